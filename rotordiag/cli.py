@@ -1,0 +1,35 @@
+"""The ``rotordiag`` command line: one Typer app, each package adds its commands.
+
+Every package that contributes commands exposes ``register(app)`` in its own
+``cli`` module; heavy imports happen inside the commands so ``rotordiag --help``
+stays fast.
+"""
+from __future__ import annotations
+
+import typer
+
+app = typer.Typer(
+    name="rotordiag",
+    help="Generator-exciter coupling misalignment: simulate, build datasets, train, diagnose, serve.",
+    no_args_is_help=True,
+    add_completion=False,
+)
+
+
+def _register_all() -> None:
+    from models import cli as models_cli
+    from service import cli as service_cli
+    from simulator import cli as simulator_cli
+    from simulator.analysis import cli as analysis_cli
+    from simulator.dataset import cli as dataset_cli
+
+    for module in (simulator_cli, analysis_cli, dataset_cli, models_cli, service_cli):
+        module.register(app)
+
+
+_register_all()
+
+
+def main() -> None:
+    """Console-script entry point."""
+    app()
