@@ -1,0 +1,204 @@
+"""Run many independent tasks on Dask and get the results back as they finish.
+
+Shared by the dataset generator (``simulator.dataset``) and the analysis sweeps
+(``simulator.analysis``). One job: take a function and a list of independent,
+picklable tasks, run ``func(task)`` for each on a ``distributed.Client``, and
+yield ``(index, result)`` pairs in completion order with a progress bar
+(samples/s and ETA).
+
+Where the work runs
+-------------------
+* default: a ``distributed.LocalCluster`` with ``n_workers`` worker *processes*,
+  one thread each (the simulator is single-threaded numba code, so processes are
+  what scale). The runner starts it and shuts it down when the iteration ends,
+  is abandoned, or fails.
+* ``scheduler_address="tcp://host:8786"``: an existing scheduler (for example
+  the ``docker-compose.yml`` cluster). The runner connects a client, and closes
+  only that client; the cluster is left running.
+* ``client=``: a client the caller already holds; the runner closes nothing.
+
+At most ``max_in_flight`` tasks are submitted at a time (default: four per
+worker thread, at least 32), so a sweep of a million samples neither floods the scheduler
+nor keeps finished results in memory: each result is yielded and then released.
+
+Example
+-------
+>>> from simulator.runner import run_tasks
+>>> for i, value in run_tasks(math.factorial, [5, 3, 4], n_workers=2):  # doctest: +SKIP
+...     print(i, value)                                                 # any order
+0 120
+2 24
+1 6
+
+``func`` must be importable by the workers (a module-level function of an
+installed package, not a lambda or a function defined in ``__main__``) when the
+workers are separate processes; tasks and results must be picklable.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import uuid
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any
+
+__all__ = ["TaskError", "default_n_workers", "run_tasks"]
+
+
+class TaskError(RuntimeError):
+    """A task raised: carries the task's ``index`` and chains the original exception."""
+
+    def __init__(self, index: int, exc: BaseException):
+        super().__init__(f"task {index} failed: {type(exc).__name__}: {exc}")
+        self.index = index
+
+
+def default_n_workers() -> int:
+    """Number of worker processes used when none is given: the CPUs this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - non-Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _validate(n_workers: int | None, scheduler_address: str | None, client: Any,
+              max_in_flight: int | None) -> None:
+    given = [name for name, v in (("n_workers", n_workers), ("scheduler_address", scheduler_address),
+                                  ("client", client)) if v is not None]
+    if len(given) > 1:
+        raise ValueError(f"give at most one of n_workers, scheduler_address, client (got {', '.join(given)})")
+    if n_workers is not None and (not isinstance(n_workers, int) or n_workers < 1):
+        raise ValueError(f"n_workers must be a positive integer, got {n_workers!r}")
+    if scheduler_address is not None and (not isinstance(scheduler_address, str) or not scheduler_address.strip()):
+        raise ValueError(f"scheduler_address must be an address such as 'tcp://host:8786', got {scheduler_address!r}")
+    if max_in_flight is not None and (not isinstance(max_in_flight, int) or max_in_flight < 1):
+        raise ValueError(f"max_in_flight must be a positive integer, got {max_in_flight!r}")
+
+
+def run_tasks(
+    func: Callable[[Any], Any],
+    tasks: Iterable[Any],
+    *,
+    n_workers: int | None = None,
+    scheduler_address: str | None = None,
+    client: Any = None,
+    max_in_flight: int | None = None,
+    progress: bool = True,
+    desc: str = "samples",
+    unit: str = "sample",
+    total: int | None = None,
+    connect_timeout_s: float = 30.0,
+) -> Iterator[tuple[int, Any]]:
+    """Run ``func(task)`` for every task on Dask; yield ``(index, result)`` as each completes.
+
+    Parameters
+    ----------
+    func : callable
+        Module-level function of one argument (importable on the workers).
+    tasks : iterable
+        Independent picklable task objects. ``index`` in the output is the
+        task's position in this iterable (0-based). Consumed lazily.
+    n_workers : int, optional
+        Worker processes of the local cluster started by default (one thread
+        each). Default: :func:`default_n_workers`.
+    scheduler_address : str, optional
+        Address of an existing scheduler, e.g. ``"tcp://127.0.0.1:8786"``,
+        instead of a local cluster.
+    client : distributed.Client, optional
+        An existing client to use; it is not closed.
+    max_in_flight : int, optional
+        Maximum number of submitted, unfinished tasks. Default: four per worker
+        thread, at least 32 (re-evaluated as workers join or leave).
+    progress : bool
+        Show a tqdm progress bar on stderr (rate in ``unit``/s and ETA).
+    desc, unit : str
+        Progress-bar label and unit.
+    total : int, optional
+        Number of tasks, for the progress bar's ETA when ``tasks`` has no
+        ``len()``.
+    connect_timeout_s : float
+        How long to wait for ``scheduler_address`` to answer.
+
+    Yields
+    ------
+    (int, object)
+        Task index and ``func``'s return value, in completion order.
+
+    Raises
+    ------
+    TaskError
+        When a task raises; its ``index`` names the task and the original
+        exception is chained (``__cause__``). Unfinished tasks are cancelled.
+    OSError
+        When ``scheduler_address`` cannot be reached within ``connect_timeout_s``.
+    """
+    _validate(n_workers, scheduler_address, client, max_in_flight)
+    from distributed import Client, LocalCluster, as_completed
+    from tqdm.auto import tqdm
+
+    if total is None and hasattr(tasks, "__len__"):
+        total = len(tasks)  # type: ignore[arg-type]
+
+    cluster = None
+    own_client = None
+    if client is None:
+        if scheduler_address is not None:
+            own_client = Client(scheduler_address, timeout=connect_timeout_s, set_as_default=False)
+        else:
+            cluster = LocalCluster(
+                n_workers=n_workers or default_n_workers(),
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=":0",
+                silence_logs=logging.ERROR,
+            )
+            own_client = Client(cluster, set_as_default=False)
+        client = own_client
+
+    bar = tqdm(total=total, desc=desc, unit=unit, disable=not progress, dynamic_ncols=True, smoothing=0.1)
+    prefix = f"{getattr(func, '__name__', 'task')}-{uuid.uuid4().hex[:12]}"
+    in_flight: dict[Any, int] = {}
+    try:
+        def limit() -> int:
+            if max_in_flight is not None:
+                return max_in_flight
+            # re-read each time: workers may join an external cluster mid-run
+            return max(32, 4 * sum(client.nthreads().values()))
+
+        task_iter = enumerate(tasks)
+        pending = as_completed(loop=client.loop)
+
+        def submit_next() -> bool:
+            try:
+                index, task = next(task_iter)
+            except StopIteration:
+                return False
+            future = client.submit(func, task, key=f"{prefix}-{index}", pure=False)
+            in_flight[future] = index
+            pending.add(future)
+            return True
+
+        cap = limit()
+        while len(in_flight) < cap and submit_next():
+            pass
+        for future in pending:
+            index = in_flight.pop(future)
+            if future.status == "error":
+                exc = future.exception()
+                raise TaskError(index, exc) from exc
+            result = future.result()
+            del future
+            cap = limit()
+            while len(in_flight) < cap and submit_next():
+                pass
+            bar.update(1)
+            yield index, result
+    finally:
+        bar.close()
+        for future in in_flight:
+            future.cancel()
+        in_flight.clear()
+        if own_client is not None:
+            own_client.close()
+        if cluster is not None:
+            cluster.close()
