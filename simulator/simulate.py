@@ -1,0 +1,235 @@
+"""``simulate``: steady-state response of the rotor at one operating point."""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .config import DEFAULT_ATOL, DEFAULT_RTOL
+from .params import JOURNAL_NODES, Plant
+from .system import TWO_PI, RotorSystem
+
+
+@dataclass
+class SimulationResult:
+    """Output of :func:`simulate`.
+
+    Attributes
+    ----------
+    time_s : ndarray, shape (n,)
+        Sample times (t = 0 at the start of the transient, so t·Ω ≡ 0 mod 2π
+        at the Poincaré points and the generator unbalance points along +x then).
+    positions_m : ndarray, shape (n, 6, 2)
+        Absolute positions of nodes 1..6 (x horizontal, y vertical up), metres.
+    phi_rad : ndarray, shape (n,)
+        Coupling angle φ; NaN when aligned (Δ = 0).
+    poincare_m : ndarray, shape (record_revs, 6, 2)
+        Node positions once per revolution (τ ≡ 0 mod 2π); NaN rows after an early stop.
+    status : {"ok", "contact", "diverged"}
+    message : str
+    final_state : ndarray, shape (22,)
+        Non-dimensional state at the end (pass as ``initial_state`` to continue).
+    final_tau : float
+    states : ndarray or None, shape (n, 22)
+        Non-dimensional states at the samples (only with ``record_state=True``).
+    nfev, n_accepted, n_rejected : int
+        Right-hand-side evaluations and integrator steps (transient + record).
+    wall_time_s : float
+    inputs : dict
+        Every input of the run (plant as a dict, operating point, options).
+    """
+
+    time_s: np.ndarray
+    positions_m: np.ndarray
+    phi_rad: np.ndarray
+    poincare_m: np.ndarray
+    status: str
+    message: str
+    final_state: np.ndarray
+    final_tau: float
+    nfev: int
+    n_accepted: int
+    n_rejected: int
+    wall_time_s: float
+    inputs: dict[str, Any] = field(default_factory=dict)
+    states: np.ndarray | None = None
+    clearance_m: float = 0.0
+    bearing_offset_m: np.ndarray = field(default_factory=lambda: np.zeros((4, 2)))
+
+    @property
+    def speed_rpm(self) -> float:
+        return float(self.inputs["speed_rpm"])
+
+    @property
+    def journal_displacements_m(self) -> np.ndarray:
+        """Journals of bearings 1..4 relative to their bearing centres, shape (n, 4, 2):
+        what a pair of proximity probes at each bearing sees."""
+        idx = [n - 1 for n in JOURNAL_NODES]
+        return self.positions_m[:, idx, :] - self.bearing_offset_m[None, :, :]
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+
+def simulate(
+    plant: Plant,
+    speed_rpm: float,
+    misalignment: float,
+    unbalance: float,
+    *,
+    mechanism: str = "pin",
+    transient_revs: int = 400,
+    record_revs: int = 128,
+    samples_per_rev: int = 128,
+    sample_rate_hz: float | None = None,
+    rtol: float = DEFAULT_RTOL,
+    atol: float = DEFAULT_ATOL,
+    initial_state: np.ndarray | None = None,
+    unbalance_phase_rad: float = 0.0,
+    exciter_unbalance: float = 0.0,
+    exciter_unbalance_phase_rad: float = 0.0,
+    offset_angle_rad: float = 0.0,
+    record_state: bool = False,
+) -> SimulationResult:
+    """Simulate the generator–exciter rotor and record its steady state.
+
+    Parameters
+    ----------
+    plant : Plant
+        Plant parameters (``Plant.default()`` for MODEL.md's).
+    speed_rpm : float
+        Running speed Ω, r/min, in [100, 6000].
+    misalignment : float
+        Non-dimensional parallel misalignment Δ = δ/c, in [0, 0.9].
+    unbalance : float
+        Non-dimensional generator unbalance A = a/c, in [0, 0.5].
+    mechanism : {"pin", "rigid", "aligned"}
+        Coupling model of MODEL.md section 3; Δ = 0 always runs ``aligned``.
+    transient_revs : int
+        Revolutions discarded before recording (the paper: 400).
+    record_revs : int
+        Revolutions recorded (≥ 1).
+    samples_per_rev : int
+        Samples per revolution at exact phases τ = 2πk/S (dense output).
+    sample_rate_hz : float, optional
+        If given, record at this fixed rate instead (what a data-acquisition
+        system does); ``samples_per_rev`` is then ignored.
+    rtol, atol : float
+        Integrator tolerances (atol on the non-dimensional state X = x/c).
+    initial_state : ndarray, shape (22,), optional
+        Non-dimensional start state (e.g. ``final_state`` of a previous run);
+        default MODEL.md section 5's.
+    unbalance_phase_rad : float
+        Angle of the generator unbalance at t = 0 (from +x toward +y).
+    exciter_unbalance, exciter_unbalance_phase_rad : float
+        Exciter unbalance a2/c (0–0.5) and its phase θ2.
+    offset_angle_rad : float
+        ``rigid`` only: direction φ0 of the offset at t = 0.
+    record_state : bool
+        Also keep the full non-dimensional states at the samples.
+
+    Returns
+    -------
+    SimulationResult
+        With ``status`` "ok", "contact" (a journal reached ε ≥ 0.999) or
+        "diverged"; after an early stop the arrays hold the samples recorded
+        up to that point (never NaN-padded positions).
+
+    Raises
+    ------
+    ValueError
+        For inputs outside their documented ranges, naming the parameter.
+    """
+    start = time.perf_counter()
+    transient_revs = _count("transient_revs", transient_revs, 0)
+    record_revs = _count("record_revs", record_revs, 1)
+    system = RotorSystem(
+        plant, speed_rpm, misalignment, unbalance, mechanism=mechanism,
+        unbalance_phase_rad=unbalance_phase_rad, exciter_unbalance=exciter_unbalance,
+        exciter_unbalance_phase_rad=exciter_unbalance_phase_rad, offset_angle_rad=offset_angle_rad,
+        rtol=rtol, atol=atol,
+    )
+    if sample_rate_hz is None:
+        samples_per_rev = _count("samples_per_rev", samples_per_rev, 4)
+        grid_dt = TWO_PI / samples_per_rev
+        n_grid = record_revs * samples_per_rev
+    else:
+        fs = float(sample_rate_hz)
+        min_fs = 8.0 * system.speed_rad_s / TWO_PI
+        if not (math.isfinite(fs) and fs >= min_fs):
+            raise ValueError(f"sample_rate_hz must be ≥ {min_fs:.1f} Hz (8 samples per revolution), got {sample_rate_hz!r}")
+        grid_dt = system.speed_rad_s / fs
+        n_grid = int(math.floor(record_revs * TWO_PI / grid_dt + 1e-9))
+        samples_per_rev = None
+    y0 = system.initial_state() if initial_state is None else system.check_state(initial_state)
+
+    tau_rec = TWO_PI * transient_revs
+    tau_end = tau_rec + TWO_PI * record_revs
+    # One integration from τ = 0 through the record window; the record grid
+    # starts at τ_rec, so the transient is not sampled.
+    y, grid, pcs, stats, ng, npc = system.integrate(
+        y0, 0.0, tau_end, grid_t0=tau_rec, grid_dt=grid_dt, n_grid=n_grid,
+        pc_t0=tau_rec, n_poincare=record_revs,
+    )
+    tau = tau_rec + grid_dt * np.arange(ng)
+    states = grid[:ng]
+    positions = system.node_positions(tau, states)
+    pc = np.full((record_revs, 6, 2), np.nan)
+    if npc:
+        pc[:npc] = system.node_positions(tau_rec + TWO_PI * np.arange(npc), pcs[:npc])
+    message = _message(stats.status, stats.tau, system.speed_rad_s, stats.max_eccentricity, tau_rec)
+    inputs = dict(
+        plant=plant.to_dict(), speed_rpm=system.speed_rpm, misalignment=system.misalignment,
+        unbalance=system.unbalance, mechanism=system.mechanism, requested_mechanism=mechanism,
+        transient_revs=transient_revs, record_revs=record_revs, samples_per_rev=samples_per_rev,
+        sample_rate_hz=None if sample_rate_hz is None else float(sample_rate_hz), rtol=system.rtol,
+        atol=system.atol, unbalance_phase_rad=float(unbalance_phase_rad),
+        exciter_unbalance=float(exciter_unbalance),
+        exciter_unbalance_phase_rad=float(exciter_unbalance_phase_rad),
+        offset_angle_rad=float(offset_angle_rad), initial_state_given=initial_state is not None,
+    )
+    return SimulationResult(
+        time_s=tau / system.speed_rad_s,
+        positions_m=positions,
+        phi_rad=system.coupling_angle(tau, states),
+        poincare_m=pc,
+        status=stats.status,
+        message=message,
+        final_state=y,
+        final_tau=stats.tau,
+        nfev=stats.nfev,
+        n_accepted=stats.n_accepted,
+        n_rejected=stats.n_rejected,
+        wall_time_s=time.perf_counter() - start,
+        inputs=inputs,
+        states=states.copy() if record_state else None,
+        clearance_m=plant.clearance_m,
+        bearing_offset_m=np.asarray(plant.bearing_offset_m, dtype=float),
+    )
+
+
+def _count(name: str, value: int, minimum: int) -> int:
+    try:
+        v = int(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an integer ≥ {minimum}, got {value!r}") from None
+    if v != value or v < minimum or v > 10_000_000:
+        raise ValueError(f"{name} must be an integer in [{minimum}, 10000000], got {value!r}")
+    return v
+
+
+def _message(status: str, tau: float, w: float, emax: float, tau_rec: float) -> str:
+    t = tau / w
+    rev = tau / TWO_PI
+    if status == "ok":
+        return "completed"
+    where = "during the transient" if tau < tau_rec else "during the record"
+    if status == "contact":
+        return (f"journal reached its bushing (eccentricity {emax:.4f}) at t = {t:.4f} s "
+                f"(revolution {rev:.1f}, {where}); samples up to that point are kept")
+    return (f"integration diverged at t = {t:.4f} s (revolution {rev:.1f}, {where}); "
+            f"samples up to that point are kept")

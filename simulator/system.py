@@ -1,0 +1,297 @@
+"""A configured rotor: plant + operating point + coupling, packed for the kernels.
+
+:class:`RotorSystem` is the flow map other code builds on (``simulate``, the
+Lyapunov exponent, sweeps with continuation): it owns the non-dimensional
+parameter vector and advances states by whole revolutions.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _kernels as K
+from .config import DEFAULT_ATOL, DEFAULT_RTOL, MAX_STEPS_PER_REV
+from .params import (
+    MECHANISMS,
+    MISALIGNMENT_RANGE,
+    SPEED_RANGE_RPM,
+    UNBALANCE_RANGE,
+    Plant,
+    check_range,
+)
+
+TWO_PI = 2.0 * math.pi
+STATUS_NAMES = {K.STATUS_OK: "ok", K.STATUS_CONTACT: "contact", K.STATUS_DIVERGED: "diverged"}
+
+
+def speed_rad_s(speed_rpm: float) -> float:
+    """Ω = π·rpm/30."""
+    return math.pi * speed_rpm / 30.0
+
+
+def _finite(name: str, value: float) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a finite number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    return v
+
+
+def resolve_mechanism(mechanism: str, misalignment: float) -> int:
+    """Kernel code of the coupling mechanism; Δ = 0 is always ``aligned``."""
+    if mechanism not in MECHANISMS:
+        raise ValueError(f"mechanism must be one of {MECHANISMS}, got {mechanism!r}")
+    if mechanism == "aligned" and misalignment != 0.0:
+        raise ValueError(f"mechanism 'aligned' needs misalignment = 0, got {misalignment!r}")
+    if misalignment == 0.0 or mechanism == "aligned":
+        return K.MECH_ALIGNED
+    return K.MECH_PIN if mechanism == "pin" else K.MECH_RIGID
+
+
+def pack_parameters(
+    plant: Plant,
+    speed_rpm: float,
+    misalignment: float,
+    unbalance: float,
+    *,
+    mechanism: str = "pin",
+    unbalance_phase_rad: float = 0.0,
+    exciter_unbalance: float = 0.0,
+    exciter_unbalance_phase_rad: float = 0.0,
+    offset_angle_rad: float = 0.0,
+) -> np.ndarray:
+    """Validate inputs and pack the non-dimensional parameter vector of the kernels."""
+    if not isinstance(plant, Plant):
+        raise ValueError(f"plant must be a simulator.Plant, got {type(plant).__name__}")
+    speed_rpm = check_range("speed_rpm", speed_rpm, *SPEED_RANGE_RPM)
+    misalignment = check_range("misalignment", misalignment, *MISALIGNMENT_RANGE)
+    unbalance = check_range("unbalance", unbalance, *UNBALANCE_RANGE)
+    exciter_unbalance = check_range("exciter_unbalance", exciter_unbalance, *UNBALANCE_RANGE)
+    unbalance_phase_rad = _finite("unbalance_phase_rad", unbalance_phase_rad)
+    exciter_unbalance_phase_rad = _finite("exciter_unbalance_phase_rad", exciter_unbalance_phase_rad)
+    offset_angle_rad = _finite("offset_angle_rad", offset_angle_rad)
+    mech = resolve_mechanism(mechanism, misalignment)
+
+    w = speed_rad_s(speed_rpm)
+    c = plant.clearance_m
+    p = np.zeros(K.N_PARAMS)
+    p[K.P_M1] = plant.journal1_mass_kg
+    p[K.P_MD1] = plant.generator_mass_kg
+    p[K.P_M3] = plant.journal3_mass_kg
+    p[K.P_M4] = plant.journal4_mass_kg
+    p[K.P_MD2] = plant.exciter_mass_kg
+    p[K.P_M6] = plant.journal6_mass_kg
+    p[K.P_KBAR] = plant.generator_stiffness_n_m / w**2
+    p[K.P_RHO] = plant.asymmetry
+    p[K.P_BETA0] = plant.stiff_axis_angle_rad
+    p[K.P_C1] = plant.generator_damping_n_s_m / w
+    p[K.P_K2] = plant.exciter_stiffness_n_m / w**2
+    p[K.P_C2] = plant.exciter_damping_n_s_m / w
+    p[K.P_G] = plant.gravity_m_s2 / (c * w**2)
+    p[K.P_SB:K.P_SB + 4] = plant.bearing_force_scale_n(w) / (c * w**2)
+    p[K.P_OFF:K.P_OFF + 8] = np.asarray(plant.bearing_offset_m).ravel() / c
+    p[K.P_A1] = unbalance
+    p[K.P_TH1] = unbalance_phase_rad
+    p[K.P_A2] = exciter_unbalance
+    p[K.P_TH2] = exciter_unbalance_phase_rad
+    p[K.P_DELTA] = misalignment
+    p[K.P_PHI0] = offset_angle_rad
+    p[K.P_KLIN] = plant.linear_bearing_stiffness_n_m / w**2
+    p[K.P_CLIN] = plant.linear_bearing_damping_n_s_m / w
+    p[K.P_MECH] = mech
+    p[K.P_BMODEL] = K.BEARING_LINEAR if plant.bearing_model == "linear" else K.BEARING_SHORT
+    return p
+
+
+@dataclass(frozen=True)
+class AdvanceStats:
+    """Integrator diagnostics of one call."""
+
+    status: str
+    tau: float
+    nfev: int
+    n_accepted: int
+    n_rejected: int
+    max_eccentricity: float
+
+
+class RotorSystem:
+    """The rotor at one operating point, as a flow map in τ = Ωt.
+
+    The equations are 2π-periodic in τ, so advancing by whole revolutions
+    from τ ≡ 0 (mod 2π) is the Poincaré (once-per-revolution) map.
+
+    Parameters
+    ----------
+    plant : Plant
+    speed_rpm : float
+        Running speed Ω in r/min (100–6000).
+    misalignment : float
+        Δ = δ/c (0–0.9).
+    unbalance : float
+        Generator unbalance A = a/c (0–0.5).
+    mechanism : {"pin", "rigid", "aligned"}
+        Coupling model (MODEL.md section 3). Δ = 0 always uses ``aligned``.
+    unbalance_phase_rad, exciter_unbalance, exciter_unbalance_phase_rad, offset_angle_rad : float
+        Generator unbalance phase, exciter unbalance a2/c and its phase θ2,
+        and the ``rigid`` offset direction φ0 (all relative to the generator
+        unbalance direction at t = 0 when its phase is 0).
+    rtol, atol : float
+        Integrator tolerances (atol on the non-dimensional state).
+    """
+
+    def __init__(
+        self,
+        plant: Plant,
+        speed_rpm: float,
+        misalignment: float,
+        unbalance: float,
+        *,
+        mechanism: str = "pin",
+        unbalance_phase_rad: float = 0.0,
+        exciter_unbalance: float = 0.0,
+        exciter_unbalance_phase_rad: float = 0.0,
+        offset_angle_rad: float = 0.0,
+        rtol: float = DEFAULT_RTOL,
+        atol: float = DEFAULT_ATOL,
+    ) -> None:
+        self.params = pack_parameters(
+            plant, speed_rpm, misalignment, unbalance, mechanism=mechanism,
+            unbalance_phase_rad=unbalance_phase_rad, exciter_unbalance=exciter_unbalance,
+            exciter_unbalance_phase_rad=exciter_unbalance_phase_rad, offset_angle_rad=offset_angle_rad,
+        )
+        rtol = _finite("rtol", rtol)
+        atol = _finite("atol", atol)
+        if not 1e-14 <= rtol <= 1e-2:
+            raise ValueError(f"rtol must be in [1e-14, 1e-2], got {rtol!r}")
+        if not 0 < atol <= 1e-2:
+            raise ValueError(f"atol must be in (0, 1e-2], got {atol!r}")
+        self.plant = plant
+        self.speed_rpm = float(speed_rpm)
+        self.speed_rad_s = speed_rad_s(self.speed_rpm)
+        self.misalignment = float(misalignment)
+        self.unbalance = float(unbalance)
+        self.mechanism_code = int(self.params[K.P_MECH])
+        self.mechanism = {K.MECH_ALIGNED: "aligned", K.MECH_PIN: "pin", K.MECH_RIGID: "rigid"}[self.mechanism_code]
+        self.rtol = rtol
+        self.atol = atol
+        self._h = TWO_PI / 200.0  # last step size, reused between calls
+
+    # ---------------------------------------------------------------- states
+    def initial_state(self) -> np.ndarray:
+        """MODEL.md section 5's deterministic start (journals at X = 0.3, Y = −0.3)."""
+        pl = self.plant
+        c = pl.clearance_m
+        g = pl.gravity_m_s2
+        y = np.zeros(K.N_STATE)
+        for j in (0, 4, 8):  # journals 1, 4, 6
+            y[j], y[j + 1] = 0.3, -0.3
+        y[2] = 0.3
+        y[3] = -0.3 - pl.generator_mass_kg * g / (2.0 * pl.generator_stiffness_n_m * c)
+        y[6] = 0.3
+        y[7] = -0.3 - pl.exciter_mass_kg * g / (2.0 * pl.exciter_stiffness_n_m * c)
+        if self.mechanism_code == K.MECH_PIN:
+            y[10] = -0.5 * math.pi + 0.3
+        elif self.mechanism_code == K.MECH_RIGID:
+            y[10] = self.params[K.P_PHI0]
+            y[21] = 1.0
+        return y
+
+    def check_state(self, state: np.ndarray) -> np.ndarray:
+        """Validate a user-supplied state vector (shape (22,), finite)."""
+        arr = np.asarray(state, dtype=float)
+        if arr.shape != (K.N_STATE,):
+            raise ValueError(f"initial_state must have shape ({K.N_STATE},), got {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            raise ValueError("initial_state must be finite")
+        arr = arr.copy()
+        if self.mechanism_code == K.MECH_RIGID:
+            arr[21] = 1.0  # φ' = 1 by construction; φ itself is re-derived from τ
+        elif self.mechanism_code == K.MECH_ALIGNED:
+            arr[21] = 0.0
+        return arr
+
+    def rhs(self, tau: float, state: np.ndarray) -> np.ndarray:
+        """Compiled right-hand side y' = f(τ, y) (a new array)."""
+        return K.rhs_alloc(float(tau), np.ascontiguousarray(state, dtype=float), self.params)
+
+    # ---------------------------------------------------------------- integration
+    def integrate(
+        self,
+        state: np.ndarray,
+        tau_start: float,
+        tau_end: float,
+        *,
+        grid_t0: float = 0.0,
+        grid_dt: float = 1.0,
+        n_grid: int = 0,
+        pc_t0: float = 0.0,
+        n_poincare: int = 0,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, AdvanceStats, int, int]:
+        """Integrate and sample; returns (final state, grid samples, Poincaré samples, stats, n_grid, n_pc)."""
+        grid = np.full((n_grid, K.N_STATE), np.nan)
+        pcs = np.full((n_poincare, K.N_STATE), np.nan)
+        revs = max(1.0, (tau_end - tau_start) / TWO_PI)
+        max_steps = int(MAX_STEPS_PER_REV * revs) + 1000
+        status, tau, y, nfev, nacc, nrej, ng, npc, emax, h = K.integrate(
+            np.ascontiguousarray(state, dtype=float), float(tau_start), self.params, self.rtol,
+            self.atol, self._h, float(grid_t0), float(grid_dt), grid, float(pc_t0), TWO_PI, pcs,
+            float(tau_end), max_steps,
+        )
+        if status == K.STATUS_OK and h > 0:
+            self._h = min(h, TWO_PI / 20.0)
+        stats = AdvanceStats(STATUS_NAMES[status], tau, nfev, nacc, nrej, emax)
+        return y, grid, pcs, stats, ng, npc
+
+    def advance(self, state: np.ndarray, tau_start: float, n_revs: float) -> tuple[np.ndarray, str]:
+        """Advance ``state`` from ``tau_start`` by ``n_revs`` revolutions.
+
+        Returns
+        -------
+        state : ndarray, shape (22,)
+        status : {"ok", "contact", "diverged"}
+        """
+        y, _, _, stats, _, _ = self.integrate(state, tau_start, tau_start + TWO_PI * n_revs)
+        return y, stats.status
+
+    # ---------------------------------------------------------------- conversions
+    def node_positions(self, tau: np.ndarray, states: np.ndarray) -> np.ndarray:
+        """Absolute positions of nodes 1..6 in metres, shape (n, 6, 2)."""
+        c = self.plant.clearance_m
+        states = np.atleast_2d(states)
+        tau = np.broadcast_to(np.asarray(tau, dtype=float), (states.shape[0],))
+        out = np.empty((states.shape[0], 6, 2))
+        out[:, 0] = states[:, 0:2]
+        out[:, 1] = states[:, 2:4]
+        out[:, 3] = states[:, 4:6]
+        out[:, 4] = states[:, 6:8]
+        out[:, 5] = states[:, 8:10]
+        d = self.misalignment
+        if self.mechanism_code == K.MECH_PIN:
+            phi = states[:, 10]
+        elif self.mechanism_code == K.MECH_RIGID:
+            phi = tau + self.params[K.P_PHI0]
+        else:
+            phi = np.zeros(states.shape[0])
+            d = 0.0
+        out[:, 2, 0] = states[:, 4] + d * np.cos(phi)
+        out[:, 2, 1] = states[:, 5] + d * np.sin(phi)
+        return out * c
+
+    def coupling_angle(self, tau: np.ndarray, states: np.ndarray) -> np.ndarray:
+        """φ (rad) along the samples; NaN when aligned."""
+        states = np.atleast_2d(states)
+        if self.mechanism_code == K.MECH_PIN:
+            return states[:, 10].copy()
+        if self.mechanism_code == K.MECH_RIGID:
+            return np.asarray(tau, dtype=float) + self.params[K.P_PHI0]
+        return np.full(states.shape[0], np.nan)
+
+
+def build_system(plant: Plant, speed_rpm: float, misalignment: float, unbalance: float, **kwargs) -> RotorSystem:
+    """Build a :class:`RotorSystem` (same arguments as its constructor)."""
+    return RotorSystem(plant, speed_rpm, misalignment, unbalance, **kwargs)
