@@ -1,0 +1,553 @@
+"""scikit-learn estimators for misalignment diagnosis.
+
+Three components, each a scikit-learn estimator that passes
+``sklearn.utils.estimator_checks`` (see ``tests/test_models_estimators.py``):
+
+- :class:`SeverityClassifier` — gradient-boosted trees (native NaN handling) whose
+  probabilities are calibrated out of fold (``CalibratedClassifierCV``) with folds
+  that keep every plant on one side (``StratifiedGroupKFold``) when ``groups`` are given.
+- :class:`ConformalIntervalRegressor` — Δ point estimate plus a split-conformal
+  quantile-regression interval (CQR, Romano et al. 2019) whose calibration rows come
+  from plants the quantile models never saw.
+- :class:`KNNDistanceOOD` — out-of-distribution score: distance to the k-th nearest
+  training point in median-imputed, standardised feature space, thresholded at a
+  quantile of the training points' leave-one-out distances.
+
+:class:`MisalignmentModel` bundles the three with the severity bands and the feature
+names; it is the one object the registry stores and :func:`models.predict.diagnose` uses.
+"""
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+from sklearn.base import (
+    BaseEstimator,
+    ClassifierMixin,
+    OutlierMixin,
+    RegressorMixin,
+    clone,
+)
+from sklearn.calibration import CalibratedClassifierCV
+from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
+from sklearn.impute import SimpleImputer
+from sklearn.model_selection import GroupShuffleSplit, ShuffleSplit, StratifiedGroupKFold, StratifiedKFold
+from sklearn.neighbors import NearestNeighbors
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import StandardScaler
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+from .bands import DEFAULT_EDGES, DEFAULT_NAMES, SeverityBands
+
+_CALIBRATION_METHODS = ("temperature", "sigmoid", "isotonic", "none")
+
+
+def _nan_tags(tags):
+    tags.input_tags.allow_nan = True
+    return tags
+
+
+class SeverityClassifier(ClassifierMixin, BaseEstimator):
+    """Gradient-boosted severity classifier with out-of-fold calibrated probabilities.
+
+    Parameters
+    ----------
+    learning_rate, max_iter, max_leaf_nodes, min_samples_leaf, l2_regularization :
+        Passed to :class:`~sklearn.ensemble.HistGradientBoostingClassifier`.
+    class_weight : {"balanced", None}, default="balanced"
+        Class weighting of the boosted trees (the bands are rarely balanced).
+    calibration : {"temperature", "sigmoid", "isotonic", "none"}, default="temperature"
+        Calibration map fitted on out-of-fold scores (``CalibratedClassifierCV`` with
+        ``ensemble=False``: one model trained on all rows, the map on cross-validated
+        predictions). Temperature scaling is one parameter for all classes, which suits
+        a few hundred to a few thousand rows.
+    cv : int, default=5
+        Number of calibration folds (reduced to the number of groups, or of members of
+        the smallest class, when those are fewer; calibration is skipped below 2).
+    random_state : int, default=0
+        Seed of the fold shuffling and the trees.
+
+    Attributes
+    ----------
+    classes_ : ndarray of shape (n_classes,)
+    n_features_in_ : int
+    model_ : fitted classifier (calibrated or plain boosted trees)
+    calibrated_ : bool
+        Whether ``model_`` carries a calibration map.
+    n_iter_ : int
+        Boosting iterations of the trees.
+    """
+
+    def __init__(
+        self,
+        *,
+        learning_rate: float = 0.08,
+        max_iter: int = 300,
+        max_leaf_nodes: int = 15,
+        min_samples_leaf: int = 10,
+        l2_regularization: float = 1.0,
+        class_weight: str | None = "balanced",
+        calibration: str = "temperature",
+        cv: int = 5,
+        random_state: int = 0,
+    ) -> None:
+        self.learning_rate = learning_rate
+        self.max_iter = max_iter
+        self.max_leaf_nodes = max_leaf_nodes
+        self.min_samples_leaf = min_samples_leaf
+        self.l2_regularization = l2_regularization
+        self.class_weight = class_weight
+        self.calibration = calibration
+        self.cv = cv
+        self.random_state = random_state
+
+    def __sklearn_tags__(self):
+        return _nan_tags(super().__sklearn_tags__())
+
+    def _boosted(self) -> HistGradientBoostingClassifier:
+        return HistGradientBoostingClassifier(
+            learning_rate=self.learning_rate,
+            max_iter=self.max_iter,
+            max_leaf_nodes=self.max_leaf_nodes,
+            min_samples_leaf=self.min_samples_leaf,
+            l2_regularization=self.l2_regularization,
+            class_weight=self.class_weight,
+            early_stopping=False,
+            random_state=self.random_state,
+        )
+
+    def fit(self, X, y, groups=None) -> "SeverityClassifier":
+        """Fit the trees and the calibration map.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_samples, n_features); NaN allowed
+        y : array-like of shape (n_samples,) class labels
+        groups : array-like of shape (n_samples,), optional
+            Plant identifiers; calibration folds never split a plant.
+        """
+        if self.calibration not in _CALIBRATION_METHODS:
+            raise ValueError(
+                f"calibration: must be one of {_CALIBRATION_METHODS}, got {self.calibration!r}"
+            )
+        if not (isinstance(self.cv, (int, np.integer)) and self.cv >= 2):
+            raise ValueError(f"cv: must be an integer ≥ 2, got {self.cv!r}")
+        X, y = validate_data(self, X, y, ensure_all_finite="allow-nan")
+        check_classification_targets(y)
+        self.classes_, counts = np.unique(y, return_counts=True)
+        if len(self.classes_) < 2:
+            raise ValueError(
+                f"y: need at least two classes to fit a classifier, got only one class "
+                f"({self.classes_.tolist()})"
+            )
+        n_splits = min(int(self.cv), int(counts.min()))
+        if groups is not None:
+            groups = np.asarray(groups)
+            if groups.shape[0] != X.shape[0]:
+                raise ValueError(f"groups: length {groups.shape[0]} does not match X ({X.shape[0]} rows)")
+            n_splits = min(n_splits, len(np.unique(groups)))
+        self.calibrated_ = self.calibration != "none" and n_splits >= 2
+        if not self.calibrated_:
+            self.model_ = self._boosted().fit(X, y)
+            self.n_iter_ = int(self.model_.n_iter_)
+            return self
+        if groups is not None:
+            splitter = StratifiedGroupKFold(n_splits=n_splits, shuffle=True, random_state=self.random_state)
+            splits = list(splitter.split(X, y, groups))
+        else:
+            splitter = StratifiedKFold(n_splits=n_splits, shuffle=True, random_state=self.random_state)
+            splits = list(splitter.split(X, y))
+        self.model_ = CalibratedClassifierCV(
+            self._boosted(), method=self.calibration, cv=splits, ensemble=False
+        ).fit(X, y)
+        self.n_iter_ = int(self.model_.calibrated_classifiers_[0].estimator.n_iter_)
+        return self
+
+    def predict_proba(self, X) -> np.ndarray:
+        """Calibrated class probabilities, shape (n_samples, n_classes), columns in ``classes_`` order."""
+        check_is_fitted(self, "model_")
+        X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
+        return self.model_.predict_proba(X)
+
+    def predict(self, X) -> np.ndarray:
+        """Most probable class of each row."""
+        proba = self.predict_proba(X)
+        return self.classes_[np.argmax(proba, axis=1)]
+
+
+class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
+    """Δ regressor with a split-conformal quantile-regression interval.
+
+    The point estimate is a squared-error boosted model trained on all rows. The
+    interval comes from two quantile models (levels α/2, 1 − α/2) trained on a
+    "proper" part, widened by the conformity quantile q̂ of the held-out calibration
+    part: ``[lo − q̂, hi + q̂]`` (CQR). With exchangeable rows (plants, when ``groups``
+    are given) it covers the truth with probability ≥ 1 − α. The interval is then
+    widened, never narrowed, to contain the point estimate and clipped below at
+    ``lower_bound`` (Δ ≥ 0), neither of which can lower the coverage.
+
+    Parameters
+    ----------
+    alpha : float, default=0.1
+        Miscoverage level (0.1 → 90 % interval).
+    calibration_fraction : float, default=0.25
+        Share of rows (of groups, when given) held out to calibrate the interval.
+    lower_bound : float or None, default=None
+        Physical lower bound of the target, applied to point and interval
+        (:class:`MisalignmentModel` uses 0: Δ ≥ 0).
+    learning_rate, max_iter, max_leaf_nodes, min_samples_leaf, l2_regularization :
+        Passed to :class:`~sklearn.ensemble.HistGradientBoostingRegressor`.
+    random_state : int, default=0
+
+    Attributes
+    ----------
+    point_model_, lower_model_, upper_model_ : fitted regressors
+    conformity_quantile_ : float
+        q̂ (``inf`` when the calibration part is too small for the requested α).
+    n_calibration_ : int
+    n_iter_ : int
+        Boosting iterations of the point model.
+    """
+
+    def __init__(
+        self,
+        *,
+        alpha: float = 0.1,
+        calibration_fraction: float = 0.25,
+        lower_bound: float | None = None,
+        learning_rate: float = 0.08,
+        max_iter: int = 300,
+        max_leaf_nodes: int = 15,
+        min_samples_leaf: int = 10,
+        l2_regularization: float = 1.0,
+        random_state: int = 0,
+    ) -> None:
+        self.alpha = alpha
+        self.calibration_fraction = calibration_fraction
+        self.lower_bound = lower_bound
+        self.learning_rate = learning_rate
+        self.max_iter = max_iter
+        self.max_leaf_nodes = max_leaf_nodes
+        self.min_samples_leaf = min_samples_leaf
+        self.l2_regularization = l2_regularization
+        self.random_state = random_state
+
+    def __sklearn_tags__(self):
+        return _nan_tags(super().__sklearn_tags__())
+
+    def _boosted(self, **loss) -> HistGradientBoostingRegressor:
+        return HistGradientBoostingRegressor(
+            learning_rate=self.learning_rate,
+            max_iter=self.max_iter,
+            max_leaf_nodes=self.max_leaf_nodes,
+            min_samples_leaf=self.min_samples_leaf,
+            l2_regularization=self.l2_regularization,
+            early_stopping=False,
+            random_state=self.random_state,
+            **loss,
+        )
+
+    def fit(self, X, y, groups=None) -> "ConformalIntervalRegressor":
+        """Fit point and quantile models and calibrate the interval.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_samples, n_features); NaN allowed
+        y : array-like of shape (n_samples,)
+        groups : array-like of shape (n_samples,), optional
+            Plant identifiers; the calibration part holds whole plants.
+        """
+        if not (0.0 < float(self.alpha) < 1.0):
+            raise ValueError(f"alpha: must lie in (0, 1), got {self.alpha!r}")
+        if not (0.0 < float(self.calibration_fraction) < 1.0):
+            raise ValueError(
+                f"calibration_fraction: must lie in (0, 1), got {self.calibration_fraction!r}"
+            )
+        X, y = validate_data(self, X, y, ensure_all_finite="allow-nan", y_numeric=True)
+        y = y.astype(float)
+        n = X.shape[0]
+        if n < 2:
+            raise ValueError(f"X: need at least 2 samples to fit an interval regressor, got n_samples = {n}")
+        if groups is not None:
+            groups = np.asarray(groups)
+            if groups.shape[0] != n:
+                raise ValueError(f"groups: length {groups.shape[0]} does not match X ({n} rows)")
+        if groups is not None and len(np.unique(groups)) >= 2:
+            split = GroupShuffleSplit(
+                n_splits=1, test_size=self.calibration_fraction, random_state=self.random_state
+            )
+            proper, calib = next(split.split(X, y, groups))
+        else:
+            split = ShuffleSplit(n_splits=1, test_size=self.calibration_fraction, random_state=self.random_state)
+            proper, calib = next(split.split(X, y))
+        a = float(self.alpha)
+        self.point_model_ = self._boosted(loss="squared_error").fit(X, y)
+        self.lower_model_ = self._boosted(loss="quantile", quantile=a / 2).fit(X[proper], y[proper])
+        self.upper_model_ = self._boosted(loss="quantile", quantile=1 - a / 2).fit(X[proper], y[proper])
+        lo = self.lower_model_.predict(X[calib])
+        hi = self.upper_model_.predict(X[calib])
+        scores = np.maximum(lo - y[calib], y[calib] - hi)
+        m = scores.shape[0]
+        rank = math.ceil((m + 1) * (1 - a))
+        self.conformity_quantile_ = float(np.sort(scores)[rank - 1]) if rank <= m else math.inf
+        self.n_calibration_ = int(m)
+        self.n_iter_ = int(self.point_model_.n_iter_)
+        return self
+
+    def _clip(self, v: np.ndarray) -> np.ndarray:
+        return v if self.lower_bound is None else np.maximum(v, self.lower_bound)
+
+    def predict(self, X) -> np.ndarray:
+        """Point estimate, shape (n_samples,)."""
+        check_is_fitted(self, "point_model_")
+        X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
+        return self._clip(self.point_model_.predict(X))
+
+    def predict_interval(self, X) -> np.ndarray:
+        """Conformal interval, shape (n_samples, 2): columns lower, upper."""
+        check_is_fitted(self, "point_model_")
+        X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
+        point = self._clip(self.point_model_.predict(X))
+        q = self.conformity_quantile_
+        lo = np.minimum(self.lower_model_.predict(X) - q, point)
+        hi = np.maximum(self.upper_model_.predict(X) + q, point)
+        return np.column_stack([self._clip(lo), self._clip(hi)])
+
+
+class KNNDistanceOOD(OutlierMixin, BaseEstimator):
+    """Out-of-distribution score: k-th-neighbour distance in standardised feature space.
+
+    Features are median-imputed (a feature that is always missing becomes 0) and
+    standardised with the training statistics. A row's distance is the Euclidean
+    distance to its ``n_neighbors``-th nearest reference row; the threshold is the
+    ``threshold_quantile`` of the same distance over the training rows, each measured
+    with itself left out. So about ``1 − threshold_quantile`` of rows like the
+    training data are flagged, and rows far from all of it always are.
+
+    Parameters
+    ----------
+    n_neighbors : int, default=5
+    threshold_quantile : float, default=0.99
+    max_reference : int, default=2000
+        At most this many training rows (a seeded random subset) are kept as the
+        reference set, which bounds model size and query time.
+    random_state : int, default=0
+
+    Attributes
+    ----------
+    preprocess_ : Pipeline (SimpleImputer → StandardScaler)
+    reference_ : ndarray of shape (n_reference, n_features), float32
+    threshold_ : float
+        Distance above which a row is out of distribution.
+    offset_ : float
+        ``-threshold_``; ``decision_function = score_samples - offset_`` (scikit-learn's
+        outlier convention: negative means outlier).
+    """
+
+    def __init__(
+        self,
+        *,
+        n_neighbors: int = 5,
+        threshold_quantile: float = 0.99,
+        max_reference: int = 2000,
+        random_state: int = 0,
+    ) -> None:
+        self.n_neighbors = n_neighbors
+        self.threshold_quantile = threshold_quantile
+        self.max_reference = max_reference
+        self.random_state = random_state
+
+    def __sklearn_tags__(self):
+        return _nan_tags(super().__sklearn_tags__())
+
+    def fit(self, X, y=None) -> "KNNDistanceOOD":
+        """Store the standardised reference set and the distance threshold.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_samples, n_features); NaN allowed
+        y : ignored
+        """
+        if not (isinstance(self.n_neighbors, (int, np.integer)) and self.n_neighbors >= 1):
+            raise ValueError(f"n_neighbors: must be an integer ≥ 1, got {self.n_neighbors!r}")
+        if not (0.0 < float(self.threshold_quantile) <= 1.0):
+            raise ValueError(f"threshold_quantile: must lie in (0, 1], got {self.threshold_quantile!r}")
+        if not (isinstance(self.max_reference, (int, np.integer)) and self.max_reference >= 2):
+            raise ValueError(f"max_reference: must be an integer ≥ 2, got {self.max_reference!r}")
+        X = validate_data(self, X, ensure_all_finite="allow-nan")
+        if X.shape[0] < 2:
+            raise ValueError(f"X: need at least 2 samples to fit an OOD scorer, got n_samples = {X.shape[0]}")
+        self.preprocess_ = Pipeline(
+            [
+                ("impute", SimpleImputer(strategy="median", keep_empty_features=True)),
+                ("scale", StandardScaler()),
+            ]
+        ).fit(X)
+        Z = self.preprocess_.transform(X)
+        rng = np.random.default_rng(self.random_state)
+        if Z.shape[0] > self.max_reference:
+            keep = np.sort(rng.choice(Z.shape[0], size=self.max_reference, replace=False))
+            Z = Z[keep]
+        self.reference_ = Z.astype(np.float32)
+        self.k_ = int(min(self.n_neighbors, self.reference_.shape[0] - 1))
+        # Leave-one-out distances of the reference rows: query k + 1, drop self.
+        d, _ = self._neighbors().kneighbors(self.reference_, n_neighbors=self.k_ + 1)
+        train_dist = d[:, self.k_]
+        self.threshold_ = float(np.quantile(train_dist, self.threshold_quantile))
+        self.offset_ = -self.threshold_
+        return self
+
+    def _neighbors(self) -> NearestNeighbors:
+        # Rebuilt on demand (cheap for ≤ a few thousand rows) so the stored model holds
+        # only plain arrays.
+        return NearestNeighbors(n_neighbors=self.k_ + 1).fit(self.reference_)
+
+    def distance(self, X) -> np.ndarray:
+        """Distance to the k-th nearest reference row, shape (n_samples,)."""
+        check_is_fitted(self, "reference_")
+        X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
+        Z = self.preprocess_.transform(X).astype(np.float32)
+        d, _ = self._neighbors().kneighbors(Z, n_neighbors=self.k_)
+        return d[:, self.k_ - 1].astype(float)
+
+    def score_samples(self, X) -> np.ndarray:
+        """Negative distance (higher = more normal)."""
+        return -self.distance(X)
+
+    def decision_function(self, X) -> np.ndarray:
+        """``score_samples - offset_``; negative values are out of distribution."""
+        return self.score_samples(X) - self.offset_
+
+    def predict(self, X) -> np.ndarray:
+        """+1 for in-distribution rows, −1 for out-of-distribution rows."""
+        return np.where(self.decision_function(X) < 0, -1, 1)
+
+    def ood_ratio(self, X) -> np.ndarray:
+        """Distance divided by the threshold: > 1 means out of distribution."""
+        return self.distance(X) / max(self.threshold_, np.finfo(float).tiny)
+
+
+class MisalignmentModel(BaseEstimator):
+    """Severity classifier + Δ interval regressor + OOD scorer, with bands and feature names.
+
+    ``fit(X, y)`` takes the true misalignment Δ as ``y``; the severity labels are derived
+    from ``band_edges``/``band_names``.
+
+    Parameters
+    ----------
+    band_edges : tuple of float, default=(0.05, 0.15, 0.35)
+    band_names : tuple of str, default=("aligned", "slight", "moderate", "severe")
+    classifier : SeverityClassifier or None
+        Template (cloned at fit); ``None`` → ``SeverityClassifier()``.
+    regressor : ConformalIntervalRegressor or None
+    ood : KNNDistanceOOD or None
+    feature_names : sequence of str or None
+        Names of the columns of X, in order; stored as ``feature_names_``.
+
+    Attributes
+    ----------
+    bands_ : SeverityBands
+    classifier_, regressor_, ood_ : fitted components
+    feature_names_ : tuple of str
+    feature_median_ : ndarray of shape (n_features,)
+        Training median of each feature (NaN-ignoring), the reference value used to
+        explain a verdict.
+    feature_nan_rate_ : ndarray of shape (n_features,)
+        Share of training rows in which each feature was missing.
+    classes_ : ndarray of str, the band names in order
+    """
+
+    def __init__(
+        self,
+        *,
+        band_edges: Sequence[float] = DEFAULT_EDGES,
+        band_names: Sequence[str] = DEFAULT_NAMES,
+        classifier: SeverityClassifier | None = None,
+        regressor: ConformalIntervalRegressor | None = None,
+        ood: KNNDistanceOOD | None = None,
+        feature_names: Sequence[str] | None = None,
+    ) -> None:
+        self.band_edges = band_edges
+        self.band_names = band_names
+        self.classifier = classifier
+        self.regressor = regressor
+        self.ood = ood
+        self.feature_names = feature_names
+
+    def __sklearn_tags__(self):
+        return _nan_tags(super().__sklearn_tags__())
+
+    def fit(self, X, y, groups=None) -> "MisalignmentModel":
+        """Fit all components.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_samples, n_features); NaN allowed
+        y : array-like of shape (n_samples,)
+            True misalignment Δ = δ/c (≥ 0).
+        groups : array-like of shape (n_samples,), optional
+            Plant identifiers, so that calibration never mixes rows of one plant.
+        """
+        self.bands_ = SeverityBands(tuple(self.band_edges), tuple(self.band_names))
+        X, y = validate_data(self, X, y, ensure_all_finite="allow-nan", y_numeric=True)
+        y = y.astype(float)
+        if self.feature_names is None:
+            self.feature_names_ = tuple(f"x{i}" for i in range(X.shape[1]))
+        else:
+            names = tuple(str(n) for n in self.feature_names)
+            if len(names) != X.shape[1]:
+                raise ValueError(f"feature_names: {len(names)} names for {X.shape[1]} columns of X")
+            if len(set(names)) != len(names):
+                raise ValueError("feature_names: names must be unique")
+            self.feature_names_ = names
+        labels = self.bands_.label(y)
+        present = set(labels.tolist())
+        missing = [n for n in self.bands_.names if n not in present]
+        if missing:
+            raise ValueError(
+                f"y: the training data has no rows in band(s) {missing}; "
+                "every severity band needs examples (check the dataset's Δ range and band_edges)"
+            )
+        self.classes_ = np.asarray(self.bands_.names, dtype=object)
+        self.classifier_ = clone(self.classifier if self.classifier is not None else SeverityClassifier())
+        self.classifier_.fit(X, labels, groups=groups)
+        self.regressor_ = clone(
+            self.regressor if self.regressor is not None else ConformalIntervalRegressor(lower_bound=0.0)
+        )
+        self.regressor_.fit(X, y, groups=groups)
+        self.ood_ = clone(self.ood if self.ood is not None else KNNDistanceOOD())
+        self.ood_.fit(X)
+        nan = np.isnan(X)
+        self.feature_nan_rate_ = nan.mean(axis=0)
+        with np.errstate(all="ignore"):
+            med = np.nanmedian(np.where(nan.all(axis=0), 0.0, X), axis=0)
+        self.feature_median_ = np.where(np.isfinite(med), med, 0.0)
+        return self
+
+    def predict_proba(self, X) -> np.ndarray:
+        """Severity probabilities, shape (n_samples, n_bands), columns in band order."""
+        check_is_fitted(self, "classifier_")
+        X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
+        proba = self.classifier_.predict_proba(X)
+        # Reorder the classifier's (sorted) columns into band order.
+        order = [list(self.classifier_.classes_).index(n) for n in self.bands_.names]
+        return proba[:, order]
+
+    def predict(self, X) -> np.ndarray:
+        """Most probable severity band of each row (array of str)."""
+        proba = self.predict_proba(X)
+        return self.classes_[np.argmax(proba, axis=1)]
+
+    def predict_misalignment(self, X) -> tuple[np.ndarray, np.ndarray]:
+        """Δ estimate and its interval: ``(point (n,), interval (n, 2))``."""
+        check_is_fitted(self, "regressor_")
+        X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
+        return self.regressor_.predict(X), self.regressor_.predict_interval(X)
+
+    def ood_ratio(self, X) -> np.ndarray:
+        """OOD distance / threshold per row (> 1: unlike the training data)."""
+        check_is_fitted(self, "ood_")
+        X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
+        return self.ood_.ood_ratio(X)

@@ -1,0 +1,182 @@
+"""Estimator tests: scikit-learn conventions, and behaviour on data whose answer is known."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sklearn.utils.estimator_checks import parametrize_with_checks
+
+from models.bands import SeverityBands
+from models.estimators import (
+    ConformalIntervalRegressor,
+    KNNDistanceOOD,
+    MisalignmentModel,
+    SeverityClassifier,
+)
+from tests.models_synthetic import FEATURE_NAMES, make_table
+
+
+@parametrize_with_checks(
+    [
+        SeverityClassifier(max_iter=10, cv=3),
+        ConformalIntervalRegressor(max_iter=10),
+        KNNDistanceOOD(),
+    ]
+)
+def test_sklearn_conventions(estimator, check):
+    check(estimator)
+
+
+# ---------------------------------------------------------------- bands
+def test_bands_edges_are_lower_inclusive():
+    b = SeverityBands()
+    got = b.label([0.0, 0.0499, 0.05, 0.1499, 0.15, 0.3499, 0.35, 0.9]).tolist()
+    assert got == ["aligned", "aligned", "slight", "slight", "moderate", "moderate", "severe", "severe"]
+
+
+@pytest.mark.parametrize(
+    "edges,names,msg",
+    [
+        ((0.1, 0.05), ("a", "b", "c"), "strictly increasing"),
+        ((0.0, 0.1), ("a", "b", "c"), "> 0"),
+        ((0.1,), ("a", "b", "c"), "len\\(edges\\) \\+ 1"),
+        ((0.1,), ("a", "a"), "unique"),
+    ],
+)
+def test_bands_reject_bad_definitions(edges, names, msg):
+    with pytest.raises(ValueError, match=msg):
+        SeverityBands(edges, names)
+
+
+def test_bands_reject_negative_delta():
+    with pytest.raises(ValueError, match="misalignment"):
+        SeverityBands().index([-0.01])
+
+
+def test_band_representatives():
+    rep = SeverityBands().representative(upper=0.55)
+    assert rep.tolist() == pytest.approx([0.025, 0.10, 0.25, 0.45])
+
+
+# ---------------------------------------------------------------- classifier
+def test_classifier_learns_a_known_rule_and_is_calibrated():
+    rng = np.random.default_rng(1)
+    X = rng.normal(size=(3000, 4))
+    # Label is a noisy threshold on feature 0: P(class 1 | x) = sigmoid(3 x0), known exactly.
+    p_true = 1 / (1 + np.exp(-3 * X[:, 0]))
+    y = (rng.random(3000) < p_true).astype(int)
+    clf = SeverityClassifier(max_iter=100, class_weight=None).fit(X[:2000], y[:2000])
+    p = clf.predict_proba(X[2000:])[:, 1]
+    # Calibrated probabilities follow the known conditional probability.
+    assert np.mean(np.abs(p - p_true[2000:])) < 0.06
+    # ... and a classifier that ignores feature 0 could not do this:
+    assert np.corrcoef(p, p_true[2000:])[0, 1] > 0.95
+
+
+def test_classifier_calibration_folds_keep_groups_together():
+    t = make_table(n_plants=20, per_plant=10, seed=3)
+    labels = SeverityBands().label(t.misalignment)
+    clf = SeverityClassifier(max_iter=20, cv=4).fit(t.X, labels, groups=t.plant_id)
+    assert clf.calibrated_
+    # sklearn stores the calibration splits it was given; no plant on both sides.
+    for train, test in clf.model_.cv:
+        assert not set(t.plant_id[train]) & set(t.plant_id[test])
+
+
+def test_classifier_rejects_unknown_calibration():
+    with pytest.raises(ValueError, match="calibration"):
+        SeverityClassifier(calibration="platt").fit(np.zeros((10, 2)), [0, 1] * 5)
+
+
+# ---------------------------------------------------------------- regressor
+def test_conformal_interval_covers_at_the_requested_rate():
+    rng = np.random.default_rng(2)
+    n = 6000
+    X = rng.uniform(-1, 1, size=(n, 3))
+    # Heteroscedastic noise: an interval of constant width would over/under-cover locally.
+    y = 2 * X[:, 0] + rng.normal(0, 0.05 + 0.3 * np.abs(X[:, 1]))
+    reg = ConformalIntervalRegressor(alpha=0.2, max_iter=100).fit(X[:3000], y[:3000])
+    iv = reg.predict_interval(X[3000:])
+    covered = (iv[:, 0] <= y[3000:]) & (y[3000:] <= iv[:, 1])
+    # 3000 test rows: binomial sd of the coverage ≈ 0.007 around ≥ 0.80.
+    assert 0.78 <= covered.mean() <= 0.86
+    width = iv[:, 1] - iv[:, 0]
+    quiet = np.abs(X[3000:, 1]) < 0.2
+    loud = np.abs(X[3000:, 1]) > 0.8
+    assert width[loud].mean() > 2 * width[quiet].mean()   # adaptive, as CQR should be
+    point = reg.predict(X[3000:])
+    assert np.all((iv[:, 0] <= point) & (point <= iv[:, 1]))
+
+
+def test_conformal_lower_bound_clips_point_and_interval():
+    rng = np.random.default_rng(3)
+    X = rng.uniform(size=(400, 2))
+    y = np.abs(rng.normal(0, 0.02, 400))
+    reg = ConformalIntervalRegressor(lower_bound=0.0, max_iter=30).fit(X, y)
+    assert reg.predict(X).min() >= 0
+    assert reg.predict_interval(X).min() >= 0
+
+
+def test_conformal_too_small_calibration_gives_infinite_interval():
+    X = np.arange(8.0)[:, None]
+    reg = ConformalIntervalRegressor(alpha=0.05, max_iter=5).fit(X, X[:, 0])
+    # 2 calibration rows cannot certify 95 %: the honest interval is unbounded.
+    assert reg.n_calibration_ == 2
+    assert np.isinf(reg.conformity_quantile_)
+    assert np.all(np.isinf(reg.predict_interval(X)[:, 1]))
+
+
+# ---------------------------------------------------------------- OOD
+def test_ood_flags_the_requested_share_and_far_points():
+    rng = np.random.default_rng(4)
+    train = rng.normal(size=(2000, 6))
+    ood = KNNDistanceOOD(threshold_quantile=0.95).fit(train)
+    fresh = rng.normal(size=(4000, 6))
+    rate = np.mean(ood.predict(fresh) == -1)
+    assert 0.03 <= rate <= 0.08
+    far = fresh[:100] + 8.0        # 8 sd away in every feature
+    assert np.all(ood.predict(far) == -1)
+    assert np.all(ood.ood_ratio(far) > 2)
+
+
+def test_ood_reference_is_bounded_and_nan_tolerant():
+    rng = np.random.default_rng(5)
+    train = rng.normal(size=(500, 3))
+    train[:, 2] = np.nan                               # a feature always missing
+    ood = KNNDistanceOOD(max_reference=100).fit(train)
+    assert ood.reference_.shape == (100, 3)
+    assert np.isfinite(ood.distance(train[:10])).all()
+
+
+# ---------------------------------------------------------------- bundle
+def test_model_bundle_orders_probabilities_by_band_and_beats_chance():
+    t = make_table(n_plants=80, per_plant=10, seed=6, nan_rate=0.02)
+    train = t.plant_id < 60
+    m = MisalignmentModel(
+        classifier=SeverityClassifier(max_iter=60),
+        regressor=ConformalIntervalRegressor(max_iter=60, lower_bound=0.0),
+        feature_names=FEATURE_NAMES,
+    ).fit(t.X[train], t.misalignment[train], groups=t.plant_id[train])
+    proba = m.predict_proba(t.X[~train])
+    assert proba.shape == (np.sum(~train), 4)
+    np.testing.assert_allclose(proba.sum(axis=1), 1.0, atol=1e-9)
+    assert m.classes_.tolist() == ["aligned", "slight", "moderate", "severe"]
+    truth = SeverityBands().label(t.misalignment[~train])
+    pred = m.predict(t.X[~train])
+    assert pred.tolist() == m.classes_[np.argmax(proba, axis=1)].tolist()
+    assert np.mean(pred == truth) > 0.75       # chance is 0.25; the phase feature carries Δ
+    point, iv = m.predict_misalignment(t.X[~train])
+    assert np.mean(np.abs(point - t.misalignment[~train])) < 0.05
+    assert m.feature_names_ == FEATURE_NAMES
+    assert m.feature_median_.shape == (len(FEATURE_NAMES),)
+
+
+def test_model_bundle_needs_every_band():
+    t = make_table(n_plants=10, per_plant=10, seed=7)
+    keep = t.misalignment < 0.3                       # no "severe" rows
+    with pytest.raises(ValueError, match="severe"):
+        MisalignmentModel().fit(t.X[keep], t.misalignment[keep])
+
+
+def test_model_bundle_checks_feature_names():
+    with pytest.raises(ValueError, match="feature_names"):
+        MisalignmentModel(feature_names=("a",)).fit(np.zeros((8, 2)), np.linspace(0, 0.5, 8))
