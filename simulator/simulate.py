@@ -233,3 +233,26 @@ def _message(status: str, tau: float, w: float, emax: float, tau_rec: float) -> 
                 f"(revolution {rev:.1f}, {where}); samples up to that point are kept")
     return (f"integration diverged at t = {t:.4f} s (revolution {rev:.1f}, {where}); "
             f"samples up to that point are kept")
+
+
+def order_amplitudes(result: SimulationResult, orders: tuple[int, ...] = (1, 2, 3)) -> np.ndarray:
+    """Zero-to-peak amplitudes (m) of the given running-speed orders at the four journals.
+
+    Exact for a record of whole revolutions sampled synchronously
+    (``samples_per_rev`` mode): order k falls on FFT bin k·record_revs.
+
+    Returns
+    -------
+    ndarray, shape (4, 2, len(orders))
+        Bearings 1..4, directions (x, y), orders.
+    """
+    revs = result.inputs["record_revs"]
+    spr = result.inputs["samples_per_rev"]
+    if spr is None:
+        raise ValueError("order_amplitudes needs a synchronously sampled result (samples_per_rev mode)")
+    d = result.journal_displacements_m
+    n = d.shape[0]
+    if n != revs * spr:
+        raise ValueError("the run stopped early; its record is not whole revolutions")
+    spec = np.fft.rfft(d, axis=0) * (2.0 / n)
+    return np.stack([np.abs(spec[k * revs]) for k in orders], axis=-1)
