@@ -196,6 +196,12 @@ class RotorSystem:
         y[7] = -0.3 - pl.exciter_mass_kg * g / (2.0 * pl.exciter_stiffness_n_m * c)
         if self.mechanism_code == K.MECH_PIN:
             y[10] = -0.5 * math.pi + 0.3
+            d = self.params[K.P_DELTA]
+            er = np.array([math.cos(y[10]), math.sin(y[10])])
+            if np.hypot(*(y[4:6] + d * er)) >= 0.9:
+                # Large Δ: MODEL.md's start would put journal 3 outside its bushing;
+                # centre the coupling link on the start point instead (docs/model.md).
+                y[4:6] = np.array([0.3, -0.3]) - 0.5 * d * er
         elif self.mechanism_code == K.MECH_RIGID:
             y[10] = self.params[K.P_PHI0]
             y[21] = 1.0
