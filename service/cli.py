@@ -5,4 +5,30 @@ import typer
 
 
 def register(app: typer.Typer) -> None:
-    """Add this package's commands to the ``rotordiag`` app (filled by the service work)."""
+    """Add ``rotordiag serve`` to the ``rotordiag`` app."""
+
+    @app.command()
+    def serve(
+        host: str = typer.Option("127.0.0.1", help="Interface to listen on (0.0.0.0 for every interface)."),
+        port: int = typer.Option(8000, min=1, max=65535, help="TCP port."),
+        workers: int = typer.Option(1, min=1, max=64, help="uvicorn worker processes (jobs run in each; "
+                                    "keep 1 unless the database is shared, e.g. PostgreSQL)."),
+    ) -> None:
+        """Serve the HTTP API (settings from ROTORDIAG_* environment variables or .env; see docs/service.md)."""
+        import uvicorn
+        from pydantic import ValidationError
+
+        from service.core.config import Settings
+
+        try:
+            settings = Settings()
+        except ValidationError as exc:
+            msgs = "; ".join(str(e.get("msg", "")).removeprefix("Value error, ") for e in exc.errors())
+            typer.secho(f"error: invalid settings: {msgs}", fg="red", err=True)
+            raise typer.Exit(2) from None
+        try:
+            uvicorn.run("service.main:app", host=host, port=port, workers=workers,
+                        log_level=settings.log_level.lower(), access_log=False)
+        except OSError as exc:  # e.g. address in use
+            typer.secho(f"error: cannot listen on {host}:{port}: {exc}", fg="red", err=True)
+            raise typer.Exit(2) from None

@@ -1,0 +1,36 @@
+"""GET /assets/{asset_id}/history."""
+from __future__ import annotations
+
+import datetime as dt
+from typing import Annotated
+
+from fastapi import APIRouter, Path, Query
+
+from ...schemas import MAX_LABEL_LEN, AssetHistory, AssetPoint, ErrorOut
+from ...store import asset_history
+from ..deps import SessionDep
+from ..errors import InputError
+
+router = APIRouter(tags=["assets"])
+
+
+@router.get("/assets/{asset_id}/history", response_model=AssetHistory,
+            responses={404: {"model": ErrorOut, "description": "No diagnosis stored for this asset."}},
+            summary="Trend of an asset's diagnoses")
+def history(
+    asset_id: Annotated[str, Path(min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:/-]+$",
+                                  description="The `asset_id` sent with /diagnose.")],
+    session: SessionDep,
+    limit: Annotated[int, Query(ge=1, le=10_000, description="Most recent points to return.")] = 500,
+    since: Annotated[dt.datetime | None, Query(description="Only points at or after this time (ISO 8601; "
+                                               "UTC when no offset is given).")] = None,
+) -> AssetHistory:
+    rows = asset_history(session, asset_id, limit, since)
+    if not rows and since is None:
+        raise InputError(f"no diagnosis stored for asset {asset_id!r}; POST /diagnose with \"asset_id\": "
+                         f"\"{asset_id}\" to start its history", 404)
+    points = [AssetPoint(time=r.created_at, severity=r.severity, misalignment=r.misalignment,
+                         misalignment_low=r.misalignment_low, misalignment_high=r.misalignment_high,
+                         speed_rpm=r.speed_rpm, ood=r.ood, model_version=r.model_version, plant=r.plant,
+                         key_features=r.key_features) for r in rows]
+    return AssetHistory(asset_id=asset_id, count=len(points), points=points)

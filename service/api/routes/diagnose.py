@@ -1,0 +1,196 @@
+"""POST /diagnose and POST /diagnose/batch."""
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, HTTPException, Query, Request
+from fastapi.concurrency import run_in_threadpool
+from pydantic import ValidationError
+
+from ...inference import ModelUnavailable
+from ...parsing import BinaryMeta, load_csv, load_hdf5, load_npy, recording_from_array, recording_from_model
+from ...schemas import MAX_LABEL_LEN, BatchItem, BatchRequest, BatchResponse, DiagnoseRequest, DiagnoseResponse, ErrorOut
+from ...store import store_diagnosis
+from ..deps import ModelsDep, StateDep
+from ..errors import InputError, validation_detail
+
+router = APIRouter(tags=["diagnose"])
+
+_ERRORS = {
+    413: {"model": ErrorOut, "description": "Body over the size limit (ROTORDIAG_MAX_BODY_BYTES)."},
+    415: {"model": ErrorOut, "description": "Content-Type is not JSON, NPY (application/octet-stream) or multipart."},
+    422: {"model": ErrorOut, "description": "The recording cannot be diagnosed; `detail` says what to fix."},
+    503: {"model": ErrorOut, "description": "No model is available on the server."},
+}
+
+_BINARY_BODY = {
+    "requestBody": {
+        "required": True,
+        "description": "A recording as JSON (`DiagnoseRequest`), as an NPY array of shape (n_channels, n_points) "
+        "(`application/octet-stream`; metadata in the query parameters), or as a multipart upload of one "
+        "CSV / NPY / HDF5 file in the part `file` (metadata in the query parameters; HDF5 may carry "
+        "`sample_rate_hz`, `units` attributes and a `channels/bearing`, `channels/angle_deg` table).",
+        "content": {
+            "application/json": {"schema": {"$ref": "#/components/schemas/DiagnoseRequest"}},
+            "application/octet-stream": {"schema": {"type": "string", "format": "binary",
+                                                    "description": "numpy.save output, (n_channels, n_points)"}},
+            "multipart/form-data": {"schema": {
+                "type": "object", "required": ["file"],
+                "properties": {"file": {"type": "string", "format": "binary",
+                                        "description": "CSV (one probe per column), .npy or .h5/.hdf5 file"}}}},
+        },
+    }
+}
+
+JSON_TYPES = ("application/json",)
+NPY_TYPES = ("application/octet-stream", "application/x-npy", "application/npy")
+
+
+def _media_type(request: Request) -> str:
+    return request.headers.get("content-type", "").split(";")[0].strip().lower()
+
+
+def _checked(build, *args):
+    """Call a recording constructor, turning its ValueError (bad recording) into a 422."""
+    try:
+        return build(*args)
+    except ValueError as exc:
+        if isinstance(exc, InputError):
+            raise
+        raise InputError(str(exc)) from None
+
+
+async def _recording_from_request(request: Request, query: dict[str, Any]) -> tuple[Any, str | None, str | None]:
+    """Recording, asset_id, plant from any accepted body form."""
+    media = _media_type(request)
+    if media in JSON_TYPES:
+        body = await request.body()
+        try:
+            req = DiagnoseRequest.model_validate_json(body)
+        except ValidationError as exc:
+            raise HTTPException(422, validation_detail(exc, ("body",))) from None
+        return _checked(recording_from_model, req), req.asset_id, req.plant
+    if media in NPY_TYPES:
+        array, file_meta = load_npy(await request.body()), {}
+    elif media == "multipart/form-data":
+        array, file_meta = await _read_upload(request, query.get("sample_index", 0))
+    else:
+        raise InputError(
+            f"unsupported Content-Type {media or '(none)'!r}: send application/json (DiagnoseRequest), "
+            "application/octet-stream (an NPY array) or multipart/form-data (a CSV/NPY/HDF5 file in part 'file')", 415)
+    given = {k: v for k, v in query.items() if v is not None and k != "sample_index"}
+    merged = {**file_meta, **given}  # query parameters win over metadata stored in the file
+    if "sample_rate_hz" not in merged:
+        raise InputError("sample_rate_hz: required as a query parameter with a binary or multipart body, "
+                         "e.g. /diagnose?sample_rate_hz=4096")
+    meta = BinaryMeta(**merged)
+    return _checked(recording_from_array, array, meta), meta.asset_id, meta.plant
+
+
+async def _read_upload(request: Request, sample_index: int):
+    form = await request.form(max_files=1, max_fields=8)
+    try:
+        upload = form.get("file")
+        if upload is None or isinstance(upload, str):
+            raise InputError("multipart upload: put the waveform file in a part named 'file' (with a filename)")
+        data = await upload.read()
+        name = (upload.filename or "").lower()
+    finally:
+        await form.close()
+    if data.startswith(b"\x93NUMPY") or name.endswith(".npy"):
+        return load_npy(data), {}
+    if data.startswith(b"\x89HDF") or name.endswith((".h5", ".hdf5")):
+        return load_hdf5(data, sample_index)
+    if name.endswith((".csv", ".txt")) or not name:
+        return load_csv(data), {}
+    raise InputError(f"multipart upload {upload.filename!r}: unknown file type; send .csv, .npy, .h5 or .hdf5", 415)
+
+
+def _diagnose_sync(state, recording, asset_id: str | None, plant: str | None, version: str | None) -> dict:
+    try:
+        verdict = state.models.diagnose(recording, version)
+    except ModelUnavailable as exc:
+        if version is not None:
+            raise InputError(str(exc), 404) from None
+        raise HTTPException(503, str(exc)) from None
+    except ValueError as exc:  # the features/models packages' messages for bad recordings
+        raise InputError(str(exc)) from None
+    if asset_id is not None:
+        store_diagnosis(state, asset_id, plant, verdict)
+    return verdict
+
+
+@router.post(
+    "/diagnose", response_model=DiagnoseResponse, responses=_ERRORS, openapi_extra=_BINARY_BODY,
+    summary="Diagnose one recording",
+    description="Returns the severity class, probabilities, Δ estimate with interval, offset in µm (when "
+    "`clearance_um` is given), motion type, per-bearing key features, top contributing features, OOD flag, "
+    "warnings and the model version. With an `asset_id`, the diagnosis is stored for the asset's history.",
+)
+async def diagnose(
+    request: Request,
+    state: StateDep,
+    models: ModelsDep,
+    sample_rate_hz: Annotated[float | None, Query(gt=0, le=1e6, allow_inf_nan=False,
+                                                  description="Binary/multipart only: sample rate, Hz.")] = None,
+    speed_rpm: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False,
+                                             description="Binary/multipart only: running speed, r/min.")] = None,
+    clearance_um: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False,
+                                                description="Binary/multipart only: radial clearance, µm.")] = None,
+    units: Annotated[str | None, Query(min_length=1, max_length=16,
+                                       description="Binary/multipart only: units of the array (`um` or `mil`); "
+                                       "default `um` (or the HDF5 file's `units` attribute).")] = None,
+    bearings: Annotated[str | None, Query(max_length=64, pattern=r"^[0-9, ]*$",
+                                          description="Binary/multipart only: bearing (1-4) of each row, "
+                                          "comma-separated; default 1,1,2,2,3,3,4,4 for 8 rows.")] = None,
+    angles_deg: Annotated[str | None, Query(max_length=256,
+                                            description="Binary/multipart only: probe angle of each row in degrees "
+                                            "from horizontal x towards vertical-up y, comma-separated; "
+                                            "default 45,135 repeated.")] = None,
+    keyphasor_times_s: Annotated[str | None, Query(max_length=200_000,
+                                                   description="Binary/multipart only: keyphasor pulse times, s, "
+                                                   "comma-separated.")] = None,
+    asset_id: Annotated[str | None, Query(min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:/-]+$",
+                                          description="Binary/multipart only: asset identifier (stores the "
+                                          "diagnosis in the asset's history).")] = None,
+    plant: Annotated[str | None, Query(min_length=1, max_length=MAX_LABEL_LEN,
+                                       description="Binary/multipart only: plant label.")] = None,
+    sample_index: Annotated[int, Query(ge=0, le=10_000_000, description="HDF5 upload of a dataset file only: "
+                                       "which sample to diagnose.")] = 0,
+    model_version: Annotated[str | None, Query(min_length=1, max_length=128,
+                                               description="Diagnose with this registered version instead of the "
+                                               "active one.")] = None,
+) -> dict:
+    query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=asset_id,
+                 plant=plant, units=units, bearings=bearings, angles_deg=angles_deg,
+                 keyphasor_times_s=keyphasor_times_s, sample_index=sample_index)
+    recording, rec_asset, rec_plant = await _recording_from_request(request, query)
+    return await run_in_threadpool(_diagnose_sync, state, recording, rec_asset, rec_plant, model_version)
+
+
+@router.post(
+    "/diagnose/batch", response_model=BatchResponse, responses=_ERRORS,
+    summary="Diagnose many recordings (JSON)",
+    description="Each record is diagnosed independently; a record the service cannot diagnose gets its own "
+    "`status_code` and `error` while the others still get results. The number of records is capped by "
+    "ROTORDIAG_MAX_BATCH_RECORDS.",
+)
+def diagnose_batch(body: BatchRequest, state: StateDep,
+                   model_version: Annotated[str | None, Query(min_length=1, max_length=128)] = None) -> dict:
+    cap = state.settings.max_batch_records
+    if len(body.records) > cap:
+        raise InputError(f"records: {len(body.records)} records sent; this server accepts at most {cap} per batch "
+                         "(ROTORDIAG_MAX_BATCH_RECORDS); split the batch")
+    items: list[BatchItem] = []
+    for i, rec in enumerate(body.records):
+        try:
+            recording = _checked(recording_from_model, rec)
+            verdict = _diagnose_sync(state, recording, rec.asset_id, rec.plant, model_version)
+            items.append(BatchItem(index=i, status_code=200, result=verdict))
+        except InputError as exc:
+            items.append(BatchItem(index=i, status_code=exc.status_code, error=str(exc)))
+        except HTTPException as exc:
+            if exc.status_code >= 500:
+                raise
+            items.append(BatchItem(index=i, status_code=exc.status_code, error=str(exc.detail)))
+    return {"count": len(items), "n_ok": sum(it.status_code == 200 for it in items), "items": items}

@@ -1,0 +1,32 @@
+"""GET /health (polled by docker-compose's healthcheck)."""
+from __future__ import annotations
+
+from fastapi import APIRouter, Response
+from sqlalchemy import text
+
+from rotordiag import code_version
+
+from ...schemas import HealthOut
+from ..deps import StateDep
+
+router = APIRouter(tags=["health"])
+
+
+@router.get("/health", response_model=HealthOut, summary="Liveness and readiness",
+            responses={503: {"model": HealthOut, "description": "Degraded: database or model unavailable."}})
+def health(state: StateDep, response: Response) -> HealthOut:
+    problems = []
+    try:
+        with state.engine.connect() as conn:
+            conn.execute(text("SELECT 1"))
+        db_ok = True
+    except Exception as exc:  # noqa: BLE001 - reported, not raised
+        db_ok = False
+        problems.append(f"database: {type(exc).__name__}: {exc}")
+    version = state.models.active_version()
+    if version is None:
+        problems.append("no active model in the registry")
+    if problems:
+        response.status_code = 503
+    return HealthOut(status="degraded" if problems else "ok", version=code_version(), database=db_ok,
+                     model_version=version, detail="; ".join(problems))

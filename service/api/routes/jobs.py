@@ -1,0 +1,70 @@
+"""Jobs: POST /datasets, POST /models/retrain, GET /jobs, GET /jobs/{id}, POST /jobs/{id}/resume."""
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Path, Query
+from fastapi.concurrency import run_in_threadpool
+
+from ...schemas import DatasetJobRequest, ErrorOut, JobCreated, JobList, JobOut, JobStatus, RetrainRequest
+from ...work import prepare_dataset_job, prepare_retrain_job
+from ..deps import ApiKeyDep, JobsDep
+from ..errors import InputError
+
+router = APIRouter(tags=["jobs"])
+
+_AUTH = {401: {"model": ErrorOut, "description": "No X-API-Key header."},
+         403: {"model": ErrorOut, "description": "Wrong API key."}}
+_JobId = Annotated[str, Path(min_length=1, max_length=64, description="Job id returned by the creating POST.")]
+
+
+def _out(job) -> JobOut:
+    return JobOut.model_validate(job, from_attributes=True)
+
+
+@router.post("/datasets", status_code=202, response_model=JobCreated, dependencies=[ApiKeyDep],
+             responses={**_AUTH, 422: {"model": ErrorOut, "description": "Invalid spec; `detail` names the key."}},
+             summary="Generate a labelled dataset from a sweep spec (job)")
+async def create_dataset(body: DatasetJobRequest, jobs: JobsDep) -> JobCreated:
+    params = await run_in_threadpool(prepare_dataset_job, body, jobs.settings)
+    job = jobs.submit("dataset", params)
+    return JobCreated(id=job.id, status=job.status, url=f"/jobs/{job.id}")
+
+
+@router.post("/models/retrain", status_code=202, response_model=JobCreated, dependencies=[ApiKeyDep],
+             tags=["models"],
+             responses={**_AUTH, 422: {"model": ErrorOut, "description": "Invalid plant, sweep or training options."}},
+             summary="Retrain the model for a plant (job)")
+async def create_retrain(body: RetrainRequest, jobs: JobsDep) -> JobCreated:
+    params = await run_in_threadpool(prepare_retrain_job, body, jobs.settings)
+    job = jobs.submit("retrain", params)
+    return JobCreated(id=job.id, status=job.status, url=f"/jobs/{job.id}")
+
+
+@router.get("/jobs", response_model=JobList, summary="Recent jobs")
+def list_jobs(jobs: JobsDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100,
+              status: Annotated[JobStatus | None, Query(description="Only jobs in this state.")] = None) -> JobList:
+    items = [_out(j) for j in jobs.list(limit, status)]
+    return JobList(count=len(items), jobs=items)
+
+
+@router.get("/jobs/{job_id}", response_model=JobOut, responses={404: {"model": ErrorOut}},
+            summary="A job's status, progress and result")
+def get_job(job_id: _JobId, jobs: JobsDep) -> JobOut:
+    job = jobs.get(job_id)
+    if job is None:
+        raise InputError(f"no job with id {job_id!r}", 404)
+    return _out(job)
+
+
+@router.post("/jobs/{job_id}/resume", response_model=JobOut, dependencies=[ApiKeyDep],
+             responses={**_AUTH, 404: {"model": ErrorOut}, 409: {"model": ErrorOut, "description": "Not resumable."}},
+             summary="Resume an interrupted (or failed) job")
+def resume_job(job_id: _JobId, jobs: JobsDep) -> JobOut:
+    try:
+        job = jobs.resume(job_id)
+    except ValueError as exc:
+        raise InputError(str(exc), 409) from None
+    if job is None:
+        raise InputError(f"no job with id {job_id!r}", 404)
+    return _out(job)

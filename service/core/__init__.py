@@ -1,0 +1,1 @@
+"""Settings, database and ASGI middleware of the service."""

@@ -1,0 +1,121 @@
+"""Service settings: one pydantic-settings class read from ``ROTORDIAG_*`` env vars and ``.env``.
+
+Every setting has an embedded default so ``rotordiag serve`` works on a fresh
+clone (development mode, SQLite file and model registry under ``./data``, a
+local Dask cluster created the first time a job runs). Production mode refuses
+the unsafe defaults (an empty API key).
+"""
+from __future__ import annotations
+
+import logging
+import secrets
+from functools import cached_property
+from pathlib import Path
+from typing import Literal
+
+from pydantic import Field, SecretStr, field_validator, model_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+log = logging.getLogger("rotordiag.service")
+
+#: The registry shipped in the repository (default model, trained by the project's own pipeline).
+SHIPPED_REGISTRY_DIR = Path(__file__).resolve().parents[2] / "models" / "default_registry"
+
+
+class Settings(BaseSettings):
+    """Settings of the rotordiag HTTP service.
+
+    Each field is read from the environment variable ``ROTORDIAG_<FIELD>``
+    (case-insensitive) or from a ``.env`` file in the working directory.
+    """
+
+    model_config = SettingsConfigDict(
+        env_prefix="ROTORDIAG_", env_file=".env", env_file_encoding="utf-8", extra="ignore",
+    )
+
+    environment: Literal["development", "production"] = Field(
+        "development",
+        description="`development` generates a random API key when none is set and logs it once; "
+        "`production` refuses to start without an API key.",
+    )
+    data_dir: Path = Field(Path("./data"), description="Directory for the database, datasets and retrained models.")
+    database_url: str = Field(
+        "", description="SQLAlchemy URL; empty means a SQLite file `<data_dir>/rotordiag.sqlite3`.",
+    )
+    api_key: SecretStr = Field(
+        SecretStr(""),
+        description="Key required in the `X-API-Key` header by every write endpoint except /diagnose.",
+    )
+    dask_scheduler_address: str = Field(
+        "", description="Address of an existing Dask scheduler (e.g. `tcp://scheduler:8786`); "
+        "empty means a local cluster created the first time a job runs.",
+    )
+    dask_local_workers: int = Field(2, ge=1, le=256, description="Worker processes of the local Dask cluster.")
+    max_body_bytes: int = Field(
+        64 * 1024 * 1024, ge=1024,
+        description="Largest request body accepted, in bytes, counted while it streams in (413 above it).",
+    )
+    model_registry_dir: Path | None = Field(
+        None,
+        description="Model registry the service diagnoses with and registers retrained models into. "
+        "Empty means `<data_dir>/registry`, seeded on first start with the shipped default registry.",
+    )
+    shipped_registry_dir: Path = Field(
+        SHIPPED_REGISTRY_DIR,
+        description="Read-only registry copied into an empty `model_registry_dir` on first start "
+        "(default: the repository's `models/default_registry/`).",
+    )
+    max_batch_records: int = Field(64, ge=1, le=10_000, description="Largest number of records in POST /diagnose/batch.")
+    job_threads: int = Field(1, ge=1, le=16, description="Jobs run at the same time (each fans out on Dask).")
+    log_level: str = Field("info", description="Log level of the service and uvicorn.")
+
+    @field_validator("database_url", "dask_scheduler_address")
+    @classmethod
+    def _strip(cls, value: str) -> str:
+        return value.strip()
+
+    @model_validator(mode="after")
+    def _refuse_unsafe_defaults(self) -> "Settings":
+        if self.environment == "production" and not self.api_key.get_secret_value().strip():
+            raise ValueError(
+                "ROTORDIAG_API_KEY is empty: production mode needs an API key for the write endpoints; "
+                "set ROTORDIAG_API_KEY (e.g. `python -c 'import secrets; print(secrets.token_urlsafe(32))'`) "
+                "or run with ROTORDIAG_ENVIRONMENT=development."
+            )
+        return self
+
+    # -- derived values ---------------------------------------------------------------------
+    @cached_property
+    def effective_api_key(self) -> str:
+        """The key write endpoints compare against (generated once per process in development)."""
+        key = self.api_key.get_secret_value().strip()
+        if key:
+            return key
+        key = secrets.token_urlsafe(24)
+        log.warning(
+            "ROTORDIAG_API_KEY is not set (development mode): generated the key %s for this run; "
+            "send it as the X-API-Key header to write endpoints.", key,
+        )
+        return key
+
+    @property
+    def effective_database_url(self) -> str:
+        """The database URL, defaulting to a SQLite file under ``data_dir``."""
+        if self.database_url:
+            return self.database_url
+        return f"sqlite:///{(self.data_dir / 'rotordiag.sqlite3').resolve()}"
+
+    @property
+    def registry_dir(self) -> Path:
+        """The registry directory the service reads and writes."""
+        return self.model_registry_dir if self.model_registry_dir is not None else self.data_dir / "registry"
+
+    @property
+    def datasets_dir(self) -> Path:
+        """Where dataset jobs write their HDF5 files."""
+        return self.data_dir / "datasets"
+
+
+def get_settings() -> Settings:
+    """Read settings from the environment (a fresh object each call; the app keeps its own)."""
+    return Settings()

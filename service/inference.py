@@ -1,0 +1,173 @@
+"""The model store: the service's registry, the loaded active model, and one diagnosis call.
+
+The verdict itself is the models package's (``models.predict.diagnose``) on the
+features package's feature vector (``features.extract_features``); this module
+only caches loaded models per version and turns a request into those calls.
+"""
+from __future__ import annotations
+
+import logging
+import shutil
+import threading
+from pathlib import Path
+from typing import Any
+
+from .core.config import Settings
+
+log = logging.getLogger("rotordiag.service")
+
+
+class ModelUnavailable(RuntimeError):
+    """No model can be loaded (empty registry, unknown version)."""
+
+
+class ModelStore:
+    """Registry access plus a per-version cache of loaded models.
+
+    Parameters
+    ----------
+    root : Path
+        Registry directory (``models.registry.Registry`` layout).
+    """
+
+    def __init__(self, root: Path) -> None:
+        from models.registry import Registry
+
+        self.root = Path(root)
+        self.registry = Registry(self.root)
+        self._cache: dict[str, Any] = {}
+        self._lock = threading.Lock()
+
+    @classmethod
+    def open(cls, settings: Settings) -> "ModelStore":
+        """Open ``settings.registry_dir``, seeding it from the shipped registry when it is empty.
+
+        The shipped registry is copied rather than used in place so activating or
+        registering models never writes into the installed package.
+        """
+        root = settings.registry_dir
+        shipped = settings.shipped_registry_dir
+        if settings.model_registry_dir is None and (not root.exists() or not any(root.iterdir())):
+            if shipped.is_dir() and any(shipped.iterdir()):
+                log.info("seeding model registry %s from %s", root, shipped)
+                root.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copytree(shipped, root, dirs_exist_ok=True)
+            else:
+                log.warning("no shipped model registry at %s; /diagnose answers 503 until a model is "
+                            "registered (POST /models/retrain)", shipped)
+        root.mkdir(parents=True, exist_ok=True)
+        return cls(root)
+
+    # -- registry -------------------------------------------------------------------------------
+    def active_version(self) -> str | None:
+        """Version the active pointer names, or ``None``."""
+        try:
+            return self.registry.active_version()
+        except OSError:
+            return None
+
+    def versions(self) -> list[dict[str, Any]]:
+        """Cards of every registered version, oldest first, with an ``active`` flag."""
+        from models.registry import RegistryError
+
+        out = []
+        for v in self.registry.versions():
+            try:
+                card = dict(self.registry.card(v))
+            except RegistryError as exc:
+                card = {"error": str(exc)}
+            card["version"] = v
+            card["active"] = v == self.active_version()
+            out.append(card)
+        return out
+
+    def activate(self, version: str) -> None:
+        """Point ``active`` at ``version`` (``KeyError`` when unknown)."""
+        if version not in self.registry.versions():
+            raise KeyError(version)
+        self.registry.activate(version)
+
+    def load(self, version: str | None = None) -> Any:
+        """The ``models.predict.ModelBundle`` of ``version`` or the active model, loaded once and cached."""
+        from models.predict import ModelBundle
+        from models.registry import RegistryError
+
+        if version is None:
+            version = self.active_version()
+            if version is None:
+                raise ModelUnavailable("no active model in the registry; register one (POST /models/retrain) "
+                                       "and activate it (POST /models/{version}/activate)")
+        with self._lock:
+            bundle = self._cache.get(version)
+            if bundle is None:
+                if version not in self.registry.versions():
+                    raise ModelUnavailable(f"model version {version!r} is not in the registry; "
+                                           f"registered: {self.registry.versions()}")
+                try:
+                    model, card = self.registry.load(version)
+                except RegistryError as exc:
+                    raise ModelUnavailable(str(exc)) from None
+                bundle = ModelBundle(model=model, card=card, version=version)
+                self._cache[version] = bundle
+        return bundle
+
+    # -- diagnosis ------------------------------------------------------------------------------
+    def diagnose(self, recording: Any, version: str | None = None) -> dict[str, Any]:
+        """Features, then the verdict of the models package, as a JSON-able dict.
+
+        The verdict (``models.predict.Verdict``) is returned as is, plus
+        ``bearings`` (the features package's per-bearing details) and
+        ``key_features`` (the contributing features' values, stored in asset history).
+
+        Raises
+        ------
+        ValueError
+            Bad recordings, with a message for the user (from ``features`` / ``models``).
+        ModelUnavailable
+            No model to diagnose with.
+        """
+        from features import extract_features
+        from models.predict import diagnose
+
+        bundle = self.load(version)
+        fr = extract_features(recording)
+        out = _clean(diagnose(bundle, fr).to_dict())  # NaN/inf -> null: JSON has no non-finite numbers
+        out["model_version"] = out.get("model_version") or bundle.version
+        out["bearings"] = _bearings(fr)
+        out["key_features"] = {f["name"]: f["value"] for f in out.get("top_features", [])}
+        return out
+
+
+def _clean(v: Any) -> Any:
+    """JSON-able copy: dataclasses/arrays to dicts/lists, non-finite floats to ``None``."""
+    import dataclasses
+    import math
+
+    import numpy as np
+
+    if dataclasses.is_dataclass(v) and not isinstance(v, type):
+        v = dataclasses.asdict(v)
+    elif hasattr(v, "to_dict") and not isinstance(v, dict):
+        v = v.to_dict()
+    if isinstance(v, dict):
+        return {str(k): _clean(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_clean(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return [_clean(x) for x in v.tolist()] if v.size <= 64 else None
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    if isinstance(v, complex):
+        return None
+    return v
+
+
+def _bearings(fr: Any) -> list[dict[str, Any]]:
+    """Per-bearing details of a feature result as JSON-able dicts."""
+    bearings = getattr(fr, "bearings", None) or []
+    if isinstance(bearings, dict):
+        bearings = [{"bearing": k, **(_clean(v) if isinstance(_clean(v), dict) else {"value": _clean(v)})}
+                    for k, v in bearings.items()]
+    return [_clean(b) for b in bearings]

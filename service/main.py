@@ -1,0 +1,84 @@
+"""The FastAPI application: ``service.main:app`` (``rotordiag serve`` runs it with uvicorn).
+
+``create_app(settings)`` builds an app; the module-level ``app`` reads its
+settings from the environment. Side effects (data directory, database tables,
+registry seeding, marking jobs interrupted by a previous shutdown) happen at
+startup in the lifespan, not at import.
+"""
+from __future__ import annotations
+
+import logging
+from contextlib import asynccontextmanager
+
+from fastapi import FastAPI
+
+from rotordiag import __version__
+
+from .api.errors import install_error_handlers
+from .api.routes import assets, diagnose, health, jobs, models
+from .core.config import Settings
+from .core.limits import BodySizeLimitMiddleware
+from .metrics import install_metrics
+
+log = logging.getLogger("rotordiag.service")
+
+DESCRIPTION = """
+Coupling-misalignment diagnosis for generator-exciter rotors from shaft-vibration waveforms.
+
+* `POST /diagnose` — probe waveforms (JSON, binary NPY or a CSV/NPY/HDF5 upload) → severity class,
+  probabilities, misalignment Δ = δ/c with an interval (and δ in µm when the clearance is given),
+  motion type, key features, out-of-distribution flag.
+* Jobs — `POST /datasets`, `POST /models/retrain`, `GET /jobs/{id}`: labelled datasets and models for your plant,
+  run on Dask, kept in the database across restarts.
+* `GET /assets/{id}/history` — the trend of an asset's diagnoses. `GET /health`, `GET /metrics`.
+
+Write endpoints (jobs, activation) need the `X-API-Key` header. Units are in field names
+(`_hz`, `_rpm`, `_um`, `_s`) or stated in each field's description.
+"""
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """Build the application.
+
+    Parameters
+    ----------
+    settings : Settings, optional
+        Defaults to ``Settings()`` read from the environment / ``.env``.
+    """
+    settings = settings if settings is not None else Settings()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        from .state import AppState
+
+        state = AppState.start(settings)
+        app.state.rd = state
+        try:
+            yield
+        finally:
+            state.stop()
+
+    app = FastAPI(
+        title="rotordiag",
+        version=__version__,
+        description=DESCRIPTION,
+        lifespan=lifespan,
+        openapi_tags=[
+            {"name": "diagnose", "description": "Diagnose probe waveforms."},
+            {"name": "jobs", "description": "Dataset generation and retraining jobs (run on Dask)."},
+            {"name": "models", "description": "Model registry: list and activate versions."},
+            {"name": "assets", "description": "Per-asset diagnosis history."},
+            {"name": "health", "description": "Liveness for orchestration."},
+        ],
+    )
+    app.state.settings = settings
+    install_error_handlers(app)
+    for router in (diagnose.router, jobs.router, models.router, assets.router, health.router):
+        app.include_router(router)
+    install_metrics(app)
+    # Added last = outermost of the user middleware: bytes are counted before anything reads them.
+    app.add_middleware(BodySizeLimitMiddleware, max_body_bytes=settings.max_body_bytes)
+    return app
+
+
+app = create_app()

@@ -1,0 +1,48 @@
+"""Prometheus metrics: request latency histograms (prometheus-fastapi-instrumentator) plus job counts.
+
+Each app gets its own ``CollectorRegistry`` so several apps (tests) can live in one process.
+"""
+from __future__ import annotations
+
+from fastapi import FastAPI
+from prometheus_client import CollectorRegistry
+from prometheus_client.core import GaugeMetricFamily
+from prometheus_fastapi_instrumentator import Instrumentator
+
+
+class _JobCollector:
+    """Reads job counts per status (and stored diagnoses) from the database at scrape time."""
+
+    def __init__(self, app: FastAPI) -> None:
+        self.app = app
+
+    def describe(self):
+        return []
+
+    def collect(self):
+        state = getattr(self.app.state, "rd", None)
+        if state is None:
+            return
+        jobs = GaugeMetricFamily("rotordiag_jobs", "Jobs per status, from the database.", labels=["status"])
+        for status, n in state.jobs.counts().items():
+            jobs.add_metric([status], n)
+        yield jobs
+        model = GaugeMetricFamily("rotordiag_active_model_info", "Active model version (value 1).", labels=["version"])
+        version = state.models.active_version()
+        if version is not None:
+            model.add_metric([version], 1)
+        yield model
+
+
+def install_metrics(app: FastAPI) -> None:
+    """Instrument every route and expose ``GET /metrics``."""
+    registry = CollectorRegistry(auto_describe=True)
+    instrumentator = Instrumentator(
+        registry=registry, excluded_handlers=["/metrics"], should_group_status_codes=False,
+    )
+    instrumentator.instrument(
+        app, latency_lowr_buckets=(0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10),
+    )
+    instrumentator.expose(app, endpoint="/metrics", include_in_schema=False)
+    registry.register(_JobCollector(app))
+    app.state.metrics_registry = registry

@@ -1,0 +1,300 @@
+"""Request and response models of the HTTP API (units in field names or descriptions, bounded lengths)."""
+from __future__ import annotations
+
+import datetime as dt
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+#: Bounds on what one request may carry (the body-size middleware bounds the bytes as well).
+MAX_CHANNELS = 8                # 4 bearings x 2 probes
+MAX_POINTS = 262_144            # samples per channel (16 s at 16 kHz)
+MAX_KEYPHASOR_PULSES = 100_000
+MAX_LABEL_LEN = 128
+
+FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class ChannelIn(_Strict):
+    """One proximity probe."""
+
+    bearing: int = Field(..., ge=1, le=4, description="Bearing number 1-4 (MODEL.md: 1, 2 generator; 3, 4 exciter; "
+                         "2 and 3 face each other across the coupling).", examples=[2])
+    angle_deg: FiniteFloat = Field(
+        ..., ge=-360.0, le=360.0,
+        description="Probe mounting angle in degrees, measured from the horizontal x axis towards vertical-up y "
+        "(e.g. 45 and 135 for an XY pair at 45 degrees either side of top dead centre).", examples=[45.0])
+    units: str = Field(..., min_length=1, max_length=16,
+                       description="Units of `data`: `um` (micrometres) or `mil` (thousandths of an inch).",
+                       examples=["um"])
+    data: list[FiniteFloat] = Field(
+        ..., min_length=1, max_length=MAX_POINTS,
+        description=f"Probe gap signal in `units`, uniformly sampled at `sample_rate_hz`; at most {MAX_POINTS} samples; "
+        "all channels must have the same length. Finite numbers only.")
+
+
+class RecordingIn(_Strict):
+    """Waveforms of one measurement: XY probe pairs at one or more bearings."""
+
+    sample_rate_hz: FiniteFloat = Field(..., gt=0, le=1e6, description="Sample rate of every channel, Hz.",
+                                        examples=[4096.0])
+    speed_rpm: FiniteFloat | None = Field(
+        None, gt=0, le=100_000,
+        description="Running speed, r/min. Omit to estimate it from the signals (or from `keyphasor_times_s`).",
+        examples=[3000.0])
+    keyphasor_times_s: list[FiniteFloat] | None = Field(
+        None, max_length=MAX_KEYPHASOR_PULSES,
+        description="Once-per-revolution keyphasor pulse times, seconds from the first sample, increasing.")
+    clearance_um: FiniteFloat | None = Field(
+        None, gt=0, le=100_000,
+        description="Radial bearing clearance c, micrometres; when given, amplitudes are also reported divided by c "
+        "and the offset δ = Δ·c is reported in micrometres.", examples=[350.0])
+    asset_id: str | None = Field(
+        None, min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:/-]+$",
+        description="Identifier of the machine train; when given the diagnosis is stored for GET /assets/{id}/history.",
+        examples=["unit-3-gen-exc"])
+    plant: str | None = Field(
+        None, min_length=1, max_length=MAX_LABEL_LEN,
+        description="Free-text plant or unit label stored with the asset history.", examples=["Riverside unit 3"])
+    channels: list[ChannelIn] = Field(
+        ..., min_length=1, max_length=MAX_CHANNELS,
+        description=f"Probe channels, at most {MAX_CHANNELS} (two probes per bearing).")
+
+
+class DiagnoseRequest(RecordingIn):
+    """Body of POST /diagnose (JSON form)."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{
+        "sample_rate_hz": 4096.0, "speed_rpm": 3000.0, "clearance_um": 350.0, "asset_id": "unit-3",
+        "channels": [
+            {"bearing": 2, "angle_deg": 45.0, "units": "um", "data": [10.1, 12.3, 9.8, 7.7]},
+            {"bearing": 2, "angle_deg": 135.0, "units": "um", "data": [3.1, 5.0, 6.2, 4.4]},
+        ]}]})
+
+
+class BatchRequest(_Strict):
+    """Body of POST /diagnose/batch."""
+
+    records: list[DiagnoseRequest] = Field(..., min_length=1, max_length=10_000,
+                                           description="Recordings to diagnose (the server caps the count; "
+                                           "see ROTORDIAG_MAX_BATCH_RECORDS).")
+
+
+class ErrorOut(BaseModel):
+    """Error body: what was wrong and what to fix."""
+
+    detail: Any = Field(..., description="A message, or FastAPI's list of {loc, msg, type} for schema errors.")
+
+
+# --- jobs -----------------------------------------------------------------------------------
+
+JobStatus = Literal["queued", "running", "succeeded", "failed", "interrupted"]
+
+
+class JobOut(BaseModel):
+    """A job's state."""
+
+    id: str = Field(..., description="Job identifier (UUID).")
+    kind: Literal["dataset", "retrain"]
+    status: JobStatus = Field(..., description="`interrupted`: the server stopped while it ran; "
+                              "POST /jobs/{id}/resume continues it.")
+    progress: float = Field(..., ge=0, le=1, description="Fraction done, 0-1.")
+    stage: str = Field(..., description="Current stage, e.g. `simulating`, `training`.")
+    message: str = Field(..., description="Human-readable progress note.")
+    params: dict[str, Any] = Field(..., description="The request that created the job.")
+    result: dict[str, Any] | None = Field(None, description="Dataset summary or new model version and evaluation.")
+    error: str | None = Field(None, description="Why the job failed.")
+    attempts: int = Field(..., description="How many times the job has been started (resumes count).")
+    created_at: dt.datetime
+    started_at: dt.datetime | None
+    finished_at: dt.datetime | None
+    updated_at: dt.datetime
+
+
+# --- assets ---------------------------------------------------------------------------------
+
+class AssetPoint(BaseModel):
+    """One stored diagnosis of an asset."""
+
+    time: dt.datetime = Field(..., description="When the diagnosis was made (UTC).")
+    severity: str = Field(..., description="Severity class.")
+    misalignment: float | None = Field(None, description="Estimated Δ = δ/c (non-dimensional).")
+    misalignment_low: float | None = Field(None, description="Lower end of the Δ interval.")
+    misalignment_high: float | None = Field(None, description="Upper end of the Δ interval.")
+    speed_rpm: float | None = Field(None, description="Running speed used, r/min.")
+    ood: bool | None = Field(None, description="True when the signals looked unlike the training data.")
+    model_version: str
+    plant: str | None = None
+    key_features: dict[str, Any] = Field(..., description="Key features of the diagnosis (name -> value, units in name).")
+
+
+class AssetHistory(BaseModel):
+    """Trend of an asset's diagnoses, oldest first."""
+
+    asset_id: str
+    count: int = Field(..., description="Number of points returned.")
+    points: list[AssetPoint]
+
+
+# --- health ---------------------------------------------------------------------------------
+
+class HealthOut(BaseModel):
+    """Liveness and readiness."""
+
+    status: Literal["ok", "degraded"] = Field(..., description="`degraded` when no model can be loaded or the "
+                                              "database does not answer.")
+    version: str = Field(..., description="Code version.")
+    database: bool = Field(..., description="The database answered.")
+    model_version: str | None = Field(None, description="Active model version, if any.")
+    detail: str = Field("", description="What is wrong when degraded.")
+
+
+# --- diagnosis output -------------------------------------------------------------------------
+
+class FeatureContributionOut(BaseModel):
+    """A feature that drove the verdict."""
+
+    name: str = Field(..., description="Feature name (units in the name, e.g. `_um`, `_deg`; ratios unitless).")
+    value: float | None = Field(None, description="Its value in this recording (null: not measurable here).")
+    reference: float | None = Field(None, description="Its training median.")
+    contribution: float | None = Field(None, description="Drop in the probability of the predicted class when this "
+                                       "feature alone is set to its training median (positive: pushed toward the verdict).")
+
+
+class DiagnoseResponse(BaseModel):
+    """The verdict of the active (or requested) model, from ``models.predict.diagnose``."""
+
+    model_config = ConfigDict(protected_namespaces=())
+
+    severity: str = Field(..., description="Severity class by the model's Δ bands (default: aligned Δ < 0.05, "
+                          "slight 0.05-0.15, moderate 0.15-0.35, severe ≥ 0.35).", examples=["slight"])
+    probabilities: dict[str, float] = Field(..., description="Calibrated probability of each severity class (sum 1).")
+    misalignment: float | None = Field(..., description="Estimated misalignment Δ = δ/c (offset over radial "
+                                       "clearance, non-dimensional).")
+    misalignment_interval: list[float | None] = Field(..., min_length=2, max_length=2,
+                                                      description="[low, high] interval of Δ at `interval_level`.")
+    interval_level: float | None = Field(..., description="Nominal coverage of the Δ interval (e.g. 0.9).")
+    offset_um: float | None = Field(None, description="Offset δ = Δ·c in micrometres (only when `clearance_um` was given).")
+    offset_interval_um: list[float | None] | None = Field(None, description="[low, high] of δ in micrometres.")
+    motion_type: str | None = Field(None, description="Motion type of the shaft (e.g. `period-1`, `quasi-periodic`), "
+                                    "when the record is long enough to tell.")
+    top_features: list[FeatureContributionOut] = Field(..., description="Features that drove the verdict, "
+                                                       "largest effect first.")
+    ood: bool = Field(..., description="True when the recording is unlike the model's training data "
+                      "(out-of-distribution): treat the verdict with caution.")
+    ood_score: float | None = Field(None, description="Distance to the training data over its usual distance "
+                                    "(> 1 flags OOD).")
+    speed_rpm: float | None = Field(None, description="Running speed used, r/min (given, from the keyphasor, "
+                                    "or estimated from the signals).")
+    model_version: str = Field(..., description="Registered model version that produced the verdict.")
+    bands: dict[str, Any] = Field(..., description="The model's severity bands: `edges` (Δ) and `names`.")
+    warnings: list[str] = Field(..., description="Anything that makes the verdict less certain.")
+    bearings: list[dict[str, Any]] = Field(..., description="Per-bearing key features from the features package "
+                                           "(1X/2X/3X amplitudes in µm pk-pk and phases in degrees, ratios, "
+                                           "orbit shape, whirl direction; see docs/features.md).")
+    key_features: dict[str, float | None] = Field(..., description="Values of `top_features` by name (stored in the "
+                                                  "asset history).")
+
+
+class BatchItem(BaseModel):
+    """Outcome for one record of a batch."""
+
+    index: int = Field(..., description="Position of the record in `records` (0-based).")
+    status_code: int = Field(..., description="200 when diagnosed; otherwise the status a single /diagnose "
+                             "call would have answered (422: bad recording).")
+    result: DiagnoseResponse | None = Field(None, description="The verdict when `status_code` is 200.")
+    error: str | None = Field(None, description="What to fix when the record could not be diagnosed.")
+
+
+class BatchResponse(BaseModel):
+    """Body answered by POST /diagnose/batch."""
+
+    count: int = Field(..., description="Number of records.")
+    n_ok: int = Field(..., description="Records diagnosed successfully.")
+    items: list[BatchItem]
+
+
+class ModelCard(BaseModel):
+    """A registered model version: its card (see docs/models) plus the `active` flag."""
+
+    model_config = ConfigDict(extra="allow", protected_namespaces=())
+
+    version: str = Field(..., description="Version name (directory in the registry).")
+    active: bool = Field(..., description="True for the version /diagnose uses by default.")
+
+
+class ModelList(BaseModel):
+    """The registry."""
+
+    active: str | None = Field(None, description="Active version.")
+    versions: list[ModelCard]
+
+
+# --- job requests -----------------------------------------------------------------------------
+
+JSONScalar = float | int | str | bool
+
+
+class DatasetJobRequest(_Strict):
+    """Body of POST /datasets: a dataset sweep spec (docs/datasets.md), as TOML text or as the same tables in JSON."""
+
+    spec_toml: str | None = Field(None, max_length=200_000,
+                                  description="The spec file's text (see examples/dataset_small.toml).")
+    spec: dict[str, Any] | None = Field(
+        None, description="The spec as a JSON object with the TOML tables as keys "
+        "(`design`, `operating`, `plant`, `measurement`, `simulation`).",
+        examples=[{"design": {"method": "sobol", "n_samples": 64, "seed": 1},
+                   "operating": {"misalignment": {"min": 0.0, "max": 0.6}, "speed_rpm": {"min": 1500, "max": 2100},
+                                 "mechanism": "rigid"},
+                   "measurement": {"sample_rate_hz": 2048, "duration_revs": 64, "snr_db": 30}}])
+    name: str | None = Field(None, max_length=64, pattern=r"^[A-Za-z0-9._-]+$",
+                             description="File name stem of the dataset under <data_dir>/datasets (default: the job id).")
+
+
+class FieldRecord(_Strict):
+    """A field-labelled recording: waveforms measured on the user's machine with a known misalignment."""
+
+    misalignment: FiniteFloat = Field(..., ge=0, le=0.9, description="Δ = δ/c measured by an alignment survey.")
+    mechanism: Literal["pin", "rigid"] = Field("rigid", description="Coupling mechanism the record is grouped with "
+                                               "in the evaluation.")
+    recording: RecordingIn
+
+
+class RetrainRequest(_Strict):
+    """Body of POST /models/retrain: retrain the model for a plant."""
+
+    plant: dict[str, Any] = Field(
+        default_factory=dict,
+        description="The plant's MODEL.md parameters, by `simulator.Plant` field name with units "
+        "(e.g. `generator_mass_kg`, `clearance_m`, `asymmetry`); missing ones take the MODEL.md defaults.",
+        examples=[{"generator_mass_kg": 30000.0, "asymmetry": 0.04}])
+    sweep: dict[str, Any] = Field(
+        default_factory=dict,
+        description="Dataset spec tables (`design`, `operating`, `measurement`, `simulation`, `plant.perturb`) "
+        "overriding the retraining defaults (see docs/service.md).",
+        examples=[{"design": {"n_samples": 200}, "operating": {"speed_rpm": {"min": 2900, "max": 3100}}}])
+    training: dict[str, Any] = Field(default_factory=dict,
+                                     description="Training configuration tables (as in train.toml: seed, bands, "
+                                     "classifier, regressor, ood, evaluation, baselines).")
+    field_data: list[FieldRecord] = Field(default_factory=list, max_length=1000,
+                                          description="Optional field-labelled recordings added to the training set.")
+    activate: bool = Field(False, description="Make the new version active when training succeeds.")
+
+
+class JobCreated(BaseModel):
+    """Answer to a job-creating POST."""
+
+    id: str
+    status: JobStatus
+    url: str = Field(..., description="Where to poll the job.")
+
+
+class JobList(BaseModel):
+    """Recent jobs, newest first."""
+
+    count: int
+    jobs: list[JobOut]

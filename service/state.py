@@ -1,0 +1,50 @@
+"""Everything the running app holds: settings, database, model store, job manager."""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+from sqlalchemy.engine import Engine
+from sqlalchemy.orm import sessionmaker
+
+from .core.config import Settings
+from .core.db import init_db, make_engine
+from .inference import ModelStore
+from .jobs import JobManager
+
+log = logging.getLogger("rotordiag.service")
+
+
+@dataclass
+class AppState:
+    """Resources created at startup and released at shutdown."""
+
+    settings: Settings
+    engine: Engine
+    sessions: sessionmaker
+    models: ModelStore
+    jobs: JobManager
+
+    @classmethod
+    def start(cls, settings: Settings) -> "AppState":
+        """Create the data directory and tables, open the registry, recover interrupted jobs."""
+        settings.data_dir.mkdir(parents=True, exist_ok=True)
+        settings.datasets_dir.mkdir(parents=True, exist_ok=True)
+        _ = settings.effective_api_key  # generate + log the development key once, at startup
+        engine = make_engine(settings.effective_database_url)
+        sessions = init_db(engine)
+        models = ModelStore.open(settings)
+        jobs = JobManager(settings, sessions, models)
+        n = jobs.mark_interrupted()
+        if n:
+            log.warning("%d job(s) were running when the server last stopped; marked interrupted "
+                        "(POST /jobs/{id}/resume continues them)", n)
+        log.info("rotordiag service ready: data_dir=%s database=%s registry=%s",
+                 settings.data_dir.resolve(), engine.url.render_as_string(hide_password=True),
+                 settings.registry_dir.resolve())
+        return cls(settings=settings, engine=engine, sessions=sessions, models=models, jobs=jobs)
+
+    def stop(self) -> None:
+        """Stop the job threads (running jobs are marked interrupted) and close the engine."""
+        self.jobs.shutdown()
+        self.engine.dispose()

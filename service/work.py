@@ -1,0 +1,174 @@
+"""What the jobs do: validate requests up front (422 at POST time), then run on Dask.
+
+* ``dataset``: the dataset package's generator writes ``<data_dir>/datasets/<name>.h5``
+  (resumable: a resumed job completes only the missing samples).
+* ``retrain``: a dataset for the user's plant (plant parameters + small
+  perturbations, sweep options), optionally field-labelled recordings, then the
+  models package's training entry point, which evaluates and registers a new
+  version in the service's registry (activated when asked).
+"""
+from __future__ import annotations
+
+import copy
+import math
+from typing import Any
+
+from .api.errors import InputError
+from .core.config import Settings
+
+#: Retraining sweep used unless the request overrides a table/key (a small, fast default).
+RETRAIN_DEFAULT_SWEEP: dict[str, Any] = {
+    "design": {"method": "sobol", "n_samples": 256, "seed": 0},
+    "operating": {
+        "misalignment": {"min": 0.0, "max": 0.6},
+        "speed_rpm": {"min": 1200.0, "max": 2200.0},
+        "unbalance": {"min": 0.02, "max": 0.15},
+        "unbalance_phase_rad": {"min": -3.14159, "max": 3.14159},
+        "mechanism": "rigid",
+    },
+    "plant": {"perturb": {"generator_mass_kg": 0.05, "generator_stiffness_n_m": 0.05, "asymmetry": 0.1,
+                          "clearance_m": 0.05, "viscosity_pa_s": 0.1}},
+    "measurement": {"sample_rate_hz": 2048.0, "duration_revs": 32.0, "snr_db": 30.0},
+}
+
+
+def _spec_toml_from_dict(spec: dict[str, Any]) -> str:
+    import tomli_w
+
+    try:
+        return tomli_w.dumps(spec)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"spec: cannot be written as TOML ({exc}); use objects, numbers, strings and lists") from None
+
+
+def _validate_spec_text(text: str) -> Any:
+    from simulator.dataset.spec import SpecError, parse_spec
+
+    try:
+        resolved = parse_spec(text)
+    except SpecError as exc:
+        raise InputError(str(exc)) from None
+    if resolved.spec.plant.file is not None:
+        raise InputError("plant.file: a spec sent over HTTP cannot name a file on the server; "
+                         "give the plant values in plant.set instead")
+    return resolved
+
+
+def prepare_dataset_job(body: Any, settings: Settings) -> dict[str, Any]:
+    """Validate a POST /datasets body; return the job parameters stored in the database."""
+    if (body.spec_toml is None) == (body.spec is None):
+        raise InputError("give exactly one of spec_toml (the TOML text) or spec (the same tables as JSON)")
+    text = body.spec_toml if body.spec_toml is not None else _spec_toml_from_dict(body.spec)
+    resolved = _validate_spec_text(text)
+    return {"spec_toml": text, "spec_hash": resolved.spec_hash, "name": body.name}
+
+
+def _deep_merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
+    out = copy.deepcopy(base)
+    for key, value in override.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict) and key != "mechanism":
+            out[key] = _deep_merge(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
+def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
+    """Validate a POST /models/retrain body (plant, sweep, training options, field data)."""
+    from simulator import Plant
+
+    from models.config import TrainConfig
+
+    try:
+        plant = Plant.default().replace(**body.plant) if body.plant else Plant.default()
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"plant: {exc}") from None
+    sweep = dict(body.sweep)
+    if "plant" in sweep:
+        extra = set(sweep["plant"]) - {"perturb"} if isinstance(sweep["plant"], dict) else {"plant"}
+        if extra:
+            raise InputError("sweep.plant: only `perturb` may be given here; put plant values in `plant`")
+    spec = _deep_merge(RETRAIN_DEFAULT_SWEEP, sweep)
+    spec.setdefault("plant", {})["set"] = {k: v for k, v in plant.to_dict().items() if k in body.plant} \
+        if body.plant else {}
+    if not spec["plant"]["set"]:
+        del spec["plant"]["set"]
+    text = _spec_toml_from_dict(spec)
+    resolved = _validate_spec_text(text)
+    try:
+        train_cfg = TrainConfig.from_dict(body.training)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"training: {exc}") from None
+    field = [r.model_dump(mode="json") for r in body.field_data]
+    if field:
+        from .parsing import recording_from_model
+
+        for i, rec in enumerate(body.field_data):
+            try:
+                recording_from_model(rec.recording)
+            except ValueError as exc:
+                raise InputError(f"field_data[{i}].recording: {exc}") from None
+    return {"plant": body.plant, "spec_toml": text, "spec_hash": resolved.spec_hash,
+            "training": train_cfg.to_dict(), "field_data": field, "activate": body.activate}
+
+
+# --- execution (inside the job thread) ---------------------------------------------------------
+
+def _progress_cb(ctx, lo: float, hi: float, stage: str):
+    def cb(done: int, total: int) -> None:
+        frac = done / total if total else 1.0
+        ctx.progress(lo + (hi - lo) * frac, stage, f"{stage}: {done}/{total}")
+    return cb
+
+
+def run_dataset(params: dict[str, Any], ctx) -> dict[str, Any]:
+    """Generate (or complete) the dataset file of a dataset job."""
+    out = ctx.settings.datasets_dir / f"{params.get('name') or ctx.job_id}.h5"
+    return _generate(params["spec_toml"], out, ctx, 0.0, 1.0)
+
+
+def _generate(spec_toml: str, out, ctx, lo: float, hi: float) -> dict[str, Any]:
+    from simulator.dataset import generate_dataset
+    from simulator.dataset.spec import parse_spec
+
+    ctx.progress(lo, "simulating", "starting the Dask cluster and the simulations")
+    resolved = parse_spec(spec_toml)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    summary = generate_dataset(resolved, out, client=ctx.client(), progress=False,
+                               on_progress=_progress_cb(ctx, lo, hi, "simulating"))
+    result = {"path": str(out.resolve()), "spec_hash": resolved.spec_hash}
+    if isinstance(summary, dict):
+        result.update({k: v for k, v in summary.items() if _jsonable(v)})
+    return result
+
+
+def _jsonable(v: Any) -> bool:
+    if isinstance(v, float):
+        return math.isfinite(v)
+    if isinstance(v, (int, str, bool, type(None))):
+        return True
+    if isinstance(v, (list, tuple)):
+        return all(_jsonable(x) for x in v)
+    if isinstance(v, dict):
+        return all(isinstance(k, str) and _jsonable(x) for k, x in v.items())
+    return False
+
+
+def run_retrain(params: dict[str, Any], ctx) -> dict[str, Any]:
+    """Dataset for the plant (resumable), then train, evaluate and register a model version."""
+    from models.train import train_and_register
+
+    out = ctx.settings.datasets_dir / f"retrain-{ctx.job_id}.h5"
+    dataset = _generate(params["spec_toml"], out, ctx, 0.0, 0.8)
+    ctx.progress(0.8, "training", "training and evaluating the model")
+    registered = train_and_register(out, params["training"], ctx.models.registry,
+                                    field_data=params.get("field_data") or None,
+                                    activate=bool(params.get("activate")))
+    ctx.progress(1.0, "training", "registered")
+    return {"dataset": dataset, **registered}
+
+
+def register_all(manager) -> None:
+    """Declare the job kinds on ``manager``."""
+    manager.register("dataset", run_dataset)
+    manager.register("retrain", run_retrain)
