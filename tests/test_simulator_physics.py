@@ -165,3 +165,20 @@ def test_rigid_offset_drives_exciter_journal_round_at_1x():
     a0 = order_amplitudes(simulate(Plant.default(), 1950.0, 0.0, 0.0, **kw))
     a2 = order_amplitudes(simulate(Plant.default(), 1950.0, 0.2, 0.0, mechanism="rigid", **kw))
     assert a2[2, :, 0].max() > 5 * a0[2, :, 0].max() + 1e-6
+
+
+@pytest.mark.parametrize("speed, delta, mechanism", [(1950.0, 0.1, "pin"), (1500.0, 0.2, "rigid"), (1200.0, 0.0, "pin")])
+def test_early_transient_end_gives_the_same_steady_state(speed, delta, mechanism):
+    kw = dict(record_revs=16, samples_per_rev=64, mechanism=mechanism)
+    full = simulate(Plant.default(), speed, delta, 0.05, **kw)
+    early = simulate(Plant.default(), speed, delta, 0.05, settle_tol=1e-6, **kw)
+    assert early.inputs["transient_revs_used"] < 400  # it did end early
+    a, b = order_amplitudes(full), order_amplitudes(early)
+    assert np.abs(a - b).max() / np.abs(a).max() < 1e-4
+    # the same phase too: compare the Poincaré points (same τ mod 2π)
+    assert np.abs(full.poincare_m - early.poincare_m).max() < 1e-4 * Plant.default().clearance_m
+
+
+def test_early_transient_end_does_not_fire_on_whirl():
+    res = simulate(Plant.default(), 2600.0, 0.1, 0.05, transient_revs=120, record_revs=2, settle_tol=1e-6)
+    assert res.inputs["transient_revs_used"] == 120
