@@ -99,7 +99,8 @@ class JobOut(BaseModel):
     """A job's state."""
 
     id: str = Field(..., description="Job identifier (UUID).")
-    kind: Literal["dataset", "retrain"]
+    kind: Literal["dataset", "retrain"] = Field(..., description="`dataset` (POST /datasets) or `retrain` "
+                                                "(POST /models/retrain).")
     status: JobStatus = Field(..., description="`interrupted`: the server stopped while it ran; "
                               "POST /jobs/{id}/resume continues it.")
     progress: float = Field(..., ge=0, le=1, description="Fraction done, 0-1.")
@@ -109,10 +110,10 @@ class JobOut(BaseModel):
     result: dict[str, Any] | None = Field(None, description="Dataset summary or new model version and evaluation.")
     error: str | None = Field(None, description="Why the job failed.")
     attempts: int = Field(..., description="How many times the job has been started (resumes count).")
-    created_at: dt.datetime
-    started_at: dt.datetime | None
-    finished_at: dt.datetime | None
-    updated_at: dt.datetime
+    created_at: dt.datetime = Field(..., description="When the job was created (UTC).")
+    started_at: dt.datetime | None = Field(..., description="When its last attempt started (UTC).")
+    finished_at: dt.datetime | None = Field(..., description="When it last finished, failed or was interrupted (UTC).")
+    updated_at: dt.datetime = Field(..., description="Last progress update (UTC).")
 
 
 # --- assets ---------------------------------------------------------------------------------
@@ -127,17 +128,17 @@ class AssetPoint(BaseModel):
     misalignment_high: float | None = Field(None, description="Upper end of the Δ interval.")
     speed_rpm: float | None = Field(None, description="Running speed used, r/min.")
     ood: bool | None = Field(None, description="True when the signals looked unlike the training data.")
-    model_version: str
-    plant: str | None = None
+    model_version: str = Field(..., description="Model version that made the diagnosis.")
+    plant: str | None = Field(None, description="Plant label sent with the diagnosis.")
     key_features: dict[str, Any] = Field(..., description="Key features of the diagnosis (name -> value, units in name).")
 
 
 class AssetHistory(BaseModel):
     """Trend of an asset's diagnoses, oldest first."""
 
-    asset_id: str
+    asset_id: str = Field(..., description="The asset.")
     count: int = Field(..., description="Number of points returned.")
-    points: list[AssetPoint]
+    points: list[AssetPoint] = Field(..., description="Diagnoses, oldest first.")
 
 
 # --- health ---------------------------------------------------------------------------------
@@ -215,7 +216,7 @@ class BatchResponse(BaseModel):
 
     count: int = Field(..., description="Number of records.")
     n_ok: int = Field(..., description="Records diagnosed successfully.")
-    items: list[BatchItem]
+    items: list[BatchItem] = Field(..., description="One entry per record, in order.")
 
 
 class ModelCard(BaseModel):
@@ -231,7 +232,7 @@ class ModelList(BaseModel):
     """The registry."""
 
     active: str | None = Field(None, description="Active version.")
-    versions: list[ModelCard]
+    versions: list[ModelCard] = Field(..., description="Registered versions, oldest first.")
 
 
 # --- job requests -----------------------------------------------------------------------------
@@ -261,7 +262,7 @@ class FieldRecord(_Strict):
     misalignment: FiniteFloat = Field(..., ge=0, le=0.9, description="Δ = δ/c measured by an alignment survey.")
     mechanism: Literal["pin", "rigid"] = Field("rigid", description="Coupling mechanism the record is grouped with "
                                                "in the evaluation.")
-    recording: RecordingIn
+    recording: RecordingIn = Field(..., description="The waveforms (as in POST /diagnose).")
 
 
 class RetrainRequest(_Strict):
@@ -288,13 +289,13 @@ class RetrainRequest(_Strict):
 class JobCreated(BaseModel):
     """Answer to a job-creating POST."""
 
-    id: str
-    status: JobStatus
+    id: str = Field(..., description="Job id.")
+    status: JobStatus = Field(..., description="Initial state (`queued`).")
     url: str = Field(..., description="Where to poll the job.")
 
 
 class JobList(BaseModel):
     """Recent jobs, newest first."""
 
-    count: int
-    jobs: list[JobOut]
+    count: int = Field(..., description="Number of jobs returned.")
+    jobs: list[JobOut] = Field(..., description="Jobs, newest first.")
