@@ -1,0 +1,194 @@
+"""``generate``: run a dataset spec through the simulator on Dask into one HDF5 file."""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .design import Design, SampleParams, build_design
+from .measurement import MeasurementSettings
+from .spec import ResolvedSpec, load_spec
+from .store import FORMAT, FORMAT_VERSION, MECHANISM_CODES, SIMULATED_MECHANISM_CODES, DatasetWriter, layout
+from .worker import STATUS_CODES, SampleOutput, SampleTask, SimulationSettings, run_sample
+
+__all__ = ["GenerateSummary", "generate", "severity_bands"]
+
+
+def severity_bands():
+    """The severity bands of the labels (the models package's definition, one source of truth)."""
+    from models.bands import SeverityBands
+
+    return SeverityBands()
+
+
+@dataclass
+class GenerateSummary:
+    """What a :func:`generate` call did."""
+
+    path: Path
+    n_samples: int
+    n_done_before: int
+    n_computed: int
+    status_counts: dict[str, int] = field(default_factory=dict)
+    resumed: bool = False
+    repaired: bool = False
+
+    @property
+    def complete(self) -> bool:
+        return self.n_done_before + self.n_computed == self.n_samples
+
+
+def _file_attrs(resolved: ResolvedSpec, design: Design, meas: MeasurementSettings) -> dict[str, Any]:
+    from rotordiag import code_version
+
+    bands = severity_bands()
+    return {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "spec_toml": resolved.text,
+        "spec_json": json.dumps(resolved.spec.model_dump(mode="json")),
+        "spec_hash": resolved.spec_hash,
+        "code_version": code_version(),
+        "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "n_samples": design.n_samples,
+        "n_channels": len(meas.channels),
+        "n_points": meas.n_points,
+        "sample_rate_hz": meas.sample_rate_hz,
+        "waveform_units": "um",
+        "design_method": design.method,
+        "master_seed": design.master_seed,
+        "base_plant_json": json.dumps(resolved.base_plant.to_dict()),
+        "severity_bands_json": json.dumps(bands.to_dict()),
+        "resume_log": "[]",
+        "merged": False,
+    }
+
+
+def _dataset_attrs() -> dict[str, dict[str, Any]]:
+    bands = severity_bands()
+    return {
+        "waveforms": {"units": "um", "description": "probe displacement toward the probe, (sample, channel, point)"},
+        "done": {"description": "1 when the sample is completely written"},
+        "parameters/mechanism": {"codes_json": json.dumps(MECHANISM_CODES)},
+        "parameters/simulated_mechanism": {"codes_json": json.dumps(SIMULATED_MECHANISM_CODES)},
+        "labels/severity": {"names_json": json.dumps(list(bands.names)), "edges_json": json.dumps(list(bands.edges))},
+        "labels/status": {"codes_json": json.dumps(STATUS_CODES)},
+        "diagnostics/wall_time_s": {"description": "simulator wall time (not reproducible between runs)"},
+    }
+
+
+def _rows(p: SampleParams, out: SampleOutput) -> dict[str, Any]:
+    from simulator import Plant
+
+    bands = severity_bands()
+    rows: dict[str, Any] = {"waveforms": out.waveforms_um}
+    for name in ("speed_rpm", "misalignment", "unbalance", "unbalance_phase_rad", "exciter_unbalance",
+                 "exciter_unbalance_phase_rad", "offset_angle_rad"):
+        rows[f"parameters/{name}"] = getattr(p, name)
+    rows["parameters/mechanism"] = MECHANISM_CODES[p.mechanism]
+    rows["parameters/simulated_mechanism"] = SIMULATED_MECHANISM_CODES[out.simulated_mechanism]
+    rows["parameters/sample_seed"] = np.uint64(p.sample_seed)
+    rows["parameters/plant_id"] = Plant.from_dict(p.plant).plant_id().encode()
+    rows["parameters/record_revs"] = out.record_revs
+    for name, v in p.plant.items():
+        rows[f"parameters/plant/{name}"] = v.encode() if isinstance(v, str) else np.asarray(v, dtype=float)
+    d = out.draws
+    rows["measurement/snr_db"] = d.snr_db
+    rows["measurement/start_angle_rad"] = d.start_angle_rad
+    rows["measurement/speed_fluctuation_phase_rad"] = d.speed_fluctuation_phase_rad
+    rows["measurement/runout_1x_um"] = d.runout_1x_um
+    rows["measurement/runout_1x_phase_rad"] = d.runout_1x_phase_rad
+    rows["measurement/runout_2x_um"] = d.runout_2x_um
+    rows["measurement/runout_2x_phase_rad"] = d.runout_2x_phase_rad
+    rows["labels/misalignment"] = p.misalignment
+    rows["labels/severity"] = int(bands.index([p.misalignment])[0])
+    rows["labels/status"] = STATUS_CODES[out.status]
+    rows["labels/motion_kind"] = out.motion_kind.encode()[:16]
+    rows["labels/motion_period"] = out.motion_period
+    rows["diagnostics/nfev"] = out.nfev
+    rows["diagnostics/wall_time_s"] = out.wall_time_s
+    rows["diagnostics/message"] = out.message.encode("utf-8", "replace")[:256]
+    return rows
+
+
+def generate(
+    spec: str | Path | ResolvedSpec,
+    out: str | Path,
+    *,
+    n_workers: int | None = None,
+    scheduler_address: str | None = None,
+    progress: bool = True,
+) -> GenerateSummary:
+    """Generate (or resume) the dataset of ``spec`` into the HDF5 file ``out``.
+
+    Parameters
+    ----------
+    spec : path or ResolvedSpec
+        The TOML spec (see :mod:`simulator.dataset.spec`).
+    out : path
+        Output HDF5 file. If it exists and was made from the same spec, only
+        the missing samples are computed; a different spec is refused.
+    n_workers : int, optional
+        Worker processes of the local Dask cluster (default: the CPUs
+        available). ``0`` runs the samples serially in this process, without
+        Dask (debugging; same values).
+    scheduler_address : str, optional
+        Use an existing Dask scheduler, e.g. ``"tcp://scheduler:8786"``.
+    progress : bool
+        Show the progress bar.
+
+    Returns
+    -------
+    GenerateSummary
+
+    Raises
+    ------
+    SpecError, StoreError
+        Invalid spec; unusable output file (other spec, locked, not a dataset).
+    simulator.runner.TaskError
+        A sample's computation raised something other than the simulator's
+        input errors; the samples finished so far are kept, rerun to resume.
+    """
+    from simulator.runner import run_tasks
+
+    resolved = spec if isinstance(spec, ResolvedSpec) else load_spec(spec)
+    design = build_design(resolved)
+    meas = MeasurementSettings.from_spec(resolved.spec)
+    sim = SimulationSettings.from_spec(resolved.spec)
+    from rotordiag import code_version
+
+    L = layout(len(meas.channels), meas.n_points, len(meas.bearings), resolved.base_plant.to_dict())
+    writer = DatasetWriter.open(
+        out, n_samples=design.n_samples, spec_hash=resolved.spec_hash, L=L, channels=meas.channels,
+        attrs=_file_attrs(resolved, design, meas), dataset_attrs=_dataset_attrs(), code_version=code_version(),
+    )
+    n_before = int(writer.done.sum())
+    todo = np.flatnonzero(~writer.done)
+    counts: Counter[str] = Counter()
+    complete = False
+    try:
+        tasks = (SampleTask(design[int(i)], sim, meas) for i in todo)
+        if n_workers == 0:
+            results = ((k, run_sample(t)) for k, t in enumerate(tasks))
+            if progress:
+                from tqdm.auto import tqdm
+
+                results = tqdm(results, total=len(todo), desc="samples", unit="sample")
+        else:
+            results = run_tasks(run_sample, tasks, n_workers=n_workers, scheduler_address=scheduler_address,
+                                total=len(todo), progress=progress, desc="samples", unit="sample")
+        for _, output in results:
+            params = design[output.index]
+            writer.write_sample(output.index, _rows(params, output))
+            counts[output.status] += 1
+        complete = bool(writer.done.all())
+    finally:
+        writer.close(complete=complete)
+    return GenerateSummary(Path(out), design.n_samples, n_before, int(sum(counts.values())), dict(counts),
+                           writer.resumed, writer.repaired)

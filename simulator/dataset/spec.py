@@ -1,0 +1,423 @@
+"""The dataset specification: a small TOML file, validated with pydantic.
+
+See ``examples/dataset_small.toml`` for a commented example and
+``docs/datasets.md`` for the user guide. The tables are:
+
+``[design]``       sampling design: ``method`` (grid | sobol | lhs), ``n_samples``, ``seed``
+``[operating]``    Δ, A, Ω, phases, exciter unbalance, ``mechanism``: each a value, a list or a range
+``[plant]``        base plant (``file`` and/or ``set``) and relative ``perturb``-ations
+``[measurement]``  probes, sample rate, duration, SNR, runout, speed fluctuation
+``[simulation]``   transient_revs, samples_per_rev, rtol, atol, classify_motion
+
+A *value* is a number; a *list* ``[a, b, c]`` is a set of levels; a *range*
+``{min = .., max = ..}`` is a continuous interval (``n = k`` levels for a grid).
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tomllib
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from simulator.params import MISALIGNMENT_RANGE, SPEED_RANGE_RPM, UNBALANCE_RANGE
+
+__all__ = ["SpecError", "DatasetSpec", "Range", "load_spec", "parse_spec", "PERTURBABLE"]
+
+TWO_PI = 2.0 * math.pi
+
+#: Plant fields that may be perturbed relatively (tuples are perturbed per bearing).
+PERTURBABLE: tuple[str, ...] = (
+    "journal1_mass_kg", "generator_mass_kg", "journal3_mass_kg", "journal4_mass_kg",
+    "exciter_mass_kg", "journal6_mass_kg", "generator_stiffness_n_m", "asymmetry",
+    "generator_damping_n_s_m", "exciter_stiffness_n_m", "exciter_damping_n_s_m",
+    "clearance_m", "viscosity_pa_s", "bearing_radius_m", "bearing_length_m",
+)
+
+
+class SpecError(ValueError):
+    """An invalid dataset spec; the message names the offending key and what to fix."""
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Range(_Strict):
+    """A continuous interval ``{min = a, max = b}``; ``n`` levels when the design is a grid."""
+
+    min: float
+    max: float
+    n: int | None = Field(default=None, ge=1, le=10_000)
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "Range":
+        if not (math.isfinite(self.min) and math.isfinite(self.max)):
+            raise ValueError("min and max must be finite numbers")
+        if self.max < self.min:
+            raise ValueError(f"empty range: max ({self.max}) < min ({self.min})")
+        return self
+
+    @property
+    def lo(self) -> float:
+        return self.min
+
+    @property
+    def hi(self) -> float:
+        return self.max
+
+
+def _parse_variable(v: Any) -> Any:
+    """Turn TOML input into a float, a non-empty list of floats or a Range, with clear errors."""
+    if isinstance(v, bool):
+        raise ValueError(f"expected a number, a list of numbers or a range {{min = .., max = ..}}, got {v!r}")
+    if isinstance(v, (int, float)):
+        return float(v)
+    if isinstance(v, list):
+        if not v:
+            raise ValueError("empty list: give at least one value")
+        if len(v) > 10_000:
+            raise ValueError(f"at most 10000 levels, got {len(v)}")
+        if any(isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) for x in v):
+            raise ValueError(f"a list must hold finite numbers, got {v!r}")
+        return [float(x) for x in v]
+    if isinstance(v, dict):
+        try:
+            return Range.model_validate(v)
+        except ValidationError as exc:
+            raise ValueError("; ".join(_one_error(e) for e in exc.errors())) from None
+    if isinstance(v, Range):
+        return v
+    raise ValueError(f"expected a number, a list of numbers or a range {{min = .., max = ..}}, got {v!r}")
+
+
+def _parse_mechanism(v: Any) -> Any:
+    allowed = ("pin", "rigid")
+    if isinstance(v, str):
+        if v not in allowed:
+            raise ValueError(f"unknown mechanism {v!r}; use \"pin\" or \"rigid\" (Δ = 0 always runs aligned)")
+        return v
+    if isinstance(v, list):
+        if not v:
+            raise ValueError("mechanism list is empty")
+        bad = [m for m in v if m not in allowed]
+        if bad or len(set(v)) != len(v):
+            raise ValueError(f"mechanism list must hold distinct values from {list(allowed)}, got {v!r}")
+        return list(v)
+    if isinstance(v, dict):
+        if not v:
+            raise ValueError("mechanism weights are empty; give e.g. {pin = 0.5, rigid = 0.5}")
+        bad = sorted(set(v) - set(allowed))
+        if bad:
+            raise ValueError(f"unknown mechanism(s) {bad}; use pin and/or rigid")
+        w = list(v.values())
+        if any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in w) or \
+                any(not (math.isfinite(x) and x >= 0) for x in w) or sum(w) <= 0:
+            raise ValueError(f"mechanism weights must be numbers ≥ 0, not all zero, got {v!r}")
+        return {k: float(x) for k, x in v.items()}
+    raise ValueError(f"mechanism must be \"pin\", \"rigid\", a list of them or weights {{pin = .., rigid = ..}}, got {v!r}")
+
+
+Variable = Annotated[Union[float, list[float], Range], BeforeValidator(_parse_variable)]
+Mechanism = Annotated[Union[str, list[str], dict[str, float]], BeforeValidator(_parse_mechanism)]
+
+
+def _bounds(v: Variable) -> tuple[float, float]:
+    if isinstance(v, Range):
+        return v.min, v.max
+    if isinstance(v, list):
+        return min(v), max(v)
+    return float(v), float(v)
+
+
+def _check_bounds(name: str, v: Variable, lo: float, hi: float, unit: str = "") -> Variable:
+    a, b = _bounds(v)
+    if not (math.isfinite(a) and math.isfinite(b)) or a < lo or b > hi:
+        raise ValueError(f"{name} must lie in [{lo:g}, {hi:g}]{unit}, got {a:g}..{b:g}")
+    return v
+
+
+class Design(_Strict):
+    """How operating points and plant perturbations are sampled."""
+
+    method: Literal["grid", "sobol", "lhs"] = "sobol"
+    n_samples: int | None = Field(default=None, ge=1, le=10_000_000)
+    seed: int = Field(ge=0, lt=2**63, description="master seed: every draw of the dataset derives from it")
+
+    @model_validator(mode="after")
+    def _n(self) -> "Design":
+        if self.method != "grid" and self.n_samples is None:
+            raise ValueError(f"n_samples is required for method = {self.method!r}")
+        return self
+
+
+class Operating(_Strict):
+    """Operating point of each sample (MODEL.md ranges)."""
+
+    speed_rpm: Variable
+    misalignment: Variable
+    unbalance: Variable = 0.05
+    unbalance_phase_rad: Variable = 0.0
+    exciter_unbalance: Variable = 0.0
+    exciter_unbalance_phase_rad: Variable = 0.0
+    offset_angle_rad: Variable = 0.0
+    mechanism: Mechanism = "rigid"
+
+    @field_validator("speed_rpm")
+    @classmethod
+    def _speed(cls, v: Variable) -> Variable:
+        return _check_bounds("speed_rpm", v, *SPEED_RANGE_RPM, " r/min")
+
+    @field_validator("misalignment")
+    @classmethod
+    def _delta(cls, v: Variable) -> Variable:
+        return _check_bounds("misalignment", v, *MISALIGNMENT_RANGE)
+
+    @field_validator("unbalance", "exciter_unbalance")
+    @classmethod
+    def _unb(cls, v: Variable) -> Variable:
+        return _check_bounds("unbalance", v, *UNBALANCE_RANGE)
+
+    @field_validator("unbalance_phase_rad", "exciter_unbalance_phase_rad", "offset_angle_rad")
+    @classmethod
+    def _phase(cls, v: Variable) -> Variable:
+        return _check_bounds("phase", v, -TWO_PI, TWO_PI, " rad")
+
+
+class PlantSpec(_Strict):
+    """The base plant and how it varies between samples."""
+
+    file: str | None = Field(default=None, description="plant TOML/JSON file, relative to the spec file")
+    set: dict[str, Any] = Field(default_factory=dict, description="values overriding the base plant")
+    perturb: dict[str, float] = Field(
+        default_factory=dict,
+        description="relative half-widths r: value × (1 + u), u uniform in [−r, r] (per bearing for tuples)",
+    )
+
+    @field_validator("perturb")
+    @classmethod
+    def _perturb(cls, v: dict[str, float]) -> dict[str, float]:
+        for name, r in v.items():
+            if name not in PERTURBABLE:
+                raise ValueError(f"{name!r} cannot be perturbed; perturbable: {', '.join(PERTURBABLE)}")
+            if not (math.isfinite(r) and 0.0 <= r <= 0.9):
+                raise ValueError(f"perturbation of {name} must be a relative half-width in [0, 0.9], got {r}")
+        return v
+
+
+class Measurement(_Strict):
+    """The measurement model applied to the simulated journal displacements."""
+
+    bearings: list[Literal[1, 2, 3, 4]] = Field(default=[1, 2, 3, 4], min_length=1, max_length=4)
+    probe_angles_deg: list[float] = Field(
+        default=[45.0, 135.0], min_length=1, max_length=8,
+        description="probe directions, degrees counter-clockwise from +x (horizontal); 90 = top",
+    )
+    sample_rate_hz: float = Field(gt=0, le=1e6)
+    duration_s: float | None = Field(default=None, gt=0)
+    duration_revs: float | None = Field(default=None, gt=0)
+    snr_db: Variable = math.inf
+    runout_1x_um: Variable = 0.0
+    runout_2x_um: Variable = 0.0
+    speed_fluctuation: float = Field(default=0.0, ge=0.0, le=0.05, description="relative amplitude of Ω(t)")
+    speed_fluctuation_hz: float = Field(default=0.5, gt=0.0, le=100.0)
+
+    @field_validator("bearings")
+    @classmethod
+    def _unique_bearings(cls, v: list[int]) -> list[int]:
+        if len(set(v)) != len(v):
+            raise ValueError(f"bearings must be distinct, got {v}")
+        return v
+
+    @field_validator("probe_angles_deg")
+    @classmethod
+    def _angles(cls, v: list[float]) -> list[float]:
+        if any(not math.isfinite(a) or not -360.0 <= a <= 360.0 for a in v):
+            raise ValueError(f"probe angles must be finite degrees in [-360, 360], got {v}")
+        if len({round(a % 360.0, 9) for a in v}) != len(v):
+            raise ValueError(f"probe angles must be distinct directions, got {v}")
+        return v
+
+    @field_validator("snr_db")
+    @classmethod
+    def _snr(cls, v: Variable) -> Variable:
+        a, b = _bounds(v)
+        if math.isnan(a) or math.isnan(b) or a < -20.0:
+            raise ValueError(f"snr_db must be ≥ -20 dB (inf = no noise), got {a:g}..{b:g}")
+        return v
+
+    @field_validator("runout_1x_um", "runout_2x_um")
+    @classmethod
+    def _runout(cls, v: Variable) -> Variable:
+        return _check_bounds("runout", v, 0.0, 1000.0, " µm")
+
+    @model_validator(mode="after")
+    def _duration(self) -> "Measurement":
+        if (self.duration_s is None) == (self.duration_revs is None):
+            raise ValueError("give exactly one of duration_s or duration_revs")
+        if isinstance(self.snr_db, list):
+            raise ValueError("snr_db must be a value or a range {min, max}, not a list")
+        return self
+
+    @property
+    def n_channels(self) -> int:
+        return len(self.bearings) * len(self.probe_angles_deg)
+
+
+class Simulation(_Strict):
+    """Integration settings passed to :func:`simulator.simulate`."""
+
+    transient_revs: int = Field(default=400, ge=0, le=100_000)
+    samples_per_rev: int = Field(default=128, ge=16, le=4096)
+    rtol: float = Field(default=1e-6, gt=0, le=1e-2)
+    atol: float = Field(default=1e-8, gt=0, le=1e-2)
+    record_revs_min: int = Field(default=32, ge=1, le=100_000,
+                                 description="record at least this many revolutions (Poincaré points for the motion label)")
+    classify_motion: bool = Field(default=True, description="label the motion type with simulator.analysis")
+
+
+class DatasetSpec(_Strict):
+    """A validated dataset specification (see the module docstring)."""
+
+    design: Design
+    operating: Operating
+    plant: PlantSpec = Field(default_factory=PlantSpec)
+    measurement: Measurement
+    simulation: Simulation = Field(default_factory=Simulation)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "DatasetSpec":
+        op = self.operating
+        if self.design.method == "grid":
+            for name in Operating.model_fields:
+                v = getattr(op, name)
+                if isinstance(v, Range) and v.n is None and v.min != v.max:
+                    raise ValueError(f"operating.{name}: a grid needs the number of levels, e.g. "
+                                     f"{{min = {v.min:g}, max = {v.max:g}, n = 5}}")
+            if isinstance(op.mechanism, dict):
+                raise ValueError("operating.mechanism: weights need a random design (sobol or lhs); "
+                                 "for a grid give a list such as [\"pin\", \"rigid\"]")
+            if self.plant.perturb and any(r > 0 for r in self.plant.perturb.values()):
+                raise ValueError("plant.perturb needs a random design (sobol or lhs), not a grid")
+        else:
+            for name in Operating.model_fields:
+                v = getattr(op, name)
+                if isinstance(v, Range) and v.n is not None:
+                    raise ValueError(f"operating.{name}: n (levels) is only used by method = \"grid\"")
+        s_lo, s_hi = _bounds(op.speed_rpm)
+        nyquist_need = 4.0 * s_hi / 60.0  # resolve 2X: fs > 2 × (2 × f_max)
+        if self.measurement.sample_rate_hz < nyquist_need:
+            raise ValueError(f"measurement.sample_rate_hz = {self.measurement.sample_rate_hz:g} Hz is too low "
+                             f"for speed up to {s_hi:g} r/min: need ≥ {nyquist_need:g} Hz to resolve 2X")
+        if self.n_points > 2**22:
+            raise ValueError(f"measurement: {self.n_points} points per channel is too many (max 4194304); "
+                             "shorten the duration or lower the sample rate")
+        if self.n_points < 16:
+            raise ValueError(f"measurement: only {self.n_points} points per channel; lengthen the duration")
+        return self
+
+    @property
+    def n_points(self) -> int:
+        """Points per channel: fixed for the whole dataset.
+
+        With ``duration_revs`` the record covers at least that many revolutions
+        at the slowest speed of the spec (faster samples cover more).
+        """
+        m = self.measurement
+        if m.duration_s is not None:
+            return int(round(m.duration_s * m.sample_rate_hz))
+        s_lo, _ = _bounds(self.operating.speed_rpm)
+        return int(math.ceil(m.duration_revs * 60.0 * m.sample_rate_hz / s_lo - 1e-9))
+
+
+def _one_error(err: dict) -> str:
+    loc = ".".join(str(p) for p in err["loc"])
+    msg = err["msg"].removeprefix("Value error, ")
+    if err["type"] == "extra_forbidden":
+        msg = "unknown key (check the spelling; see examples/dataset_small.toml)"
+    elif err["type"] == "missing":
+        msg = "required key is missing"
+    return f"{loc}: {msg}" if loc else msg
+
+
+def _format_validation_error(exc: ValidationError) -> str:
+    lines = dict.fromkeys("  " + _one_error(e) for e in exc.errors())
+    return "invalid dataset spec:\n" + "\n".join(lines)
+
+
+def parse_spec(text: str, *, base_dir: str | Path | None = None) -> "ResolvedSpec":
+    """Validate TOML text; resolve the plant file relative to ``base_dir``.
+
+    Raises
+    ------
+    SpecError
+        For invalid TOML, unknown keys, empty ranges, values outside MODEL.md's
+        ranges, an unreadable plant file or an invalid plant.
+    """
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SpecError(f"the spec is not valid TOML: {exc}") from None
+    try:
+        spec = DatasetSpec.model_validate(data)
+    except ValidationError as exc:
+        raise SpecError(_format_validation_error(exc)) from None
+    return ResolvedSpec(spec, text, Path(base_dir) if base_dir is not None else Path.cwd())
+
+
+def load_spec(path: str | Path) -> "ResolvedSpec":
+    """Read and validate a spec file (see :func:`parse_spec`)."""
+    path = Path(path)
+    if not path.is_file():
+        raise SpecError(f"spec file {str(path)!r} does not exist")
+    return parse_spec(path.read_text(), base_dir=path.resolve().parent)
+
+
+class ResolvedSpec:
+    """A validated spec plus its resolved base plant and identity hash.
+
+    Attributes
+    ----------
+    spec : DatasetSpec
+    text : str
+        The TOML text as written (stored in the HDF5 file).
+    base_plant : simulator.Plant
+        Plant file (if any) with ``plant.set`` applied.
+    spec_hash : str
+        SHA-256 of the normalised spec and the resolved base plant: comments
+        and formatting do not change it, any value does.
+    """
+
+    def __init__(self, spec: DatasetSpec, text: str, base_dir: Path):
+        from simulator import Plant
+
+        self.spec = spec
+        self.text = text
+        ps = spec.plant
+        try:
+            plant = Plant.default()
+            if ps.file is not None:
+                f = Path(ps.file)
+                plant = Plant.from_file(f if f.is_absolute() else base_dir / f)
+            if ps.set:
+                plant = plant.replace(**ps.set)
+        except (ValueError, TypeError) as exc:
+            raise SpecError(f"invalid dataset spec:\n  plant: {exc}") from None
+        self.base_plant = plant
+        base = plant.to_dict()
+        for name, r in ps.perturb.items():
+            for sign in (-1.0, 1.0):
+                v = base[name]
+                scaled = [x * (1 + sign * r) for x in v] if isinstance(v, list) else v * (1 + sign * r)
+                try:
+                    plant.replace(**{name: scaled})
+                except (ValueError, TypeError) as exc:
+                    raise SpecError(f"invalid dataset spec:\n  plant.perturb.{name} = {r} gives an invalid "
+                                    f"plant at its extreme: {exc}") from None
+        canonical = {"spec": spec.model_dump(mode="json", exclude={"plant": {"file"}}),
+                     "base_plant": base}
+        blob = json.dumps(canonical, sort_keys=True, allow_nan=True).encode()
+        self.spec_hash = hashlib.sha256(blob).hexdigest()

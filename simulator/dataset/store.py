@@ -1,0 +1,379 @@
+"""HDF5 storage of a dataset: layout, crash-safe writer with resume, reader.
+
+The layout is documented in ``docs/dataset-format.md``.
+
+Crash safety
+------------
+* The file is created complete (every dataset, fixed ``n_samples`` rows, all
+  attributes) under a temporary name and renamed into place, so the output
+  path never holds a half-built structure.
+* Samples are written by the parent process only, in HDF5's single-writer /
+  multiple-reader (SWMR) mode (``libver="latest"``): SWMR orders metadata
+  writes so the file on disk is consistent at every moment, which also makes it
+  survive a SIGKILL of the writer. Each sample's rows are written and flushed,
+  then its ``done`` flag is set and flushed: ``done[i] == 1`` implies that
+  sample ``i`` is completely on disk.
+* After a crash HDF5 leaves the "open for writing" flag set in the superblock:
+  the file then opens with ``h5py.File(path, "r", swmr=True)`` (and with
+  :func:`open_dataset`, which falls back to that), but a plain
+  ``h5py.File(path, "r")`` refuses it until the run is resumed. Resuming
+  copies the finished samples (compressed chunks copied as they are) into a
+  fresh file built beside it and renames it into place, so a crash during the
+  repair loses nothing either.
+* An exclusive ``fcntl`` lock on ``<out>.lock`` (released by the OS when the
+  process dies) keeps two runs from writing one file.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import errno
+import fcntl
+import json
+import os
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+
+__all__ = ["FORMAT", "FORMAT_VERSION", "StoreError", "DatasetWriter", "open_dataset", "layout",
+           "MECHANISM_CODES", "SIMULATED_MECHANISM_CODES"]
+
+FORMAT = "rotordiag-dataset"
+FORMAT_VERSION = 1
+MECHANISM_CODES: dict[str, int] = {"pin": 0, "rigid": 1}
+SIMULATED_MECHANISM_CODES: dict[str, int] = {"pin": 0, "rigid": 1, "aligned": 2}
+_MESSAGE_LEN = 256
+_KIND_LEN = 16
+
+
+class StoreError(RuntimeError):
+    """A dataset file that cannot be used as asked (other spec, locked, not a dataset); clear message."""
+
+
+def _utcnow() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+
+
+def _plant_layout(plant_dict: dict[str, Any]) -> dict[str, tuple[tuple[int, ...], str]]:
+    out = {}
+    for name, v in plant_dict.items():
+        if isinstance(v, str):
+            out[f"parameters/plant/{name}"] = ((), f"S{_KIND_LEN}")
+        else:
+            out[f"parameters/plant/{name}"] = (np.asarray(v, dtype=float).shape, "f8")
+    return out
+
+
+def layout(n_channels: int, n_points: int, n_bearings: int,
+           plant_dict: dict[str, Any]) -> dict[str, tuple[tuple[int, ...], str]]:
+    """Per-sample datasets: name → (shape after the sample axis, dtype)."""
+    L: dict[str, tuple[tuple[int, ...], str]] = {
+        "waveforms": ((n_channels, n_points), "f4"),
+        "done": ((), "u1"),
+    }
+    for name in ("speed_rpm", "misalignment", "unbalance", "unbalance_phase_rad", "exciter_unbalance",
+                 "exciter_unbalance_phase_rad", "offset_angle_rad"):
+        L[f"parameters/{name}"] = ((), "f8")
+    L["parameters/mechanism"] = ((), "i1")
+    L["parameters/simulated_mechanism"] = ((), "i1")
+    L["parameters/sample_seed"] = ((), "u8")
+    L["parameters/plant_id"] = ((), "S16")
+    L["parameters/record_revs"] = ((), "i4")
+    L.update(_plant_layout(plant_dict))
+    L["measurement/snr_db"] = ((), "f8")
+    L["measurement/start_angle_rad"] = ((), "f8")
+    L["measurement/speed_fluctuation_phase_rad"] = ((), "f8")
+    for name in ("runout_1x_um", "runout_1x_phase_rad", "runout_2x_um", "runout_2x_phase_rad"):
+        L[f"measurement/{name}"] = ((n_bearings,), "f8")
+    L["labels/misalignment"] = ((), "f8")
+    L["labels/severity"] = ((), "i1")
+    L["labels/status"] = ((), "i1")
+    L["labels/motion_kind"] = ((), f"S{_KIND_LEN}")
+    L["labels/motion_period"] = ((), "i2")
+    L["diagnostics/nfev"] = ((), "i8")
+    L["diagnostics/wall_time_s"] = ((), "f8")
+    L["diagnostics/message"] = ((), f"S{_MESSAGE_LEN}")
+    return L
+
+
+def _fill(dtype: str) -> Any:
+    if dtype.startswith("f"):
+        return np.nan
+    if dtype.startswith("S"):
+        return b""
+    if dtype == "i1" or dtype == "i2":
+        return -1
+    return 0
+
+
+def create_file(path: Path, n_samples: int, L: dict[str, tuple[tuple[int, ...], str]],
+                channels: list[tuple[int, float]], attrs: dict[str, Any],
+                dataset_attrs: dict[str, dict[str, Any]], compression: str = "gzip") -> None:
+    """Create the full, empty structure at ``path`` (atomically: temp file + rename)."""
+    import h5py
+
+    tmp = path.with_name(path.name + ".creating")
+    tmp.unlink(missing_ok=True)
+    with h5py.File(tmp, "w", libver="latest") as f:
+        for name, (tail, dtype) in L.items():
+            shape = (n_samples, *tail)
+            if name == "waveforms":
+                kw = dict(chunks=(1, *tail), shuffle=True, compression=compression,
+                          compression_opts=4 if compression == "gzip" else None)
+            else:
+                rows = max(1, min(n_samples, 4096 // max(1, int(np.prod(tail)))))
+                kw = dict(chunks=(rows, *tail))
+            f.create_dataset(name, shape=shape, dtype=dtype, fillvalue=_fill(dtype), **kw)
+            for k, v in dataset_attrs.get(name, {}).items():
+                f[name].attrs[k] = v
+        ch = np.array(channels, dtype=[("bearing", "i1"), ("angle_deg", "f8")])
+        f.create_dataset("channels", data=ch)
+        f["channels"].attrs["description"] = "probe channels: bearing 1-4, angle in degrees CCW from +x (90 = top)"
+        for k, v in attrs.items():
+            f.attrs[k] = v
+        f.flush()
+        os.fsync(f.id.get_vfd_handle())
+    os.replace(tmp, path)
+    _fsync_dir(path.parent)
+
+
+def _fsync_dir(d: Path) -> None:
+    try:
+        fd = os.open(d, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+@contextmanager
+def open_dataset(path: str | os.PathLike) -> Iterator[Any]:
+    """Open a dataset file read-only, also while it is being written or after a crash.
+
+    Yields
+    ------
+    h5py.File
+    """
+    import h5py
+
+    path = Path(path)
+    if not path.is_file():
+        raise StoreError(f"{str(path)!r} does not exist")
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        if "h5clear" not in str(exc) and "already open" not in str(exc):
+            raise StoreError(f"{str(path)!r} is not a readable HDF5 file: {exc}") from None
+        f = h5py.File(path, "r", swmr=True)  # being written, or its writer was killed
+    try:
+        if f.attrs.get("format") != FORMAT:
+            raise StoreError(f"{str(path)!r} is an HDF5 file but not a rotordiag dataset (no format attribute)")
+        yield f
+    finally:
+        f.close()
+
+
+class _Lock:
+    """Exclusive advisory lock on ``<path>.lock`` (released by the OS if the process dies)."""
+
+    def __init__(self, path: Path):
+        self.path = path.with_name(path.name + ".lock")
+        self.fd: int | None = None
+
+    def acquire(self) -> None:
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            os.close(fd)
+            if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                holder = self.path.read_text().strip() or "?"
+                raise StoreError(f"another process (pid {holder}) is writing {str(self.path)[:-5]!r}; "
+                                 "wait for it to finish or stop it, then rerun to resume") from None
+            raise
+        os.ftruncate(fd, 0)
+        os.write(fd, str(os.getpid()).encode())
+        self.fd = fd
+
+    def release(self) -> None:
+        if self.fd is not None:
+            try:
+                self.path.unlink(missing_ok=True)
+            finally:
+                os.close(self.fd)
+                self.fd = None
+
+
+class DatasetWriter:
+    """Open (create, resume or repair) a dataset file and write finished samples into it.
+
+    Use :meth:`open` as a context manager. ``done`` is the boolean mask of
+    finished samples; :meth:`write_sample` writes one sample and flushes.
+    """
+
+    def __init__(self, path: Path, f: Any, lock: _Lock, resumed: bool, repaired: bool):
+        self.path = path
+        self.f = f
+        self._lock = lock
+        self.resumed = resumed
+        self.repaired = repaired
+        self.done = f["done"][...].astype(bool)
+        self._ds = {name: f[name] for name in _dataset_names(f)}
+
+    # ------------------------------------------------------------------ opening
+    @classmethod
+    def open(cls, path: str | os.PathLike, *, n_samples: int, spec_hash: str,
+             L: dict[str, tuple[tuple[int, ...], str]], channels: list[tuple[int, float]],
+             attrs: dict[str, Any], dataset_attrs: dict[str, dict[str, Any]],
+             code_version: str) -> "DatasetWriter":
+        """Create ``path``, or reopen it to resume when it was made from the same spec.
+
+        Raises
+        ------
+        StoreError
+            If the file was made from another spec, is not a dataset, is a
+            merged file, or is being written by another process.
+        """
+        import h5py
+
+        path = Path(path)
+        if path.parent and not path.parent.exists():
+            raise StoreError(f"output folder {str(path.parent)!r} does not exist")
+        lock = _Lock(path)
+        lock.acquire()
+        try:
+            path.with_name(path.name + ".creating").unlink(missing_ok=True)
+            path.with_name(path.name + ".repair").unlink(missing_ok=True)
+            resumed = repaired = False
+            if not path.exists():
+                create_file(path, n_samples, L, channels, attrs, dataset_attrs)
+            else:
+                resumed = True
+                crashed = _check_existing(path, spec_hash, n_samples, L)
+                if crashed:
+                    _repair(path, n_samples, L)
+                    repaired = True
+            f = h5py.File(path, "r+", libver="latest")
+            try:
+                if resumed:
+                    log = json.loads(f.attrs.get("resume_log", "[]"))
+                    log.append({"time_utc": _utcnow(), "code_version": code_version,
+                                "n_done": int(np.count_nonzero(f["done"][...])), "repaired": repaired})
+                    f.attrs["resume_log"] = json.dumps(log)
+                f.swmr_mode = True
+            except BaseException:
+                f.close()
+                raise
+            return cls(path, f, lock, resumed, repaired)
+        except BaseException:
+            lock.release()
+            raise
+
+    # ------------------------------------------------------------------ writing
+    def write_sample(self, index: int, rows: dict[str, Any]) -> None:
+        """Write one sample's values (dataset name → value) and mark it done, flushing in between."""
+        for name, value in rows.items():
+            self._ds[name][index] = value
+        self.f.flush()
+        self._ds["done"][index] = 1
+        self.f.flush()
+        self.done[index] = True
+
+    def close(self, *, complete: bool = False) -> None:
+        """Close the file (clears HDF5's writing flag); record completion time when complete."""
+        import h5py
+
+        if self.f is None:
+            return
+        try:
+            self.f.close()
+            self.f = None
+            if complete:
+                with h5py.File(self.path, "r+", libver="latest") as f:
+                    f.attrs["completed_utc"] = _utcnow()
+        finally:
+            self._lock.release()
+
+    def __enter__(self) -> "DatasetWriter":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+def _dataset_names(f: Any) -> list[str]:
+    names: list[str] = []
+
+    def visit(name: str, obj: Any) -> None:
+        import h5py
+
+        if isinstance(obj, h5py.Dataset) and name != "channels":
+            names.append(name)
+
+    f.visititems(visit)
+    return names
+
+
+def _check_existing(path: Path, spec_hash: str, n_samples: int, L: dict) -> bool:
+    """Validate an existing output file for resuming; return True if its writer crashed."""
+    import h5py
+
+    crashed = False
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        if "h5clear" not in str(exc) and "already open" not in str(exc):
+            raise StoreError(f"{str(path)!r} exists but is not a readable HDF5 file ({exc}); "
+                             "choose another --out or remove it") from None
+        f = h5py.File(path, "r", swmr=True)
+        crashed = True
+    with f:
+        if f.attrs.get("format") != FORMAT:
+            raise StoreError(f"{str(path)!r} exists and is not a rotordiag dataset; choose another --out")
+        if f.attrs.get("merged", False):
+            raise StoreError(f"{str(path)!r} is a merged dataset and cannot be resumed; choose another --out")
+        old = str(f.attrs.get("spec_hash", ""))
+        if old != spec_hash:
+            raise StoreError(
+                f"{str(path)!r} was generated from a different spec (spec hash {old[:12]}…, this spec "
+                f"{spec_hash[:12]}…); use the spec it was made with to resume, or choose another --out")
+        if f["done"].shape != (n_samples,) or set(_dataset_names(f)) != set(L):
+            raise StoreError(f"{str(path)!r} has another layout than this spec produces (older format or "
+                             "code); choose another --out")
+    return crashed
+
+
+def _repair(path: Path, n_samples: int, L: dict) -> None:
+    """Copy the finished samples of a crashed file into a fresh one and rename it into place."""
+    import h5py
+
+    tmp = path.with_name(path.name + ".repair")
+    with h5py.File(path, "r", swmr=True) as src:
+        done = src["done"][...].astype(bool)
+        channels = [tuple(r) for r in src["channels"][...].tolist()]
+        attrs = {k: src.attrs[k] for k in src.attrs}
+        dattrs = {name: {k: src[name].attrs[k] for k in src[name].attrs} for name in L}
+        comp = src["waveforms"].compression or "gzip"
+        create_file(tmp, n_samples, L, channels, attrs, dattrs, compression=comp)
+        with h5py.File(tmp, "r+", libver="latest") as dst:
+            idx = np.flatnonzero(done)
+            sw, dw = src["waveforms"], dst["waveforms"]
+            tail = (0,) * (sw.ndim - 1)
+            for i in idx:
+                filter_mask, chunk = sw.id.read_direct_chunk((int(i), *tail))
+                dw.id.write_direct_chunk((int(i), *tail), chunk, filter_mask)
+            for name in L:
+                if name == "waveforms":
+                    continue
+                data = src[name][...]
+                keep = done.reshape((-1,) + (1,) * (data.ndim - 1))
+                dst[name][...] = np.where(keep, data, np.asarray(dst[name].fillvalue, dtype=data.dtype))
+            dst.flush()
+            os.fsync(dst.id.get_vfd_handle())
+    os.replace(tmp, path)
+    _fsync_dir(path.parent)

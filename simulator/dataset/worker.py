@@ -1,0 +1,106 @@
+"""The per-sample task run on the Dask workers: simulate, then measure.
+
+:func:`run_sample` takes a :class:`SampleTask` (plain, picklable data) and
+returns a :class:`SampleOutput`. It runs in a worker process and never touches
+the output file; the parent writes.
+"""
+from __future__ import annotations
+
+import traceback
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .design import SampleParams
+from .measurement import MeasurementDraws, MeasurementSettings, draw_measurement, probe_waveforms_um, \
+    required_record_revs
+
+__all__ = ["SimulationSettings", "SampleTask", "SampleOutput", "run_sample", "STATUS_CODES"]
+
+#: Sample status codes stored in ``labels/status``: the simulator's three, plus
+#: ``error`` for a sample whose simulation raised ValueError (message in diagnostics/message).
+STATUS_CODES: dict[str, int] = {"ok": 0, "contact": 1, "diverged": 2, "error": 3}
+
+
+@dataclass(frozen=True)
+class SimulationSettings:
+    transient_revs: int
+    samples_per_rev: int
+    rtol: float
+    atol: float
+    record_revs_min: int
+    classify_motion: bool
+
+    @classmethod
+    def from_spec(cls, spec) -> "SimulationSettings":
+        s = spec.simulation
+        return cls(s.transient_revs, s.samples_per_rev, s.rtol, s.atol, s.record_revs_min, s.classify_motion)
+
+
+@dataclass(frozen=True)
+class SampleTask:
+    params: SampleParams
+    simulation: SimulationSettings
+    measurement: MeasurementSettings
+
+
+@dataclass
+class SampleOutput:
+    index: int
+    waveforms_um: np.ndarray          # (n_channels, n_points) float32
+    draws: MeasurementDraws
+    status: str
+    simulated_mechanism: str          # what simulate() ran ("aligned" for Δ = 0)
+    record_revs: int
+    nfev: int = 0
+    wall_time_s: float = 0.0
+    motion_kind: str = ""
+    motion_period: int = 0
+    message: str = ""             # simulator message when status != ok
+    extra: dict = field(default_factory=dict)
+
+
+def _motion(poincare_m: np.ndarray) -> tuple[str, int]:
+    """Motion label from the analysis package's classifier (optional hook)."""
+    try:
+        from simulator.analysis import classify_motion
+    except ImportError:  # analysis package absent: no motion label
+        return "", 0
+    pts = poincare_m[np.all(np.isfinite(poincare_m.reshape(len(poincare_m), -1)), axis=1)]
+    if len(pts) < 2:
+        return "unresolved", 0
+    mt = classify_motion(pts)
+    return mt.kind, int(mt.period or 0)
+
+
+def run_sample(task: SampleTask) -> SampleOutput:
+    """Simulate one sample and apply the measurement model (runs on a worker)."""
+    from simulator import Plant, simulate
+
+    p, sim, meas = task.params, task.simulation, task.measurement
+    rng = np.random.default_rng(p.sample_seed)
+    draws = draw_measurement(meas, rng)
+    revs = max(required_record_revs(p.speed_rpm, meas, draws), sim.record_revs_min)
+    try:
+        plant = Plant.from_dict(p.plant)
+        res = simulate(
+            plant, p.speed_rpm, p.misalignment, p.unbalance, mechanism=p.mechanism,
+            transient_revs=sim.transient_revs, record_revs=revs, samples_per_rev=sim.samples_per_rev,
+            rtol=sim.rtol, atol=sim.atol, unbalance_phase_rad=p.unbalance_phase_rad,
+            exciter_unbalance=p.exciter_unbalance, exciter_unbalance_phase_rad=p.exciter_unbalance_phase_rad,
+            offset_angle_rad=p.offset_angle_rad,
+        )
+    except ValueError as exc:  # simulate's documented input error: kept as a labelled sample, not dropped
+        msg = f"{type(exc).__name__}: {exc}"
+        tb = traceback.format_exc(limit=3)
+        return SampleOutput(p.index, np.full((len(meas.channels), meas.n_points), np.nan, np.float32), draws,
+                            "error", p.mechanism if p.misalignment > 0 else "aligned", revs,
+                            message=msg, extra={"traceback": tb})
+    waveforms = probe_waveforms_um(res.journal_displacements_m, sim.samples_per_rev, p.speed_rpm, meas, draws, rng)
+    kind, period = ("", 0)
+    if sim.classify_motion and res.status == "ok":
+        kind, period = _motion(res.poincare_m)
+    return SampleOutput(p.index, waveforms, draws, res.status, res.inputs["mechanism"], revs,
+                        nfev=int(res.nfev), wall_time_s=float(res.wall_time_s),
+                        motion_kind=kind, motion_period=period,
+                        message="" if res.status == "ok" else res.message)
