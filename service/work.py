@@ -122,24 +122,37 @@ def _progress_cb(ctx, lo: float, hi: float, stage: str):
 
 
 def run_dataset(params: dict[str, Any], ctx) -> dict[str, Any]:
-    """Generate (or complete) the dataset file of a dataset job."""
+    """Generate (or complete) the dataset file of a dataset job (a resumed job computes only missing samples)."""
     out = ctx.settings.datasets_dir / f"{params.get('name') or ctx.job_id}.h5"
     return _generate(params["spec_toml"], out, ctx, 0.0, 1.0)
 
 
 def _generate(spec_toml: str, out, ctx, lo: float, hi: float) -> dict[str, Any]:
-    from simulator.dataset import generate_dataset
+    """Run the dataset package's ``generate`` on the job manager's Dask cluster (resumable)."""
+    import dataclasses
+    import inspect
+
+    from simulator.dataset.generate import generate
     from simulator.dataset.spec import parse_spec
 
-    ctx.progress(lo, "simulating", "starting the Dask cluster and the simulations")
     resolved = parse_spec(spec_toml)
+    n = resolved.spec.design.n_samples
+    ctx.progress(lo, "simulating", f"starting {n or 'the grid of'} simulations on Dask")
     out.parent.mkdir(parents=True, exist_ok=True)
-    summary = generate_dataset(resolved, out, client=ctx.client(), progress=False,
-                               on_progress=_progress_cb(ctx, lo, hi, "simulating"))
-    result = {"path": str(out.resolve()), "spec_hash": resolved.spec_hash}
-    if isinstance(summary, dict):
-        result.update({k: v for k, v in summary.items() if _jsonable(v)})
-    return result
+    client = ctx.client()
+    kwargs: dict[str, Any] = {"scheduler_address": client.scheduler.address, "progress": False}
+    if "on_progress" in inspect.signature(generate).parameters:   # per-sample progress when the generator offers it
+        kwargs["on_progress"] = _progress_cb(ctx, lo, hi, "simulating")
+    summary = generate(resolved, out, **kwargs)
+    ctx.progress(hi, "simulating", "dataset complete")
+    result = {k: (str(v) if k == "path" else v) for k, v in dataclasses.asdict(summary).items()}
+    result["path"] = str(out.resolve())
+    result["spec_hash"] = resolved.spec_hash
+    result["complete"] = summary.complete
+    if not summary.complete:
+        raise RuntimeError(f"dataset {out} is incomplete ({summary.n_done_before + summary.n_computed} of "
+                           f"{summary.n_samples} samples); resume the job to finish it")
+    return {k: v for k, v in result.items() if _jsonable(v)}
 
 
 def _jsonable(v: Any) -> bool:
