@@ -13,12 +13,21 @@ detect_period, poincare_divergence_rate
 FlowMapError
     Raised by a flow map that cannot advance (contact, divergence).
 
-The rotor-specific sweeps (bifurcation vs speed / misalignment, LLE vs speed,
-amplitude–speed curves) live in :mod:`simulator.analysis.sweeps`; the figures in
-:mod:`simulator.analysis.figures`; the CLI in :mod:`simulator.analysis.cli`.
+speed_sweep(plant, speeds_rpm, misalignment, unbalance, ...) -> SweepResult
+misalignment_sweep(plant, speed_rpm, misalignments, unbalance, ...) -> SweepResult
+    Bifurcation data (Poincaré X = x/c of a node, default node 3 horizontal),
+    motion type, optional LLE, peak-to-peak and 1X/2X/3X at every point; points
+    run in parallel through :func:`simulator.runner.run_tasks`.
+amplitude_speed_curves(plant, speeds_rpm, misalignments, unbalance, ...) -> {Δ: SweepResult}
+rotor_lyapunov(plant, speed_rpm, misalignment, unbalance, ...) -> LyapunovResult
+    LLE of the rotor's once-per-revolution map (per revolution and per second).
+
+Figures (:mod:`simulator.analysis.figures`, ``paper_figures``) and the CLI
+(:mod:`simulator.analysis.cli`: ``bifurcate``, ``lyapunov``, ``figures``).
 """
 from .lyapunov import FlowMapError, LyapunovResult, largest_lyapunov
 from .motion import MotionType, classify_motion, detect_period, poincare_divergence_rate
+from .sweeps import SweepResult, amplitude_speed_curves, misalignment_sweep, rotor_lyapunov, speed_sweep
 
 __all__ = [
     "FlowMapError",
@@ -28,4 +37,9 @@ __all__ = [
     "classify_motion",
     "detect_period",
     "poincare_divergence_rate",
+    "SweepResult",
+    "speed_sweep",
+    "misalignment_sweep",
+    "amplitude_speed_curves",
+    "rotor_lyapunov",
 ]

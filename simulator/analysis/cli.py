@@ -1,8 +1,219 @@
-"""CLI commands of the nonlinear-analysis package (bifurcate, lyapunov, figures)."""
+"""CLI commands of the nonlinear-analysis package: ``bifurcate``, ``lyapunov``, ``figures``."""
 from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Optional
 
 import typer
 
+MECHANISM_HELP = "Coupling model: pin (the paper's holonomic constraint), rigid (offset carried by the shaft)."
+WORKERS_HELP = "Local Dask worker processes (default: all usable CPUs; 0 = run in this process, no Dask)."
+SCHEDULER_HELP = "Address of an existing Dask scheduler, e.g. tcp://host:8786 (instead of a local cluster)."
+
+
+def _fail(message: str) -> None:
+    typer.secho(f"error: {message}", fg=typer.colors.RED, err=True)
+    raise typer.Exit(code=2)
+
+
+def _run_opts(workers: Optional[int], scheduler: Optional[str]) -> dict:
+    if workers is not None and scheduler is not None:
+        raise typer.BadParameter("give either --workers or --scheduler, not both", param_hint="--workers")
+    if workers is not None and workers < 0:
+        raise typer.BadParameter("must be >= 0", param_hint="--workers")
+    return dict(n_workers=workers, scheduler_address=scheduler)
+
 
 def register(app: typer.Typer) -> None:
-    """Add this package's commands to the ``rotordiag`` app (filled by the analysis work)."""
+    """Add ``bifurcate``, ``lyapunov`` and ``figures`` to the ``rotordiag`` app."""
+
+    @app.command()
+    def bifurcate(
+        over: str = typer.Option(..., help="Swept parameter: speed or misalignment."),
+        from_: float = typer.Option(..., "--from", help="Start of the sweep (r/min, or Δ)."),
+        to: float = typer.Option(..., help="End of the sweep (r/min, or Δ)."),
+        points: int = typer.Option(50, help="Number of sweep points (≥ 2)."),
+        misalignment: Optional[float] = typer.Option(None, help="Δ = δ/c for --over speed (0–0.9)."),
+        speed_rpm: Optional[float] = typer.Option(None, help="Running speed, r/min, for --over misalignment."),
+        unbalance: float = typer.Option(0.05, help="Generator unbalance A = a/c (0–0.5)."),
+        mechanism: str = typer.Option("pin", help=MECHANISM_HELP),
+        node: int = typer.Option(3, help="Node of the diagram (1–6; 3 = generator journal at the coupling)."),
+        direction: str = typer.Option("x", help="x (horizontal, the paper's) or y (vertical)."),
+        transient_revs: int = typer.Option(400, help="Revolutions discarded at each point."),
+        record_revs: int = typer.Option(128, help="Revolutions recorded (Poincaré points per parameter value)."),
+        lle_revs: int = typer.Option(0, help="Revolutions of the Lyapunov exponent at each point (0: none)."),
+        plant: Optional[Path] = typer.Option(None, help="Plant file (TOML or JSON); default MODEL.md's plant."),
+        plot: Optional[Path] = typer.Option(None, help="Write the bifurcation diagram (PNG)."),
+        out: Optional[Path] = typer.Option(None, help="Write the sweep data (HDF5)."),
+        workers: Optional[int] = typer.Option(None, help=WORKERS_HELP),
+        scheduler: Optional[str] = typer.Option(None, help=SCHEDULER_HELP),
+        progress: bool = typer.Option(True, help="Show a progress bar."),
+    ) -> None:
+        """Bifurcation diagram: Poincaré points of X = x/c against speed or misalignment."""
+        import numpy as np
+
+        from simulator.cli import load_plant
+
+        if over not in ("speed", "misalignment"):
+            raise typer.BadParameter("must be 'speed' or 'misalignment'", param_hint="--over")
+        if points < 2:
+            raise typer.BadParameter("need at least 2 points", param_hint="--points")
+        if to <= from_:
+            raise typer.BadParameter(f"--to ({to:g}) must be greater than --from ({from_:g})", param_hint="--to")
+        for path, hint in ((plot, "--plot"), (out, "--out")):
+            if path is not None and not path.parent.exists():
+                raise typer.BadParameter(f"directory {path.parent} does not exist", param_hint=hint)
+        opts = _run_opts(workers, scheduler)
+        pl = load_plant(plant)
+        values = np.linspace(from_, to, points)
+        kw = dict(mechanism=mechanism, node=node, direction=direction, transient_revs=transient_revs,
+                  record_revs=record_revs, lle_revs=lle_revs, progress=progress, **opts)
+        from simulator.analysis.sweeps import misalignment_sweep, speed_sweep
+
+        try:
+            if over == "speed":
+                if misalignment is None:
+                    raise typer.BadParameter("--over speed needs --misalignment", param_hint="--misalignment")
+                sweep = speed_sweep(pl, values, misalignment, unbalance, **kw)
+            else:
+                if speed_rpm is None:
+                    raise typer.BadParameter("--over misalignment needs --speed-rpm", param_hint="--speed-rpm")
+                sweep = misalignment_sweep(pl, speed_rpm, values, unbalance, **kw)
+        except ValueError as exc:
+            _fail(str(exc))
+        except OSError as exc:
+            _fail(f"could not reach the Dask scheduler: {exc}")
+        from simulator.analysis.figures import motion_windows
+
+        for w in motion_windows(sweep):
+            lle = "" if w["lle_min"] is None else f"  LLE {w['lle_min']:+.4f} .. {w['lle_max']:+.4f} /rev"
+            typer.echo(f"{w['from']:>10.4g} – {w['to']:<10.4g} {w['motion']:<16} ({w['n_points']} points){lle}")
+        if out is not None:
+            sweep.to_hdf5(out)
+            typer.echo(f"wrote {out}", err=True)
+        if plot is not None:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+
+            from simulator.analysis.figures import plot_bifurcation, plot_lle
+
+            rows = 2 if lle_revs > 0 else 1
+            fig, axes = plt.subplots(rows, 1, figsize=(8, 4 * rows), squeeze=False, sharex=True)
+            plot_bifurcation(axes[0, 0], sweep, size=2)
+            fixed = f"Δ = {misalignment:g}" if over == "speed" else f"{speed_rpm:g} r/min"
+            axes[0, 0].set_title(f"{fixed}, A = {unbalance:g}, {mechanism}", fontsize=9)
+            if rows == 2:
+                plot_lle(axes[1, 0], sweep)
+            fig.tight_layout()
+            fig.savefig(plot, dpi=110)
+            plt.close(fig)
+            typer.echo(f"wrote {plot}", err=True)
+
+    @app.command()
+    def lyapunov(
+        speed_rpm: float = typer.Option(..., help="Running speed, r/min (100–6000)."),
+        misalignment: float = typer.Option(..., help="Δ = δ/c (0–0.9)."),
+        unbalance: float = typer.Option(0.05, help="Generator unbalance A = a/c (0–0.5)."),
+        mechanism: str = typer.Option("pin", help=MECHANISM_HELP),
+        revs: int = typer.Option(150, help="Revolutions averaged (Benettin, renormalised once per revolution)."),
+        transient_revs: int = typer.Option(400, help="Revolutions discarded first."),
+        separation: float = typer.Option(1e-6, help="Neighbour separation (non-dimensional state)."),
+        seed: int = typer.Option(0, help="Seed of the initial perturbation direction."),
+        plant: Optional[Path] = typer.Option(None, help="Plant file (TOML or JSON)."),
+        plot: Optional[Path] = typer.Option(None, help="Write the convergence history (PNG)."),
+        as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
+    ) -> None:
+        """Largest Lyapunov exponent and motion type at one operating point."""
+        import numpy as np
+        from tqdm.auto import tqdm
+
+        from simulator import simulate
+        from simulator.analysis import FlowMapError, classify_motion
+        from simulator.analysis.sweeps import rotor_lyapunov
+        from simulator.cli import load_plant
+
+        if revs < 10:
+            raise typer.BadParameter("need at least 10 revolutions", param_hint="--revs")
+        if plot is not None and not plot.parent.exists():
+            raise typer.BadParameter(f"directory {plot.parent} does not exist", param_hint="--plot")
+        pl = load_plant(plant)
+        try:
+            res = simulate(pl, speed_rpm, misalignment, unbalance, mechanism=mechanism,
+                           transient_revs=transient_revs, record_revs=max(64, 3 * 16))
+            if res.status != "ok":
+                _fail(f"the run did not reach a steady state: {res.message}")
+            with tqdm(total=revs, desc="Lyapunov", unit="rev") as bar:
+                lle = rotor_lyapunov(pl, speed_rpm, misalignment, unbalance, n_revs=revs, transient_revs=0,
+                                     initial_state=res.final_state, mechanism=mechanism, separation=separation,
+                                     seed=seed, progress=bar.update)
+        except ValueError as exc:
+            _fail(str(exc))
+        except FlowMapError as exc:
+            _fail(str(exc))
+        c = pl.clearance_m
+        orbit = float(np.max(np.ptp(res.positions_m / c, axis=0)))
+        motion = classify_motion(res.poincare_m / c, lle, orbit_size=orbit)
+        summary = dict(speed_rpm=speed_rpm, misalignment=misalignment, unbalance=unbalance, mechanism=mechanism,
+                       lle_per_rev=lle.lle_per_interval, lle_per_s=lle.lle_per_s,
+                       stderr_per_rev=lle.stderr_per_interval, revs=lle.n_intervals, motion=motion.label,
+                       evidence=motion.evidence)
+        if as_json:
+            typer.echo(json.dumps(summary, indent=2))
+        else:
+            typer.echo(f"LLE = {lle.lle_per_interval:+.5f} ± {lle.stderr_per_interval:.5f} per revolution "
+                       f"= {lle.lle_per_s:+.4f} per second ({lle.n_intervals} revolutions)")
+            typer.echo(f"motion: {motion.label} ({motion.evidence})")
+        if plot is not None:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+
+            fig, ax = plt.subplots(figsize=(6, 3.5))
+            ax.plot(np.arange(1, lle.n_intervals + 1), lle.history_per_interval, c="black")
+            ax.axhline(0, c="0.5", lw=0.8)
+            ax.set_xlabel("revolutions averaged")
+            ax.set_ylabel("running LLE estimate (1/rev)")
+            ax.set_title(f"{speed_rpm:g} r/min, Δ = {misalignment:g}, A = {unbalance:g}", fontsize=9)
+            ax.grid(alpha=0.3)
+            fig.tight_layout()
+            fig.savefig(plot, dpi=110)
+            plt.close(fig)
+            typer.echo(f"wrote {plot}", err=True)
+
+    @app.command()
+    def figures(
+        out: Path = typer.Option(..., help="Directory for the PNGs, sweep data and summary.json."),
+        quick: bool = typer.Option(False, "--quick", help="Coarse grids: a few minutes on 2 cores."),
+        plant: Optional[Path] = typer.Option(None, help="Plant file (TOML or JSON)."),
+        mechanism: str = typer.Option("pin", help=MECHANISM_HELP),
+        workers: Optional[int] = typer.Option(None, help=WORKERS_HELP),
+        scheduler: Optional[str] = typer.Option(None, help=SCHEDULER_HELP),
+    ) -> None:
+        """Regenerate the paper's figure set (Figs 4–15) as PNGs."""
+        from dataclasses import replace
+
+        from simulator.analysis.figures import FULL, QUICK, paper_figures
+        from simulator.cli import load_plant
+
+        opts = _run_opts(workers, scheduler)
+        if mechanism not in ("pin", "rigid"):
+            raise typer.BadParameter("must be 'pin' or 'rigid'", param_hint="--mechanism")
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise typer.BadParameter(f"cannot create {out}: {exc}", param_hint="--out") from None
+        pl = load_plant(plant)
+        settings = replace(QUICK if quick else FULL, mechanism=mechanism)
+        if not quick:
+            typer.echo("full resolution: about 10 min on 2 cores (use --quick for a coarse set)", err=True)
+        try:
+            summary = paper_figures(out, settings, plant=pl, **opts)
+        except ValueError as exc:
+            _fail(str(exc))
+        except OSError as exc:
+            _fail(f"could not reach the Dask scheduler: {exc}")
+        typer.echo(f"wrote {len(summary['files'])} figures to {out} in {summary['wall_time_s']:.0f} s")
