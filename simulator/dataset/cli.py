@@ -107,6 +107,18 @@ def merge(
     typer.echo(f"{out}: {result['n_samples']} samples from {len(result['sources'])} source specs")
 
 
+@dataset_app.command()
+def repair(path: Path = typer.Argument(..., help="Dataset HDF5 file of a killed run.")) -> None:
+    """Make the file of a killed run readable by plain h5py again (keeps every finished sample)."""
+    from simulator.dataset.store import StoreError, repair_file
+
+    try:
+        crashed, n_done = repair_file(path)
+    except StoreError as exc:
+        _fail(str(exc))
+    typer.echo(f"{path}: {'repaired' if crashed else 'nothing to repair'}; {n_done} finished samples")
+
+
 def register(app: typer.Typer) -> None:
     """Add the ``dataset`` command group to the ``rotordiag`` app."""
     app.add_typer(dataset_app, name="dataset")

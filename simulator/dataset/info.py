@@ -79,7 +79,7 @@ def summarize(path: str | os.PathLike) -> dict[str, Any]:
             for j in range(cols.shape[1]):
                 lo, hi = float(cols[:, j].min()), float(cols[:, j].max())
                 if hi != lo:
-                    where = "" if v.ndim == 1 else str(list(np.unravel_index(j, v.shape[1:])))
+                    where = "" if v.ndim == 1 else str([int(k) for k in np.unravel_index(j, v.shape[1:])])
                     ranges[f"plant.{name}{where}"] = [lo, hi]
         summary["parameter_ranges"] = ranges
         if summary["merged"]:

@@ -377,3 +377,35 @@ def _repair(path: Path, n_samples: int, L: dict) -> None:
             os.fsync(dst.id.get_vfd_handle())
     os.replace(tmp, path)
     _fsync_dir(path.parent)
+
+
+def repair_file(path: str | os.PathLike) -> tuple[bool, int]:
+    """Make the file of a killed run open with plain ``h5py.File(path, "r")`` again.
+
+    Copies the finished samples into a fresh file and renames it into place
+    (what resuming does, without computing anything).
+
+    Returns
+    -------
+    (bool, int)
+        Whether a repair was needed, and the number of finished samples.
+    """
+    import h5py
+
+    path = Path(path)
+    lock = _Lock(path)
+    lock.acquire()
+    try:
+        path.with_name(path.name + ".repair").unlink(missing_ok=True)
+        with open_dataset(path) as f:
+            L = {name: (f[name].shape[1:], f[name].dtype.str.lstrip("<>|=")) for name in _dataset_names(f)}
+            n_samples = f["done"].shape[0]
+            spec_hash = str(f.attrs["spec_hash"])
+            merged = bool(f.attrs.get("merged", False))
+        crashed = False if merged else _check_existing(path, spec_hash, n_samples, L)
+        if crashed:
+            _repair(path, n_samples, L)
+        with h5py.File(path, "r") as f:
+            return crashed, int(np.count_nonzero(f["done"][...]))
+    finally:
+        lock.release()
