@@ -165,9 +165,14 @@ def _clean(v: Any) -> Any:
 
 
 def _bearings(fr: Any) -> list[dict[str, Any]]:
-    """Per-bearing details of a feature result as JSON-able dicts."""
-    bearings = getattr(fr, "bearings", None) or []
-    if isinstance(bearings, dict):
-        bearings = [{"bearing": k, **(_clean(v) if isinstance(_clean(v), dict) else {"value": _clean(v)})}
-                    for k, v in bearings.items()]
-    return [_clean(b) for b in bearings]
+    """Per-bearing key features of a ``features.FeatureResult``: bearing, probe angles, clearance and
+    that bearing's entries of the feature vector (``b{n}_...`` names, units in the names)."""
+    out = []
+    for b, detail in sorted((getattr(fr, "bearings", None) or {}).items()):
+        out.append(_clean({
+            "bearing": int(b),
+            "probe_angles_deg": list(getattr(detail, "probe_angles_deg", ())),
+            "clearance_um": getattr(detail, "clearance_um", None),
+            "features": dict(getattr(detail, "features", {}) or {}),
+        }))
+    return out

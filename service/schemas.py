@@ -29,7 +29,7 @@ class ChannelIn(_Strict):
         description="Probe mounting angle in degrees, measured from the horizontal x axis towards vertical-up y "
         "(e.g. 45 and 135 for an XY pair at 45 degrees either side of top dead centre).", examples=[45.0])
     units: str = Field(..., min_length=1, max_length=16,
-                       description="Units of `data`: `um` (micrometres) or `mil` (thousandths of an inch).",
+                       description="Units of `data`: `um` (micrometres), `mm`, `m` or `mil` (thousandths of an inch, 25.4 µm).",
                        examples=["um"])
     data: list[FiniteFloat] = Field(
         ..., min_length=1, max_length=MAX_POINTS,
@@ -166,6 +166,19 @@ class FeatureContributionOut(BaseModel):
                                        "feature alone is set to its training median (positive: pushed toward the verdict).")
 
 
+class BearingOut(BaseModel):
+    """Key features of one bearing."""
+
+    bearing: int = Field(..., description="Bearing number 1-4.")
+    probe_angles_deg: list[float] = Field(..., description="The two probes' mounting angles, degrees from "
+                                          "horizontal +x toward vertical +y.")
+    clearance_um: float | None = Field(None, description="Radial clearance used, µm (null: unknown).")
+    features: dict[str, float | None] = Field(
+        ..., description="This bearing's features by name (`b{n}_...`; units in the names: `_um_pp` micrometres "
+        "peak-to-peak, `_deg` degrees, `_per_c` divided by the clearance, `_ratio`/`_frac` unitless; "
+        "null when not measurable). Definitions: docs/features.md.")
+
+
 class DiagnoseResponse(BaseModel):
     """The verdict of the active (or requested) model, from ``models.predict.diagnose``."""
 
@@ -194,9 +207,7 @@ class DiagnoseResponse(BaseModel):
     model_version: str = Field(..., description="Registered model version that produced the verdict.")
     bands: dict[str, Any] = Field(..., description="The model's severity bands: `edges` (Δ) and `names`.")
     warnings: list[str] = Field(..., description="Anything that makes the verdict less certain.")
-    bearings: list[dict[str, Any]] = Field(..., description="Per-bearing key features from the features package "
-                                           "(1X/2X/3X amplitudes in µm pk-pk and phases in degrees, ratios, "
-                                           "orbit shape, whirl direction; see docs/features.md).")
+    bearings: list[BearingOut] = Field(..., description="Per-bearing key features from the features package.")
     key_features: dict[str, float | None] = Field(..., description="Values of `top_features` by name (stored in the "
                                                   "asset history).")
 

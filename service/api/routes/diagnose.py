@@ -138,7 +138,7 @@ async def diagnose(
     clearance_um: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False,
                                                 description="Binary/multipart only: radial clearance, µm.")] = None,
     units: Annotated[str | None, Query(min_length=1, max_length=16,
-                                       description="Binary/multipart only: units of the array (`um` or `mil`); "
+                                       description="Binary/multipart only: units of the array (`um`, `mm`, `m` or `mil`); "
                                        "default `um` (or the HDF5 file's `units` attribute).")] = None,
     bearings: Annotated[str | None, Query(max_length=64, pattern=r"^[0-9, ]*$",
                                           description="Binary/multipart only: bearing (1-4) of each row, "

@@ -1,0 +1,232 @@
+"""Load benchmark of POST /diagnose over loopback.
+
+Starts ``rotordiag serve`` (one uvicorn process, a fresh data directory with the
+shipped model), then drives it from a *separate* process with C persistent
+connections for a bounded time at several concurrencies, for the JSON and the
+binary (NPY, float32) forms of one recording of 4 bearings x 2 probes x 16,384
+samples (a simulated default plant, 1800 r/min, Δ = 0.2, 4096 Hz). Prints
+p50/p99 latency, requests/s, error count, the server's peak RSS, and the ratio
+of the HTTP p50 to the in-process diagnosis time (features + verdict, no HTTP) —
+the floor a user calling the library directly would see.
+
+Targets (2 cores, client and server sharing them): binary p99 <= 50 ms, >= 150 req/s, 0 errors.
+
+Usage: .venv/bin/python benchmarks/bench_service.py [--duration 10] [--concurrency 1 4 8]
+"""
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import multiprocessing as mp
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+N_POINTS = 16_384
+SAMPLE_RATE_HZ = 4096.0
+SPEED_RPM = 1800.0
+
+
+def recording():
+    """(channels (8, N_POINTS) float64 µm, bearings, angles) of a simulated default plant."""
+    from simulator import Plant, simulate
+
+    revs = int(np.ceil(N_POINTS / SAMPLE_RATE_HZ * SPEED_RPM / 60.0)) + 1
+    res = simulate(Plant.default(), SPEED_RPM, 0.2, 0.05, mechanism="rigid", transient_revs=200,
+                   record_revs=revs, sample_rate_hz=SAMPLE_RATE_HZ)
+    d = res.journal_displacements_m[:N_POINTS] * 1e6
+    rows, bearings, angles = [], [], []
+    for b in range(1, 5):
+        for a in (45.0, 135.0):
+            t = np.deg2rad(a)
+            rows.append(d[:, b - 1, 0] * np.cos(t) + d[:, b - 1, 1] * np.sin(t))
+            bearings.append(b)
+            angles.append(a)
+    data = np.array(rows)
+    assert data.shape == (8, N_POINTS), data.shape
+    return data, bearings, angles
+
+
+def payloads(data, bearings, angles):
+    body_json = json.dumps({
+        "sample_rate_hz": SAMPLE_RATE_HZ, "speed_rpm": SPEED_RPM,
+        "channels": [{"bearing": b, "angle_deg": a, "units": "um", "data": [round(float(v), 4) for v in row]}
+                     for b, a, row in zip(bearings, angles, data)]}).encode()
+    buf = io.BytesIO()
+    np.save(buf, data.astype(np.float32))
+    query = (f"/diagnose?sample_rate_hz={SAMPLE_RATE_HZ:g}&speed_rpm={SPEED_RPM:g}"
+             f"&bearings={','.join(map(str, bearings))}&angles_deg={','.join(f'{a:g}' for a in angles)}")
+    return {
+        "json": ("/diagnose", "application/json", body_json),
+        "binary": (query, "application/octet-stream", buf.getvalue()),
+    }
+
+
+def _worker(port, path, ctype, body, duration_s, out_q, start_evt):
+    import http.client
+
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+    lat, errors = [], 0
+    start_evt.wait()
+    t_end = time.perf_counter() + duration_s
+    while time.perf_counter() < t_end:
+        t0 = time.perf_counter()
+        try:
+            conn.request("POST", path, body=body, headers={"Content-Type": ctype})
+            r = conn.getresponse()
+            r.read()
+            ok = r.status == 200
+        except (OSError, http.client.HTTPException):
+            ok = False
+            conn.close()
+            conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+        dt = time.perf_counter() - t0
+        if ok:
+            lat.append(dt)
+        else:
+            errors += 1
+    conn.close()
+    out_q.put((lat, errors))
+
+
+def drive(port, path, ctype, body, concurrency, duration_s):
+    """Run in a separate process: ``concurrency`` threads, each with one persistent connection."""
+    import queue
+    import threading
+
+    q: queue.Queue = queue.Queue()
+    start = threading.Event()
+    threads = [threading.Thread(target=_worker, args=(port, path, ctype, body, duration_s, q, start))
+               for _ in range(concurrency)]
+    for t in threads:
+        t.start()
+    t0 = time.perf_counter()
+    start.set()
+    for t in threads:
+        t.join()
+    wall = time.perf_counter() - t0
+    lat, errors = [], 0
+    while not q.empty():
+        l, e = q.get()
+        lat += l
+        errors += e
+    return lat, errors, wall
+
+
+def _drive_entry(args, conn):
+    conn.send(drive(*args))
+    conn.close()
+
+
+def peak_rss_mib(pid: int) -> float:
+    """Peak resident set (VmHWM) of the server process and its children, MiB."""
+    total = 0.0
+    pids = [pid]
+    try:
+        pids += [int(p) for p in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except OSError:
+        pass
+    for p in pids:
+        try:
+            for line in Path(f"/proc/{p}/status").read_text().splitlines():
+                if line.startswith("VmHWM:"):
+                    total += int(line.split()[1]) / 1024
+        except OSError:
+            pass
+    return total
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=float, default=10.0, help="seconds per (form, concurrency)")
+    ap.add_argument("--concurrency", type=int, nargs="+", default=[1, 4, 8])
+    ap.add_argument("--forms", nargs="+", default=["binary", "json"], choices=["binary", "json"])
+    args = ap.parse_args()
+
+    data, bearings, angles = recording()
+    bodies = payloads(data, bearings, angles)
+
+    # in-process floor: the same recording through features + verdict, no HTTP
+    from features import ProbeChannel, Recording
+
+    from service.core.config import Settings
+    from service.inference import ModelStore
+
+    tmp = Path(tempfile.mkdtemp(prefix="bench_service_"))
+    store = ModelStore.open(Settings(data_dir=tmp / "inproc", _env_file=None))
+    rec = Recording(sample_rate_hz=SAMPLE_RATE_HZ, speed_rpm=SPEED_RPM, channels=[
+        ProbeChannel(bearing=b, angle_deg=a, units="um", data=row.astype(np.float32).astype(np.float64))
+        for b, a, row in zip(bearings, angles, data)])
+    store.diagnose(rec)
+    ts = []
+    for _ in range(30):
+        t0 = time.perf_counter()
+        store.diagnose(rec)
+        ts.append(time.perf_counter() - t0)
+    inproc_ms = 1e3 * float(np.median(ts))
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    env = dict(os.environ, ROTORDIAG_DATA_DIR=str(tmp / "data"), ROTORDIAG_API_KEY="bench",
+               ROTORDIAG_LOG_LEVEL="warning")
+    exe = Path(sys.executable).parent / "rotordiag"
+    server = subprocess.Popen([str(exe), "serve", "--host", "127.0.0.1", "--port", str(port)], cwd=tmp, env=env)
+    try:
+        for _ in range(300):
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/health", timeout=2) as r:
+                    if r.status == 200:
+                        break
+            except OSError:
+                time.sleep(0.2)
+        else:
+            raise SystemExit("server did not become healthy")
+        print(f"recording: 4 bearings x 2 probes x {N_POINTS} samples; body sizes: "
+              f"json {len(bodies['json']) / 1e6:.2f} MB, binary (NPY float32) {len(bodies['binary'][2]) / 1e6:.2f} MB")
+        print(f"in-process diagnosis (features + verdict, no HTTP): median {inproc_ms:.1f} ms")
+        print(f"cores available: {len(os.sched_getaffinity(0))}; duration {args.duration:g} s per row\n")
+        print(f"{'form':<7} {'conc':>4} {'requests':>8} {'errors':>6} {'req/s':>8} {'p50 ms':>8} {'p99 ms':>8} "
+              f"{'p50/in-proc':>11}")
+        ctx = mp.get_context("spawn")
+        for form in args.forms:
+            path, ctype, body = bodies[form]
+            # warm-up (numba caches, model load)
+            drive_args = (port, path, ctype, body, 1, 1.0)
+            parent, child = ctx.Pipe()
+            p = ctx.Process(target=_drive_entry, args=(drive_args, child))
+            p.start(); parent.recv(); p.join()
+            for c in args.concurrency:
+                parent, child = ctx.Pipe()
+                p = ctx.Process(target=_drive_entry, args=((port, path, ctype, body, c, args.duration), child))
+                p.start()
+                lat, errors, wall = parent.recv()
+                p.join()
+                lat_ms = 1e3 * np.asarray(lat)
+                p50 = float(np.percentile(lat_ms, 50)) if lat else float("nan")
+                p99 = float(np.percentile(lat_ms, 99)) if lat else float("nan")
+                print(f"{form:<7} {c:>4} {len(lat):>8} {errors:>6} {len(lat) / wall:>8.1f} {p50:>8.1f} {p99:>8.1f} "
+                      f"{p50 / inproc_ms:>11.2f}")
+        print(f"\nserver peak RSS: {peak_rss_mib(server.pid):.0f} MiB")
+    finally:
+        server.send_signal(signal.SIGINT)
+        try:
+            server.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            server.kill()
+
+
+if __name__ == "__main__":
+    main()
