@@ -1,0 +1,32 @@
+"""Probe waveforms → a fixed, named feature vector for misalignment diagnosis (issue 5).
+
+Public API
+----------
+ProbeChannel(bearing, angle_deg, units, data)
+    One proximity probe (bearing 1–4, mounting angle from horizontal +x toward +y, units
+    "um" / "mm" / "m" / "mil").
+Recording(sample_rate_hz, channels, speed_rpm=None, keyphasor_times_s=None, clearance_um=None)
+    An x/y probe pair per bearing present, sampled together; validated on construction.
+extract_features(recording) -> FeatureResult
+    Running speed, order analysis (1X–3X amplitude/phase, ratios, forward/reverse),
+    cross-coupling phase differences, orbit shape, sub-harmonic and non-synchronous
+    energy, Poincaré dispersion and motion type. ``fr.names`` / ``fr.values`` /
+    ``fr.as_dict()`` give the vector; ``fr.bearings`` the per-bearing details.
+FEATURE_NAMES, FEATURE_SPECS, feature_names()
+    The fixed schema (always bearings 1–4; absent bearings give NaN), with units and
+    definitions (docs/features.md).
+
+Every amplitude is in µm whatever the input units; ``*_per_c`` twins divide by the radial
+clearance (NaN when it is unknown).
+"""
+from ._config import ALLOWED_UNITS, MIN_REVS, MIN_REVS_MOTION
+from ._extract import BearingDetail, FeatureResult, extract_features
+from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
+from ._orbit import OrbitShape
+from ._recording import ProbeChannel, Recording
+
+__all__ = [
+    "ProbeChannel", "Recording", "extract_features", "FeatureResult", "BearingDetail", "OrbitShape",
+    "FEATURE_NAMES", "FEATURE_SPECS", "FeatureSpec", "feature_names", "ALLOWED_UNITS", "MIN_REVS",
+    "MIN_REVS_MOTION",
+]

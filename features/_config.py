@@ -1,0 +1,64 @@
+"""Tunables of the feature extractor, in one place (documented in docs/features.md)."""
+from __future__ import annotations
+
+#: accepted ``ProbeChannel.units`` → factor to µm (``"µm"`` is an alias of ``"um"``)
+UNITS_TO_UM: dict[str, float] = {"um": 1.0, "µm": 1.0, "mm": 1e3, "m": 1e6, "mil": 25.4}
+#: the public spelling of the allowed units (for error messages)
+ALLOWED_UNITS: tuple[str, ...] = ("um", "mm", "m", "mil")
+
+#: bearings of the machine train (MODEL.md): 1 generator far end, 2 generator coupling
+#: end, 3 exciter coupling end, 4 exciter far end. The feature vector always covers all four.
+BEARINGS: tuple[int, ...] = (1, 2, 3, 4)
+#: bearing pairs whose 1X / 2X phase differences are features: across the coupling, then
+#: along the generator and along the exciter
+PHASE_PAIRS: tuple[tuple[int, int], ...] = ((2, 3), (1, 2), (3, 4))
+
+#: minimum whole revolutions analysed. With 8 revolutions the 1X..3X least-squares fit is
+#: well conditioned and a 2X line 40 dB below 1X is still resolved from 1X leakage-free;
+#: below that the orders and especially the sub-harmonic bands are not reliable.
+MIN_REVS = 8
+#: minimum samples per revolution: 3X must lie below 0.75 × Nyquist (anti-alias filters
+#: of acquisition systems roll off above ~0.8 × Nyquist).
+MIN_SAMPLES_PER_REV = 8.0
+#: highest order fitted and removed before the non-synchronous analysis (limited further to
+#: below 0.9 × Nyquist)
+MAX_SYNC_ORDER = 10
+#: orders reported as features
+REPORTED_ORDERS: tuple[int, ...] = (1, 2, 3)
+
+#: sub-synchronous band (orders of running speed), lower edge above slow drift
+SUBSYNC_BAND: tuple[float, float] = (0.05, 0.95)
+#: oil-whirl band (orders)
+WHIRL_BAND: tuple[float, float] = (0.38, 0.49)
+#: call-out lines (orders) and the half-width of their bands: max(order width, 2 FFT bins)
+CALLOUT_ORDERS: dict[str, float] = {"half_x": 0.5, "third_x": 1.0 / 3.0}
+CALLOUT_HALF_WIDTH_ORDERS = 0.02
+CALLOUT_MIN_HALF_WIDTH_BINS = 2
+#: records shorter than this many revolutions get a warning that the sub-harmonic band
+#: features are coarse (FFT resolution 1/n_revs orders)
+MIN_REVS_SUBHARMONIC = 32
+#: a sub-synchronous peak order is reported only when its bin stands this many times
+#: above the median power of the band
+SUBSYNC_PEAK_MIN_RATIO = 10.0
+
+#: speed search range without keyphasor / given speed (r/min)
+SPEED_SEARCH_RPM: tuple[float, float] = (60.0, 12000.0)
+#: how many spectral peaks are tried as (multiples of) the running speed
+SPEED_CANDIDATE_PEAKS = 5
+#: a peak must stand this many times above the median spectrum to count as a line
+SPEED_LINE_MIN_SNR = 10.0
+#: phase-difference refinement iterations of the estimated / given speed
+SPEED_REFINE_ITERATIONS = 3
+#: a given ``speed_rpm`` that differs from the signal's refined 1X line by more than this
+#: fraction gets a warning
+SPEED_MISMATCH_WARN = 1e-3
+#: keyphasor revolutions whose period differs from the mean by more than this get a warning
+SPEED_VARIATION_WARN = 0.01
+
+#: grid points per revolution for orbit-shape features
+ORBIT_GRID = 360
+
+#: minimum revolutions for the motion type (periods up to MIN_REVS_MOTION // 3 testable)
+MIN_REVS_MOTION = 32
+#: period tolerance = max(classifier default × orbit size, this × RMS noise of a Poincaré point)
+POINCARE_NOISE_FACTOR = 5.0

@@ -1,0 +1,201 @@
+"""Input containers: one probe channel and one recording, validated on construction."""
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._config import ALLOWED_UNITS, BEARINGS, UNITS_TO_UM
+
+__all__ = ["ProbeChannel", "Recording"]
+
+
+def _finite_positive(value: object, name: str, hint: str) -> float:
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}; {hint}") from None
+    if not (np.isfinite(v) and v > 0):
+        raise ValueError(f"{name} must be finite and > 0, got {value!r}; {hint}")
+    return v
+
+
+@dataclass(frozen=True)
+class ProbeChannel:
+    """One proximity-probe waveform.
+
+    Parameters
+    ----------
+    bearing : int
+        Bearing number 1–4 (1 generator far end, 2 generator coupling end, 3 exciter
+        coupling end, 4 exciter far end).
+    angle_deg : float
+        Mounting angle of the probe, degrees from horizontal +x toward vertical +y
+        (counter-clockwise, the direction the shaft turns). A probe reads the shaft
+        displacement ``d`` projected on its axis: ``d · (cos θ, sin θ)``.
+    units : str
+        ``"um"``, ``"mm"``, ``"m"`` or ``"mil"`` (1 mil = 25.4 µm); ``"µm"`` is accepted for ``"um"``.
+    data : array_like, shape (n_points,)
+        Samples at the recording's sample rate, first sample at t = 0.
+    """
+
+    bearing: int
+    angle_deg: float
+    units: str
+    data: np.ndarray = field(repr=False)
+
+    def __post_init__(self) -> None:
+        b = self.bearing
+        if isinstance(b, bool) or not isinstance(b, (int, np.integer)) or int(b) not in BEARINGS:
+            raise ValueError(f"ProbeChannel.bearing must be one of {list(BEARINGS)} "
+                             f"(1 generator far end … 4 exciter far end), got {b!r}")
+        object.__setattr__(self, "bearing", int(b))
+        try:
+            angle = float(self.angle_deg)
+        except (TypeError, ValueError):
+            raise ValueError(f"ProbeChannel.angle_deg must be a number of degrees, got {self.angle_deg!r}") from None
+        if not np.isfinite(angle):
+            raise ValueError(f"ProbeChannel.angle_deg must be finite, got {self.angle_deg!r}")
+        object.__setattr__(self, "angle_deg", angle)
+        if not isinstance(self.units, str) or self.units.strip() not in UNITS_TO_UM:
+            raise ValueError(f"ProbeChannel.units {self.units!r} (bearing {b}) is not supported; "
+                             f"use one of {list(ALLOWED_UNITS)} (mil = 25.4 µm)")
+        object.__setattr__(self, "units", self.units.strip())
+        try:
+            data = np.asarray(self.data, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(f"ProbeChannel.data (bearing {b}, {angle:g}°) must be a numeric 1-D array") from None
+        if data.ndim != 1:
+            raise ValueError(f"ProbeChannel.data (bearing {b}, {angle:g}°) must be 1-D, got shape {data.shape}")
+        if data.size < 2:
+            raise ValueError(f"ProbeChannel.data (bearing {b}, {angle:g}°) has {data.size} samples; "
+                             "record at least 8 shaft revolutions")
+        bad = ~np.isfinite(data)
+        if bad.any():
+            first = int(np.argmax(bad))
+            raise ValueError(f"ProbeChannel.data (bearing {b}, {angle:g}°) has {int(bad.sum())} non-finite "
+                             f"sample(s) (NaN/inf), first at index {first}; remove dropouts or cut the record")
+        object.__setattr__(self, "data", data)
+
+    @property
+    def data_um(self) -> np.ndarray:
+        """The samples in µm."""
+        return self.data * UNITS_TO_UM[self.units]
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Probe waveforms of one or more bearings, recorded together.
+
+    Parameters
+    ----------
+    sample_rate_hz : float
+        Sampling rate of every channel.
+    channels : sequence of ProbeChannel
+        Two probes (an x/y pair at distinct angles) per bearing present; all the same length.
+    speed_rpm : float, optional
+        Running speed. Used when no keyphasor is given; otherwise the speed is estimated
+        from the signal.
+    keyphasor_times_s : array_like, optional
+        Once-per-revolution pulse times (s, same clock as the samples: the first sample is
+        at t = 0). Gives the speed revolution by revolution and the phase reference.
+    clearance_um : float or mapping {bearing: float}, optional
+        Radial bearing clearance; enables the ``*_per_c`` features.
+    """
+
+    sample_rate_hz: float
+    channels: Sequence[ProbeChannel]
+    speed_rpm: float | None = None
+    keyphasor_times_s: np.ndarray | None = None
+    clearance_um: float | Mapping[int, float] | None = None
+
+    def __post_init__(self) -> None:
+        fs = _finite_positive(self.sample_rate_hz, "Recording.sample_rate_hz",
+                              "give the sampling rate in Hz")
+        object.__setattr__(self, "sample_rate_hz", fs)
+        chans = tuple(self.channels) if not isinstance(self.channels, ProbeChannel) else (self.channels,)
+        if not chans:
+            raise ValueError("Recording.channels is empty; give an x/y probe pair for at least one bearing")
+        for i, c in enumerate(chans):
+            if not isinstance(c, ProbeChannel):
+                raise ValueError(f"Recording.channels[{i}] must be a ProbeChannel, got {type(c).__name__}")
+        lengths = {c.data.size for c in chans}
+        if len(lengths) > 1:
+            detail = ", ".join(f"bearing {c.bearing} {c.angle_deg:g}°: {c.data.size}" for c in chans)
+            raise ValueError(f"Recording.channels have different lengths ({detail}); "
+                             "all probes must be sampled together — cut them to a common length")
+        by_bearing: dict[int, list[ProbeChannel]] = {}
+        for c in chans:
+            by_bearing.setdefault(c.bearing, []).append(c)
+        for b, cs in sorted(by_bearing.items()):
+            if len(cs) != 2:
+                raise ValueError(f"bearing {b} has {len(cs)} probe(s); each bearing needs exactly two "
+                                 "(an x/y pair, e.g. at 45° and 135°) — add the missing probe or drop the bearing")
+            gap = np.deg2rad(cs[1].angle_deg - cs[0].angle_deg)
+            if abs(np.sin(gap)) < np.sin(np.deg2rad(30.0)):
+                raise ValueError(f"bearing {b}: probes at {cs[0].angle_deg:g}° and {cs[1].angle_deg:g}° are "
+                                 "(nearly) parallel; the pair must be at least 30° from parallel "
+                                 "(typically 90° apart) to resolve x and y")
+        object.__setattr__(self, "channels", chans)
+        if self.speed_rpm is not None:
+            object.__setattr__(self, "speed_rpm", _finite_positive(
+                self.speed_rpm, "Recording.speed_rpm", "give the running speed in r/min or leave it None"))
+        if self.keyphasor_times_s is not None:
+            try:
+                kp = np.asarray(self.keyphasor_times_s, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise ValueError("Recording.keyphasor_times_s must be a 1-D array of pulse times in s") from None
+            if kp.ndim != 1 or kp.size < 2:
+                raise ValueError(f"Recording.keyphasor_times_s must be a 1-D array of at least 2 pulse times (s), "
+                                 f"got shape {kp.shape}")
+            if not np.all(np.isfinite(kp)):
+                raise ValueError("Recording.keyphasor_times_s contains NaN/inf; give pulse times in s")
+            if np.any(np.diff(kp) <= 0):
+                raise ValueError("Recording.keyphasor_times_s must be strictly increasing (one pulse per revolution)")
+            object.__setattr__(self, "keyphasor_times_s", kp)
+        cl = self.clearance_um
+        if cl is not None:
+            if isinstance(cl, Mapping):
+                clean = {}
+                for b, v in cl.items():
+                    if isinstance(b, bool) or not isinstance(b, (int, np.integer)) or int(b) not in BEARINGS:
+                        raise ValueError(f"Recording.clearance_um: key {b!r} is not a bearing number {list(BEARINGS)}")
+                    clean[int(b)] = _finite_positive(v, f"Recording.clearance_um[{b}]", "radial clearance in µm")
+                object.__setattr__(self, "clearance_um", clean)
+            else:
+                object.__setattr__(self, "clearance_um", _finite_positive(
+                    cl, "Recording.clearance_um", "radial bearing clearance in µm, or None"))
+
+    @property
+    def n_points(self) -> int:
+        """Samples per channel."""
+        return int(self.channels[0].data.size)
+
+    @property
+    def bearings(self) -> tuple[int, ...]:
+        """Bearings present, ascending."""
+        return tuple(sorted({c.bearing for c in self.channels}))
+
+    def clearance_for(self, bearing: int) -> float:
+        """Radial clearance of ``bearing`` in µm, NaN when unknown."""
+        cl = self.clearance_um
+        if cl is None:
+            return float("nan")
+        if isinstance(cl, Mapping):
+            return float(cl.get(bearing, float("nan")))
+        return float(cl)
+
+    def xy_um(self, bearing: int) -> tuple[np.ndarray, np.ndarray]:
+        """Horizontal and vertical displacement (µm) of ``bearing`` from its probe pair.
+
+        Solves ``p_i = x cos θ_i + y sin θ_i`` for the two probes.
+        """
+        pair = [c for c in self.channels if c.bearing == bearing]
+        if len(pair) != 2:
+            raise ValueError(f"bearing {bearing} is not in this recording (bearings: {list(self.bearings)})")
+        th = np.deg2rad([pair[0].angle_deg, pair[1].angle_deg])
+        m = np.array([[np.cos(th[0]), np.sin(th[0])], [np.cos(th[1]), np.sin(th[1])]])
+        inv = np.linalg.inv(m)
+        p1, p2 = pair[0].data_um, pair[1].data_um
+        return inv[0, 0] * p1 + inv[0, 1] * p2, inv[1, 0] * p1 + inv[1, 1] * p2

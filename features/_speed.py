@@ -1,0 +1,226 @@
+"""Running speed and shaft angle: keyphasor, given speed, or estimated from the signal."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import _config as cfg
+from ._spectrum import hann
+
+__all__ = ["ShaftAngle", "shaft_angle", "estimate_speed_hz", "refine_line_hz"]
+
+
+@dataclass
+class ShaftAngle:
+    """The shaft angle over the analysed segment (a whole number of revolutions).
+
+    ``theta_rad[i]`` is the angle at sample ``start + i``; θ = 0 at the keyphasor pulse that
+    opens the segment, or at the first sample when there is no keyphasor.
+    """
+
+    speed_rpm: float
+    source: str                 # "keyphasor" | "given" | "estimated"
+    start: int
+    stop: int
+    theta_rad: np.ndarray
+    n_revs: int
+    rev_times_s: np.ndarray     # (n_revs,) time at which each analysed revolution starts (θ = 2πm)
+    min_samples_per_rev: float
+    warnings: list[str] = field(default_factory=list)
+
+
+def _too_slow_sampling(spr: float, fs: float, f1: float) -> ValueError:
+    return ValueError(
+        f"sample_rate_hz {fs:g} gives only {spr:.2f} samples per revolution at {60 * f1:.1f} r/min; "
+        f"3X must lie below 0.75 × Nyquist, so record at >= {cfg.MIN_SAMPLES_PER_REV:g} samples per "
+        f"revolution (sample_rate_hz >= {cfg.MIN_SAMPLES_PER_REV * f1:.1f} Hz)")
+
+
+def _too_short(n_revs: float, rpm: float, fs: float, n: int, source: str) -> ValueError:
+    need_s = cfg.MIN_REVS * 60.0 / rpm
+    return ValueError(
+        f"the record covers {n_revs:.2f} revolutions at {rpm:.1f} r/min ({source}); at least "
+        f"{cfg.MIN_REVS} whole revolutions are needed for reliable 1X–3X estimates — record at least "
+        f"{need_s:.3f} s ({int(np.ceil(need_s * fs))} samples at {fs:g} Hz; this one has {n})")
+
+
+def _hann_amplitude_at(power: np.ndarray, f: float, df: float) -> float:
+    k = int(round(f / df))
+    if k < 1 or k >= power.size - 1:
+        return 0.0
+    return float(np.sqrt(np.max(power[k - 1:k + 2])))
+
+
+def refine_line_hz(data: np.ndarray, fs: float, f0: float, iterations: int = cfg.SPEED_REFINE_ITERATIONS) -> float:
+    """Refine the frequency of a spectral line near ``f0`` (Hz) by the phase-difference method.
+
+    The record (columns of ``data``, mean removed) is split in two halves; each is demodulated
+    at the current estimate with a Hann window; the phase advance of the line from the first
+    half to the second, summed coherently over the channels, corrects the frequency. Converges
+    from within about one FFT bin of the full record.
+    """
+    n = data.shape[1]
+    h = n // 2
+    w = hann(h)
+    t = np.arange(h) / fs
+    x1 = data[:, :h]
+    x2 = data[:, h:2 * h]
+    f = float(f0)
+    for _ in range(iterations):
+        e = w * np.exp(-2j * np.pi * f * t)
+        c1 = x1 @ e
+        c2 = (x2 @ e) * np.exp(-2j * np.pi * f * h / fs)
+        dphi = float(np.angle(np.vdot(c1, c2)))
+        f = f + dphi * fs / (2 * np.pi * h)
+    return f
+
+
+def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
+    """Running speed (Hz) from the waveforms: the refined spectral line of 1X.
+
+    Parameters
+    ----------
+    data : ndarray, shape (n_channels, n_points)
+        x/y displacements, µm.
+    fs : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    speed_hz, warnings
+
+    Notes
+    -----
+    The summed Hann power spectrum of all channels is searched for its largest peaks in
+    ``SPEED_SEARCH_RPM`` (and with 3X below 0.75 × Nyquist). Each peak ``f_p`` and its
+    sub-multiples ``f_p/2``, ``f_p/3`` is a candidate running speed, scored by the summed
+    amplitudes of its 1X, 2X and 3X lines, so that a dominant 2X (the generator's
+    twice-per-revolution) or a strong sub-synchronous whirl line is not taken for 1X. The
+    winning line (its strongest harmonic) is refined by :func:`refine_line_hz`. Period-2
+    motion (a 1/2X line) and a 2X-dominated signal look alike to any spectral method: a
+    warning is given when two candidates score within 20 %.
+    """
+    n = data.shape[1]
+    x = data - data.mean(axis=1)[:, None]
+    spec = np.fft.rfft(x * hann(n), axis=-1)
+    power = np.sum(spec.real ** 2 + spec.imag ** 2, axis=0)
+    df = fs / n
+    f_lo = max(cfg.SPEED_SEARCH_RPM[0] / 60.0, 3 * df)
+    f_hi = min(cfg.SPEED_SEARCH_RPM[1] / 60.0, fs / cfg.MIN_SAMPLES_PER_REV)
+    k_lo, k_hi = int(np.ceil(f_lo / df)), min(int(np.floor(f_hi / df)), power.size - 2)
+    if k_hi <= k_lo + 2:
+        raise ValueError(
+            f"cannot estimate the running speed: the record ({n} samples at {fs:g} Hz) is too short to resolve "
+            f"{cfg.SPEED_SEARCH_RPM[0]:g}–{cfg.SPEED_SEARCH_RPM[1]:g} r/min; give speed_rpm or keyphasor_times_s")
+    band = power[k_lo:k_hi + 1]
+    floor = float(np.median(band))
+    inner = band[1:-1]
+    is_peak = (inner >= band[:-2]) & (inner > band[2:])
+    peak_idx = np.nonzero(is_peak)[0] + k_lo + 1
+    if peak_idx.size == 0 or power[peak_idx].max() < cfg.SPEED_LINE_MIN_SNR * floor:
+        raise ValueError(
+            "cannot estimate the running speed: no spectral line stands out of the noise between "
+            f"{cfg.SPEED_SEARCH_RPM[0]:g} and {cfg.SPEED_SEARCH_RPM[1]:g} r/min; give speed_rpm or keyphasor_times_s")
+    order = np.argsort(-power[peak_idx], kind="stable")[:cfg.SPEED_CANDIDATE_PEAKS]
+    peak_idx = peak_idx[order]
+    pmax = power[peak_idx[0]]
+    peak_idx = peak_idx[power[peak_idx] >= 1e-2 * pmax]
+    logp = np.log(np.maximum(power, np.finfo(float).tiny))
+    candidates: list[tuple[float, float]] = []
+    for k in peak_idx:
+        den = logp[k - 1] - 2 * logp[k] + logp[k + 1]
+        delta = 0.5 * (logp[k - 1] - logp[k + 1]) / den if den < 0 else 0.0
+        fp = (k + delta) * df
+        for d in (1, 2, 3):
+            f = fp / d
+            if not (f_lo <= f <= f_hi):
+                continue
+            if any(abs(f - g) < 1.5 * df for g, _ in candidates):
+                continue
+            score = sum(_hann_amplitude_at(power, m * f, df) for m in (1, 2, 3))
+            candidates.append((f, score))
+    if not candidates:
+        raise ValueError("cannot estimate the running speed: no candidate line in the search range; "
+                         "give speed_rpm or keyphasor_times_s")
+    candidates.sort(key=lambda c: -c[1])
+    f_best, s_best = candidates[0]
+    warnings: list[str] = []
+    if len(candidates) > 1 and candidates[1][1] >= 0.8 * s_best:
+        warnings.append(
+            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * candidates[1][0]:.1f} r/min "
+            "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
+    # refine on the strongest of the candidate's 1X..3X lines below 0.45 fs
+    harmonics = [m for m in (1, 2, 3) if m * f_best < 0.45 * fs]
+    h = max(harmonics, key=lambda m: _hann_amplitude_at(power, m * f_best, df))
+    f = refine_line_hz(x, fs, h * f_best) / h
+    if abs(f - f_best) > 2 * df:  # refinement wandered off: keep the interpolated peak
+        warnings.append(f"speed refinement did not converge; using the spectral peak {60 * f_best:.2f} r/min")
+        f = f_best
+    k_top = int(peak_idx[0])
+    top_order = k_top * df / f
+    if abs(top_order - round(top_order)) > 0.05 or round(top_order) == 0:
+        warnings.append(
+            f"the largest spectral line ({60 * k_top * df:.1f} cpm = {top_order:.2f}X) is not synchronous: "
+            "non-synchronous vibration dominates; check the speed estimate or give speed_rpm / keyphasor_times_s")
+    return f, warnings
+
+
+def shaft_angle(rec, data: np.ndarray) -> ShaftAngle:
+    """Speed, analysed segment and shaft angle for a recording.
+
+    Parameters
+    ----------
+    rec : Recording
+    data : ndarray, shape (n_channels, n_points)
+        x/y displacements in µm (used only to estimate the speed when neither a keyphasor
+        nor ``speed_rpm`` is given).
+    """
+    fs = rec.sample_rate_hz
+    n = data.shape[1]
+    warnings: list[str] = []
+    if rec.keyphasor_times_s is not None:
+        t_end = (n - 1) / fs
+        kp_all = rec.keyphasor_times_s
+        kp = kp_all[(kp_all >= 0) & (kp_all <= t_end)]
+        if kp.size < 2:
+            raise ValueError(
+                f"keyphasor_times_s: {kp.size} pulse(s) fall inside the record (0 to {t_end:.4g} s); the pulse times "
+                "must be on the samples' clock (first sample at t = 0)")
+        periods = np.diff(kp)
+        n_revs = int(kp.size - 1)
+        rpm = 60.0 * n_revs / float(kp[-1] - kp[0])
+        if n_revs < cfg.MIN_REVS:
+            raise _too_short(n_revs, rpm, fs, n, "from the keyphasor pulses inside the record")
+        spr_min = fs * float(periods.min())
+        if spr_min < cfg.MIN_SAMPLES_PER_REV:
+            raise _too_slow_sampling(spr_min, fs, 1.0 / float(periods.min()))
+        variation = float(np.max(np.abs(periods / periods.mean() - 1.0)))
+        if variation > cfg.SPEED_VARIATION_WARN:
+            warnings.append(f"running speed varies by up to {100 * variation:.1f} % between revolutions; "
+                            "orders are tracked revolution by revolution from the keyphasor")
+        if rec.speed_rpm is not None and abs(rec.speed_rpm / rpm - 1) > 0.01:
+            warnings.append(f"speed_rpm {rec.speed_rpm:g} disagrees with the keyphasor ({rpm:.2f} r/min); "
+                            "the keyphasor is used")
+        t = np.arange(n) / fs
+        start = int(np.searchsorted(t, kp[0], side="left"))
+        stop = int(np.searchsorted(t, kp[-1], side="left"))
+        theta = 2 * np.pi * np.interp(t[start:stop], kp, np.arange(kp.size, dtype=float))
+        return ShaftAngle(rpm, "keyphasor", start, stop, theta, n_revs, kp[:-1].copy(), spr_min, warnings)
+
+    if rec.speed_rpm is not None:
+        f1, source = rec.speed_rpm / 60.0, "given"
+    else:
+        f1, est_warn = estimate_speed_hz(data, fs)
+        warnings.extend(est_warn)
+        source = "estimated"
+    spr = fs / f1
+    if spr < cfg.MIN_SAMPLES_PER_REV:
+        raise _too_slow_sampling(spr, fs, f1)
+    n_revs = int(np.floor(n / spr + 1e-9))
+    if n_revs < cfg.MIN_REVS:
+        raise _too_short(n / spr, 60 * f1, fs, n, "speed " + source)
+    stop = min(n, int(np.ceil(n_revs * spr - 1e-9)))
+    theta = (2 * np.pi * f1 / fs) * np.arange(stop)
+    rev_times = np.arange(n_revs) / f1
+    return ShaftAngle(60.0 * f1, source, 0, stop, theta, n_revs, rev_times, spr, warnings)
