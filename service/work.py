@@ -42,16 +42,21 @@ def _spec_toml_from_dict(spec: dict[str, Any]) -> str:
 
 
 def _validate_spec_text(text: str) -> Any:
+    import tomllib
+
     from simulator.dataset.spec import SpecError, parse_spec
 
     try:
-        resolved = parse_spec(text)
-    except SpecError as exc:
-        raise InputError(str(exc)) from None
-    if resolved.spec.plant.file is not None:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"the spec is not valid TOML: {exc}") from None
+    if isinstance(raw.get("plant"), dict) and "file" in raw["plant"]:   # checked before anything reads it
         raise InputError("plant.file: a spec sent over HTTP cannot name a file on the server; "
                          "give the plant values in plant.set instead")
-    return resolved
+    try:
+        return parse_spec(text)
+    except SpecError as exc:
+        raise InputError(str(exc)) from None
 
 
 def prepare_dataset_job(body: Any, settings: Settings) -> dict[str, Any]:
@@ -149,6 +154,10 @@ def _generate(spec_toml: str, out, ctx, lo: float, hi: float) -> dict[str, Any]:
     result["path"] = str(out.resolve())
     result["spec_hash"] = resolved.spec_hash
     result["complete"] = summary.complete
+    if summary.complete:
+        from simulator.dataset.info import summarize
+
+        result["summary"] = summarize(out)
     if not summary.complete:
         raise RuntimeError(f"dataset {out} is incomplete ({summary.n_done_before + summary.n_computed} of "
                            f"{summary.n_samples} samples); resume the job to finish it")

@@ -1,0 +1,88 @@
+"""Jobs through the API on a real local Dask cluster: a dataset job, its interruption by a server
+shutdown and its resumption (only the missing samples are computed), and retraining for a perturbed plant."""
+from __future__ import annotations
+
+import time
+
+import pytest
+from fastapi.testclient import TestClient
+
+from service.main import create_app
+from tests.service_util import auth, make_settings
+
+SMALL_SPEC = {
+    "design": {"method": "sobol", "n_samples": 16, "seed": 11},
+    "operating": {"speed_rpm": {"min": 1500, "max": 2100}, "misalignment": {"min": 0.0, "max": 0.5},
+                  "mechanism": "rigid"},
+    "measurement": {"sample_rate_hz": 1024.0, "duration_revs": 12, "snr_db": 40.0},
+    "simulation": {"transient_revs": 60, "samples_per_rev": 64, "record_revs_min": 12, "classify_motion": False},
+}
+
+
+def _wait(c, job_id, statuses, timeout=240):
+    t0 = time.monotonic()
+    job = None
+    while time.monotonic() - t0 < timeout:
+        job = c.get(f"/jobs/{job_id}").json()
+        if job["status"] in statuses:
+            return job
+        time.sleep(0.2)
+    raise AssertionError(f"job {job_id} did not reach {statuses}: {job}")
+
+
+def _done_count(path) -> int:
+    from simulator.dataset.store import open_dataset
+
+    try:
+        with open_dataset(path) as f:
+            return int(f["done"][...].sum())
+    except Exception:  # noqa: BLE001 - not created yet / being written
+        return 0
+
+
+def test_dataset_job_interrupted_by_shutdown_then_resumed(tmp_path):
+    settings = make_settings(tmp_path, dask_local_workers=1)
+    out = settings.datasets_dir / "small.h5"
+    app = create_app(settings)
+    with TestClient(app) as c:
+        r = c.post("/datasets", json={"spec": SMALL_SPEC, "name": "small"}, headers=auth())
+        assert r.status_code == 202, r.text
+        job_id = r.json()["id"]
+        t0 = time.monotonic()
+        while _done_count(out) < 3:
+            assert time.monotonic() - t0 < 180, c.get(f"/jobs/{job_id}").json()
+            job = c.get(f"/jobs/{job_id}").json()
+            assert job["status"] in ("queued", "running"), job
+            time.sleep(0.2)
+    # server stopped mid-run
+    done_before = _done_count(out)
+    assert 3 <= done_before < 16
+    app2 = create_app(settings)
+    with TestClient(app2) as c:
+        job = c.get(f"/jobs/{job_id}").json()
+        assert job["status"] == "interrupted", job
+        assert c.post(f"/jobs/{job_id}/resume", headers=auth()).status_code == 200
+        job = _wait(c, job_id, {"succeeded", "failed"})
+        assert job["status"] == "succeeded", job
+        res = job["result"]
+        assert res["n_samples"] == 16 and res["complete"]
+        assert res["n_done_before"] >= done_before and res["n_computed"] == 16 - res["n_done_before"]
+        assert res["summary"]["n_done"] == 16
+        assert job["attempts"] == 2
+
+
+def test_dataset_spec_errors_are_422_before_any_job(tmp_path):
+    with TestClient(create_app(make_settings(tmp_path))) as c:
+        bad = {**SMALL_SPEC, "operating": {**SMALL_SPEC["operating"], "misalignment": {"min": 0.5, "max": 0.1}}}
+        r = c.post("/datasets", json={"spec": bad}, headers=auth())
+        assert r.status_code == 422 and "misalignment" in r.json()["detail"] and "empty range" in r.json()["detail"]
+        r = c.post("/datasets", json={"spec_toml": "[design]\nmethod = 'sobol'\nn_samples = 4\nseed = 1\n"
+                                      "[plant]\nfile = '/etc/passwd'\n"}, headers=auth())
+        assert r.status_code == 422 and "plant.file" in r.json()["detail"] and "root" not in r.json()["detail"]
+        r = c.post("/datasets", json={"spec_toml": "not toml ["}, headers=auth())
+        assert r.status_code == 422 and "TOML" in r.json()["detail"]
+        r = c.post("/models/retrain", json={"plant": {"asymmetry": 0.7}}, headers=auth())
+        assert r.status_code == 422 and "asymmetry" in r.json()["detail"]
+        r = c.post("/models/retrain", json={"training": {"bogus": 1}}, headers=auth())
+        assert r.status_code == 422 and "bogus" in r.json()["detail"]
+        assert c.get("/jobs").json()["count"] == 0
