@@ -67,9 +67,10 @@ def _motion(poincare_m: np.ndarray) -> tuple[str, int]:
     except ImportError:  # analysis package absent: no motion label
         return "", 0
     pts = poincare_m[np.all(np.isfinite(poincare_m.reshape(len(poincare_m), -1)), axis=1)]
-    if len(pts) < 2:
+    try:
+        mt = classify_motion(pts)
+    except ValueError:  # too few Poincaré points for the classifier's tests: say so, don't guess
         return "unresolved", 0
-    mt = classify_motion(pts)
     return mt.kind, int(mt.period or 0)
 
 

@@ -1,0 +1,166 @@
+"""End-to-end dataset generation with the real simulator: layout, labels, resume rules, Dask vs serial."""
+from __future__ import annotations
+
+import json
+
+import h5py
+import numpy as np
+import pytest
+
+from simulator import Plant, simulate
+from simulator.dataset.design import build_design
+from simulator.dataset.generate import generate
+from simulator.dataset.spec import load_spec
+from simulator.dataset.store import StoreError, open_dataset
+
+from .dataset_support import differing_datasets, write_spec
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory):
+    d = tmp_path_factory.mktemp("ds")
+    spec = write_spec(d / "spec.toml")
+    out = d / "serial.h5"
+    summary = generate(spec, out, n_workers=0, progress=False)
+    return spec, out, summary
+
+
+def test_layout_and_attributes(small):
+    spec, out, summary = small
+    assert summary.complete and summary.n_computed == 8 and not summary.resumed
+    r = load_spec(spec)
+    with h5py.File(out, "r") as f:  # a completed file opens with plain h5py
+        w = f["waveforms"]
+        assert w.shape == (8, 8, 164) and w.dtype == np.float32
+        assert w.chunks == (1, 8, 164) and w.compression == "gzip"
+        assert f["done"][...].tolist() == [1] * 8
+        assert f["channels"]["bearing"].tolist() == [1, 1, 2, 2, 3, 3, 4, 4]
+        assert f["channels"]["angle_deg"].tolist() == [45.0, 135.0] * 4
+        assert f.attrs["spec_hash"] == r.spec_hash
+        assert f.attrs["spec_toml"] == spec.read_text()
+        assert f.attrs["code_version"].startswith("0.1.0")
+        assert f.attrs["created_utc"] and f.attrs["completed_utc"]
+        assert f.attrs["sample_rate_hz"] == 1024.0 and f.attrs["n_points"] == 164
+        for name in Plant.field_names():
+            assert f"parameters/plant/{name}" in f
+        assert f["parameters/plant/bearing_offset_m"].shape == (8, 4, 2)
+        assert np.all(np.isfinite(w[...]))
+
+
+def test_parameters_and_labels_match_the_design(small):
+    spec, out, _ = small
+    design = build_design(load_spec(spec))
+    with h5py.File(out, "r") as f:
+        delta = f["parameters/misalignment"][...]
+        for i in range(8):
+            p = design[i]
+            assert f["parameters/speed_rpm"][i] == p.speed_rpm
+            assert f["parameters/sample_seed"][i] == p.sample_seed
+            assert f["parameters/plant/generator_mass_kg"][i] == p.plant["generator_mass_kg"]
+            assert f["parameters/plant_id"][i].decode() == Plant.from_dict(p.plant).plant_id()
+            codes = json.loads(f["parameters/mechanism"].attrs["codes_json"])
+            assert f["parameters/mechanism"][i] == codes[p.mechanism]
+        # severity by the documented bands, computed here independently
+        expected = np.select([delta < 0.05, delta < 0.15, delta < 0.35], [0, 1, 2], 3)
+        assert f["labels/severity"][...].tolist() == expected.tolist()
+        assert json.loads(f["labels/severity"].attrs["names_json"]) == ["aligned", "slight", "moderate", "severe"]
+        assert np.array_equal(f["labels/misalignment"][...], delta)
+        assert set(f["labels/status"][...].tolist()) == {0}
+        kinds = {k.decode() for k in f["labels/motion_kind"][...]}
+        assert kinds <= {"period-n", "quasi-periodic", "chaotic", "unresolved"}
+
+
+def test_waveform_equals_the_simulator_seen_through_the_probes(small):
+    """Rebuild sample 0 from simulate() and the documented measurement model by hand."""
+    from scipy.interpolate import CubicSpline
+
+    spec, out, _ = small
+    p = build_design(load_spec(spec))[0]
+    with h5py.File(out, "r") as f:
+        revs = int(f["parameters/record_revs"][0])
+        theta0 = f["measurement/start_angle_rad"][0]
+        phi_m = f["measurement/speed_fluctuation_phase_rad"][0]
+        r1, p1 = f["measurement/runout_1x_um"][0], f["measurement/runout_1x_phase_rad"][0]
+        r2, p2 = f["measurement/runout_2x_um"][0], f["measurement/runout_2x_phase_rad"][0]
+        snr = f["measurement/snr_db"][0]
+        stored = f["waveforms"][0].astype(float)
+    res = simulate(Plant.from_dict(p.plant), p.speed_rpm, p.misalignment, p.unbalance, mechanism=p.mechanism,
+                   transient_revs=30, record_revs=revs, samples_per_rev=128,
+                   unbalance_phase_rad=p.unbalance_phase_rad, offset_angle_rad=p.offset_angle_rad)
+    t = np.arange(164) / 1024.0
+    w = p.speed_rpm * np.pi / 30
+    wm = 2 * np.pi * 0.5
+    theta = theta0 + w * t + w * 0.002 / wm * (np.cos(phi_m) - np.cos(wm * t + phi_m))
+    tau = 2 * np.pi / 128 * np.arange(res.journal_displacements_m.shape[0])
+    xy = CubicSpline(tau, res.journal_displacements_m, axis=0)(theta) * 1e6
+    for c in range(8):
+        b, alpha = c // 2, np.radians((45.0, 135.0)[c % 2])
+        psi = alpha - theta
+        clean = (xy[:, b, 0] * np.cos(alpha) + xy[:, b, 1] * np.sin(alpha)
+                 + r1[b] * np.cos(psi - p1[b]) + r2[b] * np.cos(2 * psi - p2[b]))
+        noise_sd = np.sqrt(clean.var() / 10 ** (snr / 10))
+        resid = stored[c] - clean
+        assert abs(resid.mean()) < 4 * noise_sd / np.sqrt(164) + 1e-3
+        assert resid.std() == pytest.approx(noise_sd, rel=0.25)
+
+
+def test_contact_samples_are_kept_with_their_status(tmp_path):
+    spec = write_spec(tmp_path / "spec.toml", n_samples=2)
+    text = spec.read_text().replace("misalignment = {min = 0.0, max = 0.5}", "misalignment = 0.9") \
+        .replace("mechanism = {pin = 1, rigid = 1}", 'mechanism = "rigid"') \
+        .replace("speed_rpm = {min = 1500, max = 2100}", "speed_rpm = 3000") \
+        .replace("offset_angle_rad = {min = 0.0, max = 6.283185307179586}", "offset_angle_rad = 0.0")
+    spec.write_text(text.replace("sample_rate_hz = 1024.0", "sample_rate_hz = 2048.0"))
+    summary = generate(spec, tmp_path / "c.h5", n_workers=0, progress=False)
+    assert summary.status_counts == {"contact": 2}
+    with open_dataset(tmp_path / "c.h5") as f:
+        assert f["done"][...].tolist() == [1, 1]
+        assert f["labels/status"][...].tolist() == [1, 1]
+        assert b"journal reached its bushing" in f["diagnostics/message"][0]
+        assert np.all(np.isnan(f["waveforms"][...]))  # contact at the start: nothing recorded
+        assert f["labels/severity"][...].tolist() == [3, 3]
+
+
+def test_rerun_of_a_complete_file_computes_nothing_and_other_specs_are_refused(small, tmp_path):
+    spec, out, _ = small
+    again = generate(spec, out, n_workers=0, progress=False)
+    assert again.resumed and again.n_computed == 0 and again.complete
+    other = write_spec(tmp_path / "other.toml", seed=8)
+    with pytest.raises(StoreError, match="different spec"):
+        generate(other, out, n_workers=0, progress=False)
+    # a comment-only edit is the same spec
+    same = tmp_path / "same.toml"
+    same.write_text("# edited comment\n" + spec.read_text())
+    assert generate(same, out, n_workers=0, progress=False).n_computed == 0
+
+
+def test_output_that_is_not_a_dataset_is_refused(tmp_path):
+    spec = write_spec(tmp_path / "spec.toml")
+    with h5py.File(tmp_path / "x.h5", "w") as f:
+        f["a"] = 1
+    with pytest.raises(StoreError, match="not a rotordiag dataset"):
+        generate(spec, tmp_path / "x.h5", n_workers=0, progress=False)
+    (tmp_path / "y.h5").write_text("hello")
+    with pytest.raises(StoreError, match="not a readable HDF5 file"):
+        generate(spec, tmp_path / "y.h5", n_workers=0, progress=False)
+
+
+def test_a_second_writer_is_refused_while_the_first_holds_the_file(tmp_path):
+    from simulator.dataset.store import _Lock
+
+    spec = write_spec(tmp_path / "spec.toml")
+    lock = _Lock(tmp_path / "o.h5")
+    lock.acquire()
+    try:
+        with pytest.raises(StoreError, match="another process"):
+            generate(spec, tmp_path / "o.h5", n_workers=0, progress=False)
+    finally:
+        lock.release()
+
+
+def test_dask_local_cluster_gives_the_serial_values(small, tmp_path):
+    spec, serial, _ = small
+    out = tmp_path / "dask.h5"
+    s = generate(spec, out, n_workers=2, progress=False)
+    assert s.complete
+    assert differing_datasets(serial, out) == []
