@@ -40,6 +40,8 @@ MIN_REVS_SUBHARMONIC = 32
 #: a sub-synchronous peak order is reported only when its bin stands this many times
 #: above the median power of the band
 SUBSYNC_PEAK_MIN_RATIO = 10.0
+#: … and holds at least this fraction of the orbit's AC mean-square (amplitude ≳ 0.1 % of RMS)
+SUBSYNC_PEAK_MIN_FRAC = 1e-6
 
 #: speed search range without keyphasor / given speed (r/min)
 SPEED_SEARCH_RPM: tuple[float, float] = (60.0, 12000.0)
@@ -47,6 +49,8 @@ SPEED_SEARCH_RPM: tuple[float, float] = (60.0, 12000.0)
 SPEED_CANDIDATE_PEAKS = 5
 #: a peak must stand this many times above the median spectrum to count as a line
 SPEED_LINE_MIN_SNR = 10.0
+#: a harmonic counts as present when its amplitude is at least this fraction of the largest line
+SPEED_HARMONIC_MIN_REL = 0.01
 #: phase-difference refinement iterations of the estimated / given speed
 SPEED_REFINE_ITERATIONS = 3
 #: a given ``speed_rpm`` that differs from the signal's refined 1X line by more than this

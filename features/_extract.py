@@ -263,7 +263,8 @@ def extract_features(recording: Recording) -> FeatureResult:
         peak_order = float("nan")
         if sel.size >= 3:
             k = int(sel[np.argmax(pb[sel])])
-            if pb[k] > cfg.SUBSYNC_PEAK_MIN_RATIO * float(np.median(pb[sel])) and 0 < k < pb.size - 1:
+            distinct = pb[k] > cfg.SUBSYNC_PEAK_MIN_RATIO * float(np.median(pb[sel]))
+            if distinct and pb[k] > cfg.SUBSYNC_PEAK_MIN_FRAC * total_ms and 0 < k < pb.size - 1:
                 lp = np.log(np.maximum(pb[k - 1:k + 2], np.finfo(float).tiny))
                 den = lp[0] - 2 * lp[1] + lp[2]
                 delta = 0.5 * (lp[0] - lp[2]) / den if den < 0 else 0.0

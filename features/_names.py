@@ -69,7 +69,7 @@ def _bearing_specs(b: int) -> list[FeatureSpec]:
         add(f"{key}_rms_per_c", "1", f"{key}_rms_um / radial clearance")
         add(f"{key}_frac", "1", f"mean-square in the {what} / total AC mean-square (x and y)")
     add("subsync_peak_order", "X", "order of the largest sub-synchronous line (0.05–0.95X); NaN when no bin stands "
-        "10× above the band's median")
+        "10× above the band's median and holds 1e-6 of the AC mean-square")
     add("nonsync_frac", "1", "non-synchronous mean-square (everything but orders 1..K and the mean) / total AC mean-square")
     add("poincare_rms_um", "µm rms", "RMS scatter of the once-per-revolution (θ = 2πm) orbit points about their centroid")
     add("poincare_rms_per_c", "1", "poincare_rms_um / radial clearance")

@@ -8,8 +8,8 @@ revolutions is fitted as
 so ``C_k = A_k · exp(-j φ_k)`` with ``A_k`` the zero-to-peak amplitude and ``φ_k`` the phase
 lag (degrees of the k-th order's own cycle from the θ = 0 reference to the positive peak:
 ``A_k cos(kθ − φ_k)``). This is exact for any speed, integer or not, with no leakage between
-the fitted orders, and is equivalent to synchronous resampling followed by a DFT when the
-samples per revolution are an integer. ``r(t)`` — everything that is not a fitted order —
+the fitted orders (for a noise-free synchronous signal it equals synchronous resampling followed
+by a DFT). The fit is weighted by a Hann taper to keep non-synchronous lines out of the orders. ``r(t)`` — everything that is not a fitted order —
 is the non-synchronous part.
 """
 from __future__ import annotations
@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _config as cfg
+from ._spectrum import hann
 
 __all__ = ["max_sync_order", "fit_orders", "forward_reverse"]
 
@@ -26,17 +27,27 @@ def max_sync_order(min_samples_per_rev: float) -> int:
     return int(min(cfg.MAX_SYNC_ORDER, np.floor(0.45 * min_samples_per_rev)))
 
 
-def _uniform_gram(n: int, step_rad: float, k_max: int) -> np.ndarray:
-    """``DᵀD`` of the design [1, cos θ, sin θ, cos 2θ, sin 2θ, …] for θ_i = i·step, in closed form.
+def _geometric_sum(n: int, step: np.ndarray) -> np.ndarray:
+    """Σ_{i<n} e^{j·step·i} for each step (n where the step is a multiple of 2π)."""
+    e = np.exp(1j * step)
+    zero = np.abs(1 - e) < 1e-300
+    den = np.where(zero, 1.0, 1 - e)
+    return np.where(zero, n, (1 - np.exp(1j * step * n)) / den)
 
-    Uses S(m) = Σ_i e^{j m θ_i} = (1 − e^{j m step n}) / (1 − e^{j m step}) (m ≥ 1; the
-    denominator is nonzero because every fitted order is below Nyquist).
+
+def _uniform_gram(n: int, step_rad: float, k_max: int, hann_taper: bool = True) -> np.ndarray:
+    """``DᵀWD`` of the design [1, cos θ, sin θ, cos 2θ, sin 2θ, …] for θ_i = i·step, in closed form.
+
+    ``W`` is the Hann taper ``w_i = ½ − ½ cos(2πi/(n−1))`` (or 1). With
+    S(m) = Σ_i w_i e^{j m θ_i}, a sum of three geometric series,
+    Σ w cos aθ cos bθ = ½ Re[S(a−b) + S(a+b)] and so on.
     """
-    m = np.arange(2 * k_max + 1)
-    s = np.empty(m.size, dtype=np.complex128)
-    s[0] = n
-    mm = m[1:] * step_rad
-    s[1:] = (1 - np.exp(1j * mm * n)) / (1 - np.exp(1j * mm))
+    m = np.arange(2 * k_max + 1) * step_rad
+    if hann_taper:
+        beta = 2 * np.pi / (n - 1)
+        s = 0.5 * _geometric_sum(n, m) - 0.25 * (_geometric_sum(n, m + beta) + _geometric_sum(n, m - beta))
+    else:
+        s = _geometric_sum(n, m)
     k = np.arange(1, k_max + 1)
     a, b = k[:, None], k[None, :]
     sp, sd = s[a + b], s[np.abs(a - b)]
@@ -46,7 +57,7 @@ def _uniform_gram(n: int, step_rad: float, k_max: int) -> np.ndarray:
     sd_signed = np.where(a >= b, sd.imag, -sd.imag)
     cs = 0.5 * (sp.imag - sd_signed)
     g = np.empty((2 * k_max + 1, 2 * k_max + 1))
-    g[0, 0] = n
+    g[0, 0] = s[0].real
     g[0, 1::2] = g[1::2, 0] = s[k].real
     g[0, 2::2] = g[2::2, 0] = s[k].imag
     g[1::2, 1::2] = cc
@@ -58,7 +69,13 @@ def _uniform_gram(n: int, step_rad: float, k_max: int) -> np.ndarray:
 
 def fit_orders(theta_rad: np.ndarray, data: np.ndarray, max_order: int,
                uniform_step_rad: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Least-squares fit of orders 1..``max_order`` plus a constant.
+    """Hann-weighted least-squares fit of orders 1..``max_order`` plus a constant.
+
+    The weights (a Hann taper over the analysed segment) change nothing for a signal made
+    of the fitted orders — the fit is exact whatever the weights — but they suppress the
+    leakage of non-synchronous lines (an oil whirl at 0.45X, say) into the order estimates
+    from ~1/(π·distance in bins) to ~1/distance³; the price is a ≈ 1.2× larger noise
+    standard error.
 
     Parameters
     ----------
@@ -82,22 +99,24 @@ def fit_orders(theta_rad: np.ndarray, data: np.ndarray, max_order: int,
     """
     n = theta_rad.size
     k_max = int(max_order)
+    w = hann(n)
     e1 = np.exp(1j * theta_rad)
     basis = np.empty((n, k_max), dtype=np.complex128)
     basis[:, 0] = e1
     for k in range(1, k_max):
         np.multiply(basis[:, k - 1], e1, out=basis[:, k])
     trig = basis.view(np.float64)          # (n, 2K): cos θ, sin θ, cos 2θ, sin 2θ, …
+    wtrig = trig * w[:, None]
     if uniform_step_rad is None:
         gram = np.empty((2 * k_max + 1, 2 * k_max + 1))
-        gram[0, 0] = n
-        gram[0, 1:] = gram[1:, 0] = trig.sum(axis=0)
-        gram[1:, 1:] = trig.T @ trig
+        gram[0, 0] = w.sum()
+        gram[0, 1:] = gram[1:, 0] = wtrig.sum(axis=0)
+        gram[1:, 1:] = wtrig.T @ trig
     else:
         gram = _uniform_gram(n, float(uniform_step_rad), k_max)
     rhs = np.empty((2 * k_max + 1, data.shape[0]))
-    rhs[0] = data.sum(axis=1)
-    rhs[1:] = (data @ trig).T
+    rhs[0] = data @ w
+    rhs[1:] = (data @ wtrig).T
     sol = np.linalg.solve(gram, rhs)       # (2K+1, m)
     residual = data - sol[0][:, None] - sol[1:].T @ trig.T
     coeffs = (sol[1::2] - 1j * sol[2::2]).T

@@ -94,12 +94,16 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
     -----
     The summed Hann power spectrum of all channels is searched for its largest peaks in
     ``SPEED_SEARCH_RPM`` (and with 3X below 0.75 × Nyquist). Each peak ``f_p`` and its
-    sub-multiples ``f_p/2``, ``f_p/3`` is a candidate running speed, scored by the summed
-    amplitudes of its 1X, 2X and 3X lines, so that a dominant 2X (the generator's
-    twice-per-revolution) or a strong sub-synchronous whirl line is not taken for 1X. The
-    winning line (its strongest harmonic) is refined by :func:`refine_line_hz`. Period-2
-    motion (a 1/2X line) and a 2X-dominated signal look alike to any spectral method: a
-    warning is given when two candidates score within 20 %.
+    sub-multiples ``f_p/2``, ``f_p/3`` is a candidate running speed if it has a line of its
+    own; candidates are ranked by how many of their 1X, 2X, 3X lines are present (a line is
+    present when it stands ``SPEED_LINE_MIN_SNR`` above the median spectrum and its amplitude
+    is at least ``SPEED_HARMONIC_MIN_REL`` of the largest line), then by the summed
+    amplitude of those lines. So a dominant 2X (the two-pole generator's
+    twice-per-revolution) or a strong sub-synchronous whirl line is not taken for 1X as
+    long as the true 1X shows at least one harmonic. The winning line (its strongest
+    harmonic) is refined by :func:`refine_line_hz`. Period-2 motion (a 1/2X line) and a
+    2X-dominated signal can look alike to any spectral method: a warning is given when the
+    two best candidates have the same number of lines and amplitudes within 20 %.
     """
     n = data.shape[1]
     x = data - data.mean(axis=1)[:, None]
@@ -127,7 +131,8 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
     pmax = power[peak_idx[0]]
     peak_idx = peak_idx[power[peak_idx] >= 1e-2 * pmax]
     logp = np.log(np.maximum(power, np.finfo(float).tiny))
-    candidates: list[tuple[float, float]] = []
+    present_level = max(cfg.SPEED_LINE_MIN_SNR * floor, cfg.SPEED_HARMONIC_MIN_REL ** 2 * pmax)
+    candidates: list[tuple[float, int, float]] = []
     for k in peak_idx:
         den = logp[k - 1] - 2 * logp[k] + logp[k + 1]
         delta = 0.5 * (logp[k - 1] - logp[k + 1]) / den if den < 0 else 0.0
@@ -136,17 +141,20 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
             f = fp / d
             if not (f_lo <= f <= f_hi):
                 continue
-            if any(abs(f - g) < 1.5 * df for g, _ in candidates):
+            if any(abs(f - g) < 1.5 * df for g, _, _ in candidates):
                 continue
-            score = sum(_hann_amplitude_at(power, m * f, df) for m in (1, 2, 3))
-            candidates.append((f, score))
+            amps = [_hann_amplitude_at(power, m * f, df) for m in (1, 2, 3)]
+            present = [a * a >= present_level for a in amps]
+            if not present[0]:      # a running speed always shows its own 1X line
+                continue
+            candidates.append((f, int(sum(present)), float(sum(a for a, p in zip(amps, present) if p))))
     if not candidates:
         raise ValueError("cannot estimate the running speed: no candidate line in the search range; "
                          "give speed_rpm or keyphasor_times_s")
-    candidates.sort(key=lambda c: -c[1])
-    f_best, s_best = candidates[0]
+    candidates.sort(key=lambda c: (-c[1], -c[2]))
+    f_best, n_best, s_best = candidates[0]
     warnings: list[str] = []
-    if len(candidates) > 1 and candidates[1][1] >= 0.8 * s_best:
+    if len(candidates) > 1 and candidates[1][1] == n_best and candidates[1][2] >= 0.8 * s_best:
         warnings.append(
             f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * candidates[1][0]:.1f} r/min "
             "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")

@@ -82,11 +82,16 @@ def test_varying_speed_tracked_by_keyphasor():
 
 @pytest.mark.parametrize("noise", [0.5, 2.0])
 def test_orders_with_noise(noise):
-    """White probe noise σ: amplitude errors stay within 5 standard errors (σ·√(2/N) per axis)."""
+    """White probe noise σ: amplitude errors stay within 5 standard errors.
+
+    Unweighted least squares gives σ·√(2/N) per cosine/sine coefficient; the Hann weights
+    raise that by √(Σw⁴·N)/Σw² = √(35/18) ≈ 1.39 (x, y are orthonormal probe combinations
+    at ±45°, so they carry the probe noise σ unchanged).
+    """
     rec = make_recording(noise_um=noise, seed=7, speed_rpm=1953.7)
     fr = extract_features(rec)
     n = 16384
-    se_pp = 2 * noise * np.sqrt(2.0 / n) * 1.0  # x, y are probe combinations with unit gain at ±45°
+    se_pp = 2 * noise * np.sqrt(2.0 / n) * np.sqrt(35 / 18)
     for b, cs in DEFAULT_COMPONENTS.items():
         for k, ax, phx, ay, phy in cs:
             for d, a, ph in (("x", ax, phx), ("y", ay, phy)):
@@ -162,7 +167,9 @@ def test_uniform_gram_matches_direct():
     for m in range(1, k + 1):
         cols += [np.cos(m * th), np.sin(m * th)]
     d = np.column_stack(cols)
-    np.testing.assert_allclose(_uniform_gram(n, step, k), d.T @ d, atol=1e-8 * n)
+    np.testing.assert_allclose(_uniform_gram(n, step, k, hann_taper=False), d.T @ d, atol=1e-8 * n)
+    w = np.hanning(n)
+    np.testing.assert_allclose(_uniform_gram(n, step, k), (d * w[:, None]).T @ d, atol=1e-8 * n)
 
 
 def test_fit_orders_general_and_uniform_paths_agree():
