@@ -29,6 +29,8 @@ def generate(
     scheduler: Optional[str] = typer.Option(
         None, "--scheduler", help="Address of an existing Dask scheduler, e.g. tcp://scheduler:8786."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show the progress bar."),
+    connect_timeout: float = typer.Option(30.0, "--connect-timeout", min=0.1,
+                                          help="Seconds to wait for --scheduler to answer."),
 ) -> None:
     """Generate (or resume) a dataset. Safe to kill at any moment; rerun the same command to resume."""
     from simulator.dataset.generate import generate as run
@@ -39,7 +41,8 @@ def generate(
     if workers is not None and scheduler is not None:
         raise typer.BadParameter("give either --workers or --scheduler, not both", param_hint="--workers")
     try:
-        summary = run(spec, out, n_workers=workers, scheduler_address=scheduler, progress=progress)
+        summary = run(spec, out, n_workers=workers, scheduler_address=scheduler, progress=progress,
+                      connect_timeout_s=connect_timeout)
     except (SpecError, StoreError) as exc:
         _fail(str(exc))
     except TaskError as exc:

@@ -124,6 +124,7 @@ def generate(
     n_workers: int | None = None,
     scheduler_address: str | None = None,
     progress: bool = True,
+    connect_timeout_s: float = 30.0,
 ) -> GenerateSummary:
     """Generate (or resume) the dataset of ``spec`` into the HDF5 file ``out``.
 
@@ -142,6 +143,8 @@ def generate(
         Use an existing Dask scheduler, e.g. ``"tcp://scheduler:8786"``.
     progress : bool
         Show the progress bar.
+    connect_timeout_s : float
+        How long to wait for ``scheduler_address`` to answer.
 
     Returns
     -------
@@ -182,7 +185,8 @@ def generate(
                 results = tqdm(results, total=len(todo), desc="samples", unit="sample")
         else:
             results = run_tasks(run_sample, tasks, n_workers=n_workers, scheduler_address=scheduler_address,
-                                total=len(todo), progress=progress, desc="samples", unit="sample")
+                                total=len(todo), progress=progress, desc="samples", unit="sample",
+                                connect_timeout_s=connect_timeout_s)
         for _, output in results:
             params = design[output.index]
             writer.write_sample(output.index, _rows(params, output))
