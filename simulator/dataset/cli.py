@@ -55,7 +55,8 @@ def generate(
         _fail(f"interrupted; the finished samples are saved in {out}; rerun the same command to resume", 130)
     what = "resumed" + (" (repaired after a crash)" if summary.repaired else "") if summary.resumed else "created"
     typer.echo(f"{out}: {what}; {summary.n_computed} samples computed, "
-               f"{summary.n_done_before + summary.n_computed}/{summary.n_samples} done; status {summary.status_counts}")
+               f"{summary.n_done_before + summary.n_computed}/{summary.n_samples} done; status {summary.status_counts}; "
+               f"{summary.elapsed_s:.1f} s")
     bad = {k: v for k, v in summary.status_counts.items() if k != "ok"}
     if bad:
         typer.secho(f"note: {sum(bad.values())} samples did not finish cleanly ({bad}); they are kept with their "

@@ -4,6 +4,7 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import math
+import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,6 +39,15 @@ class GenerateSummary:
     status_counts: dict[str, int] = field(default_factory=dict)
     resumed: bool = False
     repaired: bool = False
+    elapsed_s: float = 0.0            # whole call: file, cluster start-up, samples
+    first_sample_s: float = math.nan  # from the call's start to the first sample written
+
+    @property
+    def steady_rate_per_s(self) -> float:
+        """Samples per second after the first one (excludes cluster start-up and warm-up)."""
+        if self.n_computed < 2 or not math.isfinite(self.first_sample_s):
+            return math.nan
+        return (self.n_computed - 1) / max(self.elapsed_s - self.first_sample_s, 1e-9)
 
     @property
     def complete(self) -> bool:
@@ -160,6 +170,8 @@ def generate(
     """
     from simulator.runner import run_tasks
 
+    t_start = time.perf_counter()
+    t_first = math.nan
     resolved = spec if isinstance(spec, ResolvedSpec) else load_spec(spec)
     design = build_design(resolved)
     meas = MeasurementSettings.from_spec(resolved.spec)
@@ -191,8 +203,10 @@ def generate(
             params = design[output.index]
             writer.write_sample(output.index, _rows(params, output))
             counts[output.status] += 1
+            if not math.isfinite(t_first):
+                t_first = time.perf_counter() - t_start
         complete = bool(writer.done.all())
     finally:
         writer.close(complete=complete)
     return GenerateSummary(Path(out), design.n_samples, n_before, int(sum(counts.values())), dict(counts),
-                           writer.resumed, writer.repaired)
+                           writer.resumed, writer.repaired, time.perf_counter() - t_start, t_first)
