@@ -64,5 +64,6 @@ ORBIT_GRID = 360
 
 #: minimum revolutions for the motion type (periods up to MIN_REVS_MOTION // 3 testable)
 MIN_REVS_MOTION = 32
-#: period tolerance = max(classifier default × orbit size, this × RMS noise of a Poincaré point)
-POINCARE_NOISE_FACTOR = 5.0
+#: probability that Gaussian measurement noise alone breaks a truly periodic Poincaré set
+#: (sets the period tolerance, see features._poincare.period_tolerance)
+POINCARE_FALSE_ALARM = 1e-3

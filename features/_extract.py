@@ -190,9 +190,8 @@ def extract_features(recording: Recording) -> FeatureResult:
     ms = np.einsum("ij,ij->i", ac, ac) / n_seg
     res_ms = np.einsum("ij,ij->i", resid, resid) / n_seg
     ptp = np.ptp(seg, axis=1)
-    seg_times = (sa.start + np.arange(n_seg)) / fs
     sync0 = mean + coeffs.real.sum(axis=1)
-    pts_all = poincare_points(sync0, resid, seg_times, sa.rev_times_s)
+    pts_all = poincare_points(sync0, resid, sa.start, fs, sa.rev_times_s)
 
     values = np.full(len(FEATURE_NAMES), np.nan)
     out: dict[str, float] = {"speed_rpm": sa.speed_rpm}
@@ -298,8 +297,7 @@ def extract_features(recording: Recording) -> FeatureResult:
     motion = None
     if sa.n_revs >= cfg.MIN_REVS_MOTION:
         orbit_size = float(np.max(ptp))
-        point_noise = float(np.sqrt(np.sum(noise ** 2)))
-        motion, note = classify(pts_all, orbit_size, point_noise)
+        motion, note = classify(pts_all, orbit_size, noise)
         if motion is None:
             warnings.append(note)
         else:

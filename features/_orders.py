@@ -74,7 +74,7 @@ def fit_orders(theta_rad: np.ndarray, data: np.ndarray, max_order: int,
     The weights (a Hann taper over the analysed segment) change nothing for a signal made
     of the fitted orders — the fit is exact whatever the weights — but they suppress the
     leakage of non-synchronous lines (an oil whirl at 0.45X, say) into the order estimates
-    from ~1/(π·distance in bins) to ~1/distance³; the price is a ≈ 1.2× larger noise
+    from ~1/(π·distance in bins) to ~1/distance³; the price is a ≈ 1.22× (√1.5) larger noise
     standard error.
 
     Parameters

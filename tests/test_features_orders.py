@@ -84,14 +84,14 @@ def test_varying_speed_tracked_by_keyphasor():
 def test_orders_with_noise(noise):
     """White probe noise σ: amplitude errors stay within 5 standard errors.
 
-    Unweighted least squares gives σ·√(2/N) per cosine/sine coefficient; the Hann weights
-    raise that by √(Σw⁴·N)/Σw² = √(35/18) ≈ 1.39 (x, y are orthonormal probe combinations
-    at ±45°, so they carry the probe noise σ unchanged).
+    Unweighted least squares gives σ·√(2/N) per cosine/sine coefficient; Hann weights
+    raise that by √(N·Σw²)/Σw = √(N·3N/8)/(N/2) = √1.5 ≈ 1.22 (x, y are orthonormal probe
+    combinations at ±45°, so they carry the probe noise σ unchanged).
     """
     rec = make_recording(noise_um=noise, seed=7, speed_rpm=1953.7)
     fr = extract_features(rec)
     n = 16384
-    se_pp = 2 * noise * np.sqrt(2.0 / n) * np.sqrt(35 / 18)
+    se_pp = 2 * noise * np.sqrt(2.0 / n) * np.sqrt(1.5)
     for b, cs in DEFAULT_COMPONENTS.items():
         for k, ax, phx, ay, phy in cs:
             for d, a, ph in (("x", ax, phx), ("y", ay, phy)):
