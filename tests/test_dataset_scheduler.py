@@ -79,9 +79,12 @@ def test_generate_through_an_external_scheduler(cluster, tmp_path):
 
 
 def test_unreachable_scheduler_is_a_clean_error(tmp_path):
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
     spec = write_spec(tmp_path / "spec.toml", n_samples=2)
-    run = subprocess.run([str(BIN / "rotordiag"), "dataset", "generate", str(spec), "--out", str(tmp_path / "o.h5"),
-                          "--scheduler", f"tcp://127.0.0.1:{_free_port()}", "--connect-timeout", "2",
-                          "--no-progress"], capture_output=True, text=True, timeout=300)
-    assert run.returncode == 2
-    assert "cannot reach the Dask scheduler" in run.stderr and "Traceback" not in run.stderr
+    r = CliRunner().invoke(app, ["dataset", "generate", str(spec), "--out", str(tmp_path / "o.h5"), "--scheduler",
+                                 f"tcp://127.0.0.1:{_free_port()}", "--connect-timeout", "2", "--no-progress"])
+    assert r.exit_code == 2, r.output
+    assert "cannot reach the Dask scheduler" in r.output and "Traceback" not in r.output
