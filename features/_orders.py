@@ -100,23 +100,30 @@ def fit_orders(theta_rad: np.ndarray, data: np.ndarray, max_order: int,
     n = theta_rad.size
     k_max = int(max_order)
     w = hann(n)
-    e1 = np.exp(1j * theta_rad)
+    if uniform_step_rad is None:
+        e1 = np.exp(1j * theta_rad)
+    else:  # e^{jθ} in blocks: 2·√n complex exponentials instead of n
+        blk = 128
+        nb = -(-n // blk)
+        e1 = (np.exp(1j * uniform_step_rad * blk * np.arange(nb))[:, None]
+              * np.exp(1j * uniform_step_rad * np.arange(blk))[None, :]).ravel()[:n]
     basis = np.empty((n, k_max), dtype=np.complex128)
     basis[:, 0] = e1
     for k in range(1, k_max):
         np.multiply(basis[:, k - 1], e1, out=basis[:, k])
     trig = basis.view(np.float64)          # (n, 2K): cos θ, sin θ, cos 2θ, sin 2θ, …
-    wtrig = trig * w[:, None]
     if uniform_step_rad is None:
+        wtrig = trig * w[:, None]
         gram = np.empty((2 * k_max + 1, 2 * k_max + 1))
         gram[0, 0] = w.sum()
         gram[0, 1:] = gram[1:, 0] = wtrig.sum(axis=0)
         gram[1:, 1:] = wtrig.T @ trig
     else:
         gram = _uniform_gram(n, float(uniform_step_rad), k_max)
+    dw = data * w
     rhs = np.empty((2 * k_max + 1, data.shape[0]))
-    rhs[0] = data @ w
-    rhs[1:] = (data @ wtrig).T
+    rhs[0] = dw.sum(axis=1)
+    rhs[1:] = (dw @ trig).T
     sol = np.linalg.solve(gram, rhs)       # (2K+1, m)
     residual = data - sol[0][:, None] - sol[1:].T @ trig.T
     coeffs = (sol[1::2] - 1j * sol[2::2]).T

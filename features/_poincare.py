@@ -40,11 +40,11 @@ def period_tolerance(point_noise_rms: np.ndarray, n_points: int) -> float:
     largest of ``n_points`` squared distances stays below 2σ²·χ²_D(1 − α/n) with
     probability ≥ 1 − α (σ² the mean coordinate variance, D the dimension).
     """
-    from scipy.stats import chi2
+    from scipy.special import chdtri  # inverse survival function of χ²
 
     d = point_noise_rms.size
     sigma2 = float(np.mean(point_noise_rms ** 2))
-    return float(np.sqrt(2 * sigma2 * chi2.isf(cfg.POINCARE_FALSE_ALARM / max(n_points, 1), d)))
+    return float(np.sqrt(2 * sigma2 * chdtri(d, cfg.POINCARE_FALSE_ALARM / max(n_points, 1))))
 
 
 def classify(points: np.ndarray, orbit_size_um: float, point_noise_rms: np.ndarray):
