@@ -19,6 +19,7 @@ names; it is the one object the registry stores and :func:`models.predict.diagno
 from __future__ import annotations
 
 import math
+from numbers import Integral, Real
 from typing import Sequence
 
 import numpy as np
@@ -36,6 +37,7 @@ from sklearn.model_selection import GroupShuffleSplit, ShuffleSplit, StratifiedG
 from sklearn.neighbors import NearestNeighbors
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
+from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
@@ -79,6 +81,18 @@ class SeverityClassifier(ClassifierMixin, BaseEstimator):
     n_iter_ : int
         Boosting iterations of the trees.
     """
+
+    _parameter_constraints = {
+        "learning_rate": [Interval(Real, 0, None, closed="neither")],
+        "max_iter": [Interval(Integral, 1, None, closed="left")],
+        "max_leaf_nodes": [Interval(Integral, 2, None, closed="left")],
+        "min_samples_leaf": [Interval(Integral, 1, None, closed="left")],
+        "l2_regularization": [Interval(Real, 0, None, closed="left")],
+        "class_weight": [StrOptions({"balanced"}), dict, None],
+        "calibration": [StrOptions(set(_CALIBRATION_METHODS))],
+        "cv": [Interval(Integral, 2, None, closed="left")],
+        "random_state": ["random_state"],
+    }
 
     def __init__(
         self,
@@ -128,12 +142,7 @@ class SeverityClassifier(ClassifierMixin, BaseEstimator):
         groups : array-like of shape (n_samples,), optional
             Plant identifiers; calibration folds never split a plant.
         """
-        if self.calibration not in _CALIBRATION_METHODS:
-            raise ValueError(
-                f"calibration: must be one of {_CALIBRATION_METHODS}, got {self.calibration!r}"
-            )
-        if not (isinstance(self.cv, (int, np.integer)) and self.cv >= 2):
-            raise ValueError(f"cv: must be an integer ≥ 2, got {self.cv!r}")
+        self._validate_params()
         X, y = validate_data(self, X, y, ensure_all_finite="allow-nan")
         check_classification_targets(y)
         self.classes_, counts = np.unique(y, return_counts=True)
@@ -211,6 +220,18 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
         Boosting iterations of the point model.
     """
 
+    _parameter_constraints = {
+        "alpha": [Interval(Real, 0, 1, closed="neither")],
+        "calibration_fraction": [Interval(Real, 0, 1, closed="neither")],
+        "lower_bound": [Real, None],
+        "learning_rate": [Interval(Real, 0, None, closed="neither")],
+        "max_iter": [Interval(Integral, 1, None, closed="left")],
+        "max_leaf_nodes": [Interval(Integral, 2, None, closed="left")],
+        "min_samples_leaf": [Interval(Integral, 1, None, closed="left")],
+        "l2_regularization": [Interval(Real, 0, None, closed="left")],
+        "random_state": ["random_state"],
+    }
+
     def __init__(
         self,
         *,
@@ -259,12 +280,7 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
         groups : array-like of shape (n_samples,), optional
             Plant identifiers; the calibration part holds whole plants.
         """
-        if not (0.0 < float(self.alpha) < 1.0):
-            raise ValueError(f"alpha: must lie in (0, 1), got {self.alpha!r}")
-        if not (0.0 < float(self.calibration_fraction) < 1.0):
-            raise ValueError(
-                f"calibration_fraction: must lie in (0, 1), got {self.calibration_fraction!r}"
-            )
+        self._validate_params()
         X, y = validate_data(self, X, y, ensure_all_finite="allow-nan", y_numeric=True)
         y = y.astype(float)
         n = X.shape[0]
@@ -346,6 +362,13 @@ class KNNDistanceOOD(OutlierMixin, BaseEstimator):
         outlier convention: negative means outlier).
     """
 
+    _parameter_constraints = {
+        "n_neighbors": [Interval(Integral, 1, None, closed="left")],
+        "threshold_quantile": [Interval(Real, 0, 1, closed="right")],
+        "max_reference": [Interval(Integral, 2, None, closed="left")],
+        "random_state": ["random_state"],
+    }
+
     def __init__(
         self,
         *,
@@ -370,12 +393,7 @@ class KNNDistanceOOD(OutlierMixin, BaseEstimator):
         X : array-like of shape (n_samples, n_features); NaN allowed
         y : ignored
         """
-        if not (isinstance(self.n_neighbors, (int, np.integer)) and self.n_neighbors >= 1):
-            raise ValueError(f"n_neighbors: must be an integer ≥ 1, got {self.n_neighbors!r}")
-        if not (0.0 < float(self.threshold_quantile) <= 1.0):
-            raise ValueError(f"threshold_quantile: must lie in (0, 1], got {self.threshold_quantile!r}")
-        if not (isinstance(self.max_reference, (int, np.integer)) and self.max_reference >= 2):
-            raise ValueError(f"max_reference: must be an integer ≥ 2, got {self.max_reference!r}")
+        self._validate_params()
         X = validate_data(self, X, ensure_all_finite="allow-nan")
         if X.shape[0] < 2:
             raise ValueError(f"X: need at least 2 samples to fit an OOD scorer, got n_samples = {X.shape[0]}")

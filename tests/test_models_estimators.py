@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from threadpoolctl import threadpool_limits
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from models.bands import SeverityBands
@@ -13,6 +14,14 @@ from models.estimators import (
     SeverityClassifier,
 )
 from tests.models_synthetic import FEATURE_NAMES, make_table
+
+
+@pytest.fixture(autouse=True)
+def _one_openmp_thread():
+    # HistGradientBoosting's OpenMP threads spin badly when the 2 shared cores are
+    # oversubscribed (12x slower measured); one thread is fast and deterministic.
+    with threadpool_limits(1):
+        yield
 
 
 @parametrize_with_checks(

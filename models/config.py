@@ -1,0 +1,163 @@
+"""Training configuration (``train.toml``), validated with messages that name the key.
+
+Every section and key is optional; the defaults are the documented ones::
+
+    seed = 0
+
+    [bands]
+    edges = [0.05, 0.15, 0.35]
+    names = ["aligned", "slight", "moderate", "severe"]
+
+    [features]
+    exclude = []                # glob patterns of feature names the model must not use
+
+    [classifier]                # SeverityClassifier parameters
+    calibration = "temperature"
+    [regressor]                 # ConformalIntervalRegressor parameters
+    alpha = 0.1
+    [ood]                       # KNNDistanceOOD parameters
+    threshold_quantile = 0.99
+
+    [evaluation]
+    n_splits = 5                # GroupKFold over plant_id
+    speed_bands_rpm = [1200, 1800, 2400, 3000]
+
+    [baselines]
+    ratio_features = ["*2x_1x*"]
+    rule_cuts = [0.5, 1.0, 2.0]
+"""
+from __future__ import annotations
+
+import inspect
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from .bands import SeverityBands
+from .baselines import DEFAULT_RATIO_PATTERNS, DEFAULT_RULE_CUTS
+from .estimators import ConformalIntervalRegressor, KNNDistanceOOD, SeverityClassifier
+
+_SECTIONS = {"seed", "bands", "features", "classifier", "regressor", "ood", "evaluation", "baselines"}
+
+
+def _params(cls, section: str, d: Mapping[str, Any] | None) -> dict:
+    d = dict(d or {})
+    allowed = set(inspect.signature(cls.__init__).parameters) - {"self"}
+    unknown = set(d) - allowed
+    if unknown:
+        raise ValueError(f"[{section}]: unknown key(s) {sorted(unknown)}; allowed: {sorted(allowed)}")
+    return d
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Validated training configuration (see the module docstring for the TOML form)."""
+
+    seed: int = 0
+    bands: SeverityBands = field(default_factory=SeverityBands)
+    exclude_features: tuple[str, ...] = ()
+    classifier: dict = field(default_factory=dict)
+    regressor: dict = field(default_factory=dict)
+    ood: dict = field(default_factory=dict)
+    n_splits: int = 5
+    speed_bands_rpm: tuple[float, ...] = (1200.0, 1800.0, 2400.0, 3000.0)
+    ratio_features: tuple[str, ...] = DEFAULT_RATIO_PATTERNS
+    rule_cuts: tuple[float, ...] = DEFAULT_RULE_CUTS
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any] | None) -> "TrainConfig":
+        d = dict(d or {})
+        unknown = set(d) - _SECTIONS
+        if unknown:
+            raise ValueError(f"train config: unknown section(s) {sorted(unknown)}; allowed: {sorted(_SECTIONS)}")
+        seed = d.get("seed", 0)
+        if not isinstance(seed, int) or seed < 0:
+            raise ValueError(f"seed: must be a non-negative integer, got {seed!r}")
+        feats = dict(d.get("features", {}))
+        if set(feats) - {"exclude"}:
+            raise ValueError(f"[features]: unknown key(s) {sorted(set(feats) - {'exclude'})}; allowed: ['exclude']")
+        ev = dict(d.get("evaluation", {}))
+        if set(ev) - {"n_splits", "speed_bands_rpm"}:
+            raise ValueError(
+                f"[evaluation]: unknown key(s) {sorted(set(ev) - {'n_splits', 'speed_bands_rpm'})}; "
+                "allowed: ['n_splits', 'speed_bands_rpm']"
+            )
+        n_splits = ev.get("n_splits", 5)
+        if not isinstance(n_splits, int) or n_splits < 2:
+            raise ValueError(f"[evaluation] n_splits: must be an integer ≥ 2, got {n_splits!r}")
+        sb = tuple(float(v) for v in ev.get("speed_bands_rpm", (1200.0, 1800.0, 2400.0, 3000.0)))
+        if len(sb) < 2 or any(b <= a for a, b in zip(sb, sb[1:])):
+            raise ValueError(f"[evaluation] speed_bands_rpm: need ≥ 2 increasing edges, got {list(sb)}")
+        bl = dict(d.get("baselines", {}))
+        if set(bl) - {"ratio_features", "rule_cuts"}:
+            raise ValueError(
+                f"[baselines]: unknown key(s) {sorted(set(bl) - {'ratio_features', 'rule_cuts'})}; "
+                "allowed: ['ratio_features', 'rule_cuts']"
+            )
+        bands = SeverityBands.from_dict(d.get("bands"))
+        rule_cuts = tuple(float(c) for c in bl.get("rule_cuts", DEFAULT_RULE_CUTS))
+        if len(rule_cuts) != bands.n_bands - 1:
+            raise ValueError(
+                f"[baselines] rule_cuts: need one cut per band edge ({bands.n_bands - 1}), got {list(rule_cuts)}"
+            )
+        cfg = cls(
+            seed=seed,
+            bands=bands,
+            exclude_features=tuple(str(p) for p in feats.get("exclude", ())),
+            classifier=_params(SeverityClassifier, "classifier", d.get("classifier")),
+            regressor=_params(ConformalIntervalRegressor, "regressor", d.get("regressor")),
+            ood=_params(KNNDistanceOOD, "ood", d.get("ood")),
+            n_splits=n_splits,
+            speed_bands_rpm=sb,
+            ratio_features=tuple(str(p) for p in bl.get("ratio_features", DEFAULT_RATIO_PATTERNS)),
+            rule_cuts=rule_cuts,
+        )
+        # Validate the parameter values now, with messages naming the section.
+        m = cfg.make_model(("x",))
+        for section, est in (("classifier", m.classifier), ("regressor", m.regressor), ("ood", m.ood)):
+            try:
+                est._validate_params()
+            except ValueError as exc:  # sklearn's InvalidParameterError is a ValueError
+                raise ValueError(f"[{section}]: {exc}") from None
+        return cfg
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> "TrainConfig":
+        p = Path(path)
+        try:
+            with p.open("rb") as fh:
+                data = tomllib.load(fh)
+        except FileNotFoundError:
+            raise ValueError(f"config: file {p} does not exist") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"config: {p} is not valid TOML ({exc})") from None
+        return cls.from_dict(data)
+
+    def to_dict(self) -> dict:
+        """JSON/TOML-able form (recorded in the model card)."""
+        return {
+            "seed": self.seed,
+            "bands": self.bands.to_dict(),
+            "features": {"exclude": list(self.exclude_features)},
+            "classifier": dict(self.classifier),
+            "regressor": dict(self.regressor),
+            "ood": dict(self.ood),
+            "evaluation": {"n_splits": self.n_splits, "speed_bands_rpm": list(self.speed_bands_rpm)},
+            "baselines": {"ratio_features": list(self.ratio_features), "rule_cuts": list(self.rule_cuts)},
+        }
+
+    def make_model(self, feature_names):
+        """An unfitted :class:`~models.estimators.MisalignmentModel` with this configuration."""
+        from .estimators import MisalignmentModel
+
+        seeded = {"random_state": self.seed}
+        reg = {"lower_bound": 0.0, **seeded, **self.regressor}
+        return MisalignmentModel(
+            band_edges=self.bands.edges,
+            band_names=self.bands.names,
+            classifier=SeverityClassifier(**{**seeded, **self.classifier}),
+            regressor=ConformalIntervalRegressor(**reg),
+            ood=KNNDistanceOOD(**{**seeded, **self.ood}),
+            feature_names=tuple(feature_names),
+        )

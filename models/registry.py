@@ -1,0 +1,309 @@
+"""Model registry: versioned directories, atomic writes, an ``active`` pointer.
+
+Layout of a registry root::
+
+    ROOT/
+      active                 text file: the active version name (e.g. "v0003")
+      history.json           activation history, newest last (rollback walks it back)
+      v0001/
+        model.skops          the fitted MisalignmentModel (skops format, never pickle)
+        card.json            version, created, data hash and spec, plant family, feature
+                             names, bands, metrics, code version, ...
+        report.json          evaluation report (models.evaluate)
+        report.png           confusion matrices, reliability, Δ scatter
+      v0002/ ...
+
+A version is written into a temporary directory inside ROOT and moved into place with
+``os.replace``, so a reader never sees a half-written version; the pointer and history
+files are replaced the same way. Models are loaded with skops and the explicit
+:data:`TRUSTED_TYPES` list: a file that contains any other type is refused.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import tempfile
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any, Mapping
+
+MODEL_FILE = "model.skops"
+CARD_FILE = "card.json"
+ACTIVE_FILE = "active"
+HISTORY_FILE = "history.json"
+_VERSION_RE = re.compile(r"^v(\d{4,})$")
+
+#: Every type a rotordiag model file may contain beyond skops' default-trusted ones.
+#: Loading refuses files holding anything else (checked before any object is built).
+TRUSTED_TYPES: tuple[str, ...] = (
+    "models.bands.SeverityBands",
+    "models.estimators.ConformalIntervalRegressor",
+    "models.estimators.KNNDistanceOOD",
+    "models.estimators.MisalignmentModel",
+    "models.estimators.SeverityClassifier",
+    "numpy.dtype",
+    "sklearn.calibration._CalibratedClassifier",
+    "sklearn.calibration._SigmoidCalibration",
+    "sklearn.calibration._TemperatureScaling",
+    "sklearn.ensemble._hist_gradient_boosting.predictor.TreePredictor",
+)
+
+
+class RegistryError(ValueError):
+    """A registry operation that cannot be done (unknown version, untrusted file, ...)."""
+
+
+@dataclass(frozen=True)
+class ModelVersion:
+    """One registered version: its name, directory and card."""
+
+    name: str
+    path: Path
+    card: dict
+    active: bool
+
+
+def _atomic_write_text(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _json_default(o: Any):
+    import numpy as np
+
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON-serialisable: {type(o).__name__}")
+
+
+def dumps_json(obj: Any) -> str:
+    """JSON text used for cards and reports (NumPy scalars/arrays converted)."""
+    return json.dumps(obj, indent=2, default=_json_default, allow_nan=True) + "\n"
+
+
+def load_model_file(path: str | Path):
+    """Load a model file with the explicit trusted-types list.
+
+    Raises
+    ------
+    RegistryError
+        If the file is missing, unreadable, or contains a type outside :data:`TRUSTED_TYPES`.
+    """
+    import skops.io as sio
+
+    path = Path(path)
+    if not path.is_file():
+        raise RegistryError(f"model file {path} does not exist")
+    try:
+        untrusted = sio.get_untrusted_types(file=path)
+    except Exception as exc:  # noqa: BLE001 - any parse failure is a bad file
+        raise RegistryError(f"model file {path} is not a readable skops file ({exc})") from None
+    extra = sorted(set(untrusted) - set(TRUSTED_TYPES))
+    if extra:
+        raise RegistryError(
+            f"model file {path} contains types outside the trusted list: {extra}; refusing to load it"
+        )
+    return sio.load(path, trusted=list(TRUSTED_TYPES))
+
+
+class Registry:
+    """A directory of model versions with an ``active`` pointer.
+
+    Parameters
+    ----------
+    root : path
+        Registry directory (created on the first :meth:`register`).
+    """
+
+    def __init__(self, root: str | Path) -> None:
+        self.root = Path(root)
+
+    # ------------------------------------------------------------------ reading
+    def versions(self) -> list[str]:
+        """Version names, oldest first."""
+        if not self.root.is_dir():
+            return []
+        names = [p.name for p in self.root.iterdir() if p.is_dir() and _VERSION_RE.match(p.name)]
+        return sorted(names, key=lambda n: int(_VERSION_RE.match(n).group(1)))
+
+    def active_version(self) -> str | None:
+        """Name of the active version, or ``None`` when nothing is active."""
+        p = self.root / ACTIVE_FILE
+        if not p.is_file():
+            return None
+        name = p.read_text(encoding="utf-8").strip()
+        return name or None
+
+    def card(self, version: str) -> dict:
+        """The card of ``version``."""
+        d = self._version_dir(version)
+        try:
+            return json.loads((d / CARD_FILE).read_text(encoding="utf-8"))
+        except (OSError, json.JSONDecodeError) as exc:
+            raise RegistryError(f"version {version}: card.json unreadable ({exc})") from None
+
+    def list(self) -> list[ModelVersion]:
+        """All versions with their cards, oldest first."""
+        active = self.active_version()
+        return [ModelVersion(v, self.root / v, self.card(v), v == active) for v in self.versions()]
+
+    def load(self, version: str | None = None):
+        """Load ``version`` (default: the active one); returns ``(model, card)``.
+
+        Raises
+        ------
+        RegistryError
+            No active version, unknown version, or an untrusted/corrupt model file.
+        """
+        if version is None:
+            version = self.active_version()
+            if version is None:
+                raise RegistryError(
+                    f"registry {self.root}: no active model; train one (rotordiag train) or activate a version"
+                )
+        d = self._version_dir(version)
+        return load_model_file(d / MODEL_FILE), self.card(version)
+
+    def _version_dir(self, version: str) -> Path:
+        if not _VERSION_RE.match(str(version)):
+            raise RegistryError(f"version: {version!r} is not a version name like 'v0001'")
+        d = self.root / version
+        if not d.is_dir():
+            have = ", ".join(self.versions()) or "none"
+            raise RegistryError(f"version: {version} is not in registry {self.root} (have: {have})")
+        return d
+
+    # ------------------------------------------------------------------ writing
+    def register(
+        self,
+        model,
+        card: Mapping[str, Any],
+        *,
+        extra_files: Mapping[str, bytes | str] | None = None,
+        activate: bool = True,
+    ) -> str:
+        """Store a fitted model as a new version, atomically.
+
+        Parameters
+        ----------
+        model : fitted MisalignmentModel
+        card : mapping
+            Card fields; ``version`` and ``created`` (UTC ISO-8601) and
+            ``code_version`` (when absent) are filled in here.
+        extra_files : mapping name -> content, optional
+            More files for the version directory (e.g. ``report.json``, ``report.png``).
+        activate : bool, default=True
+            Point ``active`` at the new version.
+
+        Returns
+        -------
+        str
+            The new version name.
+        """
+        import skops.io as sio
+
+        from rotordiag import code_version
+
+        self.root.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(dir=self.root, prefix=".incoming-"))
+        try:
+            sio.dump(model, tmp / MODEL_FILE)
+            untrusted = set(sio.get_untrusted_types(file=tmp / MODEL_FILE)) - set(TRUSTED_TYPES)
+            if untrusted:
+                raise RegistryError(
+                    f"model contains types outside the trusted list {sorted(untrusted)}; "
+                    "add them to models.registry.TRUSTED_TYPES only if they are safe to load"
+                )
+            for name, content in (extra_files or {}).items():
+                if "/" in name or name in (MODEL_FILE, CARD_FILE) or name.startswith("."):
+                    raise RegistryError(f"extra_files: invalid file name {name!r}")
+                mode = "wb" if isinstance(content, bytes) else "w"
+                with open(tmp / name, mode) as fh:
+                    fh.write(content)
+            # Pick the next free name and move in; os.replace refuses a non-empty target,
+            # so two writers racing for one name cannot overwrite each other.
+            for _ in range(100):
+                existing = self.versions()
+                n = int(_VERSION_RE.match(existing[-1]).group(1)) + 1 if existing else 1
+                version = f"v{n:04d}"
+                full = dict(card)
+                full["version"] = version
+                full.setdefault("created", datetime.now(timezone.utc).isoformat(timespec="seconds"))
+                full.setdefault("code_version", code_version())
+                (tmp / CARD_FILE).write_text(dumps_json(full), encoding="utf-8")
+                try:
+                    os.replace(tmp, self.root / version)
+                    break
+                except OSError:
+                    if (self.root / version).exists():
+                        continue
+                    raise
+            else:  # pragma: no cover - 100 concurrent writers
+                raise RegistryError(f"registry {self.root}: could not find a free version name")
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        if activate:
+            self.activate(version)
+        return version
+
+    def _history(self) -> list[str]:
+        p = self.root / HISTORY_FILE
+        if not p.is_file():
+            return []
+        try:
+            h = json.loads(p.read_text(encoding="utf-8"))
+        except json.JSONDecodeError as exc:
+            raise RegistryError(f"registry {self.root}: {HISTORY_FILE} is corrupt ({exc})") from None
+        return [str(v) for v in h]
+
+    def activate(self, version: str) -> None:
+        """Make ``version`` the active one (recorded in the history for rollback)."""
+        self._version_dir(version)
+        if self.active_version() == version:
+            return
+        history = self._history() + [version]
+        _atomic_write_text(self.root / HISTORY_FILE, json.dumps(history) + "\n")
+        _atomic_write_text(self.root / ACTIVE_FILE, version + "\n")
+
+    def rollback(self) -> str:
+        """Re-activate the version that was active before the current one.
+
+        Returns
+        -------
+        str
+            The version now active.
+
+        Raises
+        ------
+        RegistryError
+            If there is no earlier activation to return to.
+        """
+        history = self._history()
+        current = self.active_version()
+        if current is not None and history and history[-1] == current:
+            history = history[:-1]
+        # Skip versions that were deleted by hand since.
+        while history and not (self.root / history[-1]).is_dir():
+            history.pop()
+        if not history:
+            raise RegistryError(f"registry {self.root}: nothing to roll back to (no earlier activation)")
+        target = history[-1]
+        _atomic_write_text(self.root / HISTORY_FILE, json.dumps(history) + "\n")
+        _atomic_write_text(self.root / ACTIVE_FILE, target + "\n")
+        return target

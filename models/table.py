@@ -1,0 +1,75 @@
+"""A labelled feature table: the input of training and evaluation."""
+from __future__ import annotations
+
+import fnmatch
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+
+@dataclass
+class FeatureTable:
+    """Feature rows with their labels and grouping.
+
+    Attributes
+    ----------
+    X : ndarray of shape (n_samples, n_features), float64 (NaN = missing feature)
+    feature_names : tuple of str
+    misalignment : ndarray (n_samples,) — true Δ = δ/c
+    plant_id : ndarray (n_samples,) — plant-parameter set; evaluation splits on it
+    mechanism : ndarray (n_samples,) of str — "pin" | "rigid" | "aligned"
+    speed_rpm : ndarray (n_samples,)
+    sample_index : ndarray (n_samples,) — row in the source dataset
+    meta : dict — provenance (dataset path, hash, spec, plant family, skipped samples)
+    """
+
+    X: np.ndarray
+    feature_names: tuple[str, ...]
+    misalignment: np.ndarray
+    plant_id: np.ndarray
+    mechanism: np.ndarray
+    speed_rpm: np.ndarray
+    sample_index: np.ndarray | None = None
+    meta: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.X = np.asarray(self.X, dtype=float)
+        n = self.X.shape[0]
+        self.feature_names = tuple(str(s) for s in self.feature_names)
+        if self.X.ndim != 2 or self.X.shape[1] != len(self.feature_names):
+            raise ValueError(
+                f"X: expected (n_samples, {len(self.feature_names)}) to match feature_names, got {self.X.shape}"
+            )
+        self.misalignment = np.asarray(self.misalignment, dtype=float)
+        self.plant_id = np.asarray(self.plant_id)
+        self.mechanism = np.asarray(self.mechanism).astype(str).astype(object)
+        self.speed_rpm = np.asarray(self.speed_rpm, dtype=float)
+        if self.sample_index is None:
+            self.sample_index = np.arange(n)
+        for name in ("misalignment", "plant_id", "mechanism", "speed_rpm", "sample_index"):
+            if getattr(self, name).shape != (n,):
+                raise ValueError(f"{name}: expected shape ({n},), got {getattr(self, name).shape}")
+
+    def __len__(self) -> int:
+        return self.X.shape[0]
+
+    def subset(self, rows) -> "FeatureTable":
+        """Rows selected by a boolean mask or index array."""
+        return FeatureTable(
+            self.X[rows], self.feature_names, self.misalignment[rows], self.plant_id[rows],
+            self.mechanism[rows], self.speed_rpm[rows], self.sample_index[rows], dict(self.meta),
+        )
+
+    def without_features(self, patterns: Sequence[str]) -> "FeatureTable":
+        """Drop the columns whose names match any glob pattern."""
+        if not patterns:
+            return self
+        keep = [i for i, n in enumerate(self.feature_names)
+                if not any(fnmatch.fnmatchcase(n, p) for p in patterns)]
+        if not keep:
+            raise ValueError(f"features.exclude: {list(patterns)} removes every feature")
+        return FeatureTable(
+            self.X[:, keep], tuple(self.feature_names[i] for i in keep), self.misalignment,
+            self.plant_id, self.mechanism, self.speed_rpm, self.sample_index, dict(self.meta),
+        )

@@ -1,0 +1,86 @@
+"""The verdict function shared by the CLI and the service."""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from threadpoolctl import threadpool_limits
+
+from models.config import TrainConfig
+from models.predict import ModelBundle, diagnose, format_verdict
+from tests.models_synthetic import FEATURE_NAMES, make_table
+
+
+@pytest.fixture(autouse=True)
+def _one_openmp_thread():
+    # See tests/test_models_evaluation.py: OpenMP spinning on oversubscribed cores.
+    with threadpool_limits(1):
+        yield
+
+
+@pytest.fixture(scope="module")
+def model():
+    t = make_table(n_plants=60, per_plant=10, seed=0)
+    cfg = TrainConfig.from_dict({"classifier": {"max_iter": 60}, "regressor": {"max_iter": 60}})
+    with threadpool_limits(1):
+        return cfg.make_model(t.feature_names).fit(t.X, t.misalignment, groups=t.plant_id)
+
+
+def _fr(row, **kw):
+    return SimpleNamespace(names=FEATURE_NAMES, values=np.asarray(row, float), **kw)
+
+
+def test_verdict_agrees_with_the_model_and_converts_offset(model):
+    t = make_table(n_plants=5, per_plant=10, seed=9)
+    for row in t.X:
+        v = diagnose(ModelBundle(model, {"version": "v0007"}, "v0007"), _fr(row, speed_rpm=1500.0),
+                     clearance_um=350.0)
+        assert v.severity == model.predict(row[None])[0]
+        assert sum(v.probabilities.values()) == pytest.approx(1.0)
+        point, iv = model.predict_misalignment(row[None])
+        assert v.misalignment == pytest.approx(point[0])
+        assert v.offset_um == pytest.approx(350.0 * point[0])
+        assert v.offset_interval_um == pytest.approx((350.0 * iv[0, 0], 350.0 * iv[0, 1]))
+        assert v.model_version == "v0007" and v.speed_rpm == 1500.0
+        assert v.interval_level == pytest.approx(0.9)
+
+
+def test_top_feature_is_the_informative_one(model):
+    # A clearly severe row (Δ ≈ 0.5 in the synthetic family): the verdict must rest on the
+    # Δ-bearing features, never on the pure-noise ones.
+    row = np.array([1.1, 1.05, 150.0, 60.0, 60 / 350, 0.0, 0.0])
+    v = diagnose(model, _fr(row))
+    assert v.severity == "severe"
+    assert v.top_features[0].name in ("coupling_1x_phase_diff_deg", "b2_x_2x_1x_ratio", "b3_x_2x_1x_ratio")
+    assert v.top_features[0].contribution > 0.2
+    noise = [f for f in v.top_features if f.name.startswith("noise")]
+    assert all(abs(f.contribution) < 0.05 for f in noise)
+    assert v.offset_um is None and "unknown" in format_verdict(v)
+
+
+def test_missing_and_unknown_features_warn(model):
+    row = np.array([0.5, 0.45, np.nan, 40.0, 40 / 350, 0.0, 0.0])
+    fr = SimpleNamespace(names=FEATURE_NAMES[:-1] + ("renamed",), values=row, warnings=["speed estimated"])
+    v = diagnose(model, fr)
+    text = " ".join(v.warnings)
+    assert "speed estimated" in text
+    assert "not produced by the feature extractor" in text and "noise_b" in text
+    assert "always present in training" in text and "coupling_1x_phase_diff_deg" in text
+    with pytest.raises(ValueError, match="none of the model's features"):
+        diagnose(model, SimpleNamespace(names=("a", "b"), values=[1.0, 2.0]))
+
+
+def test_far_away_signal_is_flagged_ood(model):
+    normal = diagnose(model, _fr([0.5, 0.45, 90.0, 40.0, 40 / 350, 0.0, 0.0]))
+    far = diagnose(model, _fr([9.0, 9.0, -500.0, 4000.0, 11.0, 30.0, -30.0]))
+    assert not normal.ood
+    assert far.ood and far.ood_score > 3
+    assert any("unlike the training data" in w for w in far.warnings)
+    d = far.to_dict()
+    assert d["ood"] is True and isinstance(d["misalignment_interval"], list)
+
+
+def test_bad_clearance_is_rejected(model):
+    with pytest.raises(ValueError, match="clearance_um"):
+        diagnose(model, _fr([0.5, 0.45, 90.0, 40.0, 0.1, 0.0, 0.0]), clearance_um=-3.0)
