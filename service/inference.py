@@ -131,7 +131,9 @@ class ModelStore:
 
         bundle = self.load(version)
         fr = extract_features(recording)
-        out = _clean(diagnose(bundle, fr).to_dict())  # NaN/inf -> null: JSON has no non-finite numbers
+        clearance = getattr(recording, "clearance_um", None)
+        clearance = float(clearance) if isinstance(clearance, (int, float)) else None
+        out = _clean(diagnose(bundle, fr, clearance_um=clearance).to_dict())  # NaN/inf -> null: JSON has no non-finite numbers
         out["model_version"] = out.get("model_version") or bundle.version
         out["bearings"] = _bearings(fr)
         out["key_features"] = {f["name"]: f["value"] for f in out.get("top_features", [])}

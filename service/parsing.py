@@ -111,9 +111,12 @@ def load_npy(body: bytes) -> np.ndarray:
     try:
         return np.load(io.BytesIO(body), allow_pickle=False)
     except ValueError as exc:
-        raise InputError(f"cannot read the NPY body: {exc}") from None
+        if "allow_pickle" in str(exc):
+            raise InputError("the NPY body holds Python objects (pickle); only numeric arrays are accepted "
+                             "— save a float32/float64 array") from None
+        raise InputError(f"cannot read the NPY body (truncated or corrupt?): {exc}") from None
     except (OSError, EOFError) as exc:
-        raise InputError(f"NPY body is truncated or corrupt: {exc}") from None
+        raise InputError(f"cannot read the NPY body (truncated or corrupt?): {exc}") from None
 
 
 def load_csv(body: bytes) -> np.ndarray:

@@ -1,0 +1,299 @@
+"""POST /diagnose (JSON, NPY, multipart CSV/NPY/HDF5), batch, asset history, models — through the TestClient,
+with simulated waveforms of the default plant and a real registered model."""
+from __future__ import annotations
+
+import io
+import json
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+
+from service.main import create_app
+from tests.service_util import auth, diagnose_json, make_settings, shipped_or_tiny_registry, simulated_channels
+
+
+@pytest.fixture(scope="module")
+def registry_src(tmp_path_factory):
+    return shipped_or_tiny_registry(tmp_path_factory.mktemp("registry"))
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory, registry_src):
+    tmp = tmp_path_factory.mktemp("svc")
+    app = create_app(make_settings(tmp, shipped_registry_dir=registry_src, max_batch_records=4))
+    with TestClient(app) as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def rec():
+    return simulated_channels(misalignment=0.2, speed_rpm=1800.0, sample_rate_hz=2048.0, record_revs=40)
+
+
+def _npy(array) -> bytes:
+    buf = io.BytesIO()
+    np.save(buf, array)
+    return buf.getvalue()
+
+
+def _binary_query(channels, **extra):
+    q = {"sample_rate_hz": 2048.0, "speed_rpm": 1800.0,
+         "bearings": ",".join(str(b) for b, _, _ in channels),
+         "angles_deg": ",".join(f"{a:g}" for _, a, _ in channels)}
+    q.update(extra)
+    return q
+
+
+def _check_verdict(v, active):
+    assert v["severity"] in v["bands"]["names"]
+    assert set(v["probabilities"]) == set(v["bands"]["names"])
+    assert sum(v["probabilities"].values()) == pytest.approx(1.0, abs=1e-9)
+    assert v["severity"] == max(v["probabilities"], key=v["probabilities"].get)
+    lo, hi = v["misalignment_interval"]
+    assert lo <= v["misalignment"] <= hi
+    assert v["model_version"] == active
+    assert [b["bearing"] for b in v["bearings"]] == [1, 2, 3, 4]
+    assert all(k.startswith(f"b{b['bearing']}_") for b in v["bearings"] for k in b["features"])
+    assert v["speed_rpm"] == pytest.approx(1800.0)
+    assert isinstance(v["ood"], bool) and v["top_features"]
+
+
+def test_json_verdict_matches_the_library(client, rec):
+    """The service returns exactly what models.predict.diagnose says for the same recording."""
+    from features import ProbeChannel, Recording, extract_features
+    from models.predict import diagnose
+
+    fs, channels = rec
+    r = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0))
+    assert r.status_code == 200, r.text
+    v = r.json()
+    active = client.get("/models").json()["active"]
+    _check_verdict(v, active)
+    assert v["offset_um"] == pytest.approx(v["misalignment"] * 350.0)
+    assert v["bearings"][0]["clearance_um"] == 350.0
+
+    bundle = client.app.state.rd.models.load()
+    direct = diagnose(bundle, clearance_um=350.0, feature_result=extract_features(Recording(
+        sample_rate_hz=fs, speed_rpm=1800.0, clearance_um=350.0,
+        channels=[ProbeChannel(bearing=b, angle_deg=a, units="um", data=np.asarray([float(x) for x in d]))
+                  for b, a, d in channels])))
+    assert v["severity"] == direct.severity
+    assert v["probabilities"] == pytest.approx(direct.probabilities, rel=1e-12)
+    assert v["misalignment"] == pytest.approx(direct.misalignment, rel=1e-12)
+
+
+def test_binary_npy_and_json_agree(client, rec):
+    fs, channels = rec
+    data = np.array([d for _, _, d in channels])
+    j = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0)).json()
+    r = client.post("/diagnose", params=_binary_query(channels), content=_npy(data),
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 200, r.text
+    b = r.json()
+    assert b["probabilities"] == pytest.approx(j["probabilities"], rel=1e-9, abs=1e-12)
+    assert b["misalignment"] == pytest.approx(j["misalignment"], rel=1e-9)
+
+
+def test_binary_default_layout_and_units(client, rec):
+    """8 rows without bearings/angles take the documented default layout; mils are converted."""
+    fs, channels = rec
+    assert [(b, a) for b, a, _ in channels] == [(1, 45.0), (1, 135.0), (2, 45.0), (2, 135.0),
+                                               (3, 45.0), (3, 135.0), (4, 45.0), (4, 135.0)]
+    data = np.array([d for _, _, d in channels])
+    ref = client.post("/diagnose", params={"sample_rate_hz": 2048, "speed_rpm": 1800}, content=_npy(data),
+                      headers={"content-type": "application/octet-stream"}).json()
+    mils = client.post("/diagnose", params={"sample_rate_hz": 2048, "speed_rpm": 1800, "units": "mil"},
+                       content=_npy(data / 25.4), headers={"content-type": "application/octet-stream"}).json()
+    assert mils["probabilities"] == pytest.approx(ref["probabilities"], rel=1e-6, abs=1e-9)
+    assert mils["misalignment"] == pytest.approx(ref["misalignment"], rel=1e-6)
+
+
+@pytest.mark.parametrize("fmt", ["csv", "npy", "hdf5"])
+def test_multipart_uploads(client, rec, fmt, tmp_path):
+    import h5py
+
+    fs, channels = rec
+    data = np.array([d for _, _, d in channels])
+    ref = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0)).json()
+    params = _binary_query(channels)
+    if fmt == "csv":
+        text = "b1x,b1y,b2x,b2y,b3x,b3y,b4x,b4y\n" + "\n".join(",".join(repr(float(v)) for v in row) for row in data.T)
+        files = {"file": ("probes.csv", text.encode(), "text/csv")}
+    elif fmt == "npy":
+        files = {"file": ("probes.npy", _npy(data), "application/octet-stream")}
+    else:
+        p = tmp_path / "probes.h5"
+        with h5py.File(p, "w") as f:
+            f.create_dataset("waveforms", data=data[None])          # (1, n_channels, n_points), dataset layout
+            f.attrs["sample_rate_hz"] = fs
+            f.create_dataset("channels/bearing", data=[b for b, _, _ in channels])
+            f.create_dataset("channels/angle_deg", data=[a for _, a, _ in channels])
+        files = {"file": ("probes.h5", p.read_bytes(), "application/x-hdf5")}
+        params = {"speed_rpm": 1800.0}                              # rate and layout from the file
+    r = client.post("/diagnose", params=params, files=files)
+    assert r.status_code == 200, r.text
+    assert r.json()["probabilities"] == pytest.approx(ref["probabilities"], rel=1e-9, abs=1e-12)
+
+
+# --- client mistakes: 4xx with a message saying what to fix ----------------------------------------
+
+def _post_channels(client, channels, fs=2048.0, **extra):
+    return client.post("/diagnose", json=diagnose_json(fs, channels, **extra))
+
+
+def test_non_finite_values(client, rec):
+    fs, channels = rec
+    body = json.dumps(diagnose_json(fs, channels)).replace("[", "[NaN, ", 3)  # Python's json emits NaN
+    r = client.post("/diagnose", content=body.encode(), headers={"content-type": "application/json"})
+    assert r.status_code == 422
+    data = np.array([d for _, _, d in channels])
+    data[3, 100] = np.inf
+    r = client.post("/diagnose", params=_binary_query(channels), content=_npy(data),
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 422
+    assert "non-finite" in r.json()["detail"] and "index 100" in r.json()["detail"]
+
+
+def test_mismatched_and_missing_channels(client, rec):
+    fs, channels = rec
+    short = [(b, a, d[:-5] if i == 0 else d) for i, (b, a, d) in enumerate(channels)]
+    r = _post_channels(client, short, speed_rpm=1800.0)
+    assert r.status_code == 422 and "different lengths" in r.json()["detail"]
+    r = _post_channels(client, channels[:3], speed_rpm=1800.0)           # bearing 2 has one probe
+    assert r.status_code == 422 and "bearing 2 has 1 probe" in r.json()["detail"]
+    r = client.post("/diagnose", json={"sample_rate_hz": 2048.0, "channels": []})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"][-1] == "channels"
+
+
+def test_unknown_units(client, rec):
+    fs, channels = rec
+    body = diagnose_json(fs, channels)
+    body["channels"][0]["units"] = "inch"
+    r = client.post("/diagnose", json=body)
+    assert r.status_code == 422
+    assert "'inch'" in r.json()["detail"] and "mil" in r.json()["detail"]
+
+
+def test_too_few_revolutions_states_the_minimum(client, rec):
+    from features import MIN_REVS
+
+    fs, channels = rec
+    few = [(b, a, d[: int(fs * 60 / 1800 * 3)]) for b, a, d in channels]   # 3 revolutions
+    r = _post_channels(client, few, speed_rpm=1800.0)
+    assert r.status_code == 422
+    assert f"at least {MIN_REVS}" in r.json()["detail"]
+
+
+def test_sample_rate_too_low_for_3x(client, rec):
+    fs, channels = rec
+    decimated = [(b, a, d[::16]) for b, a, d in channels]                  # 128 Hz < 2 x 3 x 30 Hz
+    r = _post_channels(client, decimated, fs=fs / 16, speed_rpm=1800.0)
+    assert r.status_code == 422
+    assert "3X" in r.json()["detail"] and "Hz" in r.json()["detail"]
+
+
+@pytest.mark.parametrize("body,needle", [
+    (b"not an npy file", "not an NPY file"),
+    (b"", "empty body"),
+    (_npy(np.zeros((3, 2, 100))), "shape"),
+    (_npy(np.zeros((100, 8))), "transpose"),
+    (_npy(np.array(["a", "b"])), "not numeric"),
+    (_npy(np.zeros((8, 10)))[:60], "truncated"),
+])
+def test_bad_npy_bodies(client, body, needle):
+    r = client.post("/diagnose", params={"sample_rate_hz": 2048}, content=body,
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 422, r.text
+    assert needle in r.json()["detail"]
+
+
+def test_pickled_npy_is_refused_without_unpickling(client, tmp_path):
+    marker = tmp_path / "pwned"
+
+    class Evil:
+        def __reduce__(self):
+            return (open, (str(marker), "w"))
+
+    buf = io.BytesIO()
+    np.save(buf, np.array([Evil()], dtype=object), allow_pickle=True)
+    r = client.post("/diagnose", params={"sample_rate_hz": 2048}, content=buf.getvalue(),
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 422 and "pickle" in r.json()["detail"].lower()
+    assert not marker.exists()
+
+
+def test_binary_needs_sample_rate_and_layout(client, rec):
+    _, channels = rec
+    data = np.array([d for _, _, d in channels])
+    r = client.post("/diagnose", content=_npy(data), headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 422 and "sample_rate_hz" in r.json()["detail"]
+    r = client.post("/diagnose", params={"sample_rate_hz": 2048}, content=_npy(data[:4]),
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 422 and "bearings: required" in r.json()["detail"]
+    r = client.post("/diagnose", params={"sample_rate_hz": 2048, "bearings": "1,1,2"}, content=_npy(data[:4]),
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 422 and "3 values given but the array has 4 channels" in r.json()["detail"]
+
+
+def test_multipart_mistakes(client):
+    r = client.post("/diagnose", params={"sample_rate_hz": 2048}, files={"other": ("a.csv", b"1,2\n3,4\n")})
+    assert r.status_code == 422 and "part named 'file'" in r.json()["detail"]
+    r = client.post("/diagnose", params={"sample_rate_hz": 2048}, files={"file": ("a.xlsx", b"PK\x03\x04")})
+    assert r.status_code == 415
+    r = client.post("/diagnose", params={"sample_rate_hz": 2048}, files={"file": ("a.csv", b"1,2\n3,x\n")})
+    assert r.status_code == 422 and "CSV" in r.json()["detail"]
+    r = client.post("/diagnose", params={"sample_rate_hz": 2048}, files={"file": ("a.h5", b"\x89HDF\r\n\x1a\njunk")})
+    assert r.status_code == 422 and "HDF5" in r.json()["detail"]
+
+
+def test_unknown_model_version_is_404(client, rec):
+    fs, channels = rec
+    r = client.post("/diagnose", params={"model_version": "v9999"}, json=diagnose_json(fs, channels))
+    assert r.status_code == 404 and "v9999" in r.json()["detail"]
+
+
+# --- batch, assets, models ---------------------------------------------------------------------------
+
+def test_batch_reports_each_record(client, rec):
+    fs, channels = rec
+    good = diagnose_json(fs, channels, speed_rpm=1800.0)
+    bad = diagnose_json(fs, channels[:3], speed_rpm=1800.0)
+    r = client.post("/diagnose/batch", json={"records": [good, bad, good]})
+    assert r.status_code == 200, r.text
+    out = r.json()
+    assert out["count"] == 3 and out["n_ok"] == 2
+    assert [it["status_code"] for it in out["items"]] == [200, 422, 200]
+    assert "bearing 2" in out["items"][1]["error"]
+    assert out["items"][0]["result"]["probabilities"] == out["items"][2]["result"]["probabilities"]
+    r = client.post("/diagnose/batch", json={"records": [good] * 5})
+    assert r.status_code == 422 and "at most 4" in r.json()["detail"]
+
+
+def test_asset_history_trend(client, rec):
+    fs, channels = rec
+    for _ in range(3):
+        r = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, asset_id="unit-7",
+                                                         plant="Riverside"))
+        assert r.status_code == 200
+    v = r.json()
+    h = client.get("/assets/unit-7/history").json()
+    assert h["count"] == 3
+    times = [p["time"] for p in h["points"]]
+    assert times == sorted(times)
+    p = h["points"][-1]
+    assert p["severity"] == v["severity"] and p["misalignment"] == pytest.approx(v["misalignment"])
+    assert p["plant"] == "Riverside" and p["model_version"] == v["model_version"]
+    assert p["key_features"] == pytest.approx(v["key_features"], nan_ok=True)
+    assert client.get("/assets/unit-7/history", params={"limit": 2}).json()["count"] == 2
+    assert client.get("/assets/other/history").status_code == 404
+
+
+def test_models_list_and_activate(client):
+    listing = client.get("/models").json()
+    active = listing["active"]
+    assert active and any(v["version"] == active and v["active"] for v in listing["versions"])
+    r = client.post(f"/models/{active}/activate", headers=auth())
+    assert r.status_code == 200 and r.json()["active"] == active
+    r = client.post("/models/v0999/activate", headers=auth())
+    assert r.status_code == 404 and "v0999" in r.json()["detail"]
