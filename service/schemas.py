@@ -131,6 +131,10 @@ class AssetPoint(BaseModel):
     model_version: str = Field(..., description="Model version that made the diagnosis.")
     plant: str | None = Field(None, description="Plant label sent with the diagnosis.")
     key_features: dict[str, Any] = Field(..., description="Key features of the diagnosis (name -> value, units in name).")
+    amplitudes_um_pp: dict[str, float | None] = Field(
+        default_factory=dict,
+        description="1X and 2X orbit major axes of each bearing diagnosed, micrometres peak-to-peak "
+        "(`b{n}_1x_major_um_pp`, `b{n}_2x_major_um_pp`), for trend plots.")
 
 
 class AssetHistory(BaseModel):

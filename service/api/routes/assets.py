@@ -32,5 +32,16 @@ def history(
     points = [AssetPoint(time=r.created_at, severity=r.severity, misalignment=r.misalignment,
                          misalignment_low=r.misalignment_low, misalignment_high=r.misalignment_high,
                          speed_rpm=r.speed_rpm, ood=r.ood, model_version=r.model_version, plant=r.plant,
-                         key_features=r.key_features) for r in rows]
+                         key_features=r.key_features, amplitudes_um_pp=_amplitudes(r.verdict)) for r in rows]
     return AssetHistory(asset_id=asset_id, count=len(points), points=points)
+
+
+def _amplitudes(verdict: dict | None) -> dict[str, float | None]:
+    """1X/2X orbit major axes (µm pk-pk) of each bearing, from a stored verdict's per-bearing features."""
+    out: dict[str, float | None] = {}
+    for b in (verdict or {}).get("bearings") or []:
+        feats = b.get("features") or {}
+        for name in (f"b{b.get('bearing')}_1x_major_um_pp", f"b{b.get('bearing')}_2x_major_um_pp"):
+            if name in feats:
+                out[name] = feats[name]
+    return out
