@@ -121,9 +121,15 @@ def test_contact_samples_are_kept_with_their_status(tmp_path):
         assert f["labels/severity"][...].tolist() == [3, 3]
 
 
-def test_rerun_of_a_complete_file_computes_nothing_and_other_specs_are_refused(small, tmp_path):
+def test_rerun_of_a_complete_file_computes_nothing_and_other_specs_are_refused(small, tmp_path, monkeypatch):
     spec, out, _ = small
-    again = generate(spec, out, n_workers=0, progress=False)
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a complete file must not start a cluster")
+
+    with monkeypatch.context() as m:
+        m.setattr("simulator.runner.run_tasks", no_cluster)
+        again = generate(spec, out, progress=False)  # default: local cluster, if there were work
     assert again.resumed and again.n_computed == 0 and again.complete
     other = write_spec(tmp_path / "other.toml", seed=8)
     with pytest.raises(StoreError, match="different spec"):

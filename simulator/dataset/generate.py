@@ -189,7 +189,9 @@ def generate(
     complete = False
     try:
         tasks = (SampleTask(design[int(i)], sim, meas) for i in todo)
-        if n_workers == 0:
+        if len(todo) == 0:
+            results = iter(())  # nothing to do: start no cluster
+        elif n_workers == 0:
             results = ((k, run_sample(t)) for k, t in enumerate(tasks))
             if progress:
                 from tqdm.auto import tqdm

@@ -186,19 +186,31 @@ class _Lock:
         self.fd: int | None = None
 
     def acquire(self) -> None:
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as exc:
+        for _ in range(20):
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                os.close(fd)
+                if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                    try:
+                        holder = self.path.read_text().strip() or "?"
+                    except OSError:
+                        holder = "?"
+                    raise StoreError(f"another process (pid {holder}) is writing {str(self.path)[:-5]!r}; "
+                                     "wait for it to finish or stop it, then rerun to resume") from None
+                raise
+            try:  # the previous holder may have unlinked the file between our open and flock
+                same = os.stat(self.path).st_ino == os.fstat(fd).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:
+                os.ftruncate(fd, 0)
+                os.write(fd, str(os.getpid()).encode())
+                self.fd = fd
+                return
             os.close(fd)
-            if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                holder = self.path.read_text().strip() or "?"
-                raise StoreError(f"another process (pid {holder}) is writing {str(self.path)[:-5]!r}; "
-                                 "wait for it to finish or stop it, then rerun to resume") from None
-            raise
-        os.ftruncate(fd, 0)
-        os.write(fd, str(os.getpid()).encode())
-        self.fd = fd
+        raise StoreError(f"could not lock {str(self.path)!r}; retry")
 
     def release(self) -> None:
         if self.fd is not None:
