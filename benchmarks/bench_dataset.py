@@ -78,6 +78,41 @@ def run(spec: Path, out: Path, workers: int) -> dict:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+def writer_cost_ms(tmp: Path, n: int = 64) -> float:
+    """Parent-side cost of writing one sample (rows + two SWMR flushes): the ceiling on cluster throughput."""
+    import time
+
+    import numpy as np
+
+    from simulator.dataset.design import build_design
+    from simulator.dataset.generate import _dataset_attrs, _file_attrs, _rows
+    from simulator.dataset.measurement import MeasurementSettings, draw_measurement
+    from simulator.dataset.spec import load_spec
+    from simulator.dataset.store import DatasetWriter, layout
+    from simulator.dataset.worker import SampleOutput
+
+    spec = tmp / "writer.toml"
+    spec.write_text(SPEC.format(n=n, transient=400))
+    r = load_spec(spec)
+    d, m = build_design(r), MeasurementSettings.from_spec(r.spec)
+    L = layout(len(m.channels), m.n_points, len(m.bearings), r.base_plant.to_dict())
+    w = DatasetWriter.open(tmp / "writer.h5", n_samples=n, spec_hash=r.spec_hash, L=L, channels=m.channels,
+                           attrs=_file_attrs(r, d, m), dataset_attrs=_dataset_attrs(), code_version="bench")
+    rng = np.random.default_rng(0)
+    t = np.arange(m.n_points) / m.sample_rate_hz
+    total = 0.0
+    try:
+        for i in range(n):
+            wave = (50 * np.sin(2 * np.pi * 30 * t)[None, :] + rng.normal(size=(len(m.channels), m.n_points)))
+            out = SampleOutput(i, wave.astype(np.float32), draw_measurement(m, rng), "ok", "pin", 64)
+            t0 = time.perf_counter()
+            w.write_sample(i, _rows(d[i], out))
+            total += time.perf_counter() - t0
+    finally:
+        w.close(complete=True)
+    return 1e3 * total / n
+
+
 def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
@@ -109,6 +144,9 @@ def main() -> None:
         print("(scaling needs two otherwise idle cores: compare the load above with the worker count; "
               "CPU s/sample shows the work itself, independent of load)")
 
+        ms = writer_cost_ms(tmp)
+        print(f"parent write cost: {ms:.1f} ms/sample (rows + 2 SWMR flushes) -> at most {1000 / ms:.0f} samples/s "
+              "into one file, whatever the cluster size")
         print("memory vs sample count (serial, 50 transient revs):")
         for n in (20, 160):
             s = tmp / f"mem{n}.toml"

@@ -290,11 +290,23 @@ class DatasetWriter:
     def write_sample(self, index: int, rows: dict[str, Any]) -> None:
         """Write one sample's values (dataset name → value) and mark it done, flushing in between."""
         for name, value in rows.items():
-            self._ds[name][index] = value
+            self._write_row(name, index, value)
         self.f.flush()
-        self._ds["done"][index] = 1
+        self._write_row("done", index, 1)
         self.f.flush()
         self.done[index] = True
+
+    def _write_row(self, name: str, index: int, value: Any) -> None:
+        # low-level H5Dwrite of one row: ~3x less overhead than h5py's ds[index] = value,
+        # which matters with ~50 small datasets per sample written by one parent process
+        from h5py import h5s
+
+        ds = self._ds[name]
+        tail = ds.shape[1:]
+        arr = np.ascontiguousarray(np.asarray(value, dtype=ds.dtype).reshape((1, *tail)))
+        fspace = ds.id.get_space()
+        fspace.select_hyperslab((int(index), *(0,) * len(tail)), (1, *tail))
+        ds.id.write(h5s.create_simple(arr.shape), fspace, arr)
 
     def close(self, *, complete: bool = False) -> None:
         """Close the file (clears HDF5's writing flag); record completion time when complete."""

@@ -6,8 +6,7 @@ the output file; the parent writes.
 """
 from __future__ import annotations
 
-import traceback
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -57,7 +56,6 @@ class SampleOutput:
     motion_kind: str = ""
     motion_period: int = 0
     message: str = ""             # simulator message when status != ok
-    extra: dict = field(default_factory=dict)
 
 
 def _motion(poincare_m: np.ndarray) -> tuple[str, int]:
@@ -93,10 +91,9 @@ def run_sample(task: SampleTask) -> SampleOutput:
         )
     except ValueError as exc:  # simulate's documented input error: kept as a labelled sample, not dropped
         msg = f"{type(exc).__name__}: {exc}"
-        tb = traceback.format_exc(limit=3)
         return SampleOutput(p.index, np.full((len(meas.channels), meas.n_points), np.nan, np.float32), draws,
                             "error", p.mechanism if p.misalignment > 0 else "aligned", revs,
-                            message=msg, extra={"traceback": tb})
+                            message=msg)
     waveforms = probe_waveforms_um(res.journal_displacements_m, sim.samples_per_rev, p.speed_rpm, meas, draws, rng)
     kind, period = ("", 0)
     if sim.classify_motion and res.status == "ok":
