@@ -164,9 +164,17 @@ def test_a_second_writer_is_refused_while_the_first_holds_the_file(tmp_path):
         lock.release()
 
 
-def test_dask_local_cluster_gives_the_serial_values(small, tmp_path):
+def test_dask_cluster_via_a_client_gives_the_serial_values(small, tmp_path):
+    """(The runner's own LocalCluster path is exercised by the SIGKILL test with --workers 1.)"""
+    from distributed import Client, LocalCluster
+
     spec, serial, _ = small
     out = tmp_path / "dask.h5"
-    s = generate(spec, out, n_workers=2, progress=False)
+    calls = []
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
+            Client(cluster, set_as_default=False) as client:
+        s = generate(spec, out, client=client, progress=False, on_progress=lambda d, n: calls.append((d, n)))
+        assert client.status == "running"  # the caller's client is left open
     assert s.complete
+    assert calls == [(k, 8) for k in range(9)]
     assert differing_datasets(serial, out) == []

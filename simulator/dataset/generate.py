@@ -8,7 +8,7 @@ import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -133,8 +133,10 @@ def generate(
     *,
     n_workers: int | None = None,
     scheduler_address: str | None = None,
+    client: Any = None,
     progress: bool = True,
     connect_timeout_s: float = 30.0,
+    on_progress: Callable[[int, int], None] | None = None,
 ) -> GenerateSummary:
     """Generate (or resume) the dataset of ``spec`` into the HDF5 file ``out``.
 
@@ -151,10 +153,15 @@ def generate(
         Dask (debugging; same values).
     scheduler_address : str, optional
         Use an existing Dask scheduler, e.g. ``"tcp://scheduler:8786"``.
+    client : distributed.Client, optional
+        Use a client the caller holds (e.g. the service's); it is not closed.
     progress : bool
         Show the progress bar.
     connect_timeout_s : float
         How long to wait for ``scheduler_address`` to answer.
+    on_progress : callable, optional
+        Called as ``on_progress(n_done, n_samples)`` after each sample is
+        written (and once at the start), in this process.
 
     Returns
     -------
@@ -188,6 +195,8 @@ def generate(
     counts: Counter[str] = Counter()
     complete = False
     try:
+        if on_progress is not None:
+            on_progress(n_before, design.n_samples)
         tasks = (SampleTask(design[int(i)], sim, meas) for i in todo)
         if len(todo) == 0:
             results = iter(())  # nothing to do: start no cluster
@@ -199,6 +208,7 @@ def generate(
                 results = tqdm(results, total=len(todo), desc="samples", unit="sample")
         else:
             results = run_tasks(run_sample, tasks, n_workers=n_workers, scheduler_address=scheduler_address,
+                                client=client,
                                 total=len(todo), progress=progress, desc="samples", unit="sample",
                                 connect_timeout_s=connect_timeout_s)
         for _, output in results:
@@ -207,6 +217,8 @@ def generate(
             counts[output.status] += 1
             if not math.isfinite(t_first):
                 t_first = time.perf_counter() - t_start
+            if on_progress is not None:
+                on_progress(n_before + sum(counts.values()), design.n_samples)
         complete = bool(writer.done.all())
     finally:
         writer.close(complete=complete)
