@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.service_util import API_KEY, diagnose_json, simulated_channels
+from tests.service_util import API_KEY, diagnose_json, shipped_or_tiny_registry, simulated_channels
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -39,7 +39,8 @@ def server(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("e2e")
     port = _free_port()
     env = dict(os.environ, ROTORDIAG_DATA_DIR=str(tmp / "data"), ROTORDIAG_API_KEY=API_KEY,
-               ROTORDIAG_MAX_BODY_BYTES=str(8 * 1024 * 1024))
+               ROTORDIAG_MAX_BODY_BYTES=str(8 * 1024 * 1024),
+               ROTORDIAG_SHIPPED_REGISTRY_DIR=str(shipped_or_tiny_registry()))
     exe = Path(sys.executable).parent / "rotordiag"
     cmd = [str(exe), "serve", "--host", "127.0.0.1", "--port", str(port)]
     proc = subprocess.Popen(cmd, cwd=tmp, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -81,7 +82,7 @@ def test_fresh_data_dir_defaults(server):
 
 def test_diagnose_simulated_waveform_over_http(server):
     base, _, _ = server
-    fs, channels = simulated_channels(misalignment=0.2)
+    fs, channels = simulated_channels(misalignment=0.2, record_revs=40)
     body = json.dumps(diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0, asset_id="e2e-unit")).encode()
     status, raw = _request(base + "/diagnose", body, {"Content-Type": "application/json"})
     assert status == 200, raw[:500]
