@@ -124,3 +124,28 @@ def test_repair_of_a_clean_file_does_nothing(two_files):
     _, a, _ = two_files
     r = runner.invoke(app, ["dataset", "repair", str(a)])
     assert r.exit_code == 0 and "nothing to repair; 4 finished samples" in r.output
+
+
+def test_reader_decodes_labels_and_streams_waveforms(two_files, tmp_path):
+    from simulator.dataset import DatasetReader
+
+    _, a, b = two_files
+    merged = tmp_path / "m.h5"
+    runner.invoke(app, ["dataset", "merge", str(a), str(b), "--out", str(merged)])
+    with DatasetReader(a) as ds, h5py.File(a, "r") as f:
+        lab = ds.labels()
+        assert len(ds) == 4 and lab["index"].tolist() == [0, 1, 2, 3]
+        delta = f["parameters/misalignment"][...]
+        assert np.array_equal(lab["misalignment"], delta)
+        expected = np.select([delta < 0.05, delta < 0.15, delta < 0.35], ["aligned", "slight", "moderate"], "severe")
+        assert lab["severity_name"].tolist() == expected.tolist()
+        assert set(lab["status"]) == {"ok"}
+        codes = f["parameters/simulated_mechanism"][...]
+        assert lab["mechanism"].tolist() == [["pin", "rigid", "aligned"][c] for c in codes]
+        assert all(len(p) == 16 for p in lab["plant_id"])
+        assert ds.channels[0] == (1, 45.0) and ds.sample_rate_hz == 1024.0
+        rows = dict(ds.iter_waveforms())
+        assert sorted(rows) == [0, 1, 2, 3] and np.array_equal(rows[2], f["waveforms"][2])
+        assert np.array_equal(ds.parameters("parameters/plant/asymmetry"), f["parameters/plant/asymmetry"][...])
+    with DatasetReader(merged) as ds:
+        assert ds.labels()["source"].tolist() == [0, 0, 0, 0, 1, 1, 1]

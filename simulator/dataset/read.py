@@ -1,0 +1,122 @@
+"""Reading dataset files without hard-coding their layout (for training, features, notebooks).
+
+>>> from simulator.dataset import DatasetReader
+>>> with DatasetReader("data.h5") as ds:                       # doctest: +SKIP
+...     table = ds.labels()                                   # finished samples only
+...     for i, w in ds.iter_waveforms():                      # (n_channels, n_points) µm, one at a time
+...         ...
+
+Works on complete files, on files being written and on files of a killed run
+(see :func:`simulator.dataset.store.open_dataset`).
+"""
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Iterator
+
+import numpy as np
+
+from .store import open_dataset
+
+__all__ = ["DatasetReader"]
+
+
+def _decode(codes: np.ndarray, codes_json: str) -> np.ndarray:
+    names = {v: k for k, v in json.loads(codes_json).items()}
+    return np.array([names.get(int(c), "") for c in codes], dtype=object)
+
+
+class DatasetReader:
+    """Read-only view of a dataset file.
+
+    Attributes
+    ----------
+    done : ndarray of bool, shape (n_samples,)
+    indices : ndarray of int
+        Rows of the finished samples.
+    sample_rate_hz : float
+    channels : list of (int, float)
+        (bearing, angle_deg) per channel.
+    attrs : dict
+        File attributes (spec text, spec hash, code version, ...).
+    """
+
+    def __init__(self, path: str | os.PathLike):
+        self.path = path
+        self._cm = open_dataset(path)
+        self.f = self._cm.__enter__()
+        self.done = self.f["done"][...].astype(bool)
+        self.indices = np.flatnonzero(self.done)
+        self.sample_rate_hz = float(self.f.attrs["sample_rate_hz"])
+        self.channels = [(int(b), float(a)) for b, a in self.f["channels"][...].tolist()]
+        self.attrs = {k: (v.item() if hasattr(v, "item") else v) for k, v in self.f.attrs.items()}
+
+    def close(self) -> None:
+        if self._cm is not None:
+            self._cm.__exit__(None, None, None)
+            self._cm = None
+
+    def __enter__(self) -> "DatasetReader":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def __len__(self) -> int:
+        return int(self.indices.size)
+
+    def labels(self, only_done: bool = True) -> dict[str, np.ndarray]:
+        """Per-sample labels and key parameters, decoded to plain values.
+
+        Returns
+        -------
+        dict of ndarray
+            ``index`` (row), ``misalignment``, ``severity`` (int), ``severity_name``,
+            ``status``, ``mechanism`` (simulated: pin/rigid/aligned),
+            ``design_mechanism`` (pin/rigid), ``motion`` (e.g. "period-1"),
+            ``plant_id``, ``speed_rpm``, ``unbalance``, ``clearance_m``,
+            ``sample_seed``; plus ``source`` for merged files.
+        """
+        f = self.f
+        rows = self.indices if only_done else np.arange(self.done.size)
+        sev = f["labels/severity"][...][rows]
+        names = np.array(json.loads(f["labels/severity"].attrs["names_json"]), dtype=object)
+        kinds = f["labels/motion_kind"][...][rows]
+        periods = f["labels/motion_period"][...][rows]
+        motion = np.array([(f"period-{p}" if k == b"period-n" else k.decode()) for k, p in zip(kinds, periods)],
+                          dtype=object)
+        out = {
+            "index": rows,
+            "misalignment": f["labels/misalignment"][...][rows],
+            "severity": sev.astype(int),
+            "severity_name": np.where(sev >= 0, names[np.clip(sev, 0, len(names) - 1)], ""),
+            "status": _decode(f["labels/status"][...][rows], f["labels/status"].attrs["codes_json"]),
+            "mechanism": _decode(f["parameters/simulated_mechanism"][...][rows],
+                                 f["parameters/simulated_mechanism"].attrs["codes_json"]),
+            "design_mechanism": _decode(f["parameters/mechanism"][...][rows],
+                                        f["parameters/mechanism"].attrs["codes_json"]),
+            "motion": motion,
+            "plant_id": np.array([p.decode() for p in f["parameters/plant_id"][...][rows]], dtype=object),
+            "speed_rpm": f["parameters/speed_rpm"][...][rows],
+            "unbalance": f["parameters/unbalance"][...][rows],
+            "clearance_m": f["parameters/plant/clearance_m"][...][rows],
+            "sample_seed": f["parameters/sample_seed"][...][rows],
+        }
+        if "source" in f:
+            out["source"] = f["source"][...][rows]
+        return out
+
+    def parameters(self, name: str, only_done: bool = True) -> np.ndarray:
+        """Any per-sample dataset by its path, e.g. ``"parameters/plant/asymmetry"``."""
+        rows = self.indices if only_done else np.arange(self.done.size)
+        return self.f[name][...][rows]
+
+    def waveforms(self, index: int) -> np.ndarray:
+        """Waveforms of row ``index``: (n_channels, n_points) float32, µm."""
+        return self.f["waveforms"][int(index)]
+
+    def iter_waveforms(self, indices: np.ndarray | None = None) -> Iterator[tuple[int, np.ndarray]]:
+        """Yield ``(row, waveforms)`` one sample at a time (memory stays flat); default: finished samples."""
+        for i in (self.indices if indices is None else indices):
+            yield int(i), self.f["waveforms"][int(i)]
