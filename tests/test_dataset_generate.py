@@ -178,3 +178,17 @@ def test_dask_cluster_via_a_client_gives_the_serial_values(small, tmp_path):
     assert s.complete
     assert calls == [(k, 8) for k in range(9)]
     assert differing_datasets(serial, out) == []
+
+
+def test_a_sample_the_simulator_refuses_is_labelled_error_not_dropped(small):
+    import dataclasses
+
+    from simulator.dataset.measurement import MeasurementSettings
+    from simulator.dataset.worker import SampleTask, SimulationSettings, run_sample
+
+    spec, _, _ = small
+    r = load_spec(spec)
+    p = dataclasses.replace(build_design(r)[0], misalignment=0.95)  # outside MODEL.md's range
+    out = run_sample(SampleTask(p, SimulationSettings.from_spec(r.spec), MeasurementSettings.from_spec(r.spec)))
+    assert out.status == "error" and "misalignment" in out.message
+    assert out.waveforms_um.shape == (8, 164) and np.all(np.isnan(out.waveforms_um))
