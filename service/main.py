@@ -19,6 +19,7 @@ from .api.routes import assets, diagnose, health, jobs, models
 from .core.config import Settings
 from .core.limits import BodySizeLimitMiddleware
 from .metrics import install_metrics
+from .web import router as web_router
 
 log = logging.getLogger("rotordiag.service")
 
@@ -75,6 +76,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     install_error_handlers(app)
     for router in (diagnose.router, jobs.router, models.router, assets.router, health.router):
         app.include_router(router)
+    app.include_router(web_router)  # the web page at / (issue 7; service/web, docs/web.md)
     install_metrics(app)
     # Added last = outermost of the user middleware: bytes are counted before anything reads them.
     app.add_middleware(BodySizeLimitMiddleware, max_body_bytes=settings.max_body_bytes)

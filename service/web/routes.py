@@ -1,0 +1,80 @@
+"""The web page's routes: ``GET /`` (the page), ``GET /ui/static/{name}`` (its JS and CSS) and
+``POST /ui/plot-data`` (orbit and spectrum arrays of a recording).
+
+The page is a client of the API: the verdict comes from ``POST /diagnose``, the trend from
+``GET /assets/{id}/history``, the models from ``GET /models``. ``/ui/plot-data`` accepts the same
+bodies and query parameters as ``/diagnose`` (it reuses the diagnose route's body parsing) and
+returns pictures' data only; it stores nothing and needs no model. These routes are left out of the
+OpenAPI schema: they belong to the page, not to the API clients program against.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import FileResponse
+
+from ..api.errors import InputError
+from ..api.routes.diagnose import _recording_from_request  # same body forms and messages as /diagnose
+from .plotdata import plot_data
+
+STATIC_DIR = Path(__file__).resolve().parent / "static"
+
+#: the only files served from STATIC_DIR (no path is built from the request)
+_STATIC = {"app.js": "text/javascript; charset=utf-8", "style.css": "text/css; charset=utf-8"}
+
+#: the page loads nothing from anywhere but this server
+_SECURITY_HEADERS = {
+    "Content-Security-Policy": "default-src 'self'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
+                               "connect-src 'self'; object-src 'none'; base-uri 'none'; frame-ancestors 'none'",
+    "X-Content-Type-Options": "nosniff",
+    "Referrer-Policy": "no-referrer",
+}
+
+router = APIRouter(include_in_schema=False)
+
+
+@router.get("/")
+def index() -> FileResponse:
+    """The single page."""
+    return FileResponse(STATIC_DIR / "index.html", media_type="text/html; charset=utf-8",
+                        headers={**_SECURITY_HEADERS, "Cache-Control": "no-cache"})
+
+
+@router.get("/ui/static/{name}")
+def static(name: str) -> FileResponse:
+    """``app.js`` or ``style.css``."""
+    media = _STATIC.get(name)
+    if media is None:
+        raise InputError(f"no static file {name!r}; the page uses {sorted(_STATIC)}", 404)
+    return FileResponse(STATIC_DIR / name, media_type=media,
+                        headers={"X-Content-Type-Options": "nosniff", "Cache-Control": "no-cache"})
+
+
+def _plot_sync(recording: Any) -> dict[str, Any]:
+    try:
+        return plot_data(recording)
+    except ValueError as exc:  # the features package's messages for recordings it cannot analyse
+        raise InputError(str(exc)) from None
+
+
+@router.post("/ui/plot-data")
+async def plot(
+    request: Request,
+    sample_rate_hz: Annotated[float | None, Query(gt=0, le=1e6, allow_inf_nan=False)] = None,
+    speed_rpm: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False)] = None,
+    clearance_um: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False)] = None,
+    units: Annotated[str | None, Query(min_length=1, max_length=16)] = None,
+    bearings: Annotated[str | None, Query(max_length=64, pattern=r"^[0-9, ]*$")] = None,
+    angles_deg: Annotated[str | None, Query(max_length=256)] = None,
+    keyphasor_times_s: Annotated[str | None, Query(max_length=200_000)] = None,
+    sample_index: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
+) -> dict[str, Any]:
+    """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.web.plotdata``)."""
+    query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=None,
+                 plant=None, units=units, bearings=bearings, angles_deg=angles_deg,
+                 keyphasor_times_s=keyphasor_times_s, sample_index=sample_index)
+    recording, _, _ = await _recording_from_request(request, query)
+    return await run_in_threadpool(_plot_sync, recording)

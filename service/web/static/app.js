@@ -1,0 +1,668 @@
+/* rotordiag web page: a client of the service's HTTP API, plots drawn on <canvas>.
+ *
+ * Verdict: POST /diagnose. Orbit/spectrum arrays: POST /ui/plot-data (same body).
+ * Trend: GET /assets/{id}/history. Models: GET /models. Health: GET /health.
+ * No build step, no third-party code, nothing fetched from anywhere but this server.
+ */
+"use strict";
+(function () {
+  const $ = (id) => document.getElementById(id);
+  const state = { verdict: null, plots: null, history: null, models: null, pending: 0 };
+
+  // ---- formatting ---------------------------------------------------------------------------
+  function num(v, digits = 3) {
+    if (v === null || v === undefined || !Number.isFinite(Number(v))) return "—";
+    const x = Number(v);
+    if (x === 0) return "0";
+    const a = Math.abs(x);
+    if (a >= 1e5 || a < 1e-3) return x.toExponential(digits - 1);
+    return String(Number(x.toPrecision(digits)));
+  }
+  function fixed(v, d) {
+    return v === null || v === undefined || !Number.isFinite(Number(v)) ? "—" : Number(v).toFixed(d);
+  }
+  function el(tag, attrs, ...children) {
+    const e = document.createElement(tag);
+    for (const [k, v] of Object.entries(attrs || {})) {
+      if (k === "class") e.className = v; else if (k === "text") e.textContent = v; else e.setAttribute(k, v);
+    }
+    for (const c of children) e.append(c);
+    return e;
+  }
+  function show(node, on) { node.hidden = !on; }
+  function setError(node, text) { node.textContent = text || ""; show(node, Boolean(text)); }
+
+  function errorText(status, body) {
+    let d = body && body.detail !== undefined ? body.detail : body;
+    if (Array.isArray(d)) {
+      d = d.map((e) => {
+        const loc = (e.loc || []).filter((p) => p !== "body" && p !== "query").join(" → ");
+        return (loc ? loc + ": " : "") + (e.msg || JSON.stringify(e));
+      }).join("\n");
+    } else if (typeof d !== "string") {
+      d = JSON.stringify(d);
+    }
+    const what = {
+      400: "The request is malformed", 404: "Not found", 413: "The upload is too large for this server",
+      415: "Unsupported file or content type", 422: "The recording cannot be used", 503: "The service cannot diagnose right now",
+    }[status] || `The service answered HTTP ${status}`;
+    return `${what}: ${d}`;
+  }
+
+  async function api(path, options) {
+    let resp;
+    try {
+      resp = await fetch(path, options);
+    } catch (exc) {
+      throw new Error(`Cannot reach the service (${exc.message}); is it running?`);
+    }
+    const text = await resp.text();
+    let body = null;
+    try { body = text ? JSON.parse(text) : null; } catch (_) { body = text.slice(0, 500); }
+    if (!resp.ok) { const e = new Error(errorText(resp.status, body)); e.status = resp.status; throw e; }
+    return body;
+  }
+
+  // ---- plotting on <canvas> ---------------------------------------------------------------------
+  const COLORS = { raw: "#8d96a0", "1x": "#1f5fa8", "2x": "#d9480f", "1x2x": "#2b8a3e",
+    probe0: "#1f5fa8", probe1: "#c2255c", full: "#5f3dc4",
+    bearing: ["#1f5fa8", "#d9480f", "#2b8a3e", "#862e9c"] };
+  const SEVERITY_COLORS = { aligned: "#2e7d32", slight: "#b5a300", moderate: "#ef6c00", severe: "#c62828" };
+  const FALLBACK_BAND_COLORS = ["#2e7d32", "#b5a300", "#ef6c00", "#c62828", "#6a1b9a"];
+
+  function niceStep(span, target) {
+    const raw = span / Math.max(1, target);
+    const p = Math.pow(10, Math.floor(Math.log10(raw)));
+    const m = raw / p;
+    return (m <= 1 ? 1 : m <= 2 ? 2 : m <= 5 ? 5 : 10) * p;
+  }
+  function linTicks(lo, hi, target) {
+    const step = niceStep(hi - lo, target);
+    const out = [];
+    for (let v = Math.ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step) out.push(Math.abs(v) < step * 1e-9 ? 0 : v);
+    const dec = Math.max(0, -Math.floor(Math.log10(step) + 1e-9));
+    return out.map((v) => ({ v, s: Math.abs(v) >= 1e5 ? v.toExponential(1) : v.toFixed(Math.min(dec, 6)) }));
+  }
+  function logTicks(lo, hi) {
+    const out = [];
+    for (let k = Math.floor(Math.log10(lo)); k <= Math.ceil(Math.log10(hi)); k++) {
+      const v = Math.pow(10, k);
+      if (v >= lo * 0.999 && v <= hi * 1.001) out.push({ v, s: k >= -3 && k <= 4 ? String(Number(v.toPrecision(1))) : `1e${k}` });
+    }
+    return out;
+  }
+  const TIME_STEPS = [1, 2, 5, 10, 15, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 10800, 21600, 43200,
+    86400, 172800, 604800, 1209600, 2592000, 7776000, 31536000].map((s) => s * 1000);
+  function pad(n) { return String(n).padStart(2, "0"); }
+  function timeTicks(lo, hi, target) {
+    const raw = (hi - lo) / Math.max(1, target);
+    const step = TIME_STEPS.find((s) => s >= raw) || TIME_STEPS[TIME_STEPS.length - 1];
+    const out = [];
+    for (let v = Math.ceil(lo / step) * step; v <= hi; v += step) {
+      const d = new Date(v);
+      let s;
+      if (step < 60000) s = `${pad(d.getUTCHours())}:${pad(d.getUTCMinutes())}:${pad(d.getUTCSeconds())}`;
+      else if (step < 86400000) s = `${pad(d.getUTCHours())}:${pad(d.getUTCMinutes())}`;
+      else s = `${d.getUTCFullYear()}-${pad(d.getUTCMonth() + 1)}-${pad(d.getUTCDate())}`;
+      out.push({ v, s });
+    }
+    return out;
+  }
+  function alpha(hex, a) {
+    const n = parseInt(hex.slice(1), 16);
+    return `rgba(${(n >> 16) & 255},${(n >> 8) & 255},${n & 255},${a})`;
+  }
+
+  /* drawPlot(canvas, spec): spec = {x: {label, min, max, time?}, y: {label, min, max, log?}, equal?,
+   * hbands: [{from, to, color, label}], vbands: [...], vlines: [{x, label, color}],
+   * series: [{x, y, color, width, mode: "line"|"stems"|"markers", label, lo, hi, hollow, arrow, size}]} */
+  function drawPlot(canvas, spec) {
+    canvas._spec = spec;
+    const dpr = window.devicePixelRatio || 1;
+    const W = Math.max(120, canvas.clientWidth), H = Math.max(100, canvas.clientHeight);
+    canvas.width = Math.round(W * dpr);
+    canvas.height = Math.round(H * dpr);
+    const ctx = canvas.getContext("2d");
+    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    ctx.fillStyle = "#fff";
+    ctx.fillRect(0, 0, W, H);
+    ctx.font = "12px system-ui, sans-serif";
+
+    // legend rows in the top margin
+    const legend = (spec.series || []).filter((s) => s.label).map((s) => ({ label: s.label, color: s.color, mode: s.mode, hollow: s.hollow }))
+      .concat((spec.legendExtra || []));
+    const L = 64, R = 14, B = 44;
+    let rows = 0, lx = L;
+    const legendPos = [];
+    for (const it of legend) {
+      const w = 22 + ctx.measureText(it.label).width + 14;
+      if (lx + w > W - R && lx > L) { rows++; lx = L; }
+      legendPos.push({ it, x: lx, row: rows });
+      lx += w;
+    }
+    const T = 10 + (legend.length ? (rows + 1) * 16 : 0);
+    const pw = W - L - R, ph = H - T - B;
+    if (pw < 20 || ph < 20) return;
+
+    let [x0, x1] = [spec.x.min, spec.x.max];
+    let [y0, y1] = [spec.y.min, spec.y.max];
+    if (!(x1 > x0)) { x0 -= 1; x1 += 1; }
+    if (!(y1 > y0)) { y0 = spec.y.log ? y0 / 10 : y0 - 1; y1 = spec.y.log ? y1 * 10 : y1 + 1; }
+    if (spec.equal) {           // same µm per pixel on both axes, centred
+      const s = Math.min(pw / (x1 - x0), ph / (y1 - y0));
+      const cx = (x0 + x1) / 2, cy = (y0 + y1) / 2;
+      x0 = cx - pw / s / 2; x1 = cx + pw / s / 2; y0 = cy - ph / s / 2; y1 = cy + ph / s / 2;
+    }
+    const ylog = Boolean(spec.y.log);
+    const ly0 = ylog ? Math.log10(y0) : y0, ly1 = ylog ? Math.log10(y1) : y1;
+    const X = (v) => L + ((v - x0) / (x1 - x0)) * pw;
+    const Y = (v) => {
+      const u = ylog ? Math.log10(Math.max(v, y0 * 1e-3)) : v;
+      return T + ph - ((u - ly0) / (ly1 - ly0)) * ph;
+    };
+
+    // bands
+    ctx.save();
+    ctx.beginPath(); ctx.rect(L, T, pw, ph); ctx.clip();
+    for (const b of spec.hbands || []) {
+      const ya = Y(Math.min(Math.max(b.from, y0), y1)), yb = Y(Math.min(Math.max(b.to, y0), y1));
+      ctx.fillStyle = alpha(b.color, 0.13); ctx.fillRect(L, Math.min(ya, yb), pw, Math.abs(yb - ya));
+      if (b.label && Math.abs(yb - ya) > 13) {
+        ctx.fillStyle = alpha(b.color, 0.9); ctx.textAlign = "right"; ctx.textBaseline = "top";
+        ctx.fillText(b.label, L + pw - 4, Math.min(ya, yb) + 2);
+      }
+    }
+    for (const b of spec.vbands || []) {
+      const xa = X(b.from), xb = X(b.to);
+      ctx.fillStyle = alpha(b.color, 0.16); ctx.fillRect(Math.min(xa, xb), T, Math.max(1, Math.abs(xb - xa)), ph);
+    }
+    ctx.restore();
+
+    // grid and ticks
+    const xt = spec.x.time ? timeTicks(x0, x1, pw / 90) : linTicks(x0, x1, pw / 70);
+    const yt = ylog ? logTicks(y0, y1) : linTicks(y0, y1, ph / 38);
+    ctx.strokeStyle = "#e6e8eb"; ctx.lineWidth = 1;
+    ctx.beginPath();
+    for (const t of xt) { const x = Math.round(X(t.v)) + 0.5; ctx.moveTo(x, T); ctx.lineTo(x, T + ph); }
+    for (const t of yt) { const y = Math.round(Y(t.v)) + 0.5; ctx.moveTo(L, y); ctx.lineTo(L + pw, y); }
+    ctx.stroke();
+    ctx.fillStyle = "#333"; ctx.textAlign = "center"; ctx.textBaseline = "top";
+    for (const t of xt) ctx.fillText(t.s, X(t.v), T + ph + 4);
+    ctx.textAlign = "right"; ctx.textBaseline = "middle";
+    for (const t of yt) ctx.fillText(t.s, L - 5, Y(t.v));
+    ctx.strokeStyle = "#555"; ctx.strokeRect(L + 0.5, T + 0.5, pw - 1, ph - 1);
+    if (spec.zeroLines) {
+      ctx.strokeStyle = "#b9bec5"; ctx.beginPath();
+      if (x0 < 0 && x1 > 0) { ctx.moveTo(X(0), T); ctx.lineTo(X(0), T + ph); }
+      if (y0 < 0 && y1 > 0) { ctx.moveTo(L, Y(0)); ctx.lineTo(L + pw, Y(0)); }
+      ctx.stroke();
+    }
+    // axis labels (units in every label)
+    ctx.fillStyle = "#111"; ctx.font = "600 12px system-ui, sans-serif";
+    ctx.textAlign = "center"; ctx.textBaseline = "bottom";
+    ctx.fillText(spec.x.label, L + pw / 2, H - 3);
+    ctx.save(); ctx.translate(13, T + ph / 2); ctx.rotate(-Math.PI / 2); ctx.textBaseline = "middle";
+    ctx.fillText(spec.y.label, 0, 0); ctx.restore();
+    ctx.font = "12px system-ui, sans-serif";
+
+    // vertical marker lines (1X, 2X, ...)
+    ctx.save(); ctx.beginPath(); ctx.rect(L, T, pw, ph); ctx.clip();
+    for (const v of spec.vlines || []) {
+      if (v.x < x0 || v.x > x1) continue;
+      ctx.strokeStyle = v.color || "#666"; ctx.setLineDash([4, 3]); ctx.lineWidth = 1;
+      ctx.beginPath(); ctx.moveTo(Math.round(X(v.x)) + 0.5, T); ctx.lineTo(Math.round(X(v.x)) + 0.5, T + ph); ctx.stroke();
+      ctx.setLineDash([]);
+      if (v.label) { ctx.fillStyle = v.color || "#444"; ctx.textAlign = "left"; ctx.textBaseline = "top"; ctx.fillText(v.label, X(v.x) + 3, T + 3); }
+    }
+    for (const b of spec.vbands || []) {
+      if (b.label) { ctx.fillStyle = alpha(b.color, 1); ctx.textAlign = "center"; ctx.textBaseline = "top";
+        ctx.fillText(b.label, (X(b.from) + X(b.to)) / 2, T + 17); }
+    }
+
+    // series
+    for (const s of spec.series || []) {
+      const n = Math.min(s.x.length, s.y.length);
+      ctx.strokeStyle = s.color; ctx.fillStyle = s.color; ctx.lineWidth = s.width || 1.5;
+      if (s.lo && s.hi) {      // interval whiskers
+        ctx.lineWidth = 1.2;
+        for (let i = 0; i < n; i++) {
+          if (s.lo[i] === null || s.hi[i] === null) continue;
+          const x = X(s.x[i]);
+          ctx.strokeStyle = s.colors ? s.colors[i] : s.color;
+          ctx.beginPath(); ctx.moveTo(x, Y(s.lo[i])); ctx.lineTo(x, Y(s.hi[i]));
+          ctx.moveTo(x - 4, Y(s.lo[i])); ctx.lineTo(x + 4, Y(s.lo[i]));
+          ctx.moveTo(x - 4, Y(s.hi[i])); ctx.lineTo(x + 4, Y(s.hi[i])); ctx.stroke();
+        }
+        ctx.strokeStyle = s.color; ctx.lineWidth = s.width || 1.5;
+      }
+      if (s.mode === "stems") {
+        const base = ylog ? T + ph : Y(Math.max(0, y0));
+        ctx.beginPath();
+        for (let i = 0; i < n; i++) {
+          if (s.y[i] === null) continue;
+          const x = X(s.x[i]); ctx.moveTo(x, base); ctx.lineTo(x, Y(s.y[i]));
+        }
+        ctx.stroke();
+      } else if (s.mode !== "markers") {
+        ctx.beginPath();
+        let pen = false;
+        for (let i = 0; i < n; i++) {
+          if (s.y[i] === null || s.x[i] === null) { pen = false; continue; }
+          const x = X(s.x[i]), y = Y(s.y[i]);
+          if (pen) ctx.lineTo(x, y); else ctx.moveTo(x, y);
+          pen = true;
+        }
+        ctx.stroke();
+        if (s.arrow && n > 8) {  // direction of whirl: arrowhead along increasing shaft angle
+          const i = Math.floor(n / 4);
+          const ax = X(s.x[i]), ay = Y(s.y[i]), bx = X(s.x[i + 1]), by = Y(s.y[i + 1]);
+          const a = Math.atan2(by - ay, bx - ax);
+          ctx.beginPath(); ctx.moveTo(bx, by);
+          ctx.lineTo(bx - 9 * Math.cos(a - 0.45), by - 9 * Math.sin(a - 0.45));
+          ctx.lineTo(bx - 9 * Math.cos(a + 0.45), by - 9 * Math.sin(a + 0.45));
+          ctx.closePath(); ctx.fill();
+        }
+      }
+      if (s.mode === "markers" || s.markers) {
+        const r = s.size || 3.5;
+        for (let i = 0; i < n; i++) {
+          if (s.y[i] === null || s.x[i] === null) continue;
+          const c = s.colors ? s.colors[i] : (s.markerColor || s.color);
+          ctx.beginPath(); ctx.arc(X(s.x[i]), Y(s.y[i]), r, 0, 2 * Math.PI);
+          const hollow = s.hollowAt ? s.hollowAt[i] : s.hollow;
+          if (hollow) { ctx.fillStyle = "#fff"; ctx.fill(); ctx.strokeStyle = c; ctx.lineWidth = 2; ctx.stroke(); }
+          else { ctx.fillStyle = c; ctx.fill(); ctx.strokeStyle = s.outline || "#fff"; ctx.lineWidth = 1; ctx.stroke(); }
+        }
+      }
+    }
+    ctx.restore();
+
+    // legend
+    ctx.textAlign = "left"; ctx.textBaseline = "middle";
+    for (const p of legendPos) {
+      const y = 10 + p.row * 16 + 1;
+      ctx.strokeStyle = p.it.color; ctx.fillStyle = p.it.color; ctx.lineWidth = 2;
+      if (p.it.mode === "markers") {
+        ctx.beginPath(); ctx.arc(p.x + 8, y, 3.5, 0, 2 * Math.PI);
+        if (p.it.hollow) { ctx.fillStyle = "#fff"; ctx.fill(); ctx.stroke(); } else ctx.fill();
+      } else { ctx.beginPath(); ctx.moveTo(p.x, y); ctx.lineTo(p.x + 16, y); ctx.stroke(); }
+      ctx.fillStyle = "#222"; ctx.fillText(p.it.label, p.x + 21, y);
+    }
+  }
+
+  function extent(arrays, pad0 = 0) {
+    let lo = Infinity, hi = -Infinity;
+    for (const a of arrays) for (const v of a) if (v !== null && Number.isFinite(v)) { if (v < lo) lo = v; if (v > hi) hi = v; }
+    if (!Number.isFinite(lo)) return [0, 1];
+    const p = (hi - lo) * pad0;
+    return [lo - p, hi + p];
+  }
+
+  let resizeTimer = null;
+  window.addEventListener("resize", () => {
+    clearTimeout(resizeTimer);
+    resizeTimer = setTimeout(() => {
+      document.querySelectorAll("canvas").forEach((c) => { if (c._spec && c.offsetParent !== null) drawPlot(c, c._spec); });
+    }, 120);
+  });
+
+  // ---- orbits and spectra -------------------------------------------------------------------------
+  const BEARING_NAMES = { 1: "generator, far end", 2: "generator, coupling end", 3: "exciter, coupling end", 4: "exciter, far end" };
+
+  function orbitSpec(b) {
+    const o = b.orbit, f = o.filtered, series = [];
+    const on = (id) => $(id).checked;
+    const arrays = [];
+    if (on("show-raw")) {
+      series.push({ x: o.raw_x_um, y: o.raw_y_um, color: COLORS.raw, width: 1, label: `raw (last ${o.revs} rev)` });
+      series.push({ x: o.raw_marks_um.map((p) => p[0]), y: o.raw_marks_um.map((p) => p[1]), color: "#222", mode: "markers", size: 3 });
+      arrays.push(o.raw_x_um, o.raw_y_um);
+    }
+    for (const [key, id, label] of [["1x", "show-1x", "1X"], ["2x", "show-2x", "2X"], ["1x2x", "show-1x2x", "1X+2X"]]) {
+      if (!on(id)) continue;
+      series.push({ x: f[key].x_um, y: f[key].y_um, color: COLORS[key], width: 2, label: `${label} filtered`, arrow: true });
+      series.push({ x: [f[key].x_um[0]], y: [f[key].y_um[0]], color: COLORS[key], mode: "markers", size: 4.5, outline: "#000" });
+      arrays.push(f[key].x_um, f[key].y_um);
+    }
+    let r = 0;
+    for (const a of arrays) for (const v of a) if (v !== null) r = Math.max(r, Math.abs(v));
+    r = r > 0 ? r * 1.08 : 1;
+    return { x: { label: "x (horizontal), µm", min: -r, max: r }, y: { label: "y (vertical, up), µm", min: -r, max: r },
+      equal: true, zeroLines: true, series,
+      legendExtra: [{ label: "once per rev", color: "#222", mode: "markers" }] };
+  }
+
+  function orderLines(f1, signs) {
+    const lines = [];
+    for (const sg of signs) for (const k of [1, 2, 3]) {
+      lines.push({ x: sg * k * f1, label: `${sg < 0 ? "−" : ""}${k}X`, color: "#444" });
+    }
+    return lines;
+  }
+
+  function spectrumSpecs(b, plots, log) {
+    const f1 = plots.speed_rpm / 60, wb = plots.whirl_band_orders;
+    const whirl = { from: wb[0] * f1, to: wb[1] * f1, color: "#e8590c", label: "oil whirl" };
+    const hs = b.half_spectrum, fs = b.full_spectrum;
+    const amps = hs.amp_um_pp.concat([fs.amp_um_pp]);
+    let ymax = 0;
+    for (const a of amps) for (const v of a) if (v !== null) ymax = Math.max(ymax, v);
+    ymax = ymax > 0 ? ymax : 1;
+    const y = log ? { label: "amplitude, µm pk-pk", min: ymax * 1e-4, max: ymax * 1.5, log: true }
+      : { label: "amplitude, µm pk-pk", min: 0, max: ymax * 1.12 };
+    const fmax = hs.freq_hz.length ? hs.freq_hz[hs.freq_hz.length - 1] : 4 * f1;
+    const half = {
+      x: { label: "frequency, Hz", min: 0, max: fmax }, y: { ...y }, vbands: [whirl], vlines: orderLines(f1, [1]),
+      series: hs.amp_um_pp.map((a, i) => ({ x: hs.freq_hz, y: a, mode: "stems", width: i ? 1.2 : 2,
+        color: i ? COLORS.probe1 : COLORS.probe0, label: `probe at ${num(b.probe_angles_deg[i])}°` })),
+    };
+    const full = {
+      x: { label: "frequency, Hz (− reverse, + forward whirl)", min: -fmax, max: fmax }, y: { ...y },
+      vbands: [whirl], vlines: orderLines(f1, [-1, 1]), zeroLines: true,
+      series: [{ x: fs.freq_hz, y: fs.amp_um_pp, mode: "stems", width: 1.6, color: COLORS.full, label: "full spectrum of x + jy" }],
+    };
+    return [half, full];
+  }
+
+  function renderPlots() {
+    const plots = state.plots, box = $("bearing-plots");
+    box.replaceChildren();
+    if (!plots) return;
+    const log = $("spectrum-scale").value === "log";
+    $("plots-info").textContent = `Running speed ${fixed(plots.speed_rpm, 1)} r/min (${fixed(plots.speed_rpm / 60, 2)} Hz, ` +
+      `${plots.speed_source}); ${plots.n_revs} whole revolutions analysed; shaft angle θ = 0 at the ` +
+      `${plots.phase_reference}. Spectra: Hann window over the analysed revolutions; 1X–3X marked, ` +
+      `oil-whirl band ${plots.whirl_band_orders[0]}–${plots.whirl_band_orders[1]}X shaded.`;
+    for (const b of plots.bearings) {
+      const n = b.bearing;
+      const orbit = el("canvas", { class: "orbit", id: `orbit-${n}`, role: "img",
+        "aria-label": `Orbit of bearing ${n}: raw and filtered, µm` });
+      const half = el("canvas", { class: "spectrum", id: `half-${n}`, role: "img",
+        "aria-label": `Half spectrum of bearing ${n}'s probes, µm pk-pk against Hz` });
+      const full = el("canvas", { class: "spectrum", id: `full-${n}`, role: "img",
+        "aria-label": `Full spectrum of bearing ${n}, µm pk-pk against Hz` });
+      const card = el("article", { class: "bearing", id: `bearing-${n}`, "aria-label": `Bearing ${n}` },
+        el("h3", { text: `Bearing ${n} — ${BEARING_NAMES[n] || ""}` }),
+        el("div", { class: "pics" },
+          el("figure", { class: "orbit-fig" }, orbit, el("figcaption", { text:
+            `Orbit (x right, y up; shaft turns x → y). Dots: once per revolution (θ = 0); arrows: direction of travel.` })),
+          el("figure", {}, half, el("figcaption", { text: `Half spectrum of each probe (${b.probe_angles_deg.map((a) => num(a) + "°").join(", ")}).` })),
+          el("figure", {}, full, el("figcaption", { text: "Full spectrum: forward whirl right of 0, reverse whirl left." }))));
+      box.append(card);
+    }
+    // draw after layout so clientWidth is known
+    for (const b of plots.bearings) {
+      const n = b.bearing;
+      drawPlot($(`orbit-${n}`), orbitSpec(b));
+      const [h, f] = spectrumSpecs(b, plots, log);
+      drawPlot($(`half-${n}`), h);
+      drawPlot($(`full-${n}`), f);
+    }
+  }
+
+  // ---- verdict ------------------------------------------------------------------------------------
+  function bandRanges(bands) {
+    const e = bands.edges || [], names = bands.names || [];
+    return names.map((name, i) => {
+      if (i === 0) return [name, `Δ < ${e[0]}`];
+      if (i === names.length - 1) return [name, `Δ ≥ ${e[i - 1]}`];
+      return [name, `${e[i - 1]} ≤ Δ < ${e[i]}`];
+    });
+  }
+
+  function renderVerdict(v) {
+    const sev = $("verdict-severity");
+    sev.textContent = v.severity;
+    sev.className = "badge " + (SEVERITY_COLORS[v.severity] ? v.severity : "");
+    const lvl = v.interval_level ? `${Math.round(v.interval_level * 100)} % interval` : "interval";
+    const [lo, hi] = v.misalignment_interval || [null, null];
+    $("verdict-delta").textContent = `${fixed(v.misalignment, 3)} (${lvl} ${fixed(lo, 3)}–${fixed(hi, 3)})`;
+    if (v.offset_um !== null && v.offset_um !== undefined) {
+      const oi = v.offset_interval_um || [null, null];
+      $("verdict-offset").textContent = `${fixed(v.offset_um, 1)} µm (${fixed(oi[0], 1)}–${fixed(oi[1], 1)} µm)`;
+    } else {
+      $("verdict-offset").textContent = "— (give the clearance to get δ in µm)";
+    }
+    $("verdict-motion").textContent = v.motion_type || "not determined";
+    $("verdict-speed").textContent = v.speed_rpm ? `${fixed(v.speed_rpm, 1)} r/min (${fixed(v.speed_rpm / 60, 2)} Hz)` : "—";
+    $("verdict-model").textContent = v.model_version;
+    const ood = $("ood-warning");
+    if (v.ood) {
+      ood.textContent = `Out of distribution: this recording is unlike the model's training data ` +
+        `(OOD score ${num(v.ood_score)}, flagged above 1). Treat the verdict with caution.`;
+    }
+    show(ood, Boolean(v.ood));
+    const tb = $("verdict-probs").tBodies[0];
+    tb.replaceChildren();
+    const ranges = Object.fromEntries(bandRanges(v.bands || {}));
+    const names = (v.bands && v.bands.names) || Object.keys(v.probabilities);
+    for (const name of names) {
+      const p = v.probabilities[name] || 0;
+      const bar = el("span", { class: "bar" });
+      bar.style.width = `${Math.max(1, Math.round(p * 120))}px`;
+      bar.style.background = SEVERITY_COLORS[name] || COLORS["1x"];
+      tb.append(el("tr", { "data-class": name }, el("th", { scope: "row", text: name }), el("td", { text: ranges[name] || "" }),
+        el("td", { class: "num" }, bar, `${(100 * p).toFixed(1)} %`)));
+    }
+    const fb = $("verdict-features").tBodies[0];
+    fb.replaceChildren();
+    for (const f of v.top_features || []) {
+      fb.append(el("tr", {}, el("td", {}, el("code", { text: f.name })), el("td", { class: "num", text: num(f.value, 4) }),
+        el("td", { class: "num", text: num(f.reference, 4) }),
+        el("td", { class: "num", text: f.contribution === null ? "—" : (f.contribution >= 0 ? "+" : "") + num(f.contribution, 3) })));
+    }
+    const wl = $("verdict-warnings");
+    wl.replaceChildren(...(v.warnings || []).map((w) => el("li", { text: w })));
+    show($("verdict"), true);
+  }
+
+  // ---- diagnose ---------------------------------------------------------------------------------
+  function formValue(id) { const v = $(id).value.trim(); return v === "" ? null : v; }
+
+  function buildRequests() {
+    const source = document.querySelector("input[name=source]:checked").value;
+    const numeric = { sample_rate_hz: "sample-rate", speed_rpm: "speed", clearance_um: "clearance" };
+    if (source === "json") {
+      const text = $("json-text").value.trim();
+      if (!text) throw new Error("Paste a recording as JSON, or switch the source to a file upload.");
+      let body;
+      try { body = JSON.parse(text); } catch (exc) { throw new Error(`The pasted text is not valid JSON: ${exc.message}`); }
+      if (body === null || typeof body !== "object" || Array.isArray(body)) {
+        throw new Error("The pasted JSON must be one object: {\"sample_rate_hz\": …, \"channels\": [{\"bearing\", \"angle_deg\", \"units\", \"data\"}, …]}");
+      }
+      for (const [key, id] of Object.entries(numeric)) {
+        if (!(key in body) && formValue(id) !== null) body[key] = Number(formValue(id));
+      }
+      if (!("asset_id" in body) && formValue("asset")) body.asset_id = formValue("asset");
+      const json = JSON.stringify(body);
+      const opts = () => ({ method: "POST", headers: { "Content-Type": "application/json" }, body: json });
+      return { diagnose: ["/diagnose", opts()], plot: ["/ui/plot-data", opts()], asset: body.asset_id || null };
+    }
+    const file = $("file").files[0];
+    if (!file) throw new Error("Choose a waveform file (CSV, NPY or HDF5), or switch the source to “Paste JSON”.");
+    const q = new URLSearchParams();
+    for (const [key, id] of Object.entries(numeric)) if (formValue(id) !== null) q.set(key, formValue(id));
+    for (const [key, id] of [["units", "units"], ["bearings", "bearings"], ["angles_deg", "angles"]]) {
+      if (formValue(id) !== null) q.set(key, formValue(id));
+    }
+    if (formValue("sample-index") !== null && formValue("sample-index") !== "0") q.set("sample_index", formValue("sample-index"));
+    const qp = new URLSearchParams(q);
+    const asset = formValue("asset");
+    if (asset) q.set("asset_id", asset);
+    const opts = () => { const fd = new FormData(); fd.append("file", file, file.name); return { method: "POST", body: fd }; };
+    return { diagnose: [`/diagnose?${q}`, opts()], plot: [`/ui/plot-data?${qp}`, opts()], asset };
+  }
+
+  async function onDiagnose(ev) {
+    ev.preventDefault();
+    setError($("form-error"), "");
+    let req;
+    try { req = buildRequests(); } catch (exc) { fail(exc.message); return; }
+    $("diagnose-btn").disabled = true; show($("busy"), true);
+    document.body.dataset.state = "busy";
+    const plotPromise = api(...req.plot).then((p) => ({ p }), (e) => ({ e }));
+    try {
+      const verdict = await api(...req.diagnose);
+      state.verdict = verdict;
+      renderVerdict(verdict);
+      const { p, e } = await plotPromise;
+      state.plots = p || null;
+      show($("plots"), true);
+      setError($("plots-error"), e ? `The orbit and spectrum pictures could not be drawn. ${e.message}` : "");
+      renderPlots();
+      document.body.dataset.state = "done";
+      if (req.asset) { $("trend-asset").value = req.asset; await loadTrend(req.asset); }
+    } catch (exc) {
+      await plotPromise;
+      fail(exc.message);
+    } finally {
+      $("diagnose-btn").disabled = false; show($("busy"), false);
+    }
+  }
+
+  function fail(message) {
+    // never leave an earlier verdict or pictures next to a new error
+    state.verdict = null; state.plots = null;
+    show($("verdict"), false); show($("plots"), false);
+    $("bearing-plots").replaceChildren();
+    setError($("form-error"), message);
+    document.body.dataset.state = "error";
+  }
+
+  // ---- trend ------------------------------------------------------------------------------------
+  function bandsFor(points) {
+    const latest = points.length ? points[points.length - 1].model_version : null;
+    const cards = (state.models && state.models.versions) || [];
+    const card = cards.find((c) => c.version === latest) || cards.find((c) => c.active);
+    if (card && card.bands && card.bands.edges) return card.bands;
+    if (state.verdict && state.verdict.bands) return state.verdict.bands;
+    return { edges: [0.05, 0.15, 0.35], names: ["aligned", "slight", "moderate", "severe"] };
+  }
+
+  function renderTrend() {
+    const h = state.history;
+    if (!h) return;
+    const pts = h.points;
+    const t = pts.map((p) => Date.parse(p.time.endsWith("Z") || /[+-]\d\d:?\d\d$/.test(p.time) ? p.time : p.time + "Z"));
+    let [t0, t1] = extent([t]);
+    if (t1 - t0 < 60000) { const c = (t0 + t1) / 2; t0 = c - 30000; t1 = c + 30000; }
+    const padT = (t1 - t0) * 0.05; t0 -= padT; t1 += padT;
+    const day = new Date(t0);
+    const xlab = `time (UTC), from ${day.getUTCFullYear()}-${pad(day.getUTCMonth() + 1)}-${pad(day.getUTCDate())}`;
+    const bands = bandsFor(pts);
+    const edges = bands.edges, names = bands.names;
+    const d = pts.map((p) => p.misalignment), lo = pts.map((p) => p.misalignment_low), hi = pts.map((p) => p.misalignment_high);
+    const ymax = Math.max(extent([d, hi])[1] * 1.1, (edges[edges.length - 1] || 0.35) * 1.3);
+    const hb = names.map((name, i) => ({ from: i ? edges[i - 1] : 0, to: i < edges.length ? edges[i] : ymax * 2,
+      color: SEVERITY_COLORS[name] || FALLBACK_BAND_COLORS[i % FALLBACK_BAND_COLORS.length], label: name }));
+    drawPlot($("trend-delta"), {
+      x: { label: xlab, min: t0, max: t1, time: true }, y: { label: "misalignment Δ = δ/c (–)", min: 0, max: ymax },
+      hbands: hb,
+      series: [{ x: t, y: d, lo, hi, color: "#1b1f24", width: 1.5, markers: true, size: 4.5,
+        colors: pts.map((p) => SEVERITY_COLORS[p.severity] || "#1b1f24"), hollowAt: pts.map((p) => Boolean(p.ood)),
+        label: "Δ estimate with interval" }],
+      legendExtra: pts.some((p) => p.ood) ? [{ label: "hollow: out of distribution", color: "#1b1f24", mode: "markers", hollow: true }] : [],
+    });
+    const bearings = [1, 2, 3, 4].filter((b) => pts.some((p) => (p.amplitudes_um_pp || {})[`b${b}_1x_major_um_pp`] !== undefined));
+    for (const k of ["1x", "2x"]) {
+      const series = bearings.map((b, i) => ({ x: t, y: pts.map((p) => { const v = (p.amplitudes_um_pp || {})[`b${b}_${k}_major_um_pp`]; return v === undefined ? null : v; }),
+        color: COLORS.bearing[(b - 1) % 4], width: 1.8, markers: true, size: 3.5, label: `bearing ${b}` }));
+      const [, top] = extent(series.map((s) => s.y));
+      drawPlot($(`trend-${k}`), { x: { label: xlab, min: t0, max: t1, time: true },
+        y: { label: `${k.toUpperCase()} orbit major axis, µm pk-pk`, min: 0, max: top > 0 ? top * 1.15 : 1 }, series });
+    }
+  }
+
+  async function loadTrend(asset) {
+    setError($("trend-error"), "");
+    if (!asset) { setError($("trend-error"), "Type the asset id that was sent with the diagnoses."); return; }
+    try {
+      if (!state.models) await loadModels();
+      const h = await api(`/assets/${encodeURIComponent(asset)}/history?limit=1000`);
+      state.history = h;
+      show($("trend-plots"), true);
+      const last = h.points[h.points.length - 1];
+      $("trend-info").textContent = `${h.count} diagnos${h.count === 1 ? "is" : "es"} of ${h.asset_id}` +
+        (last ? `; latest: ${last.severity}, Δ = ${fixed(last.misalignment, 3)} (model ${last.model_version}).` : ".");
+      renderTrend();
+    } catch (exc) {
+      state.history = null;
+      show($("trend-plots"), false);
+      $("trend-info").textContent = "";
+      setError($("trend-error"), exc.message);
+    }
+  }
+
+  // ---- models, health ---------------------------------------------------------------------------
+  function evalSummary(card) {
+    const m = card.metrics && card.metrics.all_mixed_average && card.metrics.all_mixed_average.model;
+    if (!m) return "no held-out evaluation in the model card";
+    const parts = [];
+    if (m.macro_f1 !== undefined) parts.push(`macro-F1 ${num(m.macro_f1)}`);
+    if (m.delta_mae !== undefined) parts.push(`Δ MAE ${num(m.delta_mae)}`);
+    if (m.interval_coverage !== undefined) parts.push(`interval coverage ${num(m.interval_coverage)}`);
+    if (m.ece !== undefined) parts.push(`ECE ${num(m.ece)}`);
+    if (m.ood_flag_rate !== undefined) parts.push(`OOD flag rate ${num(m.ood_flag_rate)}`);
+    const held = card.metrics.held_out ? ` (${card.metrics.held_out})` : "";
+    return parts.join(", ") + held;
+  }
+  function trainingSummary(card) {
+    const td = card.training_data || {};
+    const parts = [];
+    if (td.n_rows_used !== undefined) parts.push(`${td.n_rows_used} recordings`);
+    if (td.n_plants !== undefined) parts.push(`${td.n_plants} plants`);
+    if (td.speed_rpm_range) parts.push(`${num(td.speed_rpm_range[0], 4)}–${num(td.speed_rpm_range[1], 4)} r/min`);
+    if (td.misalignment_range) parts.push(`Δ ${num(td.misalignment_range[0])}–${num(td.misalignment_range[1])}`);
+    if (td.mechanisms) parts.push(td.mechanisms.join("/"));
+    if (card.note) parts.push(card.note);
+    return parts.join(", ") || "—";
+  }
+  async function loadModels() {
+    setError($("models-error"), "");
+    try {
+      const m = await api("/models");
+      state.models = m;
+      const tb = $("models-table").tBodies[0];
+      tb.replaceChildren(...m.versions.slice().reverse().map((c) => el("tr", { "data-version": c.version, class: c.active ? "active" : "" },
+        el("th", { scope: "row" }, el("code", { text: c.version })),
+        el("td", { text: c.active ? "active" : "—" }),
+        el("td", { text: c.created || c.created_at || "—" }),
+        el("td", { text: trainingSummary(c) }),
+        el("td", { text: evalSummary(c) }))));
+      if (!m.versions.length) tb.append(el("tr", {}, el("td", { colspan: "5", text: "No model is registered yet." })));
+    } catch (exc) {
+      setError($("models-error"), exc.message);
+    }
+  }
+  async function loadHealth() {
+    const h = $("health");
+    try {
+      const r = await fetch("/health");
+      const body = await r.json();
+      h.textContent = `service ${body.status} · version ${body.version} · active model ${body.model_version || "none"}` +
+        (body.detail ? ` · ${body.detail}` : "");
+      h.classList.toggle("bad", body.status !== "ok");
+    } catch (exc) {
+      h.textContent = `service unreachable (${exc.message})`;
+      h.classList.add("bad");
+    }
+  }
+
+  // ---- wiring -------------------------------------------------------------------------------------
+  document.addEventListener("DOMContentLoaded", () => {
+    document.body.dataset.state = "idle";
+    $("activate-base").textContent = window.location.origin;
+    document.querySelectorAll("input[name=source]").forEach((r) => r.addEventListener("change", () => {
+      const json = document.querySelector("input[name=source]:checked").value === "json";
+      show($("file-fields"), !json); show($("json-fields"), json);
+    }));
+    $("diagnose-form").addEventListener("submit", onDiagnose);
+    for (const id of ["show-raw", "show-1x", "show-2x", "show-1x2x", "spectrum-scale"]) $(id).addEventListener("change", renderPlots);
+    $("trend-form").addEventListener("submit", (ev) => { ev.preventDefault(); loadTrend($("trend-asset").value.trim()); });
+    loadHealth();
+    loadModels();
+  });
+
+  // for the end-to-end tests and the console
+  window.rotordiag = { state, drawPlot, renderPlots, renderTrend, loadTrend };
+})();
