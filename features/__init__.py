@@ -18,12 +18,19 @@ FEATURE_NAMES, FEATURE_SPECS, feature_names()
 
 Every amplitude is in µm whatever the input units; ``*_per_c`` twins divide by the radial
 clearance (NaN when it is unknown).
+
+Importing the package raises glibc's malloc mmap/trim thresholds (see ``features._alloc``;
+``ROTORDIAG_MALLOC_TUNING=0`` disables it) and each extraction runs with one BLAS thread
+(``features._config.BLAS_THREADS``): both measured to matter more than the arithmetic.
 """
+from ._alloc import tune_malloc
 from ._config import ALLOWED_UNITS, MIN_REVS, MIN_REVS_MOTION
 from ._extract import BearingDetail, FeatureResult, extract_features
 from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
 from ._orbit import OrbitShape
 from ._recording import ProbeChannel, Recording
+
+tune_malloc()
 
 __all__ = [
     "ProbeChannel", "Recording", "extract_features", "FeatureResult", "BearingDetail", "OrbitShape",

@@ -67,3 +67,8 @@ MIN_REVS_MOTION = 32
 #: probability that Gaussian measurement noise alone breaks a truly periodic Poincaré set
 #: (sets the period tolerance, see features._poincare.period_tolerance)
 POINCARE_FALSE_ALARM = 1e-3
+
+#: BLAS threads during one extraction (its matrix products are 20 × 16 k: threads only add
+#: overhead and contend with the caller's own parallelism — 3–4× slower on a busy 2-core
+#: machine); None leaves the BLAS setting alone
+BLAS_THREADS: int | None = 1

@@ -1,6 +1,7 @@
 """``extract_features``: one recording → the fixed, named feature vector plus details."""
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -8,7 +9,7 @@ import numpy as np
 
 from . import _config as cfg
 from ._names import FEATURE_NAMES
-from ._orbit import OrbitShape, orbit_shape
+from ._orbit import OrbitShape, orbit_shapes
 from ._orders import fit_orders, forward_reverse, max_sync_order
 from ._poincare import classify, dispersion, poincare_points
 from ._recording import Recording
@@ -132,6 +133,25 @@ def _wrap_deg(d: float) -> float:
     return d - 360.0 if d > 180.0 else d
 
 
+_BLAS_CONTROLLER: Any = None
+
+
+def _blas_limit():
+    """Context limiting BLAS threads to ``cfg.BLAS_THREADS`` during one extraction (or a no-op)."""
+    global _BLAS_CONTROLLER
+    if cfg.BLAS_THREADS is None:
+        return contextlib.nullcontext()
+    if _BLAS_CONTROLLER is None:
+        try:
+            from threadpoolctl import ThreadpoolController
+            _BLAS_CONTROLLER = ThreadpoolController()
+        except Exception:  # pragma: no cover - threadpoolctl ships with scikit-learn
+            _BLAS_CONTROLLER = False
+    if _BLAS_CONTROLLER is False:
+        return contextlib.nullcontext()
+    return _BLAS_CONTROLLER.limit(limits=cfg.BLAS_THREADS, user_api="blas")
+
+
 def extract_features(recording: Recording) -> FeatureResult:
     """Features of one recording: order analysis, orbit shape, sub-harmonics, motion type.
 
@@ -154,6 +174,11 @@ def extract_features(recording: Recording) -> FeatureResult:
     """
     if not isinstance(recording, Recording):
         raise ValueError(f"extract_features expects a features.Recording, got {type(recording).__name__}")
+    with _blas_limit():
+        return _extract(recording)
+
+
+def _extract(recording: Recording) -> FeatureResult:
     rec = recording
     fs = rec.sample_rate_hz
     bearings = rec.bearings
@@ -185,7 +210,8 @@ def extract_features(recording: Recording) -> FeatureResult:
 
     freqs, psd = residual_psd(resid, fs)
     orders_axis = freqs / f1
-    bin_orders = fs / n_seg / f1
+    bin_orders = fs / n_seg / f1                      # resolution (1/n_revs), not the padded bin spacing
+    fft_bin_orders = float(orders_axis[1])
     noise = noise_rms(psd)
     ms = np.einsum("ij,ij->i", ac, ac) / n_seg
     res_ms = np.einsum("ij,ij->i", resid, resid) / n_seg
@@ -200,34 +226,52 @@ def extract_features(recording: Recording) -> FeatureResult:
         warnings.append(f"only {sa.n_revs} revolutions: sub-harmonic band features have a resolution of "
                         f"{1 / sa.n_revs:.3f}X and are coarse (>= {cfg.MIN_REVS_SUBHARMONIC} revolutions recommended)")
 
+    # everything per bearing that vectorises, computed for all bearings at once
+    amp_pp = (2 * np.abs(coeffs[:, :3])).tolist()                       # (m, 3)
+    phase = (np.degrees(-np.angle(coeffs[:, :3])) % 360.0).tolist()
+    cx_all, cy_all = coeffs[0::2], coeffs[1::2]                           # (n_bearings, K)
+    fw_all, rv_all = forward_reverse(cx_all, cy_all)
+    afw_all, arv_all = np.abs(fw_all[:, :3]).tolist(), np.abs(rv_all[:, :3]).tolist()
+    with np.errstate(divide="ignore", invalid="ignore"):
+        hints = np.nan_to_num((np.abs(fw_all[:, 0]) - np.abs(rv_all[:, 0]))
+                              / (np.abs(fw_all[:, 0]) + np.abs(rv_all[:, 0])), nan=1.0)
+    orbits = orbit_shapes(cx_all[:, :2], cy_all[:, :2], hints)
+    hw = max(cfg.CALLOUT_HALF_WIDTH_ORDERS, cfg.CALLOUT_MIN_HALF_WIDTH_BINS * bin_orders)
+    bands = {"subsync": cfg.SUBSYNC_BAND, "whirl_band": cfg.WHIRL_BAND}
+    for key, centre in cfg.CALLOUT_ORDERS.items():
+        bands[key] = (centre - hw, centre + hw)
+    top = int(np.searchsorted(orders_axis, max(hi for _, hi in bands.values()), side="right")) + 2
+    pb_all = psd[0::2, :top] + psd[1::2, :top]                          # orbit (x + y) spectrum below 1X
+    cum_all = np.concatenate([np.zeros((pb_all.shape[0], 1)), np.cumsum(pb_all, axis=1)], axis=1)
+    sub_lo, sub_hi = np.searchsorted(orders_axis[:top], cfg.SUBSYNC_BAND, side="left")
+    amp_list = ptp.tolist()
+
     for i, b in enumerate(bearings):
         ix, iy = 2 * i, 2 * i + 1
         p = f"b{b}_"
         c = rec.clearance_for(b)
         f: dict[str, float] = {}
-        cx, cy = coeffs[ix], coeffs[iy]
-        for d, cc, col in (("x", cx, ix), ("y", cy, iy)):
-            amp = 2 * np.abs(cc[:3])
+        for d, col in (("x", ix), ("y", iy)):
+            amp = amp_pp[col]
             for k in cfg.REPORTED_ORDERS:
-                f[f"{p}{d}_{k}x_amp_um_pp"] = float(amp[k - 1])
-                f[f"{p}{d}_{k}x_amp_pp_per_c"] = float(amp[k - 1] / c)
-                f[f"{p}{d}_{k}x_phase_deg"] = _phase_lag_deg(cc[k - 1])
+                f[f"{p}{d}_{k}x_amp_um_pp"] = amp[k - 1]
+                f[f"{p}{d}_{k}x_amp_pp_per_c"] = amp[k - 1] / c
+                f[f"{p}{d}_{k}x_phase_deg"] = phase[col][k - 1]
             f[f"{p}{d}_2x_1x_ratio"] = _ratio(amp[1], amp[0])
             f[f"{p}{d}_3x_1x_ratio"] = _ratio(amp[2], amp[0])
-            f[f"{p}{d}_direct_um_pp"] = float(ptp[col])
-            f[f"{p}{d}_direct_pp_per_c"] = float(ptp[col] / c)
-        fw, rv = forward_reverse(cx, cy)
-        afw, arv = np.abs(fw), np.abs(rv)
+            f[f"{p}{d}_direct_um_pp"] = amp_list[col]
+            f[f"{p}{d}_direct_pp_per_c"] = amp_list[col] / c
+        afw, arv = afw_all[i], arv_all[i]
         for k in (1, 2):
-            f[f"{p}{k}x_fwd_um_pp"] = float(2 * afw[k - 1])
-            f[f"{p}{k}x_fwd_pp_per_c"] = float(2 * afw[k - 1] / c)
-            f[f"{p}{k}x_rev_um_pp"] = float(2 * arv[k - 1])
-            f[f"{p}{k}x_rev_pp_per_c"] = float(2 * arv[k - 1] / c)
+            f[f"{p}{k}x_fwd_um_pp"] = 2 * afw[k - 1]
+            f[f"{p}{k}x_fwd_pp_per_c"] = 2 * afw[k - 1] / c
+            f[f"{p}{k}x_rev_um_pp"] = 2 * arv[k - 1]
+            f[f"{p}{k}x_rev_pp_per_c"] = 2 * arv[k - 1] / c
             f[f"{p}{k}x_rev_fwd_ratio"] = _ratio(arv[k - 1], afw[k - 1])
-        major = 2 * (afw + arv)
+        major = [2 * (a + r) for a, r in zip(afw, arv)]
         for k in cfg.REPORTED_ORDERS:
-            f[f"{p}{k}x_major_um_pp"] = float(major[k - 1])
-            f[f"{p}{k}x_major_pp_per_c"] = float(major[k - 1] / c)
+            f[f"{p}{k}x_major_um_pp"] = major[k - 1]
+            f[f"{p}{k}x_major_pp_per_c"] = major[k - 1] / c
         f[f"{p}2x_1x_major_ratio"] = _ratio(major[1], major[0])
         f[f"{p}3x_1x_major_ratio"] = _ratio(major[2], major[0])
         s1 = afw[0] + arv[0]
@@ -235,7 +279,7 @@ def extract_features(recording: Recording) -> FeatureResult:
         f[f"{p}1x_ellipticity"] = abs(whirl_index)
         f[f"{p}1x_whirl_index"] = whirl_index
         f[f"{p}1x_whirl_dir"] = float(np.sign(afw[0] - arv[0])) if s1 > 0 else float("nan")
-        orb = orbit_shape(cx[:2], cy[:2], whirl_hint=whirl_index if np.isfinite(whirl_index) else 1.0)
+        orb = orbits[i]
         f[f"{p}orbit12_um_pp"] = orb.pp_um
         f[f"{p}orbit12_pp_per_c"] = orb.pp_um / c
         f[f"{p}orbit12_area_um2"] = orb.area_um2
@@ -245,29 +289,23 @@ def extract_features(recording: Recording) -> FeatureResult:
         f[f"{p}orbit12_loop"] = float(orb.has_loop)
         f[f"{p}orbit12_concavity"] = orb.concavity
         # sub-synchronous content of the orbit (x and y together)
-        pb = psd[ix] + psd[iy]
-        cum = np.concatenate([[0.0], np.cumsum(pb)])
+        pb, cum = pb_all[i], cum_all[i]
         total_ms = float(ms[ix] + ms[iy])
-        bands = {"subsync": cfg.SUBSYNC_BAND, "whirl_band": cfg.WHIRL_BAND}
-        for key, centre in cfg.CALLOUT_ORDERS.items():
-            hw = max(cfg.CALLOUT_HALF_WIDTH_ORDERS, cfg.CALLOUT_MIN_HALF_WIDTH_BINS * bin_orders)
-            bands[key] = (centre - hw, centre + hw)
         for key, (lo, hi) in bands.items():
-            bms = band_power(cum, orders_axis, lo, hi)
+            bms = band_power(cum, orders_axis[:top], lo, hi)
             rms = float(np.sqrt(bms))
             f[f"{p}{key}_rms_um"] = rms
             f[f"{p}{key}_rms_per_c"] = rms / c
             f[f"{p}{key}_frac"] = _ratio(bms, total_ms)
-        sel = np.arange(*np.searchsorted(orders_axis, cfg.SUBSYNC_BAND, side="left"))
         peak_order = float("nan")
-        if sel.size >= 3:
-            k = int(sel[np.argmax(pb[sel])])
-            distinct = pb[k] > cfg.SUBSYNC_PEAK_MIN_RATIO * float(np.median(pb[sel]))
+        if sub_hi - sub_lo >= 3:
+            k = int(sub_lo + np.argmax(pb[sub_lo:sub_hi]))
+            distinct = pb[k] > cfg.SUBSYNC_PEAK_MIN_RATIO * float(np.median(pb[sub_lo:sub_hi]))
             if distinct and pb[k] > cfg.SUBSYNC_PEAK_MIN_FRAC * total_ms and 0 < k < pb.size - 1:
                 lp = np.log(np.maximum(pb[k - 1:k + 2], np.finfo(float).tiny))
                 den = lp[0] - 2 * lp[1] + lp[2]
                 delta = 0.5 * (lp[0] - lp[2]) / den if den < 0 else 0.0
-                peak_order = float(orders_axis[k] + delta * bin_orders)
+                peak_order = float(orders_axis[k] + delta * fft_bin_orders)
         f[f"{p}subsync_peak_order"] = peak_order
         f[f"{p}nonsync_frac"] = _ratio(float(res_ms[ix] + res_ms[iy]), total_ms)
         pts = pts_all[:, [ix, iy]]
@@ -277,13 +315,14 @@ def extract_features(recording: Recording) -> FeatureResult:
         f[f"{p}poincare_disp"] = _ratio(prms, float(np.sqrt(total_ms)))
         out.update(f)
 
+        cx, cy = cx_all[i], cy_all[i]
         chans = [ch for ch in rec.channels if ch.bearing == b]
         angles = np.deg2rad([ch.angle_deg for ch in chans])
         probe = np.vstack([np.cos(a) * cx + np.sin(a) * cy for a in angles])
         details[b] = BearingDetail(
             bearing=b, probe_angles_deg=(chans[0].angle_deg, chans[1].angle_deg), clearance_um=c,
             orders=tuple(range(1, k_max + 1)), x_coeffs_um=cx.copy(), y_coeffs_um=cy.copy(),
-            probe_coeffs_um=probe, forward_um=fw, reverse_um=rv,
+            probe_coeffs_um=probe, forward_um=fw_all[i].copy(), reverse_um=rv_all[i].copy(),
             mean_um=(float(mean[ix]), float(mean[iy])), noise_rms_um=(float(noise[ix]), float(noise[iy])),
             poincare_um=pts, orbit12=orb, features=f)
 

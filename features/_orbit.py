@@ -8,7 +8,7 @@ import numpy as np
 
 from . import _config as cfg
 
-__all__ = ["OrbitShape", "orbit_shape"]
+__all__ = ["OrbitShape", "orbit_shape", "orbit_shapes"]
 
 
 @dataclass(frozen=True)
@@ -50,60 +50,77 @@ class OrbitShape:
 
 
 @lru_cache(maxsize=8)
-def _grid_basis(m: int, k_max: int) -> np.ndarray:
-    e = np.exp(1j * np.outer(2 * np.pi * np.arange(m) / m, np.arange(1, k_max + 1)))
+def _grid_basis(m: int, k_max: int) -> tuple[np.ndarray, np.ndarray]:
+    """e^{jkθ} and jk·e^{jkθ} on the uniform grid, shape (m, k_max) (cached, read-only)."""
+    k = np.arange(1, k_max + 1)
+    e = np.exp(1j * np.outer(2 * np.pi * np.arange(m) / m, k))
+    de = e * (1j * k)
     e.flags.writeable = False
-    return e
+    de.flags.writeable = False
+    return e, de
 
 
-def _eval(cx: np.ndarray, cy: np.ndarray, theta: np.ndarray | None) -> tuple[np.ndarray, ...]:
-    k = np.arange(1, cx.size + 1)
-    e = _grid_basis(cfg.ORBIT_GRID, cx.size) if theta is None else np.exp(1j * np.outer(theta, k))
-    x = (e @ cx).real
-    y = (e @ cy).real
-    dx = (e @ (1j * k * cx)).real
-    dy = (e @ (1j * k * cy)).real
-    return x, y, dx, dy
-
-
-def orbit_shape(cx: np.ndarray, cy: np.ndarray, whirl_hint: float = 1.0) -> OrbitShape:
-    """Shape of the orbit ``x = Re Σ cx_k e^{jkθ}``, ``y = Re Σ cy_k e^{jkθ}``.
+def orbit_shapes(cx: np.ndarray, cy: np.ndarray, whirl_hint: np.ndarray | None = None) -> list[OrbitShape]:
+    """Shapes of several orbits ``x = Re Σ cx[b,k] e^{jkθ}``, ``y = Re Σ cy[b,k] e^{jkθ}`` at once.
 
     Parameters
     ----------
-    cx, cy : ndarray, complex, shape (K,)
+    cx, cy : ndarray, complex, shape (n_orbits, K)
         Order coefficients (zero-to-peak) of x and y for orders 1..K (the constant is irrelevant).
-    whirl_hint : float
+    whirl_hint : ndarray, shape (n_orbits,), optional
         Direction used for ``concavity`` when the turning number is 0 (figure-8): the sign of
-        the 1X whirl.
+        the 1X whirl (default +1).
     """
+    cx = np.atleast_2d(cx)
+    cy = np.atleast_2d(cy)
+    nb, k_max = cx.shape
     m = cfg.ORBIT_GRID
-    theta = 2 * np.pi * np.arange(m) / m
-    x, y, dx, dy = _eval(cx, cy, None)
+    e, de = _grid_basis(m, k_max)
+    x = (cx @ e.T).real                  # (nb, m)
+    y = (cy @ e.T).real
+    dx = (cx @ de.T).real
+    dy = (cy @ de.T).real
     # signed area: trapezoid rule on a periodic trigonometric polynomial is exact
-    area = float(np.pi / m * np.sum(x * dy - y * dx))
-    # second moments about the centre (exact on the uniform grid)
-    xc, yc = x - x.mean(), y - y.mean()
-    cov = np.array([[np.mean(xc * xc), np.mean(xc * yc)], [np.mean(xc * yc), np.mean(yc * yc)]])
-    lam = np.linalg.eigvalsh(cov)
-    ellipticity = float(np.sqrt(max(lam[0], 0.0) / lam[1])) if lam[1] > 0 else float("nan")
+    area = np.pi / m * np.sum(x * dy - y * dx, axis=1)
+    # second moments about the centre (exact on the uniform grid); 2×2 eigenvalues in closed form
+    xc = x - x.mean(axis=1, keepdims=True)
+    yc = y - y.mean(axis=1, keepdims=True)
+    sxx, syy, sxy = np.mean(xc * xc, axis=1), np.mean(yc * yc, axis=1), np.mean(xc * yc, axis=1)
+    half_tr = 0.5 * (sxx + syy)
+    disc = np.sqrt(np.maximum(0.25 * (sxx - syy) ** 2 + sxy ** 2, 0.0))
+    lam_max, lam_min = half_tr + disc, np.maximum(half_tr - disc, 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ellipticity = np.where(lam_max > 0, np.sqrt(lam_min / lam_max), np.nan)
     # tangent turning
     psi = np.arctan2(dy, dx)
-    dpsi = np.diff(np.append(psi, psi[0]))
+    dpsi = np.diff(psi, axis=1, append=psi[:, :1])
     dpsi = (dpsi + np.pi) % (2 * np.pi) - np.pi
-    total = float(np.sum(dpsi))
-    turning = int(np.round(total / (2 * np.pi)))
-    s = np.sign(turning) if turning != 0 else (np.sign(whirl_hint) or 1.0)
-    absturn = float(np.sum(np.abs(dpsi)))
-    concavity = float(np.sum(np.maximum(0.0, -s * dpsi)) / absturn) if absturn > 0 else float("nan")
+    turning = np.round(dpsi.sum(axis=1) / (2 * np.pi)).astype(int)
+    hint = np.ones(nb) if whirl_hint is None else np.where(np.sign(whirl_hint) == 0, 1.0, np.sign(whirl_hint))
+    s = np.where(turning != 0, np.sign(turning), hint)
+    absturn = np.abs(dpsi).sum(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        concavity = np.where(absturn > 0, np.maximum(0.0, -s[:, None] * dpsi).sum(axis=1) / absturn, np.nan)
     # diameter: coarse pairwise search on every third grid point, then a fine local search
-    z = (x + 1j * y)[::3]
-    d2 = np.abs(z[:, None] - z[None, :])
-    i, j = np.unravel_index(int(np.argmax(d2)), d2.shape)
+    z = (x + 1j * y)[:, ::3]
+    d = np.abs(z[:, :, None] - z[:, None, :])                 # (nb, m/3, m/3)
+    flat = d.reshape(nb, -1).argmax(axis=1)
+    i, j = np.divmod(flat, z.shape[1])
     step = 3 * 2 * np.pi / m
     fine = np.linspace(-step, step, 65)
-    xi, yi, _, _ = _eval(cx, cy, theta[3 * i] + fine)
-    xj, yj, _, _ = _eval(cx, cy, theta[3 * j] + fine)
-    zi, zj = xi + 1j * yi, xj + 1j * yj
-    pp = float(max(np.max(np.abs(zi[:, None] - zj[None, :])), d2[i, j]))
-    return OrbitShape(pp, area, ellipticity, turning, concavity, np.column_stack([x, y]))
+    ks = np.arange(1, k_max + 1)
+    ti = (2 * np.pi * 3 * i / m)[:, None] + fine[None, :]       # (nb, 65)
+    tj = (2 * np.pi * 3 * j / m)[:, None] + fine[None, :]
+    ei = np.exp(1j * ti[:, :, None] * ks)                       # (nb, 65, K)
+    ej = np.exp(1j * tj[:, :, None] * ks)
+    zi = np.einsum("bfk,bk->bf", ei, cx).real + 1j * np.einsum("bfk,bk->bf", ei, cy).real
+    zj = np.einsum("bfk,bk->bf", ej, cx).real + 1j * np.einsum("bfk,bk->bf", ej, cy).real
+    pp = np.maximum(np.abs(zi[:, :, None] - zj[:, None, :]).reshape(nb, -1).max(axis=1),
+                    d.reshape(nb, -1).max(axis=1))
+    return [OrbitShape(float(pp[b]), float(area[b]), float(ellipticity[b]), int(turning[b]),
+                       float(concavity[b]), np.column_stack([x[b], y[b]])) for b in range(nb)]
+
+
+def orbit_shape(cx: np.ndarray, cy: np.ndarray, whirl_hint: float = 1.0) -> OrbitShape:
+    """Shape of one orbit (see :func:`orbit_shapes`); ``cx``, ``cy`` of shape (K,)."""
+    return orbit_shapes(np.asarray(cx)[None, :], np.asarray(cy)[None, :], np.array([whirl_hint]))[0]

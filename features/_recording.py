@@ -196,6 +196,7 @@ class Recording:
             raise ValueError(f"bearing {bearing} is not in this recording (bearings: {list(self.bearings)})")
         th = np.deg2rad([pair[0].angle_deg, pair[1].angle_deg])
         m = np.array([[np.cos(th[0]), np.sin(th[0])], [np.cos(th[1]), np.sin(th[1])]])
-        inv = np.linalg.inv(m)
-        p1, p2 = pair[0].data_um, pair[1].data_um
-        return inv[0, 0] * p1 + inv[0, 1] * p2, inv[1, 0] * p1 + inv[1, 1] * p2
+        # fold the unit factors into the inverse projection: one pass over the samples
+        inv = np.linalg.inv(m) * np.array([UNITS_TO_UM[pair[0].units], UNITS_TO_UM[pair[1].units]])[None, :]
+        xy = inv @ np.vstack([pair[0].data, pair[1].data])
+        return xy[0], xy[1]

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _config as cfg
-from ._spectrum import hann
+from ._spectrum import fast_length, hann
 
 __all__ = ["ShaftAngle", "shaft_angle", "estimate_speed_hz", "refine_line_hz"]
 
@@ -106,10 +106,11 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
     two best candidates have the same number of lines and amplitudes within 20 %.
     """
     n = data.shape[1]
+    n_fft = fast_length(n)
     x = data - data.mean(axis=1)[:, None]
-    spec = np.fft.rfft(x * hann(n), axis=-1)
+    spec = np.fft.rfft(x * hann(n), n=n_fft, axis=-1)
     power = np.sum(spec.real ** 2 + spec.imag ** 2, axis=0)
-    df = fs / n
+    df = fs / n_fft
     f_lo = max(cfg.SPEED_SEARCH_RPM[0] / 60.0, 3 * df)
     f_hi = min(cfg.SPEED_SEARCH_RPM[1] / 60.0, fs / cfg.MIN_SAMPLES_PER_REV)
     k_lo, k_hi = int(np.ceil(f_lo / df)), min(int(np.floor(f_hi / df)), power.size - 2)

@@ -55,7 +55,9 @@ def test_half_and_third_x_callouts(order, key, other):
     fr = extract_features(make_recording(extra=_whirl(order, 5.0), speed_rpm=RPM))
     assert fr[f"b2_{key}_rms_um"] == pytest.approx(5.0, rel=0.01)
     assert fr[f"b2_{other}_rms_um"] < 0.05
-    assert fr["b2_whirl_band_rms_um"] < (0.5 if order == 0.5 else 0.05)
+    # the whirl band ends at 0.49X, inside the Hann main lobe (±2/n_revs ≈ ±0.019X) of a 1/2X
+    # line: it may see a tail of it (here < 25 % of the line's energy), never of a 1/3X line
+    assert fr["b2_whirl_band_rms_um"] < (2.5 if order == 0.5 else 0.05)
     assert fr["b2_subsync_peak_order"] == pytest.approx(order, abs=0.003)
 
 
