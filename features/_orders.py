@@ -25,17 +25,21 @@ __all__ = ["max_sync_order", "fit_orders", "forward_reverse"]
 
 
 _local = threading.local()
+#: samples per block of the order fit: bounds the scratch memory (basis + trig ≈ 10 MB for
+#: K = 10) whatever the record length; records up to this long are fitted in one pass
+BLOCK_SAMPLES = 32_768
 
 
 def _workspace(name: str, shape: tuple[int, ...], dtype: type) -> np.ndarray:
-    """A scratch array owned by the calling thread, reused while the shape stays the same."""
+    """A scratch array owned by the calling thread (a view of a buffer reused between calls)."""
     store = getattr(_local, "arrays", None)
     if store is None:
         store = _local.arrays = {}
-    arr = store.get(name)
-    if arr is None or arr.shape != shape or arr.dtype != dtype:
-        arr = store[name] = np.empty(shape, dtype=dtype)
-    return arr
+    size = int(np.prod(shape))
+    buf = store.get(name)
+    if buf is None or buf.dtype != dtype or buf.size < size:
+        buf = store[name] = np.empty(size, dtype=dtype)
+    return buf[:size].reshape(shape)
 
 
 def max_sync_order(min_samples_per_rev: float) -> int:
@@ -83,6 +87,27 @@ def _uniform_gram(n: int, step_rad: float, k_max: int, hann_taper: bool = True) 
     return g
 
 
+def _trig_rows(theta_rad: np.ndarray, i0: int, i1: int, k_max: int,
+               uniform_step_rad: float | None) -> np.ndarray:
+    """Rows cos kθ, sin kθ (k = 1..K) for samples i0..i1, shape (2K, i1 − i0), in scratch memory."""
+    nb = i1 - i0
+    if uniform_step_rad is None:
+        e1 = np.exp(1j * theta_rad[i0:i1])
+    else:  # e^{jθ} in sub-blocks of 128: 2·√n complex exponentials instead of n
+        sub = 128
+        ns = -(-nb // sub)
+        e1 = (np.exp(1j * uniform_step_rad * (i0 + sub * np.arange(ns)))[:, None]
+              * np.exp(1j * uniform_step_rad * np.arange(sub))[None, :]).ravel()[:nb]
+    basis = _workspace("basis", (k_max, nb), np.complex128)   # row k-1: e^{jkθ}
+    basis[0] = e1
+    for k in range(1, k_max):
+        np.multiply(basis[k - 1], e1, out=basis[k])
+    trig = _workspace("trig", (2 * k_max, nb), np.float64)
+    trig[0::2] = basis.real
+    trig[1::2] = basis.imag
+    return trig
+
+
 def fit_orders(theta_rad: np.ndarray, data: np.ndarray, max_order: int,
                uniform_step_rad: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Hann-weighted least-squares fit of orders 1..``max_order`` plus a constant.
@@ -115,38 +140,33 @@ def fit_orders(theta_rad: np.ndarray, data: np.ndarray, max_order: int,
     """
     n = theta_rad.size
     k_max = int(max_order)
+    m = data.shape[0]
     w = hann(n)
-    if uniform_step_rad is None:
-        e1 = np.exp(1j * theta_rad)
-    else:  # e^{jθ} in blocks: 2·√n complex exponentials instead of n
-        blk = 128
-        nb = -(-n // blk)
-        e1 = (np.exp(1j * uniform_step_rad * blk * np.arange(nb))[:, None]
-              * np.exp(1j * uniform_step_rad * np.arange(blk))[None, :]).ravel()[:n]
-    # the two largest temporaries (5 MB for 16 k samples, K = 10) come from a per-thread
-    # workspace: allocating them afresh costs more in page faults than the arithmetic
-    basis = _workspace("basis", (k_max, n), np.complex128)   # row k-1: e^{jkθ} (contiguous rows)
-    basis[0] = e1
-    for k in range(1, k_max):
-        np.multiply(basis[k - 1], e1, out=basis[k])
-    trig = _workspace("trig", (2 * k_max, n), np.float64)  # rows: cos θ, sin θ, cos 2θ, sin 2θ, …
-    trig[0::2] = basis.real
-    trig[1::2] = basis.imag
-    if uniform_step_rad is None:
-        wtrig = trig * w
-        gram = np.empty((2 * k_max + 1, 2 * k_max + 1))
-        gram[0, 0] = w.sum()
-        gram[0, 1:] = gram[1:, 0] = wtrig.sum(axis=1)
-        gram[1:, 1:] = wtrig @ trig.T
-    else:
-        gram = _uniform_gram(n, float(uniform_step_rad), k_max)
-    dw = np.multiply(data, w, out=_workspace("weighted", data.shape, np.float64))
-    rhs = np.empty((2 * k_max + 1, data.shape[0]))
-    rhs[0] = dw.sum(axis=1)
-    rhs[1:] = trig @ dw.T
+    blocks = [(i0, min(n, i0 + BLOCK_SAMPLES)) for i0 in range(0, n, BLOCK_SAMPLES)]
+    general = uniform_step_rad is None
+    gram = np.zeros((2 * k_max + 1, 2 * k_max + 1)) if general else \
+        _uniform_gram(n, float(uniform_step_rad), k_max)
+    rhs = np.zeros((2 * k_max + 1, m))
+    for i0, i1 in blocks:
+        trig = _trig_rows(theta_rad, i0, i1, k_max, uniform_step_rad)
+        wb = w[i0:i1]
+        if general:
+            wtrig = trig * wb
+            gram[0, 0] += wb.sum()
+            col = wtrig.sum(axis=1)
+            gram[0, 1:] += col
+            gram[1:, 0] += col
+            gram[1:, 1:] += wtrig @ trig.T
+        dw = np.multiply(data[:, i0:i1], wb, out=_workspace("weighted", (m, i1 - i0), np.float64))
+        rhs[0] += dw.sum(axis=1)
+        rhs[1:] += trig @ dw.T
     sol = np.linalg.solve(gram, rhs)       # (2K+1, m)
-    residual = sol[1:].T @ trig
-    np.subtract(data, residual, out=residual)
+    residual = np.empty_like(data)
+    for i0, i1 in blocks:
+        # one block: the rows are still in the workspace; several: rebuild them
+        trig = _trig_rows(theta_rad, i0, i1, k_max, uniform_step_rad) if len(blocks) > 1 else trig
+        np.matmul(sol[1:].T, trig, out=residual[:, i0:i1])
+        np.subtract(data[:, i0:i1], residual[:, i0:i1], out=residual[:, i0:i1])
     residual -= sol[0][:, None]
     coeffs = (sol[1::2] - 1j * sol[2::2]).T
     return coeffs, sol[0].copy(), residual

@@ -192,3 +192,27 @@ def test_feature_vector_is_fixed_and_finite_for_full_recording():
     nan_names = [k for k, v in d.items() if not np.isfinite(v)]
     # only the sub-synchronous peak order is undefined for a purely synchronous signal
     assert all(n.endswith("subsync_peak_order") for n in nan_names), nan_names
+
+
+@pytest.mark.parametrize("uniform", [True, False])
+def test_blockwise_fit_equals_single_pass(monkeypatch, uniform):
+    """Long records are fitted in blocks (bounded scratch memory); the answer must not change."""
+    import features._orders as orders
+
+    rng = np.random.default_rng(8)
+    n, step = 10_000, 2 * np.pi / 61.7
+    th = step * np.arange(n)
+    data = rng.normal(size=(4, n)) + 3 * np.cos(2 * th - 0.5) + np.sin(th)
+    kw = dict(uniform_step_rad=step) if uniform else {}
+    one = orders.fit_orders(th, data, 8, **kw)
+    monkeypatch.setattr(orders, "BLOCK_SAMPLES", 1_237)
+    many = orders.fit_orders(th, data, 8, **kw)
+    for a, b in zip(one, many):
+        np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-10)
+
+
+def test_long_record_exact():
+    """A 262 144-sample record (the service's limit) goes through the blockwise path exactly."""
+    fr = extract_features(make_recording(n=262_144, fs=16384.0, components={2: DEFAULT_COMPONENTS[2]},
+                                         speed_rpm=1953.7))
+    _check_components(fr, {2: DEFAULT_COMPONENTS[2]})
