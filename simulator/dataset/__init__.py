@@ -14,25 +14,19 @@ summarize(path), merge(inputs, out), repair_file(path)
     What ``rotordiag dataset info | merge | repair`` do.
 
 The file layout is documented in ``docs/dataset-format.md``; the user guide is ``docs/datasets.md``.
-Heavy modules are imported lazily, so ``import simulator.dataset`` stays cheap.
+h5py, scipy and Dask are imported inside the functions that need them.
 """
 from __future__ import annotations
 
-from typing import Any
+# explicit imports (not lazy): the function names ``generate`` and ``merge`` are also
+# submodule names, and an eager ``from .x import x`` keeps the package attribute the function
+from .design import build_design
+from .generate import GenerateSummary, generate
+from .info import summarize
+from .merge import merge
+from .read import DatasetReader
+from .spec import SpecError, load_spec, parse_spec
+from .store import StoreError, open_dataset, repair_file
 
 __all__ = ["load_spec", "parse_spec", "SpecError", "build_design", "generate", "GenerateSummary",
            "DatasetReader", "summarize", "merge", "repair_file", "open_dataset", "StoreError"]
-
-_WHERE = {
-    "load_spec": "spec", "parse_spec": "spec", "SpecError": "spec", "build_design": "design",
-    "generate": "generate", "GenerateSummary": "generate", "DatasetReader": "read", "summarize": "info",
-    "merge": "merge", "repair_file": "store", "open_dataset": "store", "StoreError": "store",
-}
-
-
-def __getattr__(name: str) -> Any:
-    if name in _WHERE:
-        import importlib
-
-        return getattr(importlib.import_module(f"{__name__}.{_WHERE[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
