@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import logging
 import os
+import time
 import uuid
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
@@ -159,11 +160,17 @@ def run_tasks(
     prefix = f"{getattr(func, '__name__', 'task')}-{uuid.uuid4().hex[:12]}"
     in_flight: dict[Any, int] = {}
     try:
+        cached = {"at": -1e9, "value": 32}
+
         def limit() -> int:
             if max_in_flight is not None:
                 return max_in_flight
-            # re-read each time: workers may join an external cluster mid-run
-            return max(32, 4 * sum(client.nthreads().values()))
+            # re-read at most once a second: workers may join or leave an external cluster mid-run
+            now = time.monotonic()
+            if now - cached["at"] > 1.0:
+                cached["value"] = max(32, 4 * sum(client.nthreads().values()))
+                cached["at"] = now
+            return cached["value"]
 
         task_iter = enumerate(tasks)
         pending = as_completed(loop=client.loop)
