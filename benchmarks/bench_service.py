@@ -195,7 +195,7 @@ def main() -> None:
         else:
             raise SystemExit("server did not become healthy")
         print(f"recording: 4 bearings x 2 probes x {N_POINTS} samples; body sizes: "
-              f"json {len(bodies['json']) / 1e6:.2f} MB, binary (NPY float32) {len(bodies['binary'][2]) / 1e6:.2f} MB")
+              f"json {len(bodies['json'][2]) / 1e6:.2f} MB, binary (NPY float32) {len(bodies['binary'][2]) / 1e6:.2f} MB")
         print(f"in-process diagnosis (features + verdict, no HTTP): median {inproc_ms:.1f} ms")
         print(f"cores available: {len(os.sched_getaffinity(0))}; duration {args.duration:g} s per row\n")
         print(f"{'form':<7} {'conc':>4} {'requests':>8} {'errors':>6} {'req/s':>8} {'p50 ms':>8} {'p99 ms':>8} "
