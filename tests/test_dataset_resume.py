@@ -1,6 +1,7 @@
 """Crash safety: SIGKILL a real `rotordiag dataset generate`, read the file, resume, compare."""
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -89,6 +90,8 @@ def test_sigkill_during_dask_and_serial_runs_then_resume_gives_identical_values(
     assert "repaired after a crash" in done.stdout
     with h5py.File(out, "r") as f:  # plain h5py again
         assert f["done"][...].all()
+        log = [json.loads(x) for x in f["resume_log"][...] if x]
+    assert [e["n_done"] for e in log] == [n1, n2] and all(e["repaired"] for e in log)
     assert differing_datasets(ref, out) == []
 
 

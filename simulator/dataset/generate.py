@@ -75,7 +75,6 @@ def _file_attrs(resolved: ResolvedSpec, design: Design, meas: MeasurementSetting
         "master_seed": design.master_seed,
         "base_plant_json": json.dumps(resolved.base_plant.to_dict()),
         "severity_bands_json": json.dumps(bands.to_dict()),
-        "resume_log": "[]",
         "merged": False,
     }
 
@@ -193,7 +192,6 @@ def generate(
     n_before = int(writer.done.sum())
     todo = np.flatnonzero(~writer.done)
     counts: Counter[str] = Counter()
-    complete = False
     try:
         if on_progress is not None:
             on_progress(n_before, design.n_samples)
@@ -219,8 +217,7 @@ def generate(
                 t_first = time.perf_counter() - t_start
             if on_progress is not None:
                 on_progress(n_before + sum(counts.values()), design.n_samples)
-        complete = bool(writer.done.all())
     finally:
-        writer.close(complete=complete)
+        writer.close()
     return GenerateSummary(Path(out), design.n_samples, n_before, int(sum(counts.values())), dict(counts),
                            writer.resumed, writer.repaired, time.perf_counter() - t_start, t_first)

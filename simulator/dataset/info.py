@@ -42,7 +42,7 @@ def summarize(path: str | os.PathLike) -> dict[str, Any]:
             "spec_hash": str(f.attrs["spec_hash"]),
             "code_version": str(f.attrs["code_version"]),
             "created_utc": str(f.attrs["created_utc"]),
-            "completed_utc": str(f.attrs.get("completed_utc", "")),
+            "resume_log": [json.loads(x) for x in f["resume_log"][...] if x],
             "n_samples": int(done.size),
             "n_done": n_done,
             "n_channels": int(f.attrs["n_channels"]),

@@ -112,8 +112,7 @@ def merge(inputs: list[str | os.PathLike], out: str | os.PathLike) -> dict[str, 
         "spec_hash": hashlib.sha256("".join(sorted(s["spec_hash"] for s in sources)).encode()).hexdigest(),
         "sources_json": json.dumps(sources), "code_version": code_version(),
         "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "completed_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "n_samples": total, "resume_log": "[]", "design_method": "merged", "master_seed": -1,
+        "n_samples": total, "design_method": "merged", "master_seed": -1,
         "base_plant_json": "",
     })
     dattrs["source"] = {"description": "index into the sources_json attribute"}

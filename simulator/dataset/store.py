@@ -10,7 +10,9 @@ Crash safety
 * Samples are written by the parent process only, in HDF5's single-writer /
   multiple-reader (SWMR) mode (``libver="latest"``): SWMR orders metadata
   writes so the file on disk is consistent at every moment, which also makes it
-  survive a SIGKILL of the writer. Each sample's rows are written and flushed,
+  survive a SIGKILL of the writer. The file is opened straight into SWMR-write
+  mode (never plain read-write) and no attribute is changed after creation
+  (the resume history is a dataset, ``resume_log``). Each sample's rows are written and flushed,
   then its ``done`` flag is set and flushed: ``done[i] == 1`` implies that
   sample ``i`` is completely on disk.
 * After a crash HDF5 leaves the "open for writing" flag set in the superblock:
@@ -44,6 +46,8 @@ FORMAT_VERSION = 1
 MECHANISM_CODES: dict[str, int] = {"pin": 0, "rigid": 1}
 SIMULATED_MECHANISM_CODES: dict[str, int] = {"pin": 0, "rigid": 1, "aligned": 2}
 _MESSAGE_LEN = 256
+RESUME_LOG_SLOTS = 64
+RESUME_LOG_LEN = 512
 _KIND_LEN = 16
 
 
@@ -127,6 +131,8 @@ def create_file(path: Path, n_samples: int, L: dict[str, tuple[tuple[int, ...], 
             f.create_dataset(name, shape=shape, dtype=dtype, fillvalue=_fill(dtype), **kw)
             for k, v in dataset_attrs.get(name, {}).items():
                 f[name].attrs[k] = v
+        f.create_dataset("resume_log", shape=(RESUME_LOG_SLOTS,), dtype=f"S{RESUME_LOG_LEN}", fillvalue=b"")
+        f["resume_log"].attrs["description"] = "one JSON entry per resumed run (time_utc, code_version, n_done, repaired)"
         ch = np.array(channels, dtype=[("bearing", "i1"), ("angle_deg", "f8")])
         f.create_dataset("channels", data=ch)
         f["channels"].attrs["description"] = "probe channels: bearing 1-4, angle in degrees CCW from +x (90 = top)"
@@ -270,14 +276,11 @@ class DatasetWriter:
                 if crashed:
                     _repair(path, n_samples, L)
                     repaired = True
-            f = h5py.File(path, "r+", libver="latest")
+            f = _open_swmr_write(path)
             try:
                 if resumed:
-                    log = json.loads(f.attrs.get("resume_log", "[]"))
-                    log.append({"time_utc": _utcnow(), "code_version": code_version,
-                                "n_done": int(np.count_nonzero(f["done"][...])), "repaired": repaired})
-                    f.attrs["resume_log"] = json.dumps(log)
-                f.swmr_mode = True
+                    _append_resume_log(f, {"time_utc": _utcnow(), "code_version": code_version,
+                                           "n_done": int(np.count_nonzero(f["done"][...])), "repaired": repaired})
             except BaseException:
                 f.close()
                 raise
@@ -308,18 +311,13 @@ class DatasetWriter:
         fspace.select_hyperslab((int(index), *(0,) * len(tail)), (1, *tail))
         ds.id.write(h5s.create_simple(arr.shape), fspace, arr)
 
-    def close(self, *, complete: bool = False) -> None:
-        """Close the file (clears HDF5's writing flag); record completion time when complete."""
-        import h5py
-
+    def close(self) -> None:
+        """Close the file (clears HDF5's writing flag) and release the lock."""
         if self.f is None:
             return
         try:
             self.f.close()
             self.f = None
-            if complete:
-                with h5py.File(self.path, "r+", libver="latest") as f:
-                    f.attrs["completed_utc"] = _utcnow()
         finally:
             self._lock.release()
 
@@ -330,13 +328,32 @@ class DatasetWriter:
         self.close()
 
 
+def _open_swmr_write(path: Path) -> Any:
+    """Open straight into SWMR-write mode: the file is never open for plain (non-SWMR) writing."""
+    import h5py
+    from h5py import h5f, h5p
+
+    fapl = h5p.create(h5p.FILE_ACCESS)
+    fapl.set_libver_bounds(h5f.LIBVER_LATEST, h5f.LIBVER_LATEST)
+    fid = h5f.open(os.fsencode(path), h5f.ACC_RDWR | h5f.ACC_SWMR_WRITE, fapl=fapl)
+    return h5py.File(fid)
+
+
+def _append_resume_log(f: Any, entry: dict[str, Any]) -> None:
+    log = f["resume_log"]
+    used = [bool(x) for x in log[...]]
+    slot = used.index(False) if False in used else len(used) - 1  # full: the last slot keeps the latest
+    log[slot] = json.dumps(entry).encode()[:RESUME_LOG_LEN]
+    f.flush()
+
+
 def _dataset_names(f: Any) -> list[str]:
     names: list[str] = []
 
     def visit(name: str, obj: Any) -> None:
         import h5py
 
-        if isinstance(obj, h5py.Dataset) and name != "channels":
+        if isinstance(obj, h5py.Dataset) and name not in ("channels", "resume_log"):
             names.append(name)
 
     f.visititems(visit)
@@ -391,6 +408,7 @@ def _repair(path: Path, n_samples: int, L: dict) -> None:
             for i in idx:
                 filter_mask, chunk = sw.id.read_direct_chunk((int(i), *tail))
                 dw.id.write_direct_chunk((int(i), *tail), chunk, filter_mask)
+            dst["resume_log"][...] = src["resume_log"][...]
             for name in L:
                 if name == "waveforms":
                     continue
