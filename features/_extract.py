@@ -11,7 +11,7 @@ from . import _config as cfg
 from ._names import FEATURE_NAMES
 from ._orbit import OrbitShape, orbit_shapes
 from ._orders import fit_orders, forward_reverse, max_sync_order
-from ._poincare import classify, dispersion, poincare_points
+from ._poincare import classify, poincare_points
 from ._recording import Recording
 from ._spectrum import band_power, noise_rms, residual_psd
 from ._speed import refine_line_hz, shaft_angle
@@ -124,10 +124,6 @@ def _ratio(num: float, den: float) -> float:
     return num / den if den > 0 else float("nan")
 
 
-def _phase_lag_deg(c: complex) -> float:
-    return float(np.degrees(-np.angle(c)) % 360.0)
-
-
 def _wrap_deg(d: float) -> float:
     d = d % 360.0
     return d - 360.0 if d > 180.0 else d
@@ -195,13 +191,15 @@ def _extract(recording: Recording) -> FeatureResult:
     k_max = max_sync_order(sa.min_samples_per_rev)
     uniform = None if sa.source == "keyphasor" else 2 * np.pi * f1 / fs
     coeffs, mean, resid = fit_orders(sa.theta_rad, seg, k_max, uniform_step_rad=uniform)
-    ac = seg - mean[:, None]
 
     if sa.source == "given":
-        power = np.sum(np.abs(coeffs[:, :3]) ** 2, axis=0)
+        # check the given speed on the strongest order of the two strongest channels
+        mag2 = np.abs(coeffs[:, :3]) ** 2
+        power = mag2.sum(axis=0)
         h = int(np.argmax(power)) + 1
         if power[h - 1] > 0:
-            f_sig = refine_line_hz(ac, fs, h * f1, iterations=1) / h
+            top = np.argsort(-mag2[:, h - 1])[:2]
+            f_sig = refine_line_hz(seg[top] - mean[top, None], fs, h * f1, iterations=1) / h
             if abs(f_sig / f1 - 1.0) > cfg.SPEED_MISMATCH_WARN:
                 warnings.append(
                     f"speed_rpm {sa.speed_rpm:g} differs from the signal's {h}X line ({60 * f_sig / h * h:.2f} r/min, "
@@ -213,7 +211,8 @@ def _extract(recording: Recording) -> FeatureResult:
     bin_orders = fs / n_seg / f1                      # resolution (1/n_revs), not the padded bin spacing
     fft_bin_orders = float(orders_axis[1])
     noise = noise_rms(psd)
-    ms = np.einsum("ij,ij->i", ac, ac) / n_seg
+    # AC mean square about the fitted constant, without forming seg − mean
+    ms = np.einsum("ij,ij->i", seg, seg) / n_seg - 2 * mean * seg.mean(axis=1) + mean ** 2
     res_ms = np.einsum("ij,ij->i", resid, resid) / n_seg
     ptp = np.ptp(seg, axis=1)
     sync0 = mean + coeffs.real.sum(axis=1)
@@ -232,9 +231,8 @@ def _extract(recording: Recording) -> FeatureResult:
     cx_all, cy_all = coeffs[0::2], coeffs[1::2]                           # (n_bearings, K)
     fw_all, rv_all = forward_reverse(cx_all, cy_all)
     afw_all, arv_all = np.abs(fw_all[:, :3]).tolist(), np.abs(rv_all[:, :3]).tolist()
-    with np.errstate(divide="ignore", invalid="ignore"):
-        hints = np.nan_to_num((np.abs(fw_all[:, 0]) - np.abs(rv_all[:, 0]))
-                              / (np.abs(fw_all[:, 0]) + np.abs(rv_all[:, 0])), nan=1.0)
+    a1, r1 = np.abs(fw_all[:, 0]), np.abs(rv_all[:, 0])
+    hints = np.where(a1 + r1 > 0, np.sign(a1 - r1), 1.0)
     orbits = orbit_shapes(cx_all[:, :2], cy_all[:, :2], hints)
     hw = max(cfg.CALLOUT_HALF_WIDTH_ORDERS, cfg.CALLOUT_MIN_HALF_WIDTH_BINS * bin_orders)
     bands = {"subsync": cfg.SUBSYNC_BAND, "whirl_band": cfg.WHIRL_BAND}
@@ -245,6 +243,8 @@ def _extract(recording: Recording) -> FeatureResult:
     cum_all = np.concatenate([np.zeros((pb_all.shape[0], 1)), np.cumsum(pb_all, axis=1)], axis=1)
     sub_lo, sub_hi = np.searchsorted(orders_axis[:top], cfg.SUBSYNC_BAND, side="left")
     amp_list = ptp.tolist()
+    spread = pts_all - pts_all.mean(axis=0)
+    poincare_rms = np.sqrt(np.mean(spread[:, 0::2] ** 2 + spread[:, 1::2] ** 2, axis=0)).tolist()
 
     for i, b in enumerate(bearings):
         ix, iy = 2 * i, 2 * i + 1
@@ -300,7 +300,9 @@ def _extract(recording: Recording) -> FeatureResult:
         peak_order = float("nan")
         if sub_hi - sub_lo >= 3:
             k = int(sub_lo + np.argmax(pb[sub_lo:sub_hi]))
-            distinct = pb[k] > cfg.SUBSYNC_PEAK_MIN_RATIO * float(np.median(pb[sub_lo:sub_hi]))
+            band = pb[sub_lo:sub_hi]
+            med = float(np.partition(band, band.size // 2)[band.size // 2])
+            distinct = pb[k] > cfg.SUBSYNC_PEAK_MIN_RATIO * med
             if distinct and pb[k] > cfg.SUBSYNC_PEAK_MIN_FRAC * total_ms and 0 < k < pb.size - 1:
                 lp = np.log(np.maximum(pb[k - 1:k + 2], np.finfo(float).tiny))
                 den = lp[0] - 2 * lp[1] + lp[2]
@@ -308,8 +310,8 @@ def _extract(recording: Recording) -> FeatureResult:
                 peak_order = float(orders_axis[k] + delta * fft_bin_orders)
         f[f"{p}subsync_peak_order"] = peak_order
         f[f"{p}nonsync_frac"] = _ratio(float(res_ms[ix] + res_ms[iy]), total_ms)
-        pts = pts_all[:, [ix, iy]]
-        prms = dispersion(pts)
+        pts = pts_all[:, ix:iy + 1]
+        prms = poincare_rms[i]
         f[f"{p}poincare_rms_um"] = prms
         f[f"{p}poincare_rms_per_c"] = prms / c
         f[f"{p}poincare_disp"] = _ratio(prms, float(np.sqrt(total_ms)))
@@ -330,8 +332,9 @@ def _extract(recording: Recording) -> FeatureResult:
         for bi, bj in cfg.PHASE_PAIRS:
             if bi in details and bj in details:
                 for d in ("x", "y"):
-                    out[f"dphase_{k}x_b{bi}_b{bj}_{d}_deg"] = _wrap_deg(
-                        details[bi].phase_deg(d, k) - details[bj].phase_deg(d, k))
+                    ci = 2 * bearings.index(bi) + (d == "y")
+                    cj = 2 * bearings.index(bj) + (d == "y")
+                    out[f"dphase_{k}x_b{bi}_b{bj}_{d}_deg"] = _wrap_deg(phase[ci][k - 1] - phase[cj][k - 1])
 
     motion = None
     if sa.n_revs >= cfg.MIN_REVS_MOTION:

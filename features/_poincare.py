@@ -1,11 +1,11 @@
-"""Once-per-revolution (Poincaré) samples, their dispersion and the motion type."""
+"""Once-per-revolution (Poincaré) samples and the motion type."""
 from __future__ import annotations
 
 import numpy as np
 
 from . import _config as cfg
 
-__all__ = ["poincare_points", "dispersion", "classify"]
+__all__ = ["poincare_points", "period_tolerance", "classify"]
 
 
 def poincare_points(sync_at_zero: np.ndarray, residual: np.ndarray, start_sample: int, fs: float,
@@ -26,11 +26,6 @@ def poincare_points(sync_at_zero: np.ndarray, residual: np.ndarray, start_sample
     idx = i[None, :] + np.arange(-1, 3)[:, None]                                       # (4, n_revs)
     vals = np.einsum("jr,cjr->rc", w, residual[:, idx])
     return vals + sync_at_zero[None, :]
-
-
-def dispersion(points: np.ndarray) -> float:
-    """RMS distance of the points (n, d) from their centroid."""
-    return float(np.sqrt(np.mean(np.sum((points - points.mean(axis=0)) ** 2, axis=1))))
 
 
 def period_tolerance(point_noise_rms: np.ndarray, n_points: int) -> float:

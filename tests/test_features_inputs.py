@@ -201,3 +201,28 @@ def test_keyphasor_off_the_record_refused():
 def test_empty_channels_refused():
     with pytest.raises(ValueError, match="channels is empty"):
         Recording(5120.0, [])
+
+
+def test_dc_gap_offset_does_not_change_features():
+    """Probes read the gap: a 1 mm DC offset changes only the mean position in the details."""
+    ref = extract_features(make_recording(speed_rpm=RPM, noise_um=0.3, seed=4))
+    fr = extract_features(make_recording(speed_rpm=RPM, noise_um=0.3, seed=4, offset_um=(1000.0, -750.0)))
+    _assert_same_features(ref, fr, rtol=1e-7, atol=1e-7)
+    assert fr.bearings[2].mean_um == pytest.approx((1000.0, -750.0), abs=0.05)
+
+
+def test_keyphasor_poincare_points_period_2():
+    """With a keyphasor starting mid-record, once-per-rev points alternate for a 1/2X component."""
+    f1, t0 = RPM / 60, 0.0371
+
+    def half(t, b):
+        th = 2 * np.pi * f1 * (t - t0)
+        return 4 * np.cos(0.5 * th), 4 * np.sin(0.5 * th)
+
+    rec = make_recording(theta_fn=lambda t: 2 * np.pi * f1 * (t - t0), extra=half,
+                         keyphasor_times_s=keyphasor_times(RPM, 3.2, t0))
+    fr = extract_features(rec)
+    assert fr["motion_period"] == 2.0
+    pts = fr.bearings[3].poincare_um
+    np.testing.assert_allclose(pts[0] - pts[1], [8.0, 0.0], atol=1e-3)   # x alternates ±4 µm
+    assert fr["b3_poincare_rms_um"] == pytest.approx(4.0, rel=1e-3)
