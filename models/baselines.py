@@ -31,7 +31,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-DEFAULT_RATIO_PATTERNS: tuple[str, ...] = ("*2x_1x*",)
+DEFAULT_RATIO_PATTERNS: tuple[str, ...] = ("b?_[xy]_2x_1x_ratio",)
 DEFAULT_RULE_CUTS: tuple[float, ...] = (0.5, 1.0, 2.0)
 
 

@@ -9,7 +9,12 @@ Every section and key is optional; the defaults are the documented ones::
     names = ["aligned", "slight", "moderate", "severe"]
 
     [features]
-    exclude = []                # glob patterns of feature names the model must not use
+    # glob patterns of feature names the model must not use; default: absolute 1X–3X
+    # phases, which without a keyphasor are relative to the first sample (arbitrary)
+    exclude = ["b?_[xy]_[123]x_phase_deg"]
+    clearance_features = ["*_per_c", "*_per_c2"]   # features that need the clearance
+    clearance_dropout = 0.5     # share of training rows whose clearance features are
+                                # blanked, so the model also works without the clearance
 
     [classifier]                # SeverityClassifier parameters
     calibration = "temperature"
@@ -23,7 +28,7 @@ Every section and key is optional; the defaults are the documented ones::
     speed_bands_rpm = [1200, 1800, 2400, 3000]
 
     [baselines]
-    ratio_features = ["*2x_1x*"]
+    ratio_features = ["b?_[xy]_2x_1x_ratio"]   # 2X/1X of each bearing's x and y
     rule_cuts = [0.5, 1.0, 2.0]
 """
 from __future__ import annotations
@@ -38,6 +43,9 @@ from .bands import SeverityBands
 from .baselines import DEFAULT_RATIO_PATTERNS, DEFAULT_RULE_CUTS
 from .estimators import ConformalIntervalRegressor, KNNDistanceOOD, SeverityClassifier
 
+DEFAULT_EXCLUDE: tuple[str, ...] = ("b?_[xy]_[123]x_phase_deg",)
+DEFAULT_CLEARANCE_FEATURES: tuple[str, ...] = ("*_per_c", "*_per_c2")
+_FEATURE_KEYS = {"exclude", "clearance_features", "clearance_dropout"}
 _SECTIONS = {"seed", "bands", "features", "classifier", "regressor", "ood", "evaluation", "baselines"}
 
 
@@ -56,7 +64,9 @@ class TrainConfig:
 
     seed: int = 0
     bands: SeverityBands = field(default_factory=SeverityBands)
-    exclude_features: tuple[str, ...] = ()
+    exclude_features: tuple[str, ...] = DEFAULT_EXCLUDE
+    clearance_features: tuple[str, ...] = DEFAULT_CLEARANCE_FEATURES
+    clearance_dropout: float = 0.5
     classifier: dict = field(default_factory=dict)
     regressor: dict = field(default_factory=dict)
     ood: dict = field(default_factory=dict)
@@ -75,8 +85,13 @@ class TrainConfig:
         if not isinstance(seed, int) or seed < 0:
             raise ValueError(f"seed: must be a non-negative integer, got {seed!r}")
         feats = dict(d.get("features", {}))
-        if set(feats) - {"exclude"}:
-            raise ValueError(f"[features]: unknown key(s) {sorted(set(feats) - {'exclude'})}; allowed: ['exclude']")
+        if set(feats) - _FEATURE_KEYS:
+            raise ValueError(
+                f"[features]: unknown key(s) {sorted(set(feats) - _FEATURE_KEYS)}; allowed: {sorted(_FEATURE_KEYS)}"
+            )
+        dropout = feats.get("clearance_dropout", 0.5)
+        if not isinstance(dropout, (int, float)) or not (0.0 <= float(dropout) <= 1.0):
+            raise ValueError(f"[features] clearance_dropout: must lie in [0, 1], got {dropout!r}")
         ev = dict(d.get("evaluation", {}))
         if set(ev) - {"n_splits", "speed_bands_rpm"}:
             raise ValueError(
@@ -104,7 +119,9 @@ class TrainConfig:
         cfg = cls(
             seed=seed,
             bands=bands,
-            exclude_features=tuple(str(p) for p in feats.get("exclude", ())),
+            exclude_features=tuple(str(p) for p in feats.get("exclude", DEFAULT_EXCLUDE)),
+            clearance_features=tuple(str(p) for p in feats.get("clearance_features", DEFAULT_CLEARANCE_FEATURES)),
+            clearance_dropout=float(dropout),
             classifier=_params(SeverityClassifier, "classifier", d.get("classifier")),
             regressor=_params(ConformalIntervalRegressor, "regressor", d.get("regressor")),
             ood=_params(KNNDistanceOOD, "ood", d.get("ood")),
@@ -139,7 +156,11 @@ class TrainConfig:
         return {
             "seed": self.seed,
             "bands": self.bands.to_dict(),
-            "features": {"exclude": list(self.exclude_features)},
+            "features": {
+                "exclude": list(self.exclude_features),
+                "clearance_features": list(self.clearance_features),
+                "clearance_dropout": self.clearance_dropout,
+            },
             "classifier": dict(self.classifier),
             "regressor": dict(self.regressor),
             "ood": dict(self.ood),

@@ -46,6 +46,28 @@ from .bands import DEFAULT_EDGES, DEFAULT_NAMES, SeverityBands
 _CALIBRATION_METHODS = ("temperature", "sigmoid", "isotonic", "none")
 
 
+MIN_FINITE_PER_COLUMN = 10
+
+
+def _sparse_columns(X: np.ndarray) -> np.ndarray:
+    """Columns with fewer than ``MIN_FINITE_PER_COLUMN`` finite values (or all, if fewer rows).
+
+    The boosted trees cannot bin a column that is all NaN (scikit-learn 1.9 raises), which a
+    rarely defined feature can be inside one cross-validation fold; such columns are too
+    sparse to learn from anyway and are replaced by a constant.
+    """
+    need = min(MIN_FINITE_PER_COLUMN, X.shape[0])
+    return np.isfinite(X).sum(axis=0) < need
+
+
+def _blank(X: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    if not columns.any():
+        return X
+    X = np.array(X, dtype=float, copy=True)
+    X[:, columns] = 0.0
+    return X
+
+
 def _nan_tags(tags):
     tags.input_tags.allow_nan = True
     return tags
@@ -145,6 +167,8 @@ class SeverityClassifier(ClassifierMixin, BaseEstimator):
         self._validate_params()
         X, y = validate_data(self, X, y, ensure_all_finite="allow-nan")
         check_classification_targets(y)
+        self.sparse_columns_ = _sparse_columns(X)
+        X = _blank(X, self.sparse_columns_)
         self.classes_, counts = np.unique(y, return_counts=True)
         if len(self.classes_) < 2:
             raise ValueError(
@@ -178,7 +202,7 @@ class SeverityClassifier(ClassifierMixin, BaseEstimator):
         """Calibrated class probabilities, shape (n_samples, n_classes), columns in ``classes_`` order."""
         check_is_fitted(self, "model_")
         X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
-        return self.model_.predict_proba(X)
+        return self.model_.predict_proba(_blank(X, self.sparse_columns_))
 
     def predict(self, X) -> np.ndarray:
         """Most probable class of each row."""
@@ -283,6 +307,8 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
         self._validate_params()
         X, y = validate_data(self, X, y, ensure_all_finite="allow-nan", y_numeric=True)
         y = y.astype(float)
+        self.sparse_columns_ = _sparse_columns(X)
+        X = _blank(X, self.sparse_columns_)
         n = X.shape[0]
         if n < 2:
             raise ValueError(f"X: need at least 2 samples to fit an interval regressor, got n_samples = {n}")
@@ -319,12 +345,12 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
         """Point estimate, shape (n_samples,)."""
         check_is_fitted(self, "point_model_")
         X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
-        return self._clip(self.point_model_.predict(X))
+        return self._clip(self.point_model_.predict(_blank(X, self.sparse_columns_)))
 
     def predict_interval(self, X) -> np.ndarray:
         """Conformal interval, shape (n_samples, 2): columns lower, upper."""
         check_is_fitted(self, "point_model_")
-        X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
+        X = _blank(validate_data(self, X, reset=False, ensure_all_finite="allow-nan"), self.sparse_columns_)
         point = self._clip(self.point_model_.predict(X))
         q = self.conformity_quantile_
         lo = np.minimum(self.lower_model_.predict(X) - q, point)

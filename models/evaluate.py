@@ -44,6 +44,21 @@ class OutOfFold:
     delta_pred: dict      # method -> Δ estimate
     interval: np.ndarray  # model Δ interval (n, 2)
     ood_ratio: np.ndarray
+    # The model on the same held-out rows with the clearance features blanked
+    # (a user who does not know the bearing clearance).
+    proba_no_clearance: np.ndarray | None = None
+    delta_no_clearance: np.ndarray | None = None
+    interval_no_clearance: np.ndarray | None = None
+
+
+def blank_clearance(X: np.ndarray, columns: np.ndarray, share: float, seed: int) -> np.ndarray:
+    """Copy of X with the clearance ``columns`` set to NaN in a seeded ``share`` of the rows."""
+    X = np.array(X, dtype=float, copy=True)
+    if share <= 0 or not columns.any():
+        return X
+    rows = np.random.default_rng(seed).random(X.shape[0]) < share
+    X[np.ix_(rows, columns)] = np.nan
+    return X
 
 
 def cross_validate(table: FeatureTable, config: TrainConfig) -> OutOfFold:
@@ -69,12 +84,22 @@ def cross_validate(table: FeatureTable, config: TrainConfig) -> OutOfFold:
         delta_pred={m: np.full(n, np.nan) for m in METHODS}, interval=np.full((n, 2), np.nan),
         ood_ratio=np.full(n, np.nan),
     )
+    clear_cols = table.feature_mask(config.clearance_features)
+    if clear_cols.any():
+        out.proba_no_clearance = np.full((n, k), np.nan)
+        out.delta_no_clearance = np.full(n, np.nan)
+        out.interval_no_clearance = np.full((n, 2), np.nan)
     rule = RuleOfThumb(bands.names, config.rule_cuts)
     splitter = GroupKFold(n_splits=min(config.n_splits, n_groups), shuffle=True, random_state=config.seed)
     for f, (tr, te) in enumerate(splitter.split(table.X, labels, table.plant_id)):
         model = config.make_model(table.feature_names)
-        model.fit(table.X[tr], table.misalignment[tr], groups=table.plant_id[tr])
+        Xtr = blank_clearance(table.X[tr], clear_cols, config.clearance_dropout, config.seed + 1000 + f)
+        model.fit(Xtr, table.misalignment[tr], groups=table.plant_id[tr])
         out.fold[te] = f
+        if clear_cols.any():
+            Xnc = blank_clearance(table.X[te], clear_cols, 1.0, 0)
+            out.proba_no_clearance[te] = model.predict_proba(Xnc)
+            out.delta_no_clearance[te], out.interval_no_clearance[te] = model.predict_misalignment(Xnc)
         out.proba[te] = model.predict_proba(table.X[te])
         out.pred["model"][te] = model.classes_[np.argmax(out.proba[te], axis=1)]
         out.delta_pred["model"][te], out.interval[te] = model.predict_misalignment(table.X[te])
@@ -134,6 +159,15 @@ def build_report(table: FeatureTable, config: TrainConfig, oof: OutOfFold) -> di
             groups[kind][name] = {"n_rows": int(sel.sum()), "n_plants": int(len(np.unique(table.plant_id[sel])))}
             if sel.any():
                 groups[kind][name].update(_method_metrics(oof, table, config, sel))
+    if oof.proba_no_clearance is not None:
+        names = config.bands.names
+        pred_nc = np.asarray(names, dtype=object)[np.argmax(oof.proba_no_clearance, axis=1)]
+        groups["clearance_unknown"] = {}
+        for name, sel in [("all", np.ones(len(table), bool))] + list(_subsets(table, config)["mechanism"].items()):
+            r = classification_metrics(oof.labels_true[sel], pred_nc[sel], names, oof.proba_no_clearance[sel])
+            r.update(regression_metrics(table.misalignment[sel], oof.delta_no_clearance[sel],
+                                        interval=oof.interval_no_clearance[sel]))
+            groups["clearance_unknown"][name] = {"model": r}
     targets = {}
     for mech, r in groups["mechanism"].items():
         if "model" not in r:
@@ -158,6 +192,9 @@ def build_report(table: FeatureTable, config: TrainConfig, oof: OutOfFold) -> di
             "ece": "top-label, 10 equal-width bins; hard-label baselines have confidence 1",
             "baseline_spearman": "rank correlation of the 2X/1X ratio itself with Δ",
             "baseline_delta": "band representative of the predicted band",
+            "clearance": "main results with the bearing clearance known (the *_per_c features); "
+                         "'clearance_unknown' repeats the model's figures with those features blanked; "
+                         f"training rows had them blanked with probability {config.clearance_dropout}",
         },
         "bands": config.bands.to_dict(),
         "class_counts": {n: int(np.sum(oof.labels_true == n)) for n in config.bands.names},

@@ -61,6 +61,10 @@ class FeatureTable:
             self.mechanism[rows], self.speed_rpm[rows], self.sample_index[rows], dict(self.meta),
         )
 
+    def feature_mask(self, patterns: Sequence[str]) -> np.ndarray:
+        """Boolean mask of the columns whose names match any glob pattern."""
+        return np.array([any(fnmatch.fnmatchcase(n, p) for p in patterns) for n in self.feature_names], bool)
+
     def without_features(self, patterns: Sequence[str]) -> "FeatureTable":
         """Drop the columns whose names match any glob pattern."""
         if not patterns:

@@ -9,7 +9,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from .config import TrainConfig
-from .evaluate import METHODS, evaluate, plot_report
+from .evaluate import METHODS, blank_clearance, evaluate, plot_report
 from .registry import TRUSTED_TYPES, Registry, dumps_json
 from .table import FeatureTable
 
@@ -35,15 +35,17 @@ def metrics_summary(report: dict) -> dict:
         "per_mechanism": {k: pick(v) for k, v in res["mechanism"].items()},
         "per_speed_band_rpm": {k: pick(v) for k, v in res["speed_band_rpm"].items()},
         "all_mixed_average": pick(res["all"]["all"]),
+        "clearance_unknown": {k: pick(v) for k, v in res.get("clearance_unknown", {}).items()},
         "targets": report["targets"],
     }
 
 
 def fit_final(table: FeatureTable, config: TrainConfig):
-    """The deployable model: fitted on every row of ``table``."""
-    return config.make_model(table.feature_names).fit(
-        table.X, table.misalignment, groups=table.plant_id
-    )
+    """The deployable model: fitted on every row of ``table`` (clearance features blanked
+    in ``config.clearance_dropout`` of the rows, as in the evaluation)."""
+    X = blank_clearance(table.X, table.feature_mask(config.clearance_features),
+                        config.clearance_dropout, config.seed + 999)
+    return config.make_model(table.feature_names).fit(X, table.misalignment, groups=table.plant_id)
 
 
 def train_and_register(

@@ -114,7 +114,7 @@ def test_evaluation_cannot_memorise_plants():
     fingerprint = rng.normal(size=n_plants)[plant] * 10
     ratio = rng.uniform(0.2, 0.8, plant.size)         # uninformative
     X = np.column_stack([fingerprint, ratio, rng.normal(size=plant.size)])
-    tab = FeatureTable(X, ("fingerprint", "b2_2x_1x", "noise"), delta, plant,
+    tab = FeatureTable(X, ("fingerprint", "b2_x_2x_1x_ratio", "noise"), delta, plant,
                        np.where(delta > 0, "rigid", "aligned"), np.full(plant.size, 1500.0))
     report, _ = evaluate(tab, TrainConfig.from_dict(FAST))
     assert report["results"]["all"]["all"]["model"]["macro_f1"] < 0.45   # ~chance (0.25)

@@ -1,0 +1,222 @@
+"""Dataset HDF5 (docs/dataset-format.md) → labelled feature table, with a feature cache.
+
+Each finished sample with status ``ok`` becomes one row: its eight probe waveforms go
+through :func:`features.extract_features` — the same function the service uses — with
+the sample's nominal speed and its plant's bearing clearance. Samples that are not
+finished or whose status is not ``ok`` are skipped and counted by reason.
+
+Extraction is the slow part, so the feature matrix is cached next to the dataset as
+``<file>.features-<key>.npz`` (plain arrays, loaded with ``allow_pickle=False``). The key
+hashes the dataset content (waveforms, labels, plant ids, spec), the feature schema and
+the source code of the ``features`` package, so a changed dataset or feature extractor
+never serves stale features.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from .table import FeatureTable
+
+_CACHE_VERSION = 1
+
+
+def _open(path: Path):
+    import h5py
+
+    try:
+        return h5py.File(path, "r")
+    except OSError:
+        # A run killed mid-write leaves HDF5's "being written" flag: SWMR reading works.
+        return h5py.File(path, "r", swmr=True)
+
+
+def _codes(ds) -> dict[int, str]:
+    raw = ds.attrs.get("codes_json")
+    if raw is None:
+        return {}
+    d = json.loads(raw)
+    return {int(v): str(k) for k, v in d.items()}
+
+
+def _str_array(a) -> np.ndarray:
+    return np.array([v.decode() if isinstance(v, bytes) else str(v) for v in a], dtype=object)
+
+
+def features_code_hash() -> str:
+    """SHA-256 of the ``features`` package source (what the cached values depend on)."""
+    import features
+
+    h = hashlib.sha256()
+    root = Path(features.__file__).parent
+    for p in sorted(root.glob("*.py")):
+        h.update(p.name.encode())
+        h.update(p.read_bytes())
+    h.update("|".join(features.FEATURE_NAMES).encode())
+    return h.hexdigest()
+
+
+def dataset_hash(path: str | Path) -> str:
+    """SHA-256 of a dataset's content: spec, finished flags, labels, plant ids, waveforms.
+
+    Time attributes and wall times are left out, so two runs of one spec hash alike.
+    """
+    path = Path(path)
+    h = hashlib.sha256()
+    with _open(path) as f:
+        for key in ("spec_hash", "sources_json", "sample_rate_hz", "n_points"):
+            if key in f.attrs:
+                h.update(f"{key}={f.attrs[key]!r}".encode())
+        for name in ("done", "labels/status", "labels/misalignment", "parameters/plant_id",
+                     "parameters/speed_rpm", "parameters/simulated_mechanism", "channels"):
+            if name in f:
+                h.update(name.encode())
+                h.update(np.ascontiguousarray(f[name][...]).tobytes())
+        wf = f["waveforms"]
+        for i in range(wf.shape[0]):
+            h.update(np.ascontiguousarray(wf[i]).tobytes())
+    return h.hexdigest()
+
+
+def _extract_rows(f, rows, progress: Callable | None) -> tuple[np.ndarray, list[str], list[tuple[int, str]]]:
+    from features import FEATURE_NAMES, ProbeChannel, Recording, extract_features
+
+    fs = float(f.attrs["sample_rate_hz"])
+    units = str(f.attrs.get("waveform_units", "um"))
+    ch = f["channels"][...]
+    bearings = [int(b) for b in ch["bearing"]]
+    angles = [float(a) for a in ch["angle_deg"]]
+    speed = f["parameters/speed_rpm"][...]
+    clearance_m = f["parameters/plant/clearance_m"][...] if "parameters/plant/clearance_m" in f else None
+    X = np.full((len(rows), len(FEATURE_NAMES)), np.nan)
+    failed: list[tuple[int, str]] = []
+    wf = f["waveforms"]
+    for k, i in enumerate(rows):
+        data = wf[i]
+        try:
+            rec = Recording(
+                sample_rate_hz=fs,
+                channels=[ProbeChannel(bearing=b, angle_deg=a, units=units, data=data[c])
+                          for c, (b, a) in enumerate(zip(bearings, angles))],
+                speed_rpm=float(speed[i]),
+                clearance_um=None if clearance_m is None else float(clearance_m[i]) * 1e6,
+            )
+            X[k] = extract_features(rec).values
+        except ValueError as exc:
+            failed.append((int(i), str(exc)))
+        if progress is not None:
+            progress(k + 1, len(rows))
+    return X, list(FEATURE_NAMES), failed
+
+
+def load_feature_table(
+    path: str | Path,
+    *,
+    cache: bool = True,
+    progress: Callable[[int, int], None] | None = None,
+) -> FeatureTable:
+    """Feature table of a dataset file (finished, ``ok`` samples only).
+
+    Parameters
+    ----------
+    path : path to a rotordiag dataset HDF5 file
+    cache : bool, default=True
+        Read/write the feature cache next to the file.
+    progress : callable(done, total), optional
+        Called after each extracted sample.
+
+    Returns
+    -------
+    FeatureTable
+        ``meta`` holds ``dataset_path``, ``dataset_hash``, ``dataset_spec`` (the validated
+        spec JSON), ``plant_family`` and ``skipped`` (counts by reason).
+
+    Raises
+    ------
+    ValueError
+        Not a rotordiag dataset, or no usable sample.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"dataset: file {path} does not exist")
+    try:
+        f = _open(path)
+    except OSError as exc:
+        raise ValueError(f"dataset: {path} is not a readable HDF5 file ({exc})") from None
+    with f:
+        if f.attrs.get("format") != "rotordiag-dataset":
+            raise ValueError(f"dataset: {path} is not a rotordiag dataset (attribute format != 'rotordiag-dataset')")
+        done = f["done"][...].astype(bool)
+        status_codes = _codes(f["labels/status"])
+        status = np.array([status_codes.get(int(s), f"code {int(s)}") for s in f["labels/status"][...]], dtype=object)
+        mech_codes = _codes(f["parameters/simulated_mechanism"])
+        mechanism = np.array([mech_codes.get(int(m), str(int(m))) for m in f["parameters/simulated_mechanism"][...]],
+                             dtype=object)
+        ok = done & (status == "ok")
+        skipped = {"not finished": int((~done).sum())}
+        for s in sorted(set(status[done].tolist()) - {"ok"}):
+            skipped[f"status {s}"] = int(np.sum(done & (status == s)))
+        rows = np.flatnonzero(ok)
+        if rows.size == 0:
+            raise ValueError(f"dataset: {path} has no finished sample with status ok ({skipped})")
+        spec = f.attrs.get("spec_json")
+        base_plant = f.attrs.get("base_plant_json")
+        meta = {
+            "dataset_path": str(path),
+            "dataset_spec": json.loads(spec) if spec else None,
+            "plant_family": {
+                "base_plant": json.loads(base_plant) if base_plant else None,
+                "perturb": (json.loads(spec).get("plant", {}) if spec else {}),
+            },
+        }
+        if f.attrs.get("merged"):
+            meta["dataset_sources"] = json.loads(f.attrs["sources_json"])
+        t0 = time.perf_counter()
+        data_hash = dataset_hash(path)
+        meta["dataset_hash"] = data_hash
+        key = hashlib.sha256(f"{_CACHE_VERSION}|{data_hash}|{features_code_hash()}".encode()).hexdigest()[:16]
+        cache_path = path.with_name(f"{path.name}.features-{key}.npz")
+        X = names = None
+        failed: list[tuple[int, str]] = []
+        if cache and cache_path.is_file():
+            try:
+                with np.load(cache_path, allow_pickle=False) as z:
+                    if np.array_equal(z["rows"], rows):
+                        X, names = z["X"], [str(n) for n in z["names"]]
+                        failed = [(int(i), str(m)) for i, m in zip(z["failed_rows"], z["failed_msgs"])]
+            except (OSError, KeyError, ValueError):
+                X = None
+        meta["feature_cache"] = {"path": str(cache_path), "hit": X is not None}
+        if X is None:
+            X, names, failed = _extract_rows(f, rows, progress)
+            if cache:
+                tmp = cache_path.with_name(cache_path.name + ".tmp.npz")
+                np.savez(tmp, X=X, names=np.array(names), rows=rows,
+                         failed_rows=np.array([i for i, _ in failed], dtype=np.int64),
+                         failed_msgs=np.array([m for _, m in failed], dtype=str))
+                tmp.replace(cache_path)
+        meta["feature_time_s"] = round(time.perf_counter() - t0, 2)
+        if failed:
+            skipped["feature extraction failed"] = len(failed)
+            meta["feature_failures"] = failed[:20]
+        meta["skipped"] = skipped
+        good = np.ones(rows.size, bool)
+        if failed:
+            bad = {i for i, _ in failed}
+            good = np.array([i not in bad for i in rows])
+        r = rows[good]
+        return FeatureTable(
+            X=X[good],
+            feature_names=tuple(names),
+            misalignment=f["labels/misalignment"][...][r],
+            plant_id=_str_array(f["parameters/plant_id"][...][r]),
+            mechanism=mechanism[r],
+            speed_rpm=f["parameters/speed_rpm"][...][r],
+            sample_index=r,
+            meta=meta,
+        )
