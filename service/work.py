@@ -177,17 +177,78 @@ def _jsonable(v: Any) -> bool:
 
 
 def run_retrain(params: dict[str, Any], ctx) -> dict[str, Any]:
-    """Dataset for the plant (resumable), then train, evaluate and register a model version."""
+    """Dataset for the plant (resumable), features, then train, evaluate and register a model version.
+
+    Uses the models package's ``load_feature_table`` (cached features next to the dataset) and
+    ``train_and_register`` (held-out-plant evaluation, final fit, registry write).
+    """
+    from models.config import TrainConfig
+    from models.dataset import load_feature_table
     from models.train import train_and_register
 
     out = ctx.settings.datasets_dir / f"retrain-{ctx.job_id}.h5"
-    dataset = _generate(params["spec_toml"], out, ctx, 0.0, 0.8)
-    ctx.progress(0.8, "training", "training and evaluating the model")
-    registered = train_and_register(out, params["training"], ctx.models.registry,
-                                    field_data=params.get("field_data") or None,
-                                    activate=bool(params.get("activate")))
-    ctx.progress(1.0, "training", "registered")
-    return {"dataset": dataset, **registered}
+    dataset = _generate(params["spec_toml"], out, ctx, 0.0, 0.6)
+    ctx.progress(0.6, "features", "extracting features")
+    table = load_feature_table(out, progress=_progress_cb(ctx, 0.6, 0.8, "features"))
+    field = params.get("field_data") or []
+    if field:
+        table = _with_field_rows(table, field)
+    table, dropped = _drop_unmeasured(table)
+    ctx.progress(0.8, "training", f"training on {len(table)} rows (held-out-plant evaluation, then final fit)")
+    config = TrainConfig.from_dict(params["training"])
+    activate = bool(params.get("activate"))
+    version, _report = train_and_register(
+        table, config, ctx.models.registry, activate=activate,
+        card_extra={"retrain_job": ctx.job_id, "plant_overrides": params.get("plant") or {},
+                    "field_records": len(field), "features_never_measured": dropped})
+    card = ctx.models.registry.card(version)
+    return {"version": version, "activated": activate, "metrics": card.get("metrics"),
+            "n_rows": len(table), "field_records": len(field), "features_never_measured": dropped,
+            "report": str((ctx.models.root / version / "report.json").resolve()), "dataset": dataset}
+
+
+def _drop_unmeasured(table) -> tuple[Any, list[str]]:
+    """Drop feature columns that are NaN in every row (e.g. motion type for records shorter than the
+    classifier needs, sub-synchronous peak order when no row has a sub-synchronous line).
+
+    Such a column carries no information, and scikit-learn's histogram gradient boosting fails to bin
+    it; the verdict maps features by name, so the model simply does not use them.
+    """
+    import numpy as np
+
+    never = [n for n, col in zip(table.feature_names, np.isnan(table.X).all(axis=0)) if col]
+    return (table.without_features(never) if never else table), never
+
+
+def _with_field_rows(table, field: list[dict[str, Any]]):
+    """Append field-labelled recordings (features by name, one extra plant group) to a feature table."""
+    import numpy as np
+
+    from features import extract_features
+    from models.table import FeatureTable
+
+    from .parsing import recording_from_model
+    from .schemas import RecordingIn
+
+    rows, deltas, mechs, speeds = [], [], [], []
+    for rec in field:
+        fr = extract_features(recording_from_model(RecordingIn.model_validate(rec["recording"])))
+        got = fr.as_dict()
+        rows.append([got.get(n, np.nan) for n in table.feature_names])
+        deltas.append(rec["misalignment"])
+        mechs.append(rec.get("mechanism", "rigid"))
+        speeds.append(fr.speed_rpm)
+    pid = table.plant_id
+    field_id = (pid.max() + 1) if np.issubdtype(pid.dtype, np.number) else "field"
+    return FeatureTable(
+        np.vstack([table.X, np.array(rows, dtype=float)]), table.feature_names,
+        np.concatenate([table.misalignment, deltas]),
+        np.concatenate([pid, np.full(len(rows), field_id, dtype=pid.dtype)]),
+        np.concatenate([table.mechanism, np.array(mechs, dtype=object)]),
+        np.concatenate([table.speed_rpm, speeds]),
+        np.concatenate([table.sample_index, np.full(len(rows), -1)]),
+        {**table.meta, "field_records": len(rows)},
+    )
 
 
 def register_all(manager) -> None:

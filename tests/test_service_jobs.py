@@ -86,3 +86,44 @@ def test_dataset_spec_errors_are_422_before_any_job(tmp_path):
         r = c.post("/models/retrain", json={"training": {"bogus": 1}}, headers=auth())
         assert r.status_code == 422 and "bogus" in r.json()["detail"]
         assert c.get("/jobs").json()["count"] == 0
+
+
+@pytest.mark.slow
+def test_retrain_tiny_model_for_a_perturbed_plant(tmp_path):
+    """POST /models/retrain for a plant unlike the default, on a real local Dask cluster; the new
+    version is registered with its held-out evaluation, activated, and then diagnoses."""
+    from tests.service_util import diagnose_json, shipped_or_tiny_registry, simulated_channels
+
+    settings = make_settings(tmp_path, dask_local_workers=2, shipped_registry_dir=shipped_or_tiny_registry())
+    fs, channels = simulated_channels(misalignment=0.3, record_revs=40)
+    body = {
+        "plant": {"generator_mass_kg": 28000.0, "asymmetry": 0.035},
+        "sweep": {"design": {"n_samples": 40, "seed": 5},
+                  "operating": {"speed_rpm": {"min": 1600, "max": 2000}, "misalignment": {"min": 0.0, "max": 0.6}},
+                  "measurement": {"sample_rate_hz": 1024.0, "duration_revs": 16, "snr_db": 35.0},
+                  "simulation": {"transient_revs": 80, "samples_per_rev": 64, "record_revs_min": 16,
+                                 "classify_motion": False}},
+        "training": {"seed": 1, "classifier": {"max_iter": 30, "min_samples_leaf": 2},
+                     "regressor": {"max_iter": 30, "min_samples_leaf": 2}, "evaluation": {"n_splits": 3}},
+        "field_data": [{"misalignment": 0.3, "recording": diagnose_json(fs, channels, speed_rpm=1800.0)}],
+        "activate": True,
+    }
+    app = create_app(settings)
+    with TestClient(app) as c:
+        before = c.get("/models").json()
+        r = c.post("/models/retrain", json=body, headers=auth())
+        assert r.status_code == 202, r.text
+        job = _wait(c, r.json()["id"], {"succeeded", "failed"}, timeout=900)
+        assert job["status"] == "succeeded", job
+        res = job["result"]
+        assert res["field_records"] == 1 and res["n_rows"] >= 30
+        assert "b2_subsync_peak_order" in res["features_never_measured"]   # no sub-synchronous line anywhere
+        assert res["dataset"]["n_samples"] == 40
+        assert "per_mechanism" in res["metrics"]
+        after = c.get("/models").json()
+        assert after["active"] == res["version"] and len(after["versions"]) == len(before["versions"]) + 1
+        card = next(v for v in after["versions"] if v["version"] == res["version"])
+        assert card["plant_overrides"] == body["plant"] and card["retrain_job"] == job["id"]
+        assert card["plant_family"]["base_plant"]["generator_mass_kg"] == 28000.0
+        v = c.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0)).json()
+        assert v["model_version"] == res["version"]
