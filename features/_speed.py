@@ -162,7 +162,9 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
     # refine on the strongest of the candidate's 1X..3X lines below 0.45 fs
     harmonics = [m for m in (1, 2, 3) if m * f_best < 0.45 * fs]
     h = max(harmonics, key=lambda m: _hann_amplitude_at(power, m * f_best, df))
-    f = refine_line_hz(x, fs, h * f_best) / h
+    k_h = int(round(h * f_best / df))
+    strongest = np.argsort(-np.abs(spec[:, k_h]))[:4]       # the channels that carry the line
+    f = refine_line_hz(x[strongest], fs, h * f_best) / h
     if abs(f - f_best) > 2 * df:  # refinement wandered off: keep the interpolated peak
         warnings.append(f"speed refinement did not converge; using the spectral peak {60 * f_best:.2f} r/min")
         f = f_best
