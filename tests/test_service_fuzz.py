@@ -25,20 +25,23 @@ from tests.service_util import API_KEY, make_settings, shipped_or_tiny_registry 
 
 _TMP = Path(tempfile.mkdtemp(prefix="rotordiag-fuzz-"))
 N_EXAMPLES = int(os.environ.get("ROTORDIAG_FUZZ_EXAMPLES", "15"))
-APP = create_app(make_settings(_TMP, max_body_bytes=4 * 1024 * 1024))
+APP = create_app(make_settings(_TMP, max_body_bytes=4 * 1024 * 1024, shipped_registry_dir=shipped_or_tiny_registry()))
+CREATED_JOBS: list[str] = []
+
+
+def _record_only(manager) -> None:
+    """Job kinds that record the job instead of simulating (schemathesis runs the app's lifespan itself,
+    so the stand-ins are installed where the job manager looks its work functions up)."""
+    for kind in ("dataset", "retrain"):
+        manager.register(kind, lambda params, ctx, _k=kind: CREATED_JOBS.append(_k) or {})
 
 
 @pytest.fixture(scope="module", autouse=True)
-def running_app():
-    """Run the lifespan (database, registry, job manager) around the whole pass."""
-    from fastapi.testclient import TestClient
-
-    APP.state.settings.shipped_registry_dir = shipped_or_tiny_registry()
-    with TestClient(APP):
-        created = []
-        for kind in ("dataset", "retrain"):
-            APP.state.rd.jobs.register(kind, lambda params, ctx, _k=kind: created.append(_k) or {})
-        yield APP
+def _no_real_jobs():
+    mp = pytest.MonkeyPatch()
+    mp.setattr("service.work.register_all", _record_only)
+    yield
+    mp.undo()
 
 
 schema = schemathesis.openapi.from_asgi("/openapi.json", APP)
