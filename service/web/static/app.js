@@ -179,8 +179,8 @@
     ctx.restore();
 
     // grid and ticks
-    const xt = spec.x.time ? timeTicks(x0, x1, pw / 90) : linTicks(x0, x1, pw / 70);
-    const yt = ylog ? logTicks(y0, y1) : linTicks(y0, y1, ph / 38);
+    const xt = spec.x.time ? timeTicks(x0, x1, Math.max(3, pw / 90)) : linTicks(x0, x1, Math.max(4, pw / 70));
+    const yt = ylog ? logTicks(y0, y1) : linTicks(y0, y1, Math.max(4, ph / 38));
     ctx.strokeStyle = "#e6e8eb"; ctx.lineWidth = 1;
     ctx.beginPath();
     for (const t of xt) { const x = Math.round(X(t.v)) + 0.5; ctx.moveTo(x, T); ctx.lineTo(x, T + ph); }
@@ -240,7 +240,7 @@
         ctx.beginPath();
         for (let i = 0; i < n; i++) {
           if (s.y[i] === null) continue;
-          const x = X(s.x[i]); ctx.moveTo(x, base); ctx.lineTo(x, Y(s.y[i]));
+          const x = X(s.x[i]) + (s.dx || 0); ctx.moveTo(x, base); ctx.lineTo(x, Y(s.y[i]));
         }
         ctx.stroke();
       } else if (s.mode !== "markers") {
@@ -314,13 +314,13 @@
     const on = (id) => $(id).checked;
     const arrays = [];
     if (on("show-raw")) {
-      series.push({ x: o.raw_x_um, y: o.raw_y_um, color: COLORS.raw, width: 1, label: `raw (last ${o.revs} rev)` });
+      series.push({ x: o.raw_x_um, y: o.raw_y_um, color: COLORS.raw, width: 1 });
       series.push({ x: o.raw_marks_um.map((p) => p[0]), y: o.raw_marks_um.map((p) => p[1]), color: "#222", mode: "markers", size: 3 });
       arrays.push(o.raw_x_um, o.raw_y_um);
     }
-    for (const [key, id, label] of [["1x", "show-1x", "1X"], ["2x", "show-2x", "2X"], ["1x2x", "show-1x2x", "1X+2X"]]) {
+    for (const [key, id] of [["1x", "show-1x"], ["2x", "show-2x"], ["1x2x", "show-1x2x"]]) {
       if (!on(id)) continue;
-      series.push({ x: f[key].x_um, y: f[key].y_um, color: COLORS[key], width: 2, label: `${label} filtered`, arrow: true });
+      series.push({ x: f[key].x_um, y: f[key].y_um, color: COLORS[key], width: 2, arrow: true });
       series.push({ x: [f[key].x_um[0]], y: [f[key].y_um[0]], color: COLORS[key], mode: "markers", size: 4.5, outline: "#000" });
       arrays.push(f[key].x_um, f[key].y_um);
     }
@@ -328,8 +328,7 @@
     for (const a of arrays) for (const v of a) if (v !== null) r = Math.max(r, Math.abs(v));
     r = r > 0 ? r * 1.08 : 1;
     return { x: { label: "x (horizontal), µm", min: -r, max: r }, y: { label: "y (vertical, up), µm", min: -r, max: r },
-      equal: true, zeroLines: true, series,
-      legendExtra: [{ label: "once per rev", color: "#222", mode: "markers" }] };
+      equal: true, zeroLines: true, series };
   }
 
   function orderLines(f1, signs) {
@@ -353,7 +352,7 @@
     const fmax = hs.freq_hz.length ? hs.freq_hz[hs.freq_hz.length - 1] : 4 * f1;
     const half = {
       x: { label: "frequency, Hz", min: 0, max: fmax }, y: { ...y }, vbands: [whirl], vlines: orderLines(f1, [1]),
-      series: hs.amp_um_pp.map((a, i) => ({ x: hs.freq_hz, y: a, mode: "stems", width: i ? 1.2 : 2,
+      series: hs.amp_um_pp.map((a, i) => ({ x: hs.freq_hz, y: a, mode: "stems", width: 2, dx: i ? 1.5 : -1.5,
         color: i ? COLORS.probe1 : COLORS.probe0, label: `probe at ${num(b.probe_angles_deg[i])}°` })),
     };
     const full = {
@@ -410,16 +409,23 @@
     });
   }
 
+  function intervalText(what, iv, digits, unit) {
+    const [lo, hi] = iv || [null, null];
+    const ok = (x) => x !== null && x !== undefined && Number.isFinite(Number(x));
+    if (ok(lo) && ok(hi)) return `${what} ${fixed(lo, digits)}–${fixed(hi, digits)}${unit}`;
+    if (ok(lo)) return `${what} from ${fixed(lo, digits)}${unit}, no upper bound`;
+    if (ok(hi)) return `${what} up to ${fixed(hi, digits)}${unit}`;
+    return `${what} not available`;
+  }
+
   function renderVerdict(v) {
     const sev = $("verdict-severity");
     sev.textContent = v.severity;
     sev.className = "badge " + (SEVERITY_COLORS[v.severity] ? v.severity : "");
     const lvl = v.interval_level ? `${Math.round(v.interval_level * 100)} % interval` : "interval";
-    const [lo, hi] = v.misalignment_interval || [null, null];
-    $("verdict-delta").textContent = `${fixed(v.misalignment, 3)} (${lvl} ${fixed(lo, 3)}–${fixed(hi, 3)})`;
+    $("verdict-delta").textContent = `${fixed(v.misalignment, 3)} (${intervalText(lvl, v.misalignment_interval, 3, "")})`;
     if (v.offset_um !== null && v.offset_um !== undefined) {
-      const oi = v.offset_interval_um || [null, null];
-      $("verdict-offset").textContent = `${fixed(v.offset_um, 1)} µm (${fixed(oi[0], 1)}–${fixed(oi[1], 1)} µm)`;
+      $("verdict-offset").textContent = `${fixed(v.offset_um, 1)} µm (${intervalText(lvl, v.offset_interval_um, 1, " µm")})`;
     } else {
       $("verdict-offset").textContent = "— (give the clearance to get δ in µm)";
     }
@@ -510,8 +516,8 @@
       show($("plots"), true);
       setError($("plots-error"), e ? `The orbit and spectrum pictures could not be drawn. ${e.message}` : "");
       renderPlots();
-      document.body.dataset.state = "done";
       if (req.asset) { $("trend-asset").value = req.asset; await loadTrend(req.asset); }
+      document.body.dataset.state = "done";
     } catch (exc) {
       await plotPromise;
       fail(exc.message);
@@ -545,8 +551,8 @@
     const pts = h.points;
     const t = pts.map((p) => Date.parse(p.time.endsWith("Z") || /[+-]\d\d:?\d\d$/.test(p.time) ? p.time : p.time + "Z"));
     let [t0, t1] = extent([t]);
-    if (t1 - t0 < 60000) { const c = (t0 + t1) / 2; t0 = c - 30000; t1 = c + 30000; }
-    const padT = (t1 - t0) * 0.05; t0 -= padT; t1 += padT;
+    const padT = Math.max((t1 - t0) * 0.06, 2000);     // at least 2 s either side: points never sit on the frame
+    t0 -= padT; t1 += padT;
     const day = new Date(t0);
     const xlab = `time (UTC), from ${day.getUTCFullYear()}-${pad(day.getUTCMonth() + 1)}-${pad(day.getUTCDate())}`;
     const bands = bandsFor(pts);

@@ -1,0 +1,410 @@
+"""The web page end to end: a real `rotordiag serve` on 127.0.0.1 driven by headless Chromium (Selenium).
+
+Debian's ``chromium`` + ``chromium-driver`` are required (``.ci/run`` installs them); without them these
+tests fail with a message saying what to install — they are never skipped. Screenshots go to
+``test-artifacts/web/`` (git-ignored).
+"""
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.service_util import probe_signals_um
+
+ROOT = Path(__file__).resolve().parent.parent
+ARTIFACTS = ROOT / "test-artifacts" / "web"
+CHROMIUM = "/usr/bin/chromium"
+CHROMEDRIVER = "/usr/bin/chromedriver"
+FS_HZ = 2048.0
+SPEED_RPM = 1800.0
+CLEARANCE_UM = 350.0
+#: the page's colours (service/web/static/app.js COLORS) whose pixels prove a trace was drawn
+BLUE_1X = (0x1F, 0x5F, 0xA8)
+VIOLET_FULL = (0x5F, 0x3D, 0xC4)
+#: the trend plot's bearing 1-4 colours (app.js COLORS.bearing)
+BEARING_COLOURS = ((0x1F, 0x5F, 0xA8), (0xD9, 0x48, 0x0F), (0x2B, 0x8A, 0x3E), (0x86, 0x2E, 0x9C))
+#: the severity band colours of the trend plot, as drawn at 13 % opacity on white
+GREEN_ALIGNED = (0x2E, 0x7D, 0x32)
+
+
+# --- recordings ------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def recordings():
+    """Three simulated recordings of the default plant (Δ = 0.05, 0.2, 0.45): (n_points, 8) µm, probes at
+    45° / 135° on bearings 1-4 (the service's default layout for 8 channels)."""
+    from simulator import Plant, simulate
+
+    out = {}
+    for delta in (0.05, 0.2, 0.45):
+        res = simulate(Plant.default(), SPEED_RPM, delta, 0.05, mechanism="rigid", transient_revs=100,
+                       record_revs=34, sample_rate_hz=FS_HZ)
+        assert res.status == "ok", res.status
+        chans = probe_signals_um(res.journal_displacements_m)
+        out[delta] = np.column_stack([d for _, _, d in chans])
+    return out
+
+
+def _write_csv(path: Path, data: np.ndarray) -> Path:
+    header = ",".join(f"b{b}_{a:g}deg_um" for b in (1, 2, 3, 4) for a in (45, 135))
+    np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.6f")
+    return path
+
+
+def _write_npy(path: Path, data: np.ndarray) -> Path:
+    np.save(path, data.T.astype(np.float32))
+    return path
+
+
+def _write_hdf5(path: Path, data: np.ndarray) -> Path:
+    import h5py
+
+    with h5py.File(path, "w") as f:
+        ds = f.create_dataset("waveforms", data=data.T)
+        ds.attrs["sample_rate_hz"] = FS_HZ
+        ds.attrs["units"] = "um"
+        f["channels/bearing"] = np.repeat([1, 2, 3, 4], 2)
+        f["channels/angle_deg"] = np.tile([45.0, 135.0], 4)
+    return path
+
+
+def _json_body(data: np.ndarray) -> dict:
+    layout = [(b, a) for b in (1, 2, 3, 4) for a in (45.0, 135.0)]
+    return {"channels": [{"bearing": b, "angle_deg": a, "units": "um", "data": [round(float(v), 5) for v in data[:, i]]}
+                         for i, (b, a) in enumerate(layout)]}
+
+
+# --- server and browser ----------------------------------------------------------------------------
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _get(url: str):
+    try:
+        with urllib.request.urlopen(url, timeout=60) as r:
+            return r.status, json.loads(r.read() or b"null")
+    except urllib.error.HTTPError as e:
+        return e.code, json.loads(e.read() or b"null")
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    from service.core.config import SHIPPED_REGISTRY_DIR
+    from tests.service_util import shipped_or_tiny_registry
+
+    tmp = tmp_path_factory.mktemp("web")
+    env = dict(os.environ, ROTORDIAG_DATA_DIR=str(tmp / "data"), ROTORDIAG_API_KEY="web-test-key",
+               ROTORDIAG_ENVIRONMENT="development", ROTORDIAG_LOG_LEVEL="warning")
+    if not (SHIPPED_REGISTRY_DIR / "active").is_file():   # no default model shipped yet: a tiny one
+        shutil.copytree(shipped_or_tiny_registry(), tmp / "registry")
+        env["ROTORDIAG_MODEL_REGISTRY_DIR"] = str(tmp / "registry")
+    port = _free_port()
+    exe = Path(sys.executable).parent / "rotordiag"
+    proc = subprocess.Popen([str(exe), "serve", "--host", "127.0.0.1", "--port", str(port)], cwd=tmp, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    base = f"http://127.0.0.1:{port}"
+    t0 = time.monotonic()
+    while True:
+        if proc.poll() is not None:
+            pytest.fail(f"server exited with {proc.returncode}:\n{proc.stdout.read()}")
+        try:
+            if _get(base + "/health")[0] == 200:
+                break
+        except OSError:
+            pass
+        if time.monotonic() - t0 > 90:
+            proc.kill()
+            pytest.fail(f"server did not become healthy within 90 s:\n{proc.communicate()[0]}")
+        time.sleep(0.25)
+    yield base
+    proc.send_signal(signal.SIGINT)
+    try:
+        out, _ = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        out, _ = proc.communicate()
+    assert "Traceback" not in out, out
+
+
+@pytest.fixture(scope="module")
+def browser():
+    missing = [p for p in (CHROMIUM, CHROMEDRIVER) if not Path(p).is_file()]
+    if missing:
+        pytest.fail(f"{', '.join(missing)} not found: the web page's browser tests need Debian's chromium and "
+                    "chromium-driver (`apt-get install chromium chromium-driver`; .ci/run installs them)")
+    try:
+        from selenium import webdriver
+        from selenium.webdriver.chrome.service import Service
+    except ImportError:
+        pytest.fail("selenium is not installed: `pip install -e '.[dev]'`")
+    os.environ["SE_OFFLINE"] = "true"   # Selenium Manager must never download a browser or driver
+    profile = tempfile.mkdtemp(prefix="rotordiag-chromium-")
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    for flag in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                 "--disable-dev-shm-usage", "--force-device-scale-factor=1", "--window-size=1366,900",
+                 f"--user-data-dir={profile}"):
+        opts.add_argument(flag)
+    driver = webdriver.Chrome(service=Service(executable_path=CHROMEDRIVER), options=opts)
+    driver.set_page_load_timeout(60)
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    yield driver
+    driver.quit()
+    shutil.rmtree(profile, ignore_errors=True)
+
+
+def _wait(driver, predicate, timeout=180, what="condition"):
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        value = predicate(driver)
+        if value:
+            return value
+        time.sleep(0.1)
+    raise AssertionError(f"timed out after {timeout} s waiting for {what}; page state "
+                         f"{driver.execute_script('return document.body.dataset.state')!r}, error "
+                         f"{driver.find_element('id', 'form-error').text!r}")
+
+
+def _open(driver, base, width=1366, height=900):
+    driver.set_window_size(width, height)
+    driver.get(base + "/")
+    _wait(driver, lambda d: d.execute_script("return document.body.dataset.state") == "idle", 30, "the page script")
+    _wait(driver, lambda d: d.find_elements("css selector", "#models-table tbody tr"), 30, "the models table")
+
+
+def _screenshot(driver, name: str) -> Path:
+    """Full-page screenshot (the window is stretched to the page height, then restored)."""
+    w, h = driver.get_window_size()["width"], driver.get_window_size()["height"]
+    full = driver.execute_script("return document.documentElement.scrollHeight")
+    driver.set_window_size(w, max(h, full + 120))
+    driver.execute_script("window.scrollTo(0, 0)")
+    time.sleep(0.4)                                        # the page redraws its canvases on resize
+    path = ARTIFACTS / f"{name}.png"
+    driver.save_screenshot(str(path))
+    driver.set_window_size(w, h)
+    return path
+
+
+def _submit_file(driver, path: Path, *, asset: str = "", sample_rate: str = "", clearance: str = "",
+                 expect: str = "done"):
+    d = driver
+    d.find_element("css selector", "input[name=source][value=file]").click()
+    for field, value in (("sample-rate", sample_rate), ("clearance", clearance), ("asset", asset)):
+        el = d.find_element("id", field)
+        el.clear()
+        if value:
+            el.send_keys(value)
+    d.find_element("id", "file").send_keys(str(path))
+    d.execute_script("document.body.dataset.state = 'submitted'")
+    d.find_element("id", "diagnose-btn").click()
+    state = _wait(d, lambda dr: dr.execute_script(
+        "const s = document.body.dataset.state; return s === 'done' || s === 'error' ? s : null"), what="the verdict")
+    assert state == expect, d.find_element("id", "form-error").text
+
+
+_PIXELS_JS = """
+const c = document.getElementById(arguments[0]);
+const colours = arguments[1];
+const img = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+let ink = 0, match = 0;
+for (let i = 0; i < img.length; i += 4) {
+  if (img[i] < 235 || img[i + 1] < 235 || img[i + 2] < 235) ink++;
+  if (colours.some((rgb) => Math.abs(img[i] - rgb[0]) < 40 && Math.abs(img[i + 1] - rgb[1]) < 40
+                            && Math.abs(img[i + 2] - rgb[2]) < 40)) match++;
+}
+return {w: c.width, h: c.height, cw: c.clientWidth, ch: c.clientHeight, dpr: window.devicePixelRatio, ink, match};
+"""
+
+
+def _canvas(driver, canvas_id: str, *colours) -> dict:
+    """Canvas size and pixel counts: ``ink`` (anything not white), ``match`` (pixels of any of ``colours``)."""
+    info = driver.execute_script(_PIXELS_JS, canvas_id, [list(c) for c in colours])
+    assert info["w"] == round(info["cw"] * info["dpr"]) and info["h"] == round(info["ch"] * info["dpr"]), info
+    return info
+
+
+def _verdict_api(base: str, data: np.ndarray) -> dict:
+    body = {"sample_rate_hz": FS_HZ, "clearance_um": CLEARANCE_UM, **_json_body(data)}
+    req = urllib.request.Request(base + "/diagnose", data=json.dumps(body).encode(),
+                                 headers={"Content-Type": "application/json"})
+    with urllib.request.urlopen(req, timeout=120) as r:
+        return json.loads(r.read())
+
+
+# --- tests -------------------------------------------------------------------------------------------
+
+def test_page_loads_with_models_health_and_labelled_controls(server, browser):
+    _open(browser, server)
+    status, models = _get(server + "/models")
+    assert status == 200
+    active = models["active"]
+    row = browser.find_element("css selector", f"#models-table tr[data-version='{active}']")
+    assert "active" in row.text
+    _wait(browser, lambda d: "active model" in d.find_element("id", "health").text, 30, "the health line")
+    assert active in browser.find_element("id", "health").text
+    unlabelled = browser.execute_script("""
+        return [...document.querySelectorAll('input, select, textarea, button')].filter((e) => {
+          if (e.type === 'hidden') return false;
+          if (e.tagName === 'BUTTON') return !e.textContent.trim() && !e.getAttribute('aria-label');
+          const byFor = e.id && document.querySelector(`label[for="${e.id}"]`);
+          return !(byFor || e.closest('label') || e.getAttribute('aria-label'));
+        }).map((e) => e.id || e.name);""")
+    assert unlabelled == []
+    # nothing is loaded from anywhere but this server
+    origins = browser.execute_script(
+        "return performance.getEntriesByType('resource').map((r) => new URL(r.name).origin)")
+    assert origins and set(origins) == {server}
+
+
+def test_csv_upload_shows_verdict_orbits_and_spectra(server, browser, recordings, tmp_path):
+    data = recordings[0.2]
+    _open(browser, server)
+    _submit_file(browser, _write_csv(tmp_path / "unit.csv", data), sample_rate=str(FS_HZ),
+                 clearance=str(CLEARANCE_UM))
+    d = browser
+    page = d.execute_script("return window.rotordiag.state.verdict")
+    api = _verdict_api(server, data)                       # the same recording straight to the API
+    assert page["severity"] == api["severity"]
+    assert page["misalignment"] == pytest.approx(api["misalignment"], rel=1e-6)
+    assert d.find_element("id", "verdict-severity").text.lower() == api["severity"]
+    assert d.find_element("id", "verdict-delta").text.startswith(f"{api['misalignment']:.3f}")
+    for bound in api["misalignment_interval"]:
+        if bound is not None:
+            assert f"{bound:.3f}" in d.find_element("id", "verdict-delta").text
+    assert d.find_element("id", "verdict-offset").text.startswith(f"{api['offset_um']:.1f} µm")
+    assert d.find_element("id", "verdict-model").text == api["model_version"]
+    rows = d.find_elements("css selector", "#verdict-probs tbody tr")
+    assert [r.get_attribute("data-class") for r in rows] == api["bands"]["names"]
+    shown = sum(float(r.find_elements("tag name", "td")[1].text.split()[-2]) for r in rows)
+    assert shown == pytest.approx(100.0, abs=0.25)
+    names = [e.text for e in d.find_elements("css selector", "#verdict-features tbody code")]
+    assert names == [f["name"] for f in api["top_features"]]
+    assert d.find_element("id", "ood-warning").is_displayed() == bool(api["ood"])
+
+    _screenshot(d, "verdict-laptop")
+    plots = d.execute_script("return window.rotordiag.state.plots")
+    assert [b["bearing"] for b in plots["bearings"]] == [1, 2, 3, 4]
+    assert plots["speed_rpm"] == pytest.approx(api["speed_rpm"], rel=1e-9)
+    for b in (1, 2, 3, 4):
+        orbit = _canvas(d, f"orbit-{b}", BLUE_1X)
+        assert abs(orbit["w"] - orbit["h"]) <= 1 and orbit["cw"] >= 250, orbit         # square, readable
+        assert orbit["match"] > 150, orbit                                      # the 1X orbit was drawn
+        for kind in ("half", "full"):
+            spec = _canvas(d, f"{kind}-{b}", BLUE_1X if kind == "half" else VIOLET_FULL)
+            assert abs(spec["w"] - 2 * spec["h"]) <= 1 and spec["cw"] >= 250, spec
+            assert spec["match"] > 100, spec                                    # the spectrum lines were drawn
+        # the plotted 1X orbit is the verdict's 1X: its major axis equals the feature b{n}_1x_major_um_pp
+        f1x = plots["bearings"][b - 1]["orbit"]["filtered"]["1x"]
+        major = 2 * max(np.hypot(x, y) for x, y in zip(f1x["x_um"], f1x["y_um"]))
+        feats = next(x for x in api["bearings"] if x["bearing"] == b)["features"]
+        assert major == pytest.approx(feats[f"b{b}_1x_major_um_pp"], rel=2e-3)
+    # the log-scale switch redraws the spectra
+    before = _canvas(d, "half-2", BLUE_1X)["ink"]
+    d.find_element("id", "spectrum-scale").send_keys("log")
+    _wait(d, lambda dr: _canvas(dr, "half-2", BLUE_1X)["ink"] != before, 10, "the log-scale redraw")
+
+
+def test_broken_uploads_show_the_services_message(server, browser, tmp_path):
+    _open(browser, server)
+    bad = tmp_path / "broken.csv"
+    bad.write_text("probe_x,probe_y\n1.0,2.0\n3.0,oops\n")
+    _submit_file(browser, bad, sample_rate="2048", expect="error")
+    err = browser.find_element("id", "form-error")
+    assert err.is_displayed() and "CSV upload" in err.text and "oops" in err.text, err.text
+    assert not browser.find_element("id", "verdict").is_displayed()
+    assert not browser.find_element("id", "plots").is_displayed()
+    _screenshot(browser, "error-broken-csv")
+
+    junk = tmp_path / "junk.h5"
+    junk.write_bytes(b"definitely not HDF5")
+    _submit_file(browser, junk, sample_rate="2048", expect="error")
+    assert "not an HDF5 file" in browser.find_element("id", "form-error").text
+
+    # a pasted text that is not JSON never reaches the server
+    browser.find_element("css selector", "input[name=source][value=json]").click()
+    browser.find_element("id", "json-text").send_keys('{"sample_rate_hz": 2048, channels: []}')
+    browser.execute_script("document.body.dataset.state = 'submitted'")
+    browser.find_element("id", "diagnose-btn").click()
+    _wait(browser, lambda d: d.execute_script("return document.body.dataset.state") == "error", 10, "the JSON error")
+    assert "not valid JSON" in browser.find_element("id", "form-error").text
+
+
+def test_asset_trend_after_three_diagnoses(server, browser, recordings, tmp_path):
+    asset = "web-unit-7"
+    _open(browser, server)
+    _submit_file(browser, _write_npy(tmp_path / "a.npy", recordings[0.05]), asset=asset, sample_rate=str(FS_HZ),
+                 clearance=str(CLEARANCE_UM))
+    _submit_file(browser, _write_hdf5(tmp_path / "b.h5", recordings[0.2]), asset=asset)  # rate from the file
+    # the third as pasted JSON (set as the textarea's value: typing 150 kB is slow), rate from the form
+    browser.find_element("css selector", "input[name=source][value=json]").click()
+    browser.execute_script("document.getElementById('json-text').value = arguments[0]",
+                           json.dumps(_json_body(recordings[0.45])))
+    rate = browser.find_element("id", "sample-rate")
+    rate.clear()
+    rate.send_keys(str(FS_HZ))
+    browser.execute_script("document.body.dataset.state = 'submitted'")
+    browser.find_element("id", "diagnose-btn").click()
+    _wait(browser, lambda d: d.execute_script("return document.body.dataset.state") in ("done", "error"), what="JSON")
+    assert browser.execute_script("return document.body.dataset.state") == "done", \
+        browser.find_element("id", "form-error").text
+
+    status, history = _get(f"{server}/assets/{asset}/history")
+    assert status == 200 and history["count"] == 3
+    shown = browser.execute_script("return window.rotordiag.state.history")
+    assert [p["misalignment"] for p in shown["points"]] == [p["misalignment"] for p in history["points"]]
+    assert "3 diagnoses" in browser.find_element("id", "trend-info").text
+    assert browser.find_element("id", "trend-plots").is_displayed()
+    _screenshot(browser, "trend-laptop")
+    delta = _canvas(browser, "trend-delta", GREEN_ALIGNED)
+    assert delta["ink"] > 2000
+    for k in ("1x", "2x"):
+        amp = _canvas(browser, f"trend-{k}", *BEARING_COLOURS)        # one line per bearing, in its colour
+        assert amp["match"] > 150, amp
+        assert all(f"b1_{k}_major_um_pp" in p["amplitudes_um_pp"] for p in history["points"])
+    # a trend asked for by hand, and an unknown asset's message
+    browser.find_element("id", "trend-asset").clear()
+    browser.find_element("id", "trend-asset").send_keys("no-such-asset")
+    browser.find_element("id", "trend-btn").click()
+    _wait(browser, lambda d: d.find_element("id", "trend-error").is_displayed(), 20, "the unknown-asset message")
+    assert "no diagnosis stored" in browser.find_element("id", "trend-error").text
+    browser.find_element("id", "trend-asset").clear()
+    browser.find_element("id", "trend-asset").send_keys(asset)
+    browser.find_element("id", "trend-btn").click()
+    _wait(browser, lambda d: d.find_element("id", "trend-plots").is_displayed(), 20, "the trend")
+
+
+@pytest.mark.parametrize("width,height,name", [(768, 1024, "tablet-portrait"), (1024, 768, "tablet-landscape")])
+def test_tablet_layouts_fit_the_screen(server, browser, recordings, tmp_path, width, height, name):
+    _open(browser, server, width, height)
+    _submit_file(browser, _write_csv(tmp_path / "t.csv", recordings[0.45]), sample_rate=str(FS_HZ))
+    time.sleep(0.3)
+    overflow = browser.execute_script("return document.documentElement.scrollWidth - window.innerWidth")
+    assert overflow <= 0, f"the page is {overflow} px wider than a {width} px screen"
+    orbit = _canvas(browser, "orbit-2", BLUE_1X)
+    assert orbit["match"] > 150 and 250 <= orbit["cw"] <= width
+    half = browser.find_element("id", "half-2").rect
+    assert half["x"] + half["width"] <= width
+    upload, verdict = (browser.find_element("id", i).rect for i in ("upload", "verdict"))
+    if width >= 1024:      # laptop layout: the verdict beside the form
+        assert verdict["x"] >= upload["x"] + upload["width"]
+    else:                  # tablet portrait: one column
+        assert verdict["y"] >= upload["y"] + upload["height"]
+    _screenshot(browser, name)
