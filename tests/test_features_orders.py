@@ -216,3 +216,30 @@ def test_long_record_exact():
     fr = extract_features(make_recording(n=262_144, fs=16384.0, components={2: DEFAULT_COMPONENTS[2]},
                                          speed_rpm=1953.7))
     _check_components(fr, {2: DEFAULT_COMPONENTS[2]})
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_random_configurations_recovered_exactly(seed):
+    """Random speed, sample rate (8–400 samples/rev), length (≥ 8 revs), probe angles, units,
+    amplitudes and phases: orders, forward/reverse and phase differences come back to 1e-6."""
+    rng = np.random.default_rng(1000 + seed)
+    rpm = float(rng.uniform(300, 6000))
+    spr = float(rng.uniform(8.5, 400))
+    fs = spr * rpm / 60
+    n = int(rng.uniform(8.5, 60) * spr)
+    a0 = float(rng.uniform(-180, 180))
+    angles = (a0, a0 + float(rng.choice([-1, 1]) * rng.uniform(35, 145)))
+    units = str(rng.choice(["um", "mm", "mil", "m"]))
+    comps = {b: [(k, float(rng.uniform(0.5, 80)), float(rng.uniform(0, 360)),
+                  float(rng.uniform(0.5, 80)), float(rng.uniform(0, 360))) for k in (1, 2, 3)]
+             for b in (1, 2, 3, 4)}
+    fr = extract_features(make_recording(fs=fs, n=n, rpm=rpm, components=comps, angles=angles,
+                                         units=units, speed_rpm=rpm))
+    _check_components(fr, comps, rtol=1e-6, phase_tol_deg=1e-5)
+    for b, cs in comps.items():
+        _, ax, phx, ay, phy = cs[0]
+        cx, cy = ax * np.exp(-1j * np.deg2rad(phx)), ay * np.exp(-1j * np.deg2rad(phy))
+        assert fr[f"b{b}_1x_fwd_um_pp"] == pytest.approx(abs(cx + 1j * cy), rel=1e-6)
+        assert fr[f"b{b}_1x_rev_um_pp"] == pytest.approx(abs(cx - 1j * cy), rel=1e-6)
+    expect = _wrap(comps[2][0][2] - comps[3][0][2])
+    assert abs(_wrap(fr["dphase_1x_b2_b3_x_deg"] - expect)) < 1e-5
