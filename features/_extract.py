@@ -1,7 +1,7 @@
 """``extract_features``: one recording → the fixed, named feature vector plus details."""
 from __future__ import annotations
 
-import contextlib
+import threading
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -129,23 +129,42 @@ def _wrap_deg(d: float) -> float:
     return d - 360.0 if d > 180.0 else d
 
 
-_BLAS_CONTROLLER: Any = None
+class _BlasLimit:
+    """Limit BLAS threads to ``cfg.BLAS_THREADS`` while any extraction runs (thread-safe).
+
+    The BLAS thread count is process-wide, so concurrent extractions share one limit: the first
+    to enter sets it, the last to leave restores the caller's setting.
+    """
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._active = 0
+        self._controller: Any = None
+        self._restore: Any = None
+
+    def __enter__(self) -> "_BlasLimit":
+        with self._lock:
+            if self._active == 0 and cfg.BLAS_THREADS is not None:
+                if self._controller is None:
+                    try:
+                        from threadpoolctl import ThreadpoolController
+                        self._controller = ThreadpoolController()
+                    except Exception:  # pragma: no cover - threadpoolctl ships with scikit-learn
+                        self._controller = False
+                if self._controller:
+                    self._restore = self._controller.limit(limits=cfg.BLAS_THREADS, user_api="blas")
+            self._active += 1
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        with self._lock:
+            self._active -= 1
+            if self._active == 0 and self._restore is not None:
+                self._restore.restore_original_limits()
+                self._restore = None
 
 
-def _blas_limit():
-    """Context limiting BLAS threads to ``cfg.BLAS_THREADS`` during one extraction (or a no-op)."""
-    global _BLAS_CONTROLLER
-    if cfg.BLAS_THREADS is None:
-        return contextlib.nullcontext()
-    if _BLAS_CONTROLLER is None:
-        try:
-            from threadpoolctl import ThreadpoolController
-            _BLAS_CONTROLLER = ThreadpoolController()
-        except Exception:  # pragma: no cover - threadpoolctl ships with scikit-learn
-            _BLAS_CONTROLLER = False
-    if _BLAS_CONTROLLER is False:
-        return contextlib.nullcontext()
-    return _BLAS_CONTROLLER.limit(limits=cfg.BLAS_THREADS, user_api="blas")
+_blas_limit = _BlasLimit()
 
 
 def extract_features(recording: Recording) -> FeatureResult:
@@ -170,7 +189,7 @@ def extract_features(recording: Recording) -> FeatureResult:
     """
     if not isinstance(recording, Recording):
         raise ValueError(f"extract_features expects a features.Recording, got {type(recording).__name__}")
-    with _blas_limit():
+    with _blas_limit:
         return _extract(recording)
 
 

@@ -226,3 +226,21 @@ def test_keyphasor_poincare_points_period_2():
     pts = fr.bearings[3].poincare_um
     np.testing.assert_allclose(pts[0] - pts[1], [8.0, 0.0], atol=1e-3)   # x alternates ±4 µm
     assert fr["b3_poincare_rms_um"] == pytest.approx(4.0, rel=1e-3)
+
+
+def test_concurrent_extractions_agree_and_restore_blas_threads():
+    """Threads share the per-thread scratch buffers safely and leave the BLAS setting as found."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from threadpoolctl import threadpool_info
+
+    before = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+    recs = [make_recording(speed_rpm=RPM, noise_um=0.5, seed=s) for s in range(4)]
+    serial = [extract_features(r).values for r in recs]
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        parallel = list(pool.map(lambda r: extract_features(r).values, recs * 3))
+    for i, v in enumerate(parallel):
+        # equal up to the last bits (buffer alignment can change SIMD summation order)
+        np.testing.assert_allclose(v, serial[i % 4], rtol=1e-12, atol=1e-12)
+    after = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+    assert after == before
