@@ -193,3 +193,12 @@ def test_a_sample_the_simulator_refuses_is_labelled_error_not_dropped(small):
     out = run_sample(SampleTask(p, SimulationSettings.from_spec(r.spec), MeasurementSettings.from_spec(r.spec)))
     assert out.status == "error" and "misalignment" in out.message
     assert out.waveforms_um.shape == (8, 164) and np.all(np.isnan(out.waveforms_um))
+
+
+def test_conflicting_execution_options_are_refused_before_any_file_is_made(tmp_path):
+    spec = write_spec(tmp_path / "spec.toml")
+    with pytest.raises(ValueError, match="at most one of n_workers, scheduler_address"):
+        generate(spec, tmp_path / "o.h5", n_workers=2, scheduler_address="tcp://127.0.0.1:1")
+    with pytest.raises(ValueError, match="n_workers must be >= 0"):
+        generate(spec, tmp_path / "o.h5", n_workers=-1)
+    assert not (tmp_path / "o.h5").exists()

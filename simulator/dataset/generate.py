@@ -176,6 +176,12 @@ def generate(
     """
     from simulator.runner import run_tasks
 
+    given = [k for k, v in (("n_workers", n_workers), ("scheduler_address", scheduler_address),
+                            ("client", client)) if v is not None]
+    if len(given) > 1:
+        raise ValueError(f"give at most one of n_workers, scheduler_address, client (got {', '.join(given)})")
+    if n_workers is not None and n_workers < 0:
+        raise ValueError(f"n_workers must be >= 0 (0 = serial), got {n_workers}")
     t_start = time.perf_counter()
     t_first = math.nan
     resolved = spec if isinstance(spec, ResolvedSpec) else load_spec(spec)
