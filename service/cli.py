@@ -11,8 +11,6 @@ def register(app: typer.Typer) -> None:
     def serve(
         host: str = typer.Option("127.0.0.1", help="Interface to listen on (0.0.0.0 for every interface)."),
         port: int = typer.Option(8000, min=1, max=65535, help="TCP port."),
-        workers: int = typer.Option(1, min=1, max=64, help="uvicorn worker processes (jobs run in each; "
-                                    "keep 1 unless the database is shared, e.g. PostgreSQL)."),
     ) -> None:
         """Serve the HTTP API (settings from ROTORDIAG_* environment variables or .env; see docs/service.md)."""
         import uvicorn
@@ -27,7 +25,9 @@ def register(app: typer.Typer) -> None:
             typer.secho(f"error: invalid settings: {msgs}", fg="red", err=True)
             raise typer.Exit(2) from None
         try:
-            uvicorn.run("service.main:app", host=host, port=port, workers=workers,
+            # One process: it owns the job table (a second process would mark the first one's running
+            # jobs interrupted at its startup); jobs scale out on Dask, not on uvicorn workers.
+            uvicorn.run("service.main:app", host=host, port=port,
                         log_level=settings.log_level.lower(), access_log=False)
         except OSError as exc:  # e.g. address in use
             typer.secho(f"error: cannot listen on {host}:{port}: {exc}", fg="red", err=True)

@@ -235,3 +235,9 @@ def test_failed_job_reports_error(tmp_path):
         assert j["status"] == "failed" and "sample 3" in j["error"]
         assert c.get("/jobs", params={"status": "failed"}).json()["count"] == 1
         assert c.get("/jobs/nope").status_code == 404
+
+
+@pytest.mark.parametrize("path", ["/diagnose/batch", "/datasets", "/models/retrain"])
+def test_json_endpoints_refuse_other_content_types(client, path):
+    r = client.post(path, content=b'{"records": []}', headers={"content-type": "text/plain", **auth()})
+    assert r.status_code == 415 and "application/json" in r.json()["detail"]

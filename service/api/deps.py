@@ -61,3 +61,14 @@ SessionDep = Annotated[Session, Depends(get_db)]
 ModelsDep = Annotated[ModelStore, Depends(get_models)]
 JobsDep = Annotated[JobManager, Depends(get_jobs)]
 ApiKeyDep = Depends(require_api_key)
+
+
+def require_json(request: Request) -> None:
+    """415 unless the body is declared as JSON (routes whose body is a JSON model)."""
+    media = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if media != "application/json" and not media.endswith("+json"):
+        raise HTTPException(415, f"unsupported Content-Type {media or '(none)'!r}: this endpoint takes "
+                            "application/json")
+
+
+JsonBodyDep = Depends(require_json)

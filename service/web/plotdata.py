@@ -79,7 +79,7 @@ def half_spectrum_um_pp(signals_um: np.ndarray, sample_rate_hz: float, f_max_hz:
     """
     s = np.atleast_2d(np.asarray(signals_um, dtype=float))
     n = s.shape[1]
-    w = np.hanning(n)
+    w = np.hanning(n + 1)[:-1]            # periodic Hann: exact for lines on a bin
     spec = np.fft.rfft((s - s.mean(axis=1, keepdims=True)) * w, axis=1)
     freq = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
     keep = freq <= f_max_hz
@@ -102,7 +102,7 @@ def full_spectrum_um_pp(x_um: np.ndarray, y_um: np.ndarray, sample_rate_hz: floa
     """
     z = np.asarray(x_um, dtype=float) + 1j * np.asarray(y_um, dtype=float)
     n = z.size
-    w = np.hanning(n)
+    w = np.hanning(n + 1)[:-1]            # periodic Hann: exact for lines on a bin
     spec = np.fft.fftshift(np.fft.fft((z - z.mean()) * w))
     freq = np.fft.fftshift(np.fft.fftfreq(n, 1.0 / sample_rate_hz))
     keep = np.abs(freq) <= f_max_hz

@@ -11,7 +11,7 @@ from ...inference import ModelUnavailable
 from ...parsing import BinaryMeta, load_csv, load_hdf5, load_npy, recording_from_array, recording_from_model
 from ...schemas import MAX_LABEL_LEN, BatchItem, BatchRequest, BatchResponse, DiagnoseRequest, DiagnoseResponse, ErrorOut
 from ...store import store_diagnosis
-from ..deps import ModelsDep, StateDep
+from ..deps import JsonBodyDep, ModelsDep, StateDep
 from ..errors import InputError, validation_detail
 
 router = APIRouter(tags=["diagnose"])
@@ -169,7 +169,7 @@ async def diagnose(
 
 
 @router.post(
-    "/diagnose/batch", response_model=BatchResponse, responses=_ERRORS,
+    "/diagnose/batch", response_model=BatchResponse, responses=_ERRORS, dependencies=[JsonBodyDep],
     summary="Diagnose many recordings (JSON)",
     description="Each record is diagnosed independently; a record the service cannot diagnose gets its own "
     "`status_code` and `error` while the others still get results. The number of records is capped by "

@@ -8,13 +8,14 @@ from fastapi.concurrency import run_in_threadpool
 
 from ...schemas import DatasetJobRequest, ErrorOut, JobCreated, JobList, JobOut, JobStatus, RetrainRequest
 from ...work import prepare_dataset_job, prepare_retrain_job
-from ..deps import ApiKeyDep, JobsDep
+from ..deps import ApiKeyDep, JobsDep, JsonBodyDep
 from ..errors import InputError
 
 router = APIRouter(tags=["jobs"])
 
 _AUTH = {401: {"model": ErrorOut, "description": "No X-API-Key header."},
-         403: {"model": ErrorOut, "description": "Wrong API key."}}
+         403: {"model": ErrorOut, "description": "Wrong API key."},
+         415: {"model": ErrorOut, "description": "Body is not application/json."}}
 _JobId = Annotated[str, Path(min_length=1, max_length=64, description="Job id returned by the creating POST.")]
 
 
@@ -22,7 +23,7 @@ def _out(job) -> JobOut:
     return JobOut.model_validate(job, from_attributes=True)
 
 
-@router.post("/datasets", status_code=202, response_model=JobCreated, dependencies=[ApiKeyDep],
+@router.post("/datasets", status_code=202, response_model=JobCreated, dependencies=[ApiKeyDep, JsonBodyDep],
              responses={**_AUTH, 422: {"model": ErrorOut, "description": "Invalid spec; `detail` names the key."}},
              summary="Generate a labelled dataset from a sweep spec (job)")
 async def create_dataset(body: DatasetJobRequest, jobs: JobsDep) -> JobCreated:
@@ -31,7 +32,7 @@ async def create_dataset(body: DatasetJobRequest, jobs: JobsDep) -> JobCreated:
     return JobCreated(id=job.id, status=job.status, url=f"/jobs/{job.id}")
 
 
-@router.post("/models/retrain", status_code=202, response_model=JobCreated, dependencies=[ApiKeyDep],
+@router.post("/models/retrain", status_code=202, response_model=JobCreated, dependencies=[ApiKeyDep, JsonBodyDep],
              tags=["models"],
              responses={**_AUTH, 422: {"model": ErrorOut, "description": "Invalid plant, sweep or training options."}},
              summary="Retrain the model for a plant (job)")
