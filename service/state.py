@@ -28,6 +28,7 @@ class AppState:
     @classmethod
     def start(cls, settings: Settings) -> "AppState":
         """Create the data directory and tables, open the registry, recover interrupted jobs."""
+        _configure_logging(settings.log_level)
         settings.data_dir.mkdir(parents=True, exist_ok=True)
         settings.datasets_dir.mkdir(parents=True, exist_ok=True)
         _ = settings.effective_api_key  # generate + log the development key once, at startup
@@ -48,3 +49,13 @@ class AppState:
         """Stop the job threads (running jobs are marked interrupted) and close the engine."""
         self.jobs.shutdown()
         self.engine.dispose()
+
+
+def _configure_logging(level: str) -> None:
+    """Give the ``rotordiag`` loggers a stderr handler when the host (uvicorn, tests) has not."""
+    logger = logging.getLogger("rotordiag")
+    logger.setLevel(level.upper() if level.upper() in logging.getLevelNamesMapping() else logging.INFO)
+    if not logger.handlers and not logging.getLogger().handlers:
+        handler = logging.StreamHandler()
+        handler.setFormatter(logging.Formatter("%(levelname)s:     %(name)s: %(message)s"))
+        logger.addHandler(handler)

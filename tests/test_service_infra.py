@@ -241,3 +241,14 @@ def test_failed_job_reports_error(tmp_path):
 def test_json_endpoints_refuse_other_content_types(client, path):
     r = client.post(path, content=b'{"records": []}', headers={"content-type": "text/plain", **auth()})
     assert r.status_code == 415 and "application/json" in r.json()["detail"]
+
+
+def test_development_key_is_generated_and_logged_once(tmp_path, caplog):
+    settings = make_settings(tmp_path, api_key="")
+    with caplog.at_level("WARNING", logger="rotordiag.service"):
+        with TestClient(create_app(settings)) as c:
+            key = settings.effective_api_key
+            assert c.post("/jobs/x/resume", headers={"X-API-Key": key}).status_code == 404   # key accepted
+            assert c.post("/jobs/x/resume", headers={"X-API-Key": API_KEY}).status_code == 403
+    logged = [r.getMessage() for r in caplog.records if key in r.getMessage()]
+    assert len(logged) == 1 and "X-API-Key" in logged[0]
