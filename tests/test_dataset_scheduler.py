@@ -88,3 +88,4 @@ def test_unreachable_scheduler_is_a_clean_error(tmp_path):
                                  f"tcp://127.0.0.1:{_free_port()}", "--connect-timeout", "2", "--no-progress"])
     assert r.exit_code == 2, r.output
     assert "cannot reach the Dask scheduler" in r.output and "Traceback" not in r.output
+    assert not (tmp_path / "o.h5").exists()

@@ -174,8 +174,6 @@ def generate(
         A sample's computation raised something other than the simulator's
         input errors; the samples finished so far are kept, rerun to resume.
     """
-    from simulator.runner import run_tasks
-
     given = [k for k, v in (("n_workers", n_workers), ("scheduler_address", scheduler_address),
                             ("client", client)) if v is not None]
     if len(given) > 1:
@@ -183,7 +181,6 @@ def generate(
     if n_workers is not None and n_workers < 0:
         raise ValueError(f"n_workers must be >= 0 (0 = serial), got {n_workers}")
     t_start = time.perf_counter()
-    t_first = math.nan
     resolved = spec if isinstance(spec, ResolvedSpec) else load_spec(spec)
     design = build_design(resolved)
     meas = MeasurementSettings.from_spec(resolved.spec)
@@ -191,9 +188,28 @@ def generate(
     from rotordiag import code_version
 
     L = layout(len(meas.channels), meas.n_points, len(meas.bearings), resolved.base_plant.to_dict())
+    own_client = None
+    if scheduler_address is not None:  # connect first: an unreachable scheduler leaves no file behind
+        from distributed import Client
+
+        own_client = client = Client(scheduler_address, timeout=connect_timeout_s, set_as_default=False)
+        scheduler_address = None
+    try:
+        return _run(resolved, design, meas, sim, L, out, n_workers, client, progress, on_progress,
+                    t_start, code_version())
+    finally:
+        if own_client is not None:
+            own_client.close()
+
+
+def _run(resolved, design, meas, sim, L, out, n_workers, client, progress, on_progress, t_start,
+         version) -> GenerateSummary:
+    from simulator.runner import run_tasks
+
+    t_first = math.nan
     writer = DatasetWriter.open(
         out, n_samples=design.n_samples, spec_hash=resolved.spec_hash, L=L, channels=meas.channels,
-        attrs=_file_attrs(resolved, design, meas), dataset_attrs=_dataset_attrs(), code_version=code_version(),
+        attrs=_file_attrs(resolved, design, meas), dataset_attrs=_dataset_attrs(), code_version=version,
     )
     n_before = int(writer.done.sum())
     todo = np.flatnonzero(~writer.done)
@@ -211,10 +227,8 @@ def generate(
 
                 results = tqdm(results, total=len(todo), desc="samples", unit="sample")
         else:
-            results = run_tasks(run_sample, tasks, n_workers=n_workers, scheduler_address=scheduler_address,
-                                client=client,
-                                total=len(todo), progress=progress, desc="samples", unit="sample",
-                                connect_timeout_s=connect_timeout_s)
+            results = run_tasks(run_sample, tasks, n_workers=n_workers, client=client,
+                                total=len(todo), progress=progress, desc="samples", unit="sample")
         for _, output in results:
             params = design[output.index]
             writer.write_sample(output.index, _rows(params, output))
