@@ -103,3 +103,17 @@ def test_sample_seeds_do_not_depend_on_the_number_of_samples():
 def test_index_out_of_range():
     with pytest.raises(IndexError, match="out of range"):
         make("sobol", n=8)[8]
+
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+
+@settings(max_examples=25, deadline=None)
+@given(lo=st.floats(100, 5999), width=st.floats(0, 3000), dlo=st.floats(0, 0.89), seed=st.integers(0, 2**62),
+       method=st.sampled_from(["sobol", "lhs"]), n=st.integers(1, 40))
+def test_random_designs_stay_inside_any_valid_range(lo, width, dlo, seed, method, n):
+    hi = min(lo + width, 6000.0)
+    d = make(method, n=n, seed=seed, speed=f"{{min = {lo!r}, max = {hi!r}}}", delta=f"{{min = {dlo!r}, max = 0.9}}")
+    s, m = column(d, "speed_rpm"), column(d, "misalignment")
+    assert len(d) == n
+    assert np.all((s >= lo) & (s <= hi)) and np.all((m >= dlo) & (m <= 0.9))
