@@ -197,10 +197,9 @@ def _extract(recording: Recording) -> FeatureResult:
     rec = recording
     fs = rec.sample_rate_hz
     bearings = rec.bearings
-    cols = []
-    for b in bearings:
-        cols.extend(rec.xy_um(b))
-    data = np.vstack(cols)  # (2 × n_bearings, n): x, y of each bearing
+    data = np.empty((2 * len(bearings), rec.n_points))  # x, y of each bearing
+    for i, b in enumerate(bearings):
+        rec.xy_um(b, out=data[2 * i:2 * i + 2])
 
     sa = shaft_angle(rec, data)
     warnings = list(sa.warnings)

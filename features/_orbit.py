@@ -102,10 +102,10 @@ def orbit_shapes(cx: np.ndarray, cy: np.ndarray, whirl_hint: np.ndarray | None =
     with np.errstate(divide="ignore", invalid="ignore"):
         concavity = np.where(absturn > 0, np.maximum(0.0, -s[:, None] * dpsi).sum(axis=1) / absturn, np.nan)
     # diameter: coarse pairwise search on every third grid point, then a fine local search
-    z = (x + 1j * y)[:, ::3]
-    d = np.abs(z[:, :, None] - z[:, None, :])                 # (nb, m/3, m/3)
-    flat = d.reshape(nb, -1).argmax(axis=1)
-    i, j = np.divmod(flat, z.shape[1])
+    xs, ys = x[:, ::3], y[:, ::3]
+    d2 = (xs[:, :, None] - xs[:, None, :]) ** 2 + (ys[:, :, None] - ys[:, None, :]) ** 2   # (nb, m/3, m/3)
+    flat = d2.reshape(nb, -1).argmax(axis=1)
+    i, j = np.divmod(flat, xs.shape[1])
     step = 3 * 2 * np.pi / m
     fine = np.linspace(-step, step, 65)
     ks = np.arange(1, k_max + 1)
@@ -116,7 +116,7 @@ def orbit_shapes(cx: np.ndarray, cy: np.ndarray, whirl_hint: np.ndarray | None =
     zi = np.einsum("bfk,bk->bf", ei, cx).real + 1j * np.einsum("bfk,bk->bf", ei, cy).real
     zj = np.einsum("bfk,bk->bf", ej, cx).real + 1j * np.einsum("bfk,bk->bf", ej, cy).real
     pp = np.maximum(np.abs(zi[:, :, None] - zj[:, None, :]).reshape(nb, -1).max(axis=1),
-                    d.reshape(nb, -1).max(axis=1))
+                    np.sqrt(d2.reshape(nb, -1).max(axis=1)))
     return [OrbitShape(float(pp[b]), float(area[b]), float(ellipticity[b]), int(turning[b]),
                        float(concavity[b]), np.column_stack([x[b], y[b]])) for b in range(nb)]
 

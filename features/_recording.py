@@ -186,17 +186,26 @@ class Recording:
             return float(cl.get(bearing, float("nan")))
         return float(cl)
 
-    def xy_um(self, bearing: int) -> tuple[np.ndarray, np.ndarray]:
+    def xy_um(self, bearing: int, out: np.ndarray | None = None) -> np.ndarray:
         """Horizontal and vertical displacement (µm) of ``bearing`` from its probe pair.
 
-        Solves ``p_i = x cos θ_i + y sin θ_i`` for the two probes.
+        Solves ``p_i = x cos θ_i + y sin θ_i`` for the two probes. Returns shape (2, n_points)
+        (rows x, y), written into ``out`` when given.
         """
         pair = [c for c in self.channels if c.bearing == bearing]
         if len(pair) != 2:
             raise ValueError(f"bearing {bearing} is not in this recording (bearings: {list(self.bearings)})")
-        th = np.deg2rad([pair[0].angle_deg, pair[1].angle_deg])
-        m = np.array([[np.cos(th[0]), np.sin(th[0])], [np.cos(th[1]), np.sin(th[1])]])
-        # fold the unit factors into the inverse projection: one pass over the samples
-        inv = np.linalg.inv(m) * np.array([UNITS_TO_UM[pair[0].units], UNITS_TO_UM[pair[1].units]])[None, :]
-        xy = inv @ np.vstack([pair[0].data, pair[1].data])
-        return xy[0], xy[1]
+        th1, th2 = np.deg2rad(pair[0].angle_deg), np.deg2rad(pair[1].angle_deg)
+        det = np.sin(th2 - th1)              # of [[cos θ1, sin θ1], [cos θ2, sin θ2]]
+        u1, u2 = UNITS_TO_UM[pair[0].units], UNITS_TO_UM[pair[1].units]
+        # inverse projection with the unit factors folded in
+        a11, a12 = np.sin(th2) / det * u1, -np.sin(th1) / det * u2
+        a21, a22 = -np.cos(th2) / det * u1, np.cos(th1) / det * u2
+        if out is None:
+            out = np.empty((2, self.n_points))
+        p1, p2 = pair[0].data, pair[1].data
+        np.multiply(p1, a11, out=out[0])
+        out[0] += a12 * p2
+        np.multiply(p1, a21, out=out[1])
+        out[1] += a22 * p2
+        return out
