@@ -187,7 +187,10 @@
     for (const t of yt) { const y = Math.round(Y(t.v)) + 0.5; ctx.moveTo(L, y); ctx.lineTo(L + pw, y); }
     ctx.stroke();
     ctx.fillStyle = "#333"; ctx.textAlign = "center"; ctx.textBaseline = "top";
-    for (const t of xt) ctx.fillText(t.s, X(t.v), T + ph + 4);
+    for (const t of xt) {        // a label that would spill past the frame (into the y labels) is left out
+      const half = ctx.measureText(t.s).width / 2;
+      if (X(t.v) - half >= L - 8 && X(t.v) + half <= L + pw + R) ctx.fillText(t.s, X(t.v), T + ph + 4);
+    }
     ctx.textAlign = "right"; ctx.textBaseline = "middle";
     for (const t of yt) ctx.fillText(t.s, L - 5, Y(t.v));
     ctx.strokeStyle = "#555"; ctx.strokeRect(L + 0.5, T + 0.5, pw - 1, ph - 1);
