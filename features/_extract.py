@@ -302,10 +302,12 @@ def _extract(recording: Recording) -> FeatureResult:
         f[f"{p}orbit12_pp_per_c"] = orb.pp_um / c
         f[f"{p}orbit12_area_um2"] = orb.area_um2
         f[f"{p}orbit12_area_per_c2"] = orb.area_um2 / c ** 2
-        f[f"{p}orbit12_ellipticity"] = orb.ellipticity
-        f[f"{p}orbit12_turning_number"] = float(orb.turning_number)
-        f[f"{p}orbit12_loop"] = float(orb.has_loop)
-        f[f"{p}orbit12_concavity"] = orb.concavity
+        # no 1X or 2X to speak of (below 1e-9 of the direct motion): no shape either
+        degenerate = not orb.pp_um > 1e-9 * max(amp_list[ix], amp_list[iy])
+        f[f"{p}orbit12_ellipticity"] = float("nan") if degenerate else orb.ellipticity
+        f[f"{p}orbit12_turning_number"] = float("nan") if degenerate else float(orb.turning_number)
+        f[f"{p}orbit12_loop"] = float("nan") if degenerate else float(orb.has_loop)
+        f[f"{p}orbit12_concavity"] = float("nan") if degenerate else orb.concavity
         # sub-synchronous content of the orbit (x and y together)
         pb, cum = pb_all[i], cum_all[i]
         total_ms = float(ms[ix] + ms[iy])

@@ -85,3 +85,12 @@ def test_orbit_peak_to_peak_against_dense_brute_force():
         z = (np.exp(1j * np.outer(th, [1, 2])) @ cx).real + 1j * (np.exp(1j * np.outer(th, [1, 2])) @ cy).real
         brute = np.max(np.abs(z[:, None] - z[None, :]))
         assert orbit_shape(cx, cy).pp_um == pytest.approx(brute, rel=1e-5)  # brute grid error ~1e-6
+
+
+def test_orbit_without_1x_or_2x_has_no_shape():
+    """Only 3X present: the 1X + 2X orbit is a point; its shape features are NaN, not 'a loop'."""
+    fr = extract_features(make_recording(components={2: [(3, 5.0, 0.0, 5.0, 90.0)]}, speed_rpm=RPM))
+    assert fr["b2_orbit12_um_pp"] == pytest.approx(0.0, abs=1e-9)
+    for name in ("turning_number", "loop", "concavity", "ellipticity"):
+        assert np.isnan(fr[f"b2_orbit12_{name}"]), name
+    assert fr["b2_3x_major_um_pp"] == pytest.approx(10.0, rel=1e-9)
