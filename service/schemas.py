@@ -194,10 +194,12 @@ class DiagnoseResponse(BaseModel):
     misalignment: float | None = Field(..., description="Estimated misalignment Δ = δ/c (offset over radial "
                                        "clearance, non-dimensional).")
     misalignment_interval: list[float | None] = Field(..., min_length=2, max_length=2,
-                                                      description="[low, high] interval of Δ at `interval_level`.")
+                                                      description="[low, high] interval of Δ at `interval_level` "
+                                                      "(null: unbounded on that side).")
     interval_level: float | None = Field(..., description="Nominal coverage of the Δ interval (e.g. 0.9).")
     offset_um: float | None = Field(None, description="Offset δ = Δ·c in micrometres (only when `clearance_um` was given).")
-    offset_interval_um: list[float | None] | None = Field(None, description="[low, high] of δ in micrometres.")
+    offset_interval_um: list[float | None] | None = Field(None, description="[low, high] of δ in micrometres "
+                                                          "(null inside: unbounded on that side).")
     motion_type: str | None = Field(None, description="Motion type of the shaft (e.g. `period-1`, `quasi-periodic`), "
                                     "when the record is long enough to tell.")
     top_features: list[FeatureContributionOut] = Field(..., description="Features that drove the verdict, "

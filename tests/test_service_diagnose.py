@@ -50,8 +50,8 @@ def _check_verdict(v, active):
     assert set(v["probabilities"]) == set(v["bands"]["names"])
     assert sum(v["probabilities"].values()) == pytest.approx(1.0, abs=1e-9)
     assert v["severity"] == max(v["probabilities"], key=v["probabilities"].get)
-    lo, hi = v["misalignment_interval"]
-    assert lo <= v["misalignment"] <= hi
+    lo, hi = v["misalignment_interval"]                 # null = unbounded (JSON has no infinity)
+    assert (-np.inf if lo is None else lo) <= v["misalignment"] <= (np.inf if hi is None else hi)
     assert v["model_version"] == active
     assert [b["bearing"] for b in v["bearings"]] == [1, 2, 3, 4]
     assert all(k.startswith(f"b{b['bearing']}_") for b in v["bearings"] for k in b["features"])
