@@ -60,24 +60,42 @@ def _checked(build, *args):
         raise InputError(str(exc)) from None
 
 
-async def _recording_from_request(request: Request, query: dict[str, Any]) -> tuple[Any, str | None, str | None]:
-    """Recording, asset_id, plant from any accepted body form."""
+async def _read_body(request: Request) -> tuple[str, bytes, str]:
+    """``(kind, bytes, file name)`` of the body: kind is ``json``, ``npy`` or ``upload``; 415 for anything else.
+
+    Only the I/O happens here, on the event loop; parsing runs in the thread pool (``_parse``).
+    """
     media = _media_type(request)
     if media in JSON_TYPES:
-        body = await request.body()
+        return "json", await request.body(), ""
+    if media in NPY_TYPES:
+        return "npy", await request.body(), ""
+    if media == "multipart/form-data":
+        form = await request.form(max_files=1, max_fields=8)
+        try:
+            upload = form.get("file")
+            if upload is None or isinstance(upload, str):
+                raise InputError("multipart upload: put the waveform file in a part named 'file' (with a filename)")
+            return "upload", await upload.read(), upload.filename or ""
+        finally:
+            await form.close()
+    raise InputError(
+        f"unsupported Content-Type {media or '(none)'!r}: send application/json (DiagnoseRequest), "
+        "application/octet-stream (an NPY array) or multipart/form-data (a CSV/NPY/HDF5 file in part 'file')", 415)
+
+
+def _parse(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> tuple[Any, str | None, str | None]:
+    """Recording, asset_id, plant from a body read by :func:`_read_body`."""
+    if kind == "json":
         try:
             req = DiagnoseRequest.model_validate_json(body)
         except ValidationError as exc:
             raise HTTPException(422, validation_detail(exc, ("body",))) from None
         return _checked(recording_from_model, req), req.asset_id, req.plant
-    if media in NPY_TYPES:
-        array, file_meta = load_npy(await request.body()), {}
-    elif media == "multipart/form-data":
-        array, file_meta = await _read_upload(request, query.get("sample_index", 0))
+    if kind == "npy":
+        array, file_meta = load_npy(body), {}
     else:
-        raise InputError(
-            f"unsupported Content-Type {media or '(none)'!r}: send application/json (DiagnoseRequest), "
-            "application/octet-stream (an NPY array) or multipart/form-data (a CSV/NPY/HDF5 file in part 'file')", 415)
+        array, file_meta = _load_upload(body, filename, query.get("sample_index", 0))
     given = {k: v for k, v in query.items() if v is not None and k != "sample_index"}
     merged = {**file_meta, **given}  # query parameters win over metadata stored in the file
     if "sample_rate_hz" not in merged:
@@ -87,23 +105,24 @@ async def _recording_from_request(request: Request, query: dict[str, Any]) -> tu
     return _checked(recording_from_array, array, meta), meta.asset_id, meta.plant
 
 
-async def _read_upload(request: Request, sample_index: int):
-    form = await request.form(max_files=1, max_fields=8)
-    try:
-        upload = form.get("file")
-        if upload is None or isinstance(upload, str):
-            raise InputError("multipart upload: put the waveform file in a part named 'file' (with a filename)")
-        data = await upload.read()
-        name = (upload.filename or "").lower()
-    finally:
-        await form.close()
+async def _recording_from_request(request: Request, query: dict[str, Any]) -> tuple[Any, str | None, str | None]:
+    """Recording, asset_id, plant from any accepted body form (read on the loop, parsed in the thread pool).
+
+    Also used by the web page's ``/ui/plot-data`` (service/web/routes.py).
+    """
+    kind, body, filename = await _read_body(request)
+    return await run_in_threadpool(_parse, kind, body, filename, query)
+
+
+def _load_upload(data: bytes, filename: str, sample_index: int):
+    name = filename.lower()
     if data.startswith(b"\x93NUMPY") or name.endswith(".npy"):
         return load_npy(data), {}
     if data.startswith(b"\x89HDF") or name.endswith((".h5", ".hdf5")):
         return load_hdf5(data, sample_index)
     if name.endswith((".csv", ".txt")) or not name:
         return load_csv(data), {}
-    raise InputError(f"multipart upload {upload.filename!r}: unknown file type; send .csv, .npy, .h5 or .hdf5", 415)
+    raise InputError(f"multipart upload {filename!r}: unknown file type; send .csv, .npy, .h5 or .hdf5", 415)
 
 
 def _diagnose_sync(state, recording, asset_id: str | None, plant: str | None, version: str | None) -> dict:
@@ -164,8 +183,13 @@ async def diagnose(
     query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=asset_id,
                  plant=plant, units=units, bearings=bearings, angles_deg=angles_deg,
                  keyphasor_times_s=keyphasor_times_s, sample_index=sample_index)
-    recording, rec_asset, rec_plant = await _recording_from_request(request, query)
-    return await run_in_threadpool(_diagnose_sync, state, recording, rec_asset, rec_plant, model_version)
+    kind, body, filename = await _read_body(request)
+    return await run_in_threadpool(_parse_and_diagnose, state, kind, body, filename, query, model_version)
+
+
+def _parse_and_diagnose(state, kind, body, filename, query, model_version) -> dict:
+    recording, asset_id, plant = _parse(kind, body, filename, query)
+    return _diagnose_sync(state, recording, asset_id, plant, model_version)
 
 
 @router.post(
