@@ -209,7 +209,7 @@ def register(app: typer.Typer) -> None:
         pl = load_plant(plant)
         settings = replace(QUICK if quick else FULL, mechanism=mechanism)
         if not quick:
-            typer.echo("full resolution: about 10 min on 2 cores (use --quick for a coarse set)", err=True)
+            typer.echo("full resolution: 459 operating points, about 15-25 min on 2 cores (use --quick for a coarse set)", err=True)
         try:
             summary = paper_figures(out, settings, plant=pl, **opts)
         except ValueError as exc:

@@ -164,7 +164,7 @@ class FigureSettings:
 
 
 QUICK = FigureSettings(speed_step_rpm=100.0, delta_step=0.06, transient_revs=300, record_revs=64, lle_revs=60)
-FULL = FigureSettings(speed_step_rpm=20.0, delta_step=0.01, transient_revs=400, record_revs=128, lle_revs=150,
+FULL = FigureSettings(speed_step_rpm=25.0, delta_step=0.01, transient_revs=400, record_revs=128, lle_revs=100,
                       orbit_record_revs=128)
 
 SWEEP_DELTAS = (0.0, 0.02, 0.10)
