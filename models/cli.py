@@ -31,7 +31,7 @@ def register(app: typer.Typer) -> None:
 
     @app.command()
     def train(
-        data: Path = typer.Argument(..., help="Dataset HDF5 file (rotordiag dataset generate / merge)."),
+        data: list[Path] = typer.Argument(..., help="Dataset HDF5 file(s) (rotordiag dataset generate / merge); several are joined."),
         registry: Path = typer.Option(..., "--registry", help="Registry directory to add the model to (created if missing)."),
         config: Optional[Path] = typer.Option(None, "--config", help="train.toml (bands, estimators, evaluation; see docs/models.md)."),
         activate: bool = typer.Option(True, "--activate/--no-activate", help="Make the new model the active one."),
@@ -42,14 +42,14 @@ def register(app: typer.Typer) -> None:
         from threadpoolctl import threadpool_limits
 
         from .config import TrainConfig
-        from .dataset import load_feature_table
+        from .dataset import load_feature_tables
         from .registry import Registry, RegistryError
         from .train import train_and_register
 
         try:
             cfg = TrainConfig.from_file(config) if config is not None else TrainConfig()
-            typer.echo(f"reading {data} and extracting features …", err=True)
-            table = load_feature_table(data, cache=cache)
+            typer.echo(f"reading {', '.join(map(str, data))} and extracting features …", err=True)
+            table = load_feature_tables(data, cache=cache)
             typer.echo(
                 f"{len(table)} samples from {len(set(table.plant_id.tolist()))} plants "
                 f"(skipped: {table.meta.get('skipped')}; features {table.meta['feature_time_s']} s, "

@@ -220,3 +220,29 @@ def load_feature_table(
             sample_index=r,
             meta=meta,
         )
+
+
+def load_feature_tables(paths, *, cache: bool = True) -> FeatureTable:
+    """:func:`load_feature_table` of each file, concatenated (one model from several files).
+
+    The combined ``dataset_hash`` is the SHA-256 of the files' hashes in order; the other
+    provenance fields become lists.
+    """
+    tables = [load_feature_table(p, cache=cache) for p in paths]
+    if len(tables) == 1:
+        return tables[0]
+    out = FeatureTable.concat(tables)
+    metas = out.meta["sources"]
+    out.meta.update({
+        "dataset_path": [m["dataset_path"] for m in metas],
+        "dataset_hash": hashlib.sha256("|".join(m["dataset_hash"] for m in metas).encode()).hexdigest(),
+        "dataset_hashes": [m["dataset_hash"] for m in metas],
+        "dataset_spec": [m["dataset_spec"] for m in metas],
+        "plant_family": [m["plant_family"] for m in metas],
+        "skipped": {m["dataset_path"]: m["skipped"] for m in metas},
+        "feature_time_s": round(sum(m["feature_time_s"] for m in metas), 2),
+        "feature_cache": {"hit": all(m["feature_cache"]["hit"] for m in metas)},
+    })
+    del out.meta["sources"]
+    del out.meta["source"]
+    return out

@@ -25,6 +25,7 @@ import os
 import re
 import shutil
 import tempfile
+import zipfile
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
@@ -222,7 +223,9 @@ class Registry:
         self.root.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(dir=self.root, prefix=".incoming-"))
         try:
-            sio.dump(model, tmp / MODEL_FILE)
+            # Deflate: a boosted model is thousands of small arrays plus a large JSON schema,
+            # which compress ~5-10x.
+            sio.dump(model, tmp / MODEL_FILE, compression=zipfile.ZIP_DEFLATED, compresslevel=9)
             untrusted = set(sio.get_untrusted_types(file=tmp / MODEL_FILE)) - set(TRUSTED_TYPES)
             if untrusted:
                 raise RegistryError(

@@ -61,6 +61,33 @@ class FeatureTable:
             self.mechanism[rows], self.speed_rpm[rows], self.sample_index[rows], dict(self.meta),
         )
 
+    @classmethod
+    def concat(cls, tables: Sequence["FeatureTable"]) -> "FeatureTable":
+        """Rows of several tables (same feature names) in one; ``meta["sources"]`` lists
+        each table's meta and ``meta["source"]`` the table index of each row."""
+        tables = list(tables)
+        if not tables:
+            raise ValueError("concat: no tables")
+        if len(tables) == 1:
+            return tables[0]
+        names = tables[0].feature_names
+        for k, t in enumerate(tables[1:], 1):
+            if t.feature_names != names:
+                raise ValueError(f"DATA: file {k + 1} has a different feature schema from file 1")
+        out = cls(
+            np.vstack([t.X for t in tables]), names,
+            np.concatenate([t.misalignment for t in tables]),
+            np.concatenate([t.plant_id.astype(object) for t in tables]),
+            np.concatenate([t.mechanism for t in tables]),
+            np.concatenate([t.speed_rpm for t in tables]),
+            np.concatenate([t.sample_index for t in tables]),
+        )
+        out.meta = {
+            "sources": [dict(t.meta) for t in tables],
+            "source": np.concatenate([np.full(len(t), k) for k, t in enumerate(tables)]),
+        }
+        return out
+
     def feature_mask(self, patterns: Sequence[str]) -> np.ndarray:
         """Boolean mask of the columns whose names match any glob pattern."""
         return np.array([any(fnmatch.fnmatchcase(n, p) for p in patterns) for n in self.feature_names], bool)
