@@ -13,6 +13,12 @@ def register(app: typer.Typer) -> None:
         port: int = typer.Option(8000, min=1, max=65535, help="TCP port."),
     ) -> None:
         """Serve the HTTP API (settings from ROTORDIAG_* environment variables or .env; see docs/service.md)."""
+        import os
+
+        # Requests already run in parallel (one diagnosis per CPU); OpenMP/BLAS threads inside each
+        # would oversubscribe the cores. Set before the app (scikit-learn, NumPy) is imported.
+        for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+            os.environ.setdefault(var, "1")
         import uvicorn
         from pydantic import ValidationError
 

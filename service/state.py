@@ -24,6 +24,7 @@ class AppState:
     sessions: sessionmaker
     models: ModelStore
     jobs: JobManager
+    diagnosis_limiter: object = None   # anyio.CapacityLimiter, created on the event loop at first use
 
     @classmethod
     def start(cls, settings: Settings) -> "AppState":

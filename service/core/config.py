@@ -66,6 +66,8 @@ class Settings(BaseSettings):
         "(default: the repository's `models/default_registry/`).",
     )
     max_batch_records: int = Field(64, ge=1, le=10_000, description="Largest number of records in POST /diagnose/batch.")
+    diagnosis_threads: int = Field(
+        0, ge=0, le=256, description="Diagnoses computed at the same time; 0 means one per CPU available.")
     job_threads: int = Field(1, ge=1, le=16, description="Jobs run at the same time (each fans out on Dask).")
     log_level: str = Field("info", description="Log level of the service and uvicorn.")
 
@@ -104,6 +106,18 @@ class Settings(BaseSettings):
         if self.database_url:
             return self.database_url
         return f"sqlite:///{(self.data_dir / 'rotordiag.sqlite3').resolve()}"
+
+    @property
+    def effective_diagnosis_threads(self) -> int:
+        """``diagnosis_threads``, or the number of CPUs this process may use."""
+        import os
+
+        if self.diagnosis_threads:
+            return self.diagnosis_threads
+        try:
+            return max(1, len(os.sched_getaffinity(0)))
+        except AttributeError:  # pragma: no cover - non-Linux
+            return max(1, os.cpu_count() or 1)
 
     @property
     def registry_dir(self) -> Path:

@@ -4,6 +4,8 @@ from __future__ import annotations
 from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, Query, Request
+import anyio
+import anyio.to_thread
 from fastapi.concurrency import run_in_threadpool
 from pydantic import ValidationError
 
@@ -184,7 +186,17 @@ async def diagnose(
                  plant=plant, units=units, bearings=bearings, angles_deg=angles_deg,
                  keyphasor_times_s=keyphasor_times_s, sample_index=sample_index)
     kind, body, filename = await _read_body(request)
-    return await run_in_threadpool(_parse_and_diagnose, state, kind, body, filename, query, model_version)
+    return await anyio.to_thread.run_sync(_parse_and_diagnose, state, kind, body, filename, query, model_version,
+                                          limiter=_diagnosis_limiter(state))
+
+
+def _diagnosis_limiter(state) -> anyio.CapacityLimiter:
+    """At most one diagnosis per CPU at a time: the work is CPU-bound, so more threads only thrash
+    (requests beyond it wait on the event loop, not in a crowd of threads)."""
+    limiter = getattr(state, "diagnosis_limiter", None)
+    if limiter is None:
+        limiter = state.diagnosis_limiter = anyio.CapacityLimiter(state.settings.effective_diagnosis_threads)
+    return limiter
 
 
 def _parse_and_diagnose(state, kind, body, filename, query, model_version) -> dict:
