@@ -252,3 +252,14 @@ def test_development_key_is_generated_and_logged_once(tmp_path, caplog):
             assert c.post("/jobs/x/resume", headers={"X-API-Key": API_KEY}).status_code == 403
     logged = [r.getMessage() for r in caplog.records if key in r.getMessage()]
     assert len(logged) == 1 and "X-API-Key" in logged[0]
+
+
+def test_job_times_are_utc_and_non_finite_results_are_null(tmp_path):
+    app = create_app(make_settings(tmp_path))
+    with TestClient(app) as c:
+        app.state.rd.jobs.register("dataset", lambda params, ctx: {"spearman": float("nan"), "q": float("inf")})
+        job = app.state.rd.jobs.submit("dataset", {})
+        j = _wait(c, job.id, {"succeeded", "failed"})
+        assert j["result"] == {"spearman": None, "q": None}
+        for key in ("created_at", "started_at", "finished_at", "updated_at"):
+            assert j[key].endswith("+00:00") or j[key].endswith("Z"), j[key]
