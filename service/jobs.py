@@ -120,9 +120,11 @@ class JobManager:
         """Stop accepting work, interrupt running jobs, close the Dask client."""
         self.stopping.set()
         self._executor.shutdown(wait=False, cancel_futures=True)
-        self._close_client()
+        self.mark_interrupted()   # right away, in case the process is killed while we wait below
+        self._close_client()      # makes running simulations fail fast
+        # A job thread in a step that cannot be interrupted (a model fit) ends it first; it then records
+        # its own outcome ("succeeded" when the step was the last one).
         self._executor.shutdown(wait=True)
-        self.mark_interrupted()
 
     def client(self):
         """The Dask client shared by jobs, created on first use."""

@@ -135,7 +135,6 @@ def run_dataset(params: dict[str, Any], ctx) -> dict[str, Any]:
 def _generate(spec_toml: str, out, ctx, lo: float, hi: float) -> dict[str, Any]:
     """Run the dataset package's ``generate`` on the job manager's Dask cluster (resumable)."""
     import dataclasses
-    import inspect
 
     from simulator.dataset.generate import generate
     from simulator.dataset.spec import parse_spec
@@ -144,10 +143,8 @@ def _generate(spec_toml: str, out, ctx, lo: float, hi: float) -> dict[str, Any]:
     n = resolved.spec.design.n_samples
     ctx.progress(lo, "simulating", f"starting {n or 'the grid of'} simulations on Dask")
     out.parent.mkdir(parents=True, exist_ok=True)
-    client = ctx.client()
-    kwargs: dict[str, Any] = {"scheduler_address": client.scheduler.address, "progress": False}
-    if "on_progress" in inspect.signature(generate).parameters:   # per-sample progress when the generator offers it
-        kwargs["on_progress"] = _progress_cb(ctx, lo, hi, "simulating")
+    kwargs: dict[str, Any] = {"client": ctx.client(), "progress": False,
+                              "on_progress": _progress_cb(ctx, lo, hi, "simulating")}
     summary = generate(resolved, out, **kwargs)
     ctx.progress(hi, "simulating", "dataset complete")
     result = {k: (str(v) if k == "path" else v) for k, v in dataclasses.asdict(summary).items()}

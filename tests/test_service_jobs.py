@@ -54,6 +54,9 @@ def test_dataset_job_interrupted_by_shutdown_then_resumed(tmp_path):
             job = c.get(f"/jobs/{job_id}").json()
             assert job["status"] in ("queued", "running"), job
             time.sleep(0.2)
+        job = c.get(f"/jobs/{job_id}").json()
+        assert job["stage"] == "simulating" and job["progress"] >= 2 / 16, job   # per-sample progress
+        assert job["message"].startswith("simulating: ") and job["message"].endswith("/16")
     # server stopped mid-run
     done_before = _done_count(out)
     assert 3 <= done_before < 16
