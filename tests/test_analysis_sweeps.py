@@ -92,3 +92,18 @@ def test_bad_sweep_values():
         misalignment_sweep(PLANT, 1500, [0.1, 1.5], 0.05, n_workers=0, progress=False)
     with pytest.raises(ValueError, match="unbalance"):
         speed_sweep(PLANT, [1500.0], 0.1, 0.9, n_workers=0, progress=False)
+
+
+def test_amplitude_speed_curves_match_individual_sweeps():
+    from simulator.analysis import amplitude_speed_curves
+
+    curves = amplitude_speed_curves(PLANT, [1300.0, 1700.0], [0.0, 0.2], 0.05, n_workers=0, **SHORT)
+    assert sorted(curves) == [0.0, 0.2]
+    single = speed_sweep(PLANT, [1300.0, 1700.0], 0.2, 0.05, n_workers=0, **SHORT)
+    np.testing.assert_array_equal(curves[0.2].pkpk, single.pkpk)
+    np.testing.assert_array_equal(curves[0.2].orders, single.orders)
+    assert np.all(curves[0.0].misalignment == 0.0)
+    # 1X dominates at these speeds and peak-to-peak exceeds twice the 1X amplitude minus the rest
+    for sw in curves.values():
+        assert np.all(sw.orders[:, 0] > sw.orders[:, 2])
+        assert np.all(sw.pkpk >= 2 * (sw.orders[:, 0] - sw.orders[:, 1] - sw.orders[:, 2]))
