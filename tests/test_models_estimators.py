@@ -73,7 +73,7 @@ def test_classifier_learns_a_known_rule_and_is_calibrated():
     # Label is a noisy threshold on feature 0: P(class 1 | x) = sigmoid(3 x0), known exactly.
     p_true = 1 / (1 + np.exp(-3 * X[:, 0]))
     y = (rng.random(3000) < p_true).astype(int)
-    clf = SeverityClassifier(max_iter=100, class_weight=None).fit(X[:2000], y[:2000])
+    clf = SeverityClassifier(max_iter=100, learning_rate=0.05, class_weight=None).fit(X[:2000], y[:2000])
     p = clf.predict_proba(X[2000:])[:, 1]
     # Calibrated probabilities follow the known conditional probability.
     assert np.mean(np.abs(p - p_true[2000:])) < 0.06
