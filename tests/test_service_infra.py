@@ -263,3 +263,13 @@ def test_job_times_are_utc_and_non_finite_results_are_null(tmp_path):
         assert j["result"] == {"spearman": None, "q": None}
         for key in ("created_at", "started_at", "finished_at", "updated_at"):
             assert j[key].endswith("+00:00") or j[key].endswith("Z"), j[key]
+
+
+def test_diagnose_key_is_optional_and_enforced_when_configured(tmp_path):
+    body = {"sample_rate_hz": 100.0, "channels": []}        # schema-invalid: 422 once past the key check
+    with TestClient(create_app(make_settings(tmp_path / "open"))) as c:
+        assert c.post("/diagnose", json=body).status_code == 422
+    with TestClient(create_app(make_settings(tmp_path / "closed", diagnose_requires_key=True))) as c:
+        assert c.post("/diagnose", json=body).status_code == 401
+        assert c.post("/diagnose/batch", json={"records": []}, headers={"X-API-Key": "no"}).status_code == 403
+        assert c.post("/diagnose", json=body, headers=auth()).status_code == 422

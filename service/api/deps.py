@@ -56,11 +56,18 @@ def require_api_key(state: StateDep, key: Annotated[str | None, Security(_api_ke
         raise HTTPException(403, "the X-API-Key header does not match the server's API key")
 
 
+def diagnose_key(state: StateDep, key: Annotated[str | None, Security(_api_key_header)]) -> None:
+    """The API key on the diagnose endpoints, when ROTORDIAG_DIAGNOSE_REQUIRES_KEY is set."""
+    if state.settings.diagnose_requires_key:
+        require_api_key(state, key)
+
+
 SettingsDep = Annotated[Settings, Depends(get_settings)]
 SessionDep = Annotated[Session, Depends(get_db)]
 ModelsDep = Annotated[ModelStore, Depends(get_models)]
 JobsDep = Annotated[JobManager, Depends(get_jobs)]
 ApiKeyDep = Depends(require_api_key)
+DiagnoseKeyDep = Depends(diagnose_key)
 
 
 def require_json(request: Request) -> None:

@@ -46,6 +46,9 @@ class Settings(BaseSettings):
         SecretStr(""),
         description="Key required in the `X-API-Key` header by every write endpoint except /diagnose.",
     )
+    diagnose_requires_key: bool = Field(
+        False, description="Also require the API key on POST /diagnose and /diagnose/batch (they store "
+        "asset history); off by default so monitoring systems can diagnose without a key.")
     dask_scheduler_address: str = Field(
         "", description="Address of an existing Dask scheduler (e.g. `tcp://scheduler:8786`); "
         "empty means a local cluster created the first time a job runs.",

@@ -13,7 +13,7 @@ from ...inference import ModelUnavailable
 from ...parsing import BinaryMeta, load_csv, load_hdf5, load_npy, recording_from_array, recording_from_model
 from ...schemas import MAX_LABEL_LEN, BatchItem, BatchRequest, BatchResponse, DiagnoseRequest, DiagnoseResponse, ErrorOut
 from ...store import store_diagnosis
-from ..deps import JsonBodyDep, ModelsDep, StateDep
+from ..deps import DiagnoseKeyDep, JsonBodyDep, ModelsDep, StateDep
 from ..errors import InputError, validation_detail
 
 router = APIRouter(tags=["diagnose"])
@@ -143,6 +143,7 @@ def _diagnose_sync(state, recording, asset_id: str | None, plant: str | None, ve
 
 @router.post(
     "/diagnose", response_model=DiagnoseResponse, responses=_ERRORS, openapi_extra=_BINARY_BODY,
+    dependencies=[DiagnoseKeyDep],
     summary="Diagnose one recording",
     description="Returns the severity class, probabilities, Δ estimate with interval, offset in µm (when "
     "`clearance_um` is given), motion type, per-bearing key features, top contributing features, OOD flag, "
@@ -205,7 +206,7 @@ def _parse_and_diagnose(state, kind, body, filename, query, model_version) -> di
 
 
 @router.post(
-    "/diagnose/batch", response_model=BatchResponse, responses=_ERRORS, dependencies=[JsonBodyDep],
+    "/diagnose/batch", response_model=BatchResponse, responses=_ERRORS, dependencies=[DiagnoseKeyDep, JsonBodyDep],
     summary="Diagnose many recordings (JSON)",
     description="Each record is diagnosed independently; a record the service cannot diagnose gets its own "
     "`status_code` and `error` while the others still get results. The number of records is capped by "
