@@ -297,3 +297,33 @@ def test_models_list_and_activate(client):
     assert r.status_code == 200 and r.json()["active"] == active
     r = client.post("/models/v0999/activate", headers=auth())
     assert r.status_code == 404 and "v0999" in r.json()["detail"]
+
+
+def _weird_recordings():
+    rng = np.random.default_rng(3)
+    n = 4096
+    t = np.arange(n) / 2048.0
+    sine = 20 * np.cos(2 * np.pi * 30 * t)
+    pair = lambda x, y: [(2, 45.0, x), (2, 135.0, y)]          # noqa: E731
+    return {
+        "zeros": (pair(np.zeros(n), np.zeros(n)), {}),
+        "constant": (pair(np.full(n, 5.0), np.full(n, 5.0)), {"speed_rpm": 1800.0}),
+        "white noise, speed estimated": (pair(rng.normal(size=n), rng.normal(size=n)), {}),
+        "huge values": (pair(1e300 * np.ones(n), -1e300 * np.ones(n)), {"speed_rpm": 1800.0}),
+        "tiny values": (pair(1e-300 * sine, 1e-300 * sine[::-1]), {"speed_rpm": 1800.0}),
+        "identical probes": (pair(sine, sine), {"speed_rpm": 1800.0}),
+        "two samples": (pair(np.ones(2), np.zeros(2)), {"speed_rpm": 1800.0}),
+        "speed far from the signal": (pair(sine, np.roll(sine, 17)), {"speed_rpm": 50_000.0}),
+        "keyphasor of two pulses": (pair(sine, np.roll(sine, 17)), {"keyphasor_times_s": [0.0, 1 / 30]}),
+        "keyphasor beyond the record": (pair(sine, np.roll(sine, 17)), {"keyphasor_times_s": [10.0, 10.5, 11.0]}),
+        "step": (pair(np.r_[np.zeros(n // 2), np.ones(n // 2)], np.zeros(n)), {"speed_rpm": 1800.0}),
+    }
+
+
+@pytest.mark.parametrize("name", list(_weird_recordings()))
+def test_odd_but_valid_recordings_never_give_5xx(client, name):
+    channels, extra = _weird_recordings()[name]
+    r = client.post("/diagnose", json=diagnose_json(2048.0, channels, **extra))
+    assert r.status_code in (200, 422), (r.status_code, r.text[:300])
+    if r.status_code == 422:
+        assert isinstance(r.json()["detail"], (str, list)) and r.json()["detail"]
