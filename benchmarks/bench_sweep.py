@@ -41,16 +41,22 @@ def main() -> None:
     t0 = time.perf_counter()
     base = speed_sweep(plant, speeds, 0.1, 0.05, n_workers=0, **kw)
     t_base = time.perf_counter() - t0
-    rows.append(("in-process loop (baseline)", t_base, base))
+    rows.append(("in-process loop (baseline)", t_base, base, 0))
     for w in args.workers:
         t0 = time.perf_counter()
         res = speed_sweep(plant, speeds, 0.1, 0.05, n_workers=w, **kw)
-        rows.append((f"Dask LocalCluster, {w} worker(s)", time.perf_counter() - t0, res))
+        rows.append((f"Dask LocalCluster, {w} worker(s)", time.perf_counter() - t0, res, w))
 
-    print(f"{'configuration':34s} {'wall s':>8s} {'points/s':>9s} {'speed-up':>9s} {'identical':>9s}")
-    for name, t, res in rows:
+    print(f"{'configuration':34s} {'wall s':>8s} {'points/s':>9s} {'speed-up':>9s} {'identical':>9s} "
+          f"{'sum point s':>11s} {'utilisation':>11s}")
+    for name, t, res, n_workers in rows:
         same = np.array_equal(res.sections, base.sections, equal_nan=True)
-        print(f"{name:34s} {t:8.1f} {args.points / t:9.2f} {t_base / t:9.2f} {str(same):>9s}")
+        # sum of the per-point wall times: equal to the baseline's when every worker has a core
+        # to itself; larger when the workers share cores with other load.  utilisation =
+        # sum / (workers x wall): how busy the runner kept its workers
+        print(f"{name:34s} {t:8.1f} {args.points / t:9.2f} {t_base / t:9.2f} {str(same):>9s} "
+              f"{res.wall_time_s.sum():11.1f} {res.wall_time_s.sum() / (t * max(n_workers, 1)):11.2f}")
+    print(f"load average after the runs: {os.getloadavg()[0]:.2f}")
     print(f"sum of per-point simulate times (baseline): {base.wall_time_s.sum():.1f} s; "
           f"slowest point {base.wall_time_s.max():.1f} s at {base.speed_rpm[base.wall_time_s.argmax()]:.0f} r/min")
     me = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
