@@ -74,6 +74,7 @@ def _atomic_write_text(path: Path, text: str) -> None:
             fh.write(text)
             fh.flush()
             os.fsync(fh.fileno())
+        os.chmod(tmp, 0o644)   # mkstemp makes 0600; registries are shared read-only data
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -222,6 +223,7 @@ class Registry:
 
         self.root.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(dir=self.root, prefix=".incoming-"))
+        os.chmod(tmp, 0o755)       # mkdtemp makes 0700
         try:
             # Deflate: a boosted model is thousands of small arrays plus a large JSON schema,
             # which compress ~5-10x.
