@@ -1,4 +1,5 @@
-"""Property-based fuzz pass over the OpenAPI schema (schemathesis): no request produces a 5xx.
+"""Property-based fuzz pass over the OpenAPI schema (schemathesis): no request produces a 5xx, every
+answer has a documented status code and matches its documented schema.
 
 Every operation is called with schema-conforming and schema-violating inputs (bodies in each documented
 content type, query and path parameters), with a valid API key so the write endpoints' validation is
@@ -18,7 +19,7 @@ import pytest
 
 schemathesis = pytest.importorskip("schemathesis")
 from hypothesis import HealthCheck, settings  # noqa: E402
-from schemathesis.checks import not_a_server_error  # noqa: E402
+from schemathesis.checks import not_a_server_error, response_schema_conformance, status_code_conformance  # noqa: E402,E501
 
 from service.main import create_app  # noqa: E402
 from tests.service_util import API_KEY, make_settings, shipped_or_tiny_registry  # noqa: E402
@@ -52,4 +53,5 @@ schema = schemathesis.openapi.from_asgi("/openapi.json", APP)
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much, HealthCheck.data_too_large,
                                  HealthCheck.function_scoped_fixture])
 def test_no_server_errors(case):
-    case.call_and_validate(headers={"X-API-Key": API_KEY}, checks=[not_a_server_error])
+    case.call_and_validate(headers={"X-API-Key": API_KEY}, checks=[not_a_server_error, response_schema_conformance,
+                                                                     status_code_conformance])

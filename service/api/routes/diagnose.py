@@ -19,6 +19,10 @@ from ..errors import InputError, validation_detail
 router = APIRouter(tags=["diagnose"])
 
 _ERRORS = {
+    400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
+    401: {"model": ErrorOut, "description": "No X-API-Key header (only when ROTORDIAG_DIAGNOSE_REQUIRES_KEY)."},
+    403: {"model": ErrorOut, "description": "Wrong API key (only when ROTORDIAG_DIAGNOSE_REQUIRES_KEY)."},
+    404: {"model": ErrorOut, "description": "`model_version` is not registered."},
     413: {"model": ErrorOut, "description": "Body over the size limit (ROTORDIAG_MAX_BODY_BYTES)."},
     415: {"model": ErrorOut, "description": "Content-Type is not JSON, NPY (application/octet-stream) or multipart."},
     422: {"model": ErrorOut, "description": "The recording cannot be diagnosed; `detail` says what to fix."},

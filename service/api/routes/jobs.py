@@ -13,7 +13,8 @@ from ..errors import InputError
 
 router = APIRouter(tags=["jobs"])
 
-_AUTH = {401: {"model": ErrorOut, "description": "No X-API-Key header."},
+_AUTH = {400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
+         401: {"model": ErrorOut, "description": "No X-API-Key header."},
          403: {"model": ErrorOut, "description": "Wrong API key."},
          415: {"model": ErrorOut, "description": "Body is not application/json."}}
 _JobId = Annotated[str, Path(min_length=1, max_length=64, description="Job id returned by the creating POST.")]
