@@ -254,7 +254,6 @@ class ModelList(BaseModel):
 
 # --- job requests -----------------------------------------------------------------------------
 
-JSONScalar = float | int | str | bool
 
 
 class DatasetJobRequest(_Strict):
