@@ -6,9 +6,9 @@ Three components, each a scikit-learn estimator that passes
 - :class:`SeverityClassifier` — gradient-boosted trees (native NaN handling) whose
   probabilities are calibrated out of fold (``CalibratedClassifierCV``) with folds
   that keep every plant on one side (``StratifiedGroupKFold``) when ``groups`` are given.
-- :class:`ConformalIntervalRegressor` — Δ point estimate plus a split-conformal
-  quantile-regression interval (CQR, Romano et al. 2019) whose calibration rows come
-  from plants the quantile models never saw.
+- :class:`ConformalIntervalRegressor` — Δ point estimate plus a normalised split-conformal
+  interval (Lei et al. 2018): centre ± q̂·σ(x), σ a learned residual scale, q̂ calibrated
+  on plants the interval models never saw.
 - :class:`KNNDistanceOOD` — out-of-distribution score: distance to the k-th nearest
   training point in median-imputed, standardised feature space, thresholded at a
   quantile of the training points' leave-one-out distances.
@@ -33,7 +33,15 @@ from sklearn.base import (
 from sklearn.calibration import CalibratedClassifierCV
 from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
 from sklearn.impute import SimpleImputer
-from sklearn.model_selection import GroupShuffleSplit, ShuffleSplit, StratifiedGroupKFold, StratifiedKFold
+from sklearn.model_selection import (
+    GroupKFold,
+    GroupShuffleSplit,
+    KFold,
+    ShuffleSplit,
+    StratifiedGroupKFold,
+    StratifiedKFold,
+    cross_val_predict,
+)
 from sklearn.neighbors import NearestNeighbors
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
@@ -211,15 +219,23 @@ class SeverityClassifier(ClassifierMixin, BaseEstimator):
 
 
 class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
-    """Δ regressor with a split-conformal quantile-regression interval.
+    """Δ regressor with a normalised split-conformal interval.
 
     The point estimate is a squared-error boosted model trained on all rows. The
-    interval comes from two quantile models (levels α/2, 1 − α/2) trained on a
-    "proper" part, widened by the conformity quantile q̂ of the held-out calibration
-    part: ``[lo − q̂, hi + q̂]`` (CQR). With exchangeable rows (plants, when ``groups``
-    are given) it covers the truth with probability ≥ 1 − α. The interval is then
-    widened, never narrowed, to contain the point estimate and clipped below at
-    ``lower_bound`` (Δ ≥ 0), neither of which can lower the coverage.
+    interval is ``c(x) ± q̂ · σ(x)``: a centre model ``c`` trained on a "proper" part of
+    the rows, a scale model ``σ`` trained on the proper part's out-of-fold absolute
+    residuals of ``c`` (floored at their 10th percentile), and q̂ the conformal quantile
+    of ``|y − c(x)| / σ(x)`` on the held-out calibration part (Lei et al. 2018). With
+    exchangeable rows (plants, when ``groups`` are given) it covers the truth with
+    probability ≥ 1 − α whatever ``c`` and ``σ`` are; σ makes it narrow where the
+    residuals are small. The interval is then widened, never narrowed, to contain the
+    point estimate and clipped below at ``lower_bound`` (Δ ≥ 0), neither of which can
+    lower the coverage.
+
+    (Conformalised quantile regression was the first choice, but boosted quantile models
+    at α/2 cannot leave a target with many exact ties at its lower end — Δ = 0 for every
+    aligned machine: every gradient is equal, no split has any gain, and the 5 % quantile
+    stays 0 for every row, giving uninformative intervals.)
 
     Parameters
     ----------
@@ -236,7 +252,9 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
 
     Attributes
     ----------
-    point_model_, lower_model_, upper_model_ : fitted regressors
+    point_model_, center_model_ : fitted regressors
+    scale_model_ : fitted regressor or None (None: constant scale, when too few rows)
+    scale_floor_ : float
     conformity_quantile_ : float
         q̂ (``inf`` when the calibration part is too small for the requested α).
     n_calibration_ : int
@@ -295,7 +313,7 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
         )
 
     def fit(self, X, y, groups=None) -> "ConformalIntervalRegressor":
-        """Fit point and quantile models and calibrate the interval.
+        """Fit point, centre and scale models and calibrate the interval.
 
         Parameters
         ----------
@@ -326,17 +344,33 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
             proper, calib = next(split.split(X, y))
         a = float(self.alpha)
         self.point_model_ = self._boosted(loss="squared_error").fit(X, y)
-        self.lower_model_ = self._boosted(loss="quantile", quantile=a / 2).fit(X[proper], y[proper])
-        self.upper_model_ = self._boosted(loss="quantile", quantile=1 - a / 2).fit(X[proper], y[proper])
-        lo = self.lower_model_.predict(X[calib])
-        hi = self.upper_model_.predict(X[calib])
-        scores = np.maximum(lo - y[calib], y[calib] - hi)
+        Xp, yp = X[proper], y[proper]
+        self.center_model_ = self._boosted(loss="squared_error").fit(Xp, yp)
+        self.scale_model_ = None
+        self.scale_floor_ = 1.0
+        if len(proper) >= 6:
+            gp = groups[proper] if groups is not None else None
+            if gp is not None and len(np.unique(gp)) >= 3:
+                folds = list(GroupKFold(n_splits=3).split(Xp, yp, gp))
+            else:
+                folds = list(KFold(n_splits=3, shuffle=True, random_state=self.random_state).split(Xp))
+            resid = np.abs(yp - cross_val_predict(self._boosted(loss="squared_error"), Xp, yp, cv=folds))
+            floor = float(np.quantile(resid, 0.1))
+            if floor > 0 or resid.max() > 0:
+                self.scale_floor_ = floor if floor > 0 else float(resid[resid > 0].min())
+                self.scale_model_ = self._boosted(loss="squared_error").fit(Xp, resid)
+        scores = np.abs(y[calib] - self.center_model_.predict(X[calib])) / self._scale(X[calib])
         m = scores.shape[0]
         rank = math.ceil((m + 1) * (1 - a))
         self.conformity_quantile_ = float(np.sort(scores)[rank - 1]) if rank <= m else math.inf
         self.n_calibration_ = int(m)
         self.n_iter_ = int(self.point_model_.n_iter_)
         return self
+
+    def _scale(self, X: np.ndarray) -> np.ndarray:
+        if self.scale_model_ is None:
+            return np.full(X.shape[0], self.scale_floor_)
+        return np.maximum(self.scale_model_.predict(X), self.scale_floor_)
 
     def _clip(self, v: np.ndarray) -> np.ndarray:
         return v if self.lower_bound is None else np.maximum(v, self.lower_bound)
@@ -352,9 +386,11 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "point_model_")
         X = _blank(validate_data(self, X, reset=False, ensure_all_finite="allow-nan"), self.sparse_columns_)
         point = self._clip(self.point_model_.predict(X))
-        q = self.conformity_quantile_
-        lo = np.minimum(self.lower_model_.predict(X) - q, point)
-        hi = np.maximum(self.upper_model_.predict(X) + q, point)
+        centre = self.center_model_.predict(X)
+        with np.errstate(invalid="ignore"):   # q̂ = inf: an honest unbounded interval
+            half = self.conformity_quantile_ * self._scale(X)
+        lo = np.minimum(centre - half, point)
+        hi = np.maximum(centre + half, point)
         return np.column_stack([self._clip(lo), self._clip(hi)])
 
 

@@ -111,7 +111,7 @@ def test_conformal_interval_covers_at_the_requested_rate():
     width = iv[:, 1] - iv[:, 0]
     quiet = np.abs(X[3000:, 1]) < 0.2
     loud = np.abs(X[3000:, 1]) > 0.8
-    assert width[loud].mean() > 2 * width[quiet].mean()   # adaptive, as CQR should be
+    assert width[loud].mean() > 2 * width[quiet].mean()   # adaptive: σ(x) follows the noise
     point = reg.predict(X[3000:])
     assert np.all((iv[:, 0] <= point) & (point <= iv[:, 1]))
 
