@@ -1,0 +1,25 @@
+"""Severity models for generator–exciter coupling misalignment (issue 5, docs/models.md).
+
+Public API (import from the submodules; importing ``models`` itself stays light):
+
+models.predict
+    ``load_bundle(registry_root, version=None) -> ModelBundle``;
+    ``diagnose(bundle, feature_result, clearance_um=None) -> Verdict`` — the one verdict
+    function, used by ``rotordiag diagnose`` and the service; ``format_verdict``.
+models.registry
+    ``Registry(root)``: ``register``, ``load``, ``list``, ``activate``, ``rollback``,
+    ``active_version``, ``card``; ``TRUSTED_TYPES`` (skops), ``RegistryError``.
+models.estimators
+    ``SeverityClassifier``, ``ConformalIntervalRegressor``, ``KNNDistanceOOD``,
+    ``MisalignmentModel`` (scikit-learn estimators).
+models.bands
+    ``SeverityBands`` (aligned < 0.05 ≤ slight < 0.15 ≤ moderate < 0.35 ≤ severe by default).
+models.dataset
+    ``load_feature_table(path)`` / ``load_feature_tables(paths)``: dataset HDF5 → ``FeatureTable``
+    through ``features.extract_features``, cached next to the file.
+models.config, models.train, models.evaluate, models.baselines, models.metrics
+    ``TrainConfig`` (train.toml), ``train_and_register``, held-out-plant evaluation and
+    report, the 2X/1X baselines, metrics.
+models.waveform_io
+    ``read_recording(path, sidecar=..., overrides=...)``: CSV/NPY/HDF5 → ``features.Recording``.
+"""
