@@ -100,7 +100,9 @@ def _motion_type(feature_result) -> str | None:
     kind = getattr(mt, "kind", None)
     if kind is not None:
         period = getattr(mt, "period", None)
-        return f"{kind}" + (f" (period {period})" if period else "")
+        if str(kind) == "period-n" and period:
+            return f"period-{int(period)}"
+        return str(kind)
     return str(mt)
 
 

@@ -84,3 +84,11 @@ def test_far_away_signal_is_flagged_ood(model):
 def test_bad_clearance_is_rejected(model):
     with pytest.raises(ValueError, match="clearance_um"):
         diagnose(model, _fr([0.5, 0.45, 90.0, 40.0, 0.1, 0.0, 0.0]), clearance_um=-3.0)
+
+
+def test_motion_type_is_reported(model):
+    row = [0.5, 0.45, 90.0, 40.0, 40 / 350, 0.0, 0.0]
+    mt = SimpleNamespace(kind="period-n", period=3)
+    assert diagnose(model, _fr(row, motion_type=mt)).motion_type == "period-3"
+    assert diagnose(model, _fr(row, motion_type=SimpleNamespace(kind="chaotic", period=0))).motion_type == "chaotic"
+    assert diagnose(model, _fr(row)).motion_type is None
