@@ -107,6 +107,7 @@ class ModelStore:
                     model, card = self.registry.load(version)
                 except RegistryError as exc:
                     raise ModelUnavailable(str(exc)) from None
+                _check_usable(model, version)
                 bundle = ModelBundle(model=model, card=card, version=version)
                 self._cache[version] = bundle
         return bundle
@@ -138,6 +139,25 @@ class ModelStore:
         out["bearings"] = _bearings(fr)
         out["key_features"] = {f["name"]: f["value"] for f in out.get("top_features", [])}
         return out
+
+
+def _check_usable(model: Any, version: str) -> None:
+    """Run the loaded model once on a row of missing features (every component accepts NaN).
+
+    A model file written by an incompatible version of the models package loads but fails when
+    used; this turns that into a clear 503 ("rebuild or retrain") instead of a 500 on every request.
+    """
+    import numpy as np
+
+    try:
+        row = np.full((1, len(model.feature_names_)), np.nan)
+        model.predict_proba(row)
+        model.predict_misalignment(row)
+        model.ood_ratio(row)
+    except Exception as exc:  # noqa: BLE001 - any failure means the file does not fit this code
+        raise ModelUnavailable(
+            f"model {version} cannot be used with this code version ({type(exc).__name__}: {exc}); "
+            "retrain it (POST /models/retrain or `rotordiag train`) or activate another version") from None
 
 
 def _clean(v: Any) -> Any:

@@ -112,8 +112,24 @@ def build_tiny_registry(root, n_plants=3, seed=0):
     return reg, version
 
 
+def shipped_registry_usable() -> bool:
+    """The repository ships ``models/default_registry`` and its active model runs with this code."""
+    from service.core.config import SHIPPED_REGISTRY_DIR
+    from service.inference import ModelStore, ModelUnavailable
+
+    if not (SHIPPED_REGISTRY_DIR / "active").is_file():
+        return False
+    try:
+        ModelStore(SHIPPED_REGISTRY_DIR).load()
+    except ModelUnavailable:
+        return False
+    return True
+
+
 def shipped_or_tiny_registry(tmp_root=None):
-    """The shipped default registry when the repository has one, else a tiny one.
+    """The shipped default registry when the repository has a usable one, else a tiny one.
+
+    (Whether the shipped model is usable is asserted by ``test_shipped_default_model_is_usable``.)
 
     The tiny registry is built once and cached under ``test-artifacts/`` (git-ignored), keyed by
     the source of the features and models packages, so it is rebuilt whenever either changes.
@@ -122,7 +138,7 @@ def shipped_or_tiny_registry(tmp_root=None):
 
     from service.core.config import SHIPPED_REGISTRY_DIR
 
-    if (SHIPPED_REGISTRY_DIR / "active").is_file():
+    if shipped_registry_usable():
         return SHIPPED_REGISTRY_DIR
     repo = Path(__file__).resolve().parent.parent
     h = hashlib.sha256()
@@ -143,4 +159,7 @@ def shipped_or_tiny_registry(tmp_root=None):
         except OSError:                      # another process finished first
             pass
         shutil.rmtree(tmp, ignore_errors=True)
+        stale = sorted(root.parent.glob("tiny_registry-*"), key=lambda p: p.stat().st_mtime)[:-3]
+        for old in stale:                    # keep the three newest builds
+            shutil.rmtree(old, ignore_errors=True)
     return root

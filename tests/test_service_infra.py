@@ -273,3 +273,32 @@ def test_diagnose_key_is_optional_and_enforced_when_configured(tmp_path):
         assert c.post("/diagnose", json=body).status_code == 401
         assert c.post("/diagnose/batch", json={"records": []}, headers={"X-API-Key": "no"}).status_code == 403
         assert c.post("/diagnose", json=body, headers=auth()).status_code == 422
+
+
+def test_shipped_default_model_is_usable():
+    """`make run` on a fresh clone diagnoses with the shipped model: it must exist and run with this code."""
+    from service.core.config import SHIPPED_REGISTRY_DIR
+    from service.inference import ModelStore
+
+    assert (SHIPPED_REGISTRY_DIR / "active").is_file(), f"no shipped registry at {SHIPPED_REGISTRY_DIR}"
+    bundle = ModelStore(SHIPPED_REGISTRY_DIR).load()      # raises ModelUnavailable with the reason
+    assert bundle.version == (SHIPPED_REGISTRY_DIR / "active").read_text().strip()
+
+
+def test_model_that_fails_when_used_gives_503_not_500(tmp_path, monkeypatch):
+    from models.estimators import MisalignmentModel
+    from tests.service_util import shipped_or_tiny_registry
+
+    src = shipped_or_tiny_registry()
+
+    def broken(self, X):
+        raise AttributeError("'ConformalIntervalRegressor' object has no attribute 'center_model_'")
+
+    monkeypatch.setattr(MisalignmentModel, "predict_misalignment", broken)
+    with TestClient(create_app(make_settings(tmp_path, shipped_registry_dir=src))) as c:
+        h = c.get("/health")
+        assert h.status_code == 503 and "cannot be used with this code version" in h.json()["detail"]
+        r = c.post("/diagnose", json={"sample_rate_hz": 1000.0, "channels": [
+            {"bearing": 1, "angle_deg": 45.0, "units": "um", "data": [0.0] * 100},
+            {"bearing": 1, "angle_deg": 135.0, "units": "um", "data": [0.0] * 100}]})
+        assert r.status_code == 503 and "retrain" in r.json()["detail"]

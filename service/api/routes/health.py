@@ -6,6 +6,7 @@ from sqlalchemy import text
 
 from rotordiag import code_version
 
+from ...inference import ModelUnavailable
 from ...schemas import HealthOut
 from ..deps import StateDep
 
@@ -26,6 +27,11 @@ def health(state: StateDep, response: Response) -> HealthOut:
     version = state.models.active_version()
     if version is None:
         problems.append("no active model in the registry")
+    else:
+        try:
+            state.models.load(version)          # cached after the first call
+        except ModelUnavailable as exc:
+            problems.append(str(exc))
     if problems:
         response.status_code = 503
     return HealthOut(status="degraded" if problems else "ok", version=code_version(), database=db_ok,
