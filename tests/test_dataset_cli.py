@@ -149,3 +149,15 @@ def test_reader_decodes_labels_and_streams_waveforms(two_files, tmp_path):
         assert np.array_equal(ds.parameters("parameters/plant/asymmetry"), f["parameters/plant/asymmetry"][...])
     with DatasetReader(merged) as ds:
         assert ds.labels()["source"].tolist() == [0, 0, 0, 0, 1, 1, 1]
+
+
+def test_info_on_a_file_missing_part_of_the_layout_is_a_clean_error(two_files, tmp_path):
+    """A file from older code (here: without resume_log) gets a message, not a traceback."""
+    import shutil
+
+    _, a, _ = two_files
+    old = tmp_path / "old.h5"
+    shutil.copy(a, old)
+    with h5py.File(old, "r+") as f:
+        del f["resume_log"]
+    _clean_failure(runner.invoke(app, ["dataset", "info", str(old)]), "regenerate it")

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .store import open_dataset
+from .store import StoreError, open_dataset
 
 __all__ = ["summarize"]
 
@@ -29,6 +29,14 @@ def summarize(path: str | os.PathLike) -> dict[str, Any]:
         JSON-serialisable summary.
     """
     path = Path(path)
+    try:
+        return _summarize(path)
+    except KeyError as exc:  # h5py names the missing object in the message
+        raise StoreError(f"{path} lacks part of the rotordiag dataset layout ({exc}); it was written by an "
+                         f"older or different program: regenerate it with this version") from None
+
+
+def _summarize(path: Path) -> dict[str, Any]:
     with open_dataset(path) as f:
         done = f["done"][...].astype(bool)
         n_done = int(done.sum())
