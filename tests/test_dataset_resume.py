@@ -121,3 +121,31 @@ def test_repair_makes_a_killed_file_plain_readable(reference, tmp_path):
         assert int(f["done"][...].sum()) == n
     assert repair_file(out) == (False, n)
     _check_finished_rows_match(out, ref)
+
+
+def test_writer_waits_for_a_reader_holding_the_file_lock(reference, tmp_path):
+    """A reader (another process) opening the file just before the writer re-opens it
+    must not crash the run: the writer waits for HDF5's file lock to clear."""
+    import shutil
+    import sys
+
+    from simulator.dataset import store
+
+    _, ref = reference
+    path = tmp_path / "locked.h5"
+    shutil.copy(ref, path)
+    store.repair_file(path)  # plain-readable copy
+    code = ("import h5py, sys, time; f = h5py.File(sys.argv[1], 'r'); print('open', flush=True); "
+            "time.sleep(1.0); f.close()")
+    reader = subprocess.Popen([sys.executable, "-c", code, str(path)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert reader.stdout.readline().strip() == "open"
+        t0 = time.monotonic()
+        f = store._open_swmr_write(path)  # raised BlockingIOError at once before the wait was added
+        try:
+            assert int(f["done"][...].sum()) > 0
+        finally:
+            f.close()
+        assert time.monotonic() - t0 > 0.3  # it did have to wait for the reader
+    finally:
+        reader.wait(timeout=30)

@@ -32,6 +32,7 @@ import errno
 import fcntl
 import json
 import os
+import time
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Iterator
@@ -335,8 +336,21 @@ def _open_swmr_write(path: Path) -> Any:
 
     fapl = h5p.create(h5p.FILE_ACCESS)
     fapl.set_libver_bounds(h5f.LIBVER_LATEST, h5f.LIBVER_LATEST)
-    fid = h5f.open(os.fsencode(path), h5f.ACC_RDWR | h5f.ACC_SWMR_WRITE, fapl=fapl)
-    return h5py.File(fid)
+    # A reader that opened the file just before us (``dataset info``, a monitoring
+    # script) holds HDF5's file lock for a moment: wait for it rather than fail.
+    deadline = time.monotonic() + SWMR_OPEN_WAIT_S
+    while True:
+        try:
+            fid = h5f.open(os.fsencode(path), h5f.ACC_RDWR | h5f.ACC_SWMR_WRITE, fapl=fapl)
+            return h5py.File(fid)
+        except BlockingIOError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.05)
+
+
+#: How long the writer waits for a concurrent reader's HDF5 file lock to clear.
+SWMR_OPEN_WAIT_S = 10.0
 
 
 def _append_resume_log(f: Any, entry: dict[str, Any]) -> None:
