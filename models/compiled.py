@@ -257,6 +257,8 @@ class CompiledModel:
             X = X[None, :]
         if X.ndim != 2 or X.shape[1] != self.n_features:
             raise ValueError(f"X: expected (n_samples, {self.n_features}) features, got shape {X.shape}")
+        if np.isinf(X).any():   # as scikit-learn's validation (NaN = missing is fine, infinity is not)
+            raise ValueError("Input X contains infinity or a value too large for dtype('float64').")
         return X
 
     @staticmethod

@@ -31,8 +31,10 @@ def register(app: typer.Typer) -> None:
             typer.secho(f"error: invalid settings: {msgs}", fg="red", err=True)
             raise typer.Exit(2) from None
         try:
-            # One process: it owns the job table (a second process would mark the first one's running
-            # jobs interrupted at its startup); jobs scale out on Dask, not on uvicorn workers.
+            # One server process: it owns the job table (a second uvicorn worker would mark the first
+            # one's running jobs interrupted at its startup). Diagnoses use every core through the
+            # diagnosis worker processes (ROTORDIAG_DIAGNOSIS_WORKERS, service/pool.py); jobs scale out
+            # on Dask.
             uvicorn.run("service.main:app", host=host, port=port,
                         log_level=settings.log_level.lower(), access_log=False)
         except OSError as exc:  # e.g. address in use

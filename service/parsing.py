@@ -14,8 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from .api.errors import InputError
-from .schemas import MAX_CHANNELS, MAX_KEYPHASOR_PULSES, MAX_POINTS, RecordingIn
+from fastapi import HTTPException
+from pydantic import ValidationError
+
+from .api.errors import InputError, validation_detail
+from .schemas import MAX_CHANNELS, MAX_KEYPHASOR_PULSES, MAX_POINTS, DiagnoseRequest, RecordingIn
 
 #: Default probe layout for an 8-channel array: bearings 1-4, an XY pair each.
 DEFAULT_BEARINGS = (1, 1, 2, 2, 3, 3, 4, 4)
@@ -191,3 +194,61 @@ def load_hdf5(body: bytes, sample_index: int = 0) -> tuple[np.ndarray, dict[str,
     except (OSError, KeyError, ValueError, TypeError) as exc:
         raise InputError(f"cannot read the HDF5 upload: {exc}") from None
     return np.asarray(array), meta
+
+
+def checked(build, *args):
+    """Call a recording constructor, turning its ValueError (bad recording) into a 422."""
+    try:
+        return build(*args)
+    except ValueError as exc:
+        if isinstance(exc, InputError):
+            raise
+        raise InputError(str(exc)) from None
+
+
+def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> tuple[Any, str | None, str | None]:
+    """Recording, asset_id, plant from a request body.
+
+    Parameters
+    ----------
+    kind : {"json", "npy", "upload"}
+        How the body came (``service.api.routes.diagnose._read_body``).
+    body : bytes
+    filename : str
+        The uploaded file's name (``upload`` only).
+    query : dict
+        The binary/multipart metadata query parameters (``None`` = not given).
+
+    Raises
+    ------
+    InputError, HTTPException
+        4xx with a message that says what to fix.
+    """
+    if kind == "json":
+        try:
+            req = DiagnoseRequest.model_validate_json(body)
+        except ValidationError as exc:
+            raise HTTPException(422, validation_detail(exc, ("body",))) from None
+        return checked(recording_from_model, req), req.asset_id, req.plant
+    if kind == "npy":
+        array, file_meta = load_npy(body), {}
+    else:
+        array, file_meta = load_upload(body, filename, query.get("sample_index", 0))
+    given = {k: v for k, v in query.items() if v is not None and k != "sample_index"}
+    merged = {**file_meta, **given}  # query parameters win over metadata stored in the file
+    if "sample_rate_hz" not in merged:
+        raise InputError("sample_rate_hz: required as a query parameter with a binary or multipart body, "
+                         "e.g. /diagnose?sample_rate_hz=4096")
+    meta = BinaryMeta(**merged)
+    return checked(recording_from_array, array, meta), meta.asset_id, meta.plant
+
+
+def load_upload(data: bytes, filename: str, sample_index: int):
+    name = filename.lower()
+    if data.startswith(b"\x93NUMPY") or name.endswith(".npy"):
+        return load_npy(data), {}
+    if data.startswith(b"\x89HDF") or name.endswith((".h5", ".hdf5")):
+        return load_hdf5(data, sample_index)
+    if name.endswith((".csv", ".txt")) or not name:
+        return load_csv(data), {}
+    raise InputError(f"multipart upload {filename!r}: unknown file type; send .csv, .npy, .h5 or .hdf5", 415)

@@ -11,6 +11,7 @@ from .core.config import Settings
 from .core.db import init_db, make_engine
 from .inference import ModelStore
 from .jobs import JobManager
+from .pool import DiagnosisPool
 
 log = logging.getLogger("rotordiag.service")
 
@@ -25,6 +26,7 @@ class AppState:
     models: ModelStore
     jobs: JobManager
     diagnosis_limiter: object = None   # anyio.CapacityLimiter, created on the event loop at first use
+    pool: DiagnosisPool | None = None  # diagnosis worker processes (settings.diagnosis_workers > 0)
 
     @classmethod
     def start(cls, settings: Settings) -> "AppState":
@@ -41,14 +43,21 @@ class AppState:
         if n:
             log.warning("%d job(s) were running when the server last stopped; marked interrupted "
                         "(POST /jobs/{id}/resume continues them)", n)
+        pool = None
+        if settings.effective_diagnosis_workers > 0:
+            pool = DiagnosisPool(settings.registry_dir, settings.effective_diagnosis_workers)
+            pool.warm_up(models.active_version())
         log.info("rotordiag service ready: data_dir=%s database=%s registry=%s",
                  settings.data_dir.resolve(), engine.url.render_as_string(hide_password=True),
                  settings.registry_dir.resolve())
-        return cls(settings=settings, engine=engine, sessions=sessions, models=models, jobs=jobs)
+        return cls(settings=settings, engine=engine, sessions=sessions, models=models, jobs=jobs, pool=pool)
 
     def stop(self) -> None:
-        """Stop the job threads (running jobs are marked interrupted) and close the engine."""
+        """Stop the job threads (running jobs are marked interrupted), the diagnosis workers, and close
+        the engine."""
         self.jobs.shutdown()
+        if self.pool is not None:
+            self.pool.shutdown()
         self.engine.dispose()
 
 

@@ -7,11 +7,15 @@ API_KEY = "test-key-0123456789"
 
 
 def make_settings(tmp_path: Path, **overrides):
-    """Settings for an isolated app: its own data dir, database and registry under ``tmp_path``."""
+    """Settings for an isolated app: its own data dir, database and registry under ``tmp_path``.
+
+    Diagnoses run in the test process (``diagnosis_workers=0``) unless a test asks for worker
+    processes (``tests/test_service_pool.py``, the end-to-end test with a real uvicorn).
+    """
     from service.core.config import Settings
 
     values = dict(data_dir=tmp_path / "data", api_key=API_KEY, environment="development",
-                  dask_local_workers=1, _env_file=None)
+                  dask_local_workers=1, diagnosis_workers=0, _env_file=None)
     values.update(overrides)
     return Settings(**values)
 

@@ -48,6 +48,15 @@ def test_same_predictions_as_scikit_learn(calibration):
     np.testing.assert_allclose(fast.ood_ratio(X), model.ood_ratio(X), rtol=1e-5)
 
 
+def test_infinity_is_refused_like_scikit_learn():
+    model = _fit("temperature")
+    X = _queries()[:3]
+    X[2, 1] = np.inf
+    for predict in (CompiledModel(model).predict_proba, model.predict_proba):
+        with pytest.raises(ValueError, match="infinity"):
+            predict(X)
+
+
 def test_occlusion_equals_predicting_every_occluded_row():
     model = _fit("temperature")
     fast = CompiledModel(model)

@@ -71,6 +71,11 @@ class Settings(BaseSettings):
     max_batch_records: int = Field(64, ge=1, le=10_000, description="Largest number of records in POST /diagnose/batch.")
     diagnosis_threads: int = Field(
         0, ge=0, le=256, description="Diagnoses computed at the same time; 0 means one per CPU available.")
+    diagnosis_workers: int = Field(
+        -1, ge=-1, le=256,
+        description="Worker processes that compute diagnoses (parse, features, verdict) so that requests use "
+        "every core; -1 means one per CPU available, 0 computes them in the server process's threads "
+        "(`diagnosis_threads`).")
     job_threads: int = Field(1, ge=1, le=16, description="Jobs run at the same time (each fans out on Dask).")
     log_level: str = Field("info", description="Log level of the service and uvicorn.")
 
@@ -111,16 +116,14 @@ class Settings(BaseSettings):
         return f"sqlite:///{(self.data_dir / 'rotordiag.sqlite3').resolve()}"
 
     @property
+    def effective_diagnosis_workers(self) -> int:
+        """``diagnosis_workers``, with -1 resolved to the number of CPUs this process may use."""
+        return _n_cpus() if self.diagnosis_workers < 0 else self.diagnosis_workers
+
+    @property
     def effective_diagnosis_threads(self) -> int:
         """``diagnosis_threads``, or the number of CPUs this process may use."""
-        import os
-
-        if self.diagnosis_threads:
-            return self.diagnosis_threads
-        try:
-            return max(1, len(os.sched_getaffinity(0)))
-        except AttributeError:  # pragma: no cover - non-Linux
-            return max(1, os.cpu_count() or 1)
+        return self.diagnosis_threads or _n_cpus()
 
     @property
     def registry_dir(self) -> Path:
@@ -136,3 +139,13 @@ class Settings(BaseSettings):
 def get_settings() -> Settings:
     """Read settings from the environment (a fresh object each call; the app keeps its own)."""
     return Settings()
+
+
+def _n_cpus() -> int:
+    """CPUs this process may run on."""
+    import os
+
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - non-Linux
+        return max(1, os.cpu_count() or 1)

@@ -7,14 +7,14 @@ from fastapi import APIRouter, HTTPException, Query, Request
 import anyio
 import anyio.to_thread
 from fastapi.concurrency import run_in_threadpool
-from pydantic import ValidationError
 
 from ...inference import ModelUnavailable
-from ...parsing import BinaryMeta, load_csv, load_hdf5, load_npy, recording_from_array, recording_from_model
-from ...schemas import MAX_LABEL_LEN, BatchItem, BatchRequest, BatchResponse, DiagnoseRequest, DiagnoseResponse, ErrorOut
+from ...pool import WorkerCrashed
+from ...parsing import checked, parse_body, recording_from_model
+from ...schemas import MAX_LABEL_LEN, BatchItem, BatchRequest, BatchResponse, DiagnoseResponse, ErrorOut
 from ...store import store_diagnosis
 from ..deps import DiagnoseKeyDep, JsonBodyDep, ModelsDep, StateDep
-from ..errors import InputError, validation_detail
+from ..errors import InputError
 
 router = APIRouter(tags=["diagnose"])
 
@@ -56,20 +56,10 @@ def _media_type(request: Request) -> str:
     return request.headers.get("content-type", "").split(";")[0].strip().lower()
 
 
-def _checked(build, *args):
-    """Call a recording constructor, turning its ValueError (bad recording) into a 422."""
-    try:
-        return build(*args)
-    except ValueError as exc:
-        if isinstance(exc, InputError):
-            raise
-        raise InputError(str(exc)) from None
-
-
 async def _read_body(request: Request) -> tuple[str, bytes, str]:
     """``(kind, bytes, file name)`` of the body: kind is ``json``, ``npy`` or ``upload``; 415 for anything else.
 
-    Only the I/O happens here, on the event loop; parsing runs in the thread pool (``_parse``).
+    Only the I/O happens here, on the event loop; parsing runs off the loop (``service.parsing.parse_body``).
     """
     media = _media_type(request)
     if media in JSON_TYPES:
@@ -90,45 +80,13 @@ async def _read_body(request: Request) -> tuple[str, bytes, str]:
         "application/octet-stream (an NPY array) or multipart/form-data (a CSV/NPY/HDF5 file in part 'file')", 415)
 
 
-def _parse(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> tuple[Any, str | None, str | None]:
-    """Recording, asset_id, plant from a body read by :func:`_read_body`."""
-    if kind == "json":
-        try:
-            req = DiagnoseRequest.model_validate_json(body)
-        except ValidationError as exc:
-            raise HTTPException(422, validation_detail(exc, ("body",))) from None
-        return _checked(recording_from_model, req), req.asset_id, req.plant
-    if kind == "npy":
-        array, file_meta = load_npy(body), {}
-    else:
-        array, file_meta = _load_upload(body, filename, query.get("sample_index", 0))
-    given = {k: v for k, v in query.items() if v is not None and k != "sample_index"}
-    merged = {**file_meta, **given}  # query parameters win over metadata stored in the file
-    if "sample_rate_hz" not in merged:
-        raise InputError("sample_rate_hz: required as a query parameter with a binary or multipart body, "
-                         "e.g. /diagnose?sample_rate_hz=4096")
-    meta = BinaryMeta(**merged)
-    return _checked(recording_from_array, array, meta), meta.asset_id, meta.plant
-
-
 async def _recording_from_request(request: Request, query: dict[str, Any]) -> tuple[Any, str | None, str | None]:
     """Recording, asset_id, plant from any accepted body form (read on the loop, parsed in the thread pool).
 
     Also used by the web page's ``/ui/plot-data`` (service/web/routes.py).
     """
     kind, body, filename = await _read_body(request)
-    return await run_in_threadpool(_parse, kind, body, filename, query)
-
-
-def _load_upload(data: bytes, filename: str, sample_index: int):
-    name = filename.lower()
-    if data.startswith(b"\x93NUMPY") or name.endswith(".npy"):
-        return load_npy(data), {}
-    if data.startswith(b"\x89HDF") or name.endswith((".h5", ".hdf5")):
-        return load_hdf5(data, sample_index)
-    if name.endswith((".csv", ".txt")) or not name:
-        return load_csv(data), {}
-    raise InputError(f"multipart upload {filename!r}: unknown file type; send .csv, .npy, .h5 or .hdf5", 415)
+    return await run_in_threadpool(parse_body, kind, body, filename, query)
 
 
 def _diagnose_sync(state, recording, asset_id: str | None, plant: str | None, version: str | None) -> dict:
@@ -191,8 +149,36 @@ async def diagnose(
                  plant=plant, units=units, bearings=bearings, angles_deg=angles_deg,
                  keyphasor_times_s=keyphasor_times_s, sample_index=sample_index)
     kind, body, filename = await _read_body(request)
+    if state.pool is not None:
+        return await _diagnose_in_pool(state, kind, body, filename, query, model_version)
     return await anyio.to_thread.run_sync(_parse_and_diagnose, state, kind, body, filename, query, model_version,
                                           limiter=_diagnosis_limiter(state))
+
+
+async def _diagnose_in_pool(state, kind: str, body: bytes, filename: str, query: dict[str, Any],
+                            version: str | None) -> dict:
+    """Parse and diagnose in a worker process (``service.pool``); store the result here."""
+    limiter = getattr(state, "diagnosis_limiter", None)
+    if limiter is None:   # requests in flight to the workers: two per worker keeps them busy
+        limiter = state.diagnosis_limiter = anyio.CapacityLimiter(2 * state.pool.n_workers)
+    async with limiter:
+        try:
+            result = await state.pool.run(kind, body, filename, query, version)
+        except WorkerCrashed as exc:
+            raise HTTPException(503, str(exc)) from None
+    tag = result[0]
+    if tag == "input":
+        raise InputError(result[2], result[1])
+    if tag == "http":
+        raise HTTPException(result[1], result[2])
+    if tag == "unavailable":
+        if version is not None:
+            raise InputError(result[1], 404)
+        raise HTTPException(503, result[1])
+    _, verdict, asset_id, plant = result
+    if asset_id is not None:
+        await run_in_threadpool(store_diagnosis, state, asset_id, plant, verdict)
+    return verdict
 
 
 def _diagnosis_limiter(state) -> anyio.CapacityLimiter:
@@ -205,7 +191,7 @@ def _diagnosis_limiter(state) -> anyio.CapacityLimiter:
 
 
 def _parse_and_diagnose(state, kind, body, filename, query, model_version) -> dict:
-    recording, asset_id, plant = _parse(kind, body, filename, query)
+    recording, asset_id, plant = parse_body(kind, body, filename, query)
     return _diagnose_sync(state, recording, asset_id, plant, model_version)
 
 
@@ -225,7 +211,7 @@ def diagnose_batch(body: BatchRequest, state: StateDep,
     items: list[BatchItem] = []
     for i, rec in enumerate(body.records):
         try:
-            recording = _checked(recording_from_model, rec)
+            recording = checked(recording_from_model, rec)
             verdict = _diagnose_sync(state, recording, rec.asset_id, rec.plant, model_version)
             items.append(BatchItem(index=i, status_code=200, result=verdict))
         except InputError as exc:
