@@ -3,22 +3,34 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from . import _config as cfg
 from ._names import FEATURE_NAMES
-from ._orbit import OrbitShape, orbit_shapes
+from ._orbit import OrbitShape, orbit_arrays
 from ._orders import fit_orders, forward_reverse, max_sync_order
 from ._poincare import classify, poincare_points
 from ._recording import Recording
-from ._spectrum import band_power, noise_rms, residual_psd
+from ._spectrum import noise_rms, residual_psd
 from ._speed import refine_line_hz, shaft_angle
 
 __all__ = ["BearingDetail", "FeatureResult", "extract_features"]
 
 _NAME_INDEX = {n: i for i, n in enumerate(FEATURE_NAMES)}
+_SPEED_INDEX = _NAME_INDEX["speed_rpm"]
+
+
+@lru_cache(maxsize=None)
+def _bearing_schema(bearing: int) -> tuple[tuple[str, ...], np.ndarray]:
+    """The ``b{n}_…`` names of one bearing in schema order, and their indices in the vector."""
+    prefix = f"b{bearing}_"
+    index = [i for i, n in enumerate(FEATURE_NAMES) if n.startswith(prefix)]
+    arr = np.array(index, dtype=np.intp)
+    arr.flags.writeable = False
+    return tuple(FEATURE_NAMES[i] for i in index), arr
 
 
 @dataclass(frozen=True)
@@ -120,8 +132,32 @@ class FeatureResult:
             raise KeyError(f"no feature named {name!r}; see features.FEATURE_NAMES") from None
 
 
-def _ratio(num: float, den: float) -> float:
-    return num / den if den > 0 else float("nan")
+def _ratios(num: np.ndarray, den: np.ndarray) -> np.ndarray:
+    """``num / den`` where ``den > 0``, else NaN (element-wise; call under ``np.errstate``)."""
+    return np.where(den > 0, num / den, np.nan)
+
+
+def _subsync_peak_orders(pb: np.ndarray, lo: int, hi: int, total_ms: np.ndarray, orders: np.ndarray,
+                         bin_orders: float) -> np.ndarray:
+    """Order of the largest sub-synchronous line of each orbit spectrum row (NaN when not distinct)."""
+    out = np.full(pb.shape[0], np.nan)
+    if hi - lo < 3:
+        return out
+    band = pb[:, lo:hi]
+    peak = lo + np.argmax(band, axis=1)
+    mid = band.shape[1] // 2
+    med = np.partition(band, mid, axis=1)[:, mid]
+    tiny = np.finfo(float).tiny
+    for i in range(pb.shape[0]):
+        k = int(peak[i])
+        row = pb[i]
+        distinct = row[k] > cfg.SUBSYNC_PEAK_MIN_RATIO * med[i]
+        if distinct and row[k] > cfg.SUBSYNC_PEAK_MIN_FRAC * total_ms[i] and 0 < k < row.size - 1:
+            lp = np.log(np.maximum(row[k - 1:k + 2], tiny))
+            den = lp[0] - 2 * lp[1] + lp[2]
+            delta = 0.5 * (lp[0] - lp[2]) / den if den < 0 else 0.0
+            out[i] = float(orders[k] + delta * bin_orders)
+    return out
 
 
 def _wrap_deg(d: float) -> float:
@@ -237,21 +273,23 @@ def _extract(recording: Recording) -> FeatureResult:
     pts_all = poincare_points(sync0, resid, sa.start, fs, sa.rev_times_s)
 
     values = np.full(len(FEATURE_NAMES), np.nan)
-    out: dict[str, float] = {"speed_rpm": sa.speed_rpm}
-    details: dict[int, BearingDetail] = {}
+    values[_SPEED_INDEX] = sa.speed_rpm
     if sa.n_revs < cfg.MIN_REVS_SUBHARMONIC:
         warnings.append(f"only {sa.n_revs} revolutions: sub-harmonic band features have a resolution of "
                         f"{1 / sa.n_revs:.3f}X and are coarse (>= {cfg.MIN_REVS_SUBHARMONIC} revolutions recommended)")
 
-    # everything per bearing that vectorises, computed for all bearings at once
-    amp_pp = (2 * np.abs(coeffs[:, :3])).tolist()                       # (m, 3)
-    phase = (np.degrees(-np.angle(coeffs[:, :3])) % 360.0).tolist()
+    # every per-bearing feature as a column over the bearings present (schema order), then one
+    # scatter into ``values``: the arithmetic is element-wise, so each value is the same float as
+    # computing it bearing by bearing
+    c = np.array([rec.clearance_for(b) for b in bearings])
+    amp_pp = 2 * np.abs(coeffs[:, :3])                                   # (m, 3)
+    phase = np.degrees(-np.angle(coeffs[:, :3])) % 360.0
     cx_all, cy_all = coeffs[0::2], coeffs[1::2]                           # (n_bearings, K)
     fw_all, rv_all = forward_reverse(cx_all, cy_all)
-    afw_all, arv_all = np.abs(fw_all[:, :3]).tolist(), np.abs(rv_all[:, :3]).tolist()
-    a1, r1 = np.abs(fw_all[:, 0]), np.abs(rv_all[:, 0])
+    afw, arv = np.abs(fw_all[:, :3]), np.abs(rv_all[:, :3])
+    a1, r1 = afw[:, 0], arv[:, 0]
     hints = np.where(a1 + r1 > 0, np.sign(a1 - r1), 1.0)
-    orbits = orbit_shapes(cx_all[:, :2], cy_all[:, :2], hints)
+    orb = orbit_arrays(cx_all[:, :2], cy_all[:, :2], hints)
     hw = max(cfg.CALLOUT_HALF_WIDTH_ORDERS, cfg.CALLOUT_MIN_HALF_WIDTH_BINS * bin_orders)
     bands = {"subsync": cfg.SUBSYNC_BAND, "whirl_band": cfg.WHIRL_BAND}
     for key, centre in cfg.CALLOUT_ORDERS.items():
@@ -260,93 +298,64 @@ def _extract(recording: Recording) -> FeatureResult:
     pb_all = psd[0::2, :top] + psd[1::2, :top]                          # orbit (x + y) spectrum below 1X
     cum_all = np.concatenate([np.zeros((pb_all.shape[0], 1)), np.cumsum(pb_all, axis=1)], axis=1)
     sub_lo, sub_hi = np.searchsorted(orders_axis[:top], cfg.SUBSYNC_BAND, side="left")
-    amp_list = ptp.tolist()
     spread = pts_all - pts_all.mean(axis=0)
-    poincare_rms = np.sqrt(np.mean(spread[:, 0::2] ** 2 + spread[:, 1::2] ** 2, axis=0)).tolist()
+    poincare_rms = np.sqrt(np.mean(spread[:, 0::2] ** 2 + spread[:, 1::2] ** 2, axis=0))
+    total_ms = ms[0::2] + ms[1::2]
+    nan = np.nan
 
+    cols: list[np.ndarray] = []
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for d in (0, 1):                                                # x, y
+            amp, ph, direct = amp_pp[d::2], phase[d::2], ptp[d::2]
+            for k in range(3):
+                cols += [amp[:, k], amp[:, k] / c, ph[:, k]]
+            cols += [_ratios(amp[:, 1], amp[:, 0]), _ratios(amp[:, 2], amp[:, 0]), direct, direct / c]
+        for k in range(2):
+            fw2, rv2 = 2 * afw[:, k], 2 * arv[:, k]
+            cols += [fw2, fw2 / c, rv2, rv2 / c, _ratios(arv[:, k], afw[:, k])]
+        major = 2 * (afw + arv)
+        for k in range(3):
+            cols += [major[:, k], major[:, k] / c]
+        cols += [_ratios(major[:, 1], major[:, 0]), _ratios(major[:, 2], major[:, 0])]
+        s1 = a1 + r1
+        whirl_index = _ratios(a1 - r1, s1)
+        cols += [np.abs(whirl_index), whirl_index, np.where(s1 > 0, np.sign(a1 - r1), nan)]
+        pp = orb.pp
+        # no 1X or 2X to speak of (below 1e-9 of the direct motion): no shape either
+        degenerate = ~(pp > 1e-9 * np.maximum(ptp[0::2], ptp[1::2]))
+        cols += [pp, pp / c, orb.area, orb.area / c ** 2,
+                 np.where(degenerate, nan, orb.ellipticity),
+                 np.where(degenerate, nan, orb.turning.astype(float)),
+                 np.where(degenerate, nan, (np.abs(orb.turning) != 1).astype(float)),
+                 np.where(degenerate, nan, orb.concavity)]
+        # sub-synchronous content of the orbit (x and y together)
+        for lo, hi in bands.values():
+            i0, i1 = np.searchsorted(orders_axis[:top], [lo, hi], side="left")
+            bms = cum_all[:, i1] - cum_all[:, i0]
+            rms = np.sqrt(bms)
+            cols += [rms, rms / c, _ratios(bms, total_ms)]
+        cols.append(_subsync_peak_orders(pb_all, sub_lo, sub_hi, total_ms, orders_axis, float(orders_axis[1])))
+        cols.append(_ratios(res_ms[0::2] + res_ms[1::2], total_ms))
+        cols += [poincare_rms, poincare_rms / c, _ratios(poincare_rms, np.sqrt(total_ms))]
+    table = np.column_stack(cols)                                      # (n_bearings, features per bearing)
+
+    details: dict[int, BearingDetail] = {}
+    orders = tuple(range(1, k_max + 1))
     for i, b in enumerate(bearings):
         ix, iy = 2 * i, 2 * i + 1
-        p = f"b{b}_"
-        c = rec.clearance_for(b)
-        f: dict[str, float] = {}
-        for d, col in (("x", ix), ("y", iy)):
-            amp = amp_pp[col]
-            for k in cfg.REPORTED_ORDERS:
-                f[f"{p}{d}_{k}x_amp_um_pp"] = amp[k - 1]
-                f[f"{p}{d}_{k}x_amp_pp_per_c"] = amp[k - 1] / c
-                f[f"{p}{d}_{k}x_phase_deg"] = phase[col][k - 1]
-            f[f"{p}{d}_2x_1x_ratio"] = _ratio(amp[1], amp[0])
-            f[f"{p}{d}_3x_1x_ratio"] = _ratio(amp[2], amp[0])
-            f[f"{p}{d}_direct_um_pp"] = amp_list[col]
-            f[f"{p}{d}_direct_pp_per_c"] = amp_list[col] / c
-        afw, arv = afw_all[i], arv_all[i]
-        for k in (1, 2):
-            f[f"{p}{k}x_fwd_um_pp"] = 2 * afw[k - 1]
-            f[f"{p}{k}x_fwd_pp_per_c"] = 2 * afw[k - 1] / c
-            f[f"{p}{k}x_rev_um_pp"] = 2 * arv[k - 1]
-            f[f"{p}{k}x_rev_pp_per_c"] = 2 * arv[k - 1] / c
-            f[f"{p}{k}x_rev_fwd_ratio"] = _ratio(arv[k - 1], afw[k - 1])
-        major = [2 * (a + r) for a, r in zip(afw, arv)]
-        for k in cfg.REPORTED_ORDERS:
-            f[f"{p}{k}x_major_um_pp"] = major[k - 1]
-            f[f"{p}{k}x_major_pp_per_c"] = major[k - 1] / c
-        f[f"{p}2x_1x_major_ratio"] = _ratio(major[1], major[0])
-        f[f"{p}3x_1x_major_ratio"] = _ratio(major[2], major[0])
-        s1 = afw[0] + arv[0]
-        whirl_index = _ratio(afw[0] - arv[0], s1)
-        f[f"{p}1x_ellipticity"] = abs(whirl_index)
-        f[f"{p}1x_whirl_index"] = whirl_index
-        f[f"{p}1x_whirl_dir"] = float(np.sign(afw[0] - arv[0])) if s1 > 0 else float("nan")
-        orb = orbits[i]
-        f[f"{p}orbit12_um_pp"] = orb.pp_um
-        f[f"{p}orbit12_pp_per_c"] = orb.pp_um / c
-        f[f"{p}orbit12_area_um2"] = orb.area_um2
-        f[f"{p}orbit12_area_per_c2"] = orb.area_um2 / c ** 2
-        # no 1X or 2X to speak of (below 1e-9 of the direct motion): no shape either
-        degenerate = not orb.pp_um > 1e-9 * max(amp_list[ix], amp_list[iy])
-        f[f"{p}orbit12_ellipticity"] = float("nan") if degenerate else orb.ellipticity
-        f[f"{p}orbit12_turning_number"] = float("nan") if degenerate else float(orb.turning_number)
-        f[f"{p}orbit12_loop"] = float("nan") if degenerate else float(orb.has_loop)
-        f[f"{p}orbit12_concavity"] = float("nan") if degenerate else orb.concavity
-        # sub-synchronous content of the orbit (x and y together)
-        pb, cum = pb_all[i], cum_all[i]
-        total_ms = float(ms[ix] + ms[iy])
-        for key, (lo, hi) in bands.items():
-            bms = band_power(cum, orders_axis[:top], lo, hi)
-            rms = float(np.sqrt(bms))
-            f[f"{p}{key}_rms_um"] = rms
-            f[f"{p}{key}_rms_per_c"] = rms / c
-            f[f"{p}{key}_frac"] = _ratio(bms, total_ms)
-        peak_order = float("nan")
-        if sub_hi - sub_lo >= 3:
-            k = int(sub_lo + np.argmax(pb[sub_lo:sub_hi]))
-            band = pb[sub_lo:sub_hi]
-            med = float(np.partition(band, band.size // 2)[band.size // 2])
-            distinct = pb[k] > cfg.SUBSYNC_PEAK_MIN_RATIO * med
-            if distinct and pb[k] > cfg.SUBSYNC_PEAK_MIN_FRAC * total_ms and 0 < k < pb.size - 1:
-                lp = np.log(np.maximum(pb[k - 1:k + 2], np.finfo(float).tiny))
-                den = lp[0] - 2 * lp[1] + lp[2]
-                delta = 0.5 * (lp[0] - lp[2]) / den if den < 0 else 0.0
-                peak_order = float(orders_axis[k] + delta * fft_bin_orders)
-        f[f"{p}subsync_peak_order"] = peak_order
-        f[f"{p}nonsync_frac"] = _ratio(float(res_ms[ix] + res_ms[iy]), total_ms)
-        pts = pts_all[:, ix:iy + 1]
-        prms = poincare_rms[i]
-        f[f"{p}poincare_rms_um"] = prms
-        f[f"{p}poincare_rms_per_c"] = prms / c
-        f[f"{p}poincare_disp"] = _ratio(prms, float(np.sqrt(total_ms)))
-        out.update(f)
-
+        names, index = _bearing_schema(b)
+        row = table[i]
+        values[index] = row
         cx, cy = cx_all[i], cy_all[i]
         chans = [ch for ch in rec.channels if ch.bearing == b]
-        angles = np.deg2rad([ch.angle_deg for ch in chans])
-        probe = np.vstack([np.cos(a) * cx + np.sin(a) * cy for a in angles])
+        angles = np.deg2rad([chans[0].angle_deg, chans[1].angle_deg])
+        probe = np.cos(angles)[:, None] * cx + np.sin(angles)[:, None] * cy
         details[b] = BearingDetail(
-            bearing=b, probe_angles_deg=(chans[0].angle_deg, chans[1].angle_deg), clearance_um=c,
-            orders=tuple(range(1, k_max + 1)), x_coeffs_um=cx.copy(), y_coeffs_um=cy.copy(),
+            bearing=b, probe_angles_deg=(chans[0].angle_deg, chans[1].angle_deg), clearance_um=float(c[i]),
+            orders=orders, x_coeffs_um=cx.copy(), y_coeffs_um=cy.copy(),
             probe_coeffs_um=probe, forward_um=fw_all[i].copy(), reverse_um=rv_all[i].copy(),
             mean_um=(float(mean[ix]), float(mean[iy])), noise_rms_um=(float(noise[ix]), float(noise[iy])),
-            poincare_um=pts, orbit12=orb, features=f)
+            poincare_um=pts_all[:, ix:iy + 1], orbit12=orb.shape(i), features=dict(zip(names, row.tolist())))
 
     for k in (1, 2):
         for bi, bj in cfg.PHASE_PAIRS:
@@ -354,7 +363,8 @@ def _extract(recording: Recording) -> FeatureResult:
                 for d in ("x", "y"):
                     ci = 2 * bearings.index(bi) + (d == "y")
                     cj = 2 * bearings.index(bj) + (d == "y")
-                    out[f"dphase_{k}x_b{bi}_b{bj}_{d}_deg"] = _wrap_deg(phase[ci][k - 1] - phase[cj][k - 1])
+                    values[_NAME_INDEX[f"dphase_{k}x_b{bi}_b{bj}_{d}_deg"]] = _wrap_deg(
+                        float(phase[ci, k - 1]) - float(phase[cj, k - 1]))
 
     motion = None
     if sa.n_revs >= cfg.MIN_REVS_MOTION:
@@ -363,15 +373,13 @@ def _extract(recording: Recording) -> FeatureResult:
         if motion is None:
             warnings.append(note)
         else:
-            out["motion_period"] = float(motion.period) if motion.kind == "period-n" else 0.0
-            out["motion_quasi_periodic"] = float(motion.kind == "quasi-periodic")
-            out["motion_chaotic"] = float(motion.kind == "chaotic")
+            values[_NAME_INDEX["motion_period"]] = float(motion.period) if motion.kind == "period-n" else 0.0
+            values[_NAME_INDEX["motion_quasi_periodic"]] = float(motion.kind == "quasi-periodic")
+            values[_NAME_INDEX["motion_chaotic"]] = float(motion.kind == "chaotic")
     else:
         warnings.append(f"only {sa.n_revs} revolutions: motion type not determined "
                         f"(needs >= {cfg.MIN_REVS_MOTION})")
 
-    for name, v in out.items():
-        values[_NAME_INDEX[name]] = v
     return FeatureResult(
         names=FEATURE_NAMES, values=values, bearings=details, speed_rpm=float(sa.speed_rpm),
         speed_source=sa.source, phase_reference="keyphasor" if sa.source == "keyphasor" else "first sample",

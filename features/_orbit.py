@@ -7,8 +7,9 @@ from functools import lru_cache
 import numpy as np
 
 from . import _config as cfg
+from ._kernels import coarse_diameter
 
-__all__ = ["OrbitShape", "orbit_shape", "orbit_shapes"]
+__all__ = ["OrbitShape", "OrbitArrays", "orbit_shape", "orbit_shapes", "orbit_arrays"]
 
 
 @dataclass(frozen=True)
@@ -60,6 +61,24 @@ def _grid_basis(m: int, k_max: int) -> tuple[np.ndarray, np.ndarray]:
     return e, de
 
 
+@dataclass(frozen=True)
+class OrbitArrays:
+    """The figures of :class:`OrbitShape` for several orbits, one array entry per orbit."""
+
+    pp: np.ndarray
+    area: np.ndarray
+    ellipticity: np.ndarray
+    turning: np.ndarray
+    concavity: np.ndarray
+    x: np.ndarray               # (n_orbits, ORBIT_GRID)
+    y: np.ndarray
+
+    def shape(self, b: int) -> OrbitShape:
+        """Orbit ``b`` as an :class:`OrbitShape`."""
+        return OrbitShape(float(self.pp[b]), float(self.area[b]), float(self.ellipticity[b]),
+                          int(self.turning[b]), float(self.concavity[b]), np.column_stack([self.x[b], self.y[b]]))
+
+
 def orbit_shapes(cx: np.ndarray, cy: np.ndarray, whirl_hint: np.ndarray | None = None) -> list[OrbitShape]:
     """Shapes of several orbits ``x = Re Σ cx[b,k] e^{jkθ}``, ``y = Re Σ cy[b,k] e^{jkθ}`` at once.
 
@@ -71,6 +90,12 @@ def orbit_shapes(cx: np.ndarray, cy: np.ndarray, whirl_hint: np.ndarray | None =
         Direction used for ``concavity`` when the turning number is 0 (figure-8): the sign of
         the 1X whirl (default +1).
     """
+    arr = orbit_arrays(cx, cy, whirl_hint)
+    return [arr.shape(b) for b in range(arr.pp.size)]
+
+
+def orbit_arrays(cx: np.ndarray, cy: np.ndarray, whirl_hint: np.ndarray | None = None) -> OrbitArrays:
+    """:func:`orbit_shapes` as arrays over the orbits (no per-orbit objects)."""
     cx = np.atleast_2d(cx)
     cy = np.atleast_2d(cy)
     nb, k_max = cx.shape
@@ -103,8 +128,9 @@ def orbit_shapes(cx: np.ndarray, cy: np.ndarray, whirl_hint: np.ndarray | None =
         concavity = np.where(absturn > 0, np.maximum(0.0, -s[:, None] * dpsi).sum(axis=1) / absturn, np.nan)
     # diameter: coarse pairwise search on every third grid point, then a fine local search
     xs, ys = x[:, ::3], y[:, ::3]
-    d2 = (xs[:, :, None] - xs[:, None, :]) ** 2 + (ys[:, :, None] - ys[:, None, :]) ** 2   # (nb, m/3, m/3)
-    flat = d2.reshape(nb, -1).argmax(axis=1)
+    flat = np.empty(nb, dtype=np.int64)
+    d2max = np.empty(nb)
+    coarse_diameter(np.ascontiguousarray(xs), np.ascontiguousarray(ys), flat, d2max)   # pairs of the m/3 points
     i, j = np.divmod(flat, xs.shape[1])
     step = 3 * 2 * np.pi / m
     fine = np.linspace(-step, step, 65)
@@ -116,9 +142,8 @@ def orbit_shapes(cx: np.ndarray, cy: np.ndarray, whirl_hint: np.ndarray | None =
     zi = np.einsum("bfk,bk->bf", ei, cx).real + 1j * np.einsum("bfk,bk->bf", ei, cy).real
     zj = np.einsum("bfk,bk->bf", ej, cx).real + 1j * np.einsum("bfk,bk->bf", ej, cy).real
     pp = np.maximum(np.abs(zi[:, :, None] - zj[:, None, :]).reshape(nb, -1).max(axis=1),
-                    np.sqrt(d2.reshape(nb, -1).max(axis=1)))
-    return [OrbitShape(float(pp[b]), float(area[b]), float(ellipticity[b]), int(turning[b]),
-                       float(concavity[b]), np.column_stack([x[b], y[b]])) for b in range(nb)]
+                    np.sqrt(d2max))
+    return OrbitArrays(pp, area, ellipticity, turning, concavity, x, y)
 
 
 def orbit_shape(cx: np.ndarray, cy: np.ndarray, whirl_hint: float = 1.0) -> OrbitShape:

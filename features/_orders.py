@@ -19,6 +19,7 @@ import threading
 import numpy as np
 
 from . import _config as cfg
+from ._kernels import trig_rows
 from ._spectrum import hann
 
 __all__ = ["max_sync_order", "fit_orders", "forward_reverse"]
@@ -98,13 +99,8 @@ def _trig_rows(theta_rad: np.ndarray, i0: int, i1: int, k_max: int,
         ns = -(-nb // sub)
         e1 = (np.exp(1j * uniform_step_rad * (i0 + sub * np.arange(ns)))[:, None]
               * np.exp(1j * uniform_step_rad * np.arange(sub))[None, :]).ravel()[:nb]
-    basis = _workspace("basis", (k_max, nb), np.complex128)   # row k-1: e^{jkθ}
-    basis[0] = e1
-    for k in range(1, k_max):
-        np.multiply(basis[k - 1], e1, out=basis[k])
     trig = _workspace("trig", (2 * k_max, nb), np.float64)
-    trig[0::2] = basis.real
-    trig[1::2] = basis.imag
+    trig_rows(np.ascontiguousarray(e1), k_max, trig)       # rows cos kθ, sin kθ by e^{jkθ} = e^{j(k-1)θ}·e^{jθ}
     return trig
 
 
@@ -165,8 +161,8 @@ def fit_orders(theta_rad: np.ndarray, data: np.ndarray, max_order: int,
     for i0, i1 in blocks:
         # one block: the rows are still in the workspace; several: rebuild them
         trig = _trig_rows(theta_rad, i0, i1, k_max, uniform_step_rad) if len(blocks) > 1 else trig
-        np.matmul(sol[1:].T, trig, out=residual[:, i0:i1])
-        np.subtract(data[:, i0:i1], residual[:, i0:i1], out=residual[:, i0:i1])
+        fit = np.matmul(sol[1:].T, trig, out=_workspace("fit", (m, i1 - i0), np.float64))  # contiguous: BLAS
+        np.subtract(data[:, i0:i1], fit, out=residual[:, i0:i1])
     residual -= sol[0][:, None]
     coeffs = (sol[1::2] - 1j * sol[2::2]).T
     return coeffs, sol[0].copy(), residual

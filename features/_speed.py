@@ -63,14 +63,24 @@ def refine_line_hz(data: np.ndarray, fs: float, f0: float, iterations: int = cfg
     n = data.shape[1]
     h = n // 2
     w = hann(h)
-    t = np.arange(h) / fs
     x1 = data[:, :h]
     x2 = data[:, h:2 * h]
     f = float(f0)
+    sub = 128
+    ns = -(-h // sub)
+    coarse_i = sub * np.arange(ns)
+    fine_i = np.arange(sub)
     for _ in range(iterations):
-        e = w * np.exp(-2j * np.pi * f * t)
-        c1 = x1 @ e
-        c2 = (x2 @ e) * np.exp(-2j * np.pi * f * h / fs)
+        step = -2 * np.pi * f / fs
+        # w·e^{-j2πf·i/fs} from 2·√h exponentials (i = 128a + b), as a real (h, 2) array so that
+        # the products with the real channels are real matrix products
+        e = (np.exp(1j * step * coarse_i)[:, None] * np.exp(1j * step * fine_i)[None, :]).ravel()[:h]
+        e *= w
+        ev = e.view(np.float64).reshape(h, 2)
+        p1 = x1 @ ev
+        p2 = x2 @ ev
+        c1 = p1[:, 0] + 1j * p1[:, 1]
+        c2 = (p2[:, 0] + 1j * p2[:, 1]) * np.exp(1j * step * h)
         dphi = float(np.angle(np.vdot(c1, c2)))
         f = f + dphi * fs / (2 * np.pi * h)
     return f
