@@ -92,8 +92,10 @@ def _trig_rows(theta_rad: np.ndarray, i0: int, i1: int, k_max: int,
                uniform_step_rad: float | None) -> np.ndarray:
     """Rows cos kθ, sin kθ (k = 1..K) for samples i0..i1, shape (2K, i1 − i0), in scratch memory."""
     nb = i1 - i0
-    if uniform_step_rad is None:
-        e1 = np.exp(1j * theta_rad[i0:i1])
+    if uniform_step_rad is None:   # cos and sin (SIMD in NumPy) are ~1.6× faster than the complex exp
+        e1 = np.empty(nb, dtype=np.complex128)
+        np.cos(theta_rad[i0:i1], out=e1.real)
+        np.sin(theta_rad[i0:i1], out=e1.imag)
     else:  # e^{jθ} in sub-blocks of 128: 2·√n complex exponentials instead of n
         sub = 128
         ns = -(-nb // sub)
