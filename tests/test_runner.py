@@ -94,6 +94,25 @@ def test_local_cluster_uses_worker_processes_and_is_shut_down():
     assert _wait_dead(pids) == set(), "worker processes of the runner's own cluster still alive"
 
 
+def dask_setting(name: str):
+    """Task for the tests: a Dask setting as the worker process sees it."""
+    import dask
+
+    return dask.config.get(name)
+
+
+def test_own_cluster_runs_with_the_lean_config_and_reports_ready():
+    from simulator.runner import LOCAL_CLUSTER_CONFIG
+
+    events = []
+    names = list(LOCAL_CLUSTER_CONFIG)
+    for i, value in run_tasks(dask_setting, names, n_workers=1, progress=False,
+                              on_ready=lambda: events.append("ready")):
+        events.append("result")
+        assert value == LOCAL_CLUSTER_CONFIG[names[i]], names[i]
+    assert events == ["ready"] + ["result"] * len(names)
+
+
 def test_abandoned_iteration_shuts_the_cluster_down():
     gen = run_tasks(pid_after_sleep, [0.1] * 50, n_workers=1, progress=False)
     _, pid = next(gen)

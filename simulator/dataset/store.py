@@ -34,13 +34,15 @@ import json
 import os
 import time
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterator
 
 import numpy as np
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "StoreError", "DatasetWriter", "open_dataset", "layout",
-           "MECHANISM_CODES", "SIMULATED_MECHANISM_CODES"]
+           "MECHANISM_CODES", "SIMULATED_MECHANISM_CODES", "EncodedChunk", "encode_waveform_chunk",
+           "decode_waveform_chunk"]
 
 FORMAT = "rotordiag-dataset"
 FORMAT_VERSION = 1
@@ -50,6 +52,9 @@ _MESSAGE_LEN = 256
 RESUME_LOG_SLOTS = 64
 RESUME_LOG_LEN = 512
 _KIND_LEN = 16
+#: The waveforms' filter pipeline, in HDF5's write order: byte shuffle, then deflate (gzip) at this level.
+WAVEFORM_GZIP_LEVEL = 4
+WAVEFORM_DTYPE = "<f4"
 
 
 class StoreError(RuntimeError):
@@ -102,6 +107,41 @@ def layout(n_channels: int, n_points: int, n_bearings: int,
     return L
 
 
+@dataclass(frozen=True)
+class EncodedChunk:
+    """One waveform chunk, already through the shuffle + deflate pipeline (what HDF5 stores on disk)."""
+
+    data: bytes
+    shape: tuple[int, ...]     # the chunk's shape without the sample axis, e.g. (C, P)
+    dtype: str = WAVEFORM_DTYPE
+    gzip_level: int = WAVEFORM_GZIP_LEVEL
+
+    def decode(self) -> np.ndarray:
+        return decode_waveform_chunk(self)
+
+
+def encode_waveform_chunk(values: np.ndarray, level: int = WAVEFORM_GZIP_LEVEL) -> EncodedChunk:
+    """HDF5's shuffle filter (byte k of every element together, k = 0..3) then zlib deflate at ``level``.
+
+    The bytes are what ``H5Z_filter_shuffle`` + ``H5Z_filter_deflate`` produce for the chunk, so
+    :meth:`DatasetWriter.write_sample` can store them with ``write_direct_chunk``.
+    """
+    import zlib
+
+    a = np.ascontiguousarray(values, dtype=WAVEFORM_DTYPE)
+    shuffled = a.reshape(-1).view(np.uint8).reshape(-1, a.dtype.itemsize).T.tobytes()
+    return EncodedChunk(zlib.compress(shuffled, level), tuple(a.shape), WAVEFORM_DTYPE, level)
+
+
+def decode_waveform_chunk(chunk: EncodedChunk) -> np.ndarray:
+    """Inverse of :func:`encode_waveform_chunk` (inflate, then unshuffle)."""
+    import zlib
+
+    dt = np.dtype(chunk.dtype)
+    raw = np.frombuffer(zlib.decompress(chunk.data), dtype=np.uint8)
+    return raw.reshape(dt.itemsize, -1).T.copy().view(dt).reshape(chunk.shape)
+
+
 def _fill(dtype: str) -> Any:
     if dtype.startswith("f"):
         return np.nan
@@ -125,7 +165,7 @@ def create_file(path: Path, n_samples: int, L: dict[str, tuple[tuple[int, ...], 
             shape = (n_samples, *tail)
             if name == "waveforms":
                 kw = dict(chunks=(1, *tail), shuffle=True, compression=compression,
-                          compression_opts=4 if compression == "gzip" else None)
+                          compression_opts=WAVEFORM_GZIP_LEVEL if compression == "gzip" else None)
             else:
                 rows = max(1, min(n_samples, 4096 // max(1, int(np.prod(tail)))))
                 kw = dict(chunks=(rows, *tail))
@@ -243,6 +283,7 @@ class DatasetWriter:
         self.repaired = repaired
         self.done = f["done"][...].astype(bool)
         self._ds = {name: f[name] for name in _dataset_names(f)}
+        self._direct_waveforms = _takes_encoded_chunks(self._ds["waveforms"])
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -292,9 +333,16 @@ class DatasetWriter:
 
     # ------------------------------------------------------------------ writing
     def write_sample(self, index: int, rows: dict[str, Any]) -> None:
-        """Write one sample's values (dataset name → value) and mark it done, flushing in between."""
+        """Write one sample's values (dataset name → value) and mark it done, flushing in between.
+
+        ``rows["waveforms"]`` may be an array or an :class:`EncodedChunk` (stored as it is when
+        the file's waveform filters are the ones it was encoded for, else decoded and written).
+        """
         for name, value in rows.items():
-            self._write_row(name, index, value)
+            if isinstance(value, EncodedChunk):
+                self._write_encoded(name, index, value)
+            else:
+                self._write_row(name, index, value)
         self.f.flush()
         self._write_row("done", index, 1)
         self.f.flush()
@@ -312,6 +360,14 @@ class DatasetWriter:
         fspace.select_hyperslab((int(index), *(0,) * len(tail)), (1, *tail))
         ds.id.write(h5s.create_simple(arr.shape), fspace, arr)
 
+    def _write_encoded(self, name: str, index: int, chunk: EncodedChunk) -> None:
+        ds = self._ds[name]
+        if (name == "waveforms" and self._direct_waveforms and chunk.shape == ds.shape[1:]
+                and np.dtype(chunk.dtype) == ds.dtype and chunk.gzip_level == ds.compression_opts):
+            ds.id.write_direct_chunk((int(index), *(0,) * (ds.ndim - 1)), chunk.data, 0)
+        else:
+            self._write_row(name, index, chunk.decode())
+
     def close(self) -> None:
         """Close the file (clears HDF5's writing flag) and release the lock."""
         if self.f is None:
@@ -327,6 +383,16 @@ class DatasetWriter:
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
+
+
+def _takes_encoded_chunks(ds: Any) -> bool:
+    """True when ``ds`` stores one sample per chunk through exactly shuffle, then deflate."""
+    from h5py import h5z
+
+    dcpl = ds.id.get_create_plist()
+    filters = [dcpl.get_filter(k)[0] for k in range(dcpl.get_nfilters())]
+    return (ds.chunks == (1, *ds.shape[1:]) and filters == [h5z.FILTER_SHUFFLE, h5z.FILTER_DEFLATE]
+            and ds.dtype == np.dtype(WAVEFORM_DTYPE))
 
 
 def _open_swmr_write(path: Path) -> Any:

@@ -2,7 +2,10 @@
 
 :func:`run_sample` takes a :class:`SampleTask` (plain, picklable data) and
 returns a :class:`SampleOutput`. It runs in a worker process and never touches
-the output file; the parent writes.
+the output file; the parent writes. :func:`run_sample_encoded` (what
+``generate`` runs) also puts the waveforms through the file's compression
+filters, so the parent only copies the compressed chunk into the file and the
+result sent back is smaller.
 """
 from __future__ import annotations
 
@@ -13,8 +16,9 @@ import numpy as np
 from .design import SampleParams
 from .measurement import MeasurementDraws, MeasurementSettings, draw_measurement, probe_waveforms_um, \
     required_record_revs
+from .store import EncodedChunk, encode_waveform_chunk
 
-__all__ = ["SimulationSettings", "SampleTask", "SampleOutput", "run_sample", "STATUS_CODES"]
+__all__ = ["SimulationSettings", "SampleTask", "SampleOutput", "run_sample", "run_sample_encoded", "STATUS_CODES"]
 
 #: Sample status codes stored in ``labels/status``: the simulator's three, plus
 #: ``error`` for a sample whose simulation raised ValueError (message in diagnostics/message).
@@ -46,7 +50,7 @@ class SampleTask:
 @dataclass
 class SampleOutput:
     index: int
-    waveforms_um: np.ndarray          # (n_channels, n_points) float32
+    waveforms_um: np.ndarray | EncodedChunk  # (n_channels, n_points) float32, or its file chunk (run_sample_encoded)
     draws: MeasurementDraws
     status: str
     simulated_mechanism: str          # what simulate() ran ("aligned" for Δ = 0)
@@ -102,3 +106,15 @@ def run_sample(task: SampleTask) -> SampleOutput:
                         nfev=int(res.nfev), wall_time_s=float(res.wall_time_s),
                         motion_kind=kind, motion_period=period,
                         message="" if res.status == "ok" else res.message)
+
+
+def run_sample_encoded(task: SampleTask) -> SampleOutput:
+    """:func:`run_sample`, with ``waveforms_um`` already encoded as the file's chunk (shuffle + gzip).
+
+    Compressing where the sample is computed spreads that work over the workers
+    instead of the one process that writes the file; the values are unchanged
+    (``store.decode_waveform_chunk`` gives the float32 array back bit for bit).
+    """
+    out = run_sample(task)
+    out.waveforms_um = encode_waveform_chunk(out.waveforms_um)
+    return out
