@@ -130,22 +130,28 @@ def _drive_entry(args, conn):
     conn.close()
 
 
-def peak_rss_mib(pid: int) -> float:
-    """Peak resident set (VmHWM) of the server process and its children, MiB."""
-    total = 0.0
-    pids = [pid]
-    try:
-        pids += [int(p) for p in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
-    except OSError:
-        pass
-    for p in pids:
+def peak_rss_mib(pid: int) -> dict[str, float]:
+    """Peak resident set (VmHWM), MiB, of the server process and of each of its child processes
+    (the diagnosis workers; Dask job workers when a job ran)."""
+    def hwm(p: int) -> float:
         try:
             for line in Path(f"/proc/{p}/status").read_text().splitlines():
                 if line.startswith("VmHWM:"):
-                    total += int(line.split()[1]) / 1024
+                    return int(line.split()[1]) / 1024
         except OSError:
             pass
-    return total
+        return 0.0
+
+    children = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        try:
+            children += [int(c) for c in (task / "children").read_text().split()]
+        except OSError:
+            pass
+    out = {"server": hwm(pid)}
+    for c in sorted(set(children)):
+        out[f"child {c}"] = hwm(c)
+    return out
 
 
 def main() -> None:
@@ -203,8 +209,8 @@ def main() -> None:
         ctx = mp.get_context("spawn")
         for form in args.forms:
             path, ctype, body = bodies[form]
-            # warm-up (numba caches, model load)
-            drive_args = (port, path, ctype, body, 1, 1.0)
+            # warm-up (numba caches, model load in every diagnosis worker)
+            drive_args = (port, path, ctype, body, 4, 3.0)
             parent, child = ctx.Pipe()
             p = ctx.Process(target=_drive_entry, args=(drive_args, child))
             p.start(); parent.recv(); p.join()
@@ -219,7 +225,9 @@ def main() -> None:
                 p99 = float(np.percentile(lat_ms, 99)) if lat else float("nan")
                 print(f"{form:<7} {c:>4} {len(lat):>8} {errors:>6} {len(lat) / wall:>8.1f} {p50:>8.1f} {p99:>8.1f} "
                       f"{p50 / inproc_ms:>11.2f}")
-        print(f"\nserver peak RSS: {peak_rss_mib(server.pid):.0f} MiB")
+        rss = peak_rss_mib(server.pid)
+        print(f"\npeak RSS, MiB: total {sum(rss.values()):.0f} = "
+              + ", ".join(f"{k} {v:.0f}" for k, v in rss.items()))
     finally:
         server.send_signal(signal.SIGINT)
         try:

@@ -49,6 +49,17 @@ def _warm(version: str | None) -> str:
     return f"pid {os.getpid()} ready"
 
 
+def _load_check(version: str) -> str | None:
+    """``None`` when this worker can load and use ``version``, else the reason it cannot."""
+    from .inference import ModelUnavailable
+
+    try:
+        _warm(version)
+    except ModelUnavailable as exc:
+        return str(exc)
+    return None
+
+
 def _work(kind: str, body: bytes, filename: str, query: dict[str, Any], version: str | None) -> tuple:
     """Parse and diagnose one request in the worker; errors come back as tagged tuples.
 
@@ -93,6 +104,7 @@ class DiagnosisPool:
         self.registry_root = Path(registry_root)
         self.n_workers = int(n_workers)
         self._lock = threading.Lock()
+        self._loadable: set[str] = set()
         self._executor = self._new_executor()
 
     def _new_executor(self) -> ProcessPoolExecutor:
@@ -103,6 +115,23 @@ class DiagnosisPool:
         """Start every worker and load ``version`` in each (in the background)."""
         for _ in range(self.n_workers):
             self._executor.submit(_warm, version)
+
+    def check_model(self, version: str, timeout_s: float = 60.0) -> str | None:
+        """``None`` when the workers can load ``version`` (remembered once true), else why not.
+
+        Used by ``GET /health``, so the server process itself never loads a model.
+        """
+        if version in self._loadable:
+            return None
+        try:
+            problem = self._executor.submit(_load_check, version).result(timeout=timeout_s)
+        except TimeoutError:
+            return f"diagnosis workers did not load model {version} within {timeout_s:g} s"
+        except BrokenProcessPool:
+            return "diagnosis worker processes stopped; the next diagnosis restarts them"
+        if problem is None:
+            self._loadable.add(version)
+        return problem
 
     async def run(self, kind: str, body: bytes, filename: str, query: dict[str, Any],
                   version: str | None) -> tuple:

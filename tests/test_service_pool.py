@@ -106,3 +106,24 @@ def test_activation_reaches_the_workers(clients, rec):
     finally:
         assert pooled.post(f"/models/{first}/activate", headers=auth()).status_code == 200
         shutil.rmtree(registry / "v0999")
+
+
+def test_health_asks_the_workers_whether_the_model_loads(clients):
+    """In pool mode the server process never loads a model; /health reports what the workers say."""
+    import shutil
+
+    pooled, _ = clients
+    first = pooled.get("/models").json()["active"]
+    registry = pooled.app.state.rd.settings.registry_dir
+    shutil.copytree(registry / first, registry / "v0998")
+    (registry / "v0998" / "model.skops").write_bytes(b"not a model")
+    try:
+        assert pooled.get("/health").status_code == 200
+        assert pooled.post("/models/v0998/activate", headers=auth()).status_code == 200
+        r = pooled.get("/health")
+        assert r.status_code == 503 and "v0998" in r.json()["detail"], r.text
+    finally:
+        assert pooled.post(f"/models/{first}/activate", headers=auth()).status_code == 200
+        shutil.rmtree(registry / "v0998")
+    assert pooled.get("/health").status_code == 200
+    assert pooled.app.state.rd.models._cache == {}       # the server process loaded nothing

@@ -17,8 +17,6 @@ from typing import Any
 
 import numpy as np
 
-from features import extract_features
-from features._config import WHIRL_BAND  # the features package's own oil-whirl band (orders), not a copy
 
 #: revolutions of the raw orbit shown (the last ones of the analysed segment)
 ORBIT_REVS = 8
@@ -144,6 +142,11 @@ def plot_data(recording: Any) -> dict[str, Any]:
     ValueError
         From the features package, with a message for the user (too short, too slowly sampled...).
     """
+    # Imported here: the server process loads the numeric stack only when the page asks for plots
+    # (diagnoses run in the worker processes, service/pool.py).
+    from features import extract_features
+    from features._config import WHIRL_BAND  # the features package's own oil-whirl band (orders), not a copy
+
     fr = extract_features(recording)
     fs = float(recording.sample_rate_hz)
     f1 = fr.speed_rpm / 60.0

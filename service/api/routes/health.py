@@ -27,6 +27,10 @@ def health(state: StateDep, response: Response) -> HealthOut:
     version = state.models.active_version()
     if version is None:
         problems.append("no active model in the registry")
+    elif state.pool is not None:                # the diagnosis workers load it, not this process
+        problem = state.pool.check_model(version)
+        if problem:
+            problems.append(problem)
     else:
         try:
             state.models.load(version)          # cached after the first call
