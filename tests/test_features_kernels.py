@@ -218,24 +218,9 @@ _GOLDEN = {
 
 def _bench_recording(**kw):
     """benchmarks/bench_features.py ``make_recording(seed=0)``: 4 bearings, 1953.7 r/min, 0.45X whirl on 3–4."""
-    from features import ProbeChannel, Recording
+    from benchmarks.bench_features import make_recording
 
-    fs, n, rpm = 5120.0, 16_384, 1953.7
-    rng = np.random.default_rng(0)
-    th = 2 * np.pi * rpm / 60 * np.arange(n) / fs
-    chans = []
-    for b in (1, 2, 3, 4):
-        ph = rng.uniform(0, 2 * np.pi, 6)
-        x = 40 * np.cos(th - ph[0]) + 15 * np.cos(2 * th - ph[1]) + 3 * np.cos(3 * th - ph[2])
-        y = 35 * np.cos(th - ph[3]) + 12 * np.cos(2 * th - ph[4]) + 2 * np.cos(3 * th - ph[5])
-        if b >= 3:
-            x = x + 5 * np.cos(0.45 * th)
-            y = y + 5 * np.sin(0.45 * th)
-        for a in (45.0, 135.0):
-            r = np.deg2rad(a)
-            p = x * np.cos(r) + y * np.sin(r) + rng.normal(0, 0.3, n)
-            chans.append(ProbeChannel(bearing=b, angle_deg=a, units="um", data=p))
-    return Recording(sample_rate_hz=fs, channels=chans, **kw)
+    return make_recording(seed=0, **kw)
 
 
 @pytest.mark.parametrize("source", ["given", "keyphasor", "estimated"])
