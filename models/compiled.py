@@ -321,6 +321,12 @@ class CompiledModel:
         X = self._blank(self._rows(row), self._clf_blank)
         ref = self.model.feature_median_.astype(float).copy()
         ref[self._clf_blank] = 0.0   # a blanked column is 0 whatever it is replaced with
-        occluded = self._proba_from_raw(occlusion_raw(self._clf_forest, X[0], ref))
-        base = self._proba_from_raw(raw_predict(self._clf_forest, X))[0]
+        raw_base = raw_predict(self._clf_forest, X)
+        base = self._proba_from_raw(raw_base)[0]
+        raw = occlusion_raw(self._clf_forest, X[0], ref)
+        # Features whose replacement moves no tree leave the raw scores, so the probabilities, as they were.
+        changed = np.any(raw != raw_base, axis=1)
+        occluded = np.repeat(base[None, :], raw.shape[0], axis=0)
+        if changed.any():
+            occluded[changed] = self._proba_from_raw(raw[changed])
         return base, occluded
