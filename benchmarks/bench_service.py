@@ -142,16 +142,61 @@ def peak_rss_mib(pid: int) -> dict[str, float]:
             pass
         return 0.0
 
+    tree = _tree(pid)
+    out = {"server": hwm(pid)}
+    for c in tree[1:]:
+        out[f"child {c}"] = hwm(c)
+    return out
+
+
+def _tree(pid: int) -> list[int]:
+    """The server process and its child processes."""
     children = []
     for task in Path(f"/proc/{pid}/task").glob("*"):
         try:
             children += [int(c) for c in (task / "children").read_text().split()]
         except OSError:
             pass
-    out = {"server": hwm(pid)}
-    for c in sorted(set(children)):
-        out[f"child {c}"] = hwm(c)
-    return out
+    return [pid] + sorted(set(children))
+
+
+def _mem_mib(pid: int) -> tuple[float, float]:
+    """(RSS, PSS) of one process, MiB. PSS shares the pages several processes map (the numeric
+    libraries the diagnosis workers all load) among them, so its sum over processes is the memory
+    the service really takes; the sum of RSS counts shared pages once per process."""
+    rss = pss = 0.0
+    try:
+        for line in Path(f"/proc/{pid}/smaps_rollup").read_text().splitlines():
+            if line.startswith("Rss:"):
+                rss = int(line.split()[1]) / 1024
+            elif line.startswith("Pss:"):
+                pss = int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return rss, pss
+
+
+class MemorySampler:
+    """Samples the server tree's total RSS and PSS every ``period_s`` in a thread; keeps the peaks."""
+
+    def __init__(self, pid: int, period_s: float = 0.5) -> None:
+        import threading
+
+        self.pid, self.period_s = pid, period_s
+        self.peak_rss = self.peak_pss = 0.0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.period_s):
+            mem = [_mem_mib(p) for p in _tree(self.pid)]
+            self.peak_rss = max(self.peak_rss, sum(m[0] for m in mem))
+            self.peak_pss = max(self.peak_pss, sum(m[1] for m in mem))
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join()
 
 
 def main() -> None:
@@ -207,6 +252,7 @@ def main() -> None:
         print(f"{'form':<7} {'conc':>4} {'requests':>8} {'errors':>6} {'req/s':>8} {'p50 ms':>8} {'p99 ms':>8} "
               f"{'p50/in-proc':>11}")
         ctx = mp.get_context("spawn")
+        sampler = MemorySampler(server.pid)
         for form in args.forms:
             path, ctype, body = bodies[form]
             # warm-up (numba caches, model load in every diagnosis worker)
@@ -225,8 +271,12 @@ def main() -> None:
                 p99 = float(np.percentile(lat_ms, 99)) if lat else float("nan")
                 print(f"{form:<7} {c:>4} {len(lat):>8} {errors:>6} {len(lat) / wall:>8.1f} {p50:>8.1f} {p99:>8.1f} "
                       f"{p50 / inproc_ms:>11.2f}")
+        sampler.stop()
+        print(f"\nserver and its worker processes under load, sampled every 0.5 s: peak total PSS "
+              f"{sampler.peak_pss:.0f} MiB (the memory they take), peak total RSS {sampler.peak_rss:.0f} MiB "
+              f"(shared library pages counted once per process)")
         rss = peak_rss_mib(server.pid)
-        print(f"\npeak RSS, MiB: total {sum(rss.values()):.0f} = "
+        print(f"peak RSS (VmHWM) per process, MiB: sum {sum(rss.values()):.0f} = "
               + ", ".join(f"{k} {v:.0f}" for k, v in rss.items()))
     finally:
         server.send_signal(signal.SIGINT)

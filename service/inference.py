@@ -167,6 +167,13 @@ def _clean(v: Any) -> Any:
 
     import numpy as np
 
+    t = type(v)   # fast paths for what a verdict is made of (a few hundred values per request)
+    if t is float:
+        return v if math.isfinite(v) else None
+    if t is str or t is int or t is bool or v is None:
+        return v
+    if t is dict:
+        return {str(k): _clean(x) for k, x in v.items()}
     if dataclasses.is_dataclass(v) and not isinstance(v, type):
         v = dataclasses.asdict(v)
     elif hasattr(v, "to_dict") and not isinstance(v, dict):
