@@ -45,8 +45,8 @@ class AppState:
                         "(POST /jobs/{id}/resume continues them)", n)
         pool = None
         if settings.effective_diagnosis_workers > 0:
-            pool = DiagnosisPool(settings.registry_dir, settings.effective_diagnosis_workers)
-            pool.warm_up(models.active_version())
+            pool = DiagnosisPool(settings.registry_dir, settings.effective_diagnosis_workers,
+                                 version=models.active_version())
         log.info("rotordiag service ready: data_dir=%s database=%s registry=%s",
                  settings.data_dir.resolve(), engine.url.render_as_string(hide_password=True),
                  settings.registry_dir.resolve())

@@ -84,10 +84,11 @@ def test_a_killed_worker_is_replaced(clients, rec):
     fs, channels = rec
     pool = pooled.app.state.rd.pool
     assert pooled.post("/diagnose", **_npy_request(channels)).status_code == 200
-    for pid in list(pool._executor._processes):
-        os.kill(pid, signal.SIGKILL)
+    old = pool.pids()
+    os.kill(old[0], signal.SIGKILL)
     r = pooled.post("/diagnose", **_npy_request(channels))
-    assert r.status_code == 200, r.text                 # retried on a fresh pool
+    assert r.status_code == 200, r.text                 # retried on a live worker
+    assert pool.pids() != old and len(pool.pids()) == len(old)
 
 
 def test_activation_reaches_the_workers(clients, rec):
