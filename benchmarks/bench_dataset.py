@@ -9,12 +9,30 @@ perturbations; MODEL.md's 400 transient revolutions; 8 channels × 1 s at
 * on a LocalCluster with 1 and with 2 worker processes,
 
 each into a fresh file, each in its own subprocess so peak RSS is per run.
-Reported: end-to-end samples/min (including cluster start-up), steady-state
-samples/min (after the first sample), the 2-vs-1-worker scaling ratio (target
-≥ 1.8× on two free cores), bytes per sample on disk, and peak RSS of the
-parent and of its worker processes. Finally the parent's peak RSS for 20 vs
-160 samples (serial, short simulations) shows memory does not grow with the
-sample count.
+The same 40 samples (same spec, same values) are computed in every run.
+Reported per run:
+
+* ``total s`` / ``e2e /min``: the whole ``generate`` call (spec, design, file,
+  cluster start-up, samples), the figure a user sees;
+* ``start s``: the part of it before the first task is submitted (spec and
+  design, output file, LocalCluster with its worker processes started);
+* ``gen /min``: samples/min from the first task submitted to the last sample
+  written, i.e. without the start-up (includes the workers' first-task warm-up:
+  imports and loading the numba cache);
+* ``steady /min``: after the first sample written (the older figure);
+* bytes per sample on disk, peak RSS of the parent and of its worker processes;
+* CPU: the parent's CPU per sample while samples are coming in (between the
+  first and the last sample written: writing, the Dask scheduler, nannies and
+  client, which all live in the parent), and the CPU of all processes per
+  sample over the whole run;
+* the 1-minute load average before and after the run (scaling needs two
+  otherwise idle cores).
+
+Then the 2-vs-1-worker scaling ratio on each figure (target ≥ 1.8× on two free
+cores), the parent's write cost per sample (the ceiling on any cluster's
+throughput into one file), and the parent's peak RSS for 20 vs 160 samples
+(serial, short simulations), which shows memory does not grow with the sample
+count.
 
 Run: ``.venv/bin/python benchmarks/bench_dataset.py`` (about 1–2 minutes on two free cores).
 """
@@ -58,17 +76,22 @@ record_revs_min = 64
 """
 
 CHILD = r"""
-import json, resource, sys
+import json, os, resource, sys, time
 from simulator.dataset.generate import generate
 spec, out, workers = sys.argv[1], sys.argv[2], int(sys.argv[3])
-s = generate(spec, out, n_workers=workers, progress=False)
+cpu = []   # the parent's CPU time (all its threads) at each sample written
+load0 = os.getloadavg()[0]
+s = generate(spec, out, n_workers=workers, progress=False,
+             on_progress=lambda k, n: cpu.append(time.process_time()))
+load1 = os.getloadavg()[0]
 me, ch = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
 ru_self, ru_children = me.ru_maxrss / 1024, ch.ru_maxrss / 1024
-import os
 print(json.dumps({"n": s.n_computed, "elapsed_s": s.elapsed_s, "first_s": s.first_sample_s,
+                  "startup_s": s.startup_s, "gen_rate": s.generation_rate_per_s,
                   "steady_rate": s.steady_rate_per_s, "bytes": os.path.getsize(out),
                   "rss_parent_mb": ru_self, "rss_children_mb": ru_children, "status": s.status_counts,
-                  "cpu_parent_s": me.ru_utime + me.ru_stime, "cpu_children_s": ch.ru_utime + ch.ru_stime}))
+                  "cpu_parent_s": me.ru_utime + me.ru_stime, "cpu_children_s": ch.ru_utime + ch.ru_stime,
+                  "cpu_parent_steady_s": (cpu[-1] - cpu[1]) / max(1, len(cpu) - 2), "load": [load0, load1]}))
 """
 
 
@@ -78,8 +101,9 @@ def run(spec: Path, out: Path, workers: int) -> dict:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
-def writer_cost_ms(tmp: Path, n: int = 64) -> float:
-    """Parent-side cost of writing one sample (rows + two SWMR flushes): the ceiling on cluster throughput."""
+def writer_cost_ms(tmp: Path, n: int = 64) -> tuple[float, float]:
+    """Parent-side cost of writing one sample (rows, the worker-compressed waveform chunk, two SWMR flushes):
+    the ceiling on cluster throughput; and the worker-side cost of compressing the chunk."""
     import time
 
     import numpy as np
@@ -88,7 +112,7 @@ def writer_cost_ms(tmp: Path, n: int = 64) -> float:
     from simulator.dataset.generate import _dataset_attrs, _file_attrs, _rows
     from simulator.dataset.measurement import MeasurementSettings, draw_measurement
     from simulator.dataset.spec import load_spec
-    from simulator.dataset.store import DatasetWriter, layout
+    from simulator.dataset.store import DatasetWriter, encode_waveform_chunk, layout
     from simulator.dataset.worker import SampleOutput
 
     spec = tmp / "writer.toml"
@@ -100,17 +124,20 @@ def writer_cost_ms(tmp: Path, n: int = 64) -> float:
                            attrs=_file_attrs(r, d, m), dataset_attrs=_dataset_attrs(), code_version="bench")
     rng = np.random.default_rng(0)
     t = np.arange(m.n_points) / m.sample_rate_hz
-    total = 0.0
+    total = encode = 0.0
     try:
         for i in range(n):
             wave = (50 * np.sin(2 * np.pi * 30 * t)[None, :] + rng.normal(size=(len(m.channels), m.n_points)))
-            out = SampleOutput(i, wave.astype(np.float32), draw_measurement(m, rng), "ok", "pin", 64)
-            t0 = time.perf_counter()
+            t0 = time.process_time()
+            chunk = encode_waveform_chunk(wave.astype(np.float32))  # done by the worker (run_sample_encoded)
+            encode += time.process_time() - t0
+            out = SampleOutput(i, chunk, draw_measurement(m, rng), "ok", "pin", 64)
+            t0 = time.process_time()
             w.write_sample(i, _rows(d[i], out))
-            total += time.perf_counter() - t0
+            total += time.process_time() - t0
     finally:
         w.close()
-    return 1e3 * total / n
+    return 1e3 * total / n, 1e3 * encode / n
 
 
 def main() -> None:
@@ -124,29 +151,35 @@ def main() -> None:
         run(warm, tmp / "warm.h5", 0)
 
         print(f"dataset benchmark: 40 samples, 400 transient revs + ≥64 recorded, 8 ch × 2560 points; "
-              f"cpus available {len(os.sched_getaffinity(0))}, load {os.getloadavg()[0]:.1f}")
-        print(f"{'mode':<12}{'total s':>9}{'samples/min':>13}{'steady/min':>12}{'B/sample':>10}"
-              f"{'RSS parent MB':>15}{'RSS worker MB':>15}{'CPU s/sample parent+workers':>29}")
+              f"cpus available {len(os.sched_getaffinity(0))}, load {os.getloadavg()[0]:.2f}")
+        print(f"{'mode':<11}{'total s':>8}{'start s':>8}{'e2e /min':>9}{'gen /min':>9}{'steady /min':>12}"
+              f"{'B/sample':>9}{'RSS MB parent/worker':>21}{'parent CPU ms/sample':>21}"
+              f"{'all CPU s/sample':>17}{'load before/after':>18}")
         results = {}
         for label, workers in (("serial", 0), ("1 worker", 1), ("2 workers", 2)):
             r = run(spec, tmp / f"{workers}.h5", workers)
             results[label] = r
-            print(f"{label:<12}{r['elapsed_s']:>9.1f}{60 * r['n'] / r['elapsed_s']:>13.1f}"
-                  f"{60 * r['steady_rate']:>12.1f}{r['bytes'] / r['n']:>10.0f}"
-                  f"{r['rss_parent_mb']:>15.0f}{r['rss_children_mb'] if workers else 0:>15.0f}"
-                  f"{r['cpu_parent_s'] / r['n']:>20.3f} + {r['cpu_children_s'] / r['n']:.3f}")
+            rss = f"{r['rss_parent_mb']:.0f}/{r['rss_children_mb']:.0f}" if workers else f"{r['rss_parent_mb']:.0f}/-"
+            print(f"{label:<11}{r['elapsed_s']:>8.1f}{r['startup_s']:>8.1f}{60 * r['n'] / r['elapsed_s']:>9.1f}"
+                  f"{60 * r['gen_rate']:>9.1f}{60 * r['steady_rate']:>12.1f}{r['bytes'] / r['n']:>9.0f}"
+                  f"{rss:>21}{1e3 * r['cpu_parent_steady_s']:>21.1f}"
+                  f"{(r['cpu_parent_s'] + r['cpu_children_s']) / r['n']:>17.3f}"
+                  f"{r['load'][0]:>11.2f}/{r['load'][1]:.2f}")
         one, two, ser = results["1 worker"], results["2 workers"], results["serial"]
         print(f"scaling 2 vs 1 worker: end-to-end {one['elapsed_s'] / two['elapsed_s']:.2f}x, "
+              f"generation (without start-up) {two['gen_rate'] / one['gen_rate']:.2f}x, "
               f"steady-state {two['steady_rate'] / one['steady_rate']:.2f}x (target >= 1.8x)")
         print(f"2 workers vs serial loop (baseline): end-to-end {ser['elapsed_s'] / two['elapsed_s']:.2f}x, "
+              f"generation {two['gen_rate'] / ser['gen_rate']:.2f}x, "
               f"steady-state {two['steady_rate'] / ser['steady_rate']:.2f}x")
         print(f"status counts: {two['status']}")
         print("(scaling needs two otherwise idle cores: compare the load above with the worker count; "
               "CPU s/sample shows the work itself, independent of load)")
 
-        ms = writer_cost_ms(tmp)
-        print(f"parent write cost: {ms:.1f} ms/sample (rows + 2 SWMR flushes) -> at most {1000 / ms:.0f} samples/s "
-              "into one file, whatever the cluster size")
+        ms, enc = writer_cost_ms(tmp)
+        print(f"parent write cost: {ms:.1f} CPU ms/sample (rows + compressed chunk + 2 SWMR flushes) -> at most "
+              f"{1000 / ms:.0f} samples/s into one file, whatever the cluster size; compressing the chunk "
+              f"(in the worker): {enc:.1f} CPU ms/sample")
         print("memory vs sample count (serial, 50 transient revs):")
         for n in (20, 160):
             s = tmp / f"mem{n}.toml"
