@@ -160,6 +160,7 @@ class _Worker:
         parent.setblocking(False)
         self.sock = parent
         self.depth = depth
+        self.inflight = 0                # requests given to this worker and not yet answered
         self.pending: collections.deque[asyncio.Future] = collections.deque()
         self.alive = True
         self._send_lock = asyncio.Lock()
@@ -244,13 +245,14 @@ class DiagnosisPool:
         self._workers: list[_Worker] = [_Worker(self.registry_root, version) for _ in range(self.n_workers)]
         self._free = asyncio.Condition()
         self._loadable: set[str] = set()
+        self._closing = False
 
     def pids(self) -> list[int]:
         """Process ids of the workers."""
         return [w.process.pid for w in self._workers]
 
     def _replace(self, w: _Worker) -> None:
-        if w not in self._workers:
+        if self._closing or w not in self._workers:
             return
         log.error("diagnosis worker process %s stopped (exit code %s); starting another",
                   w.process.pid, w.process.exitcode)
@@ -264,9 +266,13 @@ class DiagnosisPool:
                 for w in list(self._workers):
                     if not w.alive:
                         self._replace(w)
-                live = [w for w in self._workers if len(w.pending) < w.depth]
+                if self._closing:
+                    raise WorkerCrashed("the diagnosis workers are shutting down; retry in a moment")
+                live = [w for w in self._workers if w.alive and w.inflight < w.depth]
                 if live:
-                    return min(live, key=lambda w: len(w.pending))
+                    w = min(live, key=lambda w: w.inflight)
+                    w.inflight += 1      # reserved here, so concurrent acquires see it at once
+                    return w
                 await self._free.wait()
 
     async def _release(self) -> None:
@@ -280,6 +286,7 @@ class DiagnosisPool:
             self._replace(w)
             return False, None
         finally:
+            w.inflight -= 1
             await self._release()
 
     async def _call(self, name: str, args: tuple) -> Any:
@@ -316,7 +323,7 @@ class DiagnosisPool:
         except TimeoutError:
             future.cancel()
             return f"diagnosis workers did not load model {version} within {timeout_s:g} s"
-        except WorkerCrashed as exc:
+        except (WorkerCrashed, RuntimeError) as exc:
             return str(exc)
         if problem is None:
             self._loadable.add(version)
@@ -324,6 +331,7 @@ class DiagnosisPool:
 
     def shutdown(self) -> None:
         """Stop the workers (each finishes the request it holds first)."""
+        self._closing = True
         for w in self._workers:
             w.stop()
         self._workers.clear()

@@ -128,3 +128,17 @@ def test_health_asks_the_workers_whether_the_model_loads(clients):
         shutil.rmtree(registry / "v0998")
     assert pooled.get("/health").status_code == 200
     assert pooled.app.state.rd.models._cache == {}       # the server process loaded nothing
+
+
+def test_concurrent_requests_queue_and_all_get_the_same_answer(clients, rec):
+    """More requests than the worker takes at once (depth 2): they wait, none is lost or mixed up."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    pooled, _ = clients
+    fs, channels = rec
+    body = diagnose_json(fs, channels, speed_rpm=1800.0)
+    with ThreadPoolExecutor(6) as ex:
+        answers = list(ex.map(lambda _: pooled.post("/diagnose", json=body), range(6)))
+    assert [a.status_code for a in answers] == [200] * 6
+    assert all(a.json() == answers[0].json() for a in answers)
+    assert all(w.inflight == 0 for w in pooled.app.state.rd.pool._workers)
