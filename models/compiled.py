@@ -29,6 +29,8 @@ import numba
 import numpy as np
 from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
 
+from .estimators import _blank   # the estimators' own column blanking (sparse training columns → 0)
+
 
 @dataclass(frozen=True)
 class Forest:
@@ -261,14 +263,6 @@ class CompiledModel:
             raise ValueError("Input X contains infinity or a value too large for dtype('float64').")
         return X
 
-    @staticmethod
-    def _blank(X: np.ndarray, columns: np.ndarray) -> np.ndarray:
-        if not columns.any():
-            return X
-        X = X.copy()
-        X[:, columns] = 0.0
-        return X
-
     def _proba_from_raw(self, raw: np.ndarray) -> np.ndarray:
         if self._calibrated:
             proba = _calibrated_proba(self.model.classifier_.model_, raw)
@@ -279,13 +273,13 @@ class CompiledModel:
     # -- the model's methods ---------------------------------------------------------------------
     def predict_proba(self, X) -> np.ndarray:
         """Severity probabilities in band order (as ``MisalignmentModel.predict_proba``)."""
-        X = self._blank(self._rows(X), self._clf_blank)
+        X = _blank(self._rows(X), self._clf_blank)
         return self._proba_from_raw(raw_predict(self._clf_forest, X))
 
     def predict_misalignment(self, X) -> tuple[np.ndarray, np.ndarray]:
         """Δ point estimate and conformal interval (as ``MisalignmentModel.predict_misalignment``)."""
         reg = self.model.regressor_
-        X = self._blank(self._rows(X), self._reg_blank)
+        X = _blank(self._rows(X), self._reg_blank)
         raw = raw_predict(self._reg_forest, X)
         clip = (lambda v: v) if reg.lower_bound is None else (lambda v: np.maximum(v, reg.lower_bound))
         point = clip(raw[:, 0])
@@ -318,7 +312,7 @@ class CompiledModel:
         occluded : ndarray (n_features, n_bands)
             Row ``j``: probabilities with feature ``j`` replaced by ``feature_median_[j]``.
         """
-        X = self._blank(self._rows(row), self._clf_blank)
+        X = _blank(self._rows(row), self._clf_blank)
         ref = self.model.feature_median_.astype(float).copy()
         ref[self._clf_blank] = 0.0   # a blanked column is 0 whatever it is replaced with
         raw_base = raw_predict(self._clf_forest, X)

@@ -11,6 +11,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+import logging
 import weakref
 
 import numpy as np
@@ -123,8 +124,12 @@ def fast_predictor(model) -> Any:
 
     try:
         fast = CompiledModel(model)
-    except (TypeError, AttributeError, KeyError, ValueError):
-        fast = model   # e.g. a model whose parts are not HistGradientBoosting: the plain path
+    except (TypeError, AttributeError, KeyError, ValueError) as exc:
+        # e.g. a model whose parts are not HistGradientBoosting: the plain (slower) path
+        logging.getLogger("rotordiag.models").warning(
+            "model not compiled for fast verdicts (%s: %s); using scikit-learn's predict methods",
+            type(exc).__name__, exc)
+        fast = model
     try:
         _COMPILED[model] = fast
     except TypeError:

@@ -157,15 +157,12 @@ async def diagnose(
 
 async def _diagnose_in_pool(state, kind: str, body: bytes, filename: str, query: dict[str, Any],
                             version: str | None) -> dict:
-    """Parse and diagnose in a worker process (``service.pool``); store the result here."""
-    limiter = getattr(state, "diagnosis_limiter", None)
-    if limiter is None:   # requests in flight to the workers: two per worker keeps them busy
-        limiter = state.diagnosis_limiter = anyio.CapacityLimiter(2 * state.pool.n_workers)
-    async with limiter:
-        try:
-            result = await state.pool.run(kind, body, filename, query, version)
-        except WorkerCrashed as exc:
-            raise HTTPException(503, str(exc)) from None
+    """Parse and diagnose in a worker process (``service.pool``, which bounds the requests in flight
+    per worker); store the result here."""
+    try:
+        result = await state.pool.run(kind, body, filename, query, version)
+    except WorkerCrashed as exc:
+        raise HTTPException(503, str(exc)) from None
     tag = result[0]
     if tag == "input":
         raise InputError(result[2], result[1])
