@@ -4,7 +4,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test test-slow bench clean
+.PHONY: run test test-slow bench clean lint typecheck wheel-check
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -16,10 +16,28 @@ run: $(STAMP)
 	$(VENV)/bin/rotordiag serve
 
 test: $(STAMP)
-	$(PY) -m pytest -q
+	$(VENV)/bin/pytest -q
+
+# ruff (lint + import order) and mypy. mypy reads the packages through build/typecheck/rotordiag,
+# a tree of symlinks that gives the top-level folders their import names (rotordiag.simulator, ...).
+lint: $(STAMP) typecheck
+	$(VENV)/bin/ruff check .
+
+typecheck: $(STAMP)
+	mkdir -p build/typecheck/rotordiag
+	ln -sfn ../../../rotordiag/__init__.py build/typecheck/rotordiag/__init__.py
+	ln -sfn ../../../rotordiag/cli.py build/typecheck/rotordiag/cli.py
+	ln -sfn ../../../rotordiag/core build/typecheck/rotordiag/core
+	for p in simulator features models service; do ln -sfn ../../../$$p build/typecheck/rotordiag/$$p; done
+	$(VENV)/bin/mypy
+
+# Build the wheel, install it into a fresh venv outside the checkout and run simulate,
+# diagnose and serve from there (see .ci/wheel-check).
+wheel-check: $(STAMP)
+	bash .ci/wheel-check
 
 test-slow: $(STAMP)
-	$(PY) -m pytest -q -m slow
+	$(VENV)/bin/pytest -q -m slow
 
 bench: $(STAMP)
 	for b in benchmarks/bench_*.py; do $(PY) $$b; done

@@ -77,7 +77,7 @@ record_revs_min = 64
 
 CHILD = r"""
 import json, os, resource, sys, time
-from simulator.dataset.generate import generate
+from rotordiag.simulator.dataset.generate import generate
 spec, out, workers = sys.argv[1], sys.argv[2], int(sys.argv[3])
 cpu = []   # the parent's CPU time (all its threads) at each sample written
 load0 = os.getloadavg()[0]
@@ -108,12 +108,12 @@ def writer_cost_ms(tmp: Path, n: int = 64) -> tuple[float, float]:
 
     import numpy as np
 
-    from simulator.dataset.design import build_design
-    from simulator.dataset.generate import _dataset_attrs, _file_attrs, _rows
-    from simulator.dataset.measurement import MeasurementSettings, draw_measurement
-    from simulator.dataset.spec import load_spec
-    from simulator.dataset.store import DatasetWriter, encode_waveform_chunk, layout
-    from simulator.dataset.worker import SampleOutput
+    from rotordiag.simulator.dataset.design import build_design
+    from rotordiag.simulator.dataset.generate import _dataset_attrs, _file_attrs, _rows
+    from rotordiag.simulator.dataset.measurement import MeasurementSettings, draw_measurement
+    from rotordiag.simulator.dataset.spec import load_spec
+    from rotordiag.simulator.dataset.store import DatasetWriter, encode_waveform_chunk, layout
+    from rotordiag.simulator.dataset.worker import SampleOutput
 
     spec = tmp / "writer.toml"
     spec.write_text(SPEC.format(n=n, transient=400))

@@ -24,7 +24,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from features import ProbeChannel, Recording, extract_features  # noqa: E402
+from rotordiag.features import ProbeChannel, Recording, extract_features  # noqa: E402
 
 FS_HZ = 5120.0
 N_POINTS = 16_384
@@ -96,7 +96,7 @@ def main() -> None:
     args = ap.parse_args()
     from threadpoolctl import threadpool_limits
 
-    import features._config as cfg
+    import rotordiag.features._config as cfg
 
     kp = np.arange(0.0, N_POINTS / FS_HZ, 60.0 / SPEED_RPM)
     cases = {

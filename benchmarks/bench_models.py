@@ -37,7 +37,7 @@ def _timeit(fn, repeat: int) -> list[float]:
 
 
 def _synthetic(rows: int, seed: int = 0):
-    from features import FEATURE_NAMES
+    from rotordiag.features import FEATURE_NAMES
 
     rng = np.random.default_rng(seed)
     names = tuple(FEATURE_NAMES)
@@ -55,7 +55,7 @@ def _synthetic(rows: int, seed: int = 0):
 
 
 def _from_data(paths, rows: int, seed: int = 0):
-    from models.dataset import load_feature_tables
+    from rotordiag.models.dataset import load_feature_tables
 
     t = load_feature_tables(paths)
     rng = np.random.default_rng(seed)
@@ -66,7 +66,7 @@ def _from_data(paths, rows: int, seed: int = 0):
 
 def _diagnose_plain(model, fr):
     """``models.predict.diagnose`` with the compiled predictor swapped for the plain model."""
-    import models.predict as mp
+    import rotordiag.models.predict as mp
 
     saved = mp.fast_predictor
     mp.fast_predictor = lambda m: m
@@ -86,11 +86,11 @@ def main() -> None:
 
     from threadpoolctl import threadpool_limits
 
-    from models.baselines import RuleOfThumb, ratio_column
-    from models.config import TrainConfig
-    from models.predict import diagnose, fast_predictor
-    from models.table import FeatureTable
-    from models.train import fit_final
+    from rotordiag.models.baselines import RuleOfThumb, ratio_column
+    from rotordiag.models.config import TrainConfig
+    from rotordiag.models.predict import diagnose, fast_predictor
+    from rotordiag.models.table import FeatureTable
+    from rotordiag.models.train import fit_final
 
     cfg = TrainConfig.from_file(args.config)
     X, names, delta, plant, mech, speed = _from_data(args.data, args.rows) if args.data else _synthetic(args.rows)

@@ -41,7 +41,7 @@ SPEED_RPM = 1800.0
 
 def recording():
     """(channels (8, N_POINTS) float64 µm, bearings, angles) of a simulated default plant."""
-    from simulator import Plant, simulate
+    from rotordiag.simulator import Plant, simulate
 
     revs = int(np.ceil(N_POINTS / SAMPLE_RATE_HZ * SPEED_RPM / 60.0)) + 1
     res = simulate(Plant.default(), SPEED_RPM, 0.2, 0.05, mechanism="rigid", transient_revs=200,
@@ -210,10 +210,9 @@ def main() -> None:
     bodies = payloads(data, bearings, angles)
 
     # in-process floor: the same recording through features + verdict, no HTTP
-    from features import ProbeChannel, Recording
-
-    from service.core.config import Settings
-    from service.inference import ModelStore
+    from rotordiag.features import ProbeChannel, Recording
+    from rotordiag.service.core.config import Settings
+    from rotordiag.service.inference import ModelStore
 
     tmp = Path(tempfile.mkdtemp(prefix="bench_service_"))
     store = ModelStore.open(Settings(data_dir=tmp / "inproc", _env_file=None))

@@ -20,8 +20,8 @@ import numpy as np
 
 
 def main() -> None:
-    from simulator import Plant
-    from simulator.analysis import speed_sweep
+    from rotordiag.simulator import Plant
+    from rotordiag.simulator.analysis import speed_sweep
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--points", type=int, default=50)

@@ -12,6 +12,13 @@ extract_features(recording) -> FeatureResult
     cross-coupling phase differences, orbit shape, sub-harmonic and non-synchronous
     energy, Poincaré dispersion and motion type. ``fr.names`` / ``fr.values`` /
     ``fr.as_dict()`` give the vector; ``fr.bearings`` the per-bearing details.
+check_recording(recording, feature_result) -> tuple of SanityFinding
+    Physics sanity checks (flat / clipped / all-zero channels, orbit vs clearance and probe
+    range, implausible DC gap, all-reverse whirl, no 1X above noise); ``extract_features``
+    runs them and puts the findings in ``FeatureResult.sanity``.
+evidence(feature_result) -> list of EvidenceItem
+    The model-independent evidence: 1X/2X vectors, 2X/1X, phase across the coupling, orbit
+    shape, shaft centreline, each with what it usually means.
 FEATURE_NAMES, FEATURE_SPECS, feature_names()
     The fixed schema (always bearings 1–4; absent bearings give NaN), with units and
     definitions (docs/features.md).
@@ -24,16 +31,18 @@ Importing the package raises glibc's malloc mmap/trim thresholds (see ``features
 (``features._config.BLAS_THREADS``): both measured to matter more than the arithmetic.
 """
 from ._alloc import tune_malloc
-from ._config import ALLOWED_UNITS, MIN_REVS, MIN_REVS_MOTION
+from ._config import ALLOWED_UNITS, MIN_REVS, MIN_REVS_MOTION, WHIRL_BAND
+from ._evidence import EvidenceItem, evidence
 from ._extract import BearingDetail, FeatureResult, extract_features
 from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
 from ._orbit import OrbitShape
 from ._recording import ProbeChannel, Recording
+from ._sanity import SanityFinding, check_recording
 
 tune_malloc()
 
 __all__ = [
     "ProbeChannel", "Recording", "extract_features", "FeatureResult", "BearingDetail", "OrbitShape",
     "FEATURE_NAMES", "FEATURE_SPECS", "FeatureSpec", "feature_names", "ALLOWED_UNITS", "MIN_REVS",
-    "MIN_REVS_MOTION",
+    "MIN_REVS_MOTION", "WHIRL_BAND", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
 ]

@@ -1,14 +1,12 @@
 """Tunables of the feature extractor, in one place (documented in docs/features.md)."""
 from __future__ import annotations
 
-#: accepted ``ProbeChannel.units`` → factor to µm (``"µm"`` is an alias of ``"um"``)
-UNITS_TO_UM: dict[str, float] = {"um": 1.0, "µm": 1.0, "mm": 1e3, "m": 1e6, "mil": 25.4}
-#: the public spelling of the allowed units (for error messages)
-ALLOWED_UNITS: tuple[str, ...] = ("um", "mm", "m", "mil")
+from rotordiag.core.conventions import BEARINGS
+from rotordiag.core.units import ALLOWED_UNITS, UNITS_TO_UM
 
-#: bearings of the machine train (MODEL.md): 1 generator far end, 2 generator coupling
-#: end, 3 exciter coupling end, 4 exciter far end. The feature vector always covers all four.
-BEARINGS: tuple[int, ...] = (1, 2, 3, 4)
+__all__ = ["ALLOWED_UNITS", "UNITS_TO_UM", "BEARINGS"]  # re-exported for the package's modules
+
+# BEARINGS (rotordiag.core.conventions): the feature vector always covers all four.
 #: bearing pairs whose 1X / 2X phase differences are features: across the coupling, then
 #: along the generator and along the exciter
 PHASE_PAIRS: tuple[tuple[int, int], ...] = ((2, 3), (1, 2), (3, 4))
@@ -46,11 +44,22 @@ SUBSYNC_PEAK_MIN_FRAC = 1e-6
 #: speed search range without keyphasor / given speed (r/min)
 SPEED_SEARCH_RPM: tuple[float, float] = (60.0, 12000.0)
 #: how many spectral peaks are tried as (multiples of) the running speed
-SPEED_CANDIDATE_PEAKS = 5
+SPEED_CANDIDATE_PEAKS = 24
 #: a peak must stand this many times above the median spectrum to count as a line
 SPEED_LINE_MIN_SNR = 10.0
 #: a harmonic counts as present when its amplitude is at least this fraction of the largest line
 SPEED_HARMONIC_MIN_REL = 0.01
+#: a best-ranked line family below this fraction of a higher family's frequency may be a
+#: sub-synchronous whirl / whip (features._speed._above_subsynchronous) …
+SPEED_SUBSYNC_MAX_RATIO = 0.55
+#: … when their refined frequency ratio r is further than this fraction of r from an integer
+#: (oil whirl / whip lines are not locked to the running speed)
+SPEED_INTEGER_RATIO_TOL = 2e-3
+#: a spectral peak that is not a harmonic of the chosen speed makes the estimate "ambiguous" when
+#: its power is this many times the median spectrum (noise alone: probability 2^-30) …
+SPEED_FOREIGN_MIN_SNR = 30.0
+#: … and its amplitude at least this fraction of the largest line
+SPEED_FOREIGN_MIN_REL = 0.002
 #: phase-difference refinement iterations of the estimated / given speed
 SPEED_REFINE_ITERATIONS = 3
 #: a given ``speed_rpm`` that differs from the signal's refined 1X line by more than this
@@ -58,6 +67,19 @@ SPEED_REFINE_ITERATIONS = 3
 SPEED_MISMATCH_WARN = 1e-3
 #: keyphasor revolutions whose period differs from the mean by more than this get a warning
 SPEED_VARIATION_WARN = 0.01
+
+#: the phase of an order (and the phase differences built on it) is reported only when that
+#: order's zero-to-peak amplitude is at least this multiple of the noise-equivalent amplitude
+#: of the least-squares fit at that order (from the residual spectrum within
+#: ``PHASE_NOISE_BAND_ORDERS`` of the order). At 3× the phase's standard error is about 13.5°;
+#: below it the phase is mostly noise and is reported as missing (NaN), not as a number.
+PHASE_MIN_SNR = 3.0
+#: half-width (orders) of the residual-spectrum band around kX that gives the local noise floor
+PHASE_NOISE_BAND_ORDERS = 0.25
+#: … and an absolute floor: an order whose amplitude is below this fraction of the largest
+#: synchronous line of all channels is numerical noise however clean the record (e.g. a
+#: noise-free simulation's 2X of 1e-12 µm)
+PHASE_MIN_REL_AMPLITUDE = 1e-6
 
 #: grid points per revolution for orbit-shape features
 ORBIT_GRID = 360

@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass, field
-from functools import lru_cache
+from dataclasses import dataclass, field, replace
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -14,7 +14,8 @@ from ._orbit import OrbitShape, orbit_arrays
 from ._orders import fit_orders, forward_reverse, max_sync_order
 from ._poincare import classify, poincare_points
 from ._recording import Recording
-from ._spectrum import noise_rms, residual_psd
+from ._sanity import check_recording
+from ._spectrum import line_noise_amplitude, noise_rms, residual_psd
 from ._speed import refine_line_hz, shaft_angle
 
 __all__ = ["BearingDetail", "FeatureResult", "extract_features"]
@@ -23,7 +24,7 @@ _NAME_INDEX = {n: i for i, n in enumerate(FEATURE_NAMES)}
 _SPEED_INDEX = _NAME_INDEX["speed_rpm"]
 
 
-@lru_cache(maxsize=None)
+@cache
 def _bearing_schema(bearing: int) -> tuple[tuple[str, ...], np.ndarray]:
     """The ``b{n}_…`` names of one bearing in schema order, and their indices in the vector."""
     prefix = f"b{bearing}_"
@@ -64,6 +65,12 @@ class BearingDetail:
         The filtered 1X + 2X orbit and its shape.
     features : dict
         This bearing's entries of the feature vector (``b{n}_…`` names).
+    line_noise_um : ndarray, shape (2, 3), optional
+        Noise-equivalent zero-to-peak amplitude of the 1X–3X fit of x and y (µm, from the
+        local noise floor; ``features._spectrum.line_noise_amplitude``).
+    phase_valid : ndarray of bool, shape (2, 3), optional
+        Whether the 1X–3X phase of x and y stands out of the noise (``PHASE_MIN_SNR``); where
+        not, the phase features are NaN and :meth:`phase_deg` returns NaN.
     """
 
     bearing: int
@@ -80,10 +87,15 @@ class BearingDetail:
     poincare_um: np.ndarray
     orbit12: OrbitShape
     features: dict[str, float] = field(repr=False)
+    line_noise_um: np.ndarray | None = field(default=None, repr=False)
+    phase_valid: np.ndarray | None = field(default=None, repr=False)
 
     def phase_deg(self, direction: str, order: int) -> float:
         """Phase lag (deg, [0, 360)) of ``order`` in direction ``"x"`` or ``"y"``."""
         c = (self.x_coeffs_um if direction == "x" else self.y_coeffs_um)[order - 1]
+        if self.phase_valid is not None and order <= self.phase_valid.shape[1] \
+                and not self.phase_valid[0 if direction == "x" else 1, order - 1]:
+            return float("nan")
         return float(np.degrees(-np.angle(c)) % 360.0)
 
 
@@ -109,6 +121,8 @@ class FeatureResult:
     motion_type : simulator.analysis.MotionType or None
         None when the record is too short or the classifier is unavailable.
     warnings : tuple of str
+    sanity : tuple of features.SanityFinding
+        Physics sanity findings (``features._sanity.check_recording``); empty when all pass.
     """
 
     names: tuple[str, ...]
@@ -120,6 +134,7 @@ class FeatureResult:
     n_revs: int
     motion_type: Any
     warnings: tuple[str, ...]
+    sanity: tuple = ()
 
     def as_dict(self) -> dict[str, float]:
         """``{name: value}`` in schema order."""
@@ -160,6 +175,27 @@ def _subsync_peak_orders(pb: np.ndarray, lo: int, hi: int, total_ms: np.ndarray,
     return out
 
 
+def _subtract_slow_roll(rec: Recording, bearings: tuple[int, ...], coeffs: np.ndarray) -> None:
+    """Subtract the probes' slow-roll (runout) vectors from the fitted x/y orders, in place.
+
+    A probe reads ``p = x cos θ + y sin θ``; its slow-roll coefficient is mapped to x and y
+    with the same inverse projection as the waveforms (``Recording.xy_um``), per order.
+    """
+    for i, b in enumerate(bearings):
+        pair = [c for c in rec.channels if c.bearing == b]
+        if not (pair[0].slow_roll_um_pp or pair[1].slow_roll_um_pp):
+            continue
+        th1, th2 = np.deg2rad(pair[0].angle_deg), np.deg2rad(pair[1].angle_deg)
+        det = np.sin(th2 - th1)
+        s1, s2 = pair[0].slow_roll_coeffs_um(), pair[1].slow_roll_coeffs_um()
+        for k in (1, 2):
+            if k > coeffs.shape[1]:
+                continue
+            p1, p2 = s1.get(k, 0j), s2.get(k, 0j)
+            coeffs[2 * i, k - 1] -= (np.sin(th2) * p1 - np.sin(th1) * p2) / det
+            coeffs[2 * i + 1, k - 1] -= (-np.cos(th2) * p1 + np.cos(th1) * p2) / det
+
+
 def _wrap_deg(d: float) -> float:
     d = d % 360.0
     return d - 360.0 if d > 180.0 else d
@@ -178,7 +214,7 @@ class _BlasLimit:
         self._controller: Any = None
         self._restore: Any = None
 
-    def __enter__(self) -> "_BlasLimit":
+    def __enter__(self) -> _BlasLimit:
         with self._lock:
             if self._active == 0 and cfg.BLAS_THREADS is not None:
                 if self._controller is None:
@@ -246,14 +282,16 @@ def _extract(recording: Recording) -> FeatureResult:
     uniform = None if sa.source == "keyphasor" else 2 * np.pi * f1 / fs
     coeffs, mean, resid = fit_orders(sa.theta_rad, seg, k_max, uniform_step_rad=uniform)
 
+    _subtract_slow_roll(rec, bearings, coeffs)
+
     if sa.source == "given":
         # check the given speed on the strongest order of the two strongest channels
         mag2 = np.abs(coeffs[:, :3]) ** 2
         power = mag2.sum(axis=0)
         h = int(np.argmax(power)) + 1
         if power[h - 1] > 0:
-            top = np.argsort(-mag2[:, h - 1])[:2]
-            f_sig = refine_line_hz(seg[top] - mean[top, None], fs, h * f1, iterations=1) / h
+            strongest = np.argsort(-mag2[:, h - 1])[:2]
+            f_sig = refine_line_hz(seg[strongest] - mean[strongest, None], fs, h * f1, iterations=1) / h
             if abs(f_sig / f1 - 1.0) > cfg.SPEED_MISMATCH_WARN:
                 warnings.append(
                     f"speed_rpm {sa.speed_rpm:g} differs from the signal's {h}X line ({60 * f_sig / h * h:.2f} r/min, "
@@ -263,8 +301,15 @@ def _extract(recording: Recording) -> FeatureResult:
     freqs, psd = residual_psd(resid, fs)
     orders_axis = freqs / f1
     bin_orders = fs / n_seg / f1                      # resolution (1/n_revs), not the padded bin spacing
-    fft_bin_orders = float(orders_axis[1])
     noise = noise_rms(psd)
+    # the phase of an order is missing (NaN), not noise, when the order does not stand out of the
+    # local noise floor (or is numerically nil): cfg.PHASE_MIN_SNR, cfg.PHASE_MIN_REL_AMPLITUDE
+    n_rep = len(cfg.REPORTED_ORDERS)
+    line_noise = line_noise_amplitude(psd, orders_axis, n_seg, cfg.REPORTED_ORDERS, cfg.PHASE_NOISE_BAND_ORDERS)
+    amp0 = np.abs(coeffs[:, :n_rep])
+    rel_floor = cfg.PHASE_MIN_REL_AMPLITUDE * float(np.max(np.abs(coeffs))) if coeffs.size else 0.0
+    with np.errstate(invalid="ignore"):
+        phase_ok = (amp0 > rel_floor) & ~(amp0 < cfg.PHASE_MIN_SNR * line_noise)
     # AC mean square about the fitted constant, without forming seg − mean
     ms = np.einsum("ij,ij->i", seg, seg) / n_seg - 2 * mean * seg.mean(axis=1) + mean ** 2
     res_ms = np.einsum("ij,ij->i", resid, resid) / n_seg
@@ -283,7 +328,7 @@ def _extract(recording: Recording) -> FeatureResult:
     # computing it bearing by bearing
     c = np.array([rec.clearance_for(b) for b in bearings])
     amp_pp = 2 * np.abs(coeffs[:, :3])                                   # (m, 3)
-    phase = np.degrees(-np.angle(coeffs[:, :3])) % 360.0
+    phase = np.where(phase_ok, np.degrees(-np.angle(coeffs[:, :3])) % 360.0, np.nan)
     cx_all, cy_all = coeffs[0::2], coeffs[1::2]                           # (n_bearings, K)
     fw_all, rv_all = forward_reverse(cx_all, cy_all)
     afw, arv = np.abs(fw_all[:, :3]), np.abs(rv_all[:, :3])
@@ -355,15 +400,16 @@ def _extract(recording: Recording) -> FeatureResult:
             orders=orders, x_coeffs_um=cx.copy(), y_coeffs_um=cy.copy(),
             probe_coeffs_um=probe, forward_um=fw_all[i].copy(), reverse_um=rv_all[i].copy(),
             mean_um=(float(mean[ix]), float(mean[iy])), noise_rms_um=(float(noise[ix]), float(noise[iy])),
-            poincare_um=pts_all[:, ix:iy + 1], orbit12=orb.shape(i), features=dict(zip(names, row.tolist())))
+            poincare_um=pts_all[:, ix:iy + 1], orbit12=orb.shape(i), features=dict(zip(names, row.tolist())),
+            line_noise_um=line_noise[ix:iy + 1].copy(), phase_valid=phase_ok[ix:iy + 1].copy())
 
     for k in (1, 2):
         for bi, bj in cfg.PHASE_PAIRS:
             if bi in details and bj in details:
-                for d in ("x", "y"):
-                    ci = 2 * bearings.index(bi) + (d == "y")
-                    cj = 2 * bearings.index(bj) + (d == "y")
-                    values[_NAME_INDEX[f"dphase_{k}x_b{bi}_b{bj}_{d}_deg"]] = _wrap_deg(
+                for axis in ("x", "y"):
+                    ci = 2 * bearings.index(bi) + (axis == "y")
+                    cj = 2 * bearings.index(bj) + (axis == "y")
+                    values[_NAME_INDEX[f"dphase_{k}x_b{bi}_b{bj}_{axis}_deg"]] = _wrap_deg(
                         float(phase[ci, k - 1]) - float(phase[cj, k - 1]))
 
     motion = None
@@ -380,7 +426,8 @@ def _extract(recording: Recording) -> FeatureResult:
         warnings.append(f"only {sa.n_revs} revolutions: motion type not determined "
                         f"(needs >= {cfg.MIN_REVS_MOTION})")
 
-    return FeatureResult(
+    result = FeatureResult(
         names=FEATURE_NAMES, values=values, bearings=details, speed_rpm=float(sa.speed_rpm),
         speed_source=sa.source, phase_reference="keyphasor" if sa.source == "keyphasor" else "first sample",
         n_revs=sa.n_revs, motion_type=motion, warnings=tuple(warnings))
+    return replace(result, sanity=check_recording(rec, result))

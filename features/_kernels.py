@@ -7,10 +7,12 @@ that no operation is reordered or contracted.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit
 
-_OPTS = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")
+_OPTS: dict[str, Any] = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")
 
 __all__ = ["trig_rows", "coarse_diameter", "kth_smallest_rows", "power_spectrum"]
 

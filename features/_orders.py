@@ -143,7 +143,7 @@ def fit_orders(theta_rad: np.ndarray, data: np.ndarray, max_order: int,
     blocks = [(i0, min(n, i0 + BLOCK_SAMPLES)) for i0 in range(0, n, BLOCK_SAMPLES)]
     general = uniform_step_rad is None
     gram = np.zeros((2 * k_max + 1, 2 * k_max + 1)) if general else \
-        _uniform_gram(n, float(uniform_step_rad), k_max)
+        _uniform_gram(n, float(uniform_step_rad or 0.0), k_max)
     rhs = np.zeros((2 * k_max + 1, m))
     for i0, i1 in blocks:
         trig = _trig_rows(theta_rad, i0, i1, k_max, uniform_step_rad)

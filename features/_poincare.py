@@ -3,6 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from rotordiag.simulator.analysis import classify_motion
+from rotordiag.simulator.analysis.motion import PERIOD_RTOL
+
 from . import _config as cfg
 
 __all__ = ["poincare_points", "period_tolerance", "classify"]
@@ -48,13 +51,8 @@ def classify(points: np.ndarray, orbit_size_um: float, point_noise_rms: np.ndarr
     The period tolerance is widened from the classifier's default (a fraction of the orbit
     size, meant for noise-free simulations) to :func:`period_tolerance`, so that measurement
     noise does not turn a period-1 orbit into "quasi-periodic". Returns
-    ``(MotionType | None, note)``; None when the classifier is not importable.
+    ``(MotionType, note)``.
     """
-    try:
-        from simulator.analysis import classify_motion
-        from simulator.analysis.motion import PERIOD_RTOL
-    except ImportError as exc:  # pragma: no cover - depends on the installation
-        return None, f"motion type not determined: simulator.analysis.classify_motion unavailable ({exc})"
     rtol = PERIOD_RTOL
     if orbit_size_um > 0:
         rtol = max(rtol, period_tolerance(point_noise_rms, points.shape[0]) / orbit_size_um)

@@ -21,6 +21,24 @@ def _finite_positive(value: object, name: str, hint: str) -> float:
     return v
 
 
+def _slow_roll(value: object, bearing: int, angle: float) -> dict[int, tuple[float, float]]:
+    where = f"ProbeChannel.slow_roll_um_pp (bearing {bearing}, {angle:g}°)"
+    if not isinstance(value, Mapping):
+        raise ValueError(f"{where} must map an order (1 or 2) to (amplitude µm pk-pk, phase lag deg)")
+    out: dict[int, tuple[float, float]] = {}
+    for k, v in value.items():
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or int(k) not in (1, 2):
+            raise ValueError(f"{where}: order {k!r} is not 1 or 2")
+        try:
+            a, ph = (float(x) for x in v)  # type: ignore[union-attr]
+        except (TypeError, ValueError):
+            raise ValueError(f"{where}: order {k} needs (amplitude µm pk-pk, phase lag deg), got {v!r}") from None
+        if not (np.isfinite(a) and np.isfinite(ph) and a >= 0):
+            raise ValueError(f"{where}: order {k} amplitude must be finite and >= 0 and the phase finite, got {v!r}")
+        out[int(k)] = (a, ph)
+    return out
+
+
 @dataclass(frozen=True)
 class ProbeChannel:
     """One proximity-probe waveform.
@@ -38,12 +56,18 @@ class ProbeChannel:
         ``"um"``, ``"mm"``, ``"m"`` or ``"mil"`` (1 mil = 25.4 µm); ``"µm"`` is accepted for ``"um"``.
     data : array_like, shape (n_points,)
         Samples at the recording's sample rate, first sample at t = 0.
+    slow_roll_um_pp : mapping {order: (amplitude µm pk-pk, phase lag deg)}, optional
+        Slow-roll (runout) vectors of this probe for orders 1 and/or 2, measured at slow roll
+        with the same keyphasor reference (phase lag φ: the kX component is
+        ``A/2 · cos(kθ − φ)``). They are subtracted as vectors from the fitted orders
+        (needs ``Recording.keyphasor_times_s``).
     """
 
     bearing: int
     angle_deg: float
     units: str
     data: np.ndarray = field(repr=False)
+    slow_roll_um_pp: Mapping[int, tuple[float, float]] | None = None
 
     def __post_init__(self) -> None:
         b = self.bearing
@@ -77,6 +101,12 @@ class ProbeChannel:
             raise ValueError(f"ProbeChannel.data (bearing {b}, {angle:g}°) has {int(bad.sum())} non-finite "
                              f"sample(s) (NaN/inf), first at index {first}; remove dropouts or cut the record")
         object.__setattr__(self, "data", data)
+        if self.slow_roll_um_pp is not None:
+            object.__setattr__(self, "slow_roll_um_pp", _slow_roll(self.slow_roll_um_pp, b, angle))
+
+    def slow_roll_coeffs_um(self) -> dict[int, complex]:
+        """The slow-roll vectors as complex zero-to-peak coefficients ``C_k = A/2 · e^{−jφ}`` (µm)."""
+        return {k: 0.5 * a * np.exp(-1j * np.deg2rad(ph)) for k, (a, ph) in (self.slow_roll_um_pp or {}).items()}
 
     @property
     def data_um(self) -> np.ndarray:
@@ -154,6 +184,10 @@ class Recording:
             if np.any(np.diff(kp) <= 0):
                 raise ValueError("Recording.keyphasor_times_s must be strictly increasing (one pulse per revolution)")
             object.__setattr__(self, "keyphasor_times_s", kp)
+        if any(c.slow_roll_um_pp for c in chans) and self.keyphasor_times_s is None:
+            raise ValueError("slow_roll_um_pp: slow-roll vectors are phase-referenced to the keyphasor; give "
+                             "keyphasor_times_s with them (without a keyphasor the phase of the orders is arbitrary "
+                             "and a vector subtraction would add runout instead of removing it)")
         cl = self.clearance_um
         if cl is not None:
             if isinstance(cl, Mapping):

@@ -89,3 +89,40 @@ def noise_rms(psd: np.ndarray) -> np.ndarray:
     mid = sample.shape[1] // 2
     median = kth_smallest_rows(sample, mid)                 # upper median; bias O(1/n_bins)
     return np.sqrt(n_bins * median / np.log(2.0))
+
+
+def line_noise_amplitude(psd: np.ndarray, orders_axis: np.ndarray, n_seg: int, orders: tuple[int, ...],
+                         half_width: float) -> np.ndarray:
+    """Noise-equivalent zero-to-peak amplitude of the least-squares fit of each order, per row.
+
+    For white noise of variance σ² the fitted complex coefficient of an order over ``n_seg``
+    samples (whole revolutions) errs by ``E|ΔC|² = 4σ²/n_seg``. The local noise level is the
+    residual spectrum's mean bin power ``P = 2σ²/n_fft`` around the order, estimated as its
+    median over ``[k − half_width, k + half_width]`` divided by ln 2 (χ²₂ bins; robust to a
+    few lines), so the noise-equivalent amplitude is ``√(2·P·n_fft / n_seg)``.
+
+    Parameters
+    ----------
+    psd : ndarray, shape (m, n_fft // 2 + 1)
+        Residual power spectrum (:func:`residual_psd`), µm² per bin.
+    orders_axis : ndarray
+        Order of each bin (frequency over running speed), ascending.
+    n_seg : int
+        Samples the orders were fitted over.
+    orders : tuple of int
+    half_width : float
+        Half-width of the band, orders.
+
+    Returns
+    -------
+    ndarray, shape (m, len(orders))
+        µm, zero-to-peak; NaN where the band holds fewer than 3 bins.
+    """
+    n_fft = 2 * (psd.shape[1] - 1)
+    out = np.full((psd.shape[0], len(orders)), np.nan)
+    for j, k in enumerate(orders):
+        i0, i1 = np.searchsorted(orders_axis, [k - half_width, k + half_width], side="left")
+        if i1 - i0 >= 3:
+            p_mean = np.median(psd[:, i0:i1], axis=1) / np.log(2.0)
+            out[:, j] = np.sqrt(2.0 * p_mean * n_fft / n_seg)
+    return out

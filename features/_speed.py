@@ -52,6 +52,79 @@ def _hann_amplitude_at(power: np.ndarray, f: float, df: float) -> float:
     return float(np.sqrt(np.max(power[k - 1:k + 2])))
 
 
+def _line_amplitude(power: np.ndarray, logp: np.ndarray, f: float, df: float, level: float) -> float:
+    """Amplitude (√power) of a genuine spectral line at ``f``, else 0.
+
+    Genuine: a local maximum of the spectrum within ±1 bin of ``f`` whose interpolated centre
+    lies within half a bin of ``f`` and whose power reaches ``level``. The skirt of a strong
+    neighbouring line (e.g. oil whirl at 0.47X next to 0.5X) is not a line.
+    """
+    k0 = int(round(f / df))
+    if k0 < 2 or k0 >= power.size - 2:
+        return 0.0
+    k = k0 - 1 + int(np.argmax(power[k0 - 1:k0 + 2]))
+    if not (power[k] >= power[k - 1] and power[k] > power[k + 1]) or power[k] < level:
+        return 0.0
+    den = logp[k - 1] - 2 * logp[k] + logp[k + 1]
+    delta = 0.5 * (logp[k - 1] - logp[k + 1]) / den if den < 0 else 0.0
+    if abs(k + delta - f / df) > 0.5:
+        return 0.0
+    return float(np.sqrt(power[k]))
+
+
+def _non_harmonic_lines(power: np.ndarray, peak_idx: np.ndarray, df: float, f1: float, level: float) -> list[float]:
+    """Frequencies (Hz, strongest first) of spectral peaks at or above ``level`` that are not
+    within one bin of an integer multiple of ``f1`` (nor below 0.05 × ``f1``, slow drift)."""
+    out = []
+    for k in peak_idx:                              # already strongest first
+        if power[k] < level:
+            continue
+        f = k * df
+        m = round(f / f1)
+        if f < 0.05 * f1 or (m >= 1 and abs(f - m * f1) <= 1.0 * df + 1e-3 * f):
+            continue
+        out.append(float(f))
+    return out
+
+
+def _above_subsynchronous(x: np.ndarray, fs: float, df: float,
+                          candidates: list[tuple[float, int, float, int, float]]) -> tuple[float, str | None]:
+    """The running speed when the best-ranked line family is a sub-synchronous whirl or whip.
+
+    Oil whirl and whip are self-excited: their line (0.4–0.5X, or locked near the first natural
+    frequency, down to about 0.3X) and its harmonics form a family of their own, often far
+    stronger than the running speed's (simulated whip: 1X at 0.2 % of the whip amplitude). A
+    family above the best-ranked one, with at least two of its 1X–3X lines above the noise,
+    whose frequency is more than ``1 / SPEED_SUBSYNC_MAX_RATIO`` times the best one's and not
+    an integer multiple of it (within ``SPEED_INTEGER_RATIO_TOL`` after refining both lines), is
+    an independent source above a sub-synchronous one: no self-excited whirl runs above the
+    running speed, so the strongest such family is the running speed. Families at an exact
+    integer ratio (a 2X-dominated signal, or period-n motion) are left to the ranking.
+    """
+    f_best = candidates[0][0]
+    higher = [c for c in candidates[1:] if f_best < cfg.SPEED_SUBSYNC_MAX_RATIO * c[0] and c[3] >= 2]
+    if not higher:
+        return f_best, None
+    fb = refine_line_hz(x, fs, f_best, iterations=2)
+    if abs(fb - f_best) > 2 * df:
+        fb = f_best
+    independent = []
+    for c in higher:
+        fc = refine_line_hz(x, fs, c[0], iterations=2)
+        if abs(fc - c[0]) > 2 * df:
+            fc = c[0]
+        r = fc / fb
+        if abs(r - round(r)) > cfg.SPEED_INTEGER_RATIO_TOL * r:
+            independent.append(c)
+    if not independent:
+        return f_best, None
+    best = max(independent, key=lambda c: (c[3], c[4]))
+    note = (f"a line family at {60 * f_best:.1f} cpm ({f_best / best[0]:.3f}X) is sub-synchronous and not harmonic "
+            f"with the running speed (oil whirl / whip?); the speed is taken from the family at "
+            f"{60 * best[0]:.1f} r/min")
+    return best[0], note
+
+
 def refine_line_hz(data: np.ndarray, fs: float, f0: float, iterations: int = cfg.SPEED_REFINE_ITERATIONS) -> float:
     """Refine the frequency of a spectral line near ``f0`` (Hz) by the phase-difference method.
 
@@ -137,13 +210,15 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
         raise ValueError(
             "cannot estimate the running speed: no spectral line stands out of the noise between "
             f"{cfg.SPEED_SEARCH_RPM[0]:g} and {cfg.SPEED_SEARCH_RPM[1]:g} r/min; give speed_rpm or keyphasor_times_s")
+    peak_idx = peak_idx[power[peak_idx] >= cfg.SPEED_LINE_MIN_SNR * floor]
     order = np.argsort(-power[peak_idx], kind="stable")[:cfg.SPEED_CANDIDATE_PEAKS]
     peak_idx = peak_idx[order]
     pmax = power[peak_idx[0]]
-    peak_idx = peak_idx[power[peak_idx] >= 1e-2 * pmax]
     logp = np.log(np.maximum(power, np.finfo(float).tiny))
-    present_level = max(cfg.SPEED_LINE_MIN_SNR * floor, cfg.SPEED_HARMONIC_MIN_REL ** 2 * pmax)
-    candidates: list[tuple[float, int, float]] = []
+    snr_level = cfg.SPEED_LINE_MIN_SNR * floor
+    present_level = max(snr_level, cfg.SPEED_HARMONIC_MIN_REL ** 2 * pmax)
+    # (f, lines present, their summed amplitude, lines above the noise, their summed amplitude)
+    candidates: list[tuple[float, int, float, int, float]] = []
     for k in peak_idx:
         den = logp[k - 1] - 2 * logp[k] + logp[k + 1]
         delta = 0.5 * (logp[k - 1] - logp[k + 1]) / den if den < 0 else 0.0
@@ -152,22 +227,36 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
             f = fp / d
             if not (f_lo <= f <= f_hi):
                 continue
-            if any(abs(f - g) < 1.5 * df for g, _, _ in candidates):
+            if any(abs(f - c[0]) < 1.5 * df for c in candidates):
                 continue
-            amps = [_hann_amplitude_at(power, m * f, df) for m in (1, 2, 3)]
-            present = [a * a >= present_level for a in amps]
-            if not present[0]:      # a running speed always shows its own 1X line
+            weak = [_line_amplitude(power, logp, m * f, df, snr_level) for m in (1, 2, 3)]
+            if weak[0] <= 0.0:      # a running speed always shows its own 1X line
                 continue
-            candidates.append((f, int(sum(present)), float(sum(a for a, p in zip(amps, present) if p))))
+            amps = [a if a * a >= present_level else 0.0 for a in weak]
+            candidates.append((f, int(sum(a > 0 for a in amps)), float(sum(amps)),
+                               int(sum(a > 0 for a in weak)), float(sum(weak))))
     if not candidates:
         raise ValueError("cannot estimate the running speed: no candidate line in the search range; "
                          "give speed_rpm or keyphasor_times_s")
     candidates.sort(key=lambda c: (-c[1], -c[2]))
-    f_best, n_best, s_best = candidates[0]
+    f_best, n_best, s_best = candidates[0][:3]
     warnings: list[str] = []
-    if len(candidates) > 1 and candidates[1][1] == n_best and candidates[1][2] >= 0.8 * s_best:
+    f_best, switched = _above_subsynchronous(x, fs, df, candidates)
+    if switched is not None:
+        warnings.append(switched)
+        n_best, s_best = next((c[1], c[2]) for c in candidates if c[0] == f_best)
+    foreign = _non_harmonic_lines(power, peak_idx, df, f_best, max(cfg.SPEED_FOREIGN_MIN_SNR * floor,
+                                                                     cfg.SPEED_FOREIGN_MIN_REL ** 2 * pmax))
+    if foreign:
         warnings.append(
-            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * candidates[1][0]:.1f} r/min "
+            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but the lines at "
+            f"{', '.join(f'{60 * f:.0f}' for f in foreign[:4])} cpm are not its harmonics (two independent "
+            "frequencies: oil whirl / whip or a sub-harmonic, with the running speed possibly elsewhere); "
+            "give speed_rpm or keyphasor_times_s")
+    rivals = [c for c in candidates if c[0] != f_best and c[1] > 0]
+    if rivals and rivals[0][1] == n_best and rivals[0][2] >= 0.8 * s_best:
+        warnings.append(
+            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * rivals[0][0]:.1f} r/min "
             "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
     # refine on the strongest of the candidate's 1X..3X lines below 0.45 fs
     harmonics = [m for m in (1, 2, 3) if m * f_best < 0.45 * fs]

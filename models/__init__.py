@@ -20,6 +20,7 @@ models.dataset
 models.config, models.train, models.evaluate, models.baselines, models.metrics
     ``TrainConfig`` (train.toml), ``train_and_register``, held-out-plant evaluation and
     report, the 2X/1X baselines, metrics.
-models.waveform_io
-    ``read_recording(path, sidecar=..., overrides=...)``: CSV/NPY/HDF5 → ``features.Recording``.
+models.diagnose_files
+    ``rotordiag diagnose`` on files: options (sidecar + flags), one verdict per file through
+    ``features.reader.read_recording``, the CSV/JSON table of verdicts.
 """

@@ -25,7 +25,7 @@ The ratio of a row is the largest 2X/1X over the probes named by the configurati
 from __future__ import annotations
 
 import fnmatch
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
@@ -115,7 +115,7 @@ class RatioThresholdClassifier(ClassifierMixin, BaseEstimator):
         tags.input_tags.allow_nan = True
         return tags
 
-    def fit(self, X, y) -> "RatioThresholdClassifier":
+    def fit(self, X, y) -> RatioThresholdClassifier:
         """Fit the cuts. ``X`` has one column (the ratio); NaN rows count as below every cut."""
         X, y = validate_data(self, X, y, ensure_all_finite="allow-nan")
         if X.shape[1] != 1:

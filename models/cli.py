@@ -7,13 +7,13 @@ from typing import Optional
 
 import typer
 
-#: Registry used when --registry is not given: $ROTORDIAG_REGISTRY, else the shipped default.
-DEFAULT_REGISTRY = Path(__file__).resolve().parent / "default_registry"
-
 
 def default_registry() -> Path:
+    """Registry used when --registry is not given: $ROTORDIAG_REGISTRY, else the shipped default."""
+    from .registry import shipped_registry_dir
+
     env = os.environ.get("ROTORDIAG_REGISTRY")
-    return Path(env) if env else DEFAULT_REGISTRY
+    return Path(env) if env else shipped_registry_dir()
 
 
 def _fail(message: str, code: int = 2) -> None:
@@ -108,56 +108,115 @@ def register(app: typer.Typer) -> None:
             _fail(str(exc))
         typer.echo(f"active: {v}")
 
+    @models_app.command("migrate")
+    def migrate_models(registry: Optional[Path] = typer.Option(None, "--registry", help=_REGISTRY_HELP)) -> None:
+        """Rewrite model files saved before the rotordiag.* rename (type names models.*) to the current names.
+
+        Each rewritten file is checked to predict exactly as the old one before it replaces it; the old
+        file is kept as model.skops.pre-rename. Loading works without migrating too (the names are mapped
+        in memory); migrating makes the files readable by other tools that use the trusted-types list.
+        """
+        from .legacy import migrate_registry
+        from .registry import RegistryError
+
+        root = registry or default_registry()
+        if not root.is_dir():
+            _fail(f"registry {root} does not exist")
+        try:
+            done = migrate_registry(root)
+        except (RegistryError, ValueError, OSError) as exc:
+            _fail(str(exc))
+        typer.echo(f"migrated: {', '.join(done)}" if done else "nothing to migrate: every model file uses the current names")
+
     @app.command()
     def diagnose(
-        file: Path = typer.Argument(..., help="Waveforms: .csv (one column per probe), .npy (channels × points) or .h5."),
+        files: list[Path] = typer.Argument(..., help="Recordings (.csv, .npy, .h5/.hdf5, .json) or folders of them; "
+                                           "'rotordiag examples' lists the shipped ones."),
         registry: Optional[Path] = typer.Option(None, "--registry", help=_REGISTRY_HELP),
         version: Optional[str] = typer.Option(None, "--version", help="Model version (default: the active one)."),
-        sidecar: Optional[Path] = typer.Option(None, "--sidecar", help="JSON with sample_rate_hz, units, channels, speed_rpm, clearance_um (default: FILE with .json)."),
-        sample_rate_hz: Optional[float] = typer.Option(None, "--sample-rate-hz", help="Sample rate, Hz."),
-        units: Optional[str] = typer.Option(None, "--units", help="um | mm | m | mil."),
-        channels: Optional[str] = typer.Option(None, "--channels", help="Probe layout in file order, BEARING@ANGLE: '1@45,1@135,2@45,2@135'."),
+        sidecar: Optional[Path] = typer.Option(None, "--sidecar", help="JSON with the options below by name (default: FILE with .json next to a .csv/.npy/.h5)."),
+        sample_rate_hz: Optional[float] = typer.Option(None, "--sample-rate-hz", help="Sample rate, Hz (or a time_s column in the CSV)."),
+        units: Optional[str] = typer.Option(None, "--units", help="um | mm | m | mil | V (V needs --sensitivity-v-per-mm)."),
+        sensitivity_v_per_mm: Optional[float] = typer.Option(None, "--sensitivity-v-per-mm", help="Probe scale factor for --units V, V/mm (7.87 = 200 mV/mil)."),
+        gap_voltage_v: Optional[float] = typer.Option(None, "--gap-voltage-v", help="DC gap voltage for --units V, V (default: each channel's mean)."),
+        channels: Optional[str] = typer.Option(None, "--channels", help="Probe layout in file order, BEARING@ANGLE: '1@45,1@135,2@45,2@135'; or for a CSV 'COLUMN=b2@45;COLUMN=b2@135'."),
+        keyphasor_channel: Optional[str] = typer.Option(None, "--keyphasor-channel", help="Raw keyphasor pulse channel: CSV column name, or index in file order (default: a CSV column named kp/keyphasor)."),
+        keyphasor_edge: str = typer.Option("falling", "--keyphasor-edge", help="falling (a notch) | rising (a projection, TTL)."),
+        keyphasor_threshold: Optional[float] = typer.Option(None, "--keyphasor-threshold", help="Pulse threshold in the channel's units (default: halfway between its 1st and 99th percentile)."),
+        rotation: str = typer.Option("ccw", "--rotation", help="Shaft rotation seen from the driver end: ccw | cw."),
+        viewed_from: str = typer.Option("driver", "--viewed-from", help="End the probe angles are measured from: driver | non-driver."),
         speed_rpm: Optional[float] = typer.Option(None, "--speed-rpm", help="Running speed, r/min (estimated from the signal if omitted)."),
         clearance_um: Optional[float] = typer.Option(None, "--clearance-um", help="Radial bearing clearance, µm (gives the offset in µm)."),
         sample: Optional[int] = typer.Option(None, "--sample", help="Row of a rotordiag dataset HDF5 file."),
-        as_json: bool = typer.Option(False, "--json", help="Print the verdict as JSON."),
+        as_json: bool = typer.Option(False, "--json", help="Print the verdict(s) as JSON."),
+        out: Optional[Path] = typer.Option(None, "--out", help="Write one table of verdicts, one row per file: .csv or .json."),
+        output_units: str = typer.Option("um", "--output-units", help="Units of the offset and amplitudes in the output: um | mil."),
     ) -> None:
-        """Diagnose coupling misalignment from one recording."""
+        """Diagnose coupling misalignment from one or many recordings (the model is loaded once)."""
         import json
 
-        from features import extract_features
+        from rotordiag.core.units import um_to
 
-        from .predict import diagnose as run_diagnose
+        from .diagnose_files import collect_files, diagnose_one, load_options, verdict_json, verdict_row, write_table
         from .predict import format_verdict, load_bundle
         from .registry import RegistryError
-        from .waveform_io import parse_channels, read_recording
 
         try:
-            overrides = {
-                "sample_rate_hz": sample_rate_hz, "units": units, "speed_rpm": speed_rpm,
-                "clearance_um": clearance_um,
-                "channels": parse_channels(channels) if channels else None,
+            um_to(None, output_units)
+            paths = collect_files(files)
+            given = {
+                "sample_rate_hz": sample_rate_hz, "units": units, "sensitivity_v_per_mm": sensitivity_v_per_mm,
+                "gap_voltage_v": gap_voltage_v, "channels": channels, "keyphasor_channel": keyphasor_channel,
+                "keyphasor_edge": keyphasor_edge, "keyphasor_threshold_v": keyphasor_threshold,
+                "rotation": rotation, "viewed_from": viewed_from, "speed_rpm": speed_rpm,
+                "clearance_um": clearance_um, "sample_index": sample,
             }
-            rec, info = read_recording(file, sidecar=sidecar, overrides=overrides, sample=sample)
-            bundle = load_bundle(registry or default_registry(), version)
-            fr = extract_features(rec)
-            clearance = rec.clearance_um if isinstance(rec.clearance_um, (int, float)) else None
-            if isinstance(rec.clearance_um, dict) and rec.clearance_um:
-                # Δ is δ over the coupling bearings' clearance: use bearing 2/3 when given.
-                cands = [rec.clearance_um.get(b) for b in (2, 3) if rec.clearance_um.get(b)]
-                clearance = float(sum(cands) / len(cands)) if cands else None
-            verdict = run_diagnose(bundle, fr, clearance_um=clearance)
-        except (ValueError, RegistryError) as exc:
+        except ValueError as exc:
             _fail(str(exc))
-        if as_json:
-            d = verdict.to_dict()
-            if "truth" in info:
-                d["truth"] = info["truth"]
-            typer.echo(json.dumps(d, indent=2))
-        else:
-            typer.echo(format_verdict(verdict))
-            if "truth" in info:
-                typer.echo(f"(dataset truth: Δ = {info['truth']['misalignment']:.3f})")
+        loaded: list = []
+
+        def bundle():  # loaded once, after the first file has been read
+            if not loaded:
+                loaded.append(load_bundle(registry or default_registry(), version))
+            return loaded[0]
+
+        rows: list[dict] = []
+        full: list[dict] = []
+        n_bad = 0
+        for path in paths:
+            try:
+                opts = load_options(path, sidecar, given)
+                verdict, res = diagnose_one(bundle, path, opts)
+            except RegistryError as exc:
+                _fail(str(exc))
+            except ValueError as exc:
+                if len(paths) == 1:
+                    _fail(f"{path}: {exc}")
+                n_bad += 1
+                typer.secho(f"error: {path}: {exc}", fg=typer.colors.RED, err=True)
+                rows.append({"file": str(path), "error": str(exc)})
+                full.append({"file": str(path), "error": str(exc)})
+                continue
+            rows.append(verdict_row(path, verdict, res, output_units))
+            full.append(verdict_json(path, verdict, res, output_units))
+            if out is None and not as_json:
+                if len(paths) > 1:
+                    typer.echo(f"== {path}")
+                typer.echo(format_verdict(verdict, output_units))
+                for note in res.notes:
+                    typer.echo(f"note: {note}")
+                if res.truth:
+                    typer.echo(f"(dataset truth: Δ = {res.truth['misalignment']:.3f})")
+        if out is not None:
+            try:
+                write_table(out, rows)
+            except ValueError as exc:
+                _fail(str(exc))
+            typer.echo(f"wrote {out}: {len(rows)} file(s), {n_bad} could not be read", err=True)
+        elif as_json:
+            typer.echo(json.dumps(full[0] if len(full) == 1 else full, indent=2))
+        if n_bad:
+            raise typer.Exit(1)
 
 
 def _summary(report: dict) -> str:

@@ -29,7 +29,8 @@ import numba
 import numpy as np
 from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
 
-from .estimators import _blank   # the estimators' own column blanking (sparse training columns → 0)
+from ._sklearn_private import hgb_trees, single_calibration
+from .estimators import _blank  # the estimators' own column blanking (sparse training columns → 0)
 
 
 @dataclass(frozen=True)
@@ -60,11 +61,7 @@ def _ensemble_trees(model) -> tuple[list, np.ndarray]:
         raise TypeError(f"not a HistGradientBoosting model: {type(model).__name__}")
     if getattr(model, "is_categorical_", None) is not None and np.any(model.is_categorical_):
         raise TypeError("categorical features are not supported by the compiled predictor")
-    trees = []
-    for iteration in model._predictors:
-        for k, predictor in enumerate(iteration):
-            trees.append((predictor.nodes, k))
-    return trees, np.asarray(model._baseline_prediction, dtype=float).ravel()
+    return hgb_trees(model)
 
 
 def compile_forest(models, n_features: int) -> Forest:
@@ -103,14 +100,14 @@ def compile_forest(models, n_features: int) -> Forest:
         for f in np.unique(feature_a[root_a[t]:ends[t]]):
             if f >= 0:
                 pairs.add((int(f), t))
-    pairs = sorted(pairs)
-    counts = np.bincount([f for f, _ in pairs], minlength=n_features)
+    pair_list = sorted(pairs)
+    counts = np.bincount([f for f, _ in pair_list], minlength=n_features)
     ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     return Forest(
         feature=feature_a, threshold=np.concatenate(threshold), missing_left=np.concatenate(missing_left),
         left=np.concatenate(left), right=np.concatenate(right), value=np.concatenate(value),
         root=root_a, output=np.asarray(output, np.int64), baseline=np.concatenate(baseline),
-        feature_ptr=ptr, trees_of_feature=np.asarray([t for _, t in pairs], np.int64),
+        feature_ptr=ptr, trees_of_feature=np.asarray([t for _, t in pair_list], np.int64),
     )
 
 
@@ -184,14 +181,14 @@ def occlusion_raw(forest: Forest, row: np.ndarray, reference: np.ndarray) -> np.
 
 def _calibrated_proba(cc, raw: np.ndarray) -> np.ndarray:
     """``CalibratedClassifierCV(ensemble=False).predict_proba`` from the trees' decision values."""
-    cal = cc.calibrated_classifiers_[0]
-    n_classes = cal.classes.shape[0]
-    if cal.method == "temperature":
-        proba = cal.calibrators[0].predict(raw)
-    elif cal.method in ("sigmoid", "isotonic"):
+    method, classes, calibrators, estimator = single_calibration(cc)
+    n_classes = classes.shape[0]
+    if method == "temperature":
+        proba = calibrators[0].predict(raw)
+    elif method in ("sigmoid", "isotonic"):
         proba = np.zeros((raw.shape[0], n_classes))
-        pos = np.searchsorted(cal.classes, cal.estimator.classes_)
-        for class_idx, pred, calibrator in zip(pos, raw.T, cal.calibrators):
+        pos = np.searchsorted(classes, estimator.classes_)
+        for class_idx, pred, calibrator in zip(pos, raw.T, calibrators):
             if n_classes == 2:
                 class_idx += 1
             proba[:, class_idx] = calibrator.predict(pred)
@@ -201,7 +198,7 @@ def _calibrated_proba(cc, raw: np.ndarray) -> np.ndarray:
             den = proba.sum(axis=1)[:, None]
             proba = np.divide(proba, den, out=np.full_like(proba, 1.0 / n_classes), where=den != 0)
     else:
-        raise TypeError(f"calibration method {cal.method!r} is not supported by the compiled predictor")
+        raise TypeError(f"calibration method {method!r} is not supported by the compiled predictor")
     proba = np.asarray(proba, dtype=float)
     proba[(1.0 < proba) & (proba <= 1.0 + 1e-5)] = 1.0
     return proba

@@ -35,11 +35,13 @@ from __future__ import annotations
 
 import inspect
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
-from .bands import SeverityBands
+from rotordiag.core.bands import SeverityBands
+
 from .baselines import DEFAULT_RATIO_PATTERNS, DEFAULT_RULE_CUTS
 from .estimators import ConformalIntervalRegressor, KNNDistanceOOD, SeverityClassifier
 
@@ -76,7 +78,7 @@ class TrainConfig:
     rule_cuts: tuple[float, ...] = DEFAULT_RULE_CUTS
 
     @classmethod
-    def from_dict(cls, d: Mapping[str, Any] | None) -> "TrainConfig":
+    def from_dict(cls, d: Mapping[str, Any] | None) -> TrainConfig:
         d = dict(d or {})
         unknown = set(d) - _SECTIONS
         if unknown:
@@ -140,7 +142,7 @@ class TrainConfig:
         return cfg
 
     @classmethod
-    def from_file(cls, path: str | Path) -> "TrainConfig":
+    def from_file(cls, path: str | Path) -> TrainConfig:
         p = Path(path)
         try:
             with p.open("rb") as fh:

@@ -16,8 +16,8 @@ from __future__ import annotations
 import hashlib
 import json
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -50,7 +50,7 @@ def _str_array(a) -> np.ndarray:
 
 def features_code_hash() -> str:
     """SHA-256 of the ``features`` package source (what the cached values depend on)."""
-    import features
+    from rotordiag import features
 
     h = hashlib.sha256()
     root = Path(features.__file__).parent
@@ -84,7 +84,7 @@ def dataset_hash(path: str | Path) -> str:
 
 
 def _extract_rows(f, rows, progress: Callable | None) -> tuple[np.ndarray, list[str], list[tuple[int, str]]]:
-    from features import FEATURE_NAMES, ProbeChannel, Recording, extract_features
+    from rotordiag.features import FEATURE_NAMES, ProbeChannel, Recording, extract_features
 
     fs = float(f.attrs["sample_rate_hz"])
     units = str(f.attrs.get("waveform_units", "um"))
@@ -181,7 +181,8 @@ def load_feature_table(
         meta["dataset_hash"] = data_hash
         key = hashlib.sha256(f"{_CACHE_VERSION}|{data_hash}|{features_code_hash()}".encode()).hexdigest()[:16]
         cache_path = path.with_name(f"{path.name}.features-{key}.npz")
-        X = names = None
+        X: np.ndarray | None = None
+        names: list[str] | None = None
         failed: list[tuple[int, str]] = []
         if cache and cache_path.is_file():
             try:
@@ -210,6 +211,7 @@ def load_feature_table(
             bad = {i for i, _ in failed}
             good = np.array([i not in bad for i in rows])
         r = rows[good]
+        assert X is not None and names is not None
         return FeatureTable(
             X=X[good],
             feature_names=tuple(names),

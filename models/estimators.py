@@ -19,8 +19,8 @@ names; it is the one object the registry stores and :func:`models.predict.diagno
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from numbers import Integral, Real
-from typing import Sequence
 
 import numpy as np
 from sklearn.base import (
@@ -45,11 +45,12 @@ from sklearn.model_selection import (
 from sklearn.neighbors import NearestNeighbors
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
-from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from .bands import DEFAULT_EDGES, DEFAULT_NAMES, SeverityBands
+from rotordiag.core.bands import DEFAULT_EDGES, DEFAULT_NAMES, SeverityBands
+
+from ._sklearn_private import Interval, StrOptions
 
 _CALIBRATION_METHODS = ("temperature", "sigmoid", "isotonic", "none")
 
@@ -162,7 +163,7 @@ class SeverityClassifier(ClassifierMixin, BaseEstimator):
             random_state=self.random_state,
         )
 
-    def fit(self, X, y, groups=None) -> "SeverityClassifier":
+    def fit(self, X, y, groups=None) -> SeverityClassifier:
         """Fit the trees and the calibration map.
 
         Parameters
@@ -312,7 +313,7 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
             **loss,
         )
 
-    def fit(self, X, y, groups=None) -> "ConformalIntervalRegressor":
+    def fit(self, X, y, groups=None) -> ConformalIntervalRegressor:
         """Fit point, centre and scale models and calibrate the interval.
 
         Parameters
@@ -447,7 +448,7 @@ class KNNDistanceOOD(OutlierMixin, BaseEstimator):
     def __sklearn_tags__(self):
         return _nan_tags(super().__sklearn_tags__())
 
-    def fit(self, X, y=None) -> "KNNDistanceOOD":
+    def fit(self, X, y=None) -> KNNDistanceOOD:
         """Store the standardised reference set and the distance threshold.
 
         Parameters
@@ -559,7 +560,7 @@ class MisalignmentModel(BaseEstimator):
     def __sklearn_tags__(self):
         return _nan_tags(super().__sklearn_tags__())
 
-    def fit(self, X, y, groups=None) -> "MisalignmentModel":
+    def fit(self, X, y, groups=None) -> MisalignmentModel:
         """Fit all components.
 
         Parameters

@@ -57,7 +57,7 @@ def blank_clearance(X: np.ndarray, columns: np.ndarray, share: float, seed: int)
     if share <= 0 or not columns.any():
         return X
     rows = np.random.default_rng(seed).random(X.shape[0]) < share
-    X[np.ix_(rows, columns)] = np.nan
+    X[np.ix_(np.asarray(rows), np.asarray(columns))] = np.nan
     return X
 
 
@@ -96,7 +96,8 @@ def cross_validate(table: FeatureTable, config: TrainConfig) -> OutOfFold:
         Xtr = blank_clearance(table.X[tr], clear_cols, config.clearance_dropout, config.seed + 1000 + f)
         model.fit(Xtr, table.misalignment[tr], groups=table.plant_id[tr])
         out.fold[te] = f
-        if clear_cols.any():
+        if out.proba_no_clearance is not None and out.delta_no_clearance is not None \
+                and out.interval_no_clearance is not None:
             Xnc = blank_clearance(table.X[te], clear_cols, 1.0, 0)
             out.proba_no_clearance[te] = model.predict_proba(Xnc)
             out.delta_no_clearance[te], out.interval_no_clearance[te] = model.predict_misalignment(Xnc)
@@ -159,7 +160,8 @@ def build_report(table: FeatureTable, config: TrainConfig, oof: OutOfFold) -> di
             groups[kind][name] = {"n_rows": int(sel.sum()), "n_plants": int(len(np.unique(table.plant_id[sel])))}
             if sel.any():
                 groups[kind][name].update(_method_metrics(oof, table, config, sel))
-    if oof.proba_no_clearance is not None:
+    if oof.proba_no_clearance is not None and oof.delta_no_clearance is not None \
+            and oof.interval_no_clearance is not None:
         names = config.bands.names
         pred_nc = np.asarray(names, dtype=object)[np.argmax(oof.proba_no_clearance, axis=1)]
         groups["clearance_unknown"] = {}

@@ -1,7 +1,7 @@
 """Classification, regression and calibration metrics used by the evaluation report."""
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from scipy.stats import spearmanr
@@ -53,8 +53,13 @@ def classification_metrics(
     over the bands present in ``y_true`` (a band absent from a subset has no recall).
     ``proba=None`` means hard labels (confidence 1) for the ECE.
     """
-    y_true = np.asarray(y_true, dtype=object)
-    y_pred = np.asarray(y_pred, dtype=object)
+    y_true_a = np.asarray(y_true, dtype=object)
+    y_pred_a = np.asarray(y_pred, dtype=object)
+    return _classification_metrics(y_true_a, y_pred_a, list(names), proba)
+
+
+def _classification_metrics(y_true: np.ndarray, y_pred: np.ndarray, names: list[str],
+                            proba: np.ndarray | None) -> dict:
     names = list(names)
     present = [n for n in names if np.any(y_true == n)]
     out: dict = {"n": int(y_true.shape[0])}
@@ -74,8 +79,8 @@ def classification_metrics(
         proba = np.zeros((len(y_pred), len(names)))
         proba[np.arange(len(y_pred)), [idx[v] for v in y_pred]] = 1.0
     out["ece"] = expected_calibration_error(proba, yi)
-    fault_true = y_true != names[0]
-    fault_pred = y_pred != names[0]
+    fault_true = np.asarray(y_true != names[0], dtype=bool)
+    fault_pred = np.asarray(y_pred != names[0], dtype=bool)
     det: dict = {}
     if fault_true.any():
         det["recall"] = float(np.mean(fault_pred[fault_true]))

@@ -7,17 +7,24 @@ verdict, and an out-of-distribution warning.
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
-from pathlib import Path
-from typing import Any, Mapping, Sequence
-
 import logging
 import weakref
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from rotordiag.features import evidence
+
 from .registry import Registry
+from .status import INCONCLUSIVE, assess, consistent_estimate
+
+if TYPE_CHECKING:
+    from .compiled import CompiledModel
+    from .estimators import MisalignmentModel
 
 
 @dataclass(frozen=True)
@@ -58,12 +65,20 @@ class FeatureContribution:
 
 @dataclass
 class Verdict:
-    """The diagnosis of one recording (JSON-able with :meth:`to_dict`)."""
+    """The diagnosis of one recording (JSON-able with :meth:`to_dict`).
+
+    ``status`` is ``confident``, ``uncertain`` or ``inconclusive`` (:mod:`models.status`),
+    ``reasons`` say why. An ``inconclusive`` verdict has ``severity == "inconclusive"`` and no
+    Δ / offset (``None``); its probabilities stay available. ``severity`` is the calibrated
+    classifier's class; ``misalignment`` is the Δ regressor's estimate clipped into that
+    class's band (``misalignment_model`` unclipped), so the two always agree. ``evidence`` is
+    model-independent (``features.evidence``).
+    """
 
     severity: str
     probabilities: dict[str, float]
-    misalignment: float
-    misalignment_interval: tuple[float, float]
+    misalignment: float | None
+    misalignment_interval: tuple[float | None, float | None]
     interval_level: float
     offset_um: float | None
     offset_interval_um: tuple[float, float] | None
@@ -75,6 +90,12 @@ class Verdict:
     model_version: str | None
     bands: dict
     warnings: list[str] = field(default_factory=list)
+    status: str = "confident"
+    reasons: list[dict] = field(default_factory=list)
+    evidence: list[dict] = field(default_factory=list)
+    misalignment_model: float | None = None
+    model_severity: str | None = None
+    speed_source: str | None = None
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -109,10 +130,10 @@ def _motion_type(feature_result) -> str | None:
     return str(mt)
 
 
-_COMPILED: "weakref.WeakKeyDictionary[Any, Any]" = weakref.WeakKeyDictionary()
+_COMPILED: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
 
 
-def fast_predictor(model) -> Any:
+def fast_predictor(model: MisalignmentModel) -> CompiledModel | MisalignmentModel:
     """The model's :class:`models.compiled.CompiledModel` (built once per model object), or
     the model itself when it cannot be compiled (same ``predict_proba``,
     ``predict_misalignment``, ``ood_ratio`` methods and results either way)."""
@@ -241,17 +262,38 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
         clearance_um = getattr(feature_result, "clearance_um", None)
     if clearance_um is not None and not (np.isfinite(clearance_um) and clearance_um > 0):
         raise ValueError(f"clearance_um: must be a positive number of micrometres, got {clearance_um!r}")
-    lo, hi = float(interval[0, 0]), float(interval[0, 1])
+    severity = str(model.classes_[cls])
+    bands = model.bands_
+    band = list(bands.names).index(severity) if severity in bands.names else cls
+    raw = float(point[0])
+    delta, (lo, hi), agree = consistent_estimate(band, bands.edges, raw, (float(interval[0, 0]),
+                                                                          float(interval[0, 1])))
+    status, reasons = assess(
+        sanity=getattr(feature_result, "sanity", ()) or (), ood_score=ood_score, probabilities=proba,
+        class_delta_agree=agree, names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
+        never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
+        warnings=warnings)
+    shown: float | None = delta
+    shown_iv: tuple[float | None, float | None] = (lo, hi)
+    if status == INCONCLUSIVE:
+        severity, shown, shown_iv = INCONCLUSIVE, None, (None, None)
     offset = offset_iv = None
-    if clearance_um is not None:
-        offset = float(point[0]) * float(clearance_um)
+    if clearance_um is not None and shown is not None:
+        offset = delta * float(clearance_um)
         offset_iv = (lo * float(clearance_um), hi * float(clearance_um))
     speed = getattr(feature_result, "speed_rpm", None)
+    ev = evidence(feature_result) if getattr(feature_result, "bearings", None) else []
     return Verdict(
-        severity=str(model.classes_[cls]),
+        status=status,
+        reasons=[r.to_dict() for r in reasons],
+        evidence=[e.to_dict() for e in ev],
+        misalignment_model=raw,
+        model_severity=str(model.classes_[cls]),
+        speed_source=getattr(feature_result, "speed_source", None),
+        severity=severity,
         probabilities={str(n): float(p) for n, p in zip(model.classes_, proba)},
-        misalignment=float(point[0]),
-        misalignment_interval=(lo, hi),
+        misalignment=shown,
+        misalignment_interval=shown_iv,
         interval_level=1.0 - float(model.regressor_.alpha),
         offset_um=offset,
         offset_interval_um=offset_iv,
@@ -266,19 +308,31 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     )
 
 
-def format_verdict(v: Verdict) -> str:
-    """Human-readable multi-line text of a verdict (for the CLI)."""
-    lines = [f"severity: {v.severity}"]
+def format_verdict(v: Verdict, output_units: str = "um") -> str:
+    """Human-readable multi-line text of a verdict (for the CLI); the offset in ``output_units`` (um | mil)."""
+    from rotordiag.core.units import um_to
+
+    unit = "mil" if output_units.strip().lower().startswith("mil") else "µm"
+    scale = float(um_to(1.0, "mil" if unit == "mil" else "um"))
+    lines = [f"status: {v.status}"]
+    for r in v.reasons:
+        lines.append(f"  {r['status']}: {r['message']}")
+    lines.append(f"severity: {v.severity}" + ("  (no severity: see the reasons and the evidence)"
+                                              if v.status == INCONCLUSIVE else ""))
     lines.append("probabilities: " + ", ".join(f"{k} {p:.2f}" for k, p in v.probabilities.items()))
     lo, hi = v.misalignment_interval
-    lines.append(
-        f"misalignment Δ = δ/c: {v.misalignment:.3f}  ({v.interval_level:.0%} interval {lo:.3f} – {hi:.3f})"
-    )
-    if v.offset_um is not None:
-        a, b = v.offset_interval_um
-        lines.append(f"offset δ: {v.offset_um:.1f} µm  ({a:.1f} – {b:.1f} µm)")
+    if v.misalignment is not None and lo is not None and hi is not None:
+        lines.append(
+            f"misalignment Δ = δ/c: {v.misalignment:.3f}  ({v.interval_level:.0%} interval {lo:.3f} – {hi:.3f})"
+        )
     else:
-        lines.append("offset δ: unknown (give the bearing clearance to convert Δ to µm)")
+        lines.append("misalignment Δ = δ/c: not given (inconclusive)")
+    if v.offset_um is not None and v.offset_interval_um is not None:
+        a, b = v.offset_interval_um
+        nd = 2 if unit == "mil" else 1
+        lines.append(f"offset δ: {v.offset_um * scale:.{nd}f} {unit}  ({a * scale:.{nd}f} – {b * scale:.{nd}f} {unit})")
+    else:
+        lines.append(f"offset δ: unknown (give the bearing clearance to convert Δ to {unit})")
     if v.speed_rpm is not None:
         lines.append(f"speed: {v.speed_rpm:.1f} r/min")
     lines.append(f"motion type: {v.motion_type or 'not determined'}")
@@ -291,4 +345,9 @@ def format_verdict(v: Verdict) -> str:
         lines.append(f"model: {v.model_version}")
     for w in v.warnings:
         lines.append(f"warning: {w}")
+    if v.evidence:
+        lines.append("evidence (measured, independent of the model):")
+        for e in v.evidence:
+            lines.append(f"  {e['scope']:<14s} {e['name']:<24s} {e['value']}")
+            lines.append(f"  {'':<14s} {'':<24s} → {e['meaning']}")
     return "\n".join(lines)

@@ -20,16 +20,23 @@ files are replaced the same way. Models are loaded with skops and the explicit
 """
 from __future__ import annotations
 
+import builtins
 import json
 import os
 import re
 import shutil
 import tempfile
 import zipfile
+from collections.abc import Mapping
 from dataclasses import dataclass
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any
+
+from ._sklearn_private import PRIVATE_TRUSTED_TYPES
+
+if TYPE_CHECKING:
+    from .estimators import MisalignmentModel
 
 MODEL_FILE = "model.skops"
 CARD_FILE = "card.json"
@@ -40,17 +47,34 @@ _VERSION_RE = re.compile(r"^v(\d{4,})$")
 #: Every type a rotordiag model file may contain beyond skops' default-trusted ones.
 #: Loading refuses files holding anything else (checked before any object is built).
 TRUSTED_TYPES: tuple[str, ...] = (
-    "models.bands.SeverityBands",
-    "models.estimators.ConformalIntervalRegressor",
-    "models.estimators.KNNDistanceOOD",
-    "models.estimators.MisalignmentModel",
-    "models.estimators.SeverityClassifier",
+    "rotordiag.core.bands.SeverityBands",
+    "rotordiag.models.estimators.ConformalIntervalRegressor",
+    "rotordiag.models.estimators.KNNDistanceOOD",
+    "rotordiag.models.estimators.MisalignmentModel",
+    "rotordiag.models.estimators.SeverityClassifier",
     "numpy.dtype",
-    "sklearn.calibration._CalibratedClassifier",
-    "sklearn.calibration._SigmoidCalibration",
-    "sklearn.calibration._TemperatureScaling",
-    "sklearn.ensemble._hist_gradient_boosting.predictor.TreePredictor",
+    *PRIVATE_TRUSTED_TYPES,
 )
+
+
+def _version_number(name: str) -> int:
+    """The number of a version directory name (``"v0012"`` → 12)."""
+    m = _VERSION_RE.match(name)
+    if m is None:
+        raise RegistryError(f"{name!r} is not a version name (v0001, v0002, ...)")
+    return int(m.group(1))
+
+
+def shipped_registry_dir() -> Path:
+    """Directory of the default model registry shipped inside the package.
+
+    Found through :mod:`importlib.resources`, so it works from a checkout (editable
+    install) and from an installed wheel alike. The package is always installed
+    unzipped, so the resource is a real directory.
+    """
+    from importlib.resources import files
+
+    return Path(str(files("rotordiag.models") / "default_registry"))
 
 
 class RegistryError(ValueError):
@@ -98,29 +122,52 @@ def dumps_json(obj: Any) -> str:
     return json.dumps(obj, indent=2, default=_json_default, allow_nan=True) + "\n"
 
 
-def load_model_file(path: str | Path):
-    """Load a model file with the explicit trusted-types list.
+def load_model_bytes(data: bytes, name: str = "<bytes>") -> MisalignmentModel:
+    """Load a skops model from bytes with the explicit trusted-types list.
+
+    A file written before the ``rotordiag.*`` rename (type names ``models.*``) is mapped
+    to the current names first (:mod:`rotordiag.models.legacy`, a fixed table of this
+    package's own classes); the trusted-types list is never widened.
+
+    Raises
+    ------
+    RegistryError
+        If the data is not a readable skops file or contains a type outside :data:`TRUSTED_TYPES`.
+    """
+    import skops.io as sio
+    from skops.io.exceptions import UntrustedTypesFoundException
+
+    from .legacy import renamed_skops_bytes
+
+    try:
+        data, _ = renamed_skops_bytes(data)
+    except Exception as exc:  # noqa: BLE001 - any parse failure is a bad file
+        raise RegistryError(f"model file {name} is not a readable skops file ({exc})") from None
+    try:
+        # skops audits the whole tree against ``trusted`` before constructing anything, so one
+        # parse does (checking with get_untrusted_types first parsed the schema twice: ~0.3 s)
+        return sio.loads(data, trusted=list(TRUSTED_TYPES))
+    except UntrustedTypesFoundException:
+        extra = sorted(set(sio.get_untrusted_types(data=data)) - set(TRUSTED_TYPES))
+        raise RegistryError(
+            f"model file {name} contains types outside the trusted list: {extra}; refusing to load it"
+        ) from None
+    except Exception as exc:  # noqa: BLE001 - any parse failure is a bad file
+        raise RegistryError(f"model file {name} is not a readable skops file ({exc})") from None
+
+
+def load_model_file(path: str | Path) -> MisalignmentModel:
+    """Load a model file with the explicit trusted-types list (see :func:`load_model_bytes`).
 
     Raises
     ------
     RegistryError
         If the file is missing, unreadable, or contains a type outside :data:`TRUSTED_TYPES`.
     """
-    import skops.io as sio
-
     path = Path(path)
     if not path.is_file():
         raise RegistryError(f"model file {path} does not exist")
-    try:
-        untrusted = sio.get_untrusted_types(file=path)
-    except Exception as exc:  # noqa: BLE001 - any parse failure is a bad file
-        raise RegistryError(f"model file {path} is not a readable skops file ({exc})") from None
-    extra = sorted(set(untrusted) - set(TRUSTED_TYPES))
-    if extra:
-        raise RegistryError(
-            f"model file {path} contains types outside the trusted list: {extra}; refusing to load it"
-        )
-    return sio.load(path, trusted=list(TRUSTED_TYPES))
+    return load_model_bytes(path.read_bytes(), str(path))
 
 
 class Registry:
@@ -136,12 +183,12 @@ class Registry:
         self.root = Path(root)
 
     # ------------------------------------------------------------------ reading
-    def versions(self) -> list[str]:
+    def versions(self) -> builtins.list[str]:
         """Version names, oldest first."""
         if not self.root.is_dir():
             return []
         names = [p.name for p in self.root.iterdir() if p.is_dir() and _VERSION_RE.match(p.name)]
-        return sorted(names, key=lambda n: int(_VERSION_RE.match(n).group(1)))
+        return sorted(names, key=_version_number)
 
     def active_version(self) -> str | None:
         """Name of the active version, or ``None`` when nothing is active."""
@@ -219,7 +266,7 @@ class Registry:
         """
         import skops.io as sio
 
-        from rotordiag import code_version
+        from rotordiag.core.version import code_version
 
         self.root.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(dir=self.root, prefix=".incoming-"))
@@ -244,11 +291,11 @@ class Registry:
             # so two writers racing for one name cannot overwrite each other.
             for _ in range(100):
                 existing = self.versions()
-                n = int(_VERSION_RE.match(existing[-1]).group(1)) + 1 if existing else 1
+                n = _version_number(existing[-1]) + 1 if existing else 1
                 version = f"v{n:04d}"
                 full = dict(card)
                 full["version"] = version
-                full.setdefault("created", datetime.now(timezone.utc).isoformat(timespec="seconds"))
+                full.setdefault("created", datetime.now(UTC).isoformat(timespec="seconds"))
                 full.setdefault("code_version", code_version())
                 (tmp / CARD_FILE).write_text(dumps_json(full), encoding="utf-8")
                 try:
@@ -267,7 +314,7 @@ class Registry:
             self.activate(version)
         return version
 
-    def _history(self) -> list[str]:
+    def _history(self) -> builtins.list[str]:
         p = self.root / HISTORY_FILE
         if not p.is_file():
             return []

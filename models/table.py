@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 import fnmatch
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 
@@ -54,15 +54,19 @@ class FeatureTable:
     def __len__(self) -> int:
         return self.X.shape[0]
 
-    def subset(self, rows) -> "FeatureTable":
+    def _sample_index(self) -> np.ndarray:
+        assert self.sample_index is not None  # set by __post_init__
+        return self.sample_index
+
+    def subset(self, rows) -> FeatureTable:
         """Rows selected by a boolean mask or index array."""
         return FeatureTable(
             self.X[rows], self.feature_names, self.misalignment[rows], self.plant_id[rows],
-            self.mechanism[rows], self.speed_rpm[rows], self.sample_index[rows], dict(self.meta),
+            self.mechanism[rows], self.speed_rpm[rows], self._sample_index()[rows], dict(self.meta),
         )
 
     @classmethod
-    def concat(cls, tables: Sequence["FeatureTable"]) -> "FeatureTable":
+    def concat(cls, tables: Sequence[FeatureTable]) -> FeatureTable:
         """Rows of several tables (same feature names) in one; ``meta["sources"]`` lists
         each table's meta and ``meta["source"]`` the table index of each row."""
         tables = list(tables)
@@ -92,7 +96,7 @@ class FeatureTable:
         """Boolean mask of the columns whose names match any glob pattern."""
         return np.array([any(fnmatch.fnmatchcase(n, p) for p in patterns) for n in self.feature_names], bool)
 
-    def without_features(self, patterns: Sequence[str]) -> "FeatureTable":
+    def without_features(self, patterns: Sequence[str]) -> FeatureTable:
         """Drop the columns whose names match any glob pattern."""
         if not patterns:
             return self

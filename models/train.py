@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import tempfile
 import time
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -18,12 +19,12 @@ def metrics_summary(report: dict) -> dict:
     """The headline figures of a report, for the model card."""
 
     def pick(r: dict) -> dict:
-        out = {}
+        out: dict[str, Any] = {}
         for m in METHODS:
             if m in r:
                 out[m] = {k: r[m].get(k) for k in ("macro_f1", "ece", "delta_mae", "spearman")}
                 out[m]["recall"] = r[m].get("recall")
-        if "model" in r:
+        if "model" in r and out.get("model") is not None:
             out["model"]["interval_coverage"] = r["model"].get("interval_coverage")
             out["model"]["ood_flag_rate"] = r["model"].get("ood_flag_rate")
         out["n_rows"] = r.get("n_rows")
@@ -87,7 +88,7 @@ def train_and_register(
         png_bytes = png.read_bytes()
     meta = table.meta
     card = {
-        "model_class": "models.estimators.MisalignmentModel",
+        "model_class": "rotordiag.models.estimators.MisalignmentModel",
         "training_data": {
             "path": meta.get("dataset_path"),
             "hash": meta.get("dataset_hash"),

@@ -17,11 +17,11 @@ app = typer.Typer(
 
 
 def _register_all() -> None:
-    from models import cli as models_cli
-    from service import cli as service_cli
-    from simulator import cli as simulator_cli
-    from simulator.analysis import cli as analysis_cli
-    from simulator.dataset import cli as dataset_cli
+    from rotordiag.models import cli as models_cli
+    from rotordiag.service import cli as service_cli
+    from rotordiag.simulator import cli as simulator_cli
+    from rotordiag.simulator.analysis import cli as analysis_cli
+    from rotordiag.simulator.dataset import cli as dataset_cli
 
     for module in (simulator_cli, analysis_cli, dataset_cli, models_cli, service_cli):
         module.register(app)

@@ -22,7 +22,7 @@ def register(app: typer.Typer) -> None:
         import uvicorn
         from pydantic import ValidationError
 
-        from service.core.config import Settings
+        from rotordiag.service.core.config import Settings
 
         try:
             settings = Settings()
@@ -35,7 +35,7 @@ def register(app: typer.Typer) -> None:
             # one's running jobs interrupted at its startup). Diagnoses use every core through the
             # diagnosis worker processes (ROTORDIAG_DIAGNOSIS_WORKERS, service/pool.py); jobs scale out
             # on Dask.
-            uvicorn.run("service.main:app", host=host, port=port,
+            uvicorn.run("rotordiag.service.main:app", host=host, port=port,
                         log_level=settings.log_level.lower(), access_log=False)
         except OSError as exc:  # e.g. address in use
             typer.secho(f"error: cannot listen on {host}:{port}: {exc}", fg="red", err=True)

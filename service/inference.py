@@ -10,9 +10,12 @@ import logging
 import shutil
 import threading
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .core.config import Settings
+
+if TYPE_CHECKING:
+    from rotordiag.models.predict import ModelBundle
 
 log = logging.getLogger("rotordiag.service")
 
@@ -31,7 +34,7 @@ class ModelStore:
     """
 
     def __init__(self, root: Path) -> None:
-        from models.registry import Registry
+        from rotordiag.models.registry import Registry
 
         self.root = Path(root)
         self.registry = Registry(self.root)
@@ -39,7 +42,7 @@ class ModelStore:
         self._lock = threading.Lock()
 
     @classmethod
-    def open(cls, settings: Settings) -> "ModelStore":
+    def open(cls, settings: Settings) -> ModelStore:
         """Open ``settings.registry_dir``, seeding it from the shipped registry when it is empty.
 
         The shipped registry is copied rather than used in place so activating or
@@ -68,7 +71,7 @@ class ModelStore:
 
     def versions(self) -> list[dict[str, Any]]:
         """Cards of every registered version, oldest first, with an ``active`` flag."""
-        from models.registry import RegistryError
+        from rotordiag.models.registry import RegistryError
 
         out = []
         for v in self.registry.versions():
@@ -87,10 +90,10 @@ class ModelStore:
             raise KeyError(version)
         self.registry.activate(version)
 
-    def load(self, version: str | None = None) -> Any:
+    def load(self, version: str | None = None) -> ModelBundle:
         """The ``models.predict.ModelBundle`` of ``version`` or the active model, loaded once and cached."""
-        from models.predict import ModelBundle
-        from models.registry import RegistryError
+        from rotordiag.models.predict import ModelBundle
+        from rotordiag.models.registry import RegistryError
 
         if version is None:
             version = self.active_version()
@@ -127,8 +130,8 @@ class ModelStore:
         ModelUnavailable
             No model to diagnose with.
         """
-        from features import extract_features
-        from models.predict import diagnose
+        from rotordiag.features import extract_features
+        from rotordiag.models.predict import diagnose
 
         bundle = self.load(version)
         fr = extract_features(recording)

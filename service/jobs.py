@@ -18,8 +18,9 @@ import logging
 import threading
 import traceback
 import uuid
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any, Callable
+from typing import Any
 
 from sqlalchemy import func, select, update
 from sqlalchemy.orm import sessionmaker
@@ -41,7 +42,7 @@ class JobInterrupted(Exception):
 class JobContext:
     """What a work function gets: settings, Dask client, model store, progress reporting."""
 
-    def __init__(self, manager: "JobManager", job_id: str) -> None:
+    def __init__(self, manager: JobManager, job_id: str) -> None:
         self._manager = manager
         self.job_id = job_id
         self.settings = manager.settings

@@ -12,10 +12,11 @@ from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
 
-from rotordiag import __version__
+from rotordiag.core.version import __version__
 
 from .api.errors import install_error_handlers
 from .api.routes import assets, diagnose, health, jobs, models
+from .api.routes.docs import install_docs
 from .core.config import Settings
 from .core.limits import BodySizeLimitMiddleware
 from .metrics import install_metrics
@@ -64,6 +65,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         version=__version__,
         description=DESCRIPTION,
         lifespan=lifespan,
+        docs_url=None,       # /docs from the installed Swagger UI (service/api/routes/docs.py), never a CDN
+        redoc_url=None,
         openapi_tags=[
             {"name": "diagnose", "description": "Diagnose probe waveforms."},
             {"name": "jobs", "description": "Dataset generation and retraining jobs (run on Dask)."},
@@ -77,6 +80,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     for router in (diagnose.router, jobs.router, models.router, assets.router, health.router):
         app.include_router(router)
     app.include_router(web_router)  # the web page at / (issue 7; service/web, docs/web.md)
+    install_docs(app)
     install_metrics(app)
     # Added last = outermost of the user middleware: bytes are counted before anything reads them.
     app.add_middleware(BodySizeLimitMiddleware, max_body_bytes=settings.max_body_bytes)

@@ -23,6 +23,7 @@ request it held is retried once on a live worker.
 from __future__ import annotations
 
 import asyncio
+import atexit
 import collections
 import logging
 import multiprocessing
@@ -31,12 +32,24 @@ import pickle
 import socket
 import struct
 import traceback
+import weakref
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .inference import ModelStore
 
 log = logging.getLogger("rotordiag.service")
 
-_STORE = None   # the worker process's ModelStore
+_STORE: ModelStore | None = None   # the worker process's ModelStore
+
+
+def _store() -> ModelStore:
+    """The worker's model store (set by :func:`_init_worker`)."""
+    if _STORE is None:
+        raise RuntimeError("diagnosis worker used before _init_worker ran")
+    return _STORE
 _HEADER = struct.Struct("!Q")
 
 
@@ -53,12 +66,11 @@ def _init_worker(registry_root: str) -> None:
 
 def _warm(version: str | None) -> None:
     """Load ``version`` and compile its fast predictor before the first request needs it."""
-    from models.predict import fast_predictor
-
-    import features  # noqa: F401  (numba kernels load from their cache)
+    from rotordiag import features  # noqa: F401  (numba kernels load from their cache)
+    from rotordiag.models.predict import fast_predictor
 
     if version is not None:
-        fast_predictor(_STORE.load(version).model)
+        fast_predictor(_store().load(version).model)
 
 
 def _load_check(version: str) -> str | None:
@@ -86,7 +98,7 @@ def _work(kind: str, body: bytes, filename: str, query: dict[str, Any], version:
 
     try:
         recording, asset_id, plant = parse_body(kind, body, filename, query)
-        verdict = _STORE.diagnose(recording, version)
+        verdict = _store().diagnose(recording, version)
     except InputError as exc:
         return ("input", exc.status_code, str(exc))
     except HTTPException as exc:
@@ -98,7 +110,7 @@ def _work(kind: str, body: bytes, filename: str, query: dict[str, Any], version:
     return ("ok", verdict, asset_id, plant)
 
 
-_CALLS = {"work": _work, "check": _load_check}
+_CALLS: dict[str, Callable[..., Any]] = {"work": _work, "check": _load_check}
 
 
 def _recv_exact(sock: socket.socket, n: int) -> bytes | None:
@@ -141,6 +153,28 @@ class WorkerCrashed(RuntimeError):
     """A diagnosis worker process died on a request (reported as 503)."""
 
 
+_LIVE_WORKERS: weakref.WeakSet[_Worker] = weakref.WeakSet()
+_AT_EXIT_REGISTERED = False
+
+
+def _stop_workers_at_exit() -> None:
+    """Close the sockets of workers still running when the server exits.
+
+    Workers are not daemonic (a daemonic process may not start the sandbox child that
+    decodes HDF5, :mod:`rotordiag.features.sandbox`), so multiprocessing would wait for
+    them at exit; closing their socket makes them return at once. Registered after
+    multiprocessing's own exit handler, so it runs before it.
+    """
+    for w in list(_LIVE_WORKERS):
+        try:
+            w.sock.close()
+        except OSError:
+            pass
+        w.process.join(2.0)
+        if w.process.is_alive():
+            w.process.kill()
+
+
 class _Worker:
     """One worker process and the server's end of its socket.
 
@@ -154,9 +188,14 @@ class _Worker:
         parent, child = socket.socketpair()
         ctx = multiprocessing.get_context("spawn")
         self.process = ctx.Process(target=_worker_main, args=(child, str(registry_root), version),
-                                   name="rotordiag-diagnosis", daemon=True)
+                                   name="rotordiag-diagnosis", daemon=False)
         self.process.start()
         child.close()
+        global _AT_EXIT_REGISTERED
+        if not _AT_EXIT_REGISTERED:
+            atexit.register(_stop_workers_at_exit)
+            _AT_EXIT_REGISTERED = True
+        _LIVE_WORKERS.add(self)
         parent.setblocking(False)
         self.sock = parent
         self.depth = depth
@@ -249,7 +288,7 @@ class DiagnosisPool:
 
     def pids(self) -> list[int]:
         """Process ids of the workers."""
-        return [w.process.pid for w in self._workers]
+        return [w.process.pid for w in self._workers if w.process.pid is not None]
 
     def _replace(self, w: _Worker) -> None:
         if self._closing or w not in self._workers:

@@ -19,6 +19,15 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
+class SlowRollIn(_Strict):
+    """A slow-roll (runout) vector of one probe, to be subtracted from its fitted order."""
+
+    order: Literal[1, 2] = Field(..., description="Order: 1 (1X) or 2 (2X).")
+    amp_um_pp: FiniteFloat = Field(..., ge=0, le=10_000, description="Slow-roll amplitude, micrometres peak-to-peak.")
+    phase_deg: FiniteFloat = Field(..., ge=-360, le=720, description="Slow-roll phase lag, degrees, from the same "
+                                   "keyphasor reference as `keyphasor_times_s`.")
+
+
 class ChannelIn(_Strict):
     """One proximity probe."""
 
@@ -35,6 +44,9 @@ class ChannelIn(_Strict):
         ..., min_length=1, max_length=MAX_POINTS,
         description=f"Probe gap signal in `units`, uniformly sampled at `sample_rate_hz`; at most {MAX_POINTS} samples; "
         "all channels must have the same length. Finite numbers only.")
+    slow_roll: list[SlowRollIn] | None = Field(
+        None, max_length=2, description="Optional slow-roll (runout) 1X/2X vectors of this probe, subtracted as "
+        "vectors from the fitted orders; needs `keyphasor_times_s` (the phases are keyphasor-referenced).")
 
 
 class RecordingIn(_Strict):
@@ -183,16 +195,51 @@ class BearingOut(BaseModel):
         "null when not measurable). Definitions: docs/features.md.")
 
 
+class ReasonOut(BaseModel):
+    """Why a verdict is not `confident`."""
+
+    code: str = Field(..., description="Stable identifier, e.g. `orbit_exceeds_clearance`, `flat_channel`, "
+                      "`clipped_channel`, `reverse_whirl_all`, `ood`, `scale`, `speed_ambiguous`, `low_probability`.")
+    status: Literal["uncertain", "inconclusive"] = Field(..., description="What this reason alone makes of the verdict.")
+    message: str = Field(..., description="What was found and what to check.")
+
+
+class EvidenceOut(BaseModel):
+    """One measured signature, independent of the ML model."""
+
+    scope: str = Field(..., description="`bearing N` or `coupling 2–3`.")
+    name: str = Field(..., description="What is measured, e.g. `1X x`, `2X/1X`, `1X phase difference y`, "
+                      "`orbit shape`, `shaft centreline`.")
+    value: str = Field(..., description="The measurement with units (amplitudes µm peak-to-peak, phase lag in degrees).")
+    meaning: str = Field(..., description="What it usually means.")
+    number: float | None = Field(None, description="The main number (µm pk-pk, ratio, degrees or eccentricity ratio).")
+
+
 class DiagnoseResponse(BaseModel):
     """The verdict of the active (or requested) model, from ``models.predict.diagnose``."""
 
     model_config = ConfigDict(protected_namespaces=())
 
+    status: Literal["confident", "uncertain", "inconclusive"] = Field(
+        "confident", description="`inconclusive`: a physics sanity check failed or the recording is far outside what "
+        "the model knows — no severity is given, read `reasons` and `evidence`; `uncertain`: a severity is given but "
+        "`reasons` say why to doubt it; `confident`: none of these.")
+    reasons: list[ReasonOut] = Field(default_factory=list, description="Why the verdict is not confident, worst first.")
+    evidence: list[EvidenceOut] = Field(default_factory=list, description="Measured signatures (1X/2X vectors, 2X/1X, "
+                                        "phase across the coupling, orbit shape, shaft centreline), each with what it "
+                                        "usually means; independent of the ML model.")
     severity: str = Field(..., description="Severity class by the model's Δ bands (default: aligned Δ < 0.05, "
-                          "slight 0.05-0.15, moderate 0.15-0.35, severe ≥ 0.35).", examples=["slight"])
+                          "slight 0.05-0.15, moderate 0.15-0.35, severe ≥ 0.35), or `inconclusive` when `status` is "
+                          "inconclusive.", examples=["slight"])
+    model_severity: str | None = Field(None, description="The classifier's class even when `status` is inconclusive "
+                                       "(for audit; do not act on it then).")
+    misalignment_model: float | None = Field(None, description="The Δ regressor's own estimate; `misalignment` is it "
+                                             "clipped into the band of `severity`, so class and Δ always agree.")
+    speed_source: str | None = Field(None, description="`keyphasor`, `given` or `estimated`.")
     probabilities: dict[str, float] = Field(..., description="Calibrated probability of each severity class (sum 1).")
     misalignment: float | None = Field(..., description="Estimated misalignment Δ = δ/c (offset over radial "
-                                       "clearance, non-dimensional).")
+                                       "clearance, non-dimensional), inside the band of `severity`; null when "
+                                       "inconclusive.")
     misalignment_interval: list[float | None] = Field(..., min_length=2, max_length=2,
                                                       description="[low, high] interval of Δ at `interval_level` "
                                                       "(null: unbounded on that side).")

@@ -29,7 +29,7 @@ class AppState:
     pool: DiagnosisPool | None = None  # diagnosis worker processes (settings.diagnosis_workers > 0)
 
     @classmethod
-    def start(cls, settings: Settings) -> "AppState":
+    def start(cls, settings: Settings) -> AppState:
         """Create the data directory and tables, open the registry, recover interrupted jobs."""
         _configure_logging(settings.log_level)
         settings.data_dir.mkdir(parents=True, exist_ok=True)

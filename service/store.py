@@ -2,11 +2,16 @@
 from __future__ import annotations
 
 import datetime as dt
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from sqlalchemy import select
 
 from .core.db import AssetDiagnosis
+
+if TYPE_CHECKING:
+    from sqlalchemy.orm import Session
+
+    from .state import AppState
 
 
 def _num(value: Any) -> float | None:
@@ -16,7 +21,7 @@ def _num(value: Any) -> float | None:
         return None
 
 
-def store_diagnosis(state: Any, asset_id: str, plant: str | None, verdict: dict[str, Any]) -> None:
+def store_diagnosis(state: AppState, asset_id: str, plant: str | None, verdict: dict[str, Any]) -> None:
     """Store one verdict for ``asset_id`` (time, verdict, key features, model version)."""
     interval = verdict.get("misalignment_interval") or (None, None)
     row = AssetDiagnosis(
@@ -32,12 +37,12 @@ def store_diagnosis(state: Any, asset_id: str, plant: str | None, verdict: dict[
         s.add(row)
 
 
-def asset_history(session: Any, asset_id: str, limit: int, since: dt.datetime | None) -> list[AssetDiagnosis]:
+def asset_history(session: Session, asset_id: str, limit: int, since: dt.datetime | None) -> list[AssetDiagnosis]:
     """The latest ``limit`` diagnoses of ``asset_id`` (after ``since``), oldest first."""
     q = select(AssetDiagnosis).where(AssetDiagnosis.asset_id == asset_id)
     if since is not None:
         if since.tzinfo is None:
-            since = since.replace(tzinfo=dt.timezone.utc)
+            since = since.replace(tzinfo=dt.UTC)
         q = q.where(AssetDiagnosis.created_at >= since)
     q = q.order_by(AssetDiagnosis.created_at.desc(), AssetDiagnosis.id.desc()).limit(limit)
     rows = list(session.scalars(q))

@@ -44,7 +44,7 @@ def _spec_toml_from_dict(spec: dict[str, Any]) -> str:
 def _validate_spec_text(text: str) -> Any:
     import tomllib
 
-    from simulator.dataset.spec import SpecError, parse_spec
+    from rotordiag.simulator.dataset.spec import SpecError, parse_spec
 
     try:
         raw = tomllib.loads(text)
@@ -80,9 +80,8 @@ def _deep_merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any
 
 def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
     """Validate a POST /models/retrain body (plant, sweep, training options, field data)."""
-    from simulator import Plant
-
-    from models.config import TrainConfig
+    from rotordiag.models.config import TrainConfig
+    from rotordiag.simulator import Plant
 
     try:
         plant = Plant.default().replace(**body.plant) if body.plant else Plant.default()
@@ -136,8 +135,8 @@ def _generate(spec_toml: str, out, ctx, lo: float, hi: float) -> dict[str, Any]:
     """Run the dataset package's ``generate`` on the job manager's Dask cluster (resumable)."""
     import dataclasses
 
-    from simulator.dataset.generate import generate
-    from simulator.dataset.spec import parse_spec
+    from rotordiag.simulator.dataset.generate import generate
+    from rotordiag.simulator.dataset.spec import parse_spec
 
     resolved = parse_spec(spec_toml)
     n = resolved.spec.design.n_samples
@@ -152,7 +151,7 @@ def _generate(spec_toml: str, out, ctx, lo: float, hi: float) -> dict[str, Any]:
     result["spec_hash"] = resolved.spec_hash
     result["complete"] = summary.complete
     if summary.complete:
-        from simulator.dataset.info import summarize
+        from rotordiag.simulator.dataset.info import summarize
 
         result["summary"] = summarize(out)
     if not summary.complete:
@@ -179,9 +178,9 @@ def run_retrain(params: dict[str, Any], ctx) -> dict[str, Any]:
     Uses the models package's ``load_feature_table`` (cached features next to the dataset) and
     ``train_and_register`` (held-out-plant evaluation, final fit, registry write).
     """
-    from models.config import TrainConfig
-    from models.dataset import load_feature_table
-    from models.train import train_and_register
+    from rotordiag.models.config import TrainConfig
+    from rotordiag.models.dataset import load_feature_table
+    from rotordiag.models.train import train_and_register
 
     out = ctx.settings.datasets_dir / f"retrain-{ctx.job_id}.h5"
     dataset = _generate(params["spec_toml"], out, ctx, 0.0, 0.6)
@@ -221,8 +220,8 @@ def _with_field_rows(table, field: list[dict[str, Any]]):
     """Append field-labelled recordings (features by name, one extra plant group) to a feature table."""
     import numpy as np
 
-    from features import extract_features
-    from models.table import FeatureTable
+    from rotordiag.features import extract_features
+    from rotordiag.models.table import FeatureTable
 
     from .parsing import recording_from_model
     from .schemas import RecordingIn

@@ -11,9 +11,18 @@ State vector (22 entries, every mechanism)::
     q = [X1, Y1, X2, Y2, X4, Y4, X5, Y5, X6, Y6, φ]   y = [q, q']
 
 Node 3 is not a coordinate: it follows from node 4 and the coupling
-(``pin``: r3 = r4 + Δ e_r(φ); ``rigid``: φ = τ + φ0; ``aligned``: r3 = r4).
-For ``rigid`` φ is still integrated (φ' = 1) so the state has one layout; for
-``aligned`` φ stays constant.
+(``pin``: r3 = r4 + Δ e_r(φ); ``rigid``: φ = τ + φ0; ``aligned`` and
+``offset``: r3 = r4). For ``rigid`` φ is still integrated (φ' = 1) so the
+state has one layout; for ``aligned`` and ``offset`` φ stays constant.
+``offset`` differs from ``aligned`` only in the packed bearing centres (the
+exciter's are displaced by Δ in direction φ0: a stationary shaft-line offset).
+
+``flexible`` (26 entries) keeps the stationary offset of ``offset`` but joins
+nodes 3 and 4 by a flexible coupling of radial stiffness k_c and damping c_c,
+with the kinematic 2X excitation of a double-engagement flexible coupling:
+the relative hub displacement the coupling "wants" is u(τ) = (Δ/2)·[cos(2τ+ψ) e_δ
++ sin(2τ+ψ) e_⊥] (e_δ the offset direction), so the coupling force on node 3 is
+F3 = k_c (r4 − r3 − u(τ)) + c_c (r4' − r3') and F4 = −F3 (docs/model.md).
 """
 from __future__ import annotations
 
@@ -22,7 +31,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .config import NUMBA_OPTIONS
+from rotordiag.core.numerics import NUMBA_OPTIONS
 
 # ----------------------------------------------------------------- parameter layout
 P_M1, P_MD1, P_M3, P_M4, P_MD2, P_M6 = 0, 1, 2, 3, 4, 5  # m1, M1, m3, m4, M2, m6 (kg)
@@ -45,11 +54,16 @@ P_KLIN = 31     # linear bearing stiffness / Ω² (kg)
 P_CLIN = 32     # linear bearing damping / Ω (kg)
 P_MECH = 33     # 0 aligned, 1 pin, 2 rigid
 P_BMODEL = 34   # 0 short (Capone), 1 linear springs
-N_PARAMS = 35
+P_KC = 35       # flexible coupling radial stiffness k_c / Ω² (kg)
+P_CC = 36       # flexible coupling radial damping c_c / Ω (kg)
+P_PSI = 37      # ψ, phase of the flexible coupling's 2X excitation (rad)
+N_PARAMS = 38
 
-MECH_ALIGNED, MECH_PIN, MECH_RIGID = 0, 1, 2
+MECH_ALIGNED, MECH_PIN, MECH_RIGID, MECH_OFFSET, MECH_FLEXIBLE = 0, 1, 2, 3, 4
 BEARING_SHORT, BEARING_LINEAR = 0, 1
 N_STATE = 22
+#: ``flexible`` adds node 3 as a coordinate: y = [22 entries as above, X3, Y3, X3', Y3'].
+N_STATE_FLEXIBLE = 26
 N_Q = 11
 
 STATUS_OK, STATUS_CONTACT, STATUS_DIVERGED = 0, 1, 2
@@ -107,8 +121,10 @@ def bearing_force(p, b, X, Y, Xd, Yd):
 def node3(tau, y, p):
     """Position and velocity of node 3 (X3, Y3, X3', Y3') from the coupling."""
     mech = p[P_MECH]
+    if mech == MECH_FLEXIBLE:
+        return y[22], y[23], y[24], y[25]
     X4, Y4, V4x, V4y = y[4], y[5], y[15], y[16]
-    if mech == MECH_ALIGNED:
+    if mech == MECH_ALIGNED or mech == MECH_OFFSET:
         return X4, Y4, V4x, V4y
     d = p[P_DELTA]
     if mech == MECH_PIN:
@@ -120,6 +136,32 @@ def node3(tau, y, p):
     c = math.cos(phi)
     s = math.sin(phi)
     return X4 + d * c, Y4 + d * s, V4x - d * phid * s, V4y + d * phid * c
+
+
+@njit(**NUMBA_OPTIONS)
+def coupling_excitation(tau, p):
+    """u(τ) and u'(τ): the 2X relative hub displacement of the ``flexible`` coupling
+    (radius Δ/2, phase ψ, turning at 2Ω in the frame of the offset direction φ0)."""
+    h = 0.5 * p[P_DELTA]
+    a = 2.0 * tau + p[P_PSI]
+    ca, sa = math.cos(a), math.sin(a)
+    ce, se = math.cos(p[P_PHI0]), math.sin(p[P_PHI0])
+    # e_δ = (ce, se), e_⊥ = (−se, ce)
+    ux = h * (ca * ce - sa * se)
+    uy = h * (ca * se + sa * ce)
+    return ux, uy, -2.0 * uy, 2.0 * ux
+
+
+@njit(**NUMBA_OPTIONS)
+def coupling_force(tau, y, p):
+    """Scaled force of the ``flexible`` coupling on node 3 (the reaction −F acts on node 4):
+    F3 = k_c (r4 − r3 − u(τ)) + c_c (r4' − r3' − u'(τ))."""
+    ux, uy, udx, udy = coupling_excitation(tau, p)
+    kc = p[P_KC]
+    cc = p[P_CC]
+    fx = kc * (y[4] - y[22] - ux) + cc * (y[15] - y[24] - udx)
+    fy = kc * (y[5] - y[23] - uy) + cc * (y[16] - y[25] - udy)
+    return fx, fy
 
 
 @njit(**NUMBA_OPTIONS)
@@ -171,6 +213,14 @@ def rhs(tau, y, p, dy):
     F6x = k2 * e56x + b4x
     F6y = k2 * e56y + b4y - m6 * g
 
+    mech = p[P_MECH]
+    if mech == MECH_FLEXIBLE:
+        fcx, fcy = coupling_force(tau, y, p)
+        F3x += fcx
+        F3y += fcy
+        F4x -= fcx
+        F4y -= fcy
+
     for i in range(N_Q):
         dy[i] = y[N_Q + i]
     dy[11] = F1x / m1
@@ -182,9 +232,16 @@ def rhs(tau, y, p, dy):
     dy[19] = F6x / m6
     dy[20] = F6y / m6
 
-    mech = p[P_MECH]
     m34 = m3 + m4
-    if mech == MECH_PIN:
+    if mech == MECH_FLEXIBLE:
+        dy[15] = F4x / m4
+        dy[16] = F4y / m4
+        dy[21] = 0.0
+        dy[22] = y[24]
+        dy[23] = y[25]
+        dy[24] = F3x / m3
+        dy[25] = F3y / m3
+    elif mech == MECH_PIN:
         d = p[P_DELTA]
         phi = y[10]
         phid = y[21]
@@ -206,6 +263,28 @@ def rhs(tau, y, p, dy):
         dy[15] = (F3x + F4x) / m34
         dy[16] = (F3y + F4y) / m34
         dy[21] = 0.0
+
+
+@njit(**NUMBA_OPTIONS)
+def bearing_forces(tau, y, p):
+    """Scaled forces F/(cΩ²) of bearings 1..4 on their journals, shape (4, 2)."""
+    X3, Y3, V3x, V3y = node3(tau, y, p)
+    out = np.empty((4, 2))
+    out[0, 0], out[0, 1] = bearing_force(p, 0, y[0], y[1], y[11], y[12])
+    out[1, 0], out[1, 1] = bearing_force(p, 1, X3, Y3, V3x, V3y)
+    out[2, 0], out[2, 1] = bearing_force(p, 2, y[4], y[5], y[15], y[16])
+    out[3, 0], out[3, 1] = bearing_force(p, 3, y[8], y[9], y[19], y[20])
+    return out
+
+
+@njit(**NUMBA_OPTIONS)
+def bearing_forces_many(taus, ys, p):
+    """:func:`bearing_forces` at many samples: shape (n, 4, 2)."""
+    n = ys.shape[0]
+    out = np.empty((n, 4, 2))
+    for i in range(n):
+        out[i] = bearing_forces(taus[i], ys[i], p)
+    return out
 
 
 @njit(**NUMBA_OPTIONS)

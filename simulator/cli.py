@@ -3,16 +3,21 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional
 
 import typer
 
-MECHANISM_HELP = "Coupling model: pin (the paper's holonomic constraint), rigid (offset carried by the shaft) or aligned."
+MECHANISM_HELP = (
+    "Coupling model: pin (the paper's holonomic constraint); rigid (the offset turns with the shaft: "
+    "a rotating coupling eccentricity, reads as 1X runout/unbalance); offset (stationary parallel offset "
+    "of the exciter shaft line, coupling rigid); flexible (stationary offset across a flexible coupling "
+    "with its 2X reaction, stiffness from the plant's coupling_stiffness_n_m); aligned."
+)
 
 
 def load_plant(path: Optional[Path]):
     """Plant from a TOML/JSON file, or the MODEL.md default; errors become BadParameter."""
-    from simulator import Plant
+    from rotordiag.simulator import Plant
 
     if path is None:
         return Plant.default()
@@ -23,7 +28,7 @@ def load_plant(path: Optional[Path]):
 
 
 def _summary(res) -> dict:
-    from simulator.simulate import order_amplitudes
+    from rotordiag.simulator.simulate import order_amplitudes
 
     out = {"status": res.status, "message": res.message, "speed_rpm": res.speed_rpm,
            "misalignment": res.inputs["misalignment"], "unbalance": res.inputs["unbalance"],
@@ -36,14 +41,19 @@ def _summary(res) -> dict:
     except ValueError:
         amps = None
     for b in range(4):
-        entry = {"bearing": b + 1}
+        entry: dict[str, Any] = {"bearing": b + 1}
         if len(d):
             entry["peak_to_peak_um"] = {k: float(d[:, b, i].max() - d[:, b, i].min()) for i, k in enumerate("xy")}
             entry["mean_eccentricity"] = float((abs(d[:, b, 0] + 1j * d[:, b, 1]) / (res.clearance_m * 1e6)).mean())
+            entry["static_eccentricity"] = float(res.static_eccentricity[b])
+            entry["attitude_angle_deg"] = float(res.attitude_angle_deg[b])
+            entry["static_load_n"] = [float(v) for v in res.mean_bearing_load_n[b]]
         if amps is not None:
             for i, k in enumerate("xy"):
                 a1, a2, a3 = amps[b, i]
-                entry[f"{k}_1x_um"], entry[f"{k}_2x_um"], entry[f"{k}_3x_um"] = float(a1), float(a2), float(a3)
+                # order amplitudes are 0-pk (the line's amplitude); peak_to_peak_um is pk-pk of the waveform
+                entry[f"{k}_1x_um_0pk"], entry[f"{k}_2x_um_0pk"], entry[f"{k}_3x_um_0pk"] = \
+                    float(a1), float(a2), float(a3)
                 entry[f"{k}_2x_1x"] = float(a2 / a1) if a1 > 0 else float("nan")
         out["bearings"].append(entry)
     return out
@@ -52,7 +62,7 @@ def _summary(res) -> dict:
 def _write_h5(res, path: Path) -> None:
     import h5py
 
-    from rotordiag import code_version
+    from rotordiag.core.version import code_version
 
     with h5py.File(path, "w") as f:
         f.create_dataset("time_s", data=res.time_s)
@@ -64,6 +74,70 @@ def _write_h5(res, path: Path) -> None:
         f.attrs["message"] = res.message
         f.attrs["inputs_json"] = json.dumps(res.inputs)
         f.attrs["code_version"] = code_version()
+
+
+def probe_recording(res, sample_rate_hz: float, snr_db: float, runout_um: float, seed: int):
+    """What the probes would record of a simulation: the dataset's measurement model applied.
+
+    Eight probes (bearings 1-4 at 45° and 135°), the record as long as the simulation allows
+    at ``sample_rate_hz``; noise at ``snr_db`` and 1X runout of ``runout_um`` drawn from ``seed``.
+    Returns ``(waveforms_um (8, n), channels [(bearing, angle_deg)], sample_rate_hz)``.
+    """
+    import math
+
+    import numpy as np
+
+    from rotordiag.simulator.dataset.measurement import MeasurementDraws, MeasurementSettings, probe_waveforms_um
+
+    spr = res.inputs.get("samples_per_rev") or 128
+    n_rec = res.journal_displacements_m.shape[0]
+    revs_avail = n_rec / spr - 1.0
+    n_points = int(math.floor(revs_avail * 60.0 / res.speed_rpm * sample_rate_hz))
+    if n_points < 16:
+        raise ValueError("--probes-out: the record is too short; raise --record-revs")
+    settings = MeasurementSettings(bearings=(1, 2, 3, 4), probe_angles_deg=(45.0, 135.0),
+                                   sample_rate_hz=sample_rate_hz, n_points=n_points)
+    rng = np.random.default_rng(seed)
+    r1 = np.full(4, float(runout_um))
+    draws = MeasurementDraws(snr_db=snr_db, start_angle_rad=0.0, speed_fluctuation_phase_rad=0.0,
+                             runout_1x_um=r1, runout_1x_phase_rad=rng.uniform(0, 2 * math.pi, 4),
+                             runout_2x_um=np.zeros(4), runout_2x_phase_rad=np.zeros(4))
+    w = probe_waveforms_um(res.journal_displacements_m, spr, res.speed_rpm, settings, draws, rng)
+    return w.astype(np.float64), settings.channels, sample_rate_hz
+
+
+def write_probes(path: Path, waveforms_um, channels, sample_rate_hz: float, *, speed_rpm: float | None = None,
+                 clearance_um: float | None = None) -> None:
+    """Write probe waveforms (µm) as .csv (``time_s`` then ``b<bearing>@<angle>`` columns, times to
+    6 significant digits as DAQ exports print them), .npy (channels × points) or .h5 (``waveforms``,
+    ``channels`` table, ``sample_rate_hz`` / ``units`` / ``speed_rpm`` / ``clearance_um`` attributes)."""
+    import numpy as np
+
+    suffix = path.suffix.lower()
+    names = [f"b{b}@{a:g}" for b, a in channels]
+    if suffix == ".csv":
+        t = np.arange(waveforms_um.shape[1]) / sample_rate_hz
+        with path.open("w") as fh:
+            fh.write("time_s," + ",".join(names) + "\n")
+            for k in range(t.size):
+                fh.write(f"{t[k]:.6g}," + ",".join(f"{v:.3f}" for v in waveforms_um[:, k]) + "\n")
+    elif suffix == ".npy":
+        np.save(path, waveforms_um.astype(np.float32))
+    elif suffix in (".h5", ".hdf5"):
+        import h5py
+
+        table = np.array(list(channels), dtype=[("bearing", "i1"), ("angle_deg", "f8")])
+        with h5py.File(path, "w") as f:
+            f.create_dataset("waveforms", data=waveforms_um.astype(np.float32), compression="gzip", shuffle=True)
+            f.create_dataset("channels", data=table)
+            f.attrs["sample_rate_hz"] = float(sample_rate_hz)
+            f.attrs["units"] = "um"
+            if speed_rpm is not None:
+                f.attrs["speed_rpm"] = float(speed_rpm)
+            if clearance_um is not None:
+                f.attrs["clearance_um"] = float(clearance_um)
+    else:
+        raise ValueError(f"--probes-out: unknown ending {suffix!r}; use .csv, .npy or .h5")
 
 
 def _plot(res, path: Path) -> None:
@@ -131,15 +205,23 @@ def register(app: typer.Typer) -> None:
         samples_per_rev: int = typer.Option(128, help="Samples per revolution."),
         exciter_unbalance: float = typer.Option(0.0, help="Exciter unbalance a2/c (0–0.5)."),
         exciter_unbalance_phase_deg: float = typer.Option(0.0, help="Exciter unbalance phase θ2, degrees."),
-        offset_angle_deg: float = typer.Option(0.0, help="rigid: offset direction φ0, degrees."),
+        offset_angle_deg: float = typer.Option(
+            0.0, help="Offset direction φ0, degrees from +x toward +y: rotating eccentricity at t = 0 (rigid) "
+                      "or stationary exciter shaft-line offset (offset, flexible; -90 = downward)."),
+        coupling_phase_deg: float = typer.Option(0.0, help="flexible: phase ψ of the coupling's 2X excitation, degrees."),
         as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
         plot: Optional[Path] = typer.Option(None, help="Write a PNG: journal orbits with Poincaré points, spectra."),
-        out: Optional[Path] = typer.Option(None, help="Write the time series to this HDF5 file."),
+        out: Optional[Path] = typer.Option(None, help="Write the simulator's time series (journal positions, m) to this HDF5 file."),
+        probes_out: Optional[Path] = typer.Option(None, "--probes-out", help="Write what 8 proximity probes would record (µm, the dataset's measurement model) as .csv/.npy/.h5, readable by 'rotordiag diagnose'."),
+        probe_sample_rate_hz: float = typer.Option(2560.0, "--probe-sample-rate-hz", min=100, max=1e6, help="Sample rate of --probes-out, Hz."),
+        snr_db: float = typer.Option(40.0, "--snr-db", help="Probe noise of --probes-out: signal-to-noise ratio, dB (inf: none)."),
+        runout_um: float = typer.Option(0.0, "--runout-um", min=0, help="1X mechanical/electrical runout of --probes-out, µm."),
+        seed: int = typer.Option(0, "--seed", help="Seed of the --probes-out noise and runout phases."),
     ) -> None:
         """Simulate one operating point and summarise the journal vibration."""
         import math
 
-        from simulator import simulate as run
+        from rotordiag.simulator import simulate as run
 
         pl = load_plant(plant)
         try:
@@ -147,7 +229,8 @@ def register(app: typer.Typer) -> None:
                       transient_revs=transient_revs, record_revs=record_revs, samples_per_rev=samples_per_rev,
                       exciter_unbalance=exciter_unbalance,
                       exciter_unbalance_phase_rad=math.radians(exciter_unbalance_phase_deg),
-                      offset_angle_rad=math.radians(offset_angle_deg))
+                      offset_angle_rad=math.radians(offset_angle_deg),
+                      coupling_phase_rad=math.radians(coupling_phase_deg))
         except ValueError as exc:
             raise typer.BadParameter(str(exc)) from None
         summary = _summary(res)
@@ -156,18 +239,63 @@ def register(app: typer.Typer) -> None:
         else:
             typer.echo(f"status: {res.status} ({res.message}); {summary['wall_time_s']} s, "
                        f"{summary['steps_per_rev']} steps/rev")
-            typer.echo(f"{'bearing':>7} {'dir':>3} {'1X µm':>9} {'2X µm':>9} {'3X µm':>9} {'2X/1X':>7} {'pk-pk µm':>9}")
+            typer.echo(f"{'bearing':>7} {'dir':>3} {'1X µm 0-pk':>10} {'2X µm 0-pk':>10} {'3X µm 0-pk':>10} "
+                       f"{'2X/1X':>7} {'µm pk-pk':>9}")
             for e in summary["bearings"]:
                 for k in "xy":
-                    if f"{k}_1x_um" in e:
-                        typer.echo(f"{e['bearing']:>7} {k:>3} {e[f'{k}_1x_um']:9.2f} {e[f'{k}_2x_um']:9.2f} "
-                                   f"{e[f'{k}_3x_um']:9.2f} {e[f'{k}_2x_1x']:7.3f} {e['peak_to_peak_um'][k]:9.2f}")
+                    if f"{k}_1x_um_0pk" in e:
+                        typer.echo(f"{e['bearing']:>7} {k:>3} {e[f'{k}_1x_um_0pk']:10.2f} {e[f'{k}_2x_um_0pk']:10.2f} "
+                                   f"{e[f'{k}_3x_um_0pk']:10.2f} {e[f'{k}_2x_1x']:7.3f} {e['peak_to_peak_um'][k]:9.2f}")
+            typer.echo("static journal position over the record:")
+            typer.echo(f"{'bearing':>7} {'ε':>6} {'attitude °':>10} {'load x kN':>10} {'load y kN':>10}")
+            for e in summary["bearings"]:
+                if "static_eccentricity" in e:
+                    lx, ly = e["static_load_n"]
+                    typer.echo(f"{e['bearing']:>7} {e['static_eccentricity']:6.3f} {e['attitude_angle_deg']:10.1f} "
+                               f"{lx / 1e3:10.2f} {ly / 1e3:10.2f}")
         if plot is not None:
             _plot(res, plot)
             typer.echo(f"wrote {plot}", err=True)
         if out is not None:
             _write_h5(res, out)
             typer.echo(f"wrote {out}", err=True)
+        if probes_out is not None:
+            try:
+                w, chans, fs = probe_recording(res, probe_sample_rate_hz, snr_db, runout_um, seed)
+                write_probes(probes_out, w, chans, fs)
+            except ValueError as exc:
+                raise typer.BadParameter(str(exc), param_hint="--probes-out") from None
+            typer.echo(f"wrote {probes_out} ({w.shape[0]} probes × {w.shape[1]} samples at {fs:g} Hz, µm)", err=True)
+
+    plant_app = typer.Typer(help="Build plant files.", no_args_is_help=True)
+    app.add_typer(plant_app, name="plant")
+
+    @plant_app.command("from-shaftline")
+    def from_shaftline(
+        file: Optional[Path] = typer.Argument(None, help="Shaft-line TOML (see examples/shaftline_200mw.toml)."),
+        preset: Optional[str] = typer.Option(None, help="A named machine instead of FILE: gen50_2pole, "
+                                                        "gen200_2pole, gen600_2pole, gen600_4pole."),
+        out: Path = typer.Option(..., help="Plant file to write (.toml or .json)."),
+        bearing_stiffness_n_m: float = typer.Option(1e9, help="Bearing stiffness of the critical-speed check."),
+    ) -> None:
+        """Reduce a shaft-line description to the lumped plant and write it; print the first two critical
+        speeds of the full beam model and of the lumped plant (the reduction's check)."""
+        from rotordiag.simulator import shaftline as sl
+
+        if (file is None) == (preset is None):
+            raise typer.BadParameter("give either FILE or --preset", param_hint="FILE")
+        try:
+            line = sl.ShaftLine.from_file(file) if file is not None else sl.preset(preset)  # type: ignore[arg-type]
+            pl = sl.to_plant(line)
+            pl.to_file(out)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc)) from None
+        fe = sl.train_critical_speeds(line, bearing_stiffness_n_m)
+        lu = sl.lumped_critical_speeds(pl, bearing_stiffness_n_m)
+        typer.echo(f"wrote {out}")
+        typer.echo(f"critical speeds with {bearing_stiffness_n_m:.1e} N/m bearings (non-rotating, r/min): "
+                   f"beam model {fe[0] * 60:.0f}, {fe[1] * 60:.0f}; lumped plant {lu[0] * 60:.0f}, {lu[1] * 60:.0f} "
+                   f"({(lu[0] / fe[0] - 1) * 100:+.1f} %, {(lu[1] / fe[1] - 1) * 100:+.1f} %)")
 
     @app.command()
     def modal(
@@ -176,7 +304,7 @@ def register(app: typer.Typer) -> None:
         as_json: bool = typer.Option(False, "--json", help="Print as JSON."),
     ) -> None:
         """Natural frequencies and damping of the rotor linearised about its static equilibrium."""
-        from simulator import modal as run
+        from rotordiag.simulator import modal as run
 
         pl = load_plant(plant)
         try:

@@ -151,7 +151,7 @@ def modal(plant: Plant, speed_rpm: float) -> ModalResult:
         mode_shapes=shapes,
         eigenvalues_per_s=lam,
         stability_margin_per_s=float(lam.real.max()),
-        equilibrium_m=system.node_positions(0.0, y)[0],
+        equilibrium_m=system.node_positions(np.zeros(1), y)[0],
         speed_rpm=float(speed_rpm),
     )
 

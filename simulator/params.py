@@ -19,8 +19,13 @@ import numpy as np
 #: Node numbers (MODEL.md) of the journals in bearings 1..4.
 JOURNAL_NODES: tuple[int, int, int, int] = (1, 3, 4, 6)
 
-#: Coupling mechanisms of MODEL.md section 3.
-MECHANISMS: tuple[str, ...] = ("pin", "rigid", "aligned")
+#: Coupling mechanisms: MODEL.md section 3's ``pin``, ``rigid`` (a rotating coupling
+#: eccentricity) and ``aligned``, plus the stationary shaft-line ``offset`` and the
+#: ``flexible`` coupling with its 2X misalignment reaction (docs/model.md).
+MECHANISMS: tuple[str, ...] = ("pin", "rigid", "aligned", "offset", "flexible")
+
+#: Physically sourced range of the flexible coupling's radial stiffness (N/m), docs/model.md.
+COUPLING_STIFFNESS_RANGE_N_M: tuple[float, float] = (1.0e6, 1.0e10)
 
 #: Bearing force models: Capone short bearing, or linear isotropic springs
 #: (used for the energy and symmetry checks, and for users who want them).
@@ -110,6 +115,8 @@ class Plant:
     bearing_model: str = "short"
     linear_bearing_stiffness_n_m: float = 1.0e9
     linear_bearing_damping_n_s_m: float = 0.0
+    coupling_stiffness_n_m: float = 1.0e8
+    coupling_damping_n_s_m: float = 0.0
 
     # ------------------------------------------------------------------ validation
     def __post_init__(self) -> None:
@@ -132,6 +139,7 @@ class Plant:
             "journal1_mass_kg", "generator_mass_kg", "journal3_mass_kg", "journal4_mass_kg",
             "exciter_mass_kg", "journal6_mass_kg", "generator_stiffness_n_m",
             "exciter_stiffness_n_m", "clearance_m", "viscosity_pa_s", "linear_bearing_stiffness_n_m",
+            "coupling_stiffness_n_m",
         ]
         for name in positive:
             if not getattr(self, name) > 0:
@@ -140,7 +148,7 @@ class Plant:
             if min(getattr(self, name)) <= 0:
                 raise ValueError(f"{name} must be > 0 for every bearing, got {getattr(self, name)!r}")
         for name in ("generator_damping_n_s_m", "exciter_damping_n_s_m",
-                     "linear_bearing_damping_n_s_m", "gravity_m_s2"):
+                     "linear_bearing_damping_n_s_m", "gravity_m_s2", "coupling_damping_n_s_m"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
         lo, hi = ASYMMETRY_RANGE
@@ -156,11 +164,11 @@ class Plant:
 
     # ------------------------------------------------------------------ constructors
     @classmethod
-    def default(cls) -> "Plant":
+    def default(cls) -> Plant:
         """The MODEL.md default plant."""
         return cls()
 
-    def replace(self, **changes: Any) -> "Plant":
+    def replace(self, **changes: Any) -> Plant:
         """A validated copy with some fields changed (unknown names raise ``ValueError``)."""
         unknown = set(changes) - set(self.field_names())
         if unknown:
@@ -173,7 +181,7 @@ class Plant:
         return tuple(f.name for f in fields(cls))
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "Plant":
+    def from_dict(cls, data: dict[str, Any]) -> Plant:
         """Build from a (possibly partial) mapping; missing fields take the defaults."""
         if not isinstance(data, dict):
             raise ValueError(f"a plant must be a mapping of parameter names to values, got {type(data).__name__}")
@@ -191,7 +199,7 @@ class Plant:
         return out
 
     @classmethod
-    def from_file(cls, path: str | Path) -> "Plant":
+    def from_file(cls, path: str | Path) -> Plant:
         """Load from a ``.toml`` or ``.json`` file (a ``[plant]`` table is accepted in TOML)."""
         path = Path(path)
         if not path.is_file():
@@ -224,7 +232,12 @@ class Plant:
 
     def plant_id(self) -> str:
         """Short stable hash of the parameter values (for grouping samples by plant)."""
-        blob = json.dumps(self.to_dict(), sort_keys=True).encode()
+        data = self.to_dict()
+        # Fields added after plants were first hashed leave the id unchanged at their defaults.
+        for name, default in _LATER_FIELD_DEFAULTS.items():
+            if data.get(name) == default:
+                data.pop(name)
+        blob = json.dumps(data, sort_keys=True).encode()
         return hashlib.sha256(blob).hexdigest()[:16]
 
     # ------------------------------------------------------------------ derived values
@@ -233,6 +246,10 @@ class Plant:
         r = np.asarray(self.bearing_radius_m)
         length = np.asarray(self.bearing_length_m)
         return self.viscosity_pa_s * speed_rad_s * r * length**3 / (4.0 * self.clearance_m**2)
+
+
+#: Plant fields added later, with the defaults that keep earlier plant ids.
+_LATER_FIELD_DEFAULTS: dict[str, float] = {"coupling_stiffness_n_m": 1.0e8, "coupling_damping_n_s_m": 0.0}
 
 
 def check_range(name: str, value: float, lo: float, hi: float, *, hi_inclusive: bool = True) -> float:

@@ -199,7 +199,7 @@ def run_tasks(
             if now - cached["at"] > 1.0:
                 cached["value"] = max(32, 4 * sum(client.nthreads().values()))
                 cached["at"] = now
-            return cached["value"]
+            return int(cached["value"])
 
         task_iter = enumerate(tasks)
         pending = as_completed(loop=client.loop)

@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from .config import DEFAULT_ATOL, DEFAULT_RTOL
+from rotordiag.core.numerics import DEFAULT_ATOL, DEFAULT_RTOL
+
 from .params import JOURNAL_NODES, Plant
 from .system import TWO_PI, RotorSystem
 
@@ -33,13 +34,21 @@ class SimulationResult:
     final_state : ndarray, shape (22,)
         Non-dimensional state at the end (pass as ``initial_state`` to continue).
     final_tau : float
-    states : ndarray or None, shape (n, 22)
+    states : ndarray or None, shape (n, 22) (26 for ``flexible``)
         Non-dimensional states at the samples (only with ``record_state=True``).
     nfev, n_accepted, n_rejected : int
         Right-hand-side evaluations and integrator steps (transient + record).
     wall_time_s : float
     inputs : dict
         Every input of the run (plant as a dict, operating point, options).
+    clearance_m : float
+    bearing_offset_m : ndarray, shape (4, 2)
+        Bearing centres (m): the plant's offsets plus, for ``offset``/``flexible``,
+        the stationary exciter shaft-line offset.
+    mean_bearing_load_n : ndarray, shape (4, 2)
+        Mean force of each bearing on its journal over the record (N): the static
+        bearing reactions. ``static_eccentricity`` and ``attitude_angle_deg`` derive
+        the static journal positions from it and the mean journal positions.
     """
 
     time_s: np.ndarray
@@ -58,6 +67,31 @@ class SimulationResult:
     states: np.ndarray | None = None
     clearance_m: float = 0.0
     bearing_offset_m: np.ndarray = field(default_factory=lambda: np.zeros((4, 2)))
+    mean_bearing_load_n: np.ndarray = field(default_factory=lambda: np.full((4, 2), np.nan))
+
+    @property
+    def static_position_m(self) -> np.ndarray:
+        """Mean journal position relative to its bearing centre over the record, m, shape (4, 2)."""
+        d = self.journal_displacements_m
+        return d.mean(axis=0) if len(d) else np.full((4, 2), np.nan)
+
+    @property
+    def static_eccentricity(self) -> np.ndarray:
+        """Static (mean) journal eccentricity ε = |mean position − centre| / c, bearings 1..4."""
+        return np.hypot(*self.static_position_m.T) / self.clearance_m
+
+    @property
+    def attitude_angle_deg(self) -> np.ndarray:
+        """Static attitude angle of each journal, degrees: the angle from the mean bearing load
+        (the direction the film pushes the journal, reversed) to the mean journal displacement,
+        positive in the direction of rotation (+x toward +y). About 90° for a lightly loaded
+        short bearing, toward 0° as the load grows; NaN where the load is zero."""
+        pos = self.static_position_m
+        load = -self.mean_bearing_load_n  # the journal's load on the film
+        a = np.arctan2(pos[:, 1], pos[:, 0]) - np.arctan2(load[:, 1], load[:, 0])
+        out = np.degrees(np.angle(np.exp(1j * a)))
+        out[np.hypot(*load.T) == 0] = np.nan
+        return out
 
     @property
     def speed_rpm(self) -> float:
@@ -95,6 +129,7 @@ def simulate(
     offset_angle_rad: float = 0.0,
     record_state: bool = False,
     settle_tol: float | None = None,
+    coupling_phase_rad: float = 0.0,
 ) -> SimulationResult:
     """Simulate the generator–exciter rotor and record its steady state.
 
@@ -108,8 +143,19 @@ def simulate(
         Non-dimensional parallel misalignment Δ = δ/c, in [0, 0.9].
     unbalance : float
         Non-dimensional generator unbalance A = a/c, in [0, 0.5].
-    mechanism : {"pin", "rigid", "aligned"}
-        Coupling model of MODEL.md section 3; Δ = 0 always runs ``aligned``.
+    mechanism : {"pin", "rigid", "aligned", "offset", "flexible"}
+        Coupling model (docs/model.md); Δ = 0 always runs ``aligned``.
+
+        - ``pin``: the paper's holonomic constraint |r3 − r4| = δ (MODEL.md 3a).
+        - ``rigid``: the offset is fixed in the rotating shaft: kinematically a
+          **rotating coupling eccentricity** (a once-per-revolution runout of radius δ
+          at the coupling), which the field reads as unbalance/runout, not misalignment.
+        - ``offset``: a **stationary** parallel offset of the shaft lines: the exciter's
+          bearing centres are displaced by δ in direction ``offset_angle_rad``, the
+          coupling is rigid in translation. Changes static journal positions and loads.
+        - ``flexible``: the stationary offset of ``offset`` across a flexible coupling
+          of radial stiffness ``plant.coupling_stiffness_n_m``, with its kinematic 2X
+          misalignment reaction (amplitude k_c·δ/2, phase ``coupling_phase_rad``).
     transient_revs : int
         Revolutions discarded before recording (the paper: 400).
     record_revs : int
@@ -129,7 +175,11 @@ def simulate(
     exciter_unbalance, exciter_unbalance_phase_rad : float
         Exciter unbalance a2/c (0–0.5) and its phase θ2.
     offset_angle_rad : float
-        ``rigid`` only: direction φ0 of the offset at t = 0.
+        Direction φ0 of the offset from +x toward +y: of the rotating eccentricity at
+        t = 0 (``rigid``), or of the stationary exciter shaft-line offset (``offset``,
+        ``flexible``; 0 horizontal, −π/2 downward).
+    coupling_phase_rad : float
+        ``flexible`` only: phase ψ of the coupling's 2X excitation at t = 0.
     record_state : bool
         Also keep the full non-dimensional states at the samples.
     settle_tol : float, optional
@@ -160,10 +210,11 @@ def simulate(
         plant, speed_rpm, misalignment, unbalance, mechanism=mechanism,
         unbalance_phase_rad=unbalance_phase_rad, exciter_unbalance=exciter_unbalance,
         exciter_unbalance_phase_rad=exciter_unbalance_phase_rad, offset_angle_rad=offset_angle_rad,
-        rtol=rtol, atol=atol,
+        coupling_phase_rad=coupling_phase_rad, rtol=rtol, atol=atol,
     )
     if sample_rate_hz is None:
         samples_per_rev = _count("samples_per_rev", samples_per_rev, 4)
+        grid_samples_per_rev: int | None = samples_per_rev
         grid_dt = TWO_PI / samples_per_rev
         n_grid = record_revs * samples_per_rev
     else:
@@ -173,7 +224,7 @@ def simulate(
             raise ValueError(f"sample_rate_hz must be ≥ {min_fs:.1f} Hz (8 samples per revolution), got {sample_rate_hz!r}")
         grid_dt = system.speed_rad_s / fs
         n_grid = int(math.floor(record_revs * TWO_PI / grid_dt + 1e-9))
-        samples_per_rev = None
+        grid_samples_per_rev = None  # a sample-rate grid is not synchronous
     y0 = system.initial_state() if initial_state is None else system.check_state(initial_state)
 
     tau0 = 0.0
@@ -202,14 +253,16 @@ def simulate(
     inputs = dict(
         plant=plant.to_dict(), speed_rpm=system.speed_rpm, misalignment=system.misalignment,
         unbalance=system.unbalance, mechanism=system.mechanism, requested_mechanism=mechanism,
-        transient_revs=transient_revs, record_revs=record_revs, samples_per_rev=samples_per_rev,
+        transient_revs=transient_revs, record_revs=record_revs, samples_per_rev=grid_samples_per_rev,
         sample_rate_hz=None if sample_rate_hz is None else float(sample_rate_hz), rtol=system.rtol,
         atol=system.atol, unbalance_phase_rad=float(unbalance_phase_rad),
         exciter_unbalance=float(exciter_unbalance),
         exciter_unbalance_phase_rad=float(exciter_unbalance_phase_rad),
         offset_angle_rad=float(offset_angle_rad), initial_state_given=initial_state is not None,
         settle_tol=settle_tol, transient_revs_used=transient_used,
+        coupling_phase_rad=float(coupling_phase_rad),
     )
+    loads = system.bearing_forces_n(tau, states).mean(axis=0) if ng else np.full((4, 2), np.nan)
     return SimulationResult(
         time_s=tau / system.speed_rad_s,
         positions_m=positions,
@@ -226,7 +279,8 @@ def simulate(
         inputs=inputs,
         states=states.copy() if record_state else None,
         clearance_m=plant.clearance_m,
-        bearing_offset_m=np.asarray(plant.bearing_offset_m, dtype=float),
+        bearing_offset_m=system.bearing_centres_m.copy(),
+        mean_bearing_load_n=loads,
     )
 
 

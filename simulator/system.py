@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rotordiag.core.numerics import DEFAULT_ATOL, DEFAULT_RTOL, MAX_STEPS_PER_REV
+
 from . import _kernels as K
-from .config import DEFAULT_ATOL, DEFAULT_RTOL, MAX_STEPS_PER_REV
 from .params import (
     MECHANISMS,
     MISALIGNMENT_RANGE,
@@ -41,6 +42,14 @@ def _finite(name: str, value: float) -> float:
     return v
 
 
+#: Kernel code of each mechanism name.
+MECHANISM_CODES: dict[str, int] = {
+    "aligned": K.MECH_ALIGNED, "pin": K.MECH_PIN, "rigid": K.MECH_RIGID,
+    "offset": K.MECH_OFFSET, "flexible": K.MECH_FLEXIBLE,
+}
+MECHANISM_NAMES: dict[int, str] = {v: k for k, v in MECHANISM_CODES.items()}
+
+
 def resolve_mechanism(mechanism: str, misalignment: float) -> int:
     """Kernel code of the coupling mechanism; Δ = 0 is always ``aligned``."""
     if mechanism not in MECHANISMS:
@@ -49,7 +58,19 @@ def resolve_mechanism(mechanism: str, misalignment: float) -> int:
         raise ValueError(f"mechanism 'aligned' needs misalignment = 0, got {misalignment!r}")
     if misalignment == 0.0 or mechanism == "aligned":
         return K.MECH_ALIGNED
-    return K.MECH_PIN if mechanism == "pin" else K.MECH_RIGID
+    return MECHANISM_CODES[mechanism]
+
+
+def mechanism_bearing_offsets(plant: Plant, misalignment: float, mechanism_code: int,
+                              offset_angle_rad: float) -> np.ndarray:
+    """Bearing centres (m, shape (4, 2)) the kernels use: the plant's offsets, plus, for the
+    stationary shaft-line mechanisms (``offset``, ``flexible``), the exciter's two bearing
+    centres displaced by δ = Δ·c in direction φ0 (a parallel offset of the exciter shaft line)."""
+    centres = np.asarray(plant.bearing_offset_m, dtype=float).copy()
+    if mechanism_code in (K.MECH_OFFSET, K.MECH_FLEXIBLE):
+        d = misalignment * plant.clearance_m
+        centres[2:4] += d * np.array([math.cos(offset_angle_rad), math.sin(offset_angle_rad)])
+    return centres
 
 
 def pack_parameters(
@@ -63,6 +84,7 @@ def pack_parameters(
     exciter_unbalance: float = 0.0,
     exciter_unbalance_phase_rad: float = 0.0,
     offset_angle_rad: float = 0.0,
+    coupling_phase_rad: float = 0.0,
 ) -> np.ndarray:
     """Validate inputs and pack the non-dimensional parameter vector of the kernels."""
     if not isinstance(plant, Plant):
@@ -74,6 +96,7 @@ def pack_parameters(
     unbalance_phase_rad = _finite("unbalance_phase_rad", unbalance_phase_rad)
     exciter_unbalance_phase_rad = _finite("exciter_unbalance_phase_rad", exciter_unbalance_phase_rad)
     offset_angle_rad = _finite("offset_angle_rad", offset_angle_rad)
+    coupling_phase_rad = _finite("coupling_phase_rad", coupling_phase_rad)
     mech = resolve_mechanism(mechanism, misalignment)
 
     w = speed_rad_s(speed_rpm)
@@ -93,7 +116,7 @@ def pack_parameters(
     p[K.P_C2] = plant.exciter_damping_n_s_m / w
     p[K.P_G] = plant.gravity_m_s2 / (c * w**2)
     p[K.P_SB:K.P_SB + 4] = plant.bearing_force_scale_n(w) / (c * w**2)
-    p[K.P_OFF:K.P_OFF + 8] = np.asarray(plant.bearing_offset_m).ravel() / c
+    p[K.P_OFF:K.P_OFF + 8] = mechanism_bearing_offsets(plant, misalignment, mech, offset_angle_rad).ravel() / c
     p[K.P_A1] = unbalance
     p[K.P_TH1] = unbalance_phase_rad
     p[K.P_A2] = exciter_unbalance
@@ -104,6 +127,9 @@ def pack_parameters(
     p[K.P_CLIN] = plant.linear_bearing_damping_n_s_m / w
     p[K.P_MECH] = mech
     p[K.P_BMODEL] = K.BEARING_LINEAR if plant.bearing_model == "linear" else K.BEARING_SHORT
+    p[K.P_KC] = plant.coupling_stiffness_n_m / w**2
+    p[K.P_CC] = plant.coupling_damping_n_s_m / w
+    p[K.P_PSI] = coupling_phase_rad
     return p
 
 
@@ -134,12 +160,15 @@ class RotorSystem:
         Δ = δ/c (0–0.9).
     unbalance : float
         Generator unbalance A = a/c (0–0.5).
-    mechanism : {"pin", "rigid", "aligned"}
-        Coupling model (MODEL.md section 3). Δ = 0 always uses ``aligned``.
+    mechanism : {"pin", "rigid", "aligned", "offset", "flexible"}
+        Coupling model (docs/model.md). Δ = 0 always uses ``aligned``.
     unbalance_phase_rad, exciter_unbalance, exciter_unbalance_phase_rad, offset_angle_rad : float
         Generator unbalance phase, exciter unbalance a2/c and its phase θ2,
-        and the ``rigid`` offset direction φ0 (all relative to the generator
-        unbalance direction at t = 0 when its phase is 0).
+        and the offset direction φ0: of the rotating eccentricity at t = 0
+        (``rigid``) or of the stationary exciter shaft-line offset (``offset``,
+        ``flexible``; 0 = +x horizontal, −π/2 = downward). All angles from +x toward +y.
+    coupling_phase_rad : float
+        ``flexible`` only: phase ψ of the coupling's 2X excitation.
     rtol, atol : float
         Integrator tolerances (atol on the non-dimensional state).
     """
@@ -156,6 +185,7 @@ class RotorSystem:
         exciter_unbalance: float = 0.0,
         exciter_unbalance_phase_rad: float = 0.0,
         offset_angle_rad: float = 0.0,
+        coupling_phase_rad: float = 0.0,
         rtol: float = DEFAULT_RTOL,
         atol: float = DEFAULT_ATOL,
     ) -> None:
@@ -163,6 +193,7 @@ class RotorSystem:
             plant, speed_rpm, misalignment, unbalance, mechanism=mechanism,
             unbalance_phase_rad=unbalance_phase_rad, exciter_unbalance=exciter_unbalance,
             exciter_unbalance_phase_rad=exciter_unbalance_phase_rad, offset_angle_rad=offset_angle_rad,
+            coupling_phase_rad=coupling_phase_rad,
         )
         rtol = _finite("rtol", rtol)
         atol = _finite("atol", atol)
@@ -176,7 +207,12 @@ class RotorSystem:
         self.misalignment = float(misalignment)
         self.unbalance = float(unbalance)
         self.mechanism_code = int(self.params[K.P_MECH])
-        self.mechanism = {K.MECH_ALIGNED: "aligned", K.MECH_PIN: "pin", K.MECH_RIGID: "rigid"}[self.mechanism_code]
+        self.mechanism = MECHANISM_NAMES[self.mechanism_code]
+        #: Length of the state vector: 22, or 26 for ``flexible`` (node 3 is a coordinate).
+        self.n_state = K.N_STATE_FLEXIBLE if self.mechanism_code == K.MECH_FLEXIBLE else K.N_STATE
+        #: Bearing centres used by the kernels (m, shape (4, 2)): plant offsets + stationary shaft-line offset.
+        self.bearing_centres_m = mechanism_bearing_offsets(plant, self.misalignment, self.mechanism_code,
+                                                           float(offset_angle_rad))
         self.rtol = rtol
         self.atol = atol
         self._h = TWO_PI / 200.0  # last step size, reused between calls
@@ -187,7 +223,7 @@ class RotorSystem:
         pl = self.plant
         c = pl.clearance_m
         g = pl.gravity_m_s2
-        y = np.zeros(K.N_STATE)
+        y = np.zeros(self.n_state)
         for j in (0, 4, 8):  # journals 1, 4, 6
             y[j], y[j + 1] = 0.3, -0.3
         y[2] = 0.3
@@ -205,19 +241,30 @@ class RotorSystem:
         elif self.mechanism_code == K.MECH_RIGID:
             y[10] = self.params[K.P_PHI0]
             y[21] = 1.0
+        if self.mechanism_code in (K.MECH_OFFSET, K.MECH_FLEXIBLE):
+            # Exciter nodes start where the aligned start puts them relative to the displaced centres.
+            shift = (self.bearing_centres_m[2] - np.asarray(self.plant.bearing_offset_m[2])) / self.plant.clearance_m
+            if self.mechanism_code == K.MECH_FLEXIBLE:
+                y[22:24] = y[4:6]  # node 3 stays with its (undisplaced) generator bearing
+            for j in (4, 6, 8):
+                y[j:j + 2] += shift
+            if self.mechanism_code == K.MECH_OFFSET:
+                # journals 3 and 4 are one point between two bearing centres δ apart: start half-way
+                y[4:6] = np.array([0.0, -0.3]) + 0.5 * shift
         return y
 
     def check_state(self, state: np.ndarray) -> np.ndarray:
         """Validate a user-supplied state vector (shape (22,), finite)."""
         arr = np.asarray(state, dtype=float)
-        if arr.shape != (K.N_STATE,):
-            raise ValueError(f"initial_state must have shape ({K.N_STATE},), got {arr.shape}")
+        if arr.shape != (self.n_state,):
+            raise ValueError(f"initial_state must have shape ({self.n_state},) for mechanism "
+                             f"{self.mechanism!r}, got {arr.shape}")
         if not np.all(np.isfinite(arr)):
             raise ValueError("initial_state must be finite")
         arr = arr.copy()
         if self.mechanism_code == K.MECH_RIGID:
             arr[21] = 1.0  # φ' = 1 by construction; φ itself is re-derived from τ
-        elif self.mechanism_code == K.MECH_ALIGNED:
+        else:
             arr[21] = 0.0
         return arr
 
@@ -239,8 +286,8 @@ class RotorSystem:
         n_poincare: int = 0,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, AdvanceStats, int, int]:
         """Integrate and sample; returns (final state, grid samples, Poincaré samples, stats, n_grid, n_pc)."""
-        grid = np.full((n_grid, K.N_STATE), np.nan)
-        pcs = np.full((n_poincare, K.N_STATE), np.nan)
+        grid = np.full((n_grid, self.n_state), np.nan)
+        pcs = np.full((n_poincare, self.n_state), np.nan)
         revs = max(1.0, (tau_end - tau_start) / TWO_PI)
         max_steps = int(MAX_STEPS_PER_REV * revs) + 1000
         status, tau, y, nfev, nacc, nrej, ng, npc, emax, h = K.integrate(
@@ -286,7 +333,17 @@ class RotorSystem:
             d = 0.0
         out[:, 2, 0] = states[:, 4] + d * np.cos(phi)
         out[:, 2, 1] = states[:, 5] + d * np.sin(phi)
+        if self.mechanism_code == K.MECH_FLEXIBLE:
+            out[:, 2] = states[:, 22:24]
         return out * c
+
+    def bearing_forces_n(self, tau: np.ndarray, states: np.ndarray) -> np.ndarray:
+        """Force of each bearing's oil film (or spring) on its journal, N, shape (n, 4, 2)."""
+        states = np.atleast_2d(np.asarray(states, dtype=float))
+        tau = np.broadcast_to(np.asarray(tau, dtype=float), (states.shape[0],))
+        out = K.bearing_forces_many(np.ascontiguousarray(tau), np.ascontiguousarray(states), self.params)
+        w = self.speed_rad_s
+        return out * self.plant.clearance_m * w * w
 
     def coupling_angle(self, tau: np.ndarray, states: np.ndarray) -> np.ndarray:
         """φ (rad) along the samples; NaN when aligned."""
@@ -296,6 +353,17 @@ class RotorSystem:
         if self.mechanism_code == K.MECH_RIGID:
             return np.asarray(tau, dtype=float) + self.params[K.P_PHI0]
         return np.full(states.shape[0], np.nan)
+
+    def coupling_force_n(self, tau: np.ndarray, states: np.ndarray) -> np.ndarray:
+        """``flexible``: force of the coupling on node 3 (generator side), N, shape (n, 2); zeros otherwise."""
+        states = np.atleast_2d(np.asarray(states, dtype=float))
+        tau = np.broadcast_to(np.asarray(tau, dtype=float), (states.shape[0],))
+        out = np.zeros((states.shape[0], 2))
+        if self.mechanism_code == K.MECH_FLEXIBLE:
+            for i in range(states.shape[0]):
+                out[i] = K.coupling_force(float(tau[i]), np.ascontiguousarray(states[i]), self.params)
+        w = self.speed_rad_s
+        return out * self.plant.clearance_m * w * w
 
 
 def build_system(plant: Plant, speed_rpm: float, misalignment: float, unbalance: float, **kwargs) -> RotorSystem:

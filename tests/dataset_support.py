@@ -55,7 +55,7 @@ def differing_datasets(path_a: Path, path_b: Path) -> list[str]:
     """Names of datasets whose values differ (NaN == NaN), plus datasets present in only one file."""
     import h5py
 
-    from simulator.dataset.store import open_dataset
+    from rotordiag.simulator.dataset.store import open_dataset
 
     out: list[str] = []
     with open_dataset(path_a) as a, open_dataset(path_b) as b:

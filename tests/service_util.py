@@ -12,7 +12,7 @@ def make_settings(tmp_path: Path, **overrides):
     Diagnoses run in the test process (``diagnosis_workers=0``) unless a test asks for worker
     processes (``tests/test_service_pool.py``, the end-to-end test with a real uvicorn).
     """
-    from service.core.config import Settings
+    from rotordiag.service.core.config import Settings
 
     values = dict(data_dir=tmp_path / "data", api_key=API_KEY, environment="development",
                   dask_local_workers=1, diagnosis_workers=0, _env_file=None)
@@ -48,7 +48,7 @@ def simulated_channels(misalignment=0.2, speed_rpm=1800.0, sample_rate_hz=2048.0
     """A simulated recording of the default plant as ``(sample_rate_hz, [(bearing, angle_deg, data_um), ...])``."""
     key = (misalignment, speed_rpm, sample_rate_hz, record_revs, mechanism)
     if key not in _SIM_CACHE:
-        from simulator import Plant, simulate
+        from rotordiag.simulator import Plant, simulate
 
         res = simulate(Plant.default(), speed_rpm, misalignment, 0.05, mechanism=mechanism,
                        transient_revs=200, record_revs=record_revs, sample_rate_hz=sample_rate_hz)
@@ -75,10 +75,10 @@ def build_tiny_registry(root, n_plants=3, seed=0):
     """
     import numpy as np
 
-    from features import ProbeChannel, Recording, extract_features
-    from models.config import TrainConfig
-    from models.registry import Registry
-    from simulator import Plant, simulate
+    from rotordiag.features import ProbeChannel, Recording, extract_features
+    from rotordiag.models.config import TrainConfig
+    from rotordiag.models.registry import Registry
+    from rotordiag.simulator import Plant, simulate
 
     rng = np.random.default_rng(seed)
     base = Plant.default()
@@ -118,8 +118,8 @@ def build_tiny_registry(root, n_plants=3, seed=0):
 
 def shipped_registry_usable() -> bool:
     """The repository ships ``models/default_registry`` and its active model runs with this code."""
-    from service.core.config import SHIPPED_REGISTRY_DIR
-    from service.inference import ModelStore, ModelUnavailable
+    from rotordiag.service.core.config import SHIPPED_REGISTRY_DIR
+    from rotordiag.service.inference import ModelStore, ModelUnavailable
 
     if not (SHIPPED_REGISTRY_DIR / "active").is_file():
         return False
@@ -140,7 +140,7 @@ def shipped_or_tiny_registry(tmp_root=None):
     """
     import hashlib
 
-    from service.core.config import SHIPPED_REGISTRY_DIR
+    from rotordiag.service.core.config import SHIPPED_REGISTRY_DIR
 
     if shipped_registry_usable():
         return SHIPPED_REGISTRY_DIR

@@ -7,7 +7,7 @@ import pytest
 from typer.testing import CliRunner
 
 from rotordiag.cli import app
-from simulator.analysis.sweeps import SweepResult
+from rotordiag.simulator.analysis.sweeps import SweepResult
 
 runner = CliRunner()
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simulator.analysis import FlowMapError, largest_lyapunov
+from rotordiag.simulator.analysis import FlowMapError, largest_lyapunov
 from tests.reference import analysis_systems as ref
 
 

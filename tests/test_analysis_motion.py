@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simulator.analysis import classify_motion, detect_period, largest_lyapunov, poincare_divergence_rate
-from simulator.analysis.motion import LLE_NOISE_PER_INTERVAL
+from rotordiag.simulator.analysis import classify_motion, detect_period, largest_lyapunov, poincare_divergence_rate
+from rotordiag.simulator.analysis.motion import LLE_NOISE_PER_INTERVAL
 from tests.reference import analysis_systems as ref
 
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simulator import Plant, simulate
-from simulator.analysis.sweeps import SweepResult, misalignment_sweep, rotor_lyapunov, speed_sweep
-from simulator.simulate import order_amplitudes
+from rotordiag.simulator import Plant, simulate
+from rotordiag.simulator.analysis.sweeps import SweepResult, misalignment_sweep, rotor_lyapunov, speed_sweep
+from rotordiag.simulator.simulate import order_amplitudes
 
 PLANT = Plant.default()
 SHORT = dict(transient_revs=200, record_revs=32, progress=False)
@@ -95,7 +95,7 @@ def test_bad_sweep_values():
 
 
 def test_amplitude_speed_curves_match_individual_sweeps():
-    from simulator.analysis import amplitude_speed_curves
+    from rotordiag.simulator.analysis import amplitude_speed_curves
 
     curves = amplitude_speed_curves(PLANT, [1300.0, 1700.0], [0.0, 0.2], 0.05, n_workers=0, **SHORT)
     assert sorted(curves) == [0.0, 0.2]

@@ -7,13 +7,19 @@ import h5py
 import numpy as np
 import pytest
 
-from simulator.dataset.design import build_design
-from simulator.dataset.generate import generate, submission_order
-from simulator.dataset.measurement import MeasurementSettings
-from simulator.dataset.spec import load_spec
-from simulator.dataset.store import DatasetWriter, EncodedChunk, _takes_encoded_chunks, create_file, \
-    decode_waveform_chunk, encode_waveform_chunk
-from simulator.dataset.worker import SampleTask, SimulationSettings, run_sample, run_sample_encoded
+from rotordiag.simulator.dataset.design import build_design
+from rotordiag.simulator.dataset.generate import generate, submission_order
+from rotordiag.simulator.dataset.measurement import MeasurementSettings
+from rotordiag.simulator.dataset.spec import load_spec
+from rotordiag.simulator.dataset.store import (
+    DatasetWriter,
+    EncodedChunk,
+    _takes_encoded_chunks,
+    create_file,
+    decode_waveform_chunk,
+    encode_waveform_chunk,
+)
+from rotordiag.simulator.dataset.worker import SampleTask, SimulationSettings, run_sample, run_sample_encoded
 
 from .dataset_support import write_spec
 

@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from rotordiag.cli import app
-from simulator.dataset.generate import generate
+from rotordiag.simulator.dataset.generate import generate
 
 from .dataset_support import write_spec
 
@@ -127,7 +127,7 @@ def test_repair_of_a_clean_file_does_nothing(two_files):
 
 
 def test_reader_decodes_labels_and_streams_waveforms(two_files, tmp_path):
-    from simulator.dataset import DatasetReader
+    from rotordiag.simulator.dataset import DatasetReader
 
     _, a, b = two_files
     merged = tmp_path / "m.h5"

@@ -6,9 +6,9 @@ import itertools
 import numpy as np
 import pytest
 
-from simulator import Plant
-from simulator.dataset.design import build_design, sample_seed
-from simulator.dataset.spec import parse_spec
+from rotordiag.simulator import Plant
+from rotordiag.simulator.dataset.design import build_design, sample_seed
+from rotordiag.simulator.dataset.spec import parse_spec
 
 BASE = """
 [design]
@@ -105,7 +105,8 @@ def test_index_out_of_range():
         make("sobol", n=8)[8]
 
 
-from hypothesis import given, settings, strategies as st  # noqa: E402
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
 
 
 @settings(max_examples=25, deadline=None)

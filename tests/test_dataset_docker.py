@@ -37,7 +37,7 @@ def test_compose_has_api_scheduler_and_workers_from_one_image(compose):
 
 
 def test_api_healthcheck_polls_the_health_endpoint(compose):
-    from service.api.routes.health import router
+    from rotordiag.service.api.routes.health import router
 
     test = compose["services"]["api"]["healthcheck"]["test"]
     assert test[:3] == ["CMD", "python", "-c"]
@@ -68,7 +68,7 @@ def test_rotordiag_entry_point_is_the_projects(compose):
 def test_dockerfile_installs_every_package_and_has_what_pip_needs():
     text = (REPO / "Dockerfile").read_text()
     pyproject = tomllib.loads((REPO / "pyproject.toml").read_text())
-    packages = [p.rstrip("*") for p in pyproject["tool"]["setuptools"]["packages"]["find"]["include"]]
+    packages = sorted(set(pyproject["tool"]["setuptools"]["package-dir"].values()))
     for pkg in packages:
         assert re.search(rf"^COPY {pkg} \./{pkg}$", text, re.M), f"Dockerfile does not copy {pkg}/"
     assert "COPY pyproject.toml README.md ./" in text and (REPO / "README.md").is_file()

@@ -7,11 +7,11 @@ import h5py
 import numpy as np
 import pytest
 
-from simulator import Plant, simulate
-from simulator.dataset.design import build_design
-from simulator.dataset.generate import generate
-from simulator.dataset.spec import load_spec
-from simulator.dataset.store import StoreError, open_dataset
+from rotordiag.simulator import Plant, simulate
+from rotordiag.simulator.dataset.design import build_design
+from rotordiag.simulator.dataset.generate import generate
+from rotordiag.simulator.dataset.spec import load_spec
+from rotordiag.simulator.dataset.store import StoreError, open_dataset
 
 from .dataset_support import differing_datasets, write_spec
 
@@ -129,7 +129,7 @@ def test_rerun_of_a_complete_file_computes_nothing_and_other_specs_are_refused(s
         raise AssertionError("a complete file must not start a cluster")
 
     with monkeypatch.context() as m:
-        m.setattr("simulator.runner.run_tasks", no_cluster)
+        m.setattr("rotordiag.simulator.runner.run_tasks", no_cluster)
         again = generate(spec, out, progress=False)  # default: local cluster, if there were work
     assert again.resumed and again.n_computed == 0 and again.complete
     other = write_spec(tmp_path / "other.toml", seed=8)
@@ -153,7 +153,7 @@ def test_output_that_is_not_a_dataset_is_refused(tmp_path):
 
 
 def test_a_second_writer_is_refused_while_the_first_holds_the_file(tmp_path):
-    from simulator.dataset.store import _Lock
+    from rotordiag.simulator.dataset.store import _Lock
 
     spec = write_spec(tmp_path / "spec.toml")
     lock = _Lock(tmp_path / "o.h5")
@@ -184,8 +184,8 @@ def test_dask_cluster_via_a_client_gives_the_serial_values(small, tmp_path):
 def test_a_sample_the_simulator_refuses_is_labelled_error_not_dropped(small):
     import dataclasses
 
-    from simulator.dataset.measurement import MeasurementSettings
-    from simulator.dataset.worker import SampleTask, SimulationSettings, run_sample
+    from rotordiag.simulator.dataset.measurement import MeasurementSettings
+    from rotordiag.simulator.dataset.worker import SampleTask, SimulationSettings, run_sample
 
     spec, _, _ = small
     r = load_spec(spec)

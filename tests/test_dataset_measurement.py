@@ -6,8 +6,14 @@ import math
 import numpy as np
 import pytest
 
-from simulator.dataset.measurement import (MeasurementDraws, MeasurementSettings, draw_measurement,
-                                           probe_waveforms_um, required_record_revs, shaft_angle_rad)
+from rotordiag.simulator.dataset.measurement import (
+    MeasurementDraws,
+    MeasurementSettings,
+    draw_measurement,
+    probe_waveforms_um,
+    required_record_revs,
+    shaft_angle_rad,
+)
 
 S = 128  # simulator samples per revolution
 

@@ -13,8 +13,8 @@ import h5py
 import numpy as np
 import pytest
 
-from simulator.dataset.generate import generate
-from simulator.dataset.store import open_dataset, repair_file
+from rotordiag.simulator.dataset.generate import generate
+from rotordiag.simulator.dataset.store import open_dataset, repair_file
 
 from .dataset_support import differing_datasets, write_spec
 
@@ -129,7 +129,7 @@ def test_writer_waits_for_a_reader_holding_the_file_lock(reference, tmp_path):
     import shutil
     import sys
 
-    from simulator.dataset import store
+    from rotordiag.simulator.dataset import store
 
     _, ref = reference
     path = tmp_path / "locked.h5"

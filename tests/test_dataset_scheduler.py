@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from simulator.dataset.generate import generate
+from rotordiag.simulator.dataset.generate import generate
 
 from .dataset_support import differing_datasets, write_spec
 

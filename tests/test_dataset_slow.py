@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from simulator.dataset import DatasetReader, generate
+from rotordiag.simulator.dataset import DatasetReader, generate
 
 SPEC = """
 [design]

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from simulator.dataset.spec import SpecError, load_spec, parse_spec
+from rotordiag.simulator.dataset.spec import SpecError, load_spec, parse_spec
 
 from .dataset_support import SMALL_SPEC
 
@@ -70,7 +70,7 @@ def test_grid_needs_levels_and_a_consistent_count():
     body = (body.replace("max = 2100}", "max = 2100, n = 3}").replace("max = 0.5}", "max = 0.5, n = 2}")
             .replace("max = 0.08}", "max = 0.08, n = 1}").replace("6.283185307179586}", "6.283185307179586, n = 1}")
             .replace("{pin = 1, rigid = 1}", '["pin", "rigid"]'))
-    from simulator.dataset.design import build_design
+    from rotordiag.simulator.dataset.design import build_design
 
     assert len(build_design(parse_spec(body))) == 3 * 2 * 2
     bad = body.replace("seed = 7", "seed = 7\nn_samples = 10")
@@ -94,7 +94,7 @@ def test_spec_hash_ignores_formatting_but_not_values(tmp_path):
 
 
 def test_plant_file_is_resolved_relative_to_the_spec_and_hashed(tmp_path):
-    from simulator import Plant
+    from rotordiag.simulator import Plant
 
     (tmp_path / "sub").mkdir()
     Plant.default().replace(viscosity_pa_s=0.02).to_file(tmp_path / "sub" / "plant.toml")

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from features import FEATURE_NAMES, FEATURE_SPECS, ProbeChannel, Recording, extract_features
+from rotordiag.features import FEATURE_NAMES, FEATURE_SPECS, ProbeChannel, Recording, extract_features
 
 from .test_features_synth import keyphasor_times, make_recording
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from features import _kernels as K
-from features._orbit import orbit_arrays, orbit_shapes
-from features._speed import refine_line_hz
-from features._spectrum import hann, noise_rms, residual_psd
+from rotordiag.features import _kernels as K
+from rotordiag.features._orbit import orbit_arrays, orbit_shapes
+from rotordiag.features._spectrum import hann, noise_rms, residual_psd
+from rotordiag.features._speed import refine_line_hz
 
 
 @pytest.mark.parametrize("shape", [(8, 2048), (8, 2049), (3, 7), (1, 1), (4, 100)])
@@ -225,7 +225,7 @@ def _bench_recording(**kw):
 
 @pytest.mark.parametrize("source", ["given", "keyphasor", "estimated"])
 def test_feature_values_unchanged_by_the_fast_paths(source):
-    from features import extract_features
+    from rotordiag.features import extract_features
 
     kw = {"given": {"speed_rpm": 1953.7}, "estimated": {},
           "keyphasor": {"keyphasor_times_s": np.arange(0.0, 16_384 / 5120.0, 60.0 / 1953.7)}}[source]

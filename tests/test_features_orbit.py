@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from features import extract_features
-from features._orbit import orbit_shape
+from rotordiag.features import extract_features
+from rotordiag.features._orbit import orbit_shape
 
 from .test_features_synth import make_recording
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from features import FEATURE_NAMES, extract_features
-from features._orders import _uniform_gram, fit_orders
+from rotordiag.features import FEATURE_NAMES, extract_features
+from rotordiag.features._orders import _uniform_gram, fit_orders
 
 from .test_features_synth import DEFAULT_COMPONENTS, keyphasor_times, make_recording
 
@@ -106,7 +106,7 @@ def test_orders_with_noise(noise):
 def test_forward_reverse_known_circles():
     """x + jy = F e^{jθ} + R e^{-jθ} with known F, R (and 2X F2, R2)."""
     f1c, r1c, f2c, r2c = 30 * np.exp(0.4j), 8 * np.exp(-1.1j), 6 * np.exp(2.0j), 9 * np.exp(0.3j)
-    fs, n, rpm = 5120.0, 16384, 1953.7
+    rpm = 1953.7
 
     def extra(t, b):
         th = 2 * np.pi * rpm / 60 * t
@@ -197,7 +197,7 @@ def test_feature_vector_is_fixed_and_finite_for_full_recording():
 @pytest.mark.parametrize("uniform", [True, False])
 def test_blockwise_fit_equals_single_pass(monkeypatch, uniform):
     """Long records are fitted in blocks (bounded scratch memory); the answer must not change."""
-    import features._orders as orders
+    import rotordiag.features._orders as orders
 
     rng = np.random.default_rng(8)
     n, step = 10_000, 2 * np.pi / 61.7

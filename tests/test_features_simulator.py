@@ -9,9 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from features import ProbeChannel, Recording, extract_features
-
-simulator = pytest.importorskip("simulator")
+from rotordiag import simulator
+from rotordiag.features import ProbeChannel, Recording, extract_features
 
 SPEED_RPM = 1950.0
 REVS, SPR = 64, 128
@@ -71,7 +70,7 @@ def test_poincare_points_and_motion_match_simulator_oil_whip():
     """Oil whip at 2500 r/min (MODEL.md §6): non-periodic. The features' once-per-revolution
     points, rebuilt from the sampled waveforms, equal the simulator's own Poincaré section, and
     the motion type equals the classifier's verdict on that section."""
-    from simulator.analysis import classify_motion
+    from rotordiag.simulator.analysis import classify_motion
 
     rpm, spr, revs = 2500.0, 64, 64
     res = simulator.simulate(simulator.Plant.default(), rpm, 0.02, 0.05, mechanism="pin",

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from features import extract_features
+from rotordiag.features import extract_features
 
 from .test_features_synth import DEFAULT_COMPONENTS, keyphasor_times, make_recording
 
@@ -69,7 +69,7 @@ def test_wrong_given_speed_is_flagged():
 
 def test_pure_noise_without_speed_is_refused():
     rng = np.random.default_rng(0)
-    from features import ProbeChannel, Recording
+    from rotordiag.features import ProbeChannel, Recording
     chans = [ProbeChannel(b, a, "um", rng.normal(size=8192)) for b in (2, 3) for a in (45.0, 135.0)]
     with pytest.raises(ValueError, match="speed_rpm or keyphasor_times_s"):
         extract_features(Recording(5120.0, chans))

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from features import extract_features
+from rotordiag.features import extract_features
 
 from .test_features_synth import DEFAULT_COMPONENTS, make_recording
 

@@ -13,7 +13,7 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from features import ProbeChannel, Recording
+from rotordiag.features import ProbeChannel, Recording
 
 UM_PER_UNIT = {"um": 1.0, "mm": 1000.0, "m": 1e6, "mil": 25.4}
 

@@ -13,8 +13,8 @@ import pytest
 from threadpoolctl import threadpool_limits
 from typer.testing import CliRunner
 
-from models.dataset import load_feature_table
 from rotordiag.cli import app
+from rotordiag.models.dataset import load_feature_table
 
 FS = 2560.0
 N_POINTS = 2048

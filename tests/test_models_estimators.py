@@ -3,11 +3,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from threadpoolctl import threadpool_limits
 from sklearn.utils.estimator_checks import parametrize_with_checks
+from threadpoolctl import threadpool_limits
 
-from models.bands import SeverityBands
-from models.estimators import (
+from rotordiag.core.bands import SeverityBands
+from rotordiag.models.estimators import (
     ConformalIntervalRegressor,
     KNNDistanceOOD,
     MisalignmentModel,

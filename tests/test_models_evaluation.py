@@ -7,12 +7,13 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_limits
 
-from models.baselines import RatioThresholdClassifier, RuleOfThumb, ratio_column
-from models.config import TrainConfig
-from models.evaluate import cross_validate, evaluate, plot_report
-from models.metrics import classification_metrics, expected_calibration_error, regression_metrics
-from models.table import FeatureTable
+from rotordiag.models.baselines import RatioThresholdClassifier, RuleOfThumb, ratio_column
+from rotordiag.models.config import TrainConfig
+from rotordiag.models.evaluate import cross_validate, evaluate, plot_report
+from rotordiag.models.metrics import classification_metrics, expected_calibration_error, regression_metrics
+from rotordiag.models.table import FeatureTable
 from tests.models_synthetic import make_table
+
 
 @pytest.fixture(autouse=True)
 def _one_openmp_thread():

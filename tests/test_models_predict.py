@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_limits
 
-from models.config import TrainConfig
-from models.predict import ModelBundle, diagnose, format_verdict
+from rotordiag.models.config import TrainConfig
+from rotordiag.models.predict import ModelBundle, diagnose, format_verdict
 from tests.models_synthetic import FEATURE_NAMES, make_table
 
 
@@ -39,9 +39,17 @@ def test_verdict_agrees_with_the_model_and_converts_offset(model):
         assert v.severity == model.predict(row[None])[0]
         assert sum(v.probabilities.values()) == pytest.approx(1.0)
         point, iv = model.predict_misalignment(row[None])
-        assert v.misalignment == pytest.approx(point[0])
-        assert v.offset_um == pytest.approx(350.0 * point[0])
-        assert v.offset_interval_um == pytest.approx((350.0 * iv[0, 0], 350.0 * iv[0, 1]))
+        # the regressor's own estimate is kept; the Δ shown is it clipped into the class's band
+        assert v.misalignment_model == pytest.approx(point[0])
+        band = int(model.bands_.index([v.misalignment])[0])
+        assert model.bands_.names[band] == v.severity
+        lo_edge = ([0.0] + list(model.bands_.edges))[band]
+        hi_edge = (list(model.bands_.edges) + [np.inf])[band]
+        assert v.misalignment == pytest.approx(min(max(point[0], lo_edge), hi_edge), abs=1e-12)
+        assert v.offset_um == pytest.approx(350.0 * v.misalignment)
+        lo, hi = v.misalignment_interval
+        assert lo <= v.misalignment <= hi and lo <= iv[0, 0] + 1e-12 and hi >= iv[0, 1] - 1e-12
+        assert v.offset_interval_um == pytest.approx((350.0 * lo, 350.0 * hi))
         assert v.model_version == "v0007" and v.speed_rpm == 1500.0
         assert v.interval_level == pytest.approx(0.9)
 

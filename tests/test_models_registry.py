@@ -8,10 +8,10 @@ import pytest
 import skops.io as sio
 from threadpoolctl import threadpool_limits
 
-from models.config import TrainConfig
-from models.registry import Registry, RegistryError, load_model_file
-from models.table import FeatureTable
-from models.train import train_and_register
+from rotordiag.models.config import TrainConfig
+from rotordiag.models.registry import Registry, RegistryError, load_model_file
+from rotordiag.models.table import FeatureTable
+from rotordiag.models.train import train_and_register
 from tests.models_synthetic import make_table
 
 

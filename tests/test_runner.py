@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from simulator.runner import TaskError, run_tasks
+from rotordiag.simulator.runner import TaskError, run_tasks
 
 
 def pid_after_sleep(seconds: float) -> int:
@@ -102,7 +102,7 @@ def dask_setting(name: str):
 
 
 def test_own_cluster_runs_with_the_lean_config_and_reports_ready():
-    from simulator.runner import LOCAL_CLUSTER_CONFIG
+    from rotordiag.simulator.runner import LOCAL_CLUSTER_CONFIG
 
     events = []
     names = list(LOCAL_CLUSTER_CONFIG)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from service.main import create_app
+from rotordiag.service.main import create_app
 from tests.service_util import auth, diagnose_json, make_settings, shipped_or_tiny_registry, simulated_channels
 
 
@@ -61,8 +61,8 @@ def _check_verdict(v, active):
 
 def test_json_verdict_matches_the_library(client, rec):
     """The service returns exactly what models.predict.diagnose says for the same recording."""
-    from features import ProbeChannel, Recording, extract_features
-    from models.predict import diagnose
+    from rotordiag.features import ProbeChannel, Recording, extract_features
+    from rotordiag.models.predict import diagnose
 
     fs, channels = rec
     r = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0))
@@ -176,7 +176,7 @@ def test_unknown_units(client, rec):
 
 
 def test_too_few_revolutions_states_the_minimum(client, rec):
-    from features import MIN_REVS
+    from rotordiag.features import MIN_REVS
 
     fs, channels = rec
     few = [(b, a, d[: int(fs * 60 / 1800 * 3)]) for b, a, d in channels]   # 3 revolutions
@@ -198,7 +198,7 @@ def test_sample_rate_too_low_for_3x(client, rec):
     (b"", "empty body"),
     (_npy(np.zeros((3, 2, 100))), "shape"),
     (_npy(np.zeros((100, 8))), "transpose"),
-    (_npy(np.array(["a", "b"])), "not numeric"),
+    (_npy(np.array(["a", "b"])), "float32 or float64"),
     (_npy(np.zeros((8, 10)))[:60], "truncated"),
 ])
 def test_bad_npy_bodies(client, body, needle):
@@ -230,10 +230,10 @@ def test_binary_needs_sample_rate_and_layout(client, rec):
     assert r.status_code == 422 and "sample_rate_hz" in r.json()["detail"]
     r = client.post("/diagnose", params={"sample_rate_hz": 2048}, content=_npy(data[:4]),
                     headers={"content-type": "application/octet-stream"})
-    assert r.status_code == 422 and "bearings: required" in r.json()["detail"]
+    assert r.status_code == 422 and "channel layout unknown" in r.json()["detail"]
     r = client.post("/diagnose", params={"sample_rate_hz": 2048, "bearings": "1,1,2"}, content=_npy(data[:4]),
                     headers={"content-type": "application/octet-stream"})
-    assert r.status_code == 422 and "3 values given but the array has 4 channels" in r.json()["detail"]
+    assert r.status_code == 422 and "the layout names 3 channels" in r.json()["detail"]
 
 
 def test_multipart_mistakes(client):
@@ -327,3 +327,35 @@ def test_odd_but_valid_recordings_never_give_5xx(client, name):
     assert r.status_code in (200, 422), (r.status_code, r.text[:300])
     if r.status_code == 422:
         assert isinstance(r.json()["detail"], (str, list)) and r.json()["detail"]
+
+
+def test_verdict_status_reasons_and_evidence(client, rec):
+    """A clean recording gets a status, reasons and evidence; µm declared as mils (an orbit far larger
+    than the clearance) is inconclusive: no severity, no Δ, the reason says to check the units; batch too."""
+    fs, channels = rec
+    ok = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0)).json()
+    assert ok["status"] in ("confident", "uncertain") and ok["severity"] != "inconclusive"
+    assert isinstance(ok["reasons"], list)
+    names = {(e["scope"], e["name"]) for e in ok["evidence"]}
+    assert ("coupling 2–3", "1X phase difference x") in names and ("bearing 2", "shaft centreline") in names
+    body = diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0)
+    for c in body["channels"]:
+        c["units"] = "mil"
+    bad = client.post("/diagnose", json=body)
+    assert bad.status_code == 200
+    v = bad.json()
+    assert v["status"] == "inconclusive" and v["severity"] == "inconclusive"
+    assert v["misalignment"] is None and v["offset_um"] is None
+    assert sum(v["probabilities"].values()) == pytest.approx(1.0)         # still available for audit
+    codes = [r["code"] for r in v["reasons"]]
+    assert codes[0] == "orbit_exceeds_clearance" and "units" in v["reasons"][0]["message"]
+    batch = client.post("/diagnose/batch", json={"records": [body]}).json()
+    assert batch["items"][0]["result"]["status"] == "inconclusive"
+
+
+def test_slow_roll_without_keyphasor_is_a_422(client, rec):
+    fs, channels = rec
+    body = diagnose_json(fs, channels, speed_rpm=1800.0)
+    body["channels"][0]["slow_roll"] = [{"order": 1, "amp_um_pp": 2.0, "phase_deg": 30.0}]
+    r = client.post("/diagnose", json=body)
+    assert r.status_code == 422 and "keyphasor" in r.text

@@ -21,7 +21,7 @@ schemathesis = pytest.importorskip("schemathesis")
 from hypothesis import HealthCheck, settings  # noqa: E402
 from schemathesis.checks import not_a_server_error, response_schema_conformance, status_code_conformance  # noqa: E402,E501
 
-from service.main import create_app  # noqa: E402
+from rotordiag.service.main import create_app  # noqa: E402
 from tests.service_util import API_KEY, make_settings, shipped_or_tiny_registry  # noqa: E402
 
 _TMP = Path(tempfile.mkdtemp(prefix="rotordiag-fuzz-"))
@@ -40,7 +40,7 @@ def _record_only(manager) -> None:
 @pytest.fixture(scope="module", autouse=True)
 def _no_real_jobs():
     mp = pytest.MonkeyPatch()
-    mp.setattr("service.work.register_all", _record_only)
+    mp.setattr("rotordiag.service.work.register_all", _record_only)
     yield
     mp.undo()
 

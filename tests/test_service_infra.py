@@ -9,8 +9,8 @@ import pytest
 from fastapi.testclient import TestClient
 from pydantic import ValidationError
 
-from service.core.config import Settings
-from service.main import create_app
+from rotordiag.service.core.config import Settings
+from rotordiag.service.main import create_app
 from tests.service_util import API_KEY, auth, make_settings
 
 
@@ -277,8 +277,8 @@ def test_diagnose_key_is_optional_and_enforced_when_configured(tmp_path):
 
 def test_shipped_default_model_is_usable():
     """`make run` on a fresh clone diagnoses with the shipped model: it must exist and run with this code."""
-    from service.core.config import SHIPPED_REGISTRY_DIR
-    from service.inference import ModelStore
+    from rotordiag.service.core.config import SHIPPED_REGISTRY_DIR
+    from rotordiag.service.inference import ModelStore
 
     assert (SHIPPED_REGISTRY_DIR / "active").is_file(), f"no shipped registry at {SHIPPED_REGISTRY_DIR}"
     bundle = ModelStore(SHIPPED_REGISTRY_DIR).load()      # raises ModelUnavailable with the reason
@@ -286,7 +286,7 @@ def test_shipped_default_model_is_usable():
 
 
 def test_model_that_fails_when_used_gives_503_not_500(tmp_path, monkeypatch):
-    from models.estimators import MisalignmentModel
+    from rotordiag.models.estimators import MisalignmentModel
     from tests.service_util import shipped_or_tiny_registry
 
     src = shipped_or_tiny_registry()

@@ -7,7 +7,7 @@ import time
 import pytest
 from fastapi.testclient import TestClient
 
-from service.main import create_app
+from rotordiag.service.main import create_app
 from tests.service_util import auth, make_settings
 
 SMALL_SPEC = {
@@ -31,7 +31,7 @@ def _wait(c, job_id, statuses, timeout=240):
 
 
 def _done_count(path) -> int:
-    from simulator.dataset.store import open_dataset
+    from rotordiag.simulator.dataset.store import open_dataset
 
     try:
         with open_dataset(path) as f:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from service.main import create_app
+from rotordiag.service.main import create_app
 from tests.service_util import auth, diagnose_json, make_settings, shipped_or_tiny_registry, simulated_channels
 
 

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from simulator import Plant, build_system, simulate
-from simulator import _kernels as K
+from rotordiag.simulator import Plant, build_system, simulate
+from rotordiag.simulator import _kernels as K
 from tests.reference.rotor_numpy import ReferenceRotor, capone_literal, ocvirk_static
 
 

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from simulator import Plant, modal, simulate, static_equilibrium
-from simulator.simulate import order_amplitudes
+from rotordiag.simulator import Plant, modal, simulate, static_equilibrium
+from rotordiag.simulator.simulate import order_amplitudes
 
 W1950 = 1950 * math.pi / 30
 

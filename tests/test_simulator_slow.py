@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from simulator import Plant, build_system, simulate
+from rotordiag.simulator import Plant, build_system, simulate
 from tests.reference.rotor_numpy import ReferenceRotor
 from tests.test_simulator_physics import W1950, _total_energy
 

@@ -6,7 +6,6 @@ tests fail with a message saying what to install — they are never skipped. Scr
 """
 from __future__ import annotations
 
-import io
 import json
 import os
 import shutil
@@ -47,7 +46,7 @@ GREEN_ALIGNED = (0x2E, 0x7D, 0x32)
 def recordings():
     """Three simulated recordings of the default plant (Δ = 0.05, 0.2, 0.45): (n_points, 8) µm, probes at
     45° / 135° on bearings 1-4 (the service's default layout for 8 channels)."""
-    from simulator import Plant, simulate
+    from rotordiag.simulator import Plant, simulate
 
     out = {}
     for delta in (0.05, 0.2, 0.45):
@@ -106,7 +105,7 @@ def _get(url: str):
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
-    from service.core.config import SHIPPED_REGISTRY_DIR
+    from rotordiag.service.core.config import SHIPPED_REGISTRY_DIR
     from tests.service_util import shipped_or_tiny_registry
 
     tmp = tmp_path_factory.mktemp("web")
@@ -274,6 +273,25 @@ def test_page_loads_with_models_health_and_labelled_controls(server, browser):
     assert origins and set(origins) == {server}
 
 
+def test_inconclusive_verdict_shows_no_severity_only_reasons_and_evidence(server, browser, recordings, tmp_path):
+    """An orbit 25× too large for the stated clearance (mils written as µm): the page shows the
+    inconclusive status, what to check and the measured evidence — no severity badge, no Δ."""
+    data = recordings[0.2]
+    _open(browser, server)
+    _submit_file(browser, _write_csv(tmp_path / "unit.csv", data * 25.4), sample_rate=str(FS_HZ),
+                 clearance=str(CLEARANCE_UM))
+    d = browser
+    page = d.execute_script("return window.rotordiag.state.verdict")
+    assert page["status"] == "inconclusive"
+    assert "Inconclusive" in d.find_element("id", "verdict-status").text
+    assert not d.find_element("id", "verdict-severity-row").is_displayed()
+    assert not d.find_element("id", "verdict-delta-row").is_displayed()
+    assert not d.find_element("id", "verdict-probs").is_displayed()
+    reasons = [e.text for e in d.find_elements("css selector", "#verdict-reasons li")]
+    assert reasons and "clearance" in reasons[0] and "units" in reasons[0]
+    assert len(d.find_elements("css selector", "#verdict-evidence tbody tr")) == len(page["evidence"]) > 0
+
+
 def test_csv_upload_shows_verdict_orbits_and_spectra(server, browser, recordings, tmp_path):
     data = recordings[0.2]
     _open(browser, server)
@@ -328,7 +346,7 @@ def test_broken_uploads_show_the_services_message(server, browser, tmp_path):
     bad.write_text("probe_x,probe_y\n1.0,2.0\n3.0,oops\n")
     _submit_file(browser, bad, sample_rate="2048", expect="error")
     err = browser.find_element("id", "form-error")
-    assert err.is_displayed() and "CSV upload" in err.text and "oops" in err.text, err.text
+    assert err.is_displayed() and "CSV file" in err.text and "oops" in err.text, err.text
     assert not browser.find_element("id", "verdict").is_displayed()
     assert not browser.find_element("id", "plots").is_displayed()
     _screenshot(browser, "error-broken-csv")
@@ -408,3 +426,17 @@ def test_tablet_layouts_fit_the_screen(server, browser, recordings, tmp_path, wi
     else:                  # tablet portrait: one column
         assert verdict["y"] >= upload["y"] + upload["height"]
     _screenshot(browser, name)
+
+
+def test_api_docs_render_offline(server, browser):
+    """/docs is Swagger UI from the installed package: it renders the operations and loads nothing
+    from anywhere but this server; /redoc leads there."""
+    browser.get(server + "/docs")
+    _wait(browser, lambda d: d.find_elements("css selector", ".opblock-summary-path"), 60, "the Swagger UI operations")
+    paths = {e.text.replace("\u200b", "") for e in browser.find_elements("css selector", ".opblock-summary-path")}
+    assert "/diagnose" in paths
+    origins = browser.execute_script(
+        "return performance.getEntriesByType('resource').map((r) => new URL(r.name).origin)")
+    assert origins and set(origins) == {server}
+    browser.get(server + "/redoc")
+    assert browser.current_url.endswith("/docs")

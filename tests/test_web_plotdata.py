@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from service.web.plotdata import _reduce_max, full_spectrum_um_pp, half_spectrum_um_pp
+from rotordiag.service.web.plotdata import _reduce_max, full_spectrum_um_pp, half_spectrum_um_pp
 from tests.service_util import make_settings
 
 FS = 2048.0
@@ -34,7 +34,7 @@ def _probes(angles_deg=(45.0, 135.0), scale=1.0):
 
 @pytest.fixture(scope="module")
 def client(tmp_path_factory):
-    from service.main import create_app
+    from rotordiag.service.main import create_app
 
     with TestClient(create_app(make_settings(tmp_path_factory.mktemp("webapi")))) as c:
         yield c
@@ -172,7 +172,7 @@ def test_hdf5_and_npy_uploads(client):
 
 
 @pytest.mark.parametrize("case,status,needle", [
-    ("text in csv", 422, "CSV upload"),
+    ("text in csv", 422, "CSV file"),
     ("no sample rate", 422, "sample_rate_hz"),
     ("too short", 422, "revolutions"),
     ("one probe", 422, "bearing"),

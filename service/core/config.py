@@ -16,10 +16,12 @@ from typing import Literal
 from pydantic import Field, SecretStr, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from rotordiag.models.registry import shipped_registry_dir
+
 log = logging.getLogger("rotordiag.service")
 
 #: The registry shipped in the repository (default model, trained by the project's own pipeline).
-SHIPPED_REGISTRY_DIR = Path(__file__).resolve().parents[2] / "models" / "default_registry"
+SHIPPED_REGISTRY_DIR = shipped_registry_dir()
 
 
 class Settings(BaseSettings):
@@ -85,7 +87,7 @@ class Settings(BaseSettings):
         return value.strip()
 
     @model_validator(mode="after")
-    def _refuse_unsafe_defaults(self) -> "Settings":
+    def _refuse_unsafe_defaults(self) -> Settings:
         if self.environment == "production" and not self.api_key.get_secret_value().strip():
             raise ValueError(
                 "ROTORDIAG_API_KEY is empty: production mode needs an API key for the write endpoints; "

@@ -13,10 +13,12 @@ Hann window's scalloping loss).
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+if TYPE_CHECKING:
+    from rotordiag.features import Recording
 
 #: revolutions of the raw orbit shown (the last ones of the analysed segment)
 ORBIT_REVS = 8
@@ -120,7 +122,7 @@ def _filtered_orbit(cx: np.ndarray, cy: np.ndarray, orders: tuple[int, ...], n: 
     return {"x_um": _finite_list(x), "y_um": _finite_list(y)}
 
 
-def plot_data(recording: Any) -> dict[str, Any]:
+def plot_data(recording: Recording) -> dict[str, Any]:
     """Everything the page draws for one recording.
 
     Parameters
@@ -144,8 +146,10 @@ def plot_data(recording: Any) -> dict[str, Any]:
     """
     # Imported here: the server process loads the numeric stack only when the page asks for plots
     # (diagnoses run in the worker processes, service/pool.py).
-    from features import extract_features
-    from features._config import WHIRL_BAND  # the features package's own oil-whirl band (orders), not a copy
+    from rotordiag.features import (
+        WHIRL_BAND,  # the features package's own oil-whirl band (orders), not a copy
+        extract_features,
+    )
 
     fr = extract_features(recording)
     fs = float(recording.sample_rate_hz)

@@ -9,6 +9,7 @@ OpenAPI schema: they belong to the page, not to the API clients program against.
 """
 from __future__ import annotations
 
+from importlib.resources import files
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -17,10 +18,11 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse
 
 from ..api.errors import InputError
-from ..api.routes.diagnose import _recording_from_request  # same body forms and messages as /diagnose
+from ..api.routes.diagnose import ReaderQueryDep, _recording_from_request  # same body forms and messages as /diagnose
 from .plotdata import plot_data
 
-STATIC_DIR = Path(__file__).resolve().parent / "static"
+#: the page's files, installed with the package (found through importlib.resources)
+STATIC_DIR = Path(str(files("rotordiag.service.web.static")))
 
 #: the only files served from STATIC_DIR (no path is built from the request)
 _STATIC = {"app.js": "text/javascript; charset=utf-8", "style.css": "text/css; charset=utf-8"}
@@ -63,6 +65,7 @@ def _plot_sync(recording: Any) -> dict[str, Any]:
 @router.post("/ui/plot-data")
 async def plot(
     request: Request,
+    reader: ReaderQueryDep,
     sample_rate_hz: Annotated[float | None, Query(gt=0, le=1e6, allow_inf_nan=False)] = None,
     speed_rpm: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False)] = None,
     clearance_um: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False)] = None,
@@ -75,6 +78,6 @@ async def plot(
     """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.web.plotdata``)."""
     query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=None,
                  plant=None, units=units, bearings=bearings, angles_deg=angles_deg,
-                 keyphasor_times_s=keyphasor_times_s, sample_index=sample_index)
+                 keyphasor_times_s=keyphasor_times_s, sample_index=sample_index, **reader)
     recording, _, _ = await _recording_from_request(request, query)
     return await run_in_threadpool(_plot_sync, recording)

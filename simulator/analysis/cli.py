@@ -7,7 +7,8 @@ from typing import Optional
 
 import typer
 
-MECHANISM_HELP = "Coupling model: pin (the paper's holonomic constraint), rigid (offset carried by the shaft)."
+MECHANISM_HELP = ("Coupling model: pin (the paper's holonomic constraint), rigid (rotating coupling eccentricity), "
+                  "offset (stationary shaft-line offset), flexible (offset across a flexible coupling, 2X reaction).")
 WORKERS_HELP = "Local Dask worker processes (default: all usable CPUs; 0 = run in this process, no Dask)."
 SCHEDULER_HELP = "Address of an existing Dask scheduler, e.g. tcp://host:8786 (instead of a local cluster)."
 
@@ -53,7 +54,7 @@ def register(app: typer.Typer) -> None:
         """Bifurcation diagram: Poincaré points of X = x/c against speed or misalignment."""
         import numpy as np
 
-        from simulator.cli import load_plant
+        from rotordiag.simulator.cli import load_plant
 
         if over not in ("speed", "misalignment"):
             raise typer.BadParameter("must be 'speed' or 'misalignment'", param_hint="--over")
@@ -69,7 +70,7 @@ def register(app: typer.Typer) -> None:
         values = np.linspace(from_, to, points)
         kw = dict(mechanism=mechanism, node=node, direction=direction, transient_revs=transient_revs,
                   record_revs=record_revs, lle_revs=lle_revs, progress=progress, **opts)
-        from simulator.analysis.sweeps import misalignment_sweep, speed_sweep
+        from rotordiag.simulator.analysis.sweeps import misalignment_sweep, speed_sweep
 
         try:
             if over == "speed":
@@ -84,7 +85,7 @@ def register(app: typer.Typer) -> None:
             _fail(str(exc))
         except OSError as exc:
             _fail(f"could not reach the Dask scheduler: {exc}")
-        from simulator.analysis.figures import motion_windows
+        from rotordiag.simulator.analysis.figures import motion_windows
 
         for w in motion_windows(sweep):
             lle = "" if w["lle_min"] is None else f"  LLE {w['lle_min']:+.4f} .. {w['lle_max']:+.4f} /rev"
@@ -98,7 +99,7 @@ def register(app: typer.Typer) -> None:
             matplotlib.use("Agg")
             import matplotlib.pyplot as plt
 
-            from simulator.analysis.figures import plot_bifurcation, plot_lle
+            from rotordiag.simulator.analysis.figures import plot_bifurcation, plot_lle
 
             rows = 2 if lle_revs > 0 else 1
             fig, axes = plt.subplots(rows, 1, figsize=(8, 4 * rows), squeeze=False, sharex=True)
@@ -130,10 +131,10 @@ def register(app: typer.Typer) -> None:
         import numpy as np
         from tqdm.auto import tqdm
 
-        from simulator import simulate
-        from simulator.analysis import FlowMapError, classify_motion
-        from simulator.analysis.sweeps import rotor_lyapunov
-        from simulator.cli import load_plant
+        from rotordiag.simulator import simulate
+        from rotordiag.simulator.analysis import FlowMapError, classify_motion
+        from rotordiag.simulator.analysis.sweeps import rotor_lyapunov
+        from rotordiag.simulator.cli import load_plant
 
         if revs < 10:
             raise typer.BadParameter("need at least 10 revolutions", param_hint="--revs")
@@ -185,6 +186,35 @@ def register(app: typer.Typer) -> None:
             typer.echo(f"wrote {plot}", err=True)
 
     @app.command()
+    def mechanisms(
+        out: Path = typer.Option(..., help="Directory for mechanisms.png, mechanisms.md and mechanisms.json."),
+        plant: Optional[Path] = typer.Option(None, help="Plant file (TOML or JSON); default MODEL.md's plant."),
+        workers: Optional[int] = typer.Option(None, help="Worker processes (default: usable CPUs; 0 = here)."),
+        quick: bool = typer.Option(False, "--quick", help="One speed (1950 r/min) and Δ = 0, 0.1, 0.3 only."),
+    ) -> None:
+        """Every coupling mechanism at 1500, 1950, 3000 r/min versus Δ: 1X, 2X, 2X/1X, static journal positions,
+        and the flexible coupling's phase and stiffness sensitivity (docs/reproduction.md)."""
+        from dataclasses import asdict
+
+        from rotordiag.simulator.analysis.mechanisms import mechanism_survey, survey_figure, survey_markdown
+        from rotordiag.simulator.cli import load_plant
+
+        if workers is not None and workers < 0:
+            raise typer.BadParameter("must be >= 0", param_hint="--workers")
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise typer.BadParameter(f"cannot create {out}: {exc}", param_hint="--out") from None
+        if quick:
+            points = mechanism_survey(load_plant(plant), workers=workers, speeds_rpm=(1950.0,), deltas=(0.0, 0.1, 0.3))
+        else:
+            points = mechanism_survey(load_plant(plant), workers=workers)
+        (out / "mechanisms.json").write_text(json.dumps([asdict(p) for p in points], indent=1))
+        (out / "mechanisms.md").write_text(survey_markdown(points))
+        survey_figure(points, out / "mechanisms.png")
+        typer.echo(f"{len(points)} runs; wrote {out / 'mechanisms.png'}, mechanisms.md, mechanisms.json")
+
+    @app.command()
     def figures(
         out: Path = typer.Option(..., help="Directory for the PNGs, sweep data and summary.json."),
         quick: bool = typer.Option(False, "--quick", help="Coarse grids: a few minutes on 2 cores."),
@@ -196,12 +226,12 @@ def register(app: typer.Typer) -> None:
         """Regenerate the paper's figure set (Figs 4–15) as PNGs."""
         from dataclasses import replace
 
-        from simulator.analysis.figures import FULL, QUICK, paper_figures
-        from simulator.cli import load_plant
+        from rotordiag.simulator.analysis.figures import FULL, QUICK, paper_figures
+        from rotordiag.simulator.cli import load_plant
 
         opts = _run_opts(workers, scheduler)
-        if mechanism not in ("pin", "rigid"):
-            raise typer.BadParameter("must be 'pin' or 'rigid'", param_hint="--mechanism")
+        if mechanism not in ("pin", "rigid", "offset", "flexible"):
+            raise typer.BadParameter("must be 'pin', 'rigid', 'offset' or 'flexible'", param_hint="--mechanism")
         try:
             out.mkdir(parents=True, exist_ok=True)
         except OSError as exc:

@@ -11,13 +11,19 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .sweeps import PointResult, PointTask, SweepResult, _inputs, _tasks, run_points
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from ..params import Plant
 
 __all__ = ["plot_bifurcation", "plot_lle", "plot_orbit", "plot_spectrum", "plot_amplitudes", "motion_windows",
            "FigureSettings", "QUICK", "FULL", "paper_figures"]
@@ -36,7 +42,7 @@ def _label_param(sweep: SweepResult) -> str:
     return "running speed Ω (r/min)" if sweep.parameter == "speed_rpm" else "misalignment Δ = δ/c (–)"
 
 
-def plot_bifurcation(ax: Any, sweep: SweepResult, *, colour: str = "black", label: str | None = None,
+def plot_bifurcation(ax: Axes, sweep: SweepResult, *, colour: str = "black", label: str | None = None,
                      size: float = 1.5) -> None:
     """Poincaré points of the swept node/direction against the parameter; failed runs as grey ×."""
     ok = sweep.status == "ok"
@@ -54,7 +60,7 @@ def plot_bifurcation(ax: Any, sweep: SweepResult, *, colour: str = "black", labe
     ax.grid(alpha=0.3)
 
 
-def plot_lle(ax: Any, sweep: SweepResult, *, colour: str = "black", label: str | None = None,
+def plot_lle(ax: Axes, sweep: SweepResult, *, colour: str = "black", label: str | None = None,
              noise: float | None = None) -> None:
     """LLE per revolution against the parameter, with a ±3 standard-error band."""
     from .motion import LLE_NOISE_PER_INTERVAL
@@ -72,9 +78,10 @@ def plot_lle(ax: Any, sweep: SweepResult, *, colour: str = "black", label: str |
     ax.grid(alpha=0.3)
 
 
-def plot_orbit(ax: Any, point: PointResult, node: int = 3, title: str | None = None) -> None:
+def plot_orbit(ax: Axes, point: PointResult, node: int = 3, title: str | None = None) -> None:
     """Orbit of a node (black) with its Poincaré points (red), in clearances."""
     w = point.waveform
+    assert w is not None, "plot_orbit needs a point computed with keep_waveform=True"
     ax.plot(w[:, 0], w[:, 1], c="black", lw=0.5)
     sec = point.sections[:, node - 1]
     ax.plot(sec[:, 0], sec[:, 1], "o", c="red", ms=3)
@@ -86,9 +93,10 @@ def plot_orbit(ax: Any, point: PointResult, node: int = 3, title: str | None = N
         ax.set_title(title, fontsize=9)
 
 
-def plot_spectrum(ax: Any, point: PointResult, clearance_m: float, samples_per_rev: int, record_revs: int,
+def plot_spectrum(ax: Axes, point: PointResult, clearance_m: float, samples_per_rev: int, record_revs: int,
                   max_order: float = 4.0) -> None:
     """Amplitude spectrum (zero-to-peak, µm) of the horizontal displacement; 1X..3X marked."""
+    assert point.waveform is not None, "plot_spectrum needs a point computed with keep_waveform=True"
     x = point.waveform[:, 0] * clearance_m * 1e6
     n = x.size
     spec = np.abs(np.fft.rfft(x - x.mean())) * 2.0 / n
@@ -104,7 +112,7 @@ def plot_spectrum(ax: Any, point: PointResult, clearance_m: float, samples_per_r
     ax.grid(alpha=0.3, which="both")
 
 
-def plot_amplitudes(axes: Sequence[Any], curves: dict[float, SweepResult]) -> None:
+def plot_amplitudes(axes: Sequence[Axes], curves: dict[float, SweepResult]) -> None:
     """Peak-to-peak, 1X and 2X (µm) against speed for several Δ (three axes)."""
     titles = ("peak-to-peak", "1X (0-pk)", "2X (0-pk)")
     for d, sw in curves.items():
@@ -178,7 +186,7 @@ def _grid(a: float, b: float, step: float) -> np.ndarray:
     return np.round(np.linspace(a, b, n), 10)
 
 
-def paper_figures(out_dir: str | Path, settings: FigureSettings = QUICK, *, plant: Any = None,
+def paper_figures(out_dir: str | Path, settings: FigureSettings = QUICK, *, plant: Plant | None = None,
                   n_workers: int | None = None, scheduler_address: str | None = None,
                   progress: bool = True) -> dict:
     """Compute and write the paper's figure set into ``out_dir``; returns the summary dict.
@@ -194,7 +202,7 @@ def paper_figures(out_dir: str | Path, settings: FigureSettings = QUICK, *, plan
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from simulator import Plant
+    from rotordiag.simulator import Plant
 
     start = time.perf_counter()
     out = Path(out_dir)
@@ -203,7 +211,7 @@ def paper_figures(out_dir: str | Path, settings: FigureSettings = QUICK, *, plan
     s = settings
     speeds = _grid(s.speed_from_rpm, s.speed_to_rpm, s.speed_step_rpm)
     deltas = _grid(s.delta_from, s.delta_to, s.delta_step)
-    common = dict(mechanism=s.mechanism, transient_revs=s.transient_revs, samples_per_rev=64, rtol=1e-6,
+    common: dict[str, Any] = dict(mechanism=s.mechanism, transient_revs=s.transient_revs, samples_per_rev=64, rtol=1e-6,
                   atol=1e-8, node=3, direction="x", seed=0)
 
     groups: dict[str, list[PointTask]] = {}
@@ -278,7 +286,7 @@ def paper_figures(out_dir: str | Path, settings: FigureSettings = QUICK, *, plan
     save(fig, "fig10_lle_speed_d010.png")
     # Figs 6-8 / 11-13: orbits + Poincaré + spectrum
     orbit_pts = by_group["orbits"]
-    ratios: dict[str, dict[str, float]] = {}
+    ratios: dict[str, dict[str, dict[str, Any]]] = {}
     for i, v in enumerate(ORBIT_SPEEDS):
         fig, axes = plt.subplots(2, 3, figsize=(11, 6.5))
         for j, d in enumerate(SWEEP_DELTAS):

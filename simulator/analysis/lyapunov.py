@@ -21,8 +21,8 @@ running estimate is returned as the convergence history.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
@@ -185,6 +185,7 @@ def largest_lyapunov(
     def step(state: np.ndarray) -> np.ndarray:
         if flow_map is not None:
             return _as_state(flow_map(state), "flow_map(state)")
+        assert tangent_map is not None  # checked above
         return _as_state(tangent_map(state, np.zeros_like(state))[0], "tangent_map(state)[0]")
 
     for _ in range(int(transient_intervals)):
@@ -196,6 +197,7 @@ def largest_lyapunov(
 
     log_growth = np.empty(int(n_intervals))
     if method == "neighbour":
+        assert flow_map is not None  # checked above
         y = x + separation * direction
         for k in range(int(n_intervals)):
             x_next = step(x)
@@ -213,6 +215,7 @@ def largest_lyapunov(
                 progress(1)
     else:
         v = direction
+        assert tangent_map is not None  # checked above
         for k in range(int(n_intervals)):
             x_next, v_next = tangent_map(x, v)
             x_next = _as_state(x_next, "tangent_map(state)[0]")

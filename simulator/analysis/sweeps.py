@@ -20,14 +20,18 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Callable, Iterable, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .lyapunov import FlowMapError, LyapunovResult, largest_lyapunov
 from .motion import classify_motion
+
+if TYPE_CHECKING:
+    from ..system import RotorSystem
 
 __all__ = [
     "PointTask", "PointResult", "SweepResult", "run_point", "run_points", "speed_sweep",
@@ -46,7 +50,7 @@ DIRECTIONS = {"x": 0, "y": 1}
 #: journal node -> bearing index 0..3 (MODEL.md: bearing b at node (1, 3, 4, 6)[b-1])
 _JOURNAL_BEARING = {1: 0, 3: 1, 4: 2, 6: 3}
 #: state components that are not dynamic in a mechanism (φ, φ'): kept out of the perturbation
-_INACTIVE = {"aligned": (10, 21), "rigid": (10, 21), "pin": ()}
+_INACTIVE = {"aligned": (10, 21), "rigid": (10, 21), "pin": (), "offset": (10, 21), "flexible": (10, 21)}
 
 
 # --------------------------------------------------------------------- tasks
@@ -125,7 +129,7 @@ def _check_node_direction(node: int, direction: str) -> None:
         raise ValueError(f"direction must be 'x' (horizontal) or 'y' (vertical), got {direction!r}")
 
 
-def rotor_flow_map(system: Any, state: np.ndarray) -> tuple[Callable[[np.ndarray], np.ndarray], np.ndarray]:
+def rotor_flow_map(system: RotorSystem, state: np.ndarray) -> tuple[Callable[[np.ndarray], np.ndarray], np.ndarray]:
     """Poincaré map of a :class:`simulator.RotorSystem` on its dynamic state components.
 
     Returns ``(flow, reduced_state)``: ``flow`` advances a reduced state by one
@@ -172,7 +176,7 @@ def rotor_lyapunov(
     revolutions, then averages ``n_revs`` revolutions. Per revolution and per
     second (interval = 60/rpm s).
     """
-    from simulator import build_system
+    from rotordiag.simulator import build_system
 
     system = build_system(plant, speed_rpm, misalignment, unbalance, mechanism=mechanism, rtol=rtol, atol=atol,
                           **system_kwargs)
@@ -185,8 +189,8 @@ def rotor_lyapunov(
 
 def run_point(task: PointTask) -> PointResult:
     """Run one operating point (the function the Dask workers execute)."""
-    from simulator import simulate
-    from simulator.simulate import order_amplitudes
+    from rotordiag.simulator import simulate
+    from rotordiag.simulator.simulate import order_amplitudes
 
     start = time.perf_counter()
     kwargs = dict(task.sim_kwargs)
@@ -249,7 +253,7 @@ def run_points(
         for i, task in enumerate(tqdm(tasks, desc=desc, unit="point", disable=not progress)):
             out[i] = run_point(task)
     else:
-        from simulator.runner import run_tasks
+        from rotordiag.simulator.runner import run_tasks
 
         for i, result in run_tasks(run_point, tasks, n_workers=n_workers, scheduler_address=scheduler_address,
                                    client=client, progress=progress, desc=desc, unit="point"):
@@ -309,7 +313,7 @@ class SweepResult:
         return float(self.inputs["plant"]["clearance_m"])
 
     @classmethod
-    def from_points(cls, parameter: str, points: Sequence[PointResult], inputs: dict) -> "SweepResult":
+    def from_points(cls, parameter: str, points: Sequence[PointResult], inputs: dict) -> SweepResult:
         node = inputs["node"]
         d = DIRECTIONS[inputs["direction"]]
         sections = np.stack([p.sections for p in points])
@@ -352,7 +356,7 @@ class SweepResult:
                     f.create_dataset(name, data=arr)
 
     @classmethod
-    def from_hdf5(cls, path: str | Path) -> "SweepResult":
+    def from_hdf5(cls, path: str | Path) -> SweepResult:
         """Read a file written by :meth:`to_hdf5`."""
         import json
 
@@ -395,7 +399,7 @@ def _tasks(plant: Any, pairs: Iterable[tuple[float, float]], unbalance: float, *
                      keep_waveform=keep_waveform, sim_kwargs=tuple(sorted((sim_kwargs or {}).items())))
     tasks = [replace(base, speed_rpm=float(s), misalignment=float(d)) for s, d in pairs]
     # validate the operating points here, in the caller's process, with the simulator's own messages
-    from simulator import build_system
+    from rotordiag.simulator import build_system
 
     for t in {(t.speed_rpm, t.misalignment) for t in tasks}:
         build_system(plant, t[0], t[1], unbalance, mechanism=mechanism, rtol=rtol, atol=atol, **(sim_kwargs or {}))
@@ -440,7 +444,7 @@ def speed_sweep(
         Running speeds, r/min.
     misalignment, unbalance : float
         Δ = δ/c and A = a/c.
-    mechanism : {"pin", "rigid", "aligned"}
+    mechanism : {"pin", "rigid", "aligned", "offset", "flexible"}
     node : int
         Node whose Poincaré points form the diagram (default 3, generator journal at the coupling).
     direction : {"x", "y"}

@@ -33,10 +33,10 @@ def generate(
                                           help="Seconds to wait for --scheduler to answer."),
 ) -> None:
     """Generate (or resume) a dataset. Safe to kill at any moment; rerun the same command to resume."""
-    from simulator.dataset.generate import generate as run
-    from simulator.dataset.spec import SpecError
-    from simulator.dataset.store import StoreError
-    from simulator.runner import TaskError
+    from rotordiag.simulator.dataset.generate import generate as run
+    from rotordiag.simulator.dataset.spec import SpecError
+    from rotordiag.simulator.dataset.store import StoreError
+    from rotordiag.simulator.runner import TaskError
 
     if workers is not None and scheduler is not None:
         raise typer.BadParameter("give either --workers or --scheduler, not both", param_hint="--workers")
@@ -69,8 +69,8 @@ def info(
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
     """Summarise a dataset: counts per class, status, mechanism and motion; parameter ranges."""
-    from simulator.dataset.info import summarize
-    from simulator.dataset.store import StoreError
+    from rotordiag.simulator.dataset.info import summarize
+    from rotordiag.simulator.dataset.store import StoreError
 
     try:
         s = summarize(path)
@@ -101,8 +101,8 @@ def merge(
     out: Path = typer.Option(..., "--out", "-o", help="New merged HDF5 file."),
 ) -> None:
     """Join the finished samples of several dataset files into one new file."""
-    from simulator.dataset.merge import merge as run
-    from simulator.dataset.store import StoreError
+    from rotordiag.simulator.dataset.merge import merge as run
+    from rotordiag.simulator.dataset.store import StoreError
 
     try:
         result = run(inputs, out)
@@ -114,7 +114,7 @@ def merge(
 @dataset_app.command()
 def repair(path: Path = typer.Argument(..., help="Dataset HDF5 file of a killed run.")) -> None:
     """Make the file of a killed run readable by plain h5py again (keeps every finished sample)."""
-    from simulator.dataset.store import StoreError, repair_file
+    from rotordiag.simulator.dataset.store import StoreError, repair_file
 
     try:
         crashed, n_done = repair_file(path)

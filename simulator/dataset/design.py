@@ -28,7 +28,6 @@ plant value (each bearing separately for per-bearing values) onto
 """
 from __future__ import annotations
 
-import itertools
 import math
 import warnings
 from dataclasses import dataclass
@@ -43,9 +42,8 @@ __all__ = ["VARIABLES", "Design", "SampleParams", "build_design", "sample_seed"]
 #: Operating quantities of a sample, in design order.
 VARIABLES: tuple[str, ...] = (
     "speed_rpm", "misalignment", "unbalance", "unbalance_phase_rad", "exciter_unbalance",
-    "exciter_unbalance_phase_rad", "offset_angle_rad",
+    "exciter_unbalance_phase_rad", "offset_angle_rad", "coupling_phase_rad",
 )
-MECHANISM_CODES: dict[str, int] = {"pin": 0, "rigid": 1}
 
 
 def sample_seed(master_seed: int, index: int) -> int:
@@ -69,6 +67,7 @@ class SampleParams:
     offset_angle_rad: float
     mechanism: str
     sample_seed: int
+    coupling_phase_rad: float = 0.0
 
 
 class Design:
@@ -82,7 +81,7 @@ class Design:
         self._base = resolved.base_plant.to_dict()
         op = spec.operating
         self._values = {name: getattr(op, name) for name in VARIABLES}
-        self._mechanism = op.mechanism
+        self._mechanism: str | list[str] | dict[str, float] = op.mechanism
         # perturbation dimensions: (field, element index or None, half-width)
         self._perturb: list[tuple[str, int | None, float]] = []
         for name in PERTURBABLE:
@@ -95,7 +94,7 @@ class Design:
             else:
                 self._perturb.append((name, None, r))
         if self.method == "grid":
-            self._levels = [self._grid_levels(self._values[n]) for n in VARIABLES]
+            self._levels: list[list[Any]] = [list(self._grid_levels(self._values[n])) for n in VARIABLES]
             mech = self._mechanism
             self._levels.append([mech] if isinstance(mech, str) else list(mech))
             self._shape = tuple(len(v) for v in self._levels)
@@ -104,8 +103,9 @@ class Design:
                 raise SpecError(f"invalid dataset spec:\n  design.n_samples = {spec.design.n_samples} but the grid "
                                 f"has {n} points ({' × '.join(map(str, self._shape))}); remove n_samples or fix it")
             self.n_samples = n
-            self._u = None
+            self._u: np.ndarray | None = None
         else:
+            assert spec.design.n_samples is not None  # required for sampled designs (validated)
             self.n_samples = int(spec.design.n_samples)
             self._dims = [n for n in VARIABLES if self._is_variable(self._values[n])]
             self._mech_dim = not isinstance(self._mechanism, str) and len(self._mechanism) > 1
@@ -154,8 +154,10 @@ class Design:
         m = self._mechanism
         if isinstance(m, list):
             return m[min(int(math.floor(u * len(m))), len(m) - 1)]
+        if isinstance(m, str):
+            return m
         names = sorted(m)  # fixed order: pin, rigid
-        w = np.array([m[k] for k in names], dtype=float)
+        w = np.array([float(m[k]) for k in names], dtype=float)
         edges = np.cumsum(w / w.sum())
         return names[min(int(np.searchsorted(edges, u, side="right")), len(names) - 1)]
 
@@ -181,6 +183,7 @@ class Design:
             vals = {n: float(self._levels[k][pos[k]]) for k, n in enumerate(VARIABLES)}
             mechanism = self._levels[-1][pos[-1]]
         else:
+            assert self._u is not None
             u = self._u[i]
             vals = {}
             j = 0

@@ -6,9 +6,10 @@ import json
 import math
 import time
 from collections import Counter
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -23,7 +24,7 @@ __all__ = ["GenerateSummary", "generate", "severity_bands"]
 
 def severity_bands():
     """The severity bands of the labels (the models package's definition, one source of truth)."""
-    from models.bands import SeverityBands
+    from rotordiag.core.bands import SeverityBands
 
     return SeverityBands()
 
@@ -63,7 +64,7 @@ class GenerateSummary:
 
 
 def _file_attrs(resolved: ResolvedSpec, design: Design, meas: MeasurementSettings) -> dict[str, Any]:
-    from rotordiag import code_version
+    from rotordiag.core.version import code_version
 
     bands = severity_bands()
     return {
@@ -73,7 +74,7 @@ def _file_attrs(resolved: ResolvedSpec, design: Design, meas: MeasurementSetting
         "spec_json": json.dumps(resolved.spec.model_dump(mode="json")),
         "spec_hash": resolved.spec_hash,
         "code_version": code_version(),
-        "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "created_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
         "n_samples": design.n_samples,
         "n_channels": len(meas.channels),
         "n_points": meas.n_points,
@@ -101,12 +102,12 @@ def _dataset_attrs() -> dict[str, dict[str, Any]]:
 
 
 def _rows(p: SampleParams, out: SampleOutput) -> dict[str, Any]:
-    from simulator import Plant
+    from rotordiag.simulator import Plant
 
     bands = severity_bands()
     rows: dict[str, Any] = {"waveforms": out.waveforms_um}
     for name in ("speed_rpm", "misalignment", "unbalance", "unbalance_phase_rad", "exciter_unbalance",
-                 "exciter_unbalance_phase_rad", "offset_angle_rad"):
+                 "exciter_unbalance_phase_rad", "offset_angle_rad", "coupling_phase_rad"):
         rows[f"parameters/{name}"] = getattr(p, name)
     rows["parameters/mechanism"] = MECHANISM_CODES[p.mechanism]
     rows["parameters/simulated_mechanism"] = SIMULATED_MECHANISM_CODES[out.simulated_mechanism]
@@ -217,7 +218,7 @@ def generate(
     design = build_design(resolved)
     meas = MeasurementSettings.from_spec(resolved.spec)
     sim = SimulationSettings.from_spec(resolved.spec)
-    from rotordiag import code_version
+    from rotordiag.core.version import code_version
 
     L = layout(len(meas.channels), meas.n_points, len(meas.bearings), resolved.base_plant.to_dict())
     own_client = None
@@ -236,7 +237,7 @@ def generate(
 
 def _run(resolved, design, meas, sim, L, out, n_workers, client, progress, on_progress, t_start,
          version) -> GenerateSummary:
-    from simulator.runner import run_tasks
+    from rotordiag.simulator.runner import run_tasks
 
     t_first = math.nan
     t_ready = [math.nan]
@@ -255,7 +256,7 @@ def _run(resolved, design, meas, sim, L, out, n_workers, client, progress, on_pr
             t_ready[0] = time.perf_counter() - t_start
 
         if len(todo) == 0:
-            results = iter(())  # nothing to do: start no cluster
+            results: Iterator[tuple[int, SampleOutput]] = iter(())  # nothing to do: start no cluster
         elif n_workers == 0:  # one process: nothing to balance, index order
             ready()
             tasks = (SampleTask(design[int(i)], sim, meas) for i in todo)

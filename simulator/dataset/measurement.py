@@ -37,6 +37,8 @@ from typing import Any
 
 import numpy as np
 
+from rotordiag.core.conventions import project_on_probe
+
 __all__ = ["MeasurementSettings", "MeasurementDraws", "draw_measurement", "shaft_angle_rad",
            "required_record_revs", "probe_waveforms_um"]
 
@@ -67,7 +69,7 @@ class MeasurementSettings:
     speed_fluctuation_hz: float = 0.5
 
     @classmethod
-    def from_spec(cls, spec: Any) -> "MeasurementSettings":
+    def from_spec(cls, spec: Any) -> MeasurementSettings:
         m = spec.measurement
         return cls(
             bearings=tuple(int(b) for b in m.bearings),
@@ -184,7 +186,7 @@ def probe_waveforms_um(
         for c, (b, angle_deg) in enumerate(settings.channels):
             alpha = math.radians(angle_deg)
             k = settings.bearings.index(b)
-            signal = xy[:, b - 1, 0] * math.cos(alpha) + xy[:, b - 1, 1] * math.sin(alpha)
+            signal = project_on_probe(xy[:, b - 1, 0], xy[:, b - 1, 1], angle_deg)
             psi = alpha - theta[inside]
             signal = signal + draws.runout_1x_um[k] * np.cos(psi - draws.runout_1x_phase_rad[k]) \
                 + draws.runout_2x_um[k] * np.cos(2.0 * psi - draws.runout_2x_phase_rad[k])

@@ -16,6 +16,7 @@ import datetime as _dt
 import hashlib
 import json
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -38,7 +39,7 @@ def _signature(f: Any) -> dict[str, Any]:
     }
 
 
-def merge(inputs: list[str | os.PathLike], out: str | os.PathLike) -> dict[str, Any]:
+def merge(inputs: Sequence[str | os.PathLike], out: str | os.PathLike) -> dict[str, Any]:
     """Merge the finished samples of ``inputs`` into a new file ``out``.
 
     Returns
@@ -53,7 +54,8 @@ def merge(inputs: list[str | os.PathLike], out: str | os.PathLike) -> dict[str, 
         families, or duplicated specs; the message says which file and why.
     """
     import h5py
-    from rotordiag import code_version
+
+    from rotordiag.core.version import code_version
 
     paths = [Path(p) for p in inputs]
     out = Path(out)
@@ -64,7 +66,7 @@ def merge(inputs: list[str | os.PathLike], out: str | os.PathLike) -> dict[str, 
     if any(p.resolve() == out.resolve() for p in paths):
         raise StoreError("the output file cannot be one of the inputs")
     sources: list[dict[str, Any]] = []
-    ref_sig = None
+    ref_sig: dict[str, Any] | None = None
     seen_hashes: dict[str, str] = {}
     offsets: list[int] = []
     for p in paths:
@@ -111,12 +113,13 @@ def merge(inputs: list[str | os.PathLike], out: str | os.PathLike) -> dict[str, 
         "spec_toml": "", "spec_json": "",
         "spec_hash": hashlib.sha256("".join(sorted(s["spec_hash"] for s in sources)).encode()).hexdigest(),
         "sources_json": json.dumps(sources), "code_version": code_version(),
-        "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "created_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
         "n_samples": total, "design_method": "merged", "master_seed": -1,
         "base_plant_json": "",
     })
     dattrs["source"] = {"description": "index into the sources_json attribute"}
     tmp = out.with_name(out.name + ".merging")
+    assert ref_sig is not None  # at least one input was read
     create_file(tmp, total, L, channels, attrs, dattrs, compression=ref_sig["compression"] or "gzip")
     with h5py.File(tmp, "r+", libver="latest") as dst:
         row = 0

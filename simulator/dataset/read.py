@@ -11,9 +11,11 @@ Works on complete files, on files being written and on files of a killed run
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
-from typing import Any, Iterator
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 
@@ -44,7 +46,7 @@ class DatasetReader:
 
     def __init__(self, path: str | os.PathLike):
         self.path = path
-        self._cm = open_dataset(path)
+        self._cm: contextlib.AbstractContextManager[Any] | None = open_dataset(path)
         self.f = self._cm.__enter__()
         self.done = self.f["done"][...].astype(bool)
         self.indices = np.flatnonzero(self.done)
@@ -57,7 +59,7 @@ class DatasetReader:
             self._cm.__exit__(None, None, None)
             self._cm = None
 
-    def __enter__(self) -> "DatasetReader":
+    def __enter__(self) -> DatasetReader:
         return self
 
     def __exit__(self, *exc: Any) -> None:

@@ -4,8 +4,9 @@ See ``examples/dataset_small.toml`` for a commented example and
 ``docs/datasets.md`` for the user guide. The tables are:
 
 ``[design]``       sampling design: ``method`` (grid | sobol | lhs), ``n_samples``, ``seed``
-``[operating]``    Δ, A, Ω, phases, exciter unbalance, ``mechanism``: each a value, a list or a range
-``[plant]``        base plant (``file`` and/or ``set``) and relative ``perturb``-ations
+``[operating]``    Δ, A, Ω, phases, exciter unbalance, ``coupling_phase_rad``, ``mechanism``
+                   (pin | rigid | offset | flexible): each a value, a list or a range
+``[plant]``        base plant (``file``, ``shaftline`` or ``preset``, and/or ``set``) and relative ``perturb``-ations
 ``[measurement]``  probes, sample rate, duration, SNR, runout, speed fluctuation
 ``[simulation]``   transient_revs, samples_per_rev, rtol, atol, classify_motion
 
@@ -18,12 +19,13 @@ import hashlib
 import json
 import math
 import tomllib
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from simulator.params import MISALIGNMENT_RANGE, SPEED_RANGE_RPM, UNBALANCE_RANGE
+from rotordiag.simulator.params import MISALIGNMENT_RANGE, SPEED_RANGE_RPM, UNBALANCE_RANGE
 
 __all__ = ["SpecError", "DatasetSpec", "Range", "load_spec", "parse_spec", "PERTURBABLE"]
 
@@ -34,7 +36,7 @@ PERTURBABLE: tuple[str, ...] = (
     "journal1_mass_kg", "generator_mass_kg", "journal3_mass_kg", "journal4_mass_kg",
     "exciter_mass_kg", "journal6_mass_kg", "generator_stiffness_n_m", "asymmetry",
     "generator_damping_n_s_m", "exciter_stiffness_n_m", "exciter_damping_n_s_m",
-    "clearance_m", "viscosity_pa_s", "bearing_radius_m", "bearing_length_m",
+    "clearance_m", "viscosity_pa_s", "bearing_radius_m", "bearing_length_m", "coupling_stiffness_n_m",
 )
 
 
@@ -54,7 +56,7 @@ class Range(_Strict):
     n: int | None = Field(default=None, ge=1, le=10_000)
 
     @model_validator(mode="after")
-    def _ordered(self) -> "Range":
+    def _ordered(self) -> Range:
         if not (math.isfinite(self.min) and math.isfinite(self.max)):
             raise ValueError("min and max must be finite numbers")
         if self.max < self.min:
@@ -94,11 +96,15 @@ def _parse_variable(v: Any) -> Any:
     raise ValueError(f"expected a number, a list of numbers or a range {{min = .., max = ..}}, got {v!r}")
 
 
+#: Mechanisms a dataset spec can ask for (every misaligned mechanism of the simulator).
+DESIGN_MECHANISMS: tuple[str, ...] = ("pin", "rigid", "offset", "flexible")
+
+
 def _parse_mechanism(v: Any) -> Any:
-    allowed = ("pin", "rigid")
+    allowed = DESIGN_MECHANISMS
     if isinstance(v, str):
         if v not in allowed:
-            raise ValueError(f"unknown mechanism {v!r}; use \"pin\" or \"rigid\" (Δ = 0 always runs aligned)")
+            raise ValueError(f"unknown mechanism {v!r}; use one of {list(allowed)} (Δ = 0 always runs aligned)")
         return v
     if isinstance(v, list):
         if not v:
@@ -112,13 +118,14 @@ def _parse_mechanism(v: Any) -> Any:
             raise ValueError("mechanism weights are empty; give e.g. {pin = 0.5, rigid = 0.5}")
         bad = sorted(set(v) - set(allowed))
         if bad:
-            raise ValueError(f"unknown mechanism(s) {bad}; use pin and/or rigid")
+            raise ValueError(f"unknown mechanism(s) {bad}; use some of {list(allowed)}")
         w = list(v.values())
         if any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in w) or \
                 any(not (math.isfinite(x) and x >= 0) for x in w) or sum(w) <= 0:
             raise ValueError(f"mechanism weights must be numbers ≥ 0, not all zero, got {v!r}")
         return {k: float(x) for k, x in v.items()}
-    raise ValueError(f"mechanism must be \"pin\", \"rigid\", a list of them or weights {{pin = .., rigid = ..}}, got {v!r}")
+    raise ValueError(f"mechanism must be one of {list(allowed)}, a list of them or weights "
+                     f"{{pin = .., rigid = ..}}, got {v!r}")
 
 
 Variable = Annotated[Union[float, list[float], Range], BeforeValidator(_parse_variable)]
@@ -148,7 +155,7 @@ class Design(_Strict):
     seed: int = Field(ge=0, lt=2**63, description="master seed: every draw of the dataset derives from it")
 
     @model_validator(mode="after")
-    def _n(self) -> "Design":
+    def _n(self) -> Design:
         if self.method != "grid" and self.n_samples is None:
             raise ValueError(f"n_samples is required for method = {self.method!r}")
         return self
@@ -164,6 +171,7 @@ class Operating(_Strict):
     exciter_unbalance: Variable = 0.0
     exciter_unbalance_phase_rad: Variable = 0.0
     offset_angle_rad: Variable = 0.0
+    coupling_phase_rad: Variable = 0.0
     mechanism: Mechanism = "rigid"
 
     @field_validator("speed_rpm")
@@ -181,7 +189,7 @@ class Operating(_Strict):
     def _unb(cls, v: Variable) -> Variable:
         return _check_bounds("unbalance", v, *UNBALANCE_RANGE)
 
-    @field_validator("unbalance_phase_rad", "exciter_unbalance_phase_rad", "offset_angle_rad")
+    @field_validator("unbalance_phase_rad", "exciter_unbalance_phase_rad", "offset_angle_rad", "coupling_phase_rad")
     @classmethod
     def _phase(cls, v: Variable) -> Variable:
         return _check_bounds("phase", v, -TWO_PI, TWO_PI, " rad")
@@ -191,6 +199,9 @@ class PlantSpec(_Strict):
     """The base plant and how it varies between samples."""
 
     file: str | None = Field(default=None, description="plant TOML/JSON file, relative to the spec file")
+    shaftline: str | None = Field(default=None, description="shaft-line TOML file reduced to the plant "
+                                  "(simulator.shaftline), relative to the spec file")
+    preset: str | None = Field(default=None, description="a named shaft-line preset (simulator.shaftline.PRESETS)")
     set: dict[str, Any] = Field(default_factory=dict, description="values overriding the base plant")
     perturb: dict[str, float] = Field(
         default_factory=dict,
@@ -255,7 +266,7 @@ class Measurement(_Strict):
         return _check_bounds("runout", v, 0.0, 1000.0, " µm")
 
     @model_validator(mode="after")
-    def _duration(self) -> "Measurement":
+    def _duration(self) -> Measurement:
         if (self.duration_s is None) == (self.duration_revs is None):
             raise ValueError("give exactly one of duration_s or duration_revs")
         if isinstance(self.snr_db, list):
@@ -289,7 +300,7 @@ class DatasetSpec(_Strict):
     simulation: Simulation = Field(default_factory=Simulation)
 
     @model_validator(mode="after")
-    def _consistent(self) -> "DatasetSpec":
+    def _consistent(self) -> DatasetSpec:
         op = self.operating
         if self.design.method == "grid":
             for name in Operating.model_fields:
@@ -330,10 +341,11 @@ class DatasetSpec(_Strict):
         if m.duration_s is not None:
             return int(round(m.duration_s * m.sample_rate_hz))
         s_lo, _ = _bounds(self.operating.speed_rpm)
+        assert m.duration_revs is not None  # exactly one of the two is set (validated)
         return int(math.ceil(m.duration_revs * 60.0 * m.sample_rate_hz / s_lo - 1e-9))
 
 
-def _one_error(err: dict) -> str:
+def _one_error(err: Mapping[str, Any]) -> str:
     loc = ".".join(str(p) for p in err["loc"])
     msg = err["msg"].removeprefix("Value error, ")
     if err["type"] == "extra_forbidden":
@@ -348,7 +360,7 @@ def _format_validation_error(exc: ValidationError) -> str:
     return "invalid dataset spec:\n" + "\n".join(lines)
 
 
-def parse_spec(text: str, *, base_dir: str | Path | None = None) -> "ResolvedSpec":
+def parse_spec(text: str, *, base_dir: str | Path | None = None) -> ResolvedSpec:
     """Validate TOML text; resolve the plant file relative to ``base_dir``.
 
     Raises
@@ -368,7 +380,7 @@ def parse_spec(text: str, *, base_dir: str | Path | None = None) -> "ResolvedSpe
     return ResolvedSpec(spec, text, Path(base_dir) if base_dir is not None else Path.cwd())
 
 
-def load_spec(path: str | Path) -> "ResolvedSpec":
+def load_spec(path: str | Path) -> ResolvedSpec:
     """Read and validate a spec file (see :func:`parse_spec`)."""
     path = Path(path)
     if not path.is_file():
@@ -392,13 +404,22 @@ class ResolvedSpec:
     """
 
     def __init__(self, spec: DatasetSpec, text: str, base_dir: Path):
-        from simulator import Plant
+        from rotordiag.simulator import Plant
 
         self.spec = spec
         self.text = text
         ps = spec.plant
         try:
+            from rotordiag.simulator import shaftline
+
             plant = Plant.default()
+            if sum(x is not None for x in (ps.file, ps.shaftline, ps.preset)) > 1:
+                raise ValueError("give at most one of file, shaftline and preset")
+            if ps.shaftline is not None:
+                f = Path(ps.shaftline)
+                plant = shaftline.to_plant(shaftline.ShaftLine.from_file(f if f.is_absolute() else base_dir / f))
+            if ps.preset is not None:
+                plant = shaftline.to_plant(shaftline.preset(ps.preset))
             if ps.file is not None:
                 f = Path(ps.file)
                 plant = Plant.from_file(f if f.is_absolute() else base_dir / f)
@@ -417,7 +438,7 @@ class ResolvedSpec:
                 except (ValueError, TypeError) as exc:
                     raise SpecError(f"invalid dataset spec:\n  plant.perturb.{name} = {r} gives an invalid "
                                     f"plant at its extreme: {exc}") from None
-        canonical = {"spec": spec.model_dump(mode="json", exclude={"plant": {"file"}}),
+        canonical = {"spec": spec.model_dump(mode="json", exclude={"plant": {"file", "shaftline"}}),
                      "base_plant": base}
         blob = json.dumps(canonical, sort_keys=True, allow_nan=True).encode()
         self.spec_hash = hashlib.sha256(blob).hexdigest()

@@ -33,10 +33,11 @@ import fcntl
 import json
 import os
 import time
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import numpy as np
 
@@ -46,8 +47,8 @@ __all__ = ["FORMAT", "FORMAT_VERSION", "StoreError", "DatasetWriter", "open_data
 
 FORMAT = "rotordiag-dataset"
 FORMAT_VERSION = 1
-MECHANISM_CODES: dict[str, int] = {"pin": 0, "rigid": 1}
-SIMULATED_MECHANISM_CODES: dict[str, int] = {"pin": 0, "rigid": 1, "aligned": 2}
+MECHANISM_CODES: dict[str, int] = {"pin": 0, "rigid": 1, "offset": 2, "flexible": 3}
+SIMULATED_MECHANISM_CODES: dict[str, int] = {"pin": 0, "rigid": 1, "aligned": 2, "offset": 3, "flexible": 4}
 _MESSAGE_LEN = 256
 RESUME_LOG_SLOTS = 64
 RESUME_LOG_LEN = 512
@@ -62,11 +63,11 @@ class StoreError(RuntimeError):
 
 
 def _utcnow() -> str:
-    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
 
 
 def _plant_layout(plant_dict: dict[str, Any]) -> dict[str, tuple[tuple[int, ...], str]]:
-    out = {}
+    out: dict[str, tuple[tuple[int, ...], str]] = {}
     for name, v in plant_dict.items():
         if isinstance(v, str):
             out[f"parameters/plant/{name}"] = ((), f"S{_KIND_LEN}")
@@ -83,7 +84,7 @@ def layout(n_channels: int, n_points: int, n_bearings: int,
         "done": ((), "u1"),
     }
     for name in ("speed_rpm", "misalignment", "unbalance", "unbalance_phase_rad", "exciter_unbalance",
-                 "exciter_unbalance_phase_rad", "offset_angle_rad"):
+                 "exciter_unbalance_phase_rad", "offset_angle_rad", "coupling_phase_rad"):
         L[f"parameters/{name}"] = ((), "f8")
     L["parameters/mechanism"] = ((), "i1")
     L["parameters/simulated_mechanism"] = ((), "i1")
@@ -290,7 +291,7 @@ class DatasetWriter:
     def open(cls, path: str | os.PathLike, *, n_samples: int, spec_hash: str,
              L: dict[str, tuple[tuple[int, ...], str]], channels: list[tuple[int, float]],
              attrs: dict[str, Any], dataset_attrs: dict[str, dict[str, Any]],
-             code_version: str) -> "DatasetWriter":
+             code_version: str) -> DatasetWriter:
         """Create ``path``, or reopen it to resume when it was made from the same spec.
 
         Raises
@@ -299,7 +300,6 @@ class DatasetWriter:
             If the file was made from another spec, is not a dataset, is a
             merged file, or is being written by another process.
         """
-        import h5py
 
         path = Path(path)
         if path.parent and not path.parent.exists():
@@ -378,7 +378,7 @@ class DatasetWriter:
         finally:
             self._lock.release()
 
-    def __enter__(self) -> "DatasetWriter":
+    def __enter__(self) -> DatasetWriter:
         return self
 
     def __exit__(self, *exc: Any) -> None:

@@ -14,8 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from .design import SampleParams
-from .measurement import MeasurementDraws, MeasurementSettings, draw_measurement, probe_waveforms_um, \
-    required_record_revs
+from .measurement import (
+    MeasurementDraws,
+    MeasurementSettings,
+    draw_measurement,
+    probe_waveforms_um,
+    required_record_revs,
+)
 from .store import EncodedChunk, encode_waveform_chunk
 
 __all__ = ["SimulationSettings", "SampleTask", "SampleOutput", "run_sample", "run_sample_encoded", "STATUS_CODES"]
@@ -35,7 +40,7 @@ class SimulationSettings:
     classify_motion: bool
 
     @classmethod
-    def from_spec(cls, spec) -> "SimulationSettings":
+    def from_spec(cls, spec) -> SimulationSettings:
         s = spec.simulation
         return cls(s.transient_revs, s.samples_per_rev, s.rtol, s.atol, s.record_revs_min, s.classify_motion)
 
@@ -65,7 +70,7 @@ class SampleOutput:
 def _motion(poincare_m: np.ndarray) -> tuple[str, int]:
     """Motion label from the analysis package's classifier (optional hook)."""
     try:
-        from simulator.analysis import classify_motion
+        from rotordiag.simulator.analysis import classify_motion
     except ImportError:  # analysis package absent: no motion label
         return "", 0
     pts = poincare_m[np.all(np.isfinite(poincare_m.reshape(len(poincare_m), -1)), axis=1)]
@@ -78,7 +83,7 @@ def _motion(poincare_m: np.ndarray) -> tuple[str, int]:
 
 def run_sample(task: SampleTask) -> SampleOutput:
     """Simulate one sample and apply the measurement model (runs on a worker)."""
-    from simulator import Plant, simulate
+    from rotordiag.simulator import Plant, simulate
 
     p, sim, meas = task.params, task.simulation, task.measurement
     rng = np.random.default_rng(p.sample_seed)
@@ -91,7 +96,7 @@ def run_sample(task: SampleTask) -> SampleOutput:
             transient_revs=sim.transient_revs, record_revs=revs, samples_per_rev=sim.samples_per_rev,
             rtol=sim.rtol, atol=sim.atol, unbalance_phase_rad=p.unbalance_phase_rad,
             exciter_unbalance=p.exciter_unbalance, exciter_unbalance_phase_rad=p.exciter_unbalance_phase_rad,
-            offset_angle_rad=p.offset_angle_rad,
+            offset_angle_rad=p.offset_angle_rad, coupling_phase_rad=p.coupling_phase_rad,
         )
     except ValueError as exc:  # simulate's documented input error: kept as a labelled sample, not dropped
         msg = f"{type(exc).__name__}: {exc}"
@@ -116,5 +121,6 @@ def run_sample_encoded(task: SampleTask) -> SampleOutput:
     (``store.decode_waveform_chunk`` gives the float32 array back bit for bit).
     """
     out = run_sample(task)
+    assert isinstance(out.waveforms_um, np.ndarray)
     out.waveforms_um = encode_waveform_chunk(out.waveforms_um)
     return out

@@ -1,16 +1,16 @@
 """POST /diagnose and POST /diagnose/batch."""
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, HTTPException, Query, Request
 import anyio
 import anyio.to_thread
+from fastapi import APIRouter, Depends, HTTPException, Query, Request
 from fastapi.concurrency import run_in_threadpool
 
 from ...inference import ModelUnavailable
-from ...pool import WorkerCrashed
 from ...parsing import checked, parse_body, recording_from_model
+from ...pool import WorkerCrashed
 from ...schemas import MAX_LABEL_LEN, BatchItem, BatchRequest, BatchResponse, DiagnoseResponse, ErrorOut
 from ...store import store_diagnosis
 from ..deps import DiagnoseKeyDep, JsonBodyDep, ModelsDep, StateDep
@@ -18,7 +18,33 @@ from ..errors import InputError
 
 router = APIRouter(tags=["diagnose"])
 
-_ERRORS = {
+
+def reader_query(
+    sensitivity_v_per_mm: Annotated[float | None, Query(gt=0, le=1e3, allow_inf_nan=False, description=(
+        "Binary/multipart with `units=V` only: probe scale factor, V/mm (7.87 = 200 mV/mil)."))] = None,
+    gap_voltage_v: Annotated[float | None, Query(ge=-100, le=100, allow_inf_nan=False, description=(
+        "Binary/multipart with `units=V` only: DC gap voltage, V (default: each channel's mean)."))] = None,
+    rotation: Annotated[Literal["ccw", "cw"], Query(description=(
+        "Shaft rotation seen from the driver end; with `viewed_from` it decides whether the probe angles "
+        "are mirrored so that a mirrored installation is not read as reverse whirl."))] = "ccw",
+    viewed_from: Annotated[Literal["driver", "non-driver"], Query(description=(
+        "End of the machine the probe angles are measured from."))] = "driver",
+    keyphasor_channel: Annotated[str | None, Query(max_length=64, description=(
+        "Raw keyphasor pulse channel: CSV column name or row index (default: a CSV column named kp/keyphasor)."))] = None,
+    keyphasor_edge: Annotated[Literal["falling", "rising"], Query(description=(
+        "Edge of the keyphasor pulse: falling (a notch) or rising (a projection, TTL)."))] = "falling",
+    keyphasor_threshold_v: Annotated[float | None, Query(allow_inf_nan=False, description=(
+        "Keyphasor threshold in the channel's units (default: halfway between its 1st and 99th percentile)."))] = None,
+) -> dict[str, Any]:
+    """Query parameters of the recording reader beyond the basic metadata (``features.reader.ReadOptions``)."""
+    return dict(sensitivity_v_per_mm=sensitivity_v_per_mm, gap_voltage_v=gap_voltage_v, rotation=rotation,
+                viewed_from=viewed_from, keyphasor_channel=keyphasor_channel, keyphasor_edge=keyphasor_edge,
+                keyphasor_threshold_v=keyphasor_threshold_v)
+
+
+ReaderQueryDep = Annotated[dict, Depends(reader_query)]
+
+_ERRORS: dict[int | str, dict[str, Any]] = {
     400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
     401: {"model": ErrorOut, "description": "No X-API-Key header (only when ROTORDIAG_DIAGNOSE_REQUIRES_KEY)."},
     403: {"model": ErrorOut, "description": "Wrong API key (only when ROTORDIAG_DIAGNOSE_REQUIRES_KEY)."},
@@ -115,6 +141,7 @@ async def diagnose(
     request: Request,
     state: StateDep,
     models: ModelsDep,
+    reader: ReaderQueryDep,
     sample_rate_hz: Annotated[float | None, Query(gt=0, le=1e6, allow_inf_nan=False,
                                                   description="Binary/multipart only: sample rate, Hz.")] = None,
     speed_rpm: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False,
@@ -122,7 +149,8 @@ async def diagnose(
     clearance_um: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False,
                                                 description="Binary/multipart only: radial clearance, µm.")] = None,
     units: Annotated[str | None, Query(min_length=1, max_length=16,
-                                       description="Binary/multipart only: units of the array (`um`, `mm`, `m` or `mil`); "
+                                       description="Binary/multipart only: units of the array (`um`, `mm`, `m`, `mil`, "
+                                       "or `V` with `sensitivity_v_per_mm`); "
                                        "default `um` (or the HDF5 file's `units` attribute).")] = None,
     bearings: Annotated[str | None, Query(max_length=64, pattern=r"^[0-9, ]*$",
                                           description="Binary/multipart only: bearing (1-4) of each row, "
@@ -147,7 +175,7 @@ async def diagnose(
 ) -> dict:
     query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=asset_id,
                  plant=plant, units=units, bearings=bearings, angles_deg=angles_deg,
-                 keyphasor_times_s=keyphasor_times_s, sample_index=sample_index)
+                 keyphasor_times_s=keyphasor_times_s, sample_index=sample_index, **reader)
     kind, body, filename = await _read_body(request)
     if state.pool is not None:
         return await _diagnose_in_pool(state, kind, body, filename, query, model_version)

@@ -4,7 +4,7 @@ from __future__ import annotations
 from fastapi import APIRouter, Response
 from sqlalchemy import text
 
-from rotordiag import code_version
+from rotordiag.core.version import code_version
 
 from ...inference import ModelUnavailable
 from ...schemas import HealthOut

@@ -1,7 +1,7 @@
 """Jobs: POST /datasets, POST /models/retrain, GET /jobs, GET /jobs/{id}, POST /jobs/{id}/resume."""
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Path, Query
 from fastapi.concurrency import run_in_threadpool
@@ -13,7 +13,7 @@ from ..errors import InputError
 
 router = APIRouter(tags=["jobs"])
 
-_AUTH = {400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
+_AUTH: dict[int | str, dict[str, Any]] = {400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
          401: {"model": ErrorOut, "description": "No X-API-Key header."},
          403: {"model": ErrorOut, "description": "Wrong API key."},
          415: {"model": ErrorOut, "description": "Body is not application/json."}}

@@ -421,10 +421,32 @@
     return `${what} not available`;
   }
 
+  const STATUS_TEXT = {
+    confident: "Confident: the checks passed and the model knows recordings like this one.",
+    uncertain: "Uncertain: a severity is given, but read the reasons below before acting on it.",
+    inconclusive: "Inconclusive: no severity is given. Read the reasons (what to check) and the measured evidence.",
+  };
+
   function renderVerdict(v) {
+    const status = v.status || "confident";
+    const st = $("verdict-status");
+    st.textContent = STATUS_TEXT[status] || status;
+    st.className = "status " + status;
+    const reasons = v.reasons || [];
+    $("verdict-reasons").replaceChildren(...reasons.map((r) => el("li", { class: r.status, text: r.message })));
+    show($("verdict-reasons-box"), reasons.length > 0);
+    const ev = $("verdict-evidence").tBodies[0];
+    ev.replaceChildren(...(v.evidence || []).map((e) => el("tr", {}, el("td", { text: e.scope }), el("td", { text: e.name }),
+      el("td", { text: e.value }), el("td", { text: e.meaning }))));
+    const inconclusive = status === "inconclusive";
+    // an inconclusive verdict shows no severity badge, no Δ and no class probabilities: only the evidence
+    show($("verdict-severity-row"), !inconclusive);
+    show($("verdict-delta-row"), !inconclusive);
+    show($("verdict-offset-row"), !inconclusive);
+    show($("verdict-model-part"), !inconclusive);
     const sev = $("verdict-severity");
-    sev.textContent = v.severity;
-    sev.className = "badge " + (SEVERITY_COLORS[v.severity] ? v.severity : "");
+    sev.textContent = inconclusive ? "" : v.severity;
+    sev.className = "badge " + (!inconclusive && SEVERITY_COLORS[v.severity] ? v.severity : "");
     const lvl = v.interval_level ? `${Math.round(v.interval_level * 100)} % interval` : "interval";
     $("verdict-delta").textContent = `${fixed(v.misalignment, 3)} (${intervalText(lvl, v.misalignment_interval, 3, "")})`;
     if (v.offset_um !== null && v.offset_um !== undefined) {

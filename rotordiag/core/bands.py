@@ -11,8 +11,9 @@ Edges are lower-inclusive: Δ exactly on an edge belongs to the band above it.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -55,7 +56,7 @@ class SeverityBands:
             raise ValueError(f"bands.names: must be unique and non-empty, got {list(names)}")
 
     @classmethod
-    def from_dict(cls, d: Mapping[str, Any] | None) -> "SeverityBands":
+    def from_dict(cls, d: Mapping[str, Any] | None) -> SeverityBands:
         """Build from ``{"edges": [...], "names": [...]}`` (missing keys take the defaults)."""
         if not d:
             return cls()

@@ -1,0 +1,208 @@
+"""Physics sanity checks of a recording, before any verdict (issue 15, item 1).
+
+Each check returns :class:`SanityFinding` entries with a specific message saying what to
+check. ``level`` says what the finding does to a verdict:
+
+- ``"fail"``: the recording is physically impossible or unusable as given (flat, all-zero or
+  clipped channels, an orbit larger than the bearing's diametral clearance, a DC position no
+  proximity probe can read, reverse 1X whirl at every bearing). A verdict is ``inconclusive``.
+- ``"warn"``: plausible but suspicious (reverse 1X whirl at one bearing, no synchronous
+  vibration above the noise at one bearing). A
+  verdict is at best ``uncertain``.
+
+A DC position outside the clearance circle is not a finding: DC-coupled probes read their
+gap, not the shaft centre, and no feature uses the mean (``features.evidence`` says so).
+
+Too few revolutions or samples per revolution (3X near Nyquist) are refused earlier, with a
+``ValueError`` (HTTP 422), by :func:`features.extract_features`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._recording import Recording
+
+__all__ = ["SanityFinding", "check_recording", "FAIL", "WARN",
+           "PROBE_RANGE_UM", "MAX_DC_UM", "ORBIT_CLEARANCE_MARGIN", "CLIP_MIN_FRACTION"]
+
+FAIL = "fail"
+WARN = "warn"
+
+#: a peak-to-peak motion beyond this (µm) is outside the linear range of any proximity probe
+#: (the common 8 mm probe is linear over about 2 mm; 2 mm pk-pk leaves no room): check units
+PROBE_RANGE_UM = 2000.0
+#: a mean reading beyond this (µm, 10 mm) is not a gap any proximity probe reads: check units / scale
+MAX_DC_UM = 10_000.0
+#: a journal cannot move further than the diametral clearance 2c; allow this factor for
+#: shaft runout, probe gain error and noise before calling an orbit impossible
+ORBIT_CLEARANCE_MARGIN = 1.1
+#: a channel whose samples sit at its own extreme value this often is clipped …
+CLIP_MIN_FRACTION = 0.02
+#: … provided that is this many times what a quantised sine would give (sampling resolution)
+CLIP_EXCESS = 3.0
+#: 1X whirl index (F − R)/(F + R) below this counts as clearly reverse
+REVERSE_WHIRL_INDEX = -0.2
+#: a 1X zero-to-peak amplitude below this multiple of its noise-equivalent amplitude is "in the noise"
+SYNC_MIN_SNR = 3.0
+
+
+@dataclass(frozen=True)
+class SanityFinding:
+    """One failed or suspicious check.
+
+    Attributes
+    ----------
+    code : str
+        Stable identifier (``flat_channel``, ``zero_channel``, ``clipped_channel``,
+        ``orbit_exceeds_clearance``, ``orbit_exceeds_probe_range``, ``dc_implausible``,
+        ``reverse_whirl_all``, ``reverse_whirl``, ``no_sync_signal``).
+    level : str
+        ``"fail"`` or ``"warn"``.
+    message : str
+        What was found and what to check.
+    bearing : int or None
+    """
+
+    code: str
+    level: str
+    message: str
+    bearing: int | None = None
+
+    def to_dict(self) -> dict:
+        return {"code": self.code, "level": self.level, "message": self.message, "bearing": self.bearing}
+
+
+def _channel_checks(rec: Recording) -> list[SanityFinding]:
+    out: list[SanityFinding] = []
+    for ch in rec.channels:
+        d = ch.data_um
+        where = f"bearing {ch.bearing} probe at {ch.angle_deg:g}°"
+        ptp = float(np.ptp(d))
+        scale = max(float(np.max(np.abs(d))), 1.0)
+        if not np.any(d):
+            out.append(SanityFinding("zero_channel", FAIL, f"{where}: every sample is 0 — the channel is not "
+                                     "connected, not recorded or mapped to the wrong column; check the wiring and "
+                                     "the channel order", ch.bearing))
+            continue
+        if ptp <= 1e-9 * scale:
+            out.append(SanityFinding("flat_channel", FAIL, f"{where}: the signal is constant ({d[0]:.6g} µm) — probe "
+                                     "disconnected or saturated, or the DC gap recorded without its AC part; "
+                                     "check the probe, its driver and the acquisition channel", ch.bearing))
+            continue
+        lo, hi = float(d.min()), float(d.max())
+        tol = 1e-9 * scale
+        frac = max(float(np.mean(d <= lo + tol)), float(np.mean(d >= hi - tol)))
+        if frac >= CLIP_MIN_FRACTION:
+            levels = np.unique(d)
+            q = float(np.min(np.diff(levels))) if levels.size > 1 else ptp
+            # fraction of a sine's samples within one quantisation step of its peak: arccos(1 − 2q/ptp)/π
+            expected = float(np.arccos(max(-1.0, 1.0 - 2.0 * q / ptp)) / np.pi)
+            if frac > CLIP_EXCESS * expected:
+                at = "maximum" if np.mean(d >= hi - tol) >= np.mean(d <= lo + tol) else "minimum"
+                out.append(SanityFinding(
+                    "clipped_channel", FAIL, f"{where}: {100 * frac:.1f} % of the samples sit at the channel's {at} "
+                    f"({hi if at == 'maximum' else lo:.6g} µm) — the signal is clipped (probe outside its linear "
+                    "range, driver or ADC saturated); check the probe gap voltage and the input range", ch.bearing))
+    return out
+
+
+def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
+    out: list[SanityFinding] = []
+    for b, det in sorted(fr.bearings.items()):
+        x, y = rec.xy_um(b)
+        ptp = max(float(np.ptp(x)), float(np.ptp(y)))
+        c = float(det.clearance_um)
+        units = sorted({ch.units for ch in rec.channels if ch.bearing == b})
+        units_txt = "/".join(units)
+        if np.isfinite(c) and c > 0 and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c:
+            out.append(SanityFinding(
+                "orbit_exceeds_clearance", FAIL,
+                f"bearing {b}: the motion is {ptp:.4g} µm pk-pk, {ptp / (2 * c):.1f}× the diametral clearance "
+                f"2c = {2 * c:.4g} µm — a journal cannot move that far inside its bearing. Check the units "
+                f"(data declared in {units_txt!r}; µm read as mils is ×25.4), the probe sensitivity "
+                "(e.g. 7.87 mV/µm) and clearance_um (radial, in µm)", b))
+        elif ptp > PROBE_RANGE_UM:
+            out.append(SanityFinding(
+                "orbit_exceeds_probe_range", FAIL,
+                f"bearing {b}: the motion is {ptp:.4g} µm pk-pk, beyond the linear range of a proximity probe "
+                f"({PROBE_RANGE_UM:g} µm) — check the units (data declared in {units_txt!r}) and the probe "
+                "sensitivity", b))
+        mean = np.array(det.mean_um)
+        r = float(np.hypot(*mean))
+        if r > MAX_DC_UM:
+            out.append(SanityFinding(
+                "dc_implausible", FAIL,
+                f"bearing {b}: the mean probe reading is {r:.4g} µm ({r / 1000:.3g} mm) from zero — no proximity "
+                f"probe reads such a gap; check the units (declared {units_txt!r}) and the scale factor", b))
+    return out
+
+
+def _whirl_checks(fr) -> list[SanityFinding]:
+    out: list[SanityFinding] = []
+    reverse, judged = [], []
+    for b, det in sorted(fr.bearings.items()):
+        f1, r1 = abs(det.forward_um[0]), abs(det.reverse_um[0])
+        noise = det.line_noise_um
+        a1 = max(abs(det.x_coeffs_um[0]), abs(det.y_coeffs_um[0]))
+        if noise is not None and np.all(np.isfinite(noise[:, 0])) and a1 < SYNC_MIN_SNR * float(np.max(noise[:, 0])):
+            continue
+        if f1 + r1 <= 0:
+            continue
+        judged.append(b)
+        if (f1 - r1) / (f1 + r1) < REVERSE_WHIRL_INDEX:
+            reverse.append(b)
+    hint = ("check the probe order (the first probe of each pair must be the one the shaft reaches first when "
+            "it turns), the rotation direction and the viewing end (angles are measured toward the +y probe in "
+            "the direction of rotation)")
+    if len(judged) >= 2 and reverse == judged:
+        out.append(SanityFinding("reverse_whirl_all", FAIL,
+                                 f"1X whirls backward at every bearing ({', '.join(map(str, reverse))}); real "
+                                 f"machines whirl forward at 1X almost everywhere — {hint}"))
+    else:
+        for b in reverse:
+            out.append(SanityFinding("reverse_whirl", WARN, f"bearing {b}: 1X whirls backward — possible with very "
+                                     f"anisotropic supports, but more often a convention error: {hint}", b))
+    return out
+
+
+def _signal_checks(fr) -> list[SanityFinding]:
+    weak = []
+    for b, det in sorted(fr.bearings.items()):
+        noise = det.line_noise_um
+        if noise is None:
+            continue
+        a1 = np.abs(np.array([det.x_coeffs_um[0], det.y_coeffs_um[0]]))
+        if np.all(a1 < SYNC_MIN_SNR * noise[:, 0]):
+            weak.append(b)
+    if weak and len(weak) == len(fr.bearings):
+        return [SanityFinding("no_sync_signal", FAIL,
+                              "no 1X vibration stands out of the noise at any bearing — the recording carries no "
+                              "synchronous signal to diagnose (probes not reading the shaft, wrong speed, or a "
+                              "machine at rest); check the probes and speed_rpm / the keyphasor")]
+    return [SanityFinding("no_sync_signal", WARN, f"bearing {b}: no 1X vibration above the noise floor", b)
+            for b in weak]
+
+
+def check_recording(rec: Recording, fr) -> tuple[SanityFinding, ...]:
+    """Physics sanity checks of a recording and its extracted features.
+
+    Parameters
+    ----------
+    rec : Recording
+    fr : features.FeatureResult
+        The result of ``extract_features(rec)``.
+
+    Returns
+    -------
+    tuple of SanityFinding
+        Empty when every check passes; ``fail`` findings first.
+    """
+    bad_channel = _channel_checks(rec)
+    found = bad_channel + _amplitude_checks(rec, fr)
+    if not bad_channel:   # a dead or clipped channel already explains odd whirl and missing 1X
+        found += _signal_checks(fr)
+        if not any(f.code == "no_sync_signal" and f.level == FAIL for f in found):
+            found += _whirl_checks(fr)
+    return tuple(sorted(found, key=lambda f: f.level != FAIL))

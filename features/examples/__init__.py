@@ -1,0 +1,42 @@
+"""Small example recordings shipped with the package (offline quick-start, tests, the web page).
+
+Made by ``examples/make_example_recordings.sh`` with ``rotordiag simulate --probes-out``: the
+MODEL.md plant at 1800 r/min, generator unbalance A = 0.05, pin coupling, 40 dB SNR, 1 µm 1X
+runout; 8 probes (b1@45 … b4@135) at 2560 Hz, 1.3 s, µm.
+
+=========================  =====================================================================
+``aligned.csv``            Δ = 0: ``time_s`` column (6 significant digits) + ``b2@45``-style header
+``misaligned.csv``         Δ = 0.5 (severe), same layout
+``misaligned_2560hz.npy``  the same waveforms, (8, n) float32; its sample rate in its sidecar
+``misaligned_2560hz.json`` the sidecar of the NPY (``sample_rate_hz``), read by the CLI
+``aligned.h5``             Δ = 0 as an HDF5 ``waveforms`` array with its ``channels`` table and attributes
+``misaligned.h5``          Δ = 0.5, same
+=========================  =====================================================================
+"""
+from __future__ import annotations
+
+from importlib.resources import files
+from pathlib import Path
+
+__all__ = ["example_path", "list_examples"]
+
+_ENDINGS = (".csv", ".npy", ".h5")
+
+
+def list_examples() -> list[str]:
+    """Names of the example recordings (sidecars left out)."""
+    root = files(__name__)
+    return sorted(p.name for p in root.iterdir() if p.name.endswith(_ENDINGS))
+
+
+def example_path(name: str) -> Path:
+    """Path of an example recording.
+
+    Raises
+    ------
+    ValueError
+        For a name that is not one of :func:`list_examples` (the message lists them).
+    """
+    if name not in list_examples() and name != "misaligned_2560hz.json":
+        raise ValueError(f"no example recording {name!r}; the examples are {list_examples()}")
+    return Path(str(files(__name__).joinpath(name)))

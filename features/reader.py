@@ -1,0 +1,758 @@
+"""One reader for recordings: CSV, NPY, HDF5 and JSON → :class:`rotordiag.features.Recording`.
+
+The CLI (``rotordiag diagnose``), the service (``/diagnose`` JSON, binary and multipart,
+``/diagnose/batch``) and the web page (``/ui/plot-data``) all call :func:`read_recording`
+(or :func:`recording_from_dict` for a JSON object already decoded), so one file means one
+recording whichever door it comes through. Every file is treated as hostile: HDF5 goes
+through :func:`rotordiag.features.safe_io.check_hdf5` and is decoded in a child process
+with a memory and a time limit (:mod:`rotordiag.features.sandbox`; the HDF5 library itself
+can loop or crash on a corrupt file), NPY through ``load_npy_bounded`` and JSON through
+``loads_json_finite`` before any value is read.
+
+What a file may say, and what :class:`ReadOptions` may add (options win over the file):
+
+- **Channel layout** (bearing 1–4 and probe angle of every probe). CSV header names
+  ``b<bearing>@<angle>`` (``b2@45``; ``2@45`` too) give it; or ``ReadOptions.channels``:
+  a list in file order (``"1@45,1@135,2@45,2@135"`` or ``[(1, 45.0), ...]``) or a mapping
+  from column name to ``"b2@45"`` (``{"GEN DE X": "b2@45", ...}``; other columns are
+  ignored). Without either, 8 channels are read as the dataset default
+  b1@45, b1@135, b2@45, …, b4@135; any other count is an error.
+- **Time base**: ``sample_rate_hz``, or a time column (``time_s``, ``time``, ``t``, ``t_s``
+  in seconds; ``time_ms`` in ms). The rate is the mean spacing; every time must lie within
+  ``TIME_TOLERANCE`` (a fifth) of a sample interval of the uniform grid, which the
+  rounding of real DAQ exports (times printed to 6 significant digits) passes; a dropped
+  or repeated sample fails with the row named.
+- **Keyphasor**: pulse times (``keyphasor_times_s``), or a raw keyphasor channel (a CSV
+  column named ``kp``, ``keyphasor`` or ``kph``, or ``ReadOptions.keyphasor_channel``):
+  a pulse is counted where the signal crosses the threshold (default: halfway between the
+  channel's 1st and 99th percentile) on the chosen edge (default ``falling``: a notch in
+  the shaft opens the gap and drives a proximity-probe keyphasor more negative; use
+  ``rising`` for a projection or a TTL pulse). Crossings are re-armed only after the signal
+  has gone back past the threshold by a tenth of the span (hysteresis), and each time is
+  interpolated linearly between the two samples around the crossing.
+- **Units**: ``um`` (``µm``), ``mm``, ``m``, ``mil``, or ``V`` with
+  ``sensitivity_v_per_mm`` (e.g. 7.87) and ``gap_voltage_v`` (the DC gap voltage; without
+  it the mean is removed), see :func:`rotordiag.core.units.volts_to_um`.
+- **Direction**: probe angles are degrees counter-clockwise from the horizontal to the
+  observer's right, seen from ``viewed_from`` (``driver``: the turbine/generator end,
+  API 670's convention; ``non-driver``: the exciter end). ``rotation`` is the direction
+  the shaft turns seen from the **driver** end (``ccw`` or ``cw``). The feature extractor
+  works in a frame where the shaft turns counter-clockwise; when the shaft turns clockwise
+  seen from the end the angles are measured from, every angle α becomes 180° − α (the
+  view mirrored about the vertical), so a mirrored installation is not read as reverse whirl.
+
+Formats:
+
+- **CSV**: one column per channel, one row per sample, comma (or semicolon / tab)
+  separated; an optional header row; ``#`` comment lines are skipped.
+- **NPY**: a 2-D numeric array, channels × points (points × channels is transposed when
+  only that matches the layout); never unpickled.
+- **HDF5**: a rotordiag dataset file (``waveforms`` (N, C, P) with the ``channels``
+  compound table, ``done`` flags and per-sample ``parameters/…``; ``sample_index`` picks
+  the row) or a file with a 2-D ``waveforms`` array, ``sample_rate_hz`` / ``units`` /
+  ``speed_rpm`` / ``clearance_um`` attributes and a ``channels`` table (compound with
+  ``bearing`` and ``angle_deg`` fields, or a group with those two datasets).
+- **JSON**: the ``/diagnose`` request body (``sample_rate_hz``, ``channels`` each with
+  ``bearing``, ``angle_deg``, ``units``, ``data``; optional ``speed_rpm``,
+  ``keyphasor_times_s``, ``clearance_um``).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from rotordiag.core.units import INPUT_UNITS, UNITS_TO_UM, volts_to_um
+
+from ._recording import ProbeChannel, Recording
+from .safe_io import check_hdf5, load_npy_bounded, loads_json_finite
+from .sandbox import call_isolated
+
+__all__ = ["ReadOptions", "ReadLimits", "ReadResult", "read_recording", "recording_from_dict", "parse_layout",
+           "keyphasor_times_from_pulses", "sample_rate_from_times", "DEFAULT_LAYOUT", "FORMATS", "TIME_TOLERANCE"]
+
+#: layout assumed for an 8-channel file that does not say its own (the dataset default)
+DEFAULT_LAYOUT: tuple[tuple[int, float], ...] = tuple((b, a) for b in (1, 2, 3, 4) for a in (45.0, 135.0))
+#: formats and the file-name endings that select them
+FORMATS: dict[str, tuple[str, ...]] = {"csv": (".csv", ".txt"), "npy": (".npy",), "hdf5": (".h5", ".hdf5", ".hdf"),
+                                       "json": (".json",)}
+#: largest deviation of a time stamp from the uniform grid, in sample intervals
+TIME_TOLERANCE = 0.2
+_TIME_COLUMNS = {"time_s": 1.0, "time": 1.0, "t": 1.0, "t_s": 1.0, "time [s]": 1.0, "time_ms": 1e-3}
+_KP_COLUMNS = ("kp", "keyphasor", "kph", "keyphasor_v")
+_LAYOUT_RE = re.compile(r"^\s*b?([1-4])\s*@\s*(-?\d+(?:\.\d*)?)\s*$", re.IGNORECASE)
+#: CSV column names: ``b2@45`` and the spelled-out ``b2_45deg_um`` / ``b2 45° mil`` (unit suffix optional)
+_HEADER_RE = re.compile(r"^\s*b([1-4])\s*[@_ ]\s*(-?\d+(?:\.\d*)?)\s*(?:deg|°)?(?:[_ ]*\[?(um|µm|mm|mil|v)\]?)?\s*$",
+                        re.IGNORECASE)
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+_NPY_MAGIC = b"\x93NUMPY"
+
+
+@dataclass(frozen=True)
+class ReadLimits:
+    """Bounds on what a file may make the reader allocate.
+
+    The defaults suit one recording (8 probes, 16 s at 16 kHz); the CLI raises
+    ``max_file_bytes`` / ``max_hdf5_bytes`` for local dataset files.
+    """
+
+    max_channels: int = 8
+    max_points: int = 262_144
+    max_file_bytes: int = 256 * 2**20
+    max_hdf5_bytes: int = 256 * 2**20
+    max_chunk_ratio: float = 200.0
+    max_keyphasor_pulses: int = 100_000
+    #: HDF5 is decoded in a child process (:mod:`rotordiag.features.sandbox`) with this much
+    #: memory (``None``: 3 x ``max_hdf5_bytes`` + 256 MiB) and this wall-clock limit;
+    #: ``isolate_hdf5=False`` decodes in the calling process (trusted files only).
+    isolate_hdf5: bool = True
+    hdf5_memory_bytes: int | None = None
+    hdf5_timeout_s: float = 30.0
+
+
+@dataclass(frozen=True)
+class ReadOptions:
+    """What the caller knows about a recording beyond the file (``None`` = take it from the file).
+
+    Parameters
+    ----------
+    sample_rate_hz : float, optional
+    units : str, optional
+        ``um``, ``mm``, ``m``, ``mil`` or ``V`` (default: the file's, else ``um``).
+    sensitivity_v_per_mm, gap_voltage_v : float, optional
+        For ``units="V"``: probe scale factor (positive, V/mm) and DC gap voltage (V).
+    channels : str, sequence or mapping, optional
+        Layout in file order, or column name → ``"b<bearing>@<angle>"`` (see module docstring).
+    keyphasor_channel : str or int, optional
+        Column name or index (file order) of a raw keyphasor pulse channel.
+    keyphasor_threshold_v : float, optional
+        Threshold of the pulse detection, in the channel's own units.
+    keyphasor_edge : {"falling", "rising"}
+    keyphasor_times_s : sequence of float, optional
+        Pulse times (s from the first sample); wins over a keyphasor channel.
+    speed_rpm, clearance_um : float, optional
+    rotation : {"ccw", "cw"}
+        Shaft rotation seen from the driver end.
+    viewed_from : {"driver", "non-driver"}
+        The end the probe angles are measured from.
+    sample_index : int, optional
+        Row of a dataset HDF5 file (required when it holds more than one).
+    """
+
+    sample_rate_hz: float | None = None
+    units: str | None = None
+    sensitivity_v_per_mm: float | None = None
+    gap_voltage_v: float | None = None
+    channels: str | Sequence[Any] | Mapping[str, str] | None = None
+    keyphasor_channel: str | int | None = None
+    keyphasor_threshold_v: float | None = None
+    keyphasor_edge: Literal["falling", "rising"] = "falling"
+    keyphasor_times_s: Sequence[float] | None = None
+    speed_rpm: float | None = None
+    clearance_um: float | Mapping[int, float] | None = None
+    rotation: Literal["ccw", "cw"] = "ccw"
+    viewed_from: Literal["driver", "non-driver"] = "driver"
+    sample_index: int | None = None
+
+
+@dataclass
+class ReadResult:
+    """A recording and what the reader found out on the way.
+
+    Attributes
+    ----------
+    recording : Recording
+    format : str
+        ``csv``, ``npy``, ``hdf5`` or ``json``.
+    notes : list of str
+        Assumptions made (default layout, sample rate from the time column, mirrored angles, …).
+    truth : dict, optional
+        ``{"misalignment": Δ}`` of a dataset-file sample.
+    asset_id, plant : str, optional
+        From a JSON body.
+    """
+
+    recording: Recording
+    format: str
+    notes: list[str] = field(default_factory=list)
+    truth: dict[str, float] | None = None
+    asset_id: str | None = None
+    plant: str | None = None
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def parse_layout(text: str | Sequence[Any]) -> list[tuple[int, float]]:
+    """``"1@45,1@135"`` (or ``["b1@45", (1, 135)]``, or dicts with bearing/angle_deg) → ``[(1, 45.0), (1, 135.0)]``.
+
+    Raises
+    ------
+    ValueError
+        Naming the entry that is not ``BEARING@ANGLE``.
+    """
+    items: Sequence[Any] = text.split(",") if isinstance(text, str) else text
+    out = []
+    for k, item in enumerate(items):
+        if isinstance(item, str):
+            m = _LAYOUT_RE.match(item)
+            if not m:
+                raise ValueError(f"channels: entry {k + 1} {item!r} is not BEARING@ANGLE (e.g. 'b2@45' or '2@45'; "
+                                 "bearing 1-4, angle in degrees)")
+            out.append((int(m.group(1)), float(m.group(2))))
+        elif isinstance(item, Mapping):
+            try:
+                out.append((int(item["bearing"]), float(item["angle_deg"])))
+            except (KeyError, TypeError, ValueError):
+                raise ValueError(f"channels: entry {k + 1} needs 'bearing' (1-4) and 'angle_deg', got {item!r}") from None
+        else:
+            try:
+                b, a = item
+                out.append((int(b), float(a)))
+            except (TypeError, ValueError):
+                raise ValueError(f"channels: entry {k + 1} {item!r} is not (bearing, angle_deg)") from None
+    return out
+
+
+def sample_rate_from_times(times_s: np.ndarray, tolerance: float = TIME_TOLERANCE) -> float:
+    """Sample rate (Hz) from a column of time stamps, checking they are uniformly spaced.
+
+    The rate is one over the least-squares spacing of the stamps; every stamp must lie within
+    ``tolerance`` sample intervals of that uniform grid (rounding to 6 significant digits stays
+    far inside it for records of tens of seconds).
+
+    Raises
+    ------
+    ValueError
+        Fewer than two stamps, not increasing, or irregular (a dropped or repeated sample):
+        the message names the first offending row.
+    """
+    t = np.asarray(times_s, dtype=np.float64)
+    if t.size < 2 or not np.all(np.isfinite(t)):
+        raise ValueError("time column: needs at least two finite time stamps")
+    span = t[-1] - t[0]
+    if not span > 0:
+        raise ValueError("time column: the times do not increase; put the time of each sample in s")
+    steps = np.diff(t)
+    med = float(np.median(steps))
+    jump = np.flatnonzero(np.abs(steps - med) > 0.5 * med) if med > 0 else np.arange(steps.size)
+    if jump.size:
+        row = int(jump[0]) + 1
+        raise ValueError(
+            f"time column: the samples are not evenly spaced (data row {row + 1}, t = {t[row]:g} s, comes "
+            f"{steps[row - 1] / med if med > 0 else 0:.2f} sample intervals after the row before; a dropped or "
+            "repeated sample?). Resample the record to a fixed rate, or cut it before the gap")
+    k = np.arange(t.size, dtype=np.float64)
+    kc = k - k.mean()
+    dt = float(np.dot(kc, t - t.mean()) / np.dot(kc, kc))    # least-squares spacing: the rounding averages out
+    if not dt > 0:
+        raise ValueError("time column: the times do not increase; put the time of each sample in s")
+    dev = np.abs(t - (t.mean() + dt * kc)) / dt
+    bad = np.flatnonzero(dev > tolerance)
+    if bad.size:
+        row = int(bad[0])
+        raise ValueError(
+            f"time column: the samples drift off a uniform grid (data row {row + 1}, t = {t[row]:g} s, is "
+            f"{dev[row]:.2f} sample intervals off a uniform {1 / dt:g} Hz grid; times with too few digits, or a "
+            "clock that drifts?). Write the times with more digits, or give the sample rate instead")
+    return 1.0 / dt
+
+
+def keyphasor_times_from_pulses(signal: np.ndarray, sample_rate_hz: float, *, threshold: float | None = None,
+                                edge: str = "falling") -> np.ndarray:
+    """Once-per-revolution pulse times (s) from a raw keyphasor channel.
+
+    Parameters
+    ----------
+    signal : ndarray, shape (n_points,)
+        The keyphasor probe's output (any units).
+    sample_rate_hz : float
+    threshold : float, optional
+        Crossing level; default halfway between the 1st and 99th percentile.
+    edge : {"falling", "rising"}
+        Which crossing marks the pulse (``falling``: a notch seen by a proximity probe).
+
+    Returns
+    -------
+    ndarray
+        Crossing times, linearly interpolated between samples, s from the first sample.
+
+    Raises
+    ------
+    ValueError
+        A flat channel, an unknown edge, or fewer than two pulses.
+    """
+    x = np.asarray(signal, dtype=np.float64)
+    if edge not in ("falling", "rising"):
+        raise ValueError(f"keyphasor edge {edge!r}: use 'falling' or 'rising'")
+    lo, hi = np.percentile(x, [1.0, 99.0])
+    span = hi - lo
+    if not span > 0:
+        raise ValueError("keyphasor channel is flat: no pulses to detect; check the channel or give keyphasor_times_s")
+    thr = 0.5 * (lo + hi) if threshold is None else float(threshold)
+    if edge == "falling":
+        x, thr = -x, -thr
+    hyst = 0.1 * span
+    times = []
+    armed = bool(x[0] < thr - hyst)
+    for i in range(1, x.size):            # a pulse train is short: one pass over the crossings
+        if not armed:
+            armed = x[i] < thr - hyst
+            continue
+        if x[i - 1] < thr <= x[i]:
+            frac = (thr - x[i - 1]) / (x[i] - x[i - 1])
+            times.append((i - 1 + frac) / sample_rate_hz)
+            armed = False
+    out = np.asarray(times)
+    if out.size < 2:
+        raise ValueError(f"keyphasor channel: {out.size} pulse(s) found on the {edge} edge at threshold {thr:g}; "
+                         "check keyphasor_edge / keyphasor_threshold_v or give keyphasor_times_s")
+    return out
+
+
+def _detect_format(name: str, head: bytes) -> str:
+    if head.startswith(_HDF5_SIGNATURE):
+        return "hdf5"
+    if head.startswith(_NPY_MAGIC):
+        return "npy"
+    lower = name.lower()
+    for fmt, endings in FORMATS.items():
+        if lower.endswith(endings):
+            return fmt
+    stripped = head.lstrip()
+    if stripped[:1] in (b"{", b"["):
+        return "json"
+    if not name:
+        return "csv"
+    raise ValueError(f"{name}: unknown file type; send a .csv, .npy, .h5/.hdf5 or .json file")
+
+
+# --------------------------------------------------------------------------- formats
+
+
+def _csv_table(data: bytes) -> tuple[list[str] | None, np.ndarray]:
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise ValueError("the CSV file is not UTF-8 text; export it as UTF-8 CSV") from None
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise ValueError("the CSV file has no data rows; put one probe per column and one sample per row")
+    delim = ","
+    if "," not in lines[0]:
+        delim = ";" if ";" in lines[0] else ("\t" if "\t" in lines[0] else ",")
+    rows = list(csv.reader(lines, delimiter=delim))
+    header = None
+    try:
+        [float(v) for v in rows[0]]
+    except ValueError:
+        header, rows = [h.strip() for h in rows[0]], rows[1:]
+    if not rows:
+        raise ValueError("the CSV file has a header but no data rows")
+    width = len(rows[0])
+    for k, r in enumerate(rows):
+        if len(r) != width:
+            raise ValueError(f"CSV data row {k + 1} has {len(r)} values but the first row has {width}; "
+                             "every row needs one value per column")
+    try:
+        table = np.array([[float(v) for v in r] for r in rows], dtype=np.float64)
+    except ValueError as exc:
+        raise ValueError(f"the CSV file has a value that is not a number ({exc}); "
+                         "numbers only, one probe per column") from None
+    if header is not None and len(header) != width:
+        raise ValueError(f"the CSV header has {len(header)} names for {width} columns")
+    return header, table
+
+
+def _read_csv(data: bytes, opts: ReadOptions, limits: ReadLimits, notes: list[str]) -> tuple[np.ndarray, dict]:
+    header, table = _csv_table(data)
+    if table.shape[0] > limits.max_points:
+        raise ValueError(f"the CSV file has {table.shape[0]} rows; at most {limits.max_points} samples are accepted")
+    info: dict[str, Any] = {}
+    names = header or [str(k) for k in range(table.shape[1])]
+    keep = list(range(table.shape[1]))
+    lowered = [n.strip().lower() for n in names]
+    if header is not None:
+        for j, n in enumerate(lowered):
+            if n in _TIME_COLUMNS:
+                info["sample_rate_from_time"] = sample_rate_from_times(table[:, j] * _TIME_COLUMNS[n])
+                keep.remove(j)
+                break
+    kp_col = opts.keyphasor_channel
+    kp_j = None
+    if isinstance(kp_col, str):
+        if kp_col.strip().lower() not in lowered:
+            raise ValueError(f"keyphasor channel {kp_col!r} is not a column of the CSV file (columns: {names})")
+        kp_j = lowered.index(kp_col.strip().lower())
+    elif isinstance(kp_col, int):
+        if not 0 <= kp_col < table.shape[1]:
+            raise ValueError(f"keyphasor channel {kp_col} is outside the file's columns 0..{table.shape[1] - 1}")
+        kp_j = kp_col
+    elif header is not None:
+        kp_j = next((j for j, n in enumerate(lowered) if n in _KP_COLUMNS), None)
+    if kp_j is not None:
+        info["keyphasor_signal"] = table[:, kp_j]
+        if kp_j in keep:
+            keep.remove(kp_j)
+    mapping = opts.channels if isinstance(opts.channels, Mapping) else None
+    if mapping is not None:
+        cols, layout = [], []
+        for name, where in mapping.items():
+            if name.strip().lower() not in lowered:
+                raise ValueError(f"channels: column {name!r} is not in the CSV header (columns: {names})")
+            cols.append(lowered.index(name.strip().lower()))
+            layout.extend(parse_layout([where]))
+        info["layout"] = layout
+        return table[:, cols].T, info
+    if header is not None and opts.channels is None:
+        kept = [names[j] for j in keep]
+        matches = [_HEADER_RE.match(n) or _LAYOUT_RE.match(n) for n in kept]
+        if all(matches):
+            info["layout"] = [(int(m.group(1)), float(m.group(2))) for m in matches if m]
+            suffixes = {(m.group(3) or "").lower().replace("µm", "um") for m in matches if m and m.lastindex == 3}
+            if len(suffixes) == 1 and "" not in suffixes:
+                info["units"] = "V" if suffixes == {"v"} else suffixes.pop()
+        else:
+            bad = [n for n, m in zip(kept, matches) if not m]
+            raise ValueError(f"CSV header: columns {bad} are not named BEARING@ANGLE like 'b2@45' (time columns: "
+                             f"time_s or time_ms; keyphasor: kp); rename them or give the channel mapping")
+    return table[:, keep].T, info
+
+
+def _read_npy(data: bytes, limits: ReadLimits) -> np.ndarray:
+    arr = load_npy_bounded(data, max_bytes=limits.max_channels * limits.max_points * 8 + 1024)
+    if arr.dtype.kind not in "fiu":
+        raise ValueError(f"the NPY array has dtype {arr.dtype}; save a float32 or float64 array")
+    if arr.ndim == 3 and arr.shape[0] == 1:
+        arr = arr[0]
+    if arr.ndim == 1:
+        arr = arr[None, :]
+    if arr.ndim != 2:
+        raise ValueError(f"the NPY array has shape {arr.shape}; save a 2-D array (channels × points)")
+    return arr.astype(np.float64)
+
+
+def _attr(value: Any) -> Any:
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.reshape(()).item()
+    return value.item() if hasattr(value, "item") else value
+
+
+def _read_hdf5(data: bytes | Path, opts: ReadOptions, limits: ReadLimits) -> tuple[np.ndarray, dict]:
+    """Structure check and decoding of an HDF5 recording, isolated unless ``limits`` say otherwise."""
+    if not limits.isolate_hdf5:
+        return _decode_hdf5(data, opts, limits)
+    memory = limits.hdf5_memory_bytes or 3 * limits.max_hdf5_bytes + 256 * 2**20
+    return call_isolated(_decode_hdf5, data, opts, limits, memory_bytes=memory, timeout_s=limits.hdf5_timeout_s,
+                         what="the HDF5 file")
+
+
+def _decode_hdf5(data: bytes | Path, opts: ReadOptions, limits: ReadLimits) -> tuple[np.ndarray, dict]:
+    import h5py
+
+    check_hdf5(data, max_decompressed_bytes=limits.max_hdf5_bytes, max_chunk_ratio=limits.max_chunk_ratio)
+    info: dict[str, Any] = {}
+    source: Any = io.BytesIO(data) if isinstance(data, bytes) else str(data)
+    try:
+        with h5py.File(source, "r") as f:
+            ds = f.get("waveforms")
+            if not isinstance(ds, h5py.Dataset):
+                raise ValueError("the HDF5 file has no dataset 'waveforms' (channels × points, or "
+                                 "samples × channels × points in a rotordiag dataset file)")
+            if ds.dtype.kind not in "fiu":
+                raise ValueError(f"HDF5 'waveforms' has dtype {ds.dtype}; store float32 or float64 values")
+            for src in (f.attrs, ds.attrs):
+                for key in ("sample_rate_hz", "units", "waveform_units", "speed_rpm", "clearance_um"):
+                    if key in src:
+                        info["units" if key == "waveform_units" else key] = _attr(src[key])
+            ch = f.get("channels")
+            if isinstance(ch, h5py.Dataset) and ch.dtype.names and {"bearing", "angle_deg"} <= set(ch.dtype.names):
+                if ch.shape[0] <= limits.max_channels:
+                    tab = ch[()]
+                    info["layout"] = [(int(b), float(a)) for b, a in zip(tab["bearing"], tab["angle_deg"])]
+            elif isinstance(ch, h5py.Group) and "bearing" in ch and "angle_deg" in ch:
+                b, a = ch["bearing"], ch["angle_deg"]
+                if isinstance(b, h5py.Dataset) and isinstance(a, h5py.Dataset) and b.ndim == a.ndim == 1 \
+                        and b.shape[0] == a.shape[0] <= limits.max_channels:
+                    info["layout"] = [(int(x), float(y)) for x, y in zip(b[()], a[()])]
+            if ds.ndim == 3:
+                n = ds.shape[0]
+                i = opts.sample_index
+                if i is None:
+                    if n != 1:
+                        raise ValueError(f"the HDF5 file is a dataset with {n} samples; choose one with the sample "
+                                         f"index (0..{n - 1})")
+                    i = 0
+                if not 0 <= i < n:
+                    raise ValueError(f"sample index {i} is outside the file's samples 0..{n - 1}")
+                if ds.shape[1] > limits.max_channels or ds.shape[2] > limits.max_points:
+                    raise ValueError(f"HDF5 'waveforms' has shape {ds.shape}; at most {limits.max_channels} channels "
+                                     f"of {limits.max_points} points are accepted")
+                done = f.get("done")
+                if isinstance(done, h5py.Dataset) and done.shape == (n,) and not bool(done[i]):
+                    raise ValueError(f"sample {i} of the dataset file is not finished (its 'done' flag is false); "
+                                     "choose a finished sample")
+                arr = np.asarray(ds[i], dtype=np.float64)
+                for key, name, scale in (("speed_rpm", "parameters/speed_rpm", 1.0),
+                                         ("clearance_um", "parameters/plant/clearance_m", 1e6)):
+                    d = f.get(name)
+                    if isinstance(d, h5py.Dataset) and d.shape == (n,):
+                        info[key] = float(d[i]) * scale
+                lab = f.get("labels/misalignment")
+                if isinstance(lab, h5py.Dataset) and lab.shape == (n,):
+                    info["truth"] = {"misalignment": float(lab[i])}
+            elif ds.ndim in (1, 2):
+                if ds.size > limits.max_channels * limits.max_points:
+                    raise ValueError(f"HDF5 'waveforms' has shape {ds.shape}; at most {limits.max_channels} channels "
+                                     f"of {limits.max_points} points are accepted")
+                arr = np.atleast_2d(np.asarray(ds[()], dtype=np.float64))
+            else:
+                raise ValueError(f"HDF5 'waveforms' has shape {ds.shape}; expected (channels, points)")
+    except ValueError:
+        raise
+    except (OSError, KeyError, TypeError, RuntimeError) as exc:
+        raise ValueError(f"cannot read the HDF5 file (truncated or corrupt?): {exc}") from None
+    return arr, info
+
+
+# --------------------------------------------------------------------------- assembly
+
+
+def _mirror(layout: list[tuple[int, float]], opts: ReadOptions, notes: list[str]) -> list[tuple[int, float]]:
+    if opts.rotation not in ("ccw", "cw"):
+        raise ValueError(f"rotation {opts.rotation!r}: use 'ccw' or 'cw' (seen from the driver end)")
+    if opts.viewed_from not in ("driver", "non-driver"):
+        raise ValueError(f"viewed_from {opts.viewed_from!r}: use 'driver' or 'non-driver' (the end the probe "
+                         "angles are measured from)")
+    cw_in_view = (opts.rotation == "cw") == (opts.viewed_from == "driver")
+    if not cw_in_view:
+        return layout
+    notes.append("the shaft turns clockwise seen from the end the probe angles are measured from: "
+                 "angles mirrored (α → 180° − α) so that forward whirl stays forward")
+    return [(b, (180.0 - a) % 360.0) for b, a in layout]
+
+
+def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: ReadLimits, fmt: str,
+              notes: list[str]) -> ReadResult:
+    if opts.channels is not None and not isinstance(opts.channels, Mapping):
+        layout = parse_layout(opts.channels)
+    elif "layout" in info:
+        layout = info["layout"]
+    elif arr.shape[0] == len(DEFAULT_LAYOUT):
+        layout = list(DEFAULT_LAYOUT)
+        notes.append("no channel layout given: the 8 channels are read as b1@45, b1@135, …, b4@135")
+    elif arr.shape[1] <= limits.max_channels < arr.shape[0]:
+        raise ValueError(f"the array has {arr.shape[0]} rows × {arr.shape[1]} columns; one row per probe is expected "
+                         "(did you send (n_points, n_channels)? transpose it, or give the channel layout)")
+    else:
+        n = min(arr.shape)
+        raise ValueError(f"channel layout unknown for {n} channels: name the CSV columns like 'b2@45', or give the "
+                         "channel layout (CLI --channels '1@45,1@135,2@45,2@135'; API bearings= and angles_deg=)")
+    if arr.shape[0] != len(layout):
+        if arr.shape[1] == len(layout):
+            arr = arr.T                                    # points × channels
+        else:
+            raise ValueError(f"the file has {arr.shape[0]} channels (rows) × {arr.shape[1]} points but the layout "
+                             f"names {len(layout)} channels; give one BEARING@ANGLE per channel")
+    if not 1 <= arr.shape[0] <= limits.max_channels:
+        raise ValueError(f"the file has {arr.shape[0]} channels; 1 to {limits.max_channels} are accepted")
+    if arr.shape[1] > limits.max_points:
+        raise ValueError(f"the file has {arr.shape[1]} points per channel; at most {limits.max_points} are accepted")
+    layout = _mirror(layout, opts, notes)
+
+    fs = opts.sample_rate_hz if opts.sample_rate_hz is not None else info.get("sample_rate_hz")
+    if fs is None:
+        fs = info.get("sample_rate_from_time")
+        if fs is not None:
+            notes.append(f"sample rate {fs:.6g} Hz from the time column")
+    elif "sample_rate_from_time" in info and abs(info["sample_rate_from_time"] / float(fs) - 1) > 1e-3:
+        raise ValueError(f"the sample rate given ({float(fs):g} Hz) disagrees with the time column "
+                         f"({info['sample_rate_from_time']:.6g} Hz); drop one of them")
+    if fs is None:
+        raise ValueError("sample rate unknown: add a time column (time_s) or give the sample rate in Hz "
+                         "(CLI --sample-rate-hz, API sample_rate_hz=)")
+
+    units = str(opts.units if opts.units is not None else info.get("units", "um")).strip()
+    if units == "µm":
+        units = "um"
+    if units not in INPUT_UNITS:
+        raise ValueError(f"units {units!r} not understood: use one of {list(INPUT_UNITS)} "
+                         "(V needs the probe sensitivity in V/mm, e.g. 7.87)")
+    if units == "V":
+        if opts.sensitivity_v_per_mm is None:
+            raise ValueError("units V: give the probe sensitivity in V/mm (e.g. 7.87 for 200 mV/mil) and the "
+                             "gap voltage in V")
+        arr = np.stack([volts_to_um(row, opts.sensitivity_v_per_mm, opts.gap_voltage_v) for row in arr])
+        units = "um"
+        if opts.gap_voltage_v is None:
+            notes.append("no gap voltage given: each channel's mean voltage is taken as the gap voltage")
+    slow = info.get("slow_roll") or [None] * len(layout)
+    channels = [ProbeChannel(bearing=b, angle_deg=a, units=units, data=arr[i], slow_roll_um_pp=slow[i])
+                for i, (b, a) in enumerate(layout)]
+
+    kp: Any = opts.keyphasor_times_s
+    if kp is None and "keyphasor_signal" in info:
+        kp = keyphasor_times_from_pulses(info["keyphasor_signal"], float(fs), threshold=opts.keyphasor_threshold_v,
+                                         edge=opts.keyphasor_edge)
+        notes.append(f"{len(kp)} keyphasor pulses from the keyphasor channel ({opts.keyphasor_edge} edge)")
+    if kp is not None and len(kp) > limits.max_keyphasor_pulses:
+        raise ValueError(f"{len(kp)} keyphasor pulses; at most {limits.max_keyphasor_pulses} are accepted")
+    speed = opts.speed_rpm if opts.speed_rpm is not None else info.get("speed_rpm")
+    clearance = opts.clearance_um if opts.clearance_um is not None else info.get("clearance_um")
+    if isinstance(clearance, Mapping):
+        clearance = {int(k): float(v) for k, v in clearance.items()}
+    rec = Recording(sample_rate_hz=float(fs), channels=channels, speed_rpm=speed,
+                    keyphasor_times_s=None if kp is None else np.asarray(kp, dtype=np.float64),
+                    clearance_um=clearance)
+    return ReadResult(recording=rec, format=fmt, notes=notes, truth=info.get("truth"))
+
+
+def recording_from_dict(obj: Any, options: ReadOptions | None = None, limits: ReadLimits | None = None) -> ReadResult:
+    """Recording from the JSON form (the ``/diagnose`` body, decoded).
+
+    Raises
+    ------
+    ValueError
+        Naming the missing or wrong field.
+    """
+    opts, limits = options or ReadOptions(), limits or ReadLimits()
+    if not isinstance(obj, Mapping):
+        raise ValueError("the JSON recording must be an object with sample_rate_hz and channels")
+    chans = obj.get("channels")
+    if not isinstance(chans, Sequence) or isinstance(chans, str) or not chans:
+        raise ValueError("JSON: 'channels' must be a list of {bearing, angle_deg, units, data}")
+    if len(chans) > limits.max_channels:
+        raise ValueError(f"JSON: {len(chans)} channels; at most {limits.max_channels} are accepted")
+    layout, rows, units = [], [], set()  # type: ignore[var-annotated]
+    for k, c in enumerate(chans):
+        if not isinstance(c, Mapping) or "data" not in c:
+            raise ValueError(f"JSON: channels[{k}] needs 'bearing', 'angle_deg', 'units' and 'data'")
+        layout.extend(parse_layout([c]))
+        units.add(str(c.get("units", "um")))
+        try:
+            rows.append(np.asarray(c["data"], dtype=np.float64))
+        except (TypeError, ValueError):
+            raise ValueError(f"JSON: channels[{k}].data must be a list of numbers") from None
+    if any(r.ndim != 1 for r in rows):
+        raise ValueError("JSON: every channel's data must be a flat list of numbers")
+    if len({r.size for r in rows}) != 1:
+        detail = ", ".join(f"bearing {b} {a:g}°: {r.size}" for (b, a), r in zip(layout, rows))
+        raise ValueError(f"JSON: the channels have different lengths ({detail}); all probes must be sampled "
+                         "together — cut them to a common length")
+    unit = units.pop() if len(units) == 1 else "um"
+    if len(units) > 1 or unit not in INPUT_UNITS:
+        for k, c in enumerate(chans):       # mixed units: each channel to µm (V is one unit for all)
+            u = str(c.get("units", "um")).strip()
+            if u not in UNITS_TO_UM:
+                raise ValueError(f"channels[{k}].units {u!r} is not supported; use one of {list(INPUT_UNITS)} "
+                                 "(mil = 25.4 µm; V needs the probe sensitivity)")
+            rows[k] = rows[k] * UNITS_TO_UM[u]
+        unit = "um"
+    info: dict[str, Any] = {"layout": layout, "units": unit}
+    slow: list[dict[int, tuple[float, float]] | None] = []
+    for k, c in enumerate(chans):     # slow-roll (runout) vectors: [{order, amp_um_pp, phase_deg}] per channel
+        sr = c.get("slow_roll")
+        if not sr:
+            slow.append(None)
+            continue
+        try:
+            slow.append({int(v["order"]): (float(v["amp_um_pp"]), float(v["phase_deg"])) for v in sr})
+        except (KeyError, TypeError, ValueError):
+            raise ValueError(f"JSON: channels[{k}].slow_roll must be a list of {{order, amp_um_pp, phase_deg}}") from None
+    if any(v is not None for v in slow):
+        info["slow_roll"] = slow
+    for key in ("sample_rate_hz", "speed_rpm", "clearance_um"):
+        if obj.get(key) is not None:
+            info[key] = obj[key]
+    if isinstance(info.get("clearance_um"), Mapping):
+        info["clearance_um"] = {int(k): v for k, v in info["clearance_um"].items()}
+    if opts.keyphasor_times_s is None and obj.get("keyphasor_times_s") is not None:
+        opts = replace(opts, keyphasor_times_s=obj["keyphasor_times_s"])
+    res = _assemble(np.stack(rows), info, opts, limits, "json", [])
+    res.asset_id, res.plant = obj.get("asset_id"), obj.get("plant")
+    return res
+
+
+def read_recording(source: str | Path | bytes, *, filename: str = "", options: ReadOptions | None = None,
+                   limits: ReadLimits | None = None) -> ReadResult:
+    """Read one recording from a file path or from a file's bytes.
+
+    Parameters
+    ----------
+    source : str, Path or bytes
+        A path, or the file's content (an upload).
+    filename : str
+        The upload's name when ``source`` is bytes (its ending picks the format when the
+        content has no signature).
+    options : ReadOptions, optional
+        What the caller knows beyond the file; wins over the file.
+    limits : ReadLimits, optional
+
+    Returns
+    -------
+    ReadResult
+
+    Raises
+    ------
+    ValueError
+        (``UnsafeFileError`` for refused constructs) with a message that says what to fix.
+    """
+    opts, limits = options or ReadOptions(), limits or ReadLimits()
+    if isinstance(source, (bytes, bytearray, memoryview)):
+        data: bytes | None = bytes(source)
+        path = None
+        name = filename
+    else:
+        path = Path(source)
+        if not path.is_file():
+            raise ValueError(f"{path}: no such file")
+        name = path.name
+        data = None
+        with path.open("rb") as fh:
+            head = fh.read(16)
+    if data is not None:
+        head = data[:16]
+        if not data:
+            raise ValueError(f"{name or 'the upload'} is empty; send a CSV, NPY, HDF5 or JSON recording")
+    fmt = _detect_format(name, head)
+    if fmt != "hdf5" or path is None:
+        size = path.stat().st_size if path is not None else len(data or b"")
+        if size > limits.max_file_bytes:
+            raise ValueError(f"{name}: {size} bytes; at most {limits.max_file_bytes} are accepted for a {fmt} file")
+        if data is None and path is not None:
+            data = path.read_bytes()
+    notes: list[str] = []
+    if isinstance(opts.channels, Mapping) and fmt != "csv":
+        raise ValueError("channels: a column-name mapping works for CSV files only; give the layout in file order "
+                         "('1@45,1@135,...') for NPY and HDF5")
+    if fmt == "json":
+        return recording_from_dict(loads_json_finite(data or b""), opts, limits)
+    if fmt == "hdf5":
+        arr, info = _read_hdf5(data if data is not None else path, opts, limits)  # type: ignore[arg-type]
+    elif fmt == "npy":
+        arr, info = _read_npy(data or b"", limits), {}
+    else:
+        arr, info = None, {}
+    if arr is not None and isinstance(opts.keyphasor_channel, int):
+        if not 0 <= opts.keyphasor_channel < arr.shape[0]:
+            raise ValueError(f"keyphasor channel {opts.keyphasor_channel} is outside the file's channels "
+                             f"0..{arr.shape[0] - 1}")
+        info["keyphasor_signal"] = arr[opts.keyphasor_channel]
+        arr = np.delete(arr, opts.keyphasor_channel, axis=0)
+    if arr is None:
+        arr, info = _read_csv(data or b"", opts, limits, notes)
+    if info.get("units") is not None and str(info["units"]).strip() not in (*UNITS_TO_UM, "V"):
+        raise ValueError(f"the file's units attribute {info['units']!r} is not one of {list(INPUT_UNITS)}")
+    if info.get("sample_rate_hz") is not None and not (isinstance(info["sample_rate_hz"], (int, float))
+                                                       and math.isfinite(info["sample_rate_hz"])):
+        raise ValueError(f"the file's sample_rate_hz attribute {info['sample_rate_hz']!r} is not a number")
+    return _assemble(arr, info, opts, limits, fmt, notes)

@@ -1,0 +1,312 @@
+"""Checks that make untrusted recording files safe to decode.
+
+Three pure primitives, used by every reader of files that come from outside
+(service uploads, ``rotordiag diagnose FILE``):
+
+``check_hdf5``
+    Walks an HDF5 file's structure with h5py's low-level API *without reading
+    any dataset values* and refuses what could read other files, crash the
+    HDF5 library or blow up memory: external storage, virtual datasets,
+    soft/external/user-defined links, filters other than the built-in
+    deflate/shuffle/fletcher32, and datasets or chunks whose decompressed size
+    or compression ratio exceed the caller's bounds.  The decompressed size is
+    computed from the declared shapes and chunk index, so it is bounded
+    before a single byte is inflated.
+``load_npy_bounded``
+    Reads an NPY header, checks the declared shape x dtype against the
+    caller's bound *and* against the body length, then views the body;
+    nothing is allocated from a size the file merely claims.
+``loads_json_finite``
+    ``json.loads`` that refuses ``NaN``, ``Infinity`` and numbers that
+    overflow to infinity (``1e999``), with a message that says what to send.
+
+Every refusal is an :class:`UnsafeFileError` (a ``ValueError``) whose message
+says what is wrong with the file and what to send instead.
+"""
+from __future__ import annotations
+
+import io
+import json
+import math
+import tokenize
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["UnsafeFileError", "check_hdf5", "load_npy_bounded", "loads_json_finite",
+           "ALLOWED_HDF5_FILTERS", "MAX_HDF5_OBJECTS", "MAX_HDF5_CHUNKS"]
+
+#: HDF5 filter ids an upload may use: deflate (gzip), shuffle, fletcher32.
+ALLOWED_HDF5_FILTERS = {1: "deflate", 2: "shuffle", 3: "fletcher32"}
+#: At most this many groups + datasets are walked (a recording needs a handful).
+MAX_HDF5_OBJECTS = 1_000
+#: At most this many allocated chunks over all datasets (each one's index entry is inspected).
+MAX_HDF5_CHUNKS = 200_000
+
+#: What h5py raises on corrupt files (besides the HDF5 errors, which are OSError/KeyError/ValueError).
+_H5_ERRORS = (OSError, ValueError, KeyError, TypeError, RuntimeError, OverflowError, IndexError, SystemError)
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+_NPY_MAGIC = b"\x93NUMPY"
+
+
+class UnsafeFileError(ValueError):
+    """A file refused before decoding; the message says why and what to send instead."""
+
+
+# --------------------------------------------------------------------------- HDF5
+def check_hdf5(source: bytes | str | Path, *, max_decompressed_bytes: int, max_chunk_ratio: float) -> None:
+    """Refuse an HDF5 file whose decoding could read other files, crash or exhaust memory.
+
+    Parameters
+    ----------
+    source : bytes or str or Path
+        The file's bytes (an upload) or its path.
+    max_decompressed_bytes : int
+        Bound on the in-memory size (shape x itemsize) of all datasets together,
+        and so on every single chunk.
+    max_chunk_ratio : float
+        Bound on every allocated chunk's decompressed/stored size ratio
+        (gzip reaches ~1000 on constant data; real waveforms ~1-5).
+
+    Raises
+    ------
+    UnsafeFileError
+        Not HDF5, unreadable, or any refused construct (see the module docstring).
+    """
+    if max_decompressed_bytes <= 0 or not max_chunk_ratio > 0:
+        raise ValueError("max_decompressed_bytes and max_chunk_ratio must be positive")
+    import h5py
+
+    if isinstance(source, (bytes, bytearray, memoryview)):
+        head = bytes(source[:8])
+        opener: Any = io.BytesIO(bytes(source))
+    else:
+        path = Path(source)
+        with open(path, "rb") as fh:
+            head = fh.read(8)
+        opener = str(path)
+    if head != _HDF5_SIGNATURE:
+        raise UnsafeFileError("not an HDF5 file (it must start with the HDF5 signature \\x89HDF\\r\\n\\x1a\\n)")
+    try:
+        f = h5py.File(opener, "r")
+    except _H5_ERRORS as exc:
+        raise UnsafeFileError(f"cannot open the HDF5 file (truncated or corrupt?): {exc}") from None
+    try:
+        _Walk(max_decompressed_bytes, max_chunk_ratio).group(f, "/")
+    except UnsafeFileError:
+        raise
+    except _H5_ERRORS as exc:
+        raise UnsafeFileError(f"cannot inspect the HDF5 file's structure (corrupt?): {exc}") from None
+    finally:
+        f.close()
+
+
+class _Walk:
+    """Depth-first walk over hard links only; state: objects seen, bytes and chunks counted."""
+
+    def __init__(self, max_bytes: int, max_ratio: float) -> None:
+        self.max_bytes = max_bytes
+        self.max_ratio = max_ratio
+        self.seen: set[int] = set()
+        self.total_bytes = 0
+        self.total_chunks = 0
+
+    def _visit_once(self, obj: Any, path: str) -> bool:
+        import h5py
+
+        addr = h5py.h5o.get_info(obj.id).addr
+        if addr in self.seen:
+            return False
+        self.seen.add(addr)
+        if len(self.seen) > MAX_HDF5_OBJECTS:
+            raise UnsafeFileError(f"the HDF5 file holds more than {MAX_HDF5_OBJECTS} groups/datasets; "
+                                  "send a file with just the recording")
+        return True
+
+    def group(self, grp: Any, path: str) -> None:
+        import h5py
+
+        if not self._visit_once(grp, path):
+            return
+        for name in list(grp.keys()):  # H5Literate: names only, links not followed
+            child_path = f"{path.rstrip('/')}/{name}"
+            try:
+                link = grp.get(name, getlink=True)
+            except (TypeError, KeyError, OSError):
+                link = None
+            if isinstance(link, h5py.SoftLink):
+                raise UnsafeFileError(f"the HDF5 file has a soft link {child_path!r} -> {link.path!r}; "
+                                      "links are refused, store the dataset itself")
+            if isinstance(link, h5py.ExternalLink):
+                raise UnsafeFileError(f"the HDF5 file has an external link {child_path!r} to another file; "
+                                      "links to other files are refused, store the data in the upload")
+            if not isinstance(link, h5py.HardLink):
+                raise UnsafeFileError(f"the HDF5 file has a user-defined link {child_path!r}; it is refused")
+            child = grp[name]
+            if isinstance(child, h5py.Group):
+                self.group(child, child_path)
+            elif isinstance(child, h5py.Dataset):
+                if self._visit_once(child, child_path):
+                    self.dataset(child, child_path)
+            # committed datatypes hold no data: nothing to check
+
+    def dataset(self, ds: Any, path: str) -> None:
+        import h5py
+
+        dcpl = ds.id.get_create_plist()
+        layout = dcpl.get_layout()
+        if layout == h5py.h5d.VIRTUAL:
+            raise UnsafeFileError(f"HDF5 dataset {path!r} is a virtual dataset (it maps other datasets/files); "
+                                  "virtual datasets are refused, store the values themselves")
+        if dcpl.get_external_count() > 0:
+            raise UnsafeFileError(f"HDF5 dataset {path!r} keeps its values in external files; external storage "
+                                  "is refused, store the values inside the HDF5 file")
+        for i in range(dcpl.get_nfilters()):
+            fid = dcpl.get_filter(i)[0]
+            if fid not in ALLOWED_HDF5_FILTERS:
+                raise UnsafeFileError(f"HDF5 dataset {path!r} uses filter id {fid}; only "
+                                      f"{', '.join(ALLOWED_HDF5_FILTERS.values())} are accepted "
+                                      "(write it with compression='gzip' or none)")
+        itemsize = ds.id.get_type().get_size()
+        if ds.dtype.kind == "O" or h5py.check_vlen_dtype(ds.dtype) is not None:
+            # variable-length items live in the global heap, bounded by the file size
+            itemsize = max(itemsize, 16)
+        shape = ds.shape or ()
+        nbytes = math.prod(shape) * itemsize
+        self.total_bytes += nbytes
+        if self.total_bytes > self.max_bytes:
+            raise UnsafeFileError(f"HDF5 dataset {path!r} has shape {shape} x {itemsize} bytes: the datasets "
+                                  f"decompress to more than {self.max_bytes} bytes; send a shorter recording")
+        if layout != h5py.h5d.CHUNKED:
+            return  # contiguous/compact: stored raw, bounded by the file size and the shape check above
+        chunk_shape = dcpl.get_chunk()
+        chunk_bytes = math.prod(chunk_shape) * itemsize
+        if chunk_bytes > self.max_bytes:
+            raise UnsafeFileError(f"HDF5 dataset {path!r} has chunks of shape {chunk_shape} ({chunk_bytes} bytes "
+                                  f"decompressed, more than {self.max_bytes}); rewrite it with smaller chunks")
+        n_chunks = ds.id.get_num_chunks()
+        self.total_chunks += n_chunks
+        if self.total_chunks > MAX_HDF5_CHUNKS:
+            raise UnsafeFileError(f"the HDF5 file has more than {MAX_HDF5_CHUNKS} chunks; "
+                                  "rewrite it with larger chunks or without chunking")
+        for i in range(n_chunks):
+            stored = ds.id.get_chunk_info(i).size
+            if stored <= 0 or chunk_bytes / stored > self.max_ratio:
+                raise UnsafeFileError(
+                    f"HDF5 dataset {path!r}: a chunk of {stored} stored bytes decompresses to {chunk_bytes} "
+                    f"bytes (ratio {chunk_bytes / max(stored, 1):.0f}, more than {self.max_ratio:g}); such "
+                    "compression bombs are refused — store the waveforms uncompressed or with normal gzip")
+
+
+# --------------------------------------------------------------------------- NPY
+def load_npy_bounded(data: bytes, *, max_bytes: int) -> np.ndarray:
+    """Array from NPY bytes, with the declared size checked before anything is allocated.
+
+    Parameters
+    ----------
+    data : bytes
+        The whole NPY file (``numpy.save``), format version 1.0 or 2.0.
+    max_bytes : int
+        Bound on the array's size in bytes (shape x itemsize).
+
+    Returns
+    -------
+    numpy.ndarray
+        A writable copy of the array (never unpickled: object dtypes are refused).
+
+    Raises
+    ------
+    UnsafeFileError
+        Not NPY, an object/structured dtype, a size over ``max_bytes``, or a body
+        whose length does not match the declared shape (truncated or padded).
+    """
+    if not data:
+        raise UnsafeFileError("empty body: send an NPY file (numpy.save) with an (n_channels, n_points) array")
+    if not bytes(data[:6]) == _NPY_MAGIC:
+        raise UnsafeFileError("not an NPY file (it must start with the \\x93NUMPY magic); write it with numpy.save")
+    fp = io.BytesIO(data)
+    try:
+        version = np.lib.format.read_magic(fp)
+        if version == (1, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_1_0(fp)
+        elif version == (2, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_2_0(fp)
+        else:
+            raise UnsafeFileError(f"NPY format version {version} is not accepted; "
+                                  "save a plain numeric array with numpy.save (version 1.0 or 2.0)")
+    except UnsafeFileError:
+        raise
+    except (ValueError, OSError, EOFError, SyntaxError, TypeError, tokenize.TokenError) as exc:
+        # numpy parses old-style headers with tokenize/ast, which raise their own errors on garbage
+        raise UnsafeFileError(f"cannot read the NPY header (truncated or corrupt?): {exc}") from None
+    if dtype.hasobject or dtype.fields is not None or dtype.kind not in "biufc":
+        raise UnsafeFileError(f"NPY dtype {dtype} is not accepted; save a float32 or float64 array "
+                              "(Python objects/pickles and record arrays are refused)")
+    if any(int(n) < 0 for n in shape):
+        raise UnsafeFileError(f"NPY header declares an invalid shape {shape}")
+    count = math.prod(int(n) for n in shape)
+    nbytes = count * dtype.itemsize
+    if nbytes > max_bytes:
+        raise UnsafeFileError(f"NPY array of shape {tuple(shape)} and dtype {dtype} is {nbytes} bytes, "
+                              f"more than the {max_bytes} accepted; send a shorter recording")
+    offset = fp.tell()
+    body = len(data) - offset
+    if body != nbytes:
+        what = "truncated" if body < nbytes else "followed by extra bytes"
+        raise UnsafeFileError(f"NPY body is {what}: the header declares shape {tuple(shape)} of {dtype} "
+                              f"({nbytes} bytes) but {body} bytes follow; resend the complete file")
+    flat = np.frombuffer(data, dtype=dtype, count=count, offset=offset)
+    return np.array(flat.reshape(shape, order="F" if fortran else "C"), copy=True)
+
+
+# --------------------------------------------------------------------------- JSON
+def _refuse_constant(name: str) -> Any:
+    raise UnsafeFileError(f"JSON contains {name}; numbers must be finite — send null or leave the value out "
+                          "(NaN/Infinity are not valid JSON)")
+
+
+def _finite_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        shown = text if len(text) <= 40 else text[:40] + "..."
+        raise UnsafeFileError(f"JSON number {shown} overflows to infinity; numbers must be finite "
+                              "(at most ~1.8e308 in magnitude)")
+    return value
+
+
+def _bounded_int(text: str) -> int:
+    if len(text.lstrip("-")) > 308:
+        raise UnsafeFileError(f"JSON integer with {len(text)} digits is refused; numbers must be finite as floats "
+                              "(at most ~1.8e308 in magnitude)")
+    return int(text)
+
+
+def loads_json_finite(data: bytes | str) -> Any:
+    """``json.loads`` that refuses non-finite numbers.
+
+    Parameters
+    ----------
+    data : bytes or str
+        JSON text (bytes in UTF-8/16/32, as ``json.loads`` detects).
+
+    Returns
+    -------
+    Any
+        The decoded value; every float in it is finite.
+
+    Raises
+    ------
+    UnsafeFileError
+        ``NaN``, ``Infinity``, ``-Infinity``, a float that overflows (``1e999``),
+        an integer beyond float range, or nesting too deep to decode.
+    json.JSONDecodeError
+        Text that is not JSON (a ``ValueError`` whose message gives the position).
+    """
+    try:
+        return json.loads(data, parse_constant=_refuse_constant, parse_float=_finite_float,
+                          parse_int=_bounded_int)
+    except RecursionError:
+        raise UnsafeFileError("JSON is nested too deeply; send a flat object") from None
+    except UnicodeDecodeError as exc:
+        raise UnsafeFileError(f"JSON body is not UTF-8 text: {exc}") from None

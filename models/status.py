@@ -1,0 +1,169 @@
+"""The verdict's honesty: ``status`` = confident | uncertain | inconclusive, with reasons (issue 15, item 2).
+
+- ``inconclusive``: a physics sanity check failed (``features.check_recording``), the
+  recording is far outside the training data (OOD score above ``OOD_INCONCLUSIVE``), or
+  the vibration at the coupling bearings is ``SCALE_INCONCLUSIVE`` times away from the
+  training data's typical level. No severity is given.
+- ``uncertain``: a sanity warning, OOD score above 1, vibration ``SCALE_UNCERTAIN`` times
+  away from the training level, an ambiguous speed estimate, features the model always had
+  missing here, no class above ``CONFIDENT_MIN_PROBABILITY``, or a Δ regressor whose interval
+  does not reach the classifier's band.
+- ``confident``: none of these.
+
+Class and Δ are consistent by construction (:func:`consistent_estimate`): the severity is
+the calibrated classifier's; the Δ point estimate is the interval regressor's, clipped into
+that class's band (the unclipped estimate is kept in the verdict as ``misalignment_model``).
+"""
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Reason", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
+           "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY"]
+
+CONFIDENT = "confident"
+UNCERTAIN = "uncertain"
+INCONCLUSIVE = "inconclusive"
+
+#: OOD score (distance to training data over its usual distance) beyond which no severity is given
+OOD_INCONCLUSIVE = 3.0
+#: coupling-bearing 1X orbit major axis this many times above / below the training median → uncertain …
+SCALE_UNCERTAIN = 20.0
+#: … and this many times → inconclusive (trees cannot extrapolate: a tree model is blind there)
+SCALE_INCONCLUSIVE = 100.0
+#: the predicted class needs at least this calibrated probability for a confident verdict
+CONFIDENT_MIN_PROBABILITY = 0.6
+#: the bearings either side of the coupling whose 1X level is compared with the training data
+COUPLING_BEARINGS = (2, 3)
+
+
+@dataclass(frozen=True)
+class Reason:
+    """Why a verdict is not confident.
+
+    Attributes
+    ----------
+    code : str
+        Stable identifier (a sanity check's code, ``ood``, ``scale``, ``speed_ambiguous``,
+        ``features_missing``, ``low_probability``, ``class_delta_disagree``).
+    status : str
+        ``uncertain`` or ``inconclusive``: what this reason alone makes of the verdict.
+    message : str
+        What was found and what to do.
+    """
+
+    code: str
+    status: str
+    message: str
+
+    def to_dict(self) -> dict:
+        return {"code": self.code, "status": self.status, "message": self.message}
+
+
+def consistent_estimate(band_index: int, edges: Sequence[float], point: float,
+                        interval: tuple[float, float]) -> tuple[float, tuple[float, float], bool]:
+    """Δ point and interval consistent with the class ``band_index``.
+
+    Returns
+    -------
+    point, interval, agrees
+        The point clipped into the band ``[edges[i-1], edges[i])`` (the upper edge exclusive,
+        as ``SeverityBands.index``), the interval widened to contain it, and whether the
+        regressor's own interval reached the band at all.
+    """
+    lo_edge = float(edges[band_index - 1]) if band_index > 0 else 0.0
+    hi_edge = float(edges[band_index]) if band_index < len(edges) else np.inf
+    top = float(np.nextafter(hi_edge, -np.inf)) if np.isfinite(hi_edge) else np.inf
+    p = float(min(max(point, lo_edge), top))
+    lo, hi = float(interval[0]), float(interval[1])
+    agrees = not (hi < lo_edge or lo >= hi_edge)
+    return p, (min(lo, p), max(hi, p)), agrees
+
+
+def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray) -> list[Reason]:
+    index = {n: i for i, n in enumerate(names)}
+    ratios = []
+    for b in COUPLING_BEARINGS:
+        j = index.get(f"b{b}_1x_major_um_pp")
+        if j is None or not (np.isfinite(row[j]) and np.isfinite(median[j]) and median[j] > 0):
+            continue
+        ratios.append((b, float(row[j]), float(median[j])))
+    if not ratios:
+        return []
+    b, v, m = max(ratios, key=lambda t: abs(np.log(max(t[1], 1e-300) / t[2])))
+    factor = m / v if v < m else v / m
+    if factor < SCALE_UNCERTAIN:
+        return []
+    status = INCONCLUSIVE if factor >= SCALE_INCONCLUSIVE else UNCERTAIN
+    side = "below" if v < m else "above"
+    return [Reason("scale", status,
+                   f"1X vibration at bearing {b} is {v:.3g} µm pk-pk, {factor:.0f}× {side} the training data's typical "
+                   f"{m:.3g} µm: the model has not seen machines vibrating like this"
+                   + (" — check the units (µm vs mils ×25.4) and the probe sensitivity" if side == "above" else
+                      " — a different machine design or a very smooth-running one; read the evidence instead"))]
+
+
+def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float], class_delta_agree: bool,
+           names: Sequence[str], row: np.ndarray, feature_median: np.ndarray,
+           never_missing: Sequence[str], speed_source: str | None,
+           warnings: Iterable[str]) -> tuple[str, list[Reason]]:
+    """The verdict's status and its reasons (worst first).
+
+    Parameters
+    ----------
+    sanity : iterable of features.SanityFinding
+    ood_score : float
+    probabilities : sequence of float
+        Calibrated class probabilities.
+    class_delta_agree : bool
+        From :func:`consistent_estimate`.
+    names, row, feature_median
+        The model's feature names, this recording's vector and the training medians.
+    never_missing : sequence of str
+        Features missing here that training always had.
+    speed_source : str or None
+        ``"keyphasor"``, ``"given"`` or ``"estimated"``.
+    warnings : iterable of str
+        The feature extractor's warnings (an ambiguous speed estimate is one).
+    """
+    reasons: list[Reason] = []
+    for f in sanity:
+        reasons.append(Reason(f.code, INCONCLUSIVE if f.level == "fail" else UNCERTAIN, f.message))
+    if np.isfinite(ood_score) and ood_score > 1.0:
+        status = INCONCLUSIVE if ood_score > OOD_INCONCLUSIVE else UNCERTAIN
+        reasons.append(Reason("ood", status, f"the recording is unlike the training data (OOD score {ood_score:.2f}; "
+                              f"> 1 unusual, > {OOD_INCONCLUSIVE:g} far outside): another machine design, "
+                              "operating state or measurement set-up than the model knows"))
+    reasons += _scale_reasons(names, row, feature_median)
+    if speed_source == "estimated":
+        for w in warnings:
+            if "speed estimate ambiguous" in w or "refinement did not converge" in w:
+                reasons.append(Reason("speed_ambiguous", UNCERTAIN, f"{w}"))
+    if never_missing:
+        reasons.append(Reason("features_missing", UNCERTAIN,
+                              f"{len(never_missing)} feature(s) the model always had are missing here "
+                              f"(e.g. {', '.join(list(never_missing)[:3])}): "
+                              + ("record at least 32 revolutions for the motion type; "
+                                 if any(n.startswith("motion_") for n in never_missing) else "")
+                              + "give an x/y probe pair at each bearing the model was trained with "
+                              "(the coupling bearings 2 and 3 at least)"))
+    pmax = float(np.max(probabilities)) if len(probabilities) else np.nan
+    if not pmax >= CONFIDENT_MIN_PROBABILITY:
+        reasons.append(Reason("low_probability", UNCERTAIN,
+                              f"no severity class is likely enough (highest probability {pmax:.0%} < "
+                              f"{CONFIDENT_MIN_PROBABILITY:.0%}): the recording lies between classes"))
+    if not class_delta_agree:
+        reasons.append(Reason("class_delta_disagree", UNCERTAIN,
+                              "the severity classifier and the Δ regressor disagree (the regressor's interval does "
+                              "not reach the class's band); the Δ shown is clipped into the class's band"))
+    if any(r.status == INCONCLUSIVE for r in reasons):
+        status = INCONCLUSIVE
+    elif reasons:
+        status = UNCERTAIN
+    else:
+        status = CONFIDENT
+    reasons.sort(key=lambda r: r.status != INCONCLUSIVE)
+    return status, reasons

@@ -1,0 +1,29 @@
+"""Machine-train and probe conventions shared by the simulator, features and service.
+
+Bearings are numbered along the train (MODEL.md): 1 generator far end, 2 generator
+coupling end, 3 exciter coupling end, 4 exciter far end. A proximity probe at angle α
+(degrees, from the +x axis towards +y in the simulator's frame) reads the journal
+displacement projected on its axis, positive towards the probe.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+#: bearings of the machine train, generator far end first
+BEARINGS: tuple[int, ...] = (1, 2, 3, 4)
+#: the two bearings next to the coupling (generator side, exciter side)
+COUPLING_BEARINGS: tuple[int, int] = (2, 3)
+
+
+def project_on_probe(x: np.ndarray, y: np.ndarray, angle_deg: float) -> np.ndarray:
+    """Displacement a probe at ``angle_deg`` reads: ``x cos α + y sin α``.
+
+    Parameters
+    ----------
+    x, y : ndarray
+        Journal displacement components in the simulator's frame (any common unit).
+    angle_deg : float
+        Probe angle α in degrees.
+    """
+    a = np.deg2rad(float(angle_deg))
+    return np.asarray(x) * np.cos(a) + np.asarray(y) * np.sin(a)

@@ -1,0 +1,91 @@
+"""Displacement units accepted at the edges of the product, and their conversion to µm."""
+from __future__ import annotations
+
+#: accepted unit spellings → factor to µm (``"µm"`` is an alias of ``"um"``; 1 mil = 25.4 µm)
+UNITS_TO_UM: dict[str, float] = {"um": 1.0, "µm": 1.0, "mm": 1e3, "m": 1e6, "mil": 25.4}
+#: the public spelling of the allowed units (for error messages)
+ALLOWED_UNITS: tuple[str, ...] = ("um", "mm", "m", "mil")
+#: micrometres per mil (thousandth of an inch)
+UM_PER_MIL: float = 25.4
+
+
+def factor_to_um(units: str) -> float:
+    """Multiplier that turns a value in ``units`` into µm.
+
+    Raises
+    ------
+    ValueError
+        For a unit outside :data:`ALLOWED_UNITS` (the message lists them).
+    """
+    key = units.strip() if isinstance(units, str) else units
+    if key not in UNITS_TO_UM:
+        raise ValueError(f"units {units!r} not understood: use one of {list(ALLOWED_UNITS)} (mil = 25.4 µm)")
+    return UNITS_TO_UM[key]
+
+
+#: input units a reader accepts: the displacement units plus ``"V"`` (proximity-probe output voltage,
+#: converted with a probe sensitivity and a gap voltage, :func:`volts_to_um`)
+INPUT_UNITS: tuple[str, ...] = (*ALLOWED_UNITS, "V")
+#: units amplitudes can be reported in (µm or mils)
+OUTPUT_UNITS: tuple[str, ...] = ("um", "mil")
+#: the sensitivity of the common 8 mm proximity probe system (200 mV/mil)
+TYPICAL_SENSITIVITY_V_PER_MM: float = 7.87
+
+
+def volts_to_um(volts, sensitivity_v_per_mm: float, gap_voltage_v: float | None = None):
+    """Probe output voltage → displacement toward the probe, µm.
+
+    A proximity probe's output is negative and grows more negative as the gap opens
+    (the shaft moves away from the probe): ``V = V_gap − S · (displacement toward the probe)``
+    would read positive towards the probe with ``S`` negative; with the sensitivity given as
+    a positive magnitude ``S`` (7.87 V/mm = 200 mV/mil) the displacement toward the probe is
+    ``(V − V_gap) / S`` (the voltage rises toward 0 V as the gap closes).
+
+    Parameters
+    ----------
+    volts : array_like
+        Probe output, V.
+    sensitivity_v_per_mm : float
+        Positive magnitude of the probe system's scale factor, V/mm (e.g. 7.87).
+    gap_voltage_v : float, optional
+        The DC gap voltage at the reference (centred) position, V (e.g. -10.0). When omitted
+        the mean of ``volts`` is removed: the waveform keeps its vibration, not its static position.
+
+    Raises
+    ------
+    ValueError
+        For a sensitivity that is not a finite positive number, or a non-finite gap voltage.
+    """
+    import math
+
+    import numpy as np
+
+    s = float(sensitivity_v_per_mm)
+    if not (math.isfinite(s) and s > 0):
+        raise ValueError(f"probe sensitivity must be a positive number of V/mm (e.g. 7.87), got {sensitivity_v_per_mm!r}")
+    v = np.asarray(volts, dtype=np.float64)
+    if gap_voltage_v is None:
+        ref = float(v.mean()) if v.size else 0.0
+    else:
+        ref = float(gap_voltage_v)
+        if not math.isfinite(ref):
+            raise ValueError(f"gap voltage must be a finite number of volts (e.g. -10.0), got {gap_voltage_v!r}")
+    return (v - ref) / s * 1e3
+
+
+def um_to(values, units: str):
+    """Convert µm values to an output unit (``"um"`` or ``"mil"``); ``None``/NaN pass through.
+
+    Raises
+    ------
+    ValueError
+        For a unit outside :data:`OUTPUT_UNITS`.
+    """
+    key = units.strip().replace("µm", "um").lower() if isinstance(units, str) else units
+    if key in ("mils",):
+        key = "mil"
+    if key not in OUTPUT_UNITS:
+        raise ValueError(f"output units {units!r} not understood: use 'um' (micrometres) or 'mil' (thousandths of an inch)")
+    if values is None:
+        return None
+    return values if key == "um" else values / UM_PER_MIL

@@ -1,0 +1,350 @@
+"""Plants from what a plant engineer knows: a shaft-line description reduced to the lumped plant.
+
+A :class:`ShaftLine` gives, for the generator and the exciter rotor, the shaft as
+segments (length, outer diameter) between its two bearings, extra body masses
+(windings, wedges, fans, the exciter armature) at positions along the span, the
+material, the four bearings (diameter, length, radial clearance), the oil
+viscosity and the coupling (type and radial stiffness).
+
+Reduction (docs/model.md, "Plants from a shaft line"): each rotor is modelled
+with Euler–Bernoulli beam finite elements (2 DOF per node in one plane,
+consistent mass) on pinned supports at its bearings. Its first bending mode,
+normalised to unit displacement at its largest point, gives the modal mass
+M = φᵀMφ and modal stiffness K = ω₁²M; the lumped rotor is a disk of mass M on
+two half-spans of stiffness k = K/2 (so its pinned-pinned frequency is ω₁
+exactly), and the rest of the rotor's mass goes to the two journals in the
+proportions of the static bearing reactions of the full beam (so the total mass
+and static bearing loads are kept). :func:`train_critical_speeds` gives the
+critical speeds of the whole train (both rotors, the coupling, linear bearing
+springs) from the full beam model, the reference for the reduction's test.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .params import Plant
+
+#: Materials by name: (Young's modulus Pa, density kg/m³).
+MATERIALS: dict[str, tuple[float, float]] = {
+    "steel": (2.07e11, 7850.0),            # rotor forging steel (NiCrMoV), room temperature
+    "steel_hot": (1.95e11, 7850.0),        # same at ≈ 100 °C
+}
+COUPLING_TYPES: tuple[str, ...] = ("rigid", "flexible")
+
+
+def _pos(name: str, v: Any) -> float:
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a positive number, got {v!r}") from None
+    if not (math.isfinite(x) and x > 0):
+        raise ValueError(f"{name} must be a positive number, got {v!r}")
+    return x
+
+
+@dataclass(frozen=True)
+class Rotor:
+    """One rotor between its two bearings.
+
+    Attributes
+    ----------
+    segments : list of (length_m, diameter_m)
+        Shaft segments from the first bearing (non-coupling end for the generator,
+        coupling end for the exciter) to the second; bearings at both ends.
+    body_masses : list of (position_m, mass_kg)
+        Extra masses that add weight and inertia but no stiffness, at distances
+        from the first bearing (windings and wedges of a generator body, an armature).
+    """
+
+    segments: tuple[tuple[float, float], ...]
+    body_masses: tuple[tuple[float, float], ...] = ()
+
+    @classmethod
+    def from_dict(cls, name: str, d: dict[str, Any]) -> Rotor:
+        if not isinstance(d, dict):
+            raise ValueError(f"[{name}] must be a table with 'segments' (and optionally 'body_masses')")
+        unknown = set(d) - {"segments", "body_masses"}
+        if unknown:
+            raise ValueError(f"[{name}] has unknown keys {sorted(unknown)}; known: segments, body_masses")
+        segs = d.get("segments")
+        if not isinstance(segs, list) or not segs:
+            raise ValueError(f"{name}.segments must be a non-empty list of [length_m, diameter_m]")
+        segments = []
+        for i, s in enumerate(segs):
+            if not (isinstance(s, (list, tuple)) and len(s) == 2):
+                raise ValueError(f"{name}.segments[{i}] must be [length_m, diameter_m], got {s!r}")
+            segments.append((_pos(f"{name}.segments[{i}] length_m", s[0]), _pos(f"{name}.segments[{i}] diameter_m", s[1])))
+        span = sum(s[0] for s in segments)
+        masses = []
+        for i, b in enumerate(d.get("body_masses", [])):
+            if not (isinstance(b, (list, tuple)) and len(b) == 2):
+                raise ValueError(f"{name}.body_masses[{i}] must be [position_m, mass_kg], got {b!r}")
+            x = float(b[0])
+            if not 0 <= x <= span:
+                raise ValueError(f"{name}.body_masses[{i}] position {x} m is outside the span [0, {span:g}] m")
+            masses.append((x, _pos(f"{name}.body_masses[{i}] mass_kg", b[1])))
+        return cls(tuple(segments), tuple(masses))
+
+    @property
+    def span_m(self) -> float:
+        return sum(s[0] for s in self.segments)
+
+
+@dataclass(frozen=True)
+class ShaftLine:
+    """A generator–exciter shaft line as a plant engineer describes it (SI units)."""
+
+    generator: Rotor
+    exciter: Rotor
+    material: str = "steel"
+    bearing_diameter_m: tuple[float, float, float, float] = (0.45, 0.45, 0.25, 0.25)
+    bearing_length_m: tuple[float, float, float, float] = (0.35, 0.35, 0.15, 0.15)
+    clearance_m: float = 0.35e-3
+    viscosity_pa_s: float = 0.018
+    coupling: str = "rigid"
+    coupling_stiffness_n_m: float = 1.0e8
+    generator_asymmetry: float = 0.0549
+    damping_ratio: float = 0.008
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> ShaftLine:
+        """Validate a mapping (the TOML layout of ``examples/shaftline_200mw.toml``)."""
+        if not isinstance(d, dict):
+            raise ValueError("a shaft line must be a table")
+        known = {"generator", "exciter", "material", "bearings", "oil", "coupling", "generator_asymmetry",
+                 "damping_ratio", "plant"}
+        unknown = set(d) - known
+        if unknown:
+            raise ValueError(f"unknown shaft-line key(s) {sorted(unknown)}; known: {sorted(known)}")
+        for k in ("generator", "exciter"):
+            if k not in d:
+                raise ValueError(f"the shaft line needs a [{k}] table with its segments")
+        material = d.get("material", "steel")
+        if material not in MATERIALS:
+            raise ValueError(f"material must be one of {list(MATERIALS)}, got {material!r}")
+        b = d.get("bearings", {})
+        if not isinstance(b, dict):
+            raise ValueError("[bearings] must be a table with diameter_m, length_m (4 values each) and clearance_m")
+        diam = tuple(_pos("bearings.diameter_m", v) for v in b.get("diameter_m", cls.bearing_diameter_m))
+        length = tuple(_pos("bearings.length_m", v) for v in b.get("length_m", cls.bearing_length_m))
+        if len(diam) != 4 or len(length) != 4:
+            raise ValueError("bearings.diameter_m and bearings.length_m need 4 values (bearings 1..4)")
+        oil = d.get("oil", {})
+        coupling = d.get("coupling", {})
+        ctype = coupling.get("type", "rigid")
+        if ctype not in COUPLING_TYPES:
+            raise ValueError(f"coupling.type must be one of {COUPLING_TYPES}, got {ctype!r}")
+        zeta = float(d.get("damping_ratio", 0.008))
+        if not 0 <= zeta < 1:
+            raise ValueError(f"damping_ratio must be in [0, 1), got {zeta!r}")
+        return cls(
+            generator=Rotor.from_dict("generator", d["generator"]),
+            exciter=Rotor.from_dict("exciter", d["exciter"]),
+            material=material,
+            bearing_diameter_m=diam,  # type: ignore[arg-type]
+            bearing_length_m=length,  # type: ignore[arg-type]
+            clearance_m=_pos("bearings.clearance_m", b.get("clearance_m", 0.35e-3)),
+            viscosity_pa_s=_pos("oil.viscosity_pa_s", oil.get("viscosity_pa_s", 0.018)),
+            coupling=ctype,
+            coupling_stiffness_n_m=_pos("coupling.stiffness_n_m", coupling.get("stiffness_n_m", 1.0e8)),
+            generator_asymmetry=float(d.get("generator_asymmetry", 0.0549)),
+            damping_ratio=zeta,
+            extra=dict(d.get("plant", {})),
+        )
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> ShaftLine:
+        path = Path(path)
+        if not path.is_file():
+            raise ValueError(f"shaft-line file {str(path)!r} does not exist")
+        try:
+            return cls.from_dict(tomllib.loads(path.read_text()))
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"shaft-line file {path.name!r} is not valid TOML: {exc}") from exc
+
+
+# ----------------------------------------------------------------------------- beam finite elements
+def _beam_matrices(rotor: Rotor, E: float, rho: float, max_elem_m: float = 0.25):
+    """Global K, M (planar Euler–Bernoulli, DOF [w0, θ0, w1, θ1, ...]) and node coordinates."""
+    xs = [0.0]
+    props = []
+    for length, dia in rotor.segments:
+        n = max(1, int(math.ceil(length / max_elem_m)))
+        for _ in range(n):
+            xs.append(xs[-1] + length / n)
+            props.append((length / n, dia))
+    for x, _ in rotor.body_masses:  # a node at every body mass: split the element that holds it
+        if min(abs(np.array(xs) - x)) > 1e-9:
+            i = int(np.searchsorted(xs, x))
+            le, d = props[i - 1]
+            a = x - xs[i - 1]
+            props[i - 1:i] = [(a, d), (le - a, d)]
+            xs.insert(i, x)
+    nn = len(xs)
+    K = np.zeros((2 * nn, 2 * nn))
+    M = np.zeros((2 * nn, 2 * nn))
+    for e, (le, d) in enumerate(props):
+        area = math.pi * d * d / 4
+        inertia = math.pi * d ** 4 / 64
+        k = E * inertia / le ** 3 * np.array([[12, 6 * le, -12, 6 * le], [6 * le, 4 * le * le, -6 * le, 2 * le * le],
+                                              [-12, -6 * le, 12, -6 * le], [6 * le, 2 * le * le, -6 * le, 4 * le * le]])
+        m = rho * area * le / 420 * np.array([[156, 22 * le, 54, -13 * le], [22 * le, 4 * le * le, 13 * le, -3 * le * le],
+                                              [54, 13 * le, 156, -22 * le], [-13 * le, -3 * le * le, -22 * le, 4 * le * le]])
+        idx = np.arange(2 * e, 2 * e + 4)
+        K[np.ix_(idx, idx)] += k
+        M[np.ix_(idx, idx)] += m
+    for x, mass in rotor.body_masses:
+        j = int(np.argmin(abs(np.array(xs) - x)))
+        M[2 * j, 2 * j] += mass
+    return K, M, np.array(xs)
+
+
+@dataclass(frozen=True)
+class LumpedRotor:
+    journal_a_kg: float
+    disk_kg: float
+    journal_b_kg: float
+    half_span_stiffness_n_m: float
+    first_pinned_hz: float
+
+
+def reduce_rotor(rotor: Rotor, material: str = "steel") -> LumpedRotor:
+    """Lumped journal–disk–journal rotor matching the first pinned–pinned bending mode, total mass and
+    static bearing reactions of the beam model (module docstring)."""
+    from scipy.linalg import eigh
+
+    E, rho = MATERIALS[material]
+    K, M, xs = _beam_matrices(rotor, E, rho)
+    n = K.shape[0]
+    free = [i for i in range(n) if i not in (0, n - 2)]  # pinned: w = 0 at both bearings
+    w2, vecs = eigh(K[np.ix_(free, free)], M[np.ix_(free, free)], subset_by_index=[0, 0])
+    phi = np.zeros(n)
+    phi[free] = vecs[:, 0]
+    phi /= phi[0::2][np.argmax(np.abs(phi[0::2]))]
+    modal_mass = float(phi @ M @ phi)
+    total = float(np.ones(n // 2) @ M[0::2, 0::2] @ np.ones(n // 2))
+    # static reactions under gravity of the full beam (simply supported): moments of the mass distribution
+    mass_vec = M[0::2, 0::2] @ np.ones(n // 2)  # consistent-mass lumping of weight to the nodes
+    moment = float(mass_vec @ xs)
+    r_b = moment / xs[-1]
+    r_a = total - r_b
+    rest = total - modal_mass
+    if rest <= 0:
+        raise ValueError("the rotor's first-mode modal mass exceeds its total mass; check the segments")
+    return LumpedRotor(journal_a_kg=rest * r_a / total, disk_kg=modal_mass, journal_b_kg=rest * r_b / total,
+                       half_span_stiffness_n_m=0.5 * float(w2[0]) * modal_mass,
+                       first_pinned_hz=math.sqrt(float(w2[0])) / (2 * math.pi))
+
+
+def to_plant(line: ShaftLine) -> Plant:
+    """The lumped :class:`Plant` of a shaft line (module docstring; docs/model.md)."""
+    g = reduce_rotor(line.generator, line.material)
+    x = reduce_rotor(line.exciter, line.material)
+    wg = math.sqrt(2 * g.half_span_stiffness_n_m / g.disk_kg)
+    wx = math.sqrt(2 * x.half_span_stiffness_n_m / x.disk_kg)
+    values: dict[str, Any] = dict(
+        journal1_mass_kg=g.journal_a_kg, generator_mass_kg=g.disk_kg, journal3_mass_kg=g.journal_b_kg,
+        journal4_mass_kg=x.journal_a_kg, exciter_mass_kg=x.disk_kg, journal6_mass_kg=x.journal_b_kg,
+        generator_stiffness_n_m=g.half_span_stiffness_n_m, exciter_stiffness_n_m=x.half_span_stiffness_n_m,
+        asymmetry=line.generator_asymmetry,
+        generator_damping_n_s_m=2 * line.damping_ratio * g.disk_kg * wg,
+        exciter_damping_n_s_m=2 * line.damping_ratio * x.disk_kg * wx,
+        clearance_m=line.clearance_m, viscosity_pa_s=line.viscosity_pa_s,
+        bearing_radius_m=tuple(d / 2 for d in line.bearing_diameter_m), bearing_length_m=line.bearing_length_m,
+        coupling_stiffness_n_m=line.coupling_stiffness_n_m,
+    )
+    values.update(line.extra)
+    return Plant.from_dict(values)
+
+
+# ----------------------------------------------------------------------------- verification
+def train_critical_speeds(line: ShaftLine, bearing_stiffness_n_m: float, n: int = 2) -> np.ndarray:
+    """First ``n`` natural frequencies (Hz) of the whole train from the beam model: both rotors, linear
+    isotropic bearings of the given stiffness, coupling joining the generator's last and the exciter's
+    first node in displacement (free in slope, as the lumped model's r3 = r4), non-rotating."""
+    from scipy.linalg import eigh
+
+    E, rho = MATERIALS[line.material]
+    Kg, Mg, _ = _beam_matrices(line.generator, E, rho)
+    Kx, Mx, _ = _beam_matrices(line.exciter, E, rho)
+    ng, nx = Kg.shape[0], Kx.shape[0]
+    K = np.zeros((ng + nx, ng + nx))
+    M = np.zeros_like(K)
+    K[:ng, :ng], M[:ng, :ng] = Kg, Mg
+    K[ng:, ng:], M[ng:, ng:] = Kx, Mx
+    for i in (0, ng - 2, ng, ng + nx - 2):
+        K[i, i] += bearing_stiffness_n_m
+    # constraint w_gen_end = w_exc_start: T maps reduced DOFs to full ones
+    keep = [i for i in range(ng + nx) if i != ng]
+    T = np.zeros((ng + nx, len(keep)))
+    for j, i in enumerate(keep):
+        T[i, j] = 1.0
+    T[ng, keep.index(ng - 2)] = 1.0
+    w2 = eigh(T.T @ K @ T, T.T @ M @ T, eigvals_only=True, subset_by_index=[0, n - 1])
+    return np.sqrt(w2) / (2 * math.pi)
+
+
+def lumped_critical_speeds(plant: Plant, bearing_stiffness_n_m: float, n: int = 2) -> np.ndarray:
+    """First ``n`` natural frequencies (Hz) of the lumped chain (nodes 1, 2, 3≡4, 5, 6), ρ = 0, linear bearings."""
+    from scipy.linalg import eigh
+
+    m = np.array([plant.journal1_mass_kg, plant.generator_mass_kg, plant.journal3_mass_kg + plant.journal4_mass_kg,
+                  plant.exciter_mass_kg, plant.journal6_mass_kg])
+    K = np.zeros((5, 5))
+    for a, b, k in ((0, 1, plant.generator_stiffness_n_m), (1, 2, plant.generator_stiffness_n_m),
+                    (2, 3, plant.exciter_stiffness_n_m), (3, 4, plant.exciter_stiffness_n_m)):
+        K[a, a] += k
+        K[b, b] += k
+        K[a, b] -= k
+        K[b, a] -= k
+    for i, count in ((0, 1), (2, 2), (4, 1)):
+        K[i, i] += count * bearing_stiffness_n_m
+    w2 = eigh(K, np.diag(m), eigvals_only=True, subset_by_index=[0, n - 1])
+    return np.sqrt(w2) / (2 * math.pi)
+
+
+# ----------------------------------------------------------------------------- presets
+def _preset(body, windings, shaft, journal, exc, bearings_d, bearings_l, clearance, rated):
+    """Two-bearing generator (journal, shaft, body, shaft, journal) and exciter (journal, shaft, journal)."""
+    body_d, body_l = body
+    jd, jl = journal
+    sd, sl = shaft
+    wpos = [jl + sl + body_l * (k + 0.5) / len(windings) for k in range(len(windings))]
+    ejd, ejl, esd, esl, arm = exc
+    return {
+        "generator": {"segments": [[jl, jd], [sl, sd], [body_l, body_d], [sl, sd], [jl, jd]],
+                      "body_masses": [[x, m] for x, m in zip(wpos, windings)]},
+        "exciter": {"segments": [[ejl, ejd], [esl, esd], [ejl, ejd]], "body_masses": [[ejl + esl / 2, arm]]},
+        "bearings": {"diameter_m": list(bearings_d), "length_m": list(bearings_l), "clearance_m": clearance},
+        "rated_speed_rpm": list(rated),
+    }
+
+
+#: Illustrative machine families (docs/model.md): dimensions from the usual proportions of two-pole
+#: (body ≤ ≈ 1.2 m at 3000/3600 r/min) and four-pole (larger body, 1500/1800 r/min) generators — not a
+#: vendor's drawings. Each has ``rated_speed_rpm`` (not a plant parameter) for the user's operating points.
+PRESETS: dict[str, dict[str, Any]] = {
+    "gen50_2pole": _preset((0.75, 3.2), [1200.0] * 4, (0.42, 0.6), (0.30, 0.4), (0.18, 0.3, 0.26, 1.8, 600.0),
+                           (0.30, 0.30, 0.18, 0.18), (0.24, 0.24, 0.11, 0.11), 0.25e-3, (3000, 3600)),
+    "gen200_2pole": _preset((1.0, 5.0), [3000.0] * 4, (0.6, 0.9), (0.45, 0.6), (0.25, 0.4, 0.36, 2.6, 1500.0),
+                            (0.45, 0.45, 0.25, 0.25), (0.35, 0.35, 0.15, 0.15), 0.35e-3, (3000, 3600)),
+    "gen600_2pole": _preset((1.15, 6.8), [5000.0] * 4, (0.75, 1.1), (0.55, 0.7), (0.30, 0.5, 0.45, 3.2, 3000.0),
+                            (0.55, 0.55, 0.30, 0.30), (0.45, 0.45, 0.20, 0.20), 0.45e-3, (3000, 3600)),
+    "gen600_4pole": _preset((1.6, 5.5), [7000.0] * 4, (0.85, 1.2), (0.60, 0.8), (0.30, 0.5, 0.45, 3.2, 3000.0),
+                            (0.60, 0.60, 0.30, 0.30), (0.50, 0.50, 0.20, 0.20), 0.50e-3, (1500, 1800)),
+}
+
+
+def preset(name: str) -> ShaftLine:
+    """The :class:`ShaftLine` of a named preset (``PRESETS``)."""
+    if name not in PRESETS:
+        raise ValueError(f"unknown shaft-line preset {name!r}; known: {sorted(PRESETS)}")
+    d = {k: v for k, v in PRESETS[name].items() if k != "rated_speed_rpm"}
+    return ShaftLine.from_dict(d)

@@ -1,0 +1,177 @@
+"""Physics sanity checks (issue 15, item 1) and the phase noise gate (item 3), on simulated recordings.
+
+Each broken recording is a clean simulation of the default plant with one realistic mistake
+made to it (units, a dead or clipped probe, probes swapped, no signal at all); the clean
+recording itself must pass every check.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rotordiag.features import ProbeChannel, Recording, check_recording, evidence, extract_features
+from tests.service_util import simulated_channels
+
+CLEARANCE_UM = 350.0
+
+
+def _rec(channels, fs, units="um", clearance_um=CLEARANCE_UM, **kw):
+    return Recording(sample_rate_hz=fs, channels=[ProbeChannel(b, a, units, np.asarray(d, float))
+                                                  for b, a, d in channels],
+                     speed_rpm=kw.pop("speed_rpm", 1800.0), clearance_um=clearance_um, **kw)
+
+
+@pytest.fixture(scope="module")
+def sim():
+    return simulated_channels(misalignment=0.2)
+
+
+def _codes(fr):
+    return {(f.code, f.level) for f in fr.sanity}
+
+
+@pytest.mark.parametrize("delta", [0.0, 0.2])
+def test_clean_simulated_recordings_pass(delta):
+    fs, ch = simulated_channels(misalignment=delta)
+    fr = extract_features(_rec(ch, fs))
+    assert fr.sanity == ()
+    # without a stated clearance as well
+    assert extract_features(_rec(ch, fs, clearance_um=None)).sanity == ()
+
+
+def test_micrometres_declared_as_mils_exceed_the_clearance(sim):
+    fs, ch = sim
+    fr = extract_features(_rec(ch, fs, units="mil"))
+    fails = [f for f in fr.sanity if f.code == "orbit_exceeds_clearance"]
+    assert fails and all(f.level == "fail" for f in fails)
+    assert "mil" in fails[0].message and "units" in fails[0].message
+
+
+def test_micrometres_declared_as_mm_exceed_probe_range_and_gap(sim):
+    fs, ch = sim
+    codes = _codes(extract_features(_rec(ch, fs, units="mm", clearance_um=None)))
+    assert ("orbit_exceeds_probe_range", "fail") in codes
+    assert ("dc_implausible", "fail") in codes
+
+
+def test_zero_and_flat_channels(sim):
+    fs, ch = sim
+    zero = [(b, a, np.zeros_like(d) if (b, a) == (2, 45.0) else d) for b, a, d in ch]
+    flat = [(b, a, np.full_like(d, 1234.5) if (b, a) == (3, 135.0) else d) for b, a, d in ch]
+    fz = [f for f in extract_features(_rec(zero, fs)).sanity if f.level == "fail"]
+    ff = [f for f in extract_features(_rec(flat, fs)).sanity if f.level == "fail"]
+    assert [(f.code, f.bearing) for f in fz] == [("zero_channel", 2)]
+    assert [(f.code, f.bearing) for f in ff] == [("flat_channel", 3)]
+
+
+def test_clipped_channel_but_not_a_quantised_one(sim):
+    fs, ch = sim
+    b, a, d = ch[4]                                       # bearing 3, 45°
+    top = d.min() + 0.7 * np.ptp(d)
+    clipped = [(bb, aa, np.minimum(dd, top) if (bb, aa) == (b, a) else dd) for bb, aa, dd in ch]
+    found = [f for f in extract_features(_rec(clipped, fs)).sanity if f.code == "clipped_channel"]
+    assert [(f.bearing, f.level) for f in found] == [(b, "fail")]
+    # a 16-bit-like acquisition (0.25 µm steps) repeats its extreme values but is not clipped
+    quantised = [(bb, aa, np.round(dd / 0.25) * 0.25) for bb, aa, dd in ch]
+    assert extract_features(_rec(quantised, fs)).sanity == ()
+
+
+def test_swapped_probe_order_gives_reverse_whirl_everywhere(sim):
+    fs, ch = sim
+    # the probe at 135° recorded as the one at 45° and vice versa: the orbit is mirrored
+    swapped = [(b, 180.0 - a, d) for b, a, d in ch]
+    fr = extract_features(_rec(swapped, fs))
+    assert ("reverse_whirl_all", "fail") in _codes(fr)
+    msg = next(f.message for f in fr.sanity if f.code == "reverse_whirl_all")
+    assert "probe order" in msg and "rotation direction" in msg
+
+
+def test_noise_only_recording_has_no_sync_signal(sim):
+    fs, ch = sim
+    rng = np.random.default_rng(3)
+    noise = [(b, a, rng.normal(0.0, 2.0, d.size)) for b, a, d in ch]
+    fr = extract_features(_rec(noise, fs))
+    assert ("no_sync_signal", "fail") in _codes(fr)
+
+
+def test_phase_is_missing_below_the_noise_floor():
+    """A pure 1X orbit plus white noise: 1X phase measured (to its LS error), 2X/3X phase NaN."""
+    fs, rpm, n = 2048.0, 1800.0, 2048 * 8
+    t = np.arange(n) / fs
+    th = 2 * np.pi * rpm / 60 * t
+    rng = np.random.default_rng(0)
+    chans = []
+    for b in (2, 3):
+        x = 40 * np.cos(th - 0.3) + rng.normal(0, 1.0, n)
+        y = 30 * np.sin(th - 0.3) + rng.normal(0, 1.0, n)
+        for a in (45.0, 135.0):
+            r = np.deg2rad(a)
+            chans.append((b, a, x * np.cos(r) + y * np.sin(r)))
+    fr = extract_features(_rec(chans, fs))
+    for b in (2, 3):
+        assert np.isfinite(fr[f"b{b}_x_1x_phase_deg"])
+        assert fr[f"b{b}_x_1x_phase_deg"] == pytest.approx(np.degrees(0.3), abs=1.0)
+        assert np.isnan(fr[f"b{b}_x_2x_phase_deg"]) and np.isnan(fr[f"b{b}_y_3x_phase_deg"])
+        assert np.isfinite(fr[f"b{b}_x_2x_amp_um_pp"])             # the amplitude stays (near 0)
+        noise = fr.bearings[b].line_noise_um
+        # noise-equivalent amplitude of the LS fit: 2σ/√n per quadrature → |ΔC| rms = 2σ/√n
+        assert noise[0, 1] == pytest.approx(2 * 1.0 / np.sqrt(n), rel=0.3)
+    assert np.isfinite(fr["dphase_1x_b2_b3_x_deg"]) and np.isnan(fr["dphase_2x_b2_b3_x_deg"])
+    items = {(e.scope, e.name): e for e in evidence(fr)}
+    assert "not measurable" in items[("coupling 2–3", "2X phase difference x")].value
+    assert "phase not measurable" in items[("bearing 2", "2X x")].value
+
+
+def test_noise_free_simulation_keeps_its_phases(sim):
+    fs, ch = sim
+    fr = extract_features(_rec(ch, fs))
+    for b in (1, 2, 3, 4):
+        for k in (1, 2, 3):
+            assert np.isfinite(fr[f"b{b}_x_{k}x_phase_deg"])
+
+
+def test_check_recording_is_what_extract_features_reports(sim):
+    fs, ch = sim
+    rec = _rec(ch, fs, units="mil")
+    fr = extract_features(rec)
+    assert check_recording(rec, fr) == fr.sanity
+    assert fr.sanity[0].level == "fail"                   # failures first
+
+
+def test_slow_roll_vectors_are_subtracted():
+    """Runout added to each probe as a known 1X/2X vector, then given as slow-roll: the orders equal
+    those of the recording without runout (exact: the subtraction is linear in the fitted orders)."""
+    from rotordiag import simulator
+
+    rpm, spr, revs = 1950.0, 128, 32
+    res = simulator.simulate(simulator.Plant.default(), rpm, 0.1, 0.05, mechanism="rigid",
+                             transient_revs=300, record_revs=revs, samples_per_rev=spr)
+    d = res.journal_displacements_m * 1e6
+    f = rpm / 60.0
+    fs = spr * f
+    theta = 2 * np.pi * f * np.arange(d.shape[0]) / fs
+    kp = np.arange(revs + 1) / f
+    rng = np.random.default_rng(7)
+    clean, runout, vectors = [], [], []
+    for b in range(4):
+        for a in (45.0, 135.0):
+            r = np.deg2rad(a)
+            p = d[:, b, 0] * np.cos(r) + d[:, b, 1] * np.sin(r)
+            sr = {1: (rng.uniform(0, 6), rng.uniform(0, 360)), 2: (rng.uniform(0, 2), rng.uniform(0, 360))}
+            ro = sum(amp / 2 * np.cos(k * theta - np.deg2rad(ph)) for k, (amp, ph) in sr.items())
+            clean.append(ProbeChannel(b + 1, a, "um", p))
+            runout.append(ProbeChannel(b + 1, a, "um", p + ro, slow_roll_um_pp=sr))
+            vectors.append(ProbeChannel(b + 1, a, "um", p + ro))
+    ref = extract_features(Recording(fs, clean, keyphasor_times_s=kp))
+    comp = extract_features(Recording(fs, runout, keyphasor_times_s=kp))
+    raw = extract_features(Recording(fs, vectors, keyphasor_times_s=kp))
+    for b in (1, 2, 3, 4):
+        np.testing.assert_allclose(comp.bearings[b].x_coeffs_um[:2], ref.bearings[b].x_coeffs_um[:2], atol=1e-6)
+        np.testing.assert_allclose(comp.bearings[b].y_coeffs_um[:2], ref.bearings[b].y_coeffs_um[:2], atol=1e-6)
+        assert comp[f"b{b}_2x_1x_major_ratio"] == pytest.approx(ref[f"b{b}_2x_1x_major_ratio"], rel=1e-6)
+    # and the runout did change the uncompensated orders
+    assert max(abs(raw.bearings[b].x_coeffs_um[1] - ref.bearings[b].x_coeffs_um[1]) for b in (1, 2, 3, 4)) > 0.05
+    with pytest.raises(ValueError, match="keyphasor"):
+        Recording(fs, runout)
+    with pytest.raises(ValueError, match="order 3"):
+        ProbeChannel(1, 45.0, "um", clean[0].data, slow_roll_um_pp={3: (1.0, 0.0)})

@@ -1,0 +1,70 @@
+"""Verdict status and the class/Δ consistency (models.status), and the shipped model on broken recordings."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rotordiag.models.status import INCONCLUSIVE, UNCERTAIN, assess, consistent_estimate
+
+EDGES = (0.05, 0.15, 0.35)
+
+
+@pytest.mark.parametrize("band, point, expect", [(1, 0.041, 0.05), (0, 0.2, np.nextafter(0.05, 0)),
+                                                 (2, 0.2, 0.2), (3, 0.1, 0.35), (3, 0.9, 0.9)])
+def test_delta_is_clipped_into_the_class_band(band, point, expect):
+    p, (lo, hi), _ = consistent_estimate(band, EDGES, point, (point - 0.01, point + 0.01))
+    assert p == pytest.approx(expect, abs=1e-15)
+    assert np.searchsorted(EDGES, p, side="right") == band          # the band SeverityBands.index gives
+    assert lo <= p <= hi
+
+
+def test_disagreement_is_reported():
+    assert consistent_estimate(1, EDGES, 0.041, (0.0, 0.049))[2] is False
+    assert consistent_estimate(1, EDGES, 0.041, (0.0, 0.06))[2] is True
+
+
+def _assess(**kw):
+    base = dict(sanity=(), ood_score=0.3, probabilities=[0.9, 0.05, 0.03, 0.02], class_delta_agree=True,
+                names=["b2_1x_major_um_pp"], row=np.array([30.0]), feature_median=np.array([30.0]),
+                never_missing=[], speed_source="given", warnings=[])
+    base.update(kw)
+    return assess(**base)
+
+
+def test_status_rules():
+    assert _assess() == ("confident", [])
+    assert _assess(ood_score=1.5)[0] == UNCERTAIN
+    assert _assess(ood_score=5.0)[0] == INCONCLUSIVE
+    assert _assess(row=np.array([0.2]))[0] == INCONCLUSIVE            # 150× below the training median
+    assert _assess(row=np.array([1.0]))[0] == UNCERTAIN               # 30× below
+    assert _assess(probabilities=[0.5, 0.5, 0, 0])[0] == UNCERTAIN
+    assert _assess(class_delta_agree=False)[0] == UNCERTAIN
+    amb = "speed estimate ambiguous: 1200 r/min chosen over 2400 r/min"
+    assert _assess(speed_source="estimated", warnings=[amb])[1][0].code == "speed_ambiguous"
+    assert _assess(speed_source="given", warnings=[amb])[0] == "confident"
+
+
+def test_shipped_model_never_gives_a_severity_to_an_impossible_recording():
+    from pathlib import Path
+
+    from rotordiag.features import ProbeChannel, Recording, extract_features
+    from rotordiag.models.predict import diagnose, format_verdict, load_bundle
+    from tests.service_util import simulated_channels
+
+    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
+    if not (root / "active").exists():
+        pytest.skip("no shipped registry in this checkout")
+    bundle = load_bundle(root)
+    fs, ch = simulated_channels(misalignment=0.2)
+    for units, clearance in (("mil", 350.0), ("mm", None)):
+        rec = Recording(fs, [ProbeChannel(b, a, units, d) for b, a, d in ch], speed_rpm=1800.0, clearance_um=clearance)
+        v = diagnose(bundle, extract_features(rec), clearance_um=clearance)
+        assert v.status == INCONCLUSIVE and v.severity == INCONCLUSIVE and v.misalignment is None
+        assert v.reasons[0]["status"] == INCONCLUSIVE and "units" in v.reasons[0]["message"]
+        text = format_verdict(v)
+        assert "inconclusive" in text and "evidence" in text
+    rec = Recording(fs, [ProbeChannel(b, a, "um", d) for b, a, d in ch], speed_rpm=1800.0, clearance_um=350.0)
+    v = diagnose(bundle, extract_features(rec), clearance_um=350.0)
+    assert v.status != INCONCLUSIVE
+    band = int(np.searchsorted(v.bands["edges"], v.misalignment, side="right"))
+    assert v.bands["names"][band] == v.severity
