@@ -12,3 +12,6 @@ done
 rotordiag simulate --speed-rpm 1800 --misalignment 0.5 --unbalance 0.05 --record-revs 40 \
   --probe-sample-rate-hz 2560 --snr-db 40 --runout-um 1 --seed 1 --probes-out $D/misaligned_2560hz.npy > /dev/null
 echo '{"sample_rate_hz": 2560}' > $D/misaligned_2560hz.json
+rm -f $D/misaligned.uff
+rotordiag simulate --speed-rpm 1800 --misalignment 0.5 --unbalance 0.05 --record-revs 40 \
+  --probe-sample-rate-hz 2560 --snr-db 40 --runout-um 1 --seed 1 --probes-out $D/misaligned.uff > /dev/null

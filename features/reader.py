@@ -1,4 +1,4 @@
-"""One reader for recordings: CSV, NPY, HDF5 and JSON → :class:`rotordiag.features.Recording`.
+"""One reader for recordings: CSV, NPY, HDF5, UFF (type 58) and JSON → :class:`rotordiag.features.Recording`.
 
 The CLI (``rotordiag diagnose``), the service (``/diagnose`` JSON, binary and multipart,
 ``/diagnose/batch``) and the web page (``/ui/plot-data``) all call :func:`read_recording`
@@ -82,7 +82,7 @@ __all__ = ["ReadOptions", "ReadLimits", "ReadResult", "read_recording", "recordi
 DEFAULT_LAYOUT: tuple[tuple[int, float], ...] = tuple((b, a) for b in (1, 2, 3, 4) for a in (45.0, 135.0))
 #: formats and the file-name endings that select them
 FORMATS: dict[str, tuple[str, ...]] = {"csv": (".csv", ".txt"), "npy": (".npy",), "hdf5": (".h5", ".hdf5", ".hdf"),
-                                       "json": (".json",)}
+                                       "json": (".json",), "uff": (".uff", ".unv")}
 #: largest deviation of a time stamp from the uniform grid, in sample intervals
 TIME_TOLERANCE = 0.2
 _TIME_COLUMNS = {"time_s": 1.0, "time": 1.0, "t": 1.0, "t_s": 1.0, "time [s]": 1.0, "time_ms": 1e-3}
@@ -93,6 +93,8 @@ _HEADER_RE = re.compile(r"^\s*b([1-4])\s*[@_ ]\s*(-?\d+(?:\.\d*)?)\s*(?:deg|°)?
                         re.IGNORECASE)
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 _NPY_MAGIC = b"\x93NUMPY"
+#: a universal file starts with a "-1" delimiter line followed by the dataset type (58: function at a DOF)
+_UFF_START = re.compile(rb"^\s*-1\s*\r?\n\s*(58b?|151|164)\b")
 
 
 @dataclass(frozen=True)
@@ -329,9 +331,11 @@ def _detect_format(name: str, head: bytes) -> str:
     stripped = head.lstrip()
     if stripped[:1] in (b"{", b"["):
         return "json"
+    if _UFF_START.match(head):
+        return "uff"
     if not name:
         return "csv"
-    raise ValueError(f"{name}: unknown file type; send a .csv, .npy, .h5/.hdf5 or .json file")
+    raise ValueError(f"{name}: unknown file type; send a .csv, .npy, .h5/.hdf5, .json or .uff/.unv file")
 
 
 # --------------------------------------------------------------------------- formats
@@ -375,7 +379,15 @@ def _read_csv(data: bytes, opts: ReadOptions, limits: ReadLimits, notes: list[st
     header, table = _csv_table(data)
     if table.shape[0] > limits.max_points:
         raise ValueError(f"the CSV file has {table.shape[0]} rows; at most {limits.max_points} samples are accepted")
-    info: dict[str, Any] = {}
+    return _named_columns(header, table, opts, {}, what="the CSV file")
+
+
+def _named_columns(header: list[str] | None, table: np.ndarray, opts: ReadOptions, info: dict[str, Any], *,
+                   what: str) -> tuple[np.ndarray, dict]:
+    """Channels × points and what the column names say (time column, keyphasor, layout, units).
+
+    Shared by CSV (header row) and UFF (one function record per named channel).
+    """
     names = header or [str(k) for k in range(table.shape[1])]
     keep = list(range(table.shape[1]))
     lowered = [n.strip().lower() for n in names]
@@ -389,7 +401,7 @@ def _read_csv(data: bytes, opts: ReadOptions, limits: ReadLimits, notes: list[st
     kp_j = None
     if isinstance(kp_col, str):
         if kp_col.strip().lower() not in lowered:
-            raise ValueError(f"keyphasor channel {kp_col!r} is not a column of the CSV file (columns: {names})")
+            raise ValueError(f"keyphasor channel {kp_col!r} is not a column of {what} (columns: {names})")
         kp_j = lowered.index(kp_col.strip().lower())
     elif isinstance(kp_col, int):
         if not 0 <= kp_col < table.shape[1]:
@@ -406,7 +418,7 @@ def _read_csv(data: bytes, opts: ReadOptions, limits: ReadLimits, notes: list[st
         cols, layout = [], []
         for name, where in mapping.items():
             if name.strip().lower() not in lowered:
-                raise ValueError(f"channels: column {name!r} is not in the CSV header (columns: {names})")
+                raise ValueError(f"channels: column {name!r} is not a channel name of {what} (names: {names})")
             cols.append(lowered.index(name.strip().lower()))
             layout.extend(parse_layout([where]))
         info["layout"] = layout
@@ -421,9 +433,115 @@ def _read_csv(data: bytes, opts: ReadOptions, limits: ReadLimits, notes: list[st
                 info["units"] = "V" if suffixes == {"v"} else suffixes.pop()
         else:
             bad = [n for n, m in zip(kept, matches) if not m]
-            raise ValueError(f"CSV header: columns {bad} are not named BEARING@ANGLE like 'b2@45' (time columns: "
+            raise ValueError(f"{what}: channels {bad} are not named BEARING@ANGLE like 'b2@45' (time columns: "
                              f"time_s or time_ms; keyphasor: kp); rename them or give the channel mapping")
     return table[:, keep].T, info
+
+
+#: UFF ordinate unit labels (record 10) -> reader units
+_UFF_UNITS = {"um": "um", "µm": "um", "micron": "um", "microns": "um", "micrometer": "um", "mm": "mm", "m": "m",
+              "mil": "mil", "mils": "mil", "v": "V", "volt": "V", "volts": "V"}
+
+
+def _decode_uff(data: bytes | Path, limits: ReadLimits) -> tuple[list[str], np.ndarray, float, str | None, list[str]]:
+    """Time histories of a universal file (type-58 records) with pyuff; runs in the sandbox.
+
+    Returns channel names (ID line 1, else node and direction), the points × channels table,
+    the sample rate, the common ordinate unit (``None`` when unlabelled or mixed) and notes.
+    """
+    import tempfile
+
+    import pyuff
+
+    raw = data.read_bytes() if isinstance(data, Path) else data
+    if not re.search(rb"\s-1\s*$", raw[-200:]):
+        raise ValueError("the universal file does not end with a record's closing '-1' line: it is truncated; "
+                         "export it again")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "upload.uff"
+        path.write_bytes(raw)
+        try:
+            uff = pyuff.UFF(str(path))
+            types = [int(t) for t in uff.get_set_types()]
+            idx = [i for i, t in enumerate(types) if t == 58]
+            if not idx:
+                raise ValueError(f"the universal file has no type-58 (function at a DOF) records (types: "
+                                 f"{sorted(set(types))}); export the probe time waveforms as UFF 58")
+            if len(idx) > limits.max_channels + 2:
+                raise ValueError(f"the universal file has {len(idx)} type-58 records; at most "
+                                 f"{limits.max_channels} probes and a keyphasor are accepted")
+            sets = [uff.read_sets(i) for i in idx]
+        except ValueError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - pyuff raises bare Exceptions on malformed records
+            raise ValueError(f"cannot read the universal file ({exc}); export it again as UFF 58 (ASCII or 58b)") \
+                from None
+    names, columns, incs, units = [], [], [], set()
+    for k, d in enumerate(sets):
+        label = str(d.get("id1", "")).strip() or f"node {d.get('rsp_node')} dir {d.get('rsp_dir')}"
+        if int(d.get("func_type", 1)) != 1 and int(d.get("abscissa_spec_data_type", 17)) != 17:
+            raise ValueError(f"UFF record {k + 1} ({label!r}) is not a time history (function type "
+                             f"{d.get('func_type')}); export time waveforms, not spectra")
+        if int(d.get("abscissa_spacing", 1)) != 1:
+            raise ValueError(f"UFF record {k + 1} ({label!r}) has uneven abscissa spacing; export evenly "
+                             "sampled waveforms")
+        values = np.asarray(d.get("data"))
+        if np.iscomplexobj(values):
+            raise ValueError(f"UFF record {k + 1} ({label!r}) holds complex values; export real time waveforms")
+        if values.size > limits.max_points:
+            raise ValueError(f"UFF record {k + 1} has {values.size} points; at most {limits.max_points} are accepted")
+        declared = int(d.get("num_pts", values.size))
+        if values.size != declared:
+            raise ValueError(f"UFF record {k + 1} ({label!r}) declares {declared} points but holds {values.size} "
+                             "(truncated, or a binary record whose precision does not match its header); "
+                             "export it again")
+        names.append(label)
+        columns.append(values.astype(np.float64))
+        inc = float(d.get("abscissa_inc", 0.0))
+        if str(d.get("abscissa_axis_units_lab", "")).strip().lower() == "ms":
+            inc *= 1e-3
+        incs.append(inc)
+        units.add(_UFF_UNITS.get(str(d.get("ordinate_axis_units_lab", "")).strip().lower()))
+    lengths = {c.size for c in columns}
+    if len(lengths) != 1:
+        raise ValueError(f"the UFF records have different lengths {sorted(lengths)}; export every probe over "
+                         "the same time span")
+    if not all(math.isfinite(i) and i > 0 for i in incs) or max(incs) - min(incs) > 1e-9 * max(incs):
+        raise ValueError(f"the UFF records' sample intervals differ or are not positive ({sorted(set(incs))} s); "
+                         "export every probe at the same sample rate")
+    rate_hz = _simplest_rate(incs[0])
+    notes = [f"UFF 58: {len(columns)} time records; sample interval {incs[0]:.6g} s in the header -> "
+             f"{rate_hz:.10g} Hz"]
+    unit = units.pop() if len(units) == 1 else None
+    return names, np.stack(columns, axis=1), rate_hz, unit, notes
+
+
+def _simplest_rate(interval_s: float) -> float:
+    """The sample rate with the fewest significant digits whose interval prints as ``interval_s``.
+
+    UFF record 8 holds the interval as E13.5 (6 significant digits): 2048 Hz is written
+    4.88281E-04, which read back gives 2048.001 Hz. Any rate within half a unit of the 6th
+    digit is what the exporter could have meant; the one with the fewest digits is taken.
+    """
+    raw = 1.0 / interval_s
+    half_ulp = 0.5 * 10.0 ** (math.floor(math.log10(interval_s)) - 5)
+    lo, hi = 1.0 / (interval_s + half_ulp), 1.0 / (interval_s - half_ulp)
+    for digits in range(1, 12):
+        candidate = float(f"{raw:.{digits}g}")
+        if lo <= candidate <= hi:
+            return candidate
+    return raw
+
+
+def _read_uff(data: bytes | Path, opts: ReadOptions, limits: ReadLimits, notes: list[str]) -> tuple[np.ndarray, dict]:
+    memory = limits.hdf5_memory_bytes or 3 * limits.max_hdf5_bytes + 256 * 2**20
+    names, table, rate_hz, unit, uff_notes = call_isolated(
+        _decode_uff, data, limits, memory_bytes=memory, timeout_s=limits.hdf5_timeout_s, what="the universal file")
+    notes.extend(uff_notes)
+    info: dict[str, Any] = {"sample_rate_hz": rate_hz}
+    if unit is not None:
+        info["units"] = unit
+    return _named_columns(names, table, opts, info, what="the UFF file")
 
 
 def _read_npy(data: bytes, limits: ReadLimits) -> np.ndarray:
@@ -731,8 +849,8 @@ def read_recording(source: str | Path | bytes, *, filename: str = "", options: R
         if data is None and path is not None:
             data = path.read_bytes()
     notes: list[str] = []
-    if isinstance(opts.channels, Mapping) and fmt != "csv":
-        raise ValueError("channels: a column-name mapping works for CSV files only; give the layout in file order "
+    if isinstance(opts.channels, Mapping) and fmt not in ("csv", "uff"):
+        raise ValueError("channels: a name mapping works for CSV and UFF files only; give the layout in file order "
                          "('1@45,1@135,...') for NPY and HDF5")
     if fmt == "json":
         return recording_from_dict(loads_json_finite(data or b""), opts, limits)
@@ -740,6 +858,7 @@ def read_recording(source: str | Path | bytes, *, filename: str = "", options: R
         arr, info = _read_hdf5(data if data is not None else path, opts, limits)  # type: ignore[arg-type]
     elif fmt == "npy":
         arr, info = _read_npy(data or b"", limits), {}
+
     else:
         arr, info = None, {}
     if arr is not None and isinstance(opts.keyphasor_channel, int):
@@ -748,8 +867,8 @@ def read_recording(source: str | Path | bytes, *, filename: str = "", options: R
                              f"0..{arr.shape[0] - 1}")
         info["keyphasor_signal"] = arr[opts.keyphasor_channel]
         arr = np.delete(arr, opts.keyphasor_channel, axis=0)
-    if arr is None:
-        arr, info = _read_csv(data or b"", opts, limits, notes)
+    if arr is None:  # named channels: the keyphasor is picked by name or index there
+        arr, info = (_read_uff if fmt == "uff" else _read_csv)(data or b"", opts, limits, notes)
     if info.get("units") is not None and str(info["units"]).strip() not in (*UNITS_TO_UM, "V"):
         raise ValueError(f"the file's units attribute {info['units']!r} is not one of {list(INPUT_UNITS)}")
     if info.get("sample_rate_hz") is not None and not (isinstance(info["sample_rate_hz"], (int, float))

@@ -145,7 +145,7 @@ def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> 
     except ValueError as exc:
         msg = str(exc)
         if "unknown file type" in msg:
-            raise InputError(f"multipart upload {filename!r}: unknown file type; send .csv, .npy, .h5, .hdf5 "
+            raise InputError(f"multipart upload {filename!r}: unknown file type; send .csv, .npy, .h5, .hdf5, .uff, .unv "
                              "or .json", 415) from None
         raise _read_error(exc) from None
     asset_id = query.get("asset_id") or res.asset_id

@@ -109,8 +109,10 @@ def probe_recording(res, sample_rate_hz: float, snr_db: float, runout_um: float,
 def write_probes(path: Path, waveforms_um, channels, sample_rate_hz: float, *, speed_rpm: float | None = None,
                  clearance_um: float | None = None) -> None:
     """Write probe waveforms (µm) as .csv (``time_s`` then ``b<bearing>@<angle>`` columns, times to
-    6 significant digits as DAQ exports print them), .npy (channels × points) or .h5 (``waveforms``,
-    ``channels`` table, ``sample_rate_hz`` / ``units`` / ``speed_rpm`` / ``clearance_um`` attributes)."""
+    6 significant digits as DAQ exports print them), .npy (channels × points), .h5 (``waveforms``,
+    ``channels`` table, ``sample_rate_hz`` / ``units`` / ``speed_rpm`` / ``clearance_um`` attributes) or
+    .uff/.unv (universal file, one binary type-58b time record per probe, ID line 1 ``b<bearing>@<angle>``,
+    ordinate unit label ``um``; written with pyuff)."""
     import numpy as np
 
     suffix = path.suffix.lower()
@@ -136,8 +138,31 @@ def write_probes(path: Path, waveforms_um, channels, sample_rate_hz: float, *, s
                 f.attrs["speed_rpm"] = float(speed_rpm)
             if clearance_um is not None:
                 f.attrs["clearance_um"] = float(clearance_um)
+    elif suffix in (".uff", ".unv"):
+        import pyuff
+
+        path.unlink(missing_ok=True)  # pyuff appends to an existing file
+        uff = pyuff.UFF(str(path))
+        for k, (name, (bearing, _angle)) in enumerate(zip(names, channels)):
+            record = {
+                "type": 58, "binary": 1, "id1": name, "id2": "rotordiag simulate --probes-out", "id3": "",
+                "id4": "", "id5": "", "func_type": 1, "func_id": k + 1, "ver_num": 0, "load_case_id": 0,
+                "rsp_ent_name": "NONE", "rsp_node": int(bearing), "rsp_dir": k % 2 + 1, "ref_ent_name": "NONE",
+                "ref_node": 0, "ref_dir": 0, "ord_data_type": 4, "num_pts": waveforms_um.shape[1],
+                "abscissa_spacing": 1, "abscissa_min": 0.0, "abscissa_inc": 1.0 / sample_rate_hz,
+                "z_axis_value": 0.0, "data": np.asarray(waveforms_um[k], dtype=np.float64),
+                "x": np.arange(waveforms_um.shape[1]) / sample_rate_hz,
+            }
+            # record 9-12: abscissa (time, s), ordinate (displacement 8, µm), denominator, z axis
+            for axis, (spec, label, units) in {"abscissa": (17, "Time", "s"),
+                                               "ordinate": (8, "Displacement", "um"),
+                                               "orddenom": (0, "NONE", "NONE"), "z_axis": (0, "NONE", "NONE")}.items():
+                record.update({f"{axis}_spec_data_type": spec, f"{axis}_len_unit_exp": 0,
+                               f"{axis}_force_unit_exp": 0, f"{axis}_temp_unit_exp": 0,
+                               f"{axis}_axis_lab": label, f"{axis}_axis_units_lab": units})
+            uff.write_sets(record, mode="add")
     else:
-        raise ValueError(f"--probes-out: unknown ending {suffix!r}; use .csv, .npy or .h5")
+        raise ValueError(f"--probes-out: unknown ending {suffix!r}; use .csv, .npy, .h5 or .uff")
 
 
 def _plot(res, path: Path) -> None:
@@ -212,7 +237,7 @@ def register(app: typer.Typer) -> None:
         as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
         plot: Optional[Path] = typer.Option(None, help="Write a PNG: journal orbits with Poincaré points, spectra."),
         out: Optional[Path] = typer.Option(None, help="Write the simulator's time series (journal positions, m) to this HDF5 file."),
-        probes_out: Optional[Path] = typer.Option(None, "--probes-out", help="Write what 8 proximity probes would record (µm, the dataset's measurement model) as .csv/.npy/.h5, readable by 'rotordiag diagnose'."),
+        probes_out: Optional[Path] = typer.Option(None, "--probes-out", help="Write what 8 proximity probes would record (µm, the dataset's measurement model) as .csv/.npy/.h5/.uff, readable by 'rotordiag diagnose'."),
         probe_sample_rate_hz: float = typer.Option(2560.0, "--probe-sample-rate-hz", min=100, max=1e6, help="Sample rate of --probes-out, Hz."),
         snr_db: float = typer.Option(40.0, "--snr-db", help="Probe noise of --probes-out: signal-to-noise ratio, dB (inf: none)."),
         runout_um: float = typer.Option(0.0, "--runout-um", min=0, help="1X mechanical/electrical runout of --probes-out, µm."),

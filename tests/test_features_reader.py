@@ -42,7 +42,8 @@ def test_examples_are_small_and_all_formats_agree(example):
         assert example_path(n).stat().st_size < 400_000
     h5 = read_recording(example_path("misaligned.h5")).recording
     npy = read_recording(example_path("misaligned_2560hz.npy"), options=ReadOptions(sample_rate_hz=2560)).recording
-    for other in (h5, npy):
+    uff = read_recording(example_path("misaligned.uff")).recording
+    for other in (h5, npy, uff):
         assert other.sample_rate_hz == pytest.approx(example.sample_rate_hz, rel=1e-7)
         assert [(c.bearing, c.angle_deg) for c in other.channels] == [(c.bearing, c.angle_deg) for c in example.channels]
         for a, b in zip(other.channels, example.channels):
@@ -78,7 +79,7 @@ def test_explicit_column_mapping_and_bad_header(example):
     rec = read_recording(body, filename="plant.csv", options=ReadOptions(channels=mapping)).recording
     assert [(c.bearing, c.angle_deg) for c in rec.channels] == [(1, 45.0), (1, 135.0), (2, 45.0), (2, 135.0)]
     np.testing.assert_allclose(rec.channels[2].data, data[:, 2], atol=1e-3)
-    with pytest.raises(ValueError, match="'GEN NDE X' is not in the CSV header"):
+    with pytest.raises(ValueError, match="'GEN NDE X' is not a channel name of the CSV file"):
         read_recording(body, filename="plant.csv", options=ReadOptions(channels={"GEN NDE X": "b1@45"}))
 
 

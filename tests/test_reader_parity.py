@@ -34,7 +34,7 @@ def client(tmp_path_factory, registry):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     d = tmp_path_factory.mktemp("files")
-    for name in ("misaligned.csv", "misaligned_2560hz.npy", "misaligned.h5", "aligned.h5"):
+    for name in ("misaligned.csv", "misaligned_2560hz.npy", "misaligned.h5", "aligned.h5", "misaligned.uff"):
         shutil.copy(example_path(name), d / name)
     (d / "misaligned_2560hz.json").write_text(json.dumps({"sample_rate_hz": 2560}))    # the NPY's sidecar
     rec = read_recording(example_path("aligned.csv")).recording
@@ -45,7 +45,8 @@ def files(tmp_path_factory):
 
 
 CASES = [("misaligned.csv", {}), ("misaligned_2560hz.npy", {"sample_rate_hz": 2560}), ("misaligned.h5", {}),
-         ("aligned.h5", {}), ("aligned_rec.json", {})]
+         ("aligned.h5", {}), ("aligned_rec.json", {}),
+         ("misaligned.uff", {})]
 
 
 def _same(a, b):

@@ -11,6 +11,8 @@ runout; 8 probes (b1@45 … b4@135) at 2560 Hz, 1.3 s, µm.
 ``misaligned_2560hz.json`` the sidecar of the NPY (``sample_rate_hz``), read by the CLI
 ``aligned.h5``             Δ = 0 as an HDF5 ``waveforms`` array with its ``channels`` table and attributes
 ``misaligned.h5``          Δ = 0.5, same
+``misaligned.uff``         Δ = 0.5 as a universal file: one binary type-58b time record per probe,
+                           ID line 1 ``b2@45``-style, ordinate unit label ``um``
 =========================  =====================================================================
 """
 from __future__ import annotations
@@ -20,7 +22,7 @@ from pathlib import Path
 
 __all__ = ["example_path", "list_examples"]
 
-_ENDINGS = (".csv", ".npy", ".h5")
+_ENDINGS = (".csv", ".npy", ".h5", ".uff")
 
 
 def list_examples() -> list[str]:
