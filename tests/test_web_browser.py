@@ -429,8 +429,8 @@ def test_tablet_layouts_fit_the_screen(server, browser, recordings, tmp_path, wi
 
 
 def test_api_docs_render_offline(server, browser):
-    """/docs is Swagger UI from the installed package: it renders the operations and loads nothing
-    from anywhere but this server; /redoc leads there."""
+    """/docs (Swagger UI) and /redoc (ReDoc) from the installed package: both render the operations and
+    load nothing from anywhere but this server."""
     browser.get(server + "/docs")
     _wait(browser, lambda d: d.find_elements("css selector", ".opblock-summary-path"), 60, "the Swagger UI operations")
     paths = {e.text.replace("\u200b", "") for e in browser.find_elements("css selector", ".opblock-summary-path")}
@@ -439,4 +439,8 @@ def test_api_docs_render_offline(server, browser):
         "return performance.getEntriesByType('resource').map((r) => new URL(r.name).origin)")
     assert origins and set(origins) == {server}
     browser.get(server + "/redoc")
-    assert browser.current_url.endswith("/docs")
+    _wait(browser, lambda d: [e for e in d.find_elements("css selector", "[role=menuitem], li[data-item-id]")
+                              if "diagnose" in e.get_attribute("textContent").lower()], 60, "the ReDoc operations menu")
+    origins = browser.execute_script(
+        "return performance.getEntriesByType('resource').map((r) => new URL(r.name).origin)")
+    assert origins and set(origins) == {server}
