@@ -24,6 +24,7 @@ import numpy as np
 
 from rotordiag.core.numerics import DEFAULT_ATOL, DEFAULT_RTOL
 
+from ..analysis.motion import detect_period
 from ..params import Plant
 from ..system import TWO_PI, RotorSystem
 from .maps import MapEval, PeriodicMap, RotorMap
@@ -232,18 +233,12 @@ class PeriodicOrbit:
         return self.stability == "stable"
 
 
-def recurrence_distances(points: np.ndarray, max_period: int = MAX_PERIOD) -> np.ndarray:
-    """d[n−1] = max_k |P[k+n] − P[k]| over the given Poincaré points, n = 1..max_period."""
-    pts = np.asarray(points, dtype=float)
-    out = np.full(max_period, np.inf)
-    for n in range(1, min(max_period, len(pts) - 1) + 1):
-        out[n - 1] = float(np.max(np.abs(pts[n:] - pts[:-n])))
-    return out
-
-
 def candidate_periods(points: np.ndarray, max_period: int = MAX_PERIOD, n_candidates: int = 3) -> list[int]:
     """Periods to try, best first: the smallest n whose recurrence distance is within 2× of the best."""
-    d = recurrence_distances(points, max_period)
+    pts = np.asarray(points, dtype=float)
+    d = np.full(max_period, np.inf)
+    _, dist, _ = detect_period(pts, orbit_size=1.0, max_period=max_period, min_repeats=2)
+    d[:len(dist)] = dist
     order = [int(i) + 1 for i in np.argsort(d, kind="stable") if math.isfinite(d[i])]
     if not order:
         return [1]
