@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional
 
 import typer
 
@@ -68,7 +68,8 @@ def register(app: typer.Typer) -> None:
 
             lo, hi = sorted((from_, to))
             values = np.linspace(max(lo, fam.floor), hi, brute_points)
-            kw = dict(mechanism=mechanism, node=node, record_revs=32, n_workers=workers, progress=False)
+            kw: dict[str, Any] = dict(mechanism=mechanism, node=node, record_revs=32, n_workers=workers,
+                                      progress=False)
             if parameter == "speed_rpm":
                 brute = speed_sweep(pl, values, fam.misalignment, unbalance, **kw)
             else:

@@ -117,10 +117,9 @@ def bifurcation_figure(path: str | Path, data: dict[str, Any], *, title: str = "
                 seen.add(lab)
         b = br["bifurcations"]
         for kind, pv, sx in zip(b["kind"], b["parameter"], b["section_x"]):
-            lab = KINDS[kind] if kind not in seen else None
-            seen.add(kind)
             ax.plot(np.full(len(sx), pv), sx, markers[kind], color="k", mfc="none" if kind == "fold" else "k",
-                    ms=7, label=lab, zorder=3)
+                    ms=7, label=None if kind in seen else KINDS[kind], zorder=3)
+            seen.add(kind)
     ax.set_xlabel("speed (r/min)" if data["parameter"] == "speed_rpm" else "Δ = δ/c")
     inp = data["inputs"]
     ax.set_ylabel(f"Poincaré {inp['direction']} of node {inp['node']} (x/c)")
