@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import hashlib
 import logging
+import math
 import shutil
 import threading
 from pathlib import Path
@@ -170,6 +171,11 @@ class ModelStore:
 
         bundle = self.load(version)
         fr = extract_features(recording)
+        overflowed = [k for k, v in fr.as_dict().items() if isinstance(v, float) and math.isinf(v)]
+        if overflowed:
+            raise ValueError(f"the waveforms are too large to analyse ({overflowed[0]} overflows); check the units: "
+                             "`data` is in `units` (um by default), and a proximity probe reads at most a few "
+                             "thousand µm")
         clearance = getattr(recording, "clearance_um", None)
         clearance = float(clearance) if isinstance(clearance, (int, float)) else None
         out = _clean(diagnose(bundle, fr, clearance_um=clearance).to_dict())  # NaN/inf -> null: JSON has no non-finite numbers

@@ -290,6 +290,7 @@ class _Worker:
         self.depth = depth
         self.timeout_s = float(timeout_s)
         self.inflight = 0                # requests given to this worker and not yet answered
+        self.served = 0                  # requests sent to it (tests check that requests spread)
         self.pending: collections.deque[asyncio.Future] = collections.deque()
         self.alive = True
         self.ready = False               # set when the worker says it has loaded the model
@@ -307,6 +308,7 @@ class _Worker:
         if not self.alive:               # its reader has finished: nobody would answer the future
             raise ConnectionResetError("diagnosis worker stopped")
         self.pending.append(fut)
+        self.served += 1
         if len(self.pending) == 1 and self.ready:
             self._arm()
         async with self._send_lock:      # messages must not interleave on the socket

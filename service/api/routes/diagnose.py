@@ -109,15 +109,19 @@ async def _read_body(request: Request) -> tuple[str, bytes, str]:
 
 async def _read_form(request: Request) -> Any:
     """The multipart form, with the parser's complaints in the client's terms (400)."""
+    from starlette.exceptions import HTTPException as StarletteHTTPException
     from starlette.formparsers import MultiPartException
 
     try:
         return await request.form(max_files=1, max_fields=8)
-    except MultiPartException as exc:
-        msg = str(exc)
+    except (MultiPartException, StarletteHTTPException) as exc:
+        if isinstance(exc, StarletteHTTPException) and exc.status_code != 400:
+            raise                      # 408/413 from the body limits
+        msg = str(getattr(exc, "detail", None) or getattr(exc, "message", None) or exc)
         if "maximum size" in msg:      # a part without a file name is a form field, limited to 1 MiB
-            msg = ("multipart upload: the part is not a file (its filename is missing or empty); send the "
-                   "waveform file in a part named 'file' with a file name ending .csv, .npy, .h5, .hdf5 or .json")
+            raise InputError("multipart upload: the part is not a file (its filename is missing or empty); send "
+                             "the waveform file in a part named 'file' with a file name ending .csv, .npy, .h5, "
+                             ".hdf5 or .json", 400) from None
         raise InputError(f"multipart upload cannot be read: {msg}", 400) from None
 
 
