@@ -373,3 +373,93 @@ def test_health_sees_the_model_file_change_under_the_workers(pooled, rec):
         shutil.rmtree(registry / "v0997")
     time.sleep(MODEL_CHECK_INTERVAL_S + 0.2)
     assert pooled.get("/health").status_code == 200
+
+
+# ------------------------------------------------------------------------------------------ real sockets
+@pytest.fixture(scope="module")
+def server(tmp_path_factory, registry):
+    """``rotordiag serve`` (uvicorn) with one diagnosis worker and a 2 s body timeout."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from tests.test_service_e2e import _free_port, _request
+
+    tmp = tmp_path_factory.mktemp("socket")
+    port = _free_port()
+    env = dict(os.environ, ROTORDIAG_DATA_DIR=str(tmp / "data"), ROTORDIAG_API_KEY=API_KEY,
+               ROTORDIAG_BODY_TIMEOUT_S="2", ROTORDIAG_DIAGNOSIS_WORKERS="1",
+               ROTORDIAG_SHIPPED_REGISTRY_DIR=str(registry))
+    exe = Path(sys.executable).parent / "rotordiag"
+    proc = subprocess.Popen([str(exe), "serve", "--host", "127.0.0.1", "--port", str(port)], cwd=tmp, env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    base = f"http://127.0.0.1:{port}"
+    t0 = time.monotonic()
+    while True:
+        assert proc.poll() is None, "server exited"
+        try:
+            if _request(base + "/health")[0] == 200:
+                break
+        except OSError:
+            pass
+        assert time.monotonic() - t0 < 90, "server did not answer /health"
+        time.sleep(0.2)
+    yield base, port
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+
+
+def _read_answer(sock, timeout_s: float) -> bytes:
+    sock.settimeout(timeout_s)
+    got = b""
+    try:
+        while True:
+            more = sock.recv(65536)
+            if not more:
+                break                    # the server closed the connection
+            got += more
+    except TimeoutError:
+        pass
+    return got
+
+
+def test_half_sent_bodies_get_408_and_hold_no_worker(server, rec):
+    import socket
+
+    from tests.test_service_e2e import _request
+
+    base, port = server
+    fs, channels = rec
+    body = json.dumps(diagnose_json(fs, channels, speed_rpm=1800.0)).encode()
+    head = (b"POST /diagnose HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+            b"Content-Length: %d\r\n\r\n" % len(body))
+    slow = []
+    for _ in range(5):
+        s = socket.create_connection(("127.0.0.1", port), timeout=10)
+        s.sendall(head + body[: len(body) // 2])
+        slow.append(s)
+    t0 = time.monotonic()
+    status, raw = _request(base + "/diagnose", body, {"Content-Type": "application/json"})
+    assert status == 200, raw[:300]                    # the one worker is free: slow clients hold none
+    answers = [_read_answer(s, 10.0) for s in slow]
+    elapsed = time.monotonic() - t0
+    for s in slow:
+        s.close()
+    for a in answers:
+        assert a.startswith(b"HTTP/1.1 408"), a[:200]
+        assert b"did not arrive within 2 s" in a
+    assert elapsed < 10.0
+
+
+def test_keyless_large_write_is_answered_before_the_body_is_sent(server):
+    import socket
+
+    _, port = server
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
+        s.sendall(b"POST /models/retrain HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                  b"Content-Length: 50000000\r\n\r\n{")           # 50 MB announced, 1 byte sent
+        answer = _read_answer(s, 5.0)
+    assert answer.startswith(b"HTTP/1.1 401"), answer[:200]
