@@ -482,10 +482,10 @@ class DiagnosisPool:
                         self._replace(w)
                 if self._closing:
                     raise WorkerCrashed("the diagnosis workers are shutting down; retry in a moment")
-                w = self._pick()
-                if w is not None:
-                    w.inflight += 1      # reserved here, so concurrent acquires see it at once
-                    return w
+                picked = self._pick()
+                if picked is not None:
+                    picked.inflight += 1      # reserved here, so concurrent acquires see it at once
+                    return picked
                 await self._free.wait()
 
     async def _release(self) -> None:
