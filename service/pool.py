@@ -87,13 +87,13 @@ def _warm(version: str | None) -> None:
 
 def _limit_memory(memory_bytes: int) -> int | None:
     """Lower this process's ``RLIMIT_AS`` to its size now plus ``memory_bytes``; the limit set, or ``None``."""
-    from rotordiag.features.sandbox import _address_space_bytes
+    from rotordiag.features.sandbox import address_space_bytes
 
     try:
         import resource
     except ImportError:  # pragma: no cover - not POSIX: only the time limit applies
         return None
-    size = _address_space_bytes()
+    size = address_space_bytes()
     if size is None or memory_bytes <= 0:
         return None
     _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
