@@ -47,6 +47,11 @@ def _address_space_bytes() -> int | None:
         return None
 
 
+def address_space_bytes() -> int | None:
+    """This process's virtual size in bytes (what ``RLIMIT_AS`` bounds), or ``None`` where unknown."""
+    return _address_space_bytes()
+
+
 def _limit_memory(memory_bytes: int) -> None:
     try:
         import resource

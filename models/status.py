@@ -94,6 +94,10 @@ def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray) ->
     if not ratios:
         return []
     b, v, m = max(ratios, key=lambda t: abs(np.log(max(t[1], 1e-300) / t[2])))
+    if v <= 0:                       # no 1X vibration at all (all-zero or flat probes): as far below as can be
+        return [Reason("scale", INCONCLUSIVE,
+                       f"no 1X vibration at bearing {b} (0 µm pk-pk) where the training data's typical is {m:.3g} µm: "
+                       "check that the probes are connected and the data are not all zeros")]
     factor = m / v if v < m else v / m
     if factor < SCALE_UNCERTAIN:
         return []

@@ -6,7 +6,9 @@ only caches loaded models per version and turns a request into those calls.
 """
 from __future__ import annotations
 
+import hashlib
 import logging
+import math
 import shutil
 import threading
 from pathlib import Path
@@ -39,6 +41,7 @@ class ModelStore:
         self.root = Path(root)
         self.registry = Registry(self.root)
         self._cache: dict[str, Any] = {}
+        self._files: dict[str, tuple[tuple[int, int, int], str]] = {}   # version -> (stat key, sha256)
         self._lock = threading.Lock()
 
     @classmethod
@@ -102,18 +105,51 @@ class ModelStore:
                                        "and activate it (POST /models/{version}/activate)")
         with self._lock:
             bundle = self._cache.get(version)
+            key = self._stat_key(version)
+            if bundle is not None and self._files.get(version, (None,))[0] != key:
+                log.warning("model %s: its file changed on disk since it was loaded; loading it again", version)
+                bundle = None          # replaced or corrupted under us: use (or fail on) what is there now
+                self._cache.pop(version, None)
+                self._files.pop(version, None)
             if bundle is None:
                 if version not in self.registry.versions():
                     raise ModelUnavailable(f"model version {version!r} is not in the registry; "
                                            f"registered: {self.registry.versions()}")
+                from rotordiag.models.registry import load_model_bytes
+
+                path = self._model_file(version)
                 try:
-                    model, card = self.registry.load(version)
+                    data = path.read_bytes()
+                except OSError as exc:
+                    raise ModelUnavailable(f"model {version}: its file cannot be read ({exc})") from None
+                digest = hashlib.sha256(data).hexdigest()   # of the bytes loaded, not a second read
+                try:
+                    model, card = load_model_bytes(data, str(path)), self.registry.card(version)
                 except RegistryError as exc:
                     raise ModelUnavailable(str(exc)) from None
                 _check_usable(model, version)
                 bundle = ModelBundle(model=model, card=card, version=version)
                 self._cache[version] = bundle
+                self._files[version] = (key, digest)
         return bundle
+
+    def _model_file(self, version: str) -> Path:
+        from rotordiag.models.registry import MODEL_FILE
+
+        return self.root / version / MODEL_FILE
+
+    def _stat_key(self, version: str) -> tuple[int, int, int]:
+        """(inode, size, mtime in ns) of the version's model file: a cheap test that it is the file loaded."""
+        try:
+            st = self._model_file(version).stat()
+        except OSError:
+            return (0, -1, 0)
+        return (st.st_ino, st.st_size, st.st_mtime_ns)
+
+    def file_sha256(self, version: str) -> str | None:
+        """SHA-256 of the model file of ``version`` as loaded (after :meth:`load`), else ``None``."""
+        entry = self._files.get(version)
+        return entry[1] if entry is not None else None
 
     # -- diagnosis ------------------------------------------------------------------------------
     def diagnose(self, recording: Any, version: str | None = None) -> dict[str, Any]:
@@ -135,6 +171,11 @@ class ModelStore:
 
         bundle = self.load(version)
         fr = extract_features(recording)
+        overflowed = [k for k, v in fr.as_dict().items() if isinstance(v, float) and math.isinf(v)]
+        if overflowed:
+            raise ValueError(f"the waveforms are too large to analyse ({overflowed[0]} overflows); check the units: "
+                             "`data` is in `units` (um by default), and a proximity probe reads at most a few "
+                             "thousand µm")
         clearance = getattr(recording, "clearance_um", None)
         clearance = float(clearance) if isinstance(clearance, (int, float)) else None
         out = _clean(diagnose(bundle, fr, clearance_um=clearance).to_dict())  # NaN/inf -> null: JSON has no non-finite numbers

@@ -14,6 +14,7 @@ from fastapi import FastAPI
 
 from rotordiag.core.version import __version__
 
+from .api.auth import ApiKeyGate
 from .api.errors import install_error_handlers
 from .api.routes import assets, diagnose, health, jobs, models
 from .api.routes.docs import install_docs
@@ -82,9 +83,42 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(web_router)  # the web page at / (issue 7; service/web, docs/web.md)
     install_docs(app)
     install_metrics(app)
-    # Added last = outermost of the user middleware: bytes are counted before anything reads them.
-    app.add_middleware(BodySizeLimitMiddleware, max_body_bytes=settings.max_body_bytes)
+    # Added last = outermost of the user middleware: bytes are counted (and timed) before anything reads
+    # them, and the API key is checked from the headers before any body is read (service/api/auth.py).
+    app.add_middleware(BodySizeLimitMiddleware, max_body_bytes=settings.max_body_bytes,
+                       body_timeout_s=settings.body_timeout_s)
+    app.add_middleware(ApiKeyGate)
+    _document_auth(app, settings)
     return app
+
+
+def _document_auth(app: FastAPI, settings: Settings) -> None:
+    """OpenAPI schema as the server behaves: /diagnose and /diagnose/batch list the API key only when
+    ROTORDIAG_DIAGNOSE_REQUIRES_KEY is set; the batch body (read raw, parsed in a worker) is described
+    by ``BatchRequest``."""
+    from fastapi.openapi.utils import get_openapi
+
+    from .schemas import BatchRequest
+
+    def openapi() -> dict:
+        if app.openapi_schema is None:
+            schema = get_openapi(title=app.title, version=app.version, description=app.description,
+                                 routes=app.routes, tags=app.openapi_tags)
+            components = schema.setdefault("components", {}).setdefault("schemas", {})
+            extra = BatchRequest.model_json_schema(ref_template="#/components/schemas/{model}")
+            for name, sub in extra.pop("$defs", {}).items():
+                components.setdefault(name, sub)
+            components.setdefault("BatchRequest", extra)
+            if not settings.diagnose_requires_key:
+                for path in ("/diagnose", "/diagnose/batch"):
+                    op = schema["paths"].get(path, {}).get("post", {})
+                    op.pop("security", None)
+                    op.get("responses", {}).pop("401", None)
+                    op.get("responses", {}).pop("403", None)
+            app.openapi_schema = schema
+        return app.openapi_schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
 
 
 app = create_app()

@@ -15,7 +15,7 @@ from fastapi import HTTPException
 from pydantic import ValidationError
 
 from .api.errors import InputError, validation_detail
-from .schemas import MAX_CHANNELS, MAX_KEYPHASOR_PULSES, MAX_POINTS, DiagnoseRequest, RecordingIn
+from .schemas import MAX_CHANNELS, MAX_KEYPHASOR_PULSES, MAX_POINTS, BatchRequest, DiagnoseRequest, RecordingIn
 
 #: Default probe layout for an 8-channel array: bearings 1-4, an XY pair each (the reader's default).
 DEFAULT_BEARINGS = (1, 1, 2, 2, 3, 3, 4, 4)
@@ -99,6 +99,27 @@ def checked(build, *args):
         raise _read_error(exc) from None
 
 
+def _validated_json(model: Any, body: bytes) -> Any:
+    """``model`` validated from a JSON body; non-finite numbers refused first (422 saying so)."""
+    from rotordiag.features.safe_io import UnsafeFileError, loads_json_finite
+
+    try:
+        loads_json_finite(body)
+    except UnsafeFileError as exc:
+        raise InputError(str(exc)) from None
+    except (ValueError, UnicodeDecodeError):
+        pass                                   # pydantic reports malformed JSON with its location
+    try:
+        return model.model_validate_json(body)
+    except ValidationError as exc:
+        raise HTTPException(422, validation_detail(exc, ("body",))) from None
+
+
+def parse_batch(body: bytes) -> Any:
+    """The ``BatchRequest`` of a POST /diagnose/batch body (4xx as for :func:`parse_body`)."""
+    return _validated_json(BatchRequest, body)
+
+
 def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> tuple[Any, str | None, str | None]:
     """Recording, asset_id, plant from a request body.
 
@@ -118,19 +139,9 @@ def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> 
         4xx with a message that says what to fix.
     """
     from rotordiag.features.reader import read_recording
-    from rotordiag.features.safe_io import UnsafeFileError, loads_json_finite
 
     if kind == "json":
-        try:
-            loads_json_finite(body)
-        except UnsafeFileError as exc:
-            raise InputError(str(exc)) from None
-        except (ValueError, UnicodeDecodeError):
-            pass                                   # pydantic reports malformed JSON with its location
-        try:
-            req = DiagnoseRequest.model_validate_json(body)
-        except ValidationError as exc:
-            raise HTTPException(422, validation_detail(exc, ("body",))) from None
+        req = _validated_json(DiagnoseRequest, body)
         return checked(recording_from_model, req), req.asset_id, req.plant
     if not body:
         raise InputError("empty body: send an NPY file (numpy.save) with an (n_channels, n_points) array, "

@@ -17,8 +17,19 @@ body bytes it read, plain query values, the verdict dict); nothing a client sent
 ever unpickled — the body travels as opaque bytes and is parsed by
 :func:`service.parsing.parse_body`.
 
-A worker that dies (killed for memory, a crash in native code) is replaced, and the
-request it held is retried once on a live worker.
+Limits: each worker lowers its own ``RLIMIT_AS`` after loading the model to its size then
+plus ``memory_bytes`` (``ROTORDIAG_DIAGNOSIS_WORKER_MEMORY_MB``), so a request that would
+allocate more fails inside the worker (``MemoryError`` → 422) instead of growing it; and the
+server gives each request ``timeout_s`` (``ROTORDIAG_DIAGNOSIS_TIMEOUT_S``) of the worker's
+time, counted from when the worker starts on it: a worker over the limit is killed and
+replaced, the request is answered 422 (:class:`DiagnosisTimeout`) and not retried.
+
+Failover: a worker that dies (a crash in native code, killed from outside, or over the time
+limit) is replaced by a fresh process at once, and the requests it held are retried once on a
+*warm* worker — a worker counts as ready only after it has loaded the model and said so, so
+no request waits for a cold replacement while a warm worker exists. Requests go to the ready
+worker with the fewest in flight, ties broken round-robin, so sequential requests spread
+across the workers.
 """
 from __future__ import annotations
 
@@ -31,6 +42,7 @@ import os
 import pickle
 import socket
 import struct
+import time
 import traceback
 import weakref
 from collections.abc import Callable
@@ -73,44 +85,106 @@ def _warm(version: str | None) -> None:
         fast_predictor(_store().load(version).model)
 
 
-def _load_check(version: str) -> str | None:
-    """``None`` when this worker can load and use ``version``, else the reason it cannot."""
+def _limit_memory(memory_bytes: int) -> int | None:
+    """Lower this process's ``RLIMIT_AS`` to its size now plus ``memory_bytes``; the limit set, or ``None``."""
+    from rotordiag.features.sandbox import address_space_bytes
+
+    try:
+        import resource
+    except ImportError:  # pragma: no cover - not POSIX: only the time limit applies
+        return None
+    size = address_space_bytes()
+    if size is None or memory_bytes <= 0:
+        return None
+    _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    limit = size + memory_bytes if hard == resource.RLIM_INFINITY else min(size + memory_bytes, hard)
+    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+    return limit
+
+
+def _load_check(version: str) -> dict[str, Any]:
+    """The model this worker holds for ``version``: ``{"sha256", "problem"}`` (``problem`` is ``None``
+    when a diagnosis with it would work). Reloads the file when it changed on disk."""
     from .inference import ModelUnavailable
 
     try:
         _warm(version)
     except ModelUnavailable as exc:
-        return str(exc)
-    return None
+        return {"version": version, "sha256": None, "problem": str(exc)}
+    return {"version": version, "sha256": _store().file_sha256(version), "problem": None}
 
 
-def _work(kind: str, body: bytes, filename: str, query: dict[str, Any], version: str | None) -> tuple:
-    """Parse and diagnose one request in the worker; errors come back as tagged tuples.
+_MEMORY_BYTES = 0   # this worker's memory allowance (for the MemoryError message)
 
-    Returns ``("ok", verdict, asset_id, plant)``, ``("input", status, message)``,
+
+def _tagged(fn: Callable[[], tuple]) -> tuple:
+    """``fn()``, with the errors a client can cause turned into tagged tuples.
+
+    Returns what ``fn`` returns (``("ok", ...)``), ``("input", status, message)``,
     ``("http", status, detail)`` or ``("unavailable", message)``.
     """
     from fastapi import HTTPException
 
     from .api.errors import InputError
     from .inference import ModelUnavailable
-    from .parsing import parse_body
 
     try:
-        recording, asset_id, plant = parse_body(kind, body, filename, query)
-        verdict = _store().diagnose(recording, version)
+        return fn()
     except InputError as exc:
         return ("input", exc.status_code, str(exc))
     except HTTPException as exc:
         return ("http", exc.status_code, exc.detail)
     except ModelUnavailable as exc:
         return ("unavailable", str(exc))
+    except MemoryError:
+        return ("input", 422, f"the recording needs more than the {_MEMORY_BYTES / 2**20:.0f} MiB of memory one "
+                "diagnosis may use (ROTORDIAG_DIAGNOSIS_WORKER_MEMORY_MB); send a shorter recording or fewer "
+                "channels")
     except ValueError as exc:   # the features/models packages' messages for bad recordings
         return ("input", 422, str(exc))
-    return ("ok", verdict, asset_id, plant)
 
 
-_CALLS: dict[str, Callable[..., Any]] = {"work": _work, "check": _load_check}
+def _work(kind: str, body: bytes, filename: str, query: dict[str, Any], version: str | None) -> tuple:
+    """Parse and diagnose one request in the worker: ``("ok", verdict, asset_id, plant)`` or an error
+    tuple (:func:`_tagged`)."""
+    from .parsing import parse_body
+
+    def run() -> tuple:
+        recording, asset_id, plant = parse_body(kind, body, filename, query)
+        return ("ok", _store().diagnose(recording, version), asset_id, plant)
+
+    return _tagged(run)
+
+
+def _record(record: dict[str, Any], version: str | None) -> tuple:
+    """Diagnose one record of a batch (a ``DiagnoseRequest`` as validated by :func:`_batch_parse`)."""
+    from .parsing import checked, recording_from_model
+    from .schemas import DiagnoseRequest
+
+    def run() -> tuple:
+        req = DiagnoseRequest.model_validate(record)
+        return ("ok", _store().diagnose(checked(recording_from_model, req), version), req.asset_id, req.plant)
+
+    return _tagged(run)
+
+
+def _batch_parse(body: bytes) -> tuple:
+    """Parse a POST /diagnose/batch body: ``("ok", [record dict, ...])`` or an error tuple."""
+    from .parsing import parse_batch
+
+    return _tagged(lambda: ("ok", [r.model_dump() for r in parse_batch(body).records]))
+
+
+def _plot(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> tuple:
+    """Parse a recording and compute the web page's plot arrays: ``("ok", data)`` or an error tuple."""
+    from .parsing import parse_body
+    from .web.plotdata import plot_data
+
+    return _tagged(lambda: ("ok", plot_data(parse_body(kind, body, filename, query)[0])))
+
+
+_CALLS: dict[str, Callable[..., Any]] = {"work": _work, "check": _load_check, "record": _record,
+                                         "batch_parse": _batch_parse, "plot": _plot}
 
 
 def _recv_exact(sock: socket.socket, n: int) -> bytes | None:
@@ -125,13 +199,21 @@ def _recv_exact(sock: socket.socket, n: int) -> bytes | None:
     return bytes(buf)
 
 
-def _worker_main(sock: socket.socket, registry_root: str, version: str | None) -> None:
-    """A worker process: load the model, then answer requests until the server closes the socket."""
+def _worker_main(sock: socket.socket, registry_root: str, version: str | None, memory_bytes: int = 0) -> None:
+    """A worker process: load the model, limit its memory, say it is ready, then answer requests until
+    the server closes the socket."""
+    global _MEMORY_BYTES
     _init_worker(registry_root)
     try:
         _warm(version)
+        from .parsing import parse_body  # noqa: F401  (imported before the limit, not on the first request)
+        from .web.plotdata import plot_data  # noqa: F401
     except Exception as exc:  # noqa: BLE001 - reported per request (503) by _load_check/_work
         log.warning("diagnosis worker %d: could not preload model %s: %s", os.getpid(), version, exc)
+    _MEMORY_BYTES = memory_bytes
+    _limit_memory(memory_bytes)
+    ready = pickle.dumps(("ready", os.getpid()), protocol=pickle.HIGHEST_PROTOCOL)
+    sock.sendall(_HEADER.pack(len(ready)) + ready)
     while True:
         head = _recv_exact(sock, _HEADER.size)
         if head is None:
@@ -151,6 +233,10 @@ def _worker_main(sock: socket.socket, registry_root: str, version: str | None) -
 # -- server side ---------------------------------------------------------------------------------
 class WorkerCrashed(RuntimeError):
     """A diagnosis worker process died on a request (reported as 503)."""
+
+
+class DiagnosisTimeout(RuntimeError):
+    """A request ran past the time limit; its worker was killed (reported as 422, not retried)."""
 
 
 _LIVE_WORKERS: weakref.WeakSet[_Worker] = weakref.WeakSet()
@@ -181,13 +267,16 @@ class _Worker:
     Up to ``depth`` requests are in flight per worker: the next message is already in the
     socket while the worker computes, so it never waits for the server's event loop between
     requests. The worker answers in order; a reader task resolves the futures first-in,
-    first-out, and fails them all if the worker dies.
+    first-out, and fails them all if the worker dies. The request at the head of the queue
+    (the one the worker is computing) has ``timeout_s`` from when it got there; past it the
+    worker is killed.
     """
 
-    def __init__(self, registry_root: Path, version: str | None, depth: int = 2) -> None:
+    def __init__(self, registry_root: Path, version: str | None, *, depth: int = 2, memory_bytes: int = 0,
+                 timeout_s: float = 60.0, on_ready: Callable[[], Any] | None = None) -> None:
         parent, child = socket.socketpair()
         ctx = multiprocessing.get_context("spawn")
-        self.process = ctx.Process(target=_worker_main, args=(child, str(registry_root), version),
+        self.process = ctx.Process(target=_worker_main, args=(child, str(registry_root), version, memory_bytes),
                                    name="rotordiag-diagnosis", daemon=False)
         self.process.start()
         child.close()
@@ -199,9 +288,15 @@ class _Worker:
         parent.setblocking(False)
         self.sock = parent
         self.depth = depth
+        self.timeout_s = float(timeout_s)
         self.inflight = 0                # requests given to this worker and not yet answered
+        self.served = 0                  # requests sent to it (tests check that requests spread)
         self.pending: collections.deque[asyncio.Future] = collections.deque()
         self.alive = True
+        self.ready = False               # set when the worker says it has loaded the model
+        self.timed_out = False
+        self._on_ready = on_ready
+        self._timer: asyncio.TimerHandle | None = None
         self._send_lock = asyncio.Lock()
         self._reader = asyncio.ensure_future(self._read_loop())
 
@@ -213,6 +308,9 @@ class _Worker:
         if not self.alive:               # its reader has finished: nobody would answer the future
             raise ConnectionResetError("diagnosis worker stopped")
         self.pending.append(fut)
+        self.served += 1
+        if len(self.pending) == 1 and self.ready:
+            self._arm()
         async with self._send_lock:      # messages must not interleave on the socket
             try:
                 await loop.sock_sendall(self.sock, _HEADER.pack(len(msg)) + msg)
@@ -220,13 +318,43 @@ class _Worker:
                 self._fail(exc)
         return await fut
 
+    def _arm(self) -> None:
+        """Start the time limit of the request at the head of the queue (the one being computed)."""
+        if self._timer is not None:
+            self._timer.cancel()
+        self._timer = asyncio.get_running_loop().call_later(self.timeout_s, self._expire, self.pending[0])
+
+    def _expire(self, fut: asyncio.Future) -> None:
+        """The head request ran past the limit: kill the worker; that request fails, the others are retried."""
+        if not self.pending or self.pending[0] is not fut or fut.done():
+            return
+        log.error("diagnosis worker %s: a request ran past %g s; killing the worker", self.process.pid,
+                  self.timeout_s)
+        self.timed_out = True
+        self.pending.popleft()
+        fut.set_exception(DiagnosisTimeout(self.timeout_s))
+        self.process.kill()
+        self._fail(ConnectionResetError("worker killed: a request ran past the time limit"))
+
     async def _read_loop(self) -> None:
         loop = asyncio.get_running_loop()
         try:
+            head = await self._recv_exact(loop, _HEADER.size)
+            pickle.loads(await self._recv_exact(loop, _HEADER.unpack(head)[0]))   # ("ready", pid)
+            self.ready = True
+            if self.pending:
+                self._arm()
+            if self._on_ready is not None:
+                self._on_ready()
             while True:
                 head = await self._recv_exact(loop, _HEADER.size)
                 result = pickle.loads(await self._recv_exact(loop, _HEADER.unpack(head)[0]))
                 fut = self.pending.popleft()
+                if self._timer is not None:
+                    self._timer.cancel()
+                    self._timer = None
+                if self.pending:
+                    self._arm()
                 if not fut.done():
                     fut.set_result(result)
         except (ConnectionError, OSError, EOFError, struct.error, pickle.UnpicklingError, IndexError) as exc:
@@ -237,10 +365,15 @@ class _Worker:
 
     def _fail(self, exc: BaseException) -> None:
         self.alive = False
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
         while self.pending:
             fut = self.pending.popleft()
             if not fut.done():
                 fut.set_exception(ConnectionResetError(f"diagnosis worker stopped: {exc}"))
+        if self._on_ready is not None:   # wake requests waiting for a worker: this one is gone
+            self._on_ready()
 
     async def _recv_exact(self, loop, n: int) -> bytes:
         buf = bytearray(n)
@@ -262,6 +395,10 @@ class _Worker:
             self.process.join(timeout_s)
 
 
+#: how long /health may reuse the workers' answer about the model they hold
+MODEL_CHECK_INTERVAL_S = 5.0
+
+
 class DiagnosisPool:
     """N diagnosis worker processes fed by the server's event loop.
 
@@ -272,19 +409,36 @@ class DiagnosisPool:
     n_workers : int
     version : str, optional
         Model version every worker preloads at start (the active one).
+    memory_bytes : int
+        Memory each worker may allocate beyond its size after loading the model (``RLIMIT_AS``;
+        0: no limit).
+    timeout_s : float
+        Worker time one request may take; past it the worker is killed and replaced.
 
     Must be created and used on the server's running event loop (the app's lifespan).
     """
 
-    def __init__(self, registry_root: Path, n_workers: int, version: str | None = None) -> None:
+    def __init__(self, registry_root: Path, n_workers: int, version: str | None = None, *,
+                 memory_bytes: int = 0, timeout_s: float = 60.0) -> None:
         self.registry_root = Path(registry_root)
         self.n_workers = int(n_workers)
+        self.memory_bytes = int(memory_bytes)
+        self.timeout_s = float(timeout_s)
         self._version = version
         self._loop = asyncio.get_running_loop()
-        self._workers: list[_Worker] = [_Worker(self.registry_root, version) for _ in range(self.n_workers)]
         self._free = asyncio.Condition()
-        self._loadable: set[str] = set()
+        self._workers: list[_Worker] = [self._new_worker() for _ in range(self.n_workers)]
+        self._next = 0                   # round-robin start for ties
+        self._checked: dict[str, tuple[float, str | None]] = {}
+        self.model_sha256: str | None = None   # of the model file the workers hold (last check)
         self._closing = False
+
+    def _new_worker(self) -> _Worker:
+        return _Worker(self.registry_root, self._version, memory_bytes=self.memory_bytes, timeout_s=self.timeout_s,
+                       on_ready=self._notify_soon)
+
+    def _notify_soon(self) -> None:
+        asyncio.ensure_future(self._release())
 
     def pids(self) -> list[int]:
         """Process ids of the workers."""
@@ -293,13 +447,34 @@ class DiagnosisPool:
     def _replace(self, w: _Worker) -> None:
         if self._closing or w not in self._workers:
             return
-        log.error("diagnosis worker process %s stopped (exit code %s); starting another",
-                  w.process.pid, w.process.exitcode)
-        self._workers[self._workers.index(w)] = _Worker(self.registry_root, self._version)
+        if w.timed_out:
+            log.error("diagnosis worker process %s killed after a request ran past %g s; starting another",
+                      w.process.pid, self.timeout_s)
+        else:
+            log.error("diagnosis worker process %s stopped (exit code %s); starting another",
+                      w.process.pid, w.process.exitcode)
+        self._workers[self._workers.index(w)] = self._new_worker()
         w.stop(timeout_s=1.0)
 
+    def _pick(self) -> _Worker | None:
+        """The ready worker with the fewest requests in flight (ties round-robin); a cold one only when
+        no worker is ready."""
+        n = len(self._workers)
+        order = [self._workers[(self._next + i) % n] for i in range(n)]
+        live = [w for w in order if w.alive]
+        ready = [w for w in live if w.ready]
+        if ready:
+            free = [w for w in ready if w.inflight < w.depth]
+        else:
+            free = [w for w in live if w.inflight < w.depth]
+        if not free:
+            return None
+        w = min(free, key=lambda w: w.inflight)
+        self._next = (self._workers.index(w) + 1) % n
+        return w
+
     async def _acquire(self) -> _Worker:
-        """The live worker with the fewest requests in flight, waiting while all are full."""
+        """A worker (see :meth:`_pick`), waiting while all are full."""
         async with self._free:
             while True:
                 for w in list(self._workers):
@@ -307,16 +482,15 @@ class DiagnosisPool:
                         self._replace(w)
                 if self._closing:
                     raise WorkerCrashed("the diagnosis workers are shutting down; retry in a moment")
-                live = [w for w in self._workers if w.alive and w.inflight < w.depth]
-                if live:
-                    w = min(live, key=lambda w: w.inflight)
-                    w.inflight += 1      # reserved here, so concurrent acquires see it at once
-                    return w
+                picked = self._pick()
+                if picked is not None:
+                    picked.inflight += 1      # reserved here, so concurrent acquires see it at once
+                    return picked
                 await self._free.wait()
 
     async def _release(self) -> None:
         async with self._free:
-            self._free.notify()
+            self._free.notify_all()
 
     async def _on(self, w: _Worker, name: str, args: tuple) -> tuple[bool, Any]:
         try:
@@ -324,6 +498,9 @@ class DiagnosisPool:
         except ConnectionResetError:
             self._replace(w)
             return False, None
+        except DiagnosisTimeout:
+            self._replace(w)
+            raise
         finally:
             w.inflight -= 1
             await self._release()
@@ -348,15 +525,47 @@ class DiagnosisPool:
         """:func:`_work` in a worker process (returns its tagged tuple)."""
         return await self._call("work", (kind, body, filename, query, version))
 
-    def check_model(self, version: str, timeout_s: float = 60.0) -> str | None:
-        """``None`` when the workers can load ``version`` (remembered once true), else why not.
+    async def call(self, name: str, *args: Any) -> tuple:
+        """One of the worker functions (``record``, ``batch_parse``, ``plot``) in a worker process."""
+        return await self._call(name, args)
 
-        Called from ``GET /health`` (a thread of the server), so the server process itself
-        never loads a model.
+    async def _check_all(self, version: str) -> str | None:
+        answers = []
+        for w in [w for w in self._workers if w.alive and w.ready] or self._workers[:1]:
+            if w.inflight >= w.depth:
+                continue                 # busy: its answer would wait for the requests before it
+            w.inflight += 1
+            try:
+                answers.append(await w.call("check", (version,)))
+            except (ConnectionResetError, DiagnosisTimeout):
+                self._replace(w)
+            finally:
+                w.inflight -= 1
+                await self._release()
+        if not answers:                  # every worker busy with diagnoses: the last answer stands
+            return self._checked[version][1] if version in self._checked else None
+        problems = sorted({a["problem"] for a in answers if a["problem"]})
+        hashes = {a["sha256"] for a in answers}
+        self.model_sha256 = next(iter(hashes)) if len(hashes) == 1 else None
+        if problems:
+            return "; ".join(problems)
+        if len(hashes) > 1:
+            return f"diagnosis workers hold different files of model {version} (sha256 {sorted(map(str, hashes))})"
+        return None
+
+    def check_model(self, version: str, timeout_s: float = 30.0) -> str | None:
+        """``None`` when the workers hold ``version`` and can diagnose with it, else why not.
+
+        Asks every ready worker which file of ``version`` it holds (each reloads it when the file
+        changed on disk, so a corrupted or replaced file shows here); the answer is reused for at
+        most :data:`MODEL_CHECK_INTERVAL_S`. Called from ``GET /health`` (a thread of the server),
+        so the server process itself never loads a model.
         """
-        if version in self._loadable:
-            return None
-        future = asyncio.run_coroutine_threadsafe(self._call("check", (version,)), self._loop)
+        now = time.monotonic()
+        cached = self._checked.get(version)
+        if cached is not None and now - cached[0] < MODEL_CHECK_INTERVAL_S:
+            return cached[1]
+        future = asyncio.run_coroutine_threadsafe(self._check_all(version), self._loop)
         try:
             problem = future.result(timeout=timeout_s)
         except TimeoutError:
@@ -364,8 +573,7 @@ class DiagnosisPool:
             return f"diagnosis workers did not load model {version} within {timeout_s:g} s"
         except (WorkerCrashed, RuntimeError) as exc:
             return str(exc)
-        if problem is None:
-            self._loadable.add(version)
+        self._checked = {version: (time.monotonic(), problem)}
         return problem
 
     def shutdown(self) -> None:

@@ -2,9 +2,10 @@
 from __future__ import annotations
 
 import datetime as dt
+import re
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints
 
 #: Bounds on what one request may carry (the body-size middleware bounds the bytes as well).
 MAX_CHANNELS = 8                # 4 bearings x 2 probes
@@ -14,9 +15,24 @@ MAX_LABEL_LEN = 128
 
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 
+_ASSET_ID_RE = re.compile(r"^[A-Za-z0-9._:-]+$")
+
+
+def _check_asset_id(value: str) -> str:
+    if not _ASSET_ID_RE.match(value):
+        raise ValueError("asset_id may contain only letters, digits and . _ : - (it becomes part of the URL "
+                         "/assets/{asset_id}/history, so no '/', spaces or other characters)")
+    return value
+
+
+#: An asset identifier: it is a path segment of ``GET /assets/{asset_id}/history``, so no ``/``.
+AssetId = Annotated[str, StringConstraints(min_length=1, max_length=MAX_LABEL_LEN), AfterValidator(_check_asset_id)]
+
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    """Request bodies: unknown keys refused, and no coercion (``false`` is not a number, ``0`` not a boolean)."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
 
 
 class SlowRollIn(_Strict):
@@ -65,9 +81,8 @@ class RecordingIn(_Strict):
         None, gt=0, le=100_000,
         description="Radial bearing clearance c, micrometres; when given, amplitudes are also reported divided by c "
         "and the offset δ = Δ·c is reported in micrometres.", examples=[350.0])
-    asset_id: str | None = Field(
-        None, min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:/-]+$",
-        description="Identifier of the machine train; when given the diagnosis is stored for GET /assets/{id}/history.",
+    asset_id: AssetId | None = Field(
+        None, description="Identifier of the machine train; when given the diagnosis is stored for GET /assets/{id}/history.",
         examples=["unit-3-gen-exc"])
     plant: str | None = Field(
         None, min_length=1, max_length=MAX_LABEL_LEN,
@@ -80,7 +95,7 @@ class RecordingIn(_Strict):
 class DiagnoseRequest(RecordingIn):
     """Body of POST /diagnose (JSON form)."""
 
-    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [{
+    model_config = ConfigDict(extra="forbid", strict=True, json_schema_extra={"examples": [{
         "sample_rate_hz": 4096.0, "speed_rpm": 3000.0, "clearance_um": 350.0, "asset_id": "unit-3",
         "channels": [
             {"bearing": 2, "angle_deg": 45.0, "units": "um", "data": [10.1, 12.3, 9.8, 7.7]},
@@ -167,6 +182,8 @@ class HealthOut(BaseModel):
     version: str = Field(..., description="Code version.")
     database: bool = Field(..., description="The database answered.")
     model_version: str | None = Field(None, description="Active model version, if any.")
+    model_sha256: str | None = Field(None, description="SHA-256 of the model file the diagnosis workers (or the "
+                                     "server, without workers) hold for `model_version`; checked at least every 5 s.")
     detail: str = Field("", description="What is wrong when degraded.")
 
 

@@ -46,7 +46,9 @@ class AppState:
         pool = None
         if settings.effective_diagnosis_workers > 0:
             pool = DiagnosisPool(settings.registry_dir, settings.effective_diagnosis_workers,
-                                 version=models.active_version())
+                                 version=models.active_version(),
+                                 memory_bytes=settings.diagnosis_worker_memory_mb * 2**20,
+                                 timeout_s=settings.diagnosis_timeout_s)
         log.info("rotordiag service ready: data_dir=%s database=%s registry=%s",
                  settings.data_dir.resolve(), engine.url.render_as_string(hide_password=True),
                  settings.registry_dir.resolve())

@@ -1,9 +1,17 @@
-"""Exception handlers: every client mistake becomes a 4xx whose ``detail`` says what to fix."""
+"""Exception handlers: every client mistake becomes a 4xx whose ``detail`` says what to fix.
+
+This module is where the service's and the lower layers' exceptions get HTTP statuses: the
+features/models packages raise ``ValueError`` (a bad recording → 422) and the service's own
+:class:`InputError` carries its status; :func:`raise_worker_error` maps what a diagnosis
+worker answered (``service.pool``): a client mistake → its 4xx, no model → 503 (404 when the
+request named a version), a request over the time limit → 422, a worker that died twice → 503.
+"""
 from __future__ import annotations
 
-from typing import Any
+import math
+from typing import Any, NoReturn
 
-from fastapi import FastAPI, Request
+from fastapi import FastAPI, HTTPException, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from pydantic import ValidationError
@@ -17,18 +25,54 @@ class InputError(ValueError):
         self.status_code = status_code
 
 
+def raise_worker_error(answer: Any, *, version_given: bool = False) -> NoReturn:
+    """Raise the HTTP error for a diagnosis worker's answer that is not ``("ok", ...)``.
+
+    Parameters
+    ----------
+    answer : tuple or Exception
+        The worker's tagged tuple (``service.pool._tagged``), or the pool's ``WorkerCrashed`` /
+        ``DiagnosisTimeout``.
+    version_given : bool
+        The request named a model version (an unavailable model is then 404, not 503).
+    """
+    from ..pool import DiagnosisTimeout, WorkerCrashed
+
+    if isinstance(answer, DiagnosisTimeout):
+        limit = answer.args[0] if answer.args else "the"
+        raise InputError(f"the recording took longer than the limit of {limit:g} s to analyse and was stopped; "
+                         "send a shorter recording or fewer channels (or raise ROTORDIAG_DIAGNOSIS_TIMEOUT_S "
+                         "on the server)", 422)
+    if isinstance(answer, WorkerCrashed):
+        raise HTTPException(503, str(answer))
+    tag = answer[0]
+    if tag == "input":
+        raise InputError(answer[2], answer[1])
+    if tag == "http":
+        raise HTTPException(answer[1], answer[2])
+    if tag == "unavailable":
+        raise (InputError(answer[1], 404) if version_given else HTTPException(503, answer[1]))
+    raise RuntimeError(f"unexpected answer from a diagnosis worker: {tag!r}")
+
+
+def _echoable(value: Any) -> bool:
+    """A value safe to echo in JSON: no NaN or infinity (JSON has none; rendering one would fail)."""
+    if isinstance(value, float):
+        return math.isfinite(value)
+    return isinstance(value, (int, bool, type(None))) or (isinstance(value, str) and len(value) <= 80)
+
+
 def validation_detail(exc: ValidationError | RequestValidationError, prefix: tuple = ()) -> list[dict[str, Any]]:
     """FastAPI-style error list, with long inputs (waveforms) cut out of the echo."""
     out = []
     for err in exc.errors():
         item = {"loc": list(prefix) + list(err.get("loc", ())), "msg": err.get("msg", ""), "type": err.get("type", "")}
         inp = err.get("input")
-        if isinstance(inp, (int, float, bool, type(None))) or (isinstance(inp, str) and len(inp) <= 80):
+        if _echoable(inp):
             item["input"] = inp
         ctx = err.get("ctx")
         if ctx:
-            item["ctx"] = {k: (v if isinstance(v, (int, float, str, bool, type(None))) else str(v))
-                           for k, v in ctx.items()}
+            item["ctx"] = {k: (v if _echoable(v) else str(v)) for k, v in ctx.items()}
         out.append(item)
     return out
 

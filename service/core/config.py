@@ -78,6 +78,18 @@ class Settings(BaseSettings):
         description="Worker processes that compute diagnoses (parse, features, verdict) so that requests use "
         "every core; -1 means one per CPU available, 0 computes them in the server process's threads "
         "(`diagnosis_threads`).")
+    diagnosis_worker_memory_mb: int = Field(
+        1024, ge=0, le=1_048_576,
+        description="Memory, MiB, each diagnosis worker may allocate beyond its size once it has loaded the model "
+        "(its RLIMIT_AS is set to that sum); a request that needs more is answered 422. 0: no limit.")
+    diagnosis_timeout_s: float = Field(
+        60.0, gt=0, le=3600, allow_inf_nan=False,
+        description="Worker time one diagnosis (or /ui/plot-data request) may take, s; past it the worker is killed "
+        "and replaced and the request answered 422 (not retried).")
+    body_timeout_s: float = Field(
+        60.0, gt=0, le=3600, allow_inf_nan=False,
+        description="Time a client has to send a request body once its headers have arrived, s; a slower one "
+        "is answered 408 and its connection closed.")
     job_threads: int = Field(1, ge=1, le=16, description="Jobs run at the same time (each fans out on Dask).")
     log_level: str = Field("info", description="Log level of the service and uvicorn.")
 

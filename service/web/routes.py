@@ -14,11 +14,11 @@ from pathlib import Path
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Query, Request
-from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import FileResponse
 
+from ..api.deps import DiagnoseKeyDep, StateDep
 from ..api.errors import InputError
-from ..api.routes.diagnose import ReaderQueryDep, _recording_from_request  # same body forms and messages as /diagnose
+from ..api.routes.diagnose import ReaderQueryDep, recording_answer  # same body forms and messages as /diagnose
 from .plotdata import plot_data
 
 #: the page's files, installed with the package (found through importlib.resources)
@@ -62,9 +62,10 @@ def _plot_sync(recording: Any) -> dict[str, Any]:
         raise InputError(str(exc)) from None
 
 
-@router.post("/ui/plot-data")
+@router.post("/ui/plot-data", dependencies=[DiagnoseKeyDep])
 async def plot(
     request: Request,
+    state: StateDep,
     reader: ReaderQueryDep,
     sample_rate_hz: Annotated[float | None, Query(gt=0, le=1e6, allow_inf_nan=False)] = None,
     speed_rpm: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False)] = None,
@@ -75,9 +76,13 @@ async def plot(
     keyphasor_times_s: Annotated[str | None, Query(max_length=200_000)] = None,
     sample_index: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
 ) -> dict[str, Any]:
-    """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.web.plotdata``)."""
+    """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.web.plotdata``).
+
+    Parsed and computed in a diagnosis worker (memory and time limits), as /diagnose; with
+    ``ROTORDIAG_DIAGNOSIS_WORKERS=0`` in a thread of the server (HDF5 still decoded in the sandbox).
+    Needs the API key when /diagnose does (``ROTORDIAG_DIAGNOSE_REQUIRES_KEY``).
+    """
     query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=None,
                  plant=None, units=units, bearings=bearings, angles_deg=angles_deg,
                  keyphasor_times_s=keyphasor_times_s, sample_index=sample_index, **reader)
-    recording, _, _ = await _recording_from_request(request, query)
-    return await run_in_threadpool(_plot_sync, recording)
+    return await recording_answer(request, state, query, "plot", _plot_sync)

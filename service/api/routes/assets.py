@@ -5,6 +5,7 @@ import datetime as dt
 from typing import Annotated
 
 from fastapi import APIRouter, Path, Query
+from pydantic import BeforeValidator
 
 from ...schemas import MAX_LABEL_LEN, AssetHistory, AssetPoint, ErrorOut
 from ...store import asset_history
@@ -14,15 +15,26 @@ from ..errors import InputError
 router = APIRouter(tags=["assets"])
 
 
+def _iso_time(value: object) -> object:
+    """Refuse a bare number for ``since`` (pydantic would read ``0.5`` as seconds since 1970)."""
+    if isinstance(value, str):
+        try:
+            float(value)
+        except ValueError:
+            return value
+        raise ValueError("since: give a date and time in ISO 8601, e.g. 2024-05-01T12:00:00Z (not a number)")
+    return value
+
+
 @router.get("/assets/{asset_id}/history", response_model=AssetHistory,
             responses={404: {"model": ErrorOut, "description": "No diagnosis stored for this asset."}},
             summary="Trend of an asset's diagnoses")
 def history(
-    asset_id: Annotated[str, Path(min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:/-]+$",
+    asset_id: Annotated[str, Path(min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:-]+$",
                                   description="The `asset_id` sent with /diagnose.")],
     session: SessionDep,
     limit: Annotated[int, Query(ge=1, le=10_000, description="Most recent points to return.")] = 500,
-    since: Annotated[dt.datetime | None, Query(description="Only points at or after this time (ISO 8601; "
+    since: Annotated[dt.datetime | None, BeforeValidator(_iso_time), Query(description="Only points at or after this time (ISO 8601; "
                                                "UTC when no offset is given).")] = None,
 ) -> AssetHistory:
     rows = asset_history(session, asset_id, limit, since)

@@ -1,6 +1,7 @@
 """POST /diagnose and POST /diagnose/batch."""
 from __future__ import annotations
 
+import asyncio
 from typing import Annotated, Any, Literal
 
 import anyio
@@ -9,14 +10,14 @@ from fastapi import APIRouter, Depends, HTTPException, Query, Request
 from fastapi.concurrency import run_in_threadpool
 
 from ...inference import ModelUnavailable
-from ...parsing import checked, parse_body, recording_from_model
-from ...pool import WorkerCrashed
-from ...schemas import MAX_LABEL_LEN, BatchItem, BatchRequest, BatchResponse, DiagnoseResponse, ErrorOut
+from ...parsing import checked, parse_batch, parse_body, recording_from_model
+from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
 from ...store import store_diagnosis
 from ..deps import DiagnoseKeyDep, JsonBodyDep, ModelsDep, StateDep
-from ..errors import InputError
+from ..errors import InputError, raise_worker_error
+from ..routing import FiniteJSONRoute
 
-router = APIRouter(tags=["diagnose"])
+router = APIRouter(tags=["diagnose"], route_class=FiniteJSONRoute)
 
 
 def reader_query(
@@ -93,7 +94,7 @@ async def _read_body(request: Request) -> tuple[str, bytes, str]:
     if media in NPY_TYPES:
         return "npy", await request.body(), ""
     if media == "multipart/form-data":
-        form = await request.form(max_files=1, max_fields=8)
+        form = await _read_form(request)
         try:
             upload = form.get("file")
             if upload is None or isinstance(upload, str):
@@ -106,13 +107,56 @@ async def _read_body(request: Request) -> tuple[str, bytes, str]:
         "application/octet-stream (an NPY array) or multipart/form-data (a CSV/NPY/HDF5 file in part 'file')", 415)
 
 
-async def _recording_from_request(request: Request, query: dict[str, Any]) -> tuple[Any, str | None, str | None]:
-    """Recording, asset_id, plant from any accepted body form (read on the loop, parsed in the thread pool).
+async def _read_form(request: Request) -> Any:
+    """The multipart form, with the parser's complaints in the client's terms (400)."""
+    from starlette.exceptions import HTTPException as StarletteHTTPException
+    from starlette.formparsers import MultiPartException
 
-    Also used by the web page's ``/ui/plot-data`` (service/web/routes.py).
+    try:
+        return await request.form(max_files=1, max_fields=8)
+    except (MultiPartException, StarletteHTTPException) as exc:
+        if isinstance(exc, StarletteHTTPException) and exc.status_code != 400:
+            raise                      # 408/413 from the body limits
+        msg = str(getattr(exc, "detail", None) or getattr(exc, "message", None) or exc)
+        if "maximum size" in msg:      # a part without a file name is a form field, limited to 1 MiB
+            raise InputError("multipart upload: the part is not a file (its filename is missing or empty); send "
+                             "the waveform file in a part named 'file' with a file name ending .csv, .npy, .h5, "
+                             ".hdf5 or .json", 400) from None
+        raise InputError(f"multipart upload cannot be read: {msg}", 400) from None
+
+
+async def in_worker(state, name: str, *args: Any) -> tuple:
+    """``service.pool``'s worker function ``name`` in a diagnosis worker; errors as 4xx/503.
+
+    Returns the ``("ok", ...)`` tuple; every other answer (a client mistake, no model, a worker over
+    its time limit or crashed twice) is raised for the error handlers (``service.api.errors``).
+    """
+    from ...pool import DiagnosisTimeout, WorkerCrashed
+
+    try:
+        result = await state.pool.call(name, *args)
+    except (WorkerCrashed, DiagnosisTimeout) as exc:
+        raise_worker_error(exc)
+    if result[0] != "ok":
+        raise_worker_error(result, version_given=name in ("work", "record") and args[-1] is not None)
+    return result
+
+
+async def recording_answer(request: Request, state, query: dict[str, Any], name: str, fallback) -> Any:
+    """Read the body and compute ``name`` (a worker function taking ``(kind, body, filename, query)``) in a
+    diagnosis worker, or ``fallback(recording)`` in a thread of this process when there are none.
+
+    Used by the web page's ``/ui/plot-data`` (service/web/routes.py): the same body forms and messages as
+    /diagnose, and the same isolation.
     """
     kind, body, filename = await _read_body(request)
-    return await run_in_threadpool(parse_body, kind, body, filename, query)
+    if state.pool is not None:
+        return (await in_worker(state, name, kind, body, filename, query))[1]
+
+    def run() -> Any:
+        return fallback(parse_body(kind, body, filename, query)[0])
+
+    return await anyio.to_thread.run_sync(run, limiter=_diagnosis_limiter(state))
 
 
 def _diagnose_sync(state, recording, asset_id: str | None, plant: str | None, version: str | None) -> dict:
@@ -162,9 +206,8 @@ async def diagnose(
     keyphasor_times_s: Annotated[str | None, Query(max_length=200_000,
                                                    description="Binary/multipart only: keyphasor pulse times, s, "
                                                    "comma-separated.")] = None,
-    asset_id: Annotated[str | None, Query(min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:/-]+$",
-                                          description="Binary/multipart only: asset identifier (stores the "
-                                          "diagnosis in the asset's history).")] = None,
+    asset_id: Annotated[AssetId | None, Query(description="Binary/multipart only: asset identifier (stores the "
+                                              "diagnosis in the asset's history).")] = None,
     plant: Annotated[str | None, Query(min_length=1, max_length=MAX_LABEL_LEN,
                                        description="Binary/multipart only: plant label.")] = None,
     sample_index: Annotated[int, Query(ge=0, le=10_000_000, description="HDF5 upload of a dataset file only: "
@@ -187,20 +230,7 @@ async def _diagnose_in_pool(state, kind: str, body: bytes, filename: str, query:
                             version: str | None) -> dict:
     """Parse and diagnose in a worker process (``service.pool``, which bounds the requests in flight
     per worker); store the result here."""
-    try:
-        result = await state.pool.run(kind, body, filename, query, version)
-    except WorkerCrashed as exc:
-        raise HTTPException(503, str(exc)) from None
-    tag = result[0]
-    if tag == "input":
-        raise InputError(result[2], result[1])
-    if tag == "http":
-        raise HTTPException(result[1], result[2])
-    if tag == "unavailable":
-        if version is not None:
-            raise InputError(result[1], 404)
-        raise HTTPException(503, result[1])
-    _, verdict, asset_id, plant = result
+    _, verdict, asset_id, plant = await in_worker(state, "work", kind, body, filename, query, version)
     if asset_id is not None:
         await run_in_threadpool(store_diagnosis, state, asset_id, plant, verdict)
     return verdict
@@ -220,21 +250,60 @@ def _parse_and_diagnose(state, kind, body, filename, query, model_version) -> di
     return _diagnose_sync(state, recording, asset_id, plant, model_version)
 
 
+_BATCH_BODY = {"requestBody": {"required": True, "content": {
+    "application/json": {"schema": {"$ref": "#/components/schemas/BatchRequest"}}}}}
+
+
 @router.post(
     "/diagnose/batch", response_model=BatchResponse, responses=_ERRORS, dependencies=[DiagnoseKeyDep, JsonBodyDep],
+    openapi_extra=_BATCH_BODY,
     summary="Diagnose many recordings (JSON)",
     description="Each record is diagnosed independently; a record the service cannot diagnose gets its own "
     "`status_code` and `error` while the others still get results. The number of records is capped by "
     "ROTORDIAG_MAX_BATCH_RECORDS.",
 )
-def diagnose_batch(body: BatchRequest, state: StateDep,
-                   model_version: Annotated[str | None, Query(min_length=1, max_length=128)] = None) -> dict:
+async def diagnose_batch(request: Request, state: StateDep,
+                         model_version: Annotated[str | None, Query(min_length=1, max_length=128)] = None) -> dict:
+    """The body (a ``BatchRequest``) is parsed in a diagnosis worker, not here; the records are then
+    diagnosed one per worker call, in parallel across the workers."""
+    body = await request.body()
     cap = state.settings.max_batch_records
-    if len(body.records) > cap:
-        raise InputError(f"records: {len(body.records)} records sent; this server accepts at most {cap} per batch "
+    if state.pool is not None:
+        records = (await in_worker(state, "batch_parse", body))[1]
+        _check_batch_size(len(records), cap)
+        results = await asyncio.gather(*(_batch_item(state, i, rec, model_version) for i, rec in enumerate(records)))
+        items = list(results)
+    else:
+        batch = await anyio.to_thread.run_sync(parse_batch, body, limiter=_diagnosis_limiter(state))
+        _check_batch_size(len(batch.records), cap)
+        items = await anyio.to_thread.run_sync(_batch_sync, state, batch.records, model_version,
+                                               limiter=_diagnosis_limiter(state))
+    return {"count": len(items), "n_ok": sum(it.status_code == 200 for it in items), "items": items}
+
+
+def _check_batch_size(n: int, cap: int) -> None:
+    if n > cap:
+        raise InputError(f"records: {n} records sent; this server accepts at most {cap} per batch "
                          "(ROTORDIAG_MAX_BATCH_RECORDS); split the batch")
+
+
+async def _batch_item(state, i: int, record: dict[str, Any], version: str | None) -> BatchItem:
+    try:
+        _, verdict, asset_id, plant = await in_worker(state, "record", record, version)
+    except InputError as exc:
+        return BatchItem(index=i, status_code=exc.status_code, error=str(exc))
+    except HTTPException as exc:
+        if exc.status_code >= 500:
+            raise
+        return BatchItem(index=i, status_code=exc.status_code, error=str(exc.detail))
+    if asset_id is not None:
+        await run_in_threadpool(store_diagnosis, state, asset_id, plant, verdict)
+    return BatchItem(index=i, status_code=200, result=verdict)
+
+
+def _batch_sync(state, records, model_version: str | None) -> list[BatchItem]:
     items: list[BatchItem] = []
-    for i, rec in enumerate(body.records):
+    for i, rec in enumerate(records):
         try:
             recording = checked(recording_from_model, rec)
             verdict = _diagnose_sync(state, recording, rec.asset_id, rec.plant, model_version)
@@ -245,4 +314,4 @@ def diagnose_batch(body: BatchRequest, state: StateDep,
             if exc.status_code >= 500:
                 raise
             items.append(BatchItem(index=i, status_code=exc.status_code, error=str(exc.detail)))
-    return {"count": len(items), "n_ok": sum(it.status_code == 200 for it in items), "items": items}
+    return items

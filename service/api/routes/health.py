@@ -25,18 +25,21 @@ def health(state: StateDep, response: Response) -> HealthOut:
         db_ok = False
         problems.append(f"database: {type(exc).__name__}: {exc}")
     version = state.models.active_version()
+    sha256 = None
     if version is None:
         problems.append("no active model in the registry")
-    elif state.pool is not None:                # the diagnosis workers load it, not this process
+    elif state.pool is not None:                # the workers' model (checked at most every 5 s), not this process's
         problem = state.pool.check_model(version)
+        sha256 = state.pool.model_sha256
         if problem:
             problems.append(problem)
     else:
         try:
-            state.models.load(version)          # cached after the first call
+            state.models.load(version)          # cached; loaded again when the file changed on disk
+            sha256 = state.models.file_sha256(version)
         except ModelUnavailable as exc:
             problems.append(str(exc))
     if problems:
         response.status_code = 503
     return HealthOut(status="degraded" if problems else "ok", version=code_version(), database=db_ok,
-                     model_version=version, detail="; ".join(problems))
+                     model_version=version, model_sha256=sha256, detail="; ".join(problems))

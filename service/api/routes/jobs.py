@@ -10,8 +10,9 @@ from ...schemas import DatasetJobRequest, ErrorOut, JobCreated, JobList, JobOut,
 from ...work import prepare_dataset_job, prepare_retrain_job
 from ..deps import ApiKeyDep, JobsDep, JsonBodyDep
 from ..errors import InputError
+from ..routing import FiniteJSONRoute
 
-router = APIRouter(tags=["jobs"])
+router = APIRouter(tags=["jobs"], route_class=FiniteJSONRoute)
 
 _AUTH: dict[int | str, dict[str, Any]] = {400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
          401: {"model": ErrorOut, "description": "No X-API-Key header."},

@@ -8,8 +8,9 @@ from fastapi import APIRouter, Path
 from ...schemas import ErrorOut, ModelList
 from ..deps import ApiKeyDep, ModelsDep
 from ..errors import InputError
+from ..routing import FiniteJSONRoute
 
-router = APIRouter(tags=["models"])
+router = APIRouter(tags=["models"], route_class=FiniteJSONRoute)
 
 
 @router.get("/models", response_model=ModelList, summary="Registered model versions")
