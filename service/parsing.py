@@ -11,10 +11,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from fastapi import HTTPException
 from pydantic import ValidationError
 
-from .api.errors import InputError, validation_detail
+from .errors import InputError, RequestInvalid, validation_detail
 from .schemas import MAX_CHANNELS, MAX_KEYPHASOR_PULSES, MAX_POINTS, BatchRequest, DiagnoseRequest, RecordingIn
 
 #: Default probe layout for an 8-channel array: bearings 1-4, an XY pair each (the reader's default).
@@ -36,7 +35,7 @@ def service_limits() -> Any:
 
 def _read_error(exc: ValueError) -> InputError:
     """The reader's (or ``safe_io``'s) message as a 422."""
-    return exc if isinstance(exc, InputError) else InputError(str(exc), 422)
+    return exc if isinstance(exc, InputError) else InputError(str(exc))
 
 
 def recording_from_model(req: RecordingIn) -> Any:
@@ -112,7 +111,7 @@ def _validated_json(model: Any, body: bytes) -> Any:
     try:
         return model.model_validate_json(body)
     except ValidationError as exc:
-        raise HTTPException(422, validation_detail(exc, ("body",))) from None
+        raise RequestInvalid(validation_detail(exc, ("body",))) from None
 
 
 def parse_batch(body: bytes) -> Any:
@@ -135,8 +134,8 @@ def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> 
 
     Raises
     ------
-    InputError, HTTPException
-        4xx with a message that says what to fix.
+    InputError, RequestInvalid
+        Domain exceptions with a message that says what to fix (4xx in the API layer).
     """
     from rotordiag.features.reader import read_recording
 
@@ -148,7 +147,7 @@ def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> 
                          "or a CSV/HDF5/JSON file as a multipart upload")
     if kind == "npy" and not body.startswith(b"\x93NUMPY"):
         raise InputError("body is not an NPY file (it must start with the \\x93NUMPY magic); "
-                         "write it with numpy.save, or send JSON with Content-Type application/json", 422)
+                         "write it with numpy.save, or send JSON with Content-Type application/json")
     opts = options_from_query(query)
     try:
         res = read_recording(body, filename=filename if kind == "upload" else "body.npy", options=opts,
@@ -157,7 +156,7 @@ def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> 
         msg = str(exc)
         if "unknown file type" in msg:
             raise InputError(f"multipart upload {filename!r}: unknown file type; send .csv, .npy, .h5, .hdf5, .uff, .unv "
-                             "or .json", 415) from None
+                             "or .json", "unsupported_type") from None
         raise _read_error(exc) from None
     asset_id = query.get("asset_id") or res.asset_id
     plant = query.get("plant") or res.plant

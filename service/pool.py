@@ -120,28 +120,27 @@ _MEMORY_BYTES = 0   # this worker's memory allowance (for the MemoryError messag
 def _tagged(fn: Callable[[], tuple]) -> tuple:
     """``fn()``, with the errors a client can cause turned into tagged tuples.
 
-    Returns what ``fn`` returns (``("ok", ...)``), ``("input", status, message)``,
-    ``("http", status, detail)`` or ``("unavailable", message)``.
+    Returns what ``fn`` returns (``("ok", ...)``), ``("input", kind, message)``,
+    ``("request", errors)`` or ``("unavailable", message)`` (domain exceptions only: the API
+    layer, :func:`service.api.errors.raise_worker_error`, gives them HTTP statuses).
     """
-    from fastapi import HTTPException
-
-    from .api.errors import InputError
+    from .errors import InputError, RequestInvalid
     from .inference import ModelUnavailable
 
     try:
         return fn()
     except InputError as exc:
-        return ("input", exc.status_code, str(exc))
-    except HTTPException as exc:
-        return ("http", exc.status_code, exc.detail)
+        return ("input", exc.kind, str(exc))
+    except RequestInvalid as exc:
+        return ("request", exc.errors)
     except ModelUnavailable as exc:
         return ("unavailable", str(exc))
     except MemoryError:
-        return ("input", 422, f"the recording needs more than the {_MEMORY_BYTES / 2**20:.0f} MiB of memory one "
+        return ("input", "invalid", f"the recording needs more than the {_MEMORY_BYTES / 2**20:.0f} MiB of memory one "
                 "diagnosis may use (ROTORDIAG_DIAGNOSIS_WORKER_MEMORY_MB); send a shorter recording or fewer "
                 "channels")
     except ValueError as exc:   # the features/models packages' messages for bad recordings
-        return ("input", 422, str(exc))
+        return ("input", "invalid", str(exc))
 
 
 def _work(kind: str, body: bytes, filename: str, query: dict[str, Any], version: str | None) -> tuple:

@@ -13,8 +13,8 @@ import copy
 import math
 from typing import Any
 
-from .api.errors import InputError
 from .core.config import Settings
+from .errors import InputError
 
 #: Retraining sweep used unless the request overrides a table/key (a small, fast default).
 RETRAIN_DEFAULT_SWEEP: dict[str, Any] = {

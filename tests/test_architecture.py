@@ -157,3 +157,22 @@ def test_no_bare_package_names(pattern):
                 for m in _BARE_STRING.finditer(p.read_text(encoding="utf-8"))
                 if (ROOT / m.group(1) / f"{m.group(2)}.py").exists() or (ROOT / m.group(1) / m.group(2)).is_dir()]
     assert not bad, "bare imports (use rotordiag.<package>):\n" + "\n".join(bad)
+
+
+#: service modules below the API layer: they raise ``service.errors`` domain exceptions and
+#: never touch the web framework (issue 11, item 5); HTTP statuses are chosen in service/api only
+SERVICE_DOMAIN_MODULES = ("errors", "parsing", "work", "pool", "inference", "jobs", "store", "state", "schemas")
+
+
+@pytest.mark.parametrize("name", SERVICE_DOMAIN_MODULES)
+def test_service_domain_modules_do_not_use_the_web_framework(name):
+    tree = ast.parse((ROOT / "service" / f"{name}.py").read_text())
+    used = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            used |= {a.name.split(".")[0] for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            used.add(node.module.split(".")[0])
+    assert not used & {"fastapi", "starlette"}, (
+        f"service/{name}.py imports {sorted(used & {'fastapi', 'starlette'})}: raise service.errors exceptions "
+        "and let service/api/errors.py give them HTTP statuses")

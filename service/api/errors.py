@@ -8,7 +8,6 @@ request named a version), a request over the time limit → 422, a worker that d
 """
 from __future__ import annotations
 
-import math
 from typing import Any, NoReturn
 
 from fastapi import FastAPI, HTTPException, Request
@@ -16,13 +15,10 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from pydantic import ValidationError
 
+from ..errors import InputError, RequestInvalid, validation_detail
 
-class InputError(ValueError):
-    """A client mistake found by the service itself (mapped to ``status_code``, 422 by default)."""
-
-    def __init__(self, message: str, status_code: int = 422) -> None:
-        super().__init__(message)
-        self.status_code = status_code
+#: HTTP status of each kind of client mistake (:class:`service.errors.InputError`)
+STATUS_OF_KIND = {"invalid": 422, "malformed": 400, "unsupported_type": 415, "not_found": 404, "conflict": 409}
 
 
 def raise_worker_error(answer: Any, *, version_given: bool = False) -> NoReturn:
@@ -42,39 +38,17 @@ def raise_worker_error(answer: Any, *, version_given: bool = False) -> NoReturn:
         limit = answer.args[0] if answer.args else "the"
         raise InputError(f"the recording took longer than the limit of {limit:g} s to analyse and was stopped; "
                          "send a shorter recording or fewer channels (or raise ROTORDIAG_DIAGNOSIS_TIMEOUT_S "
-                         "on the server)", 422)
+                         "on the server)")
     if isinstance(answer, WorkerCrashed):
         raise HTTPException(503, str(answer))
     tag = answer[0]
     if tag == "input":
         raise InputError(answer[2], answer[1])
-    if tag == "http":
-        raise HTTPException(answer[1], answer[2])
+    if tag == "request":
+        raise RequestInvalid(answer[1])
     if tag == "unavailable":
-        raise (InputError(answer[1], 404) if version_given else HTTPException(503, answer[1]))
+        raise (InputError(answer[1], "not_found") if version_given else HTTPException(503, answer[1]))
     raise RuntimeError(f"unexpected answer from a diagnosis worker: {tag!r}")
-
-
-def _echoable(value: Any) -> bool:
-    """A value safe to echo in JSON: no NaN or infinity (JSON has none; rendering one would fail)."""
-    if isinstance(value, float):
-        return math.isfinite(value)
-    return isinstance(value, (int, bool, type(None))) or (isinstance(value, str) and len(value) <= 80)
-
-
-def validation_detail(exc: ValidationError | RequestValidationError, prefix: tuple = ()) -> list[dict[str, Any]]:
-    """FastAPI-style error list, with long inputs (waveforms) cut out of the echo."""
-    out = []
-    for err in exc.errors():
-        item = {"loc": list(prefix) + list(err.get("loc", ())), "msg": err.get("msg", ""), "type": err.get("type", "")}
-        inp = err.get("input")
-        if _echoable(inp):
-            item["input"] = inp
-        ctx = err.get("ctx")
-        if ctx:
-            item["ctx"] = {k: (v if _echoable(v) else str(v)) for k, v in ctx.items()}
-        out.append(item)
-    return out
 
 
 def install_error_handlers(app: FastAPI) -> None:
@@ -90,4 +64,8 @@ def install_error_handlers(app: FastAPI) -> None:
 
     @app.exception_handler(InputError)
     async def _input_error(request: Request, exc: InputError) -> JSONResponse:
-        return JSONResponse(status_code=exc.status_code, content={"detail": str(exc)})
+        return JSONResponse(status_code=STATUS_OF_KIND[exc.kind], content={"detail": str(exc)})
+
+    @app.exception_handler(RequestInvalid)
+    async def _request_invalid(request: Request, exc: RequestInvalid) -> JSONResponse:
+        return JSONResponse(status_code=422, content={"detail": exc.errors})

@@ -17,8 +17,8 @@ from fastapi import APIRouter, Query, Request
 from fastapi.responses import FileResponse
 
 from ..api.deps import DiagnoseKeyDep, StateDep
-from ..api.errors import InputError
 from ..api.routes.diagnose import ReaderQueryDep, recording_answer  # same body forms and messages as /diagnose
+from ..errors import InputError
 from .plotdata import plot_data
 
 #: the page's files, installed with the package (found through importlib.resources)
@@ -50,7 +50,7 @@ def static(name: str) -> FileResponse:
     """``app.js`` or ``style.css``."""
     media = _STATIC.get(name)
     if media is None:
-        raise InputError(f"no static file {name!r}; the page uses {sorted(_STATIC)}", 404)
+        raise InputError(f"no static file {name!r}; the page uses {sorted(_STATIC)}", "not_found")
     return FileResponse(STATIC_DIR / name, media_type=media,
                         headers={"X-Content-Type-Options": "nosniff", "Cache-Control": "no-cache"})
 

@@ -40,7 +40,7 @@ def history(
     rows = asset_history(session, asset_id, limit, since)
     if not rows and since is None:
         raise InputError(f"no diagnosis stored for asset {asset_id!r}; POST /diagnose with \"asset_id\": "
-                         f"\"{asset_id}\" to start its history", 404)
+                         f"\"{asset_id}\" to start its history", "not_found")
     points = [AssetPoint(time=r.created_at, severity=r.severity, misalignment=r.misalignment,
                          misalignment_low=r.misalignment_low, misalignment_high=r.misalignment_high,
                          speed_rpm=r.speed_rpm, ood=r.ood, model_version=r.model_version, plant=r.plant,

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import asyncio
+import json
 from typing import Annotated, Any, Literal
 
 import anyio
@@ -14,7 +15,7 @@ from ...parsing import checked, parse_batch, parse_body, recording_from_model
 from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
 from ...store import store_diagnosis
 from ..deps import DiagnoseKeyDep, JsonBodyDep, ModelsDep, StateDep
-from ..errors import InputError, raise_worker_error
+from ..errors import STATUS_OF_KIND, InputError, RequestInvalid, raise_worker_error
 from ..routing import FiniteJSONRoute
 
 router = APIRouter(tags=["diagnose"], route_class=FiniteJSONRoute)
@@ -104,7 +105,7 @@ async def _read_body(request: Request) -> tuple[str, bytes, str]:
             await form.close()
     raise InputError(
         f"unsupported Content-Type {media or '(none)'!r}: send application/json (DiagnoseRequest), "
-        "application/octet-stream (an NPY array) or multipart/form-data (a CSV/NPY/HDF5 file in part 'file')", 415)
+        "application/octet-stream (an NPY array) or multipart/form-data (a CSV/NPY/HDF5 file in part 'file')", "unsupported_type")
 
 
 async def _read_form(request: Request) -> Any:
@@ -121,8 +122,8 @@ async def _read_form(request: Request) -> Any:
         if "maximum size" in msg:      # a part without a file name is a form field, limited to 1 MiB
             raise InputError("multipart upload: the part is not a file (its filename is missing or empty); send "
                              "the waveform file in a part named 'file' with a file name ending .csv, .npy, .h5, "
-                             ".hdf5 or .json", 400) from None
-        raise InputError(f"multipart upload cannot be read: {msg}", 400) from None
+                             ".hdf5 or .json", "malformed") from None
+        raise InputError(f"multipart upload cannot be read: {msg}", "malformed") from None
 
 
 async def in_worker(state, name: str, *args: Any) -> tuple:
@@ -164,7 +165,7 @@ def _diagnose_sync(state, recording, asset_id: str | None, plant: str | None, ve
         verdict = state.models.diagnose(recording, version)
     except ModelUnavailable as exc:
         if version is not None:
-            raise InputError(str(exc), 404) from None
+            raise InputError(str(exc), "not_found") from None
         raise HTTPException(503, str(exc)) from None
     except ValueError as exc:  # the features/models packages' messages for bad recordings
         raise InputError(str(exc)) from None
@@ -291,7 +292,9 @@ async def _batch_item(state, i: int, record: dict[str, Any], version: str | None
     try:
         _, verdict, asset_id, plant = await in_worker(state, "record", record, version)
     except InputError as exc:
-        return BatchItem(index=i, status_code=exc.status_code, error=str(exc))
+        return BatchItem(index=i, status_code=STATUS_OF_KIND[exc.kind], error=str(exc))
+    except RequestInvalid as exc:
+        return BatchItem(index=i, status_code=422, error=json.dumps(exc.errors))
     except HTTPException as exc:
         if exc.status_code >= 500:
             raise
@@ -309,7 +312,7 @@ def _batch_sync(state, records, model_version: str | None) -> list[BatchItem]:
             verdict = _diagnose_sync(state, recording, rec.asset_id, rec.plant, model_version)
             items.append(BatchItem(index=i, status_code=200, result=verdict))
         except InputError as exc:
-            items.append(BatchItem(index=i, status_code=exc.status_code, error=str(exc)))
+            items.append(BatchItem(index=i, status_code=STATUS_OF_KIND[exc.kind], error=str(exc)))
         except HTTPException as exc:
             if exc.status_code >= 500:
                 raise

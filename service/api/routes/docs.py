@@ -45,7 +45,7 @@ def install_docs(app: FastAPI) -> None:
     def asset(name: str) -> FileResponse:
         found = _ASSETS.get(name)
         if found is None:
-            raise InputError(f"no documentation asset {name!r}", 404)
+            raise InputError(f"no documentation asset {name!r}", "not_found")
         folder, media = found
         return FileResponse(docs_static_dir() / folder / name, media_type=media,
                             headers={"Cache-Control": "public, max-age=86400"})

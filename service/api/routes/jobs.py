@@ -56,7 +56,7 @@ def list_jobs(jobs: JobsDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100,
 def get_job(job_id: _JobId, jobs: JobsDep) -> JobOut:
     job = jobs.get(job_id)
     if job is None:
-        raise InputError(f"no job with id {job_id!r}", 404)
+        raise InputError(f"no job with id {job_id!r}", "not_found")
     return _out(job)
 
 
@@ -67,7 +67,7 @@ def resume_job(job_id: _JobId, jobs: JobsDep) -> JobOut:
     try:
         job = jobs.resume(job_id)
     except ValueError as exc:
-        raise InputError(str(exc), 409) from None
+        raise InputError(str(exc), "conflict") from None
     if job is None:
-        raise InputError(f"no job with id {job_id!r}", 404)
+        raise InputError(f"no job with id {job_id!r}", "not_found")
     return _out(job)

@@ -27,5 +27,5 @@ def activate(version: Annotated[str, Path(min_length=1, max_length=128)], models
         models.activate(version)
     except KeyError:
         known = [v["version"] for v in models.versions()]
-        raise InputError(f"model version {version!r} is not registered; known versions: {known}", 404) from None
+        raise InputError(f"model version {version!r} is not registered; known versions: {known}", "not_found") from None
     return {"active": models.active_version(), "versions": models.versions()}
