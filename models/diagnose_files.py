@@ -158,15 +158,14 @@ def verdict_row(path: Path, verdict: Any, res: ReadResult, output_units: str = "
 
 def verdict_json(path: Path, verdict: Any, res: ReadResult, output_units: str = "um") -> dict[str, Any]:
     """The verdict as JSON (``Verdict.to_dict``) with the file, its format, the reader's notes and the
-    dataset truth; with ``output_units="mil"`` the offset fields are ``offset_mil`` / ``offset_interval_mil``."""
-    d: dict[str, Any] = {"file": str(path), "format": res.format, **verdict.to_dict(), "notes": res.notes}
+    dataset truth, its lengths in ``output_units`` (:func:`rotordiag.models.output_units.verdict_in_units`,
+    the same conversion as the API's ``output_units``: ``offset_mil``, ``…_mil_pp``, evidence in mils)."""
+    from .output_units import verdict_in_units
+
+    d: dict[str, Any] = {"file": str(path), "format": res.format,
+                         **verdict_in_units(verdict.to_dict(), output_units), "notes": res.notes}
     if res.truth:
         d["truth"] = res.truth
-    um_to(None, output_units)
-    if output_units.strip().lower().startswith("mil"):
-        off, iv = d.pop("offset_um", None), d.pop("offset_interval_um", None)
-        d["offset_mil"] = None if off is None else um_to(off, "mil")
-        d["offset_interval_mil"] = None if iv is None else [um_to(v, "mil") for v in iv]
     return d
 
 

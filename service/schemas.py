@@ -206,6 +206,7 @@ class BearingOut(BaseModel):
     probe_angles_deg: list[float] = Field(..., description="The two probes' mounting angles, degrees from "
                                           "horizontal +x toward vertical +y.")
     clearance_um: float | None = Field(None, description="Radial clearance used, µm (null: unknown).")
+    clearance_mil: float | None = Field(None, description="`clearance_um` in mils, when `output_units=mil`.")
     features: dict[str, float | None] = Field(
         ..., description="This bearing's features by name (`b{n}_...`; units in the names: `_um_pp` micrometres "
         "peak-to-peak, `_deg` degrees, `_per_c` divided by the clearance, `_ratio`/`_frac` unitless; "
@@ -261,7 +262,12 @@ class DiagnoseResponse(BaseModel):
                                                       description="[low, high] interval of Δ at `interval_level` "
                                                       "(null: unbounded on that side).")
     interval_level: float | None = Field(..., description="Nominal coverage of the Δ interval (e.g. 0.9).")
+    output_units: Literal["um", "mil"] = Field("um", description="Units of the lengths in this answer "
+                                               "(`?output_units=`); the field names say them too.")
     offset_um: float | None = Field(None, description="Offset δ = Δ·c in micrometres (only when `clearance_um` was given).")
+    offset_mil: float | None = Field(None, description="`offset_um` in mils, when `output_units=mil`.")
+    offset_interval_mil: list[float | None] | None = Field(None, description="`offset_interval_um` in mils, "
+                                                           "when `output_units=mil`.")
     offset_interval_um: list[float | None] | None = Field(None, description="[low, high] of δ in micrometres "
                                                           "(null inside: unbounded on that side).")
     motion_type: str | None = Field(None, description="Motion type of the shaft (e.g. `period-1`, `quasi-periodic`), "

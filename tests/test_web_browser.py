@@ -182,6 +182,13 @@ def _wait(driver, predicate, timeout=180, what="condition"):
                          f"{driver.find_element('id', 'form-error').text!r}")
 
 
+def Select(element):
+    """selenium's Select (imported here: the module fails with a clear message when selenium is missing)."""
+    from selenium.webdriver.support.select import Select as _Select
+
+    return _Select(element)
+
+
 def _open(driver, base, width=1366, height=900):
     driver.set_window_size(width, height)
     driver.get(base + "/")
@@ -444,3 +451,62 @@ def test_api_docs_render_offline(server, browser):
     origins = browser.execute_script(
         "return performance.getEntriesByType('resource').map((r) => new URL(r.name).origin)")
     assert origins and set(origins) == {server}
+
+
+def test_try_an_example_recording(server, browser):
+    """The shipped examples are listed and diagnosed through the same upload path as a user's file."""
+    _open(browser, server)
+    browser.find_element("css selector", "input[name=source][value=example]").click()
+    assert browser.find_element("id", "example-fields").is_displayed()
+    assert not browser.find_element("id", "file-fields").is_displayed()
+    _wait(browser, lambda d: len(d.find_elements("css selector", "#example option")) >= 6, 30, "the example list")
+    names = [o.get_attribute("value") for o in browser.find_elements("css selector", "#example option")]
+    assert {"aligned.csv", "misaligned.csv", "misaligned_2560hz.npy", "misaligned.h5", "misaligned.uff"} <= set(names)
+    for name, severity in (("aligned.csv", "aligned"), ("misaligned_2560hz.npy", "severe")):
+        Select(browser.find_element("id", "example")).select_by_value(name)
+        browser.execute_script("document.body.dataset.state = 'submitted'")
+        browser.find_element("id", "diagnose-btn").click()
+        state = _wait(browser, lambda d: d.execute_script(
+            "const s = document.body.dataset.state; return s === 'done' || s === 'error' ? s : null"), what=name)
+        assert state == "done", browser.find_element("id", "form-error").text
+        verdict = browser.execute_script("return window.rotordiag.state.verdict")
+        assert verdict["model_severity"] == severity or verdict["severity"] == severity, (name, verdict["severity"])
+    _screenshot(browser, "example-npy")
+
+
+def test_form_errors_are_in_plain_words(server, browser, tmp_path):
+    """A file without a sample rate asks for the form's field, not for a query parameter."""
+    _open(browser, server)
+    arr = tmp_path / "bare.npy"
+    np.save(arr, np.random.default_rng(3).normal(size=(8, 4096)))
+    _submit_file(browser, arr, expect="error")
+    text = browser.find_element("id", "form-error").text
+    assert "Fill in the sample rate (Hz)" in text, text
+    assert "sample_rate_hz" not in text and "CLI" not in text, text
+
+
+def test_lengths_in_mils(server, browser):
+    """With "Lengths in: mil" the offset, the evidence and the plot axes are in mils."""
+    _open(browser, server)
+    browser.find_element("css selector", "input[name=source][value=example]").click()
+    _wait(browser, lambda d: len(d.find_elements("css selector", "#example option")) >= 6, 30, "the example list")
+    Select(browser.find_element("id", "example")).select_by_value("misaligned.csv")
+    Select(browser.find_element("id", "length-units")).select_by_value("mil")
+    clearance = browser.find_element("id", "clearance")
+    clearance.clear()
+    clearance.send_keys("350")
+    browser.execute_script("document.body.dataset.state = 'submitted'")
+    browser.find_element("id", "diagnose-btn").click()
+    state = _wait(browser, lambda d: d.execute_script(
+        "const s = document.body.dataset.state; return s === 'done' || s === 'error' ? s : null"), what="the verdict")
+    assert state == "done", browser.find_element("id", "form-error").text
+    verdict = browser.execute_script("return window.rotordiag.state.verdict")
+    assert verdict["output_units"] == "mil" and verdict["offset_mil"] > 0
+    assert browser.find_element("id", "verdict-offset").text.split()[1] == "mil"
+    assert "µm" not in browser.find_element("id", "verdict-evidence").text
+    labels = browser.execute_script(
+        "return [...document.querySelectorAll('canvas')].filter((c) => c._spec).map((c) => c._spec.y.label)")
+    assert labels and all("µm" not in lab for lab in labels) and any("mil" in lab for lab in labels), labels
+    _screenshot(browser, "lengths-in-mils")
+    reasons = browser.find_element("id", "verdict-reasons").text
+    assert "speed_rpm" not in reasons and "keyphasor_times_s" not in reasons, reasons

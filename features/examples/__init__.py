@@ -20,7 +20,7 @@ from __future__ import annotations
 from importlib.resources import files
 from pathlib import Path
 
-__all__ = ["example_path", "list_examples"]
+__all__ = ["example_options", "example_path", "list_examples"]
 
 _ENDINGS = (".csv", ".npy", ".h5", ".uff")
 
@@ -42,3 +42,23 @@ def example_path(name: str) -> Path:
     if name not in list_examples() and name != "misaligned_2560hz.json":
         raise ValueError(f"no example recording {name!r}; the examples are {list_examples()}")
     return Path(str(files(__name__).joinpath(name)))
+
+
+def example_options(name: str) -> dict[str, object]:
+    """What an example needs beyond its file: the reader options of its sidecar ``<stem>.json``.
+
+    The NPY example carries no sample rate; its sidecar says ``{"sample_rate_hz": 2560}`` (the
+    CLI reads sidecars itself; the web page and API clients pass these as query parameters).
+
+    Raises
+    ------
+    ValueError
+        For a name that is not one of :func:`list_examples`.
+    """
+    import json
+
+    path = example_path(name)
+    sidecar = path.with_suffix(".json")
+    if path.suffix == ".json" or not sidecar.is_file():
+        return {}
+    return dict(json.loads(sidecar.read_text()))

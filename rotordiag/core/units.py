@@ -89,3 +89,58 @@ def um_to(values, units: str):
     if values is None:
         return None
     return values if key == "um" else values / UM_PER_MIL
+
+
+def _length_key(key: str, units: str) -> tuple[str, float] | None:
+    """``(new_key, divisor)`` for a key whose name carries a µm unit token (``offset_um``,
+    ``b1_2x_major_um_pp``, ``b1_orbit12_area_um2``), else ``None``."""
+    tokens = key.split("_")
+    for i, tok in enumerate(tokens):
+        if tok in ("um", "um2"):
+            power = 2 if tok == "um2" else 1
+            tokens[i] = units + ("2" if power == 2 else "")
+            return "_".join(tokens), (UM_PER_MIL if units == "mil" else 1.0) ** power
+    return None
+
+
+def lengths_in(obj, units: str):
+    """A copy of a JSON-like verdict with every µm-named length expressed in ``units``.
+
+    Keys whose name carries the unit (``offset_um`` → ``offset_mil``, ``b2_1x_major_um_pp`` →
+    ``b2_1x_major_mil_pp``, ``…_area_um2`` → ``…_area_mil2``) are renamed and their numbers
+    converted — also inside lists and inside dicts whose own keys carry no unit (e.g.
+    ``amplitudes_um_pp: {"b2": 3.1}``). Everything else, NaN and ``None`` pass unchanged;
+    ``units="um"`` returns ``obj`` itself.
+
+    Parameters
+    ----------
+    obj : dict, list or scalar
+    units : {"um", "mil"}
+
+    Raises
+    ------
+    ValueError
+        For units outside :data:`OUTPUT_UNITS`.
+    """
+    um_to(None, units)  # checks the name
+    key_units = "mil" if units.strip().lower().startswith("mil") else "um"
+    if key_units == "um":
+        return obj
+
+    def convert(value, factor):
+        if isinstance(value, dict):
+            out = {}
+            for k, v in value.items():
+                renamed = _length_key(k, key_units) if isinstance(k, str) else None
+                if renamed is not None:
+                    out[renamed[0]] = convert(v, renamed[1])
+                else:
+                    out[k] = convert(v, factor)
+            return out
+        if isinstance(value, list):
+            return [convert(v, factor) for v in value]
+        if factor is not None and isinstance(value, (int, float)) and not isinstance(value, bool):
+            return value / factor
+        return value
+
+    return convert(obj, None)

@@ -55,6 +55,40 @@ def static(name: str) -> FileResponse:
                         headers={"X-Content-Type-Options": "nosniff", "Cache-Control": "no-cache"})
 
 
+#: what each shipped example is (features/examples; the page's "try an example")
+_EXAMPLE_TITLES = {
+    "aligned": "aligned machine (Δ = 0)",
+    "misaligned": "severely misaligned (Δ = 0.5)",
+    "misaligned_2560hz": "severely misaligned (Δ = 0.5), bare array",
+}
+_EXAMPLE_FORMATS = {".csv": "CSV with a time column and b2@45-style header", ".h5": "HDF5 with its channel table",
+                    ".npy": "NPY, sample rate given separately", ".uff": "universal file (UFF 58b)"}
+
+
+@router.get("/ui/examples")
+def examples() -> list[dict[str, Any]]:
+    """The example recordings shipped with the package: name, title and the query they need."""
+    from rotordiag.features.examples import example_options, list_examples
+
+    out = []
+    for name in list_examples():
+        stem, ext = Path(name).stem, Path(name).suffix
+        out.append({"name": name, "title": f"{_EXAMPLE_TITLES.get(stem, stem)} — {_EXAMPLE_FORMATS.get(ext, ext)}",
+                    "query": example_options(name)})
+    return out
+
+
+@router.get("/ui/examples/{name}")
+def example_file(name: str) -> FileResponse:
+    """One example recording's bytes (only names from :func:`examples`; no path is built from the request)."""
+    from rotordiag.features.examples import example_path, list_examples
+
+    if name not in list_examples():
+        raise InputError(f"no example recording {name!r}; the examples are {list_examples()}", "not_found")
+    return FileResponse(example_path(name), media_type="application/octet-stream", filename=name,
+                        headers={"X-Content-Type-Options": "nosniff", "Cache-Control": "no-cache"})
+
+
 def _plot_sync(recording: Any) -> dict[str, Any]:
     try:
         return plot_data(recording)

@@ -10,6 +10,8 @@ import anyio.to_thread
 from fastapi import APIRouter, Depends, HTTPException, Query, Request
 from fastapi.concurrency import run_in_threadpool
 
+from rotordiag.models.output_units import verdict_in_units
+
 from ...inference import ModelUnavailable
 from ...parsing import checked, parse_batch, parse_body, recording_from_model
 from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
@@ -174,6 +176,13 @@ def _diagnose_sync(state, recording, asset_id: str | None, plant: str | None, ve
     return verdict
 
 
+#: ``?output_units=`` of the diagnosis routes
+OutputUnitsQuery = Annotated[Literal["um", "mil"], Query(
+    description="Units of every length in the answer: `um` (micrometres, default) or `mil` (0.001 in = 25.4 µm). "
+    "With `mil` the µm-named fields come renamed (`offset_mil`, `b2_1x_major_mil_pp`, …) and the evidence texts "
+    "are in mils; pk-pk vs 0-pk stays in the names.")]
+
+
 @router.post(
     "/diagnose", response_model=DiagnoseResponse, responses=_ERRORS, openapi_extra=_BINARY_BODY,
     dependencies=[DiagnoseKeyDep],
@@ -216,15 +225,18 @@ async def diagnose(
     model_version: Annotated[str | None, Query(min_length=1, max_length=128,
                                                description="Diagnose with this registered version instead of the "
                                                "active one.")] = None,
+    output_units: OutputUnitsQuery = "um",
 ) -> dict:
     query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=asset_id,
                  plant=plant, units=units, bearings=bearings, angles_deg=angles_deg,
                  keyphasor_times_s=keyphasor_times_s, sample_index=sample_index, **reader)
     kind, body, filename = await _read_body(request)
     if state.pool is not None:
-        return await _diagnose_in_pool(state, kind, body, filename, query, model_version)
-    return await anyio.to_thread.run_sync(_parse_and_diagnose, state, kind, body, filename, query, model_version,
-                                          limiter=_diagnosis_limiter(state))
+        verdict = await _diagnose_in_pool(state, kind, body, filename, query, model_version)
+    else:
+        verdict = await anyio.to_thread.run_sync(_parse_and_diagnose, state, kind, body, filename, query,
+                                                 model_version, limiter=_diagnosis_limiter(state))
+    return verdict_in_units(verdict, output_units)   # stored in µm; answered in the units asked for
 
 
 async def _diagnose_in_pool(state, kind: str, body: bytes, filename: str, query: dict[str, Any],
@@ -264,7 +276,8 @@ _BATCH_BODY = {"requestBody": {"required": True, "content": {
     "ROTORDIAG_MAX_BATCH_RECORDS.",
 )
 async def diagnose_batch(request: Request, state: StateDep,
-                         model_version: Annotated[str | None, Query(min_length=1, max_length=128)] = None) -> dict:
+                         model_version: Annotated[str | None, Query(min_length=1, max_length=128)] = None,
+                         output_units: OutputUnitsQuery = "um") -> dict:
     """The body (a ``BatchRequest``) is parsed in a diagnosis worker, not here; the records are then
     diagnosed one per worker call, in parallel across the workers."""
     body = await request.body()
@@ -279,6 +292,10 @@ async def diagnose_batch(request: Request, state: StateDep,
         _check_batch_size(len(batch.records), cap)
         items = await anyio.to_thread.run_sync(_batch_sync, state, batch.records, model_version,
                                                limiter=_diagnosis_limiter(state))
+    if output_units != "um":
+        for it in items:
+            if it.result is not None:
+                it.result = DiagnoseResponse.model_validate(verdict_in_units(it.result.model_dump(), output_units))
     return {"count": len(items), "n_ok": sum(it.status_code == 200 for it in items), "items": items}
 
 

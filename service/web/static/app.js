@@ -7,7 +7,7 @@
 "use strict";
 (function () {
   const $ = (id) => document.getElementById(id);
-  const state = { verdict: null, plots: null, history: null, models: null, pending: 0 };
+  const state = { verdict: null, plots: null, history: null, models: null, examples: [], pending: 0 };
 
   // ---- formatting ---------------------------------------------------------------------------
   function num(v, digits = 3) {
@@ -32,15 +32,40 @@
   function show(node, on) { node.hidden = !on; }
   function setError(node, text) { node.textContent = text || ""; show(node, Boolean(text)); }
 
+  // the form's words for the service's parameter names (messages are written for API clients too)
+  const FIELD_WORDS = {
+    sample_rate_hz: "the sample rate (Hz)", speed_rpm: "the running speed (r/min)", clearance_um: "the bearing clearance (µm)",
+    keyphasor_times_s: "keyphasor pulse times", units: "the units of the waveforms", bearings: "the bearing of each channel",
+    angles_deg: "the probe angle of each channel", asset_id: "the asset id", sample_index: "the sample index",
+    sensitivity_v_per_mm: "the probe sensitivity (V/mm)", gap_voltage_v: "the gap voltage (V)",
+  };
+  // whole messages an engineer meets first, said as what to do in this form
+  const PLAIN = [
+    [/^sample rate unknown\b.*/i, "Fill in the sample rate (Hz): this file does not say it (no time column or sample-rate attribute)."],
+    [/^cannot estimate the running speed\b[^;]*;?.*/i,
+      (m) => `${m.split(";")[0].replace(/^cannot/, "Cannot")}. Fill in the running speed (r/min).`],
+  ];
+  function plainWords(text) {
+    let t = String(text);
+    for (const [re, to] of PLAIN) if (re.test(t)) return typeof to === "function" ? to(t) : to;
+    t = t.replace(/\s*\((?:CLI|API)[^)]*\)/g, "");                 // "(CLI --sample-rate-hz, API sample_rate_hz=)"
+    t = t.replace(/\bgive ([a-z_]+) or ([a-z_]+)\b/g, (m, a, b) => (a in FIELD_WORDS && b in FIELD_WORDS)
+      ? `fill in ${FIELD_WORDS[a]} or ${FIELD_WORDS[b]}` : m);
+    return t.replace(/\b([a-z]+(?:_[a-z]+)+)=?/g, (m, name) => FIELD_WORDS[name] || m);
+  }
+
   function errorText(status, body) {
     let d = body && body.detail !== undefined ? body.detail : body;
     if (Array.isArray(d)) {
       d = d.map((e) => {
-        const loc = (e.loc || []).filter((p) => p !== "body" && p !== "query").join(" → ");
-        return (loc ? loc + ": " : "") + (e.msg || JSON.stringify(e));
+        const loc = (e.loc || []).filter((p) => p !== "body" && p !== "query");
+        const where = loc.map((p) => FIELD_WORDS[p] || p).join(" → ");
+        return (where ? where + ": " : "") + (e.msg || JSON.stringify(e));
       }).join("\n");
     } else if (typeof d !== "string") {
       d = JSON.stringify(d);
+    } else {
+      d = plainWords(d);
     }
     const what = {
       400: "The request is malformed", 404: "Not found", 413: "The upload is too large for this server",
@@ -312,25 +337,33 @@
   // ---- orbits and spectra -------------------------------------------------------------------------
   const BEARING_NAMES = { 1: "generator, far end", 2: "generator, coupling end", 3: "exciter, coupling end", 4: "exciter, far end" };
 
+  // lengths shown in µm or mils (the form's "Lengths in" choice); the service's arrays are µm
+  function lengthUnit() {
+    return $("length-units").value === "mil" ? { k: 1 / 25.4, name: "mil" } : { k: 1, name: "µm" };
+  }
+  function scaled(a) { const k = lengthUnit().k; return k === 1 ? a : a.map((v) => (v === null ? null : v * k)); }
+
   function orbitSpec(b) {
-    const o = b.orbit, f = o.filtered, series = [];
+    const o = b.orbit, f = o.filtered, series = [], L = lengthUnit();
     const on = (id) => $(id).checked;
     const arrays = [];
     if (on("show-raw")) {
-      series.push({ x: o.raw_x_um, y: o.raw_y_um, color: COLORS.raw, width: 1 });
-      series.push({ x: o.raw_marks_um.map((p) => p[0]), y: o.raw_marks_um.map((p) => p[1]), color: "#222", mode: "markers", size: 3 });
-      arrays.push(o.raw_x_um, o.raw_y_um);
+      const rx = scaled(o.raw_x_um), ry = scaled(o.raw_y_um);
+      series.push({ x: rx, y: ry, color: COLORS.raw, width: 1 });
+      series.push({ x: scaled(o.raw_marks_um.map((p) => p[0])), y: scaled(o.raw_marks_um.map((p) => p[1])), color: "#222", mode: "markers", size: 3 });
+      arrays.push(rx, ry);
     }
     for (const [key, id] of [["1x", "show-1x"], ["2x", "show-2x"], ["1x2x", "show-1x2x"]]) {
       if (!on(id)) continue;
-      series.push({ x: f[key].x_um, y: f[key].y_um, color: COLORS[key], width: 2, arrow: true });
-      series.push({ x: [f[key].x_um[0]], y: [f[key].y_um[0]], color: COLORS[key], mode: "markers", size: 4.5, outline: "#000" });
-      arrays.push(f[key].x_um, f[key].y_um);
+      const fx = scaled(f[key].x_um), fy = scaled(f[key].y_um);
+      series.push({ x: fx, y: fy, color: COLORS[key], width: 2, arrow: true });
+      series.push({ x: [fx[0]], y: [fy[0]], color: COLORS[key], mode: "markers", size: 4.5, outline: "#000" });
+      arrays.push(fx, fy);
     }
     let r = 0;
     for (const a of arrays) for (const v of a) if (v !== null) r = Math.max(r, Math.abs(v));
     r = r > 0 ? r * 1.08 : 1;
-    return { x: { label: "x (horizontal), µm", min: -r, max: r }, y: { label: "y (vertical, up), µm", min: -r, max: r },
+    return { x: { label: `x (horizontal), ${L.name}`, min: -r, max: r }, y: { label: `y (vertical, up), ${L.name}`, min: -r, max: r },
       equal: true, zeroLines: true, series };
   }
 
@@ -345,23 +378,24 @@
   function spectrumSpecs(b, plots, log) {
     const f1 = plots.speed_rpm / 60, wb = plots.whirl_band_orders;
     const whirl = { from: wb[0] * f1, to: wb[1] * f1, color: "#e8590c", label: "oil whirl" };
-    const hs = b.half_spectrum, fs = b.full_spectrum;
-    const amps = hs.amp_um_pp.concat([fs.amp_um_pp]);
+    const hs = b.half_spectrum, fs = b.full_spectrum, L = lengthUnit();
+    const hamp = hs.amp_um_pp.map(scaled), famp = scaled(fs.amp_um_pp);
+    const amps = hamp.concat([famp]);
     let ymax = 0;
     for (const a of amps) for (const v of a) if (v !== null) ymax = Math.max(ymax, v);
     ymax = ymax > 0 ? ymax : 1;
-    const y = log ? { label: "amplitude, µm pk-pk", min: ymax * 1e-4, max: ymax * 1.5, log: true }
-      : { label: "amplitude, µm pk-pk", min: 0, max: ymax * 1.12 };
+    const y = log ? { label: `amplitude, ${L.name} pk-pk`, min: ymax * 1e-4, max: ymax * 1.5, log: true }
+      : { label: `amplitude, ${L.name} pk-pk`, min: 0, max: ymax * 1.12 };
     const fmax = hs.freq_hz.length ? hs.freq_hz[hs.freq_hz.length - 1] : 4 * f1;
     const half = {
       x: { label: "frequency, Hz", min: 0, max: fmax }, y: { ...y }, vbands: [whirl], vlines: orderLines(f1, [1]),
-      series: hs.amp_um_pp.map((a, i) => ({ x: hs.freq_hz, y: a, mode: "stems", width: 2, dx: i ? 1.5 : -1.5,
+      series: hamp.map((a, i) => ({ x: hs.freq_hz, y: a, mode: "stems", width: 2, dx: i ? 1.5 : -1.5,
         color: i ? COLORS.probe1 : COLORS.probe0, label: `probe at ${num(b.probe_angles_deg[i])}°` })),
     };
     const full = {
       x: { label: "frequency, Hz (− reverse, + forward whirl)", min: -fmax, max: fmax }, y: { ...y },
       vbands: [whirl], vlines: orderLines(f1, [-1, 1]), zeroLines: true,
-      series: [{ x: fs.freq_hz, y: fs.amp_um_pp, mode: "stems", width: 1.6, color: COLORS.full, label: "full spectrum of x + jy" }],
+      series: [{ x: fs.freq_hz, y: famp, mode: "stems", width: 1.6, color: COLORS.full, label: "full spectrum of x + jy" }],
     };
     return [half, full];
   }
@@ -433,7 +467,7 @@
     st.textContent = STATUS_TEXT[status] || status;
     st.className = "status " + status;
     const reasons = v.reasons || [];
-    $("verdict-reasons").replaceChildren(...reasons.map((r) => el("li", { class: r.status, text: r.message })));
+    $("verdict-reasons").replaceChildren(...reasons.map((r) => el("li", { class: r.status, text: plainWords(r.message) })));
     show($("verdict-reasons-box"), reasons.length > 0);
     const ev = $("verdict-evidence").tBodies[0];
     ev.replaceChildren(...(v.evidence || []).map((e) => el("tr", {}, el("td", { text: e.scope }), el("td", { text: e.name }),
@@ -449,7 +483,9 @@
     sev.className = "badge " + (!inconclusive && SEVERITY_COLORS[v.severity] ? v.severity : "");
     const lvl = v.interval_level ? `${Math.round(v.interval_level * 100)} % interval` : "interval";
     $("verdict-delta").textContent = `${fixed(v.misalignment, 3)} (${intervalText(lvl, v.misalignment_interval, 3, "")})`;
-    if (v.offset_um !== null && v.offset_um !== undefined) {
+    if (v.output_units === "mil" && v.offset_mil !== null && v.offset_mil !== undefined) {
+      $("verdict-offset").textContent = `${fixed(v.offset_mil, 2)} mil (${intervalText(lvl, v.offset_interval_mil, 2, " mil")})`;
+    } else if (v.offset_um !== null && v.offset_um !== undefined) {
       $("verdict-offset").textContent = `${fixed(v.offset_um, 1)} µm (${intervalText(lvl, v.offset_interval_um, 1, " µm")})`;
     } else {
       $("verdict-offset").textContent = "— (give the clearance to get δ in µm)";
@@ -483,7 +519,7 @@
         el("td", { class: "num", text: f.contribution === null ? "—" : (f.contribution >= 0 ? "+" : "") + num(f.contribution, 3) })));
     }
     const wl = $("verdict-warnings");
-    wl.replaceChildren(...(v.warnings || []).map((w) => el("li", { text: w })));
+    wl.replaceChildren(...(v.warnings || []).map((w) => el("li", { text: plainWords(w) })));
     show($("verdict"), true);
   }
 
@@ -507,11 +543,18 @@
       if (!("asset_id" in body) && formValue("asset")) body.asset_id = formValue("asset");
       const json = JSON.stringify(body);
       const opts = () => ({ method: "POST", headers: { "Content-Type": "application/json" }, body: json });
-      return { diagnose: ["/diagnose", opts()], plot: ["/ui/plot-data", opts()], asset: body.asset_id || null };
+      return { diagnose: [`/diagnose?output_units=${$("length-units").value}`, opts()], plot: ["/ui/plot-data", opts()],
+        asset: body.asset_id || null };
     }
-    const file = $("file").files[0];
-    if (!file) throw new Error("Choose a waveform file (CSV, NPY or HDF5), or switch the source to “Paste JSON”.");
+    let file = $("file").files[0];
     const q = new URLSearchParams();
+    if (source === "example") {
+      const ex = state.examples.find((e) => e.name === $("example").value);
+      if (!ex || !ex.blob) throw new Error("The example recordings could not be loaded from the service; reload the page.");
+      file = new File([ex.blob], ex.name);
+      for (const [key, value] of Object.entries(ex.query || {})) q.set(key, String(value));
+    }
+    if (!file) throw new Error("Choose a waveform file (CSV, NPY, HDF5 or UFF), or switch the source to an example or “Paste JSON”.");
     for (const [key, id] of Object.entries(numeric)) if (formValue(id) !== null) q.set(key, formValue(id));
     for (const [key, id] of [["units", "units"], ["bearings", "bearings"], ["angles_deg", "angles"]]) {
       if (formValue(id) !== null) q.set(key, formValue(id));
@@ -520,6 +563,7 @@
     const qp = new URLSearchParams(q);
     const asset = formValue("asset");
     if (asset) q.set("asset_id", asset);
+    q.set("output_units", $("length-units").value);
     const opts = () => { const fd = new FormData(); fd.append("file", file, file.name); return { method: "POST", body: fd }; };
     return { diagnose: [`/diagnose?${q}`, opts()], plot: [`/ui/plot-data?${qp}`, opts()], asset };
   }
@@ -596,11 +640,11 @@
     });
     const bearings = [1, 2, 3, 4].filter((b) => pts.some((p) => (p.amplitudes_um_pp || {})[`b${b}_1x_major_um_pp`] !== undefined));
     for (const k of ["1x", "2x"]) {
-      const series = bearings.map((b, i) => ({ x: t, y: pts.map((p) => { const v = (p.amplitudes_um_pp || {})[`b${b}_${k}_major_um_pp`]; return v === undefined ? null : v; }),
+      const series = bearings.map((b, i) => ({ x: t, y: scaled(pts.map((p) => { const v = (p.amplitudes_um_pp || {})[`b${b}_${k}_major_um_pp`]; return v === undefined ? null : v; })),
         color: COLORS.bearing[(b - 1) % 4], width: 1.8, markers: true, size: 3.5, label: `bearing ${b}` }));
       const [, top] = extent(series.map((s) => s.y));
       drawPlot($(`trend-${k}`), { x: { label: xlab, min: t0, max: t1, time: true },
-        y: { label: `${k.toUpperCase()} orbit major axis, µm pk-pk`, min: 0, max: top > 0 ? top * 1.15 : 1 }, series });
+        y: { label: `${k.toUpperCase()} orbit major axis, ${lengthUnit().name} pk-pk`, min: 0, max: top > 0 ? top * 1.15 : 1 }, series });
     }
   }
 
@@ -679,19 +723,37 @@
     }
   }
 
+  // ---- examples -----------------------------------------------------------------------------------
+  async function loadExamples() {
+    try {
+      const list = await api("/ui/examples");
+      state.examples = await Promise.all(list.map(async (e) => {
+        const resp = await fetch(`/ui/examples/${encodeURIComponent(e.name)}`);
+        return { ...e, blob: resp.ok ? await resp.blob() : null };
+      }));
+      $("example").replaceChildren(...state.examples.map((e) => el("option", { value: e.name, text: `${e.name}: ${e.title}` })));
+    } catch (exc) {
+      state.examples = [];
+      $("example").replaceChildren(el("option", { value: "", text: `examples unavailable (${exc.message})` }));
+    }
+  }
+
   // ---- wiring -------------------------------------------------------------------------------------
   document.addEventListener("DOMContentLoaded", () => {
     document.body.dataset.state = "idle";
     $("activate-base").textContent = window.location.origin;
     document.querySelectorAll("input[name=source]").forEach((r) => r.addEventListener("change", () => {
-      const json = document.querySelector("input[name=source]:checked").value === "json";
-      show($("file-fields"), !json); show($("json-fields"), json);
+      const source = document.querySelector("input[name=source]:checked").value;
+      show($("file-fields"), source === "file"); show($("json-fields"), source === "json");
+      show($("example-fields"), source === "example");
     }));
     $("diagnose-form").addEventListener("submit", onDiagnose);
     for (const id of ["show-raw", "show-1x", "show-2x", "show-1x2x", "spectrum-scale"]) $(id).addEventListener("change", renderPlots);
+    $("length-units").addEventListener("change", () => { renderPlots(); renderTrend(); });
     $("trend-form").addEventListener("submit", (ev) => { ev.preventDefault(); loadTrend($("trend-asset").value.trim()); });
     loadHealth();
     loadModels();
+    loadExamples();
   });
 
   // for the end-to-end tests and the console
