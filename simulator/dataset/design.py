@@ -16,7 +16,7 @@ Designs
 -------
 ``grid``  full factorial over every list / ``{min, max, n}`` range (first
           variable varies slowest, in the order of :data:`VARIABLES`; then
-          ``mechanism``).
+          ``mechanism``, then the base plant of a machine family).
 ``sobol`` scrambled Sobol points (``scipy.stats.qmc.Sobol``; powers of two keep
           its balance properties).
 ``lhs``   Latin hypercube (``scipy.stats.qmc.LatinHypercube``).
