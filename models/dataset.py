@@ -18,6 +18,7 @@ import json
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -166,16 +167,20 @@ def load_feature_table(
             raise ValueError(f"dataset: {path} has no finished sample with status ok ({skipped})")
         spec = f.attrs.get("spec_json")
         base_plant = f.attrs.get("base_plant_json")
+        family: dict[str, Any] = {
+            "base_plant": json.loads(base_plant) if base_plant else None,
+            "perturb": (json.loads(spec).get("plant", {}) if spec else {}),
+        }
         meta = {
             "dataset_path": str(path),
             "dataset_spec": json.loads(spec) if spec else None,
-            "plant_family": {
-                "base_plant": json.loads(base_plant) if base_plant else None,
-                "perturb": (json.loads(spec).get("plant", {}) if spec else {}),
-            },
+            "plant_family": family,
         }
         if f.attrs.get("merged"):
             meta["dataset_sources"] = json.loads(f.attrs["sources_json"])
+        sources = f.attrs.get("plant_sources_json")
+        if sources and len(json.loads(sources)) > 1:  # a machine family: every base plant with its weight
+            family["sources"] = json.loads(sources)
         t0 = time.perf_counter()
         data_hash = dataset_hash(path)
         meta["dataset_hash"] = data_hash

@@ -5,7 +5,9 @@ import datetime as dt
 import re
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, field_validator
+
+from rotordiag.simulator.dataset.spec import DESIGN_MECHANISMS
 
 #: Bounds on what one request may carry (the body-size middleware bounds the bytes as well).
 MAX_CHANNELS = 8                # 4 bearings x 2 probes
@@ -346,9 +348,17 @@ class FieldRecord(_Strict):
     """A field-labelled recording: waveforms measured on the user's machine with a known misalignment."""
 
     misalignment: FiniteFloat = Field(..., ge=0, le=0.9, description="Δ = δ/c measured by an alignment survey.")
-    mechanism: Literal["pin", "rigid"] = Field("rigid", description="Coupling mechanism the record is grouped with "
-                                               "in the evaluation.")
+    mechanism: str = Field("rigid", description="Coupling mechanism the record is grouped with in the evaluation: "
+                           "any mechanism of the simulator (`pin`, `rigid`, `offset`, `flexible`; docs/model.md).",
+                           json_schema_extra={"enum": list(DESIGN_MECHANISMS)})
     recording: RecordingIn = Field(..., description="The waveforms (as in POST /diagnose).")
+
+    @field_validator("mechanism")
+    @classmethod
+    def _mechanism(cls, v: str) -> str:
+        if v not in DESIGN_MECHANISMS:
+            raise ValueError(f"unknown mechanism {v!r}; use one of {list(DESIGN_MECHANISMS)}")
+        return v
 
 
 class RetrainRequest(_Strict):
@@ -357,11 +367,26 @@ class RetrainRequest(_Strict):
     plant: dict[str, Any] = Field(
         default_factory=dict,
         description="The plant's MODEL.md parameters, by `simulator.Plant` field name with units "
-        "(e.g. `generator_mass_kg`, `clearance_m`, `asymmetry`); missing ones take the MODEL.md defaults.",
+        "(e.g. `generator_mass_kg`, `clearance_m`, `asymmetry`); missing ones take the MODEL.md defaults, "
+        "or the values of `shaftline` when it is given (then these override them).",
         examples=[{"generator_mass_kg": 30000.0, "asymmetry": 0.04}])
+    shaftline: dict[str, Any] | None = Field(
+        None,
+        description="The plant as a plant engineer describes it: the shaft-line tables of "
+        "`rotordiag plant from-shaftline` (`generator`, `exciter` with `segments` [[length_m, diameter_m], ...] "
+        "and `body_masses`, `bearings`, `oil`, `coupling`, ...; examples/shaftline_200mw.toml), reduced to "
+        "the lumped plant as docs/model.md describes.",
+        examples=[{"generator": {"segments": [[0.6, 0.45], [0.9, 0.6], [5.0, 1.0], [0.9, 0.6], [0.6, 0.45]],
+                                 "body_masses": [[2.125, 3000.0], [3.375, 3000.0], [4.625, 3000.0],
+                                                 [5.875, 3000.0]]},
+                   "exciter": {"segments": [[0.4, 0.25], [2.6, 0.36], [0.4, 0.25]], "body_masses": [[1.7, 1500.0]]},
+                   "bearings": {"diameter_m": [0.45, 0.45, 0.25, 0.25], "length_m": [0.35, 0.35, 0.15, 0.15],
+                                "clearance_m": 0.00035},
+                   "coupling": {"type": "flexible", "stiffness_n_m": 1.0e8}}])
     sweep: dict[str, Any] = Field(
         default_factory=dict,
-        description="Dataset spec tables (`design`, `operating`, `measurement`, `simulation`, `plant.perturb`) "
+        description="Dataset spec tables (`design`, `operating`, `measurement`, `simulation`, `plant.perturb`, "
+        "`plant.scale`) "
         "overriding the retraining defaults (see docs/service.md).",
         examples=[{"design": {"n_samples": 200}, "operating": {"speed_rpm": {"min": 2900, "max": 3100}}}])
     training: dict[str, Any] = Field(default_factory=dict,

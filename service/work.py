@@ -2,8 +2,8 @@
 
 * ``dataset``: the dataset package's generator writes ``<data_dir>/datasets/<name>.h5``
   (resumable: a resumed job completes only the missing samples).
-* ``retrain``: a dataset for the user's plant (plant parameters + small
-  perturbations, sweep options), optionally field-labelled recordings, then the
+* ``retrain``: a dataset for the user's plant (plant parameters or a shaft-line
+  description, + small perturbations, sweep options), optionally field-labelled recordings, then the
   models package's training entry point, which evaluates and registers a new
   version in the service's registry (activated when asked).
 """
@@ -32,6 +32,10 @@ RETRAIN_DEFAULT_SWEEP: dict[str, Any] = {
 }
 
 
+#: What a retraining request may set under ``sweep.plant`` (the plant itself comes from ``plant``/``shaftline``).
+RETRAIN_SWEEP_PLANT_KEYS = frozenset({"perturb", "scale"})
+
+
 def _spec_toml_from_dict(spec: dict[str, Any]) -> str:
     import tomli_w
 
@@ -50,9 +54,15 @@ def _validate_spec_text(text: str) -> Any:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"the spec is not valid TOML: {exc}") from None
-    if isinstance(raw.get("plant"), dict) and "file" in raw["plant"]:   # checked before anything reads it
-        raise InputError("plant.file: a spec sent over HTTP cannot name a file on the server; "
-                         "give the plant values in plant.set instead")
+    plant = raw.get("plant")
+    if isinstance(plant, dict):   # checked before anything reads a file
+        if "file" in plant:
+            raise InputError("plant.file: a spec sent over HTTP cannot name a file on the server; "
+                             "give the plant values in plant.set instead")
+        if isinstance(plant.get("shaftline"), str) or "shaftlines" in plant:
+            key = "plant.shaftlines" if "shaftlines" in plant else "plant.shaftline"
+            raise InputError(f"{key}: a spec sent over HTTP cannot name a file on the server; give the "
+                             "shaft-line tables themselves in plant.shaftline (or use plant.presets)")
     try:
         return parse_spec(text)
     except SpecError as exc:
@@ -83,20 +93,31 @@ def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
     from rotordiag.models.config import TrainConfig
     from rotordiag.simulator import Plant
 
+    base = Plant.default()
+    if body.shaftline is not None:
+        from rotordiag.simulator import shaftline
+
+        try:
+            base = shaftline.to_plant(shaftline.ShaftLine.from_dict(body.shaftline))
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"shaftline: {exc}") from None
     try:
-        plant = Plant.default().replace(**body.plant) if body.plant else Plant.default()
+        plant = base.replace(**body.plant) if body.plant else base
     except (TypeError, ValueError) as exc:
         raise InputError(f"plant: {exc}") from None
     sweep = dict(body.sweep)
     if "plant" in sweep:
-        extra = set(sweep["plant"]) - {"perturb"} if isinstance(sweep["plant"], dict) else {"plant"}
+        extra = set(sweep["plant"]) - RETRAIN_SWEEP_PLANT_KEYS if isinstance(sweep["plant"], dict) else {"plant"}
         if extra:
-            raise InputError("sweep.plant: only `perturb` may be given here; put plant values in `plant`")
+            raise InputError(f"sweep.plant: only {' and '.join(sorted(RETRAIN_SWEEP_PLANT_KEYS))} may be given "
+                             "here; put plant values in `plant` and a shaft-line description in `shaftline`")
     spec = _deep_merge(RETRAIN_DEFAULT_SWEEP, sweep)
     spec.setdefault("plant", {})["set"] = {k: v for k, v in plant.to_dict().items() if k in body.plant} \
         if body.plant else {}
     if not spec["plant"]["set"]:
         del spec["plant"]["set"]
+    if body.shaftline is not None:
+        spec["plant"]["shaftline"] = body.shaftline
     text = _spec_toml_from_dict(spec)
     resolved = _validate_spec_text(text)
     try:
@@ -112,7 +133,8 @@ def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
                 recording_from_model(rec.recording)
             except ValueError as exc:
                 raise InputError(f"field_data[{i}].recording: {exc}") from None
-    return {"plant": body.plant, "spec_toml": text, "spec_hash": resolved.spec_hash,
+    return {"plant": body.plant, "shaftline": body.shaftline is not None, "spec_toml": text,
+            "spec_hash": resolved.spec_hash,
             "training": train_cfg.to_dict(), "field_data": field, "activate": body.activate}
 
 

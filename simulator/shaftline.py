@@ -38,6 +38,30 @@ MATERIALS: dict[str, tuple[float, float]] = {
 COUPLING_TYPES: tuple[str, ...] = ("rigid", "flexible")
 
 
+#: Bounds that keep the beam model small whatever a description (or an uploaded one) says.
+MAX_SPAN_M = 40.0
+MAX_DIAMETER_M = 4.0
+MAX_ITEMS = 200
+
+
+def _number(name: str, v: Any) -> float:
+    if isinstance(v, bool):
+        raise ValueError(f"{name} must be a number, got {v!r}")
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {v!r}") from None
+    if not math.isfinite(x):
+        raise ValueError(f"{name} must be a finite number, got {v!r}")
+    return x
+
+
+def _table(name: str, v: Any) -> dict[str, Any]:
+    if not isinstance(v, dict):
+        raise ValueError(f"[{name}] must be a table, got {v!r}")
+    return dict(v)
+
+
 def _pos(name: str, v: Any) -> float:
     try:
         x = float(v)
@@ -75,17 +99,25 @@ class Rotor:
         segs = d.get("segments")
         if not isinstance(segs, list) or not segs:
             raise ValueError(f"{name}.segments must be a non-empty list of [length_m, diameter_m]")
+        body = d.get("body_masses", [])
+        if not isinstance(body, list):
+            raise ValueError(f"{name}.body_masses must be a list of [position_m, mass_kg]")
+        if len(segs) > MAX_ITEMS or len(body) > MAX_ITEMS:
+            raise ValueError(f"{name}: at most {MAX_ITEMS} segments and {MAX_ITEMS} body masses")
         segments = []
         for i, s in enumerate(segs):
             if not (isinstance(s, (list, tuple)) and len(s) == 2):
                 raise ValueError(f"{name}.segments[{i}] must be [length_m, diameter_m], got {s!r}")
             segments.append((_pos(f"{name}.segments[{i}] length_m", s[0]), _pos(f"{name}.segments[{i}] diameter_m", s[1])))
         span = sum(s[0] for s in segments)
+        if span > MAX_SPAN_M or max(s[1] for s in segments) > MAX_DIAMETER_M:
+            raise ValueError(f"{name}: a rotor span of at most {MAX_SPAN_M:g} m and diameters of at most "
+                             f"{MAX_DIAMETER_M:g} m, got {span:g} m and {max(s[1] for s in segments):g} m")
         masses = []
-        for i, b in enumerate(d.get("body_masses", [])):
+        for i, b in enumerate(body):
             if not (isinstance(b, (list, tuple)) and len(b) == 2):
                 raise ValueError(f"{name}.body_masses[{i}] must be [position_m, mass_kg], got {b!r}")
-            x = float(b[0])
+            x = _number(f"{name}.body_masses[{i}] position_m", b[0])
             if not 0 <= x <= span:
                 raise ValueError(f"{name}.body_masses[{i}] position {x} m is outside the span [0, {span:g}] m")
             masses.append((x, _pos(f"{name}.body_masses[{i}] mass_kg", b[1])))
@@ -138,10 +170,16 @@ class ShaftLine:
             raise ValueError("bearings.diameter_m and bearings.length_m need 4 values (bearings 1..4)")
         oil = d.get("oil", {})
         coupling = d.get("coupling", {})
+        for name, t in (("oil", oil), ("coupling", coupling)):
+            if not isinstance(t, dict):
+                raise ValueError(f"[{name}] must be a table, got {t!r}")
+        for name, v in (("bearings.diameter_m", b.get("diameter_m", ())), ("bearings.length_m", b.get("length_m", ()))):
+            if not isinstance(v, (list, tuple)):
+                raise ValueError(f"{name} must be a list of 4 numbers (bearings 1..4), got {v!r}")
         ctype = coupling.get("type", "rigid")
         if ctype not in COUPLING_TYPES:
             raise ValueError(f"coupling.type must be one of {COUPLING_TYPES}, got {ctype!r}")
-        zeta = float(d.get("damping_ratio", 0.008))
+        zeta = _number("damping_ratio", d.get("damping_ratio", 0.008))
         if not 0 <= zeta < 1:
             raise ValueError(f"damping_ratio must be in [0, 1), got {zeta!r}")
         return cls(
@@ -154,9 +192,9 @@ class ShaftLine:
             viscosity_pa_s=_pos("oil.viscosity_pa_s", oil.get("viscosity_pa_s", 0.018)),
             coupling=ctype,
             coupling_stiffness_n_m=_pos("coupling.stiffness_n_m", coupling.get("stiffness_n_m", 1.0e8)),
-            generator_asymmetry=float(d.get("generator_asymmetry", 0.0549)),
+            generator_asymmetry=_number("generator_asymmetry", d.get("generator_asymmetry", 0.0549)),
             damping_ratio=zeta,
-            extra=dict(d.get("plant", {})),
+            extra=_table("plant", d.get("plant", {})),
         )
 
     @classmethod

@@ -16,7 +16,7 @@ Designs
 -------
 ``grid``  full factorial over every list / ``{min, max, n}`` range (first
           variable varies slowest, in the order of :data:`VARIABLES`; then
-          ``mechanism``).
+          ``mechanism``, then the base plant of a machine family).
 ``sobol`` scrambled Sobol points (``scipy.stats.qmc.Sobol``; powers of two keep
           its balance properties).
 ``lhs``   Latin hypercube (``scipy.stats.qmc.LatinHypercube``).
@@ -25,6 +25,14 @@ hypercube: a range maps linearly onto ``[min, max]``, a list onto equally
 likely levels, mechanism weights onto a weighted choice, and each perturbed
 plant value (each bearing separately for per-bearing values) onto
 ``value × (1 + u)`` with ``u`` uniform in ``[−r, r]``.
+
+Machine families (``plant.presets`` / ``plant.shaftlines``) add, after those,
+one dimension for the base plant (a weighted choice; a level on a grid) and one
+per ``plant.scale`` field (``value × f``, ``log f`` uniform in
+``[log min, log max]``, all bearings together). A spec without them has the
+same dimensions, hence the same samples, as before they existed. Each sample
+records its base plant's label (:attr:`SampleParams.plant_source`) and its full
+plant values.
 """
 from __future__ import annotations
 
@@ -68,6 +76,7 @@ class SampleParams:
     mechanism: str
     sample_seed: int
     coupling_phase_rad: float = 0.0
+    plant_source: str = "default"     # label of the base plant (ResolvedSpec.sources)
 
 
 class Design:
@@ -78,7 +87,10 @@ class Design:
         spec = resolved.spec
         self.master_seed = spec.design.seed
         self.method = spec.design.method
-        self._base = resolved.base_plant.to_dict()
+        self._bases = {label: p.to_dict() for label, p in resolved.sources.items()}
+        self._base = next(iter(self._bases.values()))
+        self._source_weights = resolved.source_weights
+        self._scale = [(name, r.min, r.max) for name, r in spec.plant.scale.items()]
         op = spec.operating
         self._values = {name: getattr(op, name) for name in VARIABLES}
         self._mechanism: str | list[str] | dict[str, float] = op.mechanism
@@ -97,6 +109,7 @@ class Design:
             self._levels: list[list[Any]] = [list(self._grid_levels(self._values[n])) for n in VARIABLES]
             mech = self._mechanism
             self._levels.append([mech] if isinstance(mech, str) else list(mech))
+            self._levels.append(list(self._bases))
             self._shape = tuple(len(v) for v in self._levels)
             n = int(np.prod(self._shape))
             if spec.design.n_samples is not None and spec.design.n_samples != n:
@@ -109,7 +122,8 @@ class Design:
             self.n_samples = int(spec.design.n_samples)
             self._dims = [n for n in VARIABLES if self._is_variable(self._values[n])]
             self._mech_dim = not isinstance(self._mechanism, str) and len(self._mechanism) > 1
-            d = len(self._dims) + int(self._mech_dim) + len(self._perturb)
+            self._source_dim = len(self._bases) > 1
+            d = len(self._dims) + int(self._mech_dim) + len(self._perturb) + int(self._source_dim) + len(self._scale)
             self._u = self._unit_points(d)
 
     # ------------------------------------------------------------------ helpers
@@ -156,8 +170,13 @@ class Design:
             return m[min(int(math.floor(u * len(m))), len(m) - 1)]
         if isinstance(m, str):
             return m
-        names = sorted(m)  # fixed order: pin, rigid
-        w = np.array([float(m[k]) for k in names], dtype=float)
+        return self._pick_weighted(m, u, sort=True)  # fixed order: names sorted
+
+    @staticmethod
+    def _pick_weighted(weights: dict[str, float], u: float, *, sort: bool) -> str:
+        """The member whose share of [0, 1) (in name order, or the given order) holds ``u``."""
+        names = sorted(weights) if sort else list(weights)
+        w = np.array([float(weights[k]) for k in names], dtype=float)
         edges = np.cumsum(w / w.sum())
         return names[min(int(np.searchsorted(edges, u, side="right")), len(names) - 1)]
 
@@ -177,11 +196,13 @@ class Design:
         i = int(index)
         if not 0 <= i < self.n_samples:
             raise IndexError(f"sample index {i} out of range [0, {self.n_samples})")
-        plant = dict(self._base)
+        source = next(iter(self._bases))
         if self.method == "grid":
             pos = np.unravel_index(i, self._shape)
             vals = {n: float(self._levels[k][pos[k]]) for k, n in enumerate(VARIABLES)}
-            mechanism = self._levels[-1][pos[-1]]
+            mechanism = self._levels[-2][pos[-2]]
+            source = self._levels[-1][pos[-1]]
+            plant = dict(self._bases[source])
         else:
             assert self._u is not None
             u = self._u[i]
@@ -200,17 +221,27 @@ class Design:
             else:
                 m = self._mechanism
                 mechanism = m if isinstance(m, str) else (m[0] if isinstance(m, list) else next(iter(m)))
-            for name, k, r in self._perturb:
-                factor = 1.0 + r * (2.0 * float(u[j]) - 1.0)
+            u_perturb = u[j:j + len(self._perturb)]
+            j += len(self._perturb)
+            if self._source_dim:
+                source = self._pick_weighted(self._source_weights, u[j], sort=False)
                 j += 1
+            plant = dict(self._bases[source])
+            for (name, k, r), uk in zip(self._perturb, u_perturb):
+                factor = 1.0 + r * (2.0 * float(uk) - 1.0)
                 if k is None:
                     plant[name] = float(plant[name]) * factor
                 else:
                     seq = list(plant[name])
                     seq[k] = float(seq[k]) * factor
                     plant[name] = seq
+            for name, lo, hi in self._scale:
+                factor = float(math.exp(math.log(lo) + float(u[j]) * (math.log(hi) - math.log(lo))))
+                j += 1
+                v = plant[name]
+                plant[name] = [float(x) * factor for x in v] if isinstance(v, list) else float(v) * factor
         return SampleParams(index=i, plant=plant, mechanism=mechanism,
-                            sample_seed=sample_seed(self.master_seed, i), **vals)
+                            sample_seed=sample_seed(self.master_seed, i), plant_source=source, **vals)
 
 
 def build_design(resolved: ResolvedSpec) -> Design:

@@ -16,7 +16,15 @@ import numpy as np
 from .design import Design, SampleParams, build_design
 from .measurement import MeasurementSettings
 from .spec import ResolvedSpec, load_spec
-from .store import FORMAT, FORMAT_VERSION, MECHANISM_CODES, SIMULATED_MECHANISM_CODES, DatasetWriter, layout
+from .store import (
+    FORMAT,
+    FORMAT_VERSION,
+    MECHANISM_CODES,
+    PLANT_SOURCE_LEN,
+    SIMULATED_MECHANISM_CODES,
+    DatasetWriter,
+    layout,
+)
 from .worker import STATUS_CODES, SampleOutput, SampleTask, SimulationSettings, run_sample_encoded
 
 __all__ = ["GenerateSummary", "generate", "severity_bands"]
@@ -83,6 +91,8 @@ def _file_attrs(resolved: ResolvedSpec, design: Design, meas: MeasurementSetting
         "design_method": design.method,
         "master_seed": design.master_seed,
         "base_plant_json": json.dumps(resolved.base_plant.to_dict()),
+        "plant_sources_json": json.dumps({k: {"weight": resolved.source_weights[k], "plant": p.to_dict()}
+                                          for k, p in resolved.sources.items()}),
         "severity_bands_json": json.dumps(bands.to_dict()),
         "merged": False,
     }
@@ -113,6 +123,7 @@ def _rows(p: SampleParams, out: SampleOutput) -> dict[str, Any]:
     rows["parameters/simulated_mechanism"] = SIMULATED_MECHANISM_CODES[out.simulated_mechanism]
     rows["parameters/sample_seed"] = np.uint64(p.sample_seed)
     rows["parameters/plant_id"] = Plant.from_dict(p.plant).plant_id().encode()
+    rows["parameters/plant_source"] = p.plant_source.encode("utf-8", "replace")[:PLANT_SOURCE_LEN]
     rows["parameters/record_revs"] = out.record_revs
     for name, v in p.plant.items():
         rows[f"parameters/plant/{name}"] = v.encode() if isinstance(v, str) else np.asarray(v, dtype=float)

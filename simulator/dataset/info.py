@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -71,6 +72,9 @@ def _summarize(path: Path) -> dict[str, Any]:
         labels = [lab.replace("period-n-", "period-") for lab in labels]
         summary["motion_counts"] = {k: labels.count(k) for k in sorted(set(labels))}
         summary["n_plants"] = int(len(set(f["parameters/plant_id"][...][done].tolist())))
+        if "parameters/plant_source" in f:
+            summary["plant_source_counts"] = dict(sorted(Counter(
+                p.decode() for p in f["parameters/plant_source"][...][done]).items()))
         ranges = {}
         for name in ("speed_rpm", "misalignment", "unbalance", "exciter_unbalance", "offset_angle_rad"):
             v = f[f"parameters/{name}"][...][done]

@@ -78,7 +78,8 @@ class DatasetReader:
             ``status``, ``mechanism`` (simulated: pin/rigid/aligned),
             ``design_mechanism`` (pin/rigid), ``motion`` (e.g. "period-1"),
             ``plant_id``, ``speed_rpm``, ``unbalance``, ``clearance_m``,
-            ``sample_seed``; plus ``source`` for merged files.
+            ``sample_seed``, ``plant_source`` (the base plant's label, e.g.
+            ``preset:gen200_2pole``; absent in older files); plus ``source`` for merged files.
         """
         f = self.f
         rows = self.indices if only_done else np.arange(self.done.size)
@@ -105,6 +106,8 @@ class DatasetReader:
             "clearance_m": f["parameters/plant/clearance_m"][...][rows],
             "sample_seed": f["parameters/sample_seed"][...][rows],
         }
+        if "parameters/plant_source" in f:  # files written before machine families lack it
+            out["plant_source"] = np.array([p.decode() for p in f["parameters/plant_source"][...][rows]], dtype=object)
         if "source" in f:
             out["source"] = f["source"][...][rows]
         return out

@@ -6,7 +6,8 @@ See ``examples/dataset_small.toml`` for a commented example and
 ``[design]``       sampling design: ``method`` (grid | sobol | lhs), ``n_samples``, ``seed``
 ``[operating]``    Δ, A, Ω, phases, exciter unbalance, ``coupling_phase_rad``, ``mechanism``
                    (pin | rigid | offset | flexible): each a value, a list or a range
-``[plant]``        base plant (``file``, ``shaftline`` or ``preset``, and/or ``set``) and relative ``perturb``-ations
+``[plant]``        base plant (``file``, ``shaftline`` or ``preset``, and/or ``set``), or a machine family
+                   (``presets`` and/or ``shaftlines``, weighted), relative ``perturb``-ations and ``scale`` factors
 ``[measurement]``  probes, sample rate, duration, SNR, runout, speed fluctuation
 ``[simulation]``   transient_revs, samples_per_rev, rtol, atol, classify_motion
 
@@ -38,6 +39,11 @@ PERTURBABLE: tuple[str, ...] = (
     "generator_damping_n_s_m", "exciter_stiffness_n_m", "exciter_damping_n_s_m",
     "clearance_m", "viscosity_pa_s", "bearing_radius_m", "bearing_length_m", "coupling_stiffness_n_m",
 )
+
+
+#: Factor bounds of ``plant.scale`` ranges, and the most members of a machine family.
+SCALE_RANGE: tuple[float, float] = (0.1, 10.0)
+MAX_FAMILY = 64
 
 
 class SpecError(ValueError):
@@ -196,16 +202,27 @@ class Operating(_Strict):
 
 
 class PlantSpec(_Strict):
-    """The base plant and how it varies between samples."""
+    """The base plant (or a family of base plants) and how it varies between samples."""
 
     file: str | None = Field(default=None, description="plant TOML/JSON file, relative to the spec file")
-    shaftline: str | None = Field(default=None, description="shaft-line TOML file reduced to the plant "
-                                  "(simulator.shaftline), relative to the spec file")
+    shaftline: str | dict[str, Any] | None = Field(
+        default=None, description="shaft-line TOML file (relative to the spec file), or the shaft-line tables "
+        "themselves, reduced to the plant (simulator.shaftline)")
     preset: str | None = Field(default=None, description="a named shaft-line preset (simulator.shaftline.PRESETS)")
+    presets: list[str] | dict[str, float] | None = Field(
+        default=None, description="a machine family: each sample's base plant is one of these presets, "
+        "equally likely (list) or by weight (table)")
+    shaftlines: list[str] | dict[str, float] | None = Field(
+        default=None, description="a machine family of shaft-line files (relative to the spec), as `presets`")
     set: dict[str, Any] = Field(default_factory=dict, description="values overriding the base plant")
     perturb: dict[str, float] = Field(
         default_factory=dict,
         description="relative half-widths r: value × (1 + u), u uniform in [−r, r] (per bearing for tuples)",
+    )
+    scale: dict[str, Range] = Field(
+        default_factory=dict,
+        description="factor ranges {min, max} in [0.1, 10]: value × f, log f uniform (one factor per field, "
+        "all bearings together for tuples)",
     )
 
     @field_validator("perturb")
@@ -217,6 +234,50 @@ class PlantSpec(_Strict):
             if not (math.isfinite(r) and 0.0 <= r <= 0.9):
                 raise ValueError(f"perturbation of {name} must be a relative half-width in [0, 0.9], got {r}")
         return v
+
+    @field_validator("scale")
+    @classmethod
+    def _scale(cls, v: dict[str, Range]) -> dict[str, Range]:
+        for name, r in v.items():
+            if name not in PERTURBABLE:
+                raise ValueError(f"{name!r} cannot be scaled; scalable: {', '.join(PERTURBABLE)}")
+            if r.n is not None:
+                raise ValueError(f"scale.{name}: n (levels) is not used; scaling needs a random design")
+            if not (SCALE_RANGE[0] <= r.min <= r.max <= SCALE_RANGE[1]):
+                raise ValueError(f"scale.{name} must be factors within [{SCALE_RANGE[0]:g}, {SCALE_RANGE[1]:g}], "
+                                 f"got {r.min:g}..{r.max:g}")
+        return v
+
+    @field_validator("presets", "shaftlines")
+    @classmethod
+    def _family(cls, v: list[str] | dict[str, float] | None) -> list[str] | dict[str, float] | None:
+        if v is None:
+            return v
+        if not v:
+            raise ValueError("empty family: give at least one member")
+        if len(v) > MAX_FAMILY:
+            raise ValueError(f"at most {MAX_FAMILY} members, got {len(v)}")
+        if isinstance(v, list):
+            if len(set(v)) != len(v):
+                raise ValueError(f"members must be distinct, got {v!r}")
+            return v
+        w = list(v.values())
+        if any(not (math.isfinite(x) and x >= 0) for x in w) or sum(w) <= 0:
+            raise ValueError(f"weights must be numbers ≥ 0, not all zero, got {v!r}")
+        return v
+
+    @model_validator(mode="after")
+    def _one_base(self) -> PlantSpec:
+        single = [k for k in ("file", "shaftline", "preset") if getattr(self, k) is not None]
+        family = [k for k in ("presets", "shaftlines") if getattr(self, k) is not None]
+        if len(single) > 1 or (single and family):
+            raise ValueError(f"give one of file, shaftline, preset, or a family (presets and/or shaftlines), "
+                             f"got {', '.join(single + family)}")
+        return self
+
+    @property
+    def is_family(self) -> bool:
+        return self.presets is not None or self.shaftlines is not None
 
 
 class Measurement(_Strict):
@@ -313,6 +374,11 @@ class DatasetSpec(_Strict):
                                  "for a grid give a list such as [\"pin\", \"rigid\"]")
             if self.plant.perturb and any(r > 0 for r in self.plant.perturb.values()):
                 raise ValueError("plant.perturb needs a random design (sobol or lhs), not a grid")
+            if any(r.max > r.min for r in self.plant.scale.values()):
+                raise ValueError("plant.scale needs a random design (sobol or lhs), not a grid")
+            if any(isinstance(f, dict) for f in (self.plant.presets, self.plant.shaftlines)):
+                raise ValueError("plant.presets/shaftlines: weights need a random design (sobol or lhs); "
+                                 "for a grid give a list")
         else:
             for name in Operating.model_fields:
                 v = getattr(op, name)
@@ -389,56 +455,111 @@ def load_spec(path: str | Path) -> ResolvedSpec:
 
 
 class ResolvedSpec:
-    """A validated spec plus its resolved base plant and identity hash.
+    """A validated spec plus its resolved base plant(s) and identity hash.
 
     Attributes
     ----------
     spec : DatasetSpec
     text : str
         The TOML text as written (stored in the HDF5 file).
+    sources : dict[str, simulator.Plant]
+        Every base plant by its label (``"default"``, ``"file:NAME"``, ``"preset:NAME"``,
+        ``"shaftline:NAME"``, ``"shaftline:inline"``), ``plant.set`` applied: one entry, or the
+        members of a machine family in the spec's order.
+    source_weights : dict[str, float]
+        Probability of each source (sums to 1).
     base_plant : simulator.Plant
-        Plant file (if any) with ``plant.set`` applied.
+        The first source (the only one unless the spec names a family).
     spec_hash : str
-        SHA-256 of the normalised spec and the resolved base plant: comments
-        and formatting do not change it, any value does.
+        SHA-256 of the normalised spec and the resolved base plants: comments,
+        formatting and the folders of the files do not change it, any value does.
     """
 
     def __init__(self, spec: DatasetSpec, text: str, base_dir: Path):
-        from rotordiag.simulator import Plant
-
         self.spec = spec
         self.text = text
         ps = spec.plant
         try:
-            from rotordiag.simulator import shaftline
-
-            plant = Plant.default()
-            if sum(x is not None for x in (ps.file, ps.shaftline, ps.preset)) > 1:
-                raise ValueError("give at most one of file, shaftline and preset")
-            if ps.shaftline is not None:
-                f = Path(ps.shaftline)
-                plant = shaftline.to_plant(shaftline.ShaftLine.from_file(f if f.is_absolute() else base_dir / f))
-            if ps.preset is not None:
-                plant = shaftline.to_plant(shaftline.preset(ps.preset))
-            if ps.file is not None:
-                f = Path(ps.file)
-                plant = Plant.from_file(f if f.is_absolute() else base_dir / f)
-            if ps.set:
-                plant = plant.replace(**ps.set)
+            members = _plant_members(ps, base_dir)
+            self.sources = {label: (p.replace(**ps.set) if ps.set else p) for label, (p, _) in members.items()}
         except (ValueError, TypeError) as exc:
             raise SpecError(f"invalid dataset spec:\n  plant: {exc}") from None
-        self.base_plant = plant
-        base = plant.to_dict()
-        for name, r in ps.perturb.items():
-            for sign in (-1.0, 1.0):
-                v = base[name]
-                scaled = [x * (1 + sign * r) for x in v] if isinstance(v, list) else v * (1 + sign * r)
-                try:
-                    plant.replace(**{name: scaled})
-                except (ValueError, TypeError) as exc:
-                    raise SpecError(f"invalid dataset spec:\n  plant.perturb.{name} = {r} gives an invalid "
-                                    f"plant at its extreme: {exc}") from None
-        canonical = {"spec": spec.model_dump(mode="json", exclude={"plant": {"file", "shaftline"}}),
-                     "base_plant": base}
+        total = sum(w for _, w in members.values())
+        self.source_weights = {label: w / total for label, (_, w) in members.items()}
+        self.base_plant = next(iter(self.sources.values()))
+        for label, plant in self.sources.items():
+            _check_extremes(plant, ps, label if len(self.sources) > 1 else "")
+        dumped = spec.model_dump(mode="json", exclude={"plant": {"file", "shaftline", "shaftlines"}})
+        for key in ("presets", "scale"):  # absent when unused, so specs written before them keep their hash
+            if not dumped["plant"].get(key):
+                dumped["plant"].pop(key, None)
+        canonical: dict[str, Any] = {"spec": dumped, "base_plant": self.base_plant.to_dict()}
+        if ps.is_family:
+            canonical["sources"] = {k: [p.to_dict(), self.source_weights[k]] for k, p in self.sources.items()}
         blob = json.dumps(canonical, sort_keys=True, allow_nan=True).encode()
         self.spec_hash = hashlib.sha256(blob).hexdigest()
+
+
+def _plant_members(ps: PlantSpec, base_dir: Path) -> dict[str, tuple[Any, float]]:
+    """label → (plant before ``set``, weight) of the spec's base plant or family (raises ValueError)."""
+    from rotordiag.simulator import Plant, shaftline
+
+    def path(name: str) -> Path:
+        f = Path(name)
+        return f if f.is_absolute() else base_dir / f
+
+    def members(v: list[str] | dict[str, float] | None) -> list[tuple[str, float]]:
+        if v is None:
+            return []
+        return [(k, 1.0) for k in v] if isinstance(v, list) else [(k, float(w)) for k, w in v.items()]
+
+    if ps.shaftline is not None:
+        if isinstance(ps.shaftline, dict):
+            return {"shaftline:inline": (shaftline.to_plant(shaftline.ShaftLine.from_dict(ps.shaftline)), 1.0)}
+        f = path(ps.shaftline)
+        return {f"shaftline:{f.name}": (shaftline.to_plant(shaftline.ShaftLine.from_file(f)), 1.0)}
+    if ps.preset is not None:
+        return {f"preset:{ps.preset}": (shaftline.to_plant(shaftline.preset(ps.preset)), 1.0)}
+    if ps.file is not None:
+        f = path(ps.file)
+        return {f"file:{f.name}": (Plant.from_file(f), 1.0)}
+    if not ps.is_family:
+        return {"default": (Plant.default(), 1.0)}
+    out: dict[str, tuple[Any, float]] = {}
+    for name, w in members(ps.presets):
+        try:
+            out[f"preset:{name}"] = (shaftline.to_plant(shaftline.preset(name)), w)
+        except ValueError as exc:
+            raise ValueError(f"presets: {exc}") from None
+    for name, w in members(ps.shaftlines):
+        f = path(name)
+        label = f"shaftline:{f.name}"
+        if label in out:
+            raise ValueError(f"shaftlines: two files are named {f.name!r}; rename one (the file name labels "
+                             "the samples)")
+        try:
+            out[label] = (shaftline.to_plant(shaftline.ShaftLine.from_file(f)), w)
+        except ValueError as exc:
+            raise ValueError(f"shaftlines: {exc}") from None
+    if sum(w for _, w in out.values()) <= 0:
+        raise ValueError("presets/shaftlines: the weights are all zero")
+    return out
+
+
+def _check_extremes(plant: Any, ps: PlantSpec, label: str) -> None:
+    """Refuse a perturbation or scale range whose extremes make an invalid plant (each field alone)."""
+    base = plant.to_dict()
+    where = f" (base plant {label})" if label else ""
+    changes: list[tuple[str, str, float]] = []
+    for name, r in ps.perturb.items():
+        changes += [(name, f"plant.perturb.{name} = {r}", 1 + sign * r) for sign in (-1.0, 1.0)]
+    for name, rng in ps.scale.items():
+        changes += [(name, f"plant.scale.{name} = {rng.min:g}..{rng.max:g}", f) for f in (rng.min, rng.max)]
+    for name, what, factor in changes:
+        v = base[name]
+        scaled = [x * factor for x in v] if isinstance(v, list) else v * factor
+        try:
+            plant.replace(**{name: scaled})
+        except (ValueError, TypeError) as exc:
+            raise SpecError(f"invalid dataset spec:\n  {what} gives an invalid plant at its extreme{where}: "
+                            f"{exc}") from None

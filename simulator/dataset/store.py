@@ -62,6 +62,10 @@ class StoreError(RuntimeError):
     """A dataset file that cannot be used as asked (other spec, locked, not a dataset); clear message."""
 
 
+#: Bytes of ``parameters/plant_source`` (the base plant's label, e.g. ``preset:gen200_2pole``).
+PLANT_SOURCE_LEN = 64
+
+
 def _utcnow() -> str:
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
 
@@ -90,6 +94,7 @@ def layout(n_channels: int, n_points: int, n_bearings: int,
     L["parameters/simulated_mechanism"] = ((), "i1")
     L["parameters/sample_seed"] = ((), "u8")
     L["parameters/plant_id"] = ((), "S16")
+    L["parameters/plant_source"] = ((), f"S{PLANT_SOURCE_LEN}")
     L["parameters/record_revs"] = ((), "i4")
     L.update(_plant_layout(plant_dict))
     L["measurement/snr_db"] = ((), "f8")

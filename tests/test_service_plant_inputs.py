@@ -1,0 +1,106 @@
+"""The retraining and dataset endpoints take every simulator mechanism and a plant as a shaft-line
+description (issue 13 items 3 and 5); bad plants are 422s that say what to fix, files on the server never."""
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import pytest
+from fastapi.testclient import TestClient
+
+from rotordiag.service.main import create_app
+from rotordiag.service.schemas import DatasetJobRequest, FieldRecord, RetrainRequest
+from rotordiag.service.work import prepare_dataset_job, prepare_retrain_job
+from rotordiag.simulator import shaftline
+from rotordiag.simulator.dataset.spec import DESIGN_MECHANISMS, parse_spec
+from tests.service_util import auth, make_settings
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "shaftline_200mw.toml"
+
+
+def _line() -> dict:
+    return tomllib.loads(EXAMPLE.read_text())
+
+
+def test_retrain_builds_its_sweep_on_the_shaftline_plant_with_overrides(tmp_path):
+    body = RetrainRequest.model_validate({"shaftline": _line(), "plant": {"asymmetry": 0.03},
+                                          "sweep": {"plant": {"scale": {"viscosity_pa_s": {"min": 0.7, "max": 1.4}}},
+                                                    "operating": {"mechanism": {"offset": 1, "flexible": 1}}}})
+    params = prepare_retrain_job(body, make_settings(tmp_path))
+    resolved = parse_spec(params["spec_toml"])
+    expect = shaftline.to_plant(shaftline.ShaftLine.from_file(EXAMPLE)).replace(asymmetry=0.03)
+    assert resolved.base_plant == expect and resolved.sources.keys() == {"shaftline:inline"}
+    assert resolved.spec.operating.mechanism == {"offset": 1.0, "flexible": 1.0}
+    assert params["spec_hash"] == resolved.spec_hash and params["shaftline"] is True
+
+
+def test_dataset_job_takes_an_inline_shaftline_and_a_preset_family(tmp_path):
+    spec = {"design": {"method": "sobol", "n_samples": 8, "seed": 1},
+            "operating": {"speed_rpm": {"min": 1500, "max": 2100}, "misalignment": {"min": 0, "max": 0.4},
+                          "mechanism": "flexible"},
+            "measurement": {"sample_rate_hz": 1024.0, "duration_revs": 8}}
+    inline = prepare_dataset_job(DatasetJobRequest(spec={**spec, "plant": {"shaftline": _line()}}),
+                                 make_settings(tmp_path))
+    assert parse_spec(inline["spec_toml"]).base_plant == shaftline.to_plant(shaftline.ShaftLine.from_file(EXAMPLE))
+    fam = prepare_dataset_job(DatasetJobRequest(spec={**spec, "plant": {"presets": ["gen50_2pole", "gen600_2pole"]}}),
+                              make_settings(tmp_path))
+    assert parse_spec(fam["spec_toml"]).source_weights == {"preset:gen50_2pole": 0.5, "preset:gen600_2pole": 0.5}
+
+
+@pytest.mark.parametrize("mechanism", DESIGN_MECHANISMS)
+def test_field_records_accept_every_mechanism(mechanism):
+    rec = {"misalignment": 0.2, "mechanism": mechanism,
+           "recording": {"sample_rate_hz": 1024.0, "channels": [{"bearing": 1, "angle_deg": 45.0, "units": "um", "data": [0.0] * 64}]}}
+    assert FieldRecord.model_validate(rec).mechanism == mechanism
+
+
+def _bad_line(**changes) -> dict:
+    d = _line()
+    for path, value in changes.items():
+        table, key = path.split("__")
+        d[table][key] = value
+    return d
+
+
+@pytest.mark.parametrize("body, expect", [
+    ({"shaftline": _bad_line(generator__segments=[[1.0, -0.3]])}, "shaftline: generator.segments[0] diameter_m"),
+    ({"shaftline": _bad_line(generator__segments=[[500.0, 0.5]])}, "span of at most 40 m"),
+    ({"shaftline": _bad_line(coupling__type="gear")}, "coupling.type must be one of"),
+    ({"shaftline": {**_line(), "oil": [1, 2]}}, "[oil] must be a table"),
+    ({"shaftline": {**_line(), "plant": {"asymmetry": 0.9}}}, "asymmetry must be in"),
+    ({"shaftline": {"generator": {"segments": [[1.0, 0.3]]}}}, "needs a [exciter] table"),
+    ({"shaftline": _line(), "plant": {"clearance_m": -1.0}}, "plant: "),
+    ({"sweep": {"plant": {"file": "/etc/passwd"}}}, "sweep.plant: only perturb and scale"),
+    ({"sweep": {"plant": {"shaftline": "/etc/passwd"}}}, "sweep.plant: only perturb and scale"),
+    ({"sweep": {"plant": {"scale": {"clearance_m": {"min": 0.01, "max": 1}}}}}, "factors within [0.1, 10]"),
+    ({"field_data": [{"misalignment": 0.2, "mechanism": "wobbly",
+                      "recording": {"sample_rate_hz": 1024.0,
+                                    "channels": [{"bearing": 1, "angle_deg": 45.0, "units": "um", "data": [0.0] * 64}]}}]},
+     "unknown mechanism 'wobbly'"),
+    ({"shaftline": "/etc/passwd"}, "shaftline"),
+])
+def test_bad_retrain_plant_input_is_422_with_what_to_fix(tmp_path, body, expect):
+    with TestClient(create_app(make_settings(tmp_path))) as c:
+        r = c.post("/models/retrain", json=body, headers=auth())
+        assert r.status_code == 422, r.text
+        detail = r.json()["detail"]
+        assert expect in (detail if isinstance(detail, str) else str(detail)), detail
+        assert c.get("/jobs").json()["count"] == 0
+
+
+@pytest.mark.parametrize("plant, expect", [
+    ({"shaftline": "/etc/passwd"}, "plant.shaftline: a spec sent over HTTP cannot name a file"),
+    ({"shaftlines": ["/etc/passwd"]}, "plant.shaftlines: a spec sent over HTTP cannot name a file"),
+    ({"presets": ["gen1000"]}, "unknown shaft-line preset 'gen1000'"),
+    ({"shaftline": {"generator": {"segments": [[1.0, 0.3]] * 500}, "exciter": {"segments": [[1.0, 0.3]]}}},
+     "at most 200 segments"),
+])
+def test_bad_dataset_plant_is_422_and_no_server_file_is_read(tmp_path, plant, expect):
+    spec = {"design": {"method": "sobol", "n_samples": 4, "seed": 1},
+            "operating": {"speed_rpm": 1800, "misalignment": 0.1, "mechanism": "offset"},
+            "measurement": {"sample_rate_hz": 1024.0, "duration_revs": 8}, "plant": plant}
+    with TestClient(create_app(make_settings(tmp_path))) as c:
+        r = c.post("/datasets", json={"spec": spec}, headers=auth())
+        assert r.status_code == 422 and expect in r.json()["detail"], r.text
+        assert "root:" not in r.json()["detail"]   # nothing of /etc/passwd comes back
+        assert c.get("/jobs").json()["count"] == 0
