@@ -1,0 +1,148 @@
+"""The robustness benchmark's condition generators and the ROSS validation set (issue 15, items 7–8).
+
+Loads ``benchmarks/bench_robustness.py`` and ``benchmarks/ross_validation.py`` by path (they are
+scripts, not packages). Only the regeneration check needs ROSS (the ``[validation]`` extra) and
+skips without it; everything else reads the cached set with NumPy.
+"""
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+BENCH = Path(__file__).resolve().parent.parent / "benchmarks"
+
+
+def _load(name: str):
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+bench = _load("bench_robustness")
+rv = _load("ross_validation")
+
+SPEED_RPM = 2400.0          # 40 Hz: 64 samples per revolution at 2560 Hz, 48 whole revolutions
+
+
+def _order_amplitudes(w: np.ndarray, order: int) -> np.ndarray:
+    """Amplitude (0-pk) of ``order`` per channel of a record of exactly ``bench.REVS`` revolutions."""
+    spec = np.fft.rfft(w - w.mean(axis=1, keepdims=True), axis=1)
+    return 2.0 * np.abs(spec[:, order * bench.REVS]) / w.shape[1]
+
+
+def _shaft(n_rows: int = 6400) -> np.ndarray:
+    """Journal displacements (n, 4, 2) in m: a 10 µm forward 1X orbit at every bearing."""
+    tau = 2 * np.pi / bench.SAMPLES_PER_REV * np.arange(n_rows)
+    d = np.zeros((n_rows, 4, 2))
+    d[:, :, 0] = 10e-6 * np.cos(tau)[:, None]
+    d[:, :, 1] = 10e-6 * np.sin(tau)[:, None]
+    return d
+
+
+def test_runout_has_the_stated_amplitude():
+    cond = bench.Condition("t", snr_db=np.inf, runout_1x_um=(3.0, 3.0), runout_2x_um=(1.0, 1.0))
+    w = bench.measure(np.zeros((6400, 4, 2)), SPEED_RPM, cond, np.random.default_rng(1), speed_fluctuation=0.0)
+    assert w.shape == (8, 3072)
+    np.testing.assert_allclose(_order_amplitudes(w, 1), 3.0, rtol=1e-3)
+    np.testing.assert_allclose(_order_amplitudes(w, 2), 1.0, rtol=1e-3)
+    # the benchmark's runout condition: U(0, 6) µm at 1X and U(0, 2) µm at 2X, the same profile for both probes
+    runout = dataclasses.replace(next(c for c in bench.CONDITIONS if c.name == "runout"), snr_db=np.inf)
+    amps1, amps2 = [], []
+    for seed in range(10):
+        w = bench.measure(np.zeros((6400, 4, 2)), SPEED_RPM, runout, np.random.default_rng(seed), speed_fluctuation=0.0)
+        amps1.append(_order_amplitudes(w, 1))
+        amps2.append(_order_amplitudes(w, 2))
+    a1, a2 = np.array(amps1), np.array(amps2)
+    assert a1.max() <= 6.0 * 1.001 and a2.max() <= 2.0 * 1.001
+    assert a1.max() > 4.0 and a2.max() > 1.3                                 # the range is used, not a constant
+    np.testing.assert_allclose(a1[:, 0::2], a1[:, 1::2], rtol=1e-3)          # both probes of a bearing
+
+
+def test_gain_mismatch_within_ten_percent():
+    d = _shaft()
+    plain = bench.Condition("t", snr_db=np.inf)
+    gained = bench.Condition("t", snr_db=np.inf, gain_mismatch=0.10)
+    ratios = []
+    for seed in range(5):
+        a = bench.measure(d, SPEED_RPM, plain, np.random.default_rng(seed))
+        b = bench.measure(d, SPEED_RPM, gained, np.random.default_rng(seed))
+        g = np.sum(a * b, axis=1) / np.sum(a * a, axis=1)
+        np.testing.assert_allclose(b, g[:, None] * a, atol=1e-4)            # one constant gain per channel
+        ratios.append(g)
+    g = np.concatenate(ratios)
+    assert np.all((g >= 0.9) & (g <= 1.1))
+    assert g.std() > 0.02                                                   # really mismatched
+
+
+def test_noise_and_bearing_selection():
+    d = _shaft()
+    only = next(c for c in bench.CONDITIONS if c.name == "coupling bearings only")
+    w = bench.measure(d, SPEED_RPM, only, np.random.default_rng(0))
+    assert w.shape[0] == 4
+    snr15 = next(c for c in bench.CONDITIONS if c.name == "SNR 15 dB")
+    clean = bench.measure(d, SPEED_RPM, bench.Condition("t", snr_db=np.inf), np.random.default_rng(0))
+    noisy = bench.measure(d, SPEED_RPM, snr15, np.random.default_rng(0))
+    snr = 10 * np.log10(clean.var(axis=1) / (noisy - clean).var(axis=1))
+    assert np.all(np.abs(snr - 15.0) < 0.5)
+
+
+def test_held_out_sets_differ_from_training():
+    base = bench.design("base", 2, 815)
+    far = bench.design("far", 2, 815)
+    assert sorted({c["label_mechanism"] for c in base}) == ["aligned", "flexible", "offset", "pin", "rigid"]
+    assert all(c["misalignment"] == 0 for c in base if c["label_mechanism"] == "aligned")
+    _, perturb = bench._training_spread()
+    from rotordiag.simulator import Plant
+
+    default = Plant.default().to_dict()
+    ratios = np.array([c["plant"]["generator_mass_kg"] / default["generator_mass_kg"] for c in far])
+    assert np.all((ratios >= 0.5) & (ratios <= 2.0)) and np.any(np.abs(ratios - 1) > perturb["generator_mass_kg"])
+
+
+def test_ross_loader_reads_the_cached_set():
+    cases = rv.load_ross_set(rv.DEFAULT_PATH, snr_db=np.inf)
+    assert len(cases) == len(rv.MACHINES) * (len(rv.GRADES_MM_S) + len(rv.DELTAS))
+    assert {c.machine for c in cases} == {m.name for m in rv.MACHINES}
+    for c in cases:
+        n = int(round(48 * 60.0 / c.speed_rpm * c.sample_rate_hz))
+        assert c.waveforms_um.shape == (2 * len(c.bearings), n) and np.all(np.isfinite(c.waveforms_um))
+        assert {2, 3} <= set(c.bearings)
+    # the misalignment force is 2X: none in the healthy cases, growing with the offset at bearing 3
+    for m in rv.MACHINES:
+        mine = sorted((c for c in cases if c.machine == m.name and c.grade_mm_s == rv.GRADES_MM_S[1]),
+                      key=lambda c: c.delta)
+        k3 = mine[0].bearings.index(3)
+        two_x = []
+        for c in mine:
+            w = c.waveforms_um[2 * k3]
+            spec = np.abs(np.fft.rfft(w - w.mean()))
+            f = np.fft.rfftfreq(w.size, 1 / c.sample_rate_hz)
+            two_x.append(spec[np.argmin(np.abs(f - 2 * c.speed_rpm / 60))])
+        assert two_x[0] < 1e-3 * max(two_x)                                   # leakage of 1X only
+        assert np.all(np.diff(two_x) > 0)
+
+
+def test_ross_loader_missing_file_says_how_to_regenerate(tmp_path):
+    with pytest.raises(FileNotFoundError, match="ross_validation.py"):
+        rv.load_ross_set(tmp_path / "none.npz")
+
+
+def test_ross_set_regenerates_from_ross():
+    pytest.importorskip("ross", reason="ross-rotordynamics not installed: pip install -e '.[validation]' "
+                                       "to check the cached ROSS set against ROSS itself")
+    z = np.load(rv.DEFAULT_PATH, allow_pickle=False)
+    spec = rv.MACHINES[0]
+    built = rv._build(spec)
+    i = int(np.flatnonzero((z["machine"] == spec.name) & (z["delta"] == 0.3))[0])
+    again = rv.solve_case(spec, built, 0.3, float(z["grade_mm_s"][i]), tuple(z["phases_rad"][i]))
+    np.testing.assert_allclose(again, z["harmonics_um"][i], rtol=1e-6, atol=1e-9)
