@@ -410,6 +410,13 @@ def report(rows, ross, args, wall_s) -> str:
         "| target | | measured |",
         "|---|---|---|",
         tg,
+        "",
+        "How to read the ROSS rows: the shipped model was trained on this project's simulator (pin and rigid "
+        "only); on the independent-code machines its class is mostly wrong (compare its F1 with the rule of "
+        "thumb's), and the ROSS targets about `aligned`+`confident` are met only because the sanity, scale, "
+        "OOD and missing-feature checks make every ROSS verdict `uncertain` — the honest-verdict layer, not "
+        "the classifier, keeps these answers from being confidently wrong. Offset and flexible are mechanisms "
+        "the shipped model never saw in training.",
     ]
     if ross is not None:
         text += ["", "## ROSS set, case by case",
