@@ -4,7 +4,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test test-slow bench clean lint typecheck wheel-check
+.PHONY: run test test-slow test-lowest bench clean lint typecheck wheel-check
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -36,6 +36,19 @@ typecheck: $(STAMP)
 wheel-check: $(STAMP)
 	bash .ci/wheel-check
 
+# The quick tests against the LOWEST declared versions: every direct dependency pinned to its
+# floor in pyproject.toml (.ci/lowest_constraints.py writes `name==floor`; transitive ones resolve
+# to their newest), in a separate venv. Fails if the floors do not install together or a test fails.
+LOWEST_VENV ?= .venv-lowest
+test-lowest: $(STAMP)
+	rm -rf $(LOWEST_VENV)
+	$(PYTHON) -m venv $(LOWEST_VENV)
+	$(LOWEST_VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(PY) .ci/lowest_constraints.py > $(LOWEST_VENV)/constraints.txt
+	$(LOWEST_VENV)/bin/python -m pip install --quiet -c $(LOWEST_VENV)/constraints.txt -e '.[dev]'
+	$(LOWEST_VENV)/bin/python -m pip check
+	ROTORDIAG_EXPECT_FLOORS=1 $(LOWEST_VENV)/bin/pytest -q
+
 test-slow: $(STAMP)
 	$(VENV)/bin/pytest -q -m slow
 
@@ -43,7 +56,7 @@ bench: $(STAMP)
 	for b in benchmarks/bench_*.py; do $(PY) $$b; done
 
 clean:
-	rm -rf $(VENV) .pytest_cache
+	rm -rf $(VENV) $(LOWEST_VENV) .pytest_cache
 
 # Rebuild the shipped default model (models/default_registry) from scratch with the
 # project's own pipeline: simulate the three dataset specs (resumable; ~1.5 h on 2 cores),

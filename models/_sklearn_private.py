@@ -16,7 +16,7 @@ import numpy as np
 from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
 from sklearn.utils._param_validation import Interval, StrOptions
 
-__all__ = ["Interval", "StrOptions", "PRIVATE_TRUSTED_TYPES", "hgb_trees", "single_calibration",
+__all__ = ["Interval", "StrOptions", "PRIVATE_TRUSTED_TYPES", "SKLEARN_RENAMED_TYPES", "hgb_trees", "single_calibration",
            "check_internals", "TREE_NODE_FIELDS"]
 
 #: private scikit-learn classes that a fitted rotordiag model holds (skops trusted types)
@@ -25,7 +25,19 @@ PRIVATE_TRUSTED_TYPES: tuple[str, ...] = (
     "sklearn.calibration._SigmoidCalibration",
     "sklearn.calibration._TemperatureScaling",
     "sklearn.ensemble._hist_gradient_boosting.predictor.TreePredictor",
+    # HistGradientBoosting's compiled losses: trusted by skops' defaults under scikit-learn >= 1.9,
+    # not under 1.8 (there the class reports the module ``_loss``; see SKLEARN_RENAMED_TYPES)
+    "sklearn._loss._loss.CyHalfBinomialLoss",
+    "sklearn._loss._loss.CyHalfMultinomialLoss",
+    "sklearn._loss._loss.CyHalfSquaredError",
 )
+#: scikit-learn 1.8's compiled loss classes report ``__module__ == "_loss"`` (fixed in 1.9), so a model
+#: written under 1.8 names them ``_loss.CyHalfSquaredError`` etc., which 1.9 cannot import. Loading
+#: rewrites exactly these names (a fixed table) to ``sklearn._loss._loss.*``, importable under both.
+SKLEARN_RENAMED_TYPES: dict[str, str] = {
+    f"_loss.{cls}": f"sklearn._loss._loss.{cls}"
+    for cls in ("CyHalfBinomialLoss", "CyHalfMultinomialLoss", "CyHalfSquaredError")
+}
 #: fields of a ``TreePredictor.nodes`` record the compiled predictor reads
 TREE_NODE_FIELDS: tuple[str, ...] = ("is_leaf", "feature_idx", "num_threshold", "missing_go_to_left",
                                      "left", "right", "value")

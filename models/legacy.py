@@ -19,6 +19,8 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
+from ._sklearn_private import SKLEARN_RENAMED_TYPES
+
 #: every type name a pre-rename rotordiag model file can hold → the current name
 LEGACY_TYPE_NAMES: dict[str, str] = {
     "models.bands.SeverityBands": "rotordiag.core.bands.SeverityBands",
@@ -28,6 +30,10 @@ LEGACY_TYPE_NAMES: dict[str, str] = {
     "models.estimators.SeverityClassifier": "rotordiag.models.estimators.SeverityClassifier",
 }
 SCHEMA_FILE = "schema.json"
+#: every name rewritten on load: the rename's table and scikit-learn 1.8's loss module names
+_RENAMES: dict[str, str] = {**LEGACY_TYPE_NAMES, **SKLEARN_RENAMED_TYPES}
+#: the old modules as they appear in a schema (``"models.bands"``): a file holding none is left as it is
+_OLD_MODULES: tuple[bytes, ...] = tuple(sorted({f'"{name.rsplit(".", 1)[0]}"'.encode() for name in _RENAMES}))
 
 
 def _rename_nodes(node: Any) -> int:
@@ -36,7 +42,7 @@ def _rename_nodes(node: Any) -> int:
     if isinstance(node, dict):
         module, cls = node.get("__module__"), node.get("__class__")
         if isinstance(module, str) and isinstance(cls, str):
-            new = LEGACY_TYPE_NAMES.get(f"{module}.{cls}")
+            new = _RENAMES.get(f"{module}.{cls}")
             if new is not None:
                 node["__module__"], node["__class__"] = new.rsplit(".", 1)
                 n += 1
@@ -49,7 +55,7 @@ def _rename_nodes(node: Any) -> int:
 
 
 def renamed_skops_bytes(data: bytes) -> tuple[bytes, int]:
-    """A skops file's bytes with the pre-rename type names replaced.
+    """A skops file's bytes with the pre-rename type names (and scikit-learn 1.8's ``_loss.*``) replaced.
 
     Parameters
     ----------
@@ -69,7 +75,7 @@ def renamed_skops_bytes(data: bytes) -> tuple[bytes, int]:
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as zin:
             raw = zin.read(SCHEMA_FILE)
-            if b'"models.' not in raw:          # a current file: no JSON parse, no rewrite
+            if not any(module in raw for module in _OLD_MODULES):   # a current file: no parse, no rewrite
                 return data, 0
             schema = json.loads(raw)
             n = _rename_nodes(schema)

@@ -112,12 +112,14 @@ async def _read_body(request: Request) -> tuple[str, bytes, str]:
 
 async def _read_form(request: Request) -> Any:
     """The multipart form, with the parser's complaints in the client's terms (400)."""
+    from python_multipart.exceptions import FormParserError
     from starlette.exceptions import HTTPException as StarletteHTTPException
     from starlette.formparsers import MultiPartException
 
     try:
         return await request.form(max_files=1, max_fields=8)
-    except (MultiPartException, StarletteHTTPException) as exc:
+    except (MultiPartException, StarletteHTTPException, FormParserError) as exc:
+        # FormParserError: python-multipart's own, which starlette < 1.7 lets through on garbage bodies
         if isinstance(exc, StarletteHTTPException) and exc.status_code != 400:
             raise                      # 408/413 from the body limits
         msg = str(getattr(exc, "detail", None) or getattr(exc, "message", None) or exc)
