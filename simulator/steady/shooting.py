@@ -109,7 +109,8 @@ class FixedPoint:
 
 def find_fixed_point(pmap: PeriodicMap, x0: np.ndarray, n_periods: int = 1, *, tol: float = NEWTON_TOL,
                      max_iter: int = 30, max_step: float = MAX_NEWTON_STEP, method: str = "newton",
-                     jacobian_rtol: float | None = None, exact_multipliers: bool = True) -> FixedPoint:
+                     jacobian_rtol: float | None = None, exact_multipliers: bool = True,
+                     newton_fallback: bool = True) -> FixedPoint:
     """Newton's method (or chord iterations) on Pⁿ(x) − x = 0 with the variational monodromy matrix.
 
     ``method="chord"``: one monodromy matrix M (at the start, optionally at a looser
@@ -143,6 +144,9 @@ def find_fixed_point(pmap: PeriodicMap, x0: np.ndarray, n_periods: int = 1, *, t
         a good value; default the map's own). Needs a map whose ``evaluate`` takes ``rtol``.
     exact_multipliers : bool
         Chord only: see above.
+    newton_fallback : bool
+        Chord only: let Newton continue when the chord iterations stall (default); False
+        returns the chord's failure (a caller that falls back to integration anyway).
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -150,7 +154,7 @@ def find_fixed_point(pmap: PeriodicMap, x0: np.ndarray, n_periods: int = 1, *, t
     nfev = 0
     if method == "chord":
         chord = _chord(pmap, x, int(n_periods), tol, max_iter, max_step, jacobian_rtol, exact_multipliers)
-        if chord.converged:
+        if chord.converged or not newton_fallback:
             return chord
         x = chord.x  # best point reached: Newton continues from there
         nfev = chord.nfev
