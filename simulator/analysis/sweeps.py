@@ -197,10 +197,8 @@ def rotor_lyapunov(
 
 def run_point(task: PointTask) -> PointResult:
     """Run one operating point (the function the Dask workers execute)."""
-    from rotordiag.simulator import simulate
+    from rotordiag.simulator import build_system, simulate
     from rotordiag.simulator.simulate import order_amplitudes
-
-    from rotordiag.simulator import build_system
     from rotordiag.simulator.steady.start import steady_start
 
     start = time.perf_counter()
