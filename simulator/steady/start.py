@@ -42,7 +42,7 @@ STEADY_STARTS = ("shooting", "integrate")
 #: is not reached by the 400-revolution transient either, so the two would differ)
 MAX_START_MULTIPLIER = 0.99
 #: most warm-up revolutions before shooting (they count toward the transient)
-START_WARMUP_REVS = 40
+START_WARMUP_REVS = 20
 #: chord iterations allowed (each one plain revolution; no Newton after them: integration is the fallback)
 START_MAX_ITER = 12
 #: an unsettled warm-up must bring its distance to the orbit down by this factor over APPROACH_REVS revolutions
