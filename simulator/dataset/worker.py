@@ -38,7 +38,7 @@ class SimulationSettings:
     atol: float
     record_revs_min: int
     classify_motion: bool
-    steady_start: str = "integrate"
+    steady_start: str = "shooting"  # as the spec's default
 
     @classmethod
     def from_spec(cls, spec) -> SimulationSettings:
