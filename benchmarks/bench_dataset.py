@@ -35,6 +35,14 @@ throughput into one file), and the parent's peak RSS for 20 vs 160 samples
 count.
 
 Run: ``.venv/bin/python benchmarks/bench_dataset.py`` (about 1–2 minutes on two free cores).
+
+``--steady-start N`` instead compares the two ways a record starts (issue 16 item 4) on the
+shipped default-model specs (models/default/dataset_*.toml, each cut to its first N Sobol
+samples: ``n_samples = N``): each is generated serially in one process (one core) with
+``simulation.steady_start = "integrate"`` (400 transient revolutions: the old path) and
+``"shooting"``; it prints samples/min of each, the ratio, how many samples took the shooting
+start, the ratio over just those samples (sum of their per-sample times), the largest
+waveform difference between the two files and whether every label is equal.
 """
 from __future__ import annotations
 
@@ -140,7 +148,72 @@ def writer_cost_ms(tmp: Path, n: int = 64) -> tuple[float, float]:
     return 1e3 * total / n, 1e3 * encode / n
 
 
+SHIPPED = sorted((Path(__file__).resolve().parent.parent / "models" / "default").glob("dataset_*.toml"))
+
+
+def compare_steady_start(n: int) -> None:
+    import re
+
+    import h5py
+    import numpy as np
+
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        warm = tmp / "warm.toml"
+        warm.write_text(SPEC.format(n=1, transient=10))
+        run(warm, tmp / "warm.h5", 0)
+        print(f"steady start: shipped default-model specs, first {n} samples each, serial (one core); "
+              f"load {os.getloadavg()[0]:.2f}")
+        print(f"{'spec':<24}{'integrate /min':>15}{'shooting /min':>14}{'x':>6}{'shot':>8}{'x period-1':>11}"
+              f"{'|dwave| shot um':>16}{'fallback um':>12}{'labels equal':>13}")
+        tot = {"integrate": 0.0, "shooting": 0.0}
+        p1 = {"integrate": 0.0, "shooting": 0.0}
+        n_tot = n_shot = 0
+        for path in SHIPPED:
+            text = re.sub(r"(?m)^n_samples = \d+", f"n_samples = {n}", path.read_text())
+            files, res = {}, {}
+            for mode in ("integrate", "shooting"):
+                spec = tmp / f"{path.stem}_{mode}.toml"
+                spec.write_text(text + f'steady_start = "{mode}"\n')
+                files[mode] = tmp / f"{path.stem}_{mode}.h5"
+                res[mode] = run(spec, files[mode], 0)
+                tot[mode] += res[mode]["elapsed_s"] - res[mode]["startup_s"]
+            with h5py.File(files["integrate"], "r") as a, h5py.File(files["shooting"], "r") as b:
+                shot = b["diagnostics/steady_start"][...] == b"shooting"
+                for mode, f in (("integrate", a), ("shooting", b)):
+                    p1[mode] += float(f["diagnostics/wall_time_s"][...][shot].sum())
+                dw = np.abs(a["waveforms"][...] - b["waveforms"][...]).reshape(n, -1)
+                dshot = float(np.nanmax(dw[shot])) if shot.any() else float("nan")
+                dfall = float(np.nanmax(dw[~shot])) if (~shot).any() else float("nan")
+                same = all(np.array_equal(a[k][...], b[k][...]) for k in
+                           ("labels/status", "labels/severity", "labels/misalignment", "labels/motion_kind",
+                            "labels/motion_period"))
+                wa = a["diagnostics/wall_time_s"][...][shot].sum()
+                wb = b["diagnostics/wall_time_s"][...][shot].sum()
+            n_tot += n
+            n_shot += int(shot.sum())
+            ri, rs = 60 * res["integrate"]["gen_rate"], 60 * res["shooting"]["gen_rate"]
+            print(f"{path.stem:<24}{ri:>15.1f}{rs:>14.1f}{rs / ri:>6.2f}{f'{shot.sum()}/{n}':>8}"
+                  f"{wa / max(wb, 1e-9):>11.2f}{dshot:>16.1e}{dfall:>12.1e}{str(same):>13}")
+        print(f"{'all':<24}{60 * n_tot / tot['integrate']:>15.1f}{60 * n_tot / tot['shooting']:>14.1f}"
+              f"{tot['integrate'] / tot['shooting']:>6.2f}{f'{n_shot}/{n_tot}':>8}"
+              f"{p1['integrate'] / max(p1['shooting'], 1e-9):>11.2f}")
+        print("(x: samples/min ratio shooting vs integrate, generation without start-up; x period-1: sum of "
+              "per-sample times of the samples that took the shooting start, integrate / shooting; |dwave|: "
+              "largest waveform difference between the two files over the samples that took the shooting start, "
+              "and over the others (fallback: chaotic samples are another realisation))")
+
+
 def main() -> None:
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steady-start", type=int, default=0, metavar="N",
+                    help="compare the shooting and integration starts on the first N samples of each shipped spec")
+    args = ap.parse_args()
+    if args.steady_start > 0:
+        compare_steady_start(args.steady_start)
+        return
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         spec = tmp / "bench.toml"

@@ -254,7 +254,12 @@ class RotorSystem:
         return y
 
     def check_state(self, state: np.ndarray) -> np.ndarray:
-        """Validate a user-supplied state vector (shape (22,), finite)."""
+        """Validate a user-supplied state vector (shape (22,), finite).
+
+        φ' (component 21) is set to 1 for ``rigid`` and 0 for the mechanisms without coupling
+        dynamics; for ``pin`` it is a state variable and is kept (a run resumed from a
+        ``final_state`` continues the same trajectory).
+        """
         arr = np.asarray(state, dtype=float)
         if arr.shape != (self.n_state,):
             raise ValueError(f"initial_state must have shape ({self.n_state},) for mechanism "
@@ -264,7 +269,7 @@ class RotorSystem:
         arr = arr.copy()
         if self.mechanism_code == K.MECH_RIGID:
             arr[21] = 1.0  # φ' = 1 by construction; φ itself is re-derived from τ
-        else:
+        elif self.mechanism_code != K.MECH_PIN:  # pin: φ' is a dynamic variable and is kept
             arr[21] = 0.0
         return arr
 

@@ -23,12 +23,19 @@ def test_low_speed_sweep_is_period_one_with_negative_lle():
 
 
 def test_sweep_points_equal_direct_simulation():
-    sw = speed_sweep(PLANT, [1600.0], 0.1, 0.05, n_workers=0, samples_per_rev=64, **SHORT)
+    """steady_start="integrate" is the brute-force run bit for bit; the shooting start equals it to 1e-7."""
     res = simulate(PLANT, 1600.0, 0.1, 0.05, transient_revs=200, record_revs=32, samples_per_rev=64)
     c = PLANT.clearance_m
+    sw = speed_sweep(PLANT, [1600.0], 0.1, 0.05, n_workers=0, samples_per_rev=64, steady_start="integrate", **SHORT)
+    assert list(sw.steady_start) == ["integrate"]
     np.testing.assert_array_equal(sw.poincare[0], res.poincare_m[:, 2, 0] / c)
     np.testing.assert_array_equal(sw.orders[0], order_amplitudes(res)[1, 0] / c)
     assert sw.pkpk[0] == pytest.approx(np.ptp(res.positions_m[:, 2, 0]) / c)
+    shot = speed_sweep(PLANT, [1600.0], 0.1, 0.05, n_workers=0, samples_per_rev=64, **SHORT)
+    assert list(shot.steady_start) == ["shooting"]  # the default, and it converges here (period 1)
+    np.testing.assert_allclose(shot.poincare[0], res.poincare_m[:, 2, 0] / c, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(shot.orders[0], order_amplitudes(res)[1, 0] / c, rtol=0, atol=1e-7)
+    assert shot.motion[0] == sw.motion[0] == "period-1"
 
 
 def test_misalignment_sweep_shape_and_determinism():

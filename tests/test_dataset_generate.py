@@ -7,11 +7,12 @@ import h5py
 import numpy as np
 import pytest
 
-from rotordiag.simulator import Plant, simulate
+from rotordiag.simulator import Plant, build_system, simulate
 from rotordiag.simulator.dataset.design import build_design
 from rotordiag.simulator.dataset.generate import generate
 from rotordiag.simulator.dataset.spec import load_spec
 from rotordiag.simulator.dataset.store import StoreError, open_dataset
+from rotordiag.simulator.steady.start import steady_start
 
 from .dataset_support import differing_datasets, write_spec
 
@@ -85,9 +86,14 @@ def test_waveform_equals_the_simulator_seen_through_the_probes(small):
         r2, p2 = f["measurement/runout_2x_um"][0], f["measurement/runout_2x_phase_rad"][0]
         snr = f["measurement/snr_db"][0]
         stored = f["waveforms"][0].astype(float)
-    res = simulate(Plant.from_dict(p.plant), p.speed_rpm, p.misalignment, p.unbalance, mechanism=p.mechanism,
-                   transient_revs=30, record_revs=revs, samples_per_rev=128,
-                   unbalance_phase_rad=p.unbalance_phase_rad, offset_angle_rad=p.offset_angle_rad)
+        path = f["diagnostics/steady_start"][0].decode()
+    kw = dict(mechanism=p.mechanism, unbalance_phase_rad=p.unbalance_phase_rad, offset_angle_rad=p.offset_angle_rad)
+    plant = Plant.from_dict(p.plant)
+    # the record starts where the file says: on the shot orbit, or after the transient
+    start = steady_start(build_system(plant, p.speed_rpm, p.misalignment, p.unbalance, **kw), 30)
+    assert start.path == path
+    res = simulate(plant, p.speed_rpm, p.misalignment, p.unbalance, transient_revs=start.transient_revs,
+                   record_revs=revs, samples_per_rev=128, initial_state=start.state, **kw)
     t = np.arange(164) / 1024.0
     w = p.speed_rpm * np.pi / 30
     wm = 2 * np.pi * 0.5

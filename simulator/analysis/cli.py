@@ -44,6 +44,9 @@ def register(app: typer.Typer) -> None:
         transient_revs: int = typer.Option(400, help="Revolutions discarded at each point."),
         record_revs: int = typer.Option(128, help="Revolutions recorded (Poincaré points per parameter value)."),
         lle_revs: int = typer.Option(0, help="Revolutions of the Lyapunov exponent at each point (0: none)."),
+        steady_start: str = typer.Option(
+            "shooting", help="shooting: start a point's record on its stable period-1 orbit where the transient "
+                             "approaches one (else the rest of the transient); integrate: always the whole transient."),
         plant: Optional[Path] = typer.Option(None, help="Plant file (TOML or JSON); default MODEL.md's plant."),
         plot: Optional[Path] = typer.Option(None, help="Write the bifurcation diagram (PNG)."),
         out: Optional[Path] = typer.Option(None, help="Write the sweep data (HDF5)."),
@@ -69,7 +72,7 @@ def register(app: typer.Typer) -> None:
         pl = load_plant(plant)
         values = np.linspace(from_, to, points)
         kw = dict(mechanism=mechanism, node=node, direction=direction, transient_revs=transient_revs,
-                  record_revs=record_revs, lle_revs=lle_revs, progress=progress, **opts)
+                  record_revs=record_revs, lle_revs=lle_revs, steady_start=steady_start, progress=progress, **opts)
         from rotordiag.simulator.analysis.sweeps import misalignment_sweep, speed_sweep
 
         try:

@@ -5,7 +5,10 @@ initial state (no continuation), so points are run in parallel through the
 shared Dask runner (:func:`simulator.runner.run_tasks`) and the result does not
 depend on the number of workers or the completion order.
 
-At each point: ``simulate`` (transient discarded, ``record_revs`` recorded);
+At each point: the steady start (by default the shooting start of
+:func:`rotordiag.simulator.steady.start.steady_start`: the period-1 orbit where the
+transient approaches a stable one, else the rest of the transient), then ``simulate``
+(``record_revs`` recorded);
 the Poincaré points (τ ≡ 0 mod 2π) of all nodes; optionally the largest
 Lyapunov exponent of the Poincaré map (Benettin, continuing from the recorded
 steady state); the motion type (:func:`classify_motion` on the 12 node
@@ -74,6 +77,7 @@ class PointTask:
     lle_seed: int = 0
     keep_waveform: bool = False
     sim_kwargs: tuple = ()
+    steady_start: str = "shooting"
 
 
 @dataclass
@@ -103,6 +107,9 @@ class PointResult:
         x, y / c of the chosen node (only with ``keep_waveform``).
     wall_time_s : float
     evidence : str
+    steady_start : str
+        How the record started: "shooting" (on the period-1 orbit, no transient) or
+        "integrate" (after the transient; see :func:`rotordiag.simulator.steady.start.steady_start`).
     """
 
     speed_rpm: float
@@ -119,6 +126,7 @@ class PointResult:
     waveform: np.ndarray | None
     wall_time_s: float
     evidence: str = ""
+    steady_start: str = ""
 
 
 def _check_node_direction(node: int, direction: str) -> None:
@@ -189,14 +197,20 @@ def rotor_lyapunov(
 
 def run_point(task: PointTask) -> PointResult:
     """Run one operating point (the function the Dask workers execute)."""
-    from rotordiag.simulator import simulate
+    from rotordiag.simulator import build_system, simulate
     from rotordiag.simulator.simulate import order_amplitudes
+    from rotordiag.simulator.steady.start import steady_start
 
     start = time.perf_counter()
-    kwargs = dict(task.sim_kwargs)
+    kwargs = dict(task.sim_kwargs)  # RotorSystem keywords (validated by _tasks)
+    system = build_system(task.plant, task.speed_rpm, task.misalignment, task.unbalance, mechanism=task.mechanism,
+                          rtol=task.rtol, atol=task.atol, **kwargs)
+    st = steady_start(system, task.transient_revs, task.steady_start)
+    from_start = st.path == "integrate" and st.warmup_revs == 0  # exactly the brute-force run
     res = simulate(task.plant, task.speed_rpm, task.misalignment, task.unbalance, mechanism=task.mechanism,
-                   transient_revs=task.transient_revs, record_revs=task.record_revs,
-                   samples_per_rev=task.samples_per_rev, rtol=task.rtol, atol=task.atol, **kwargs)
+                   transient_revs=st.transient_revs, record_revs=task.record_revs,
+                   samples_per_rev=task.samples_per_rev, rtol=task.rtol, atol=task.atol,
+                   initial_state=None if from_start else st.state, **kwargs)
     c = res.clearance_m
     sections = res.poincare_m / c
     d = DIRECTIONS[task.direction]
@@ -206,7 +220,7 @@ def run_point(task: PointTask) -> PointResult:
         return PointResult(task.speed_rpm, task.misalignment, res.status, sections, res.status, 0,
                            math.nan, math.nan, math.nan, math.nan, nan3,
                            wave.copy() if task.keep_waveform else None,
-                           time.perf_counter() - start, res.message)
+                           time.perf_counter() - start, res.message, st.path)
     pkpk = float(np.ptp(wave[:, d]))
     if task.node in _JOURNAL_BEARING:
         orders = order_amplitudes(res)[_JOURNAL_BEARING[task.node], d] / c
@@ -228,7 +242,7 @@ def run_point(task: PointTask) -> PointResult:
     return PointResult(task.speed_rpm, task.misalignment, "ok", sections, motion.label, motion.period or 0,
                        *lle_vals, pkpk, np.asarray(orders, dtype=float),
                        wave.copy() if task.keep_waveform else None,
-                       time.perf_counter() - start, motion.evidence + evidence_extra)
+                       time.perf_counter() - start, motion.evidence + evidence_extra, st.path)
 
 
 def run_points(
@@ -284,6 +298,9 @@ class SweepResult:
     orders : ndarray, shape (n_points, 3)
         Zero-to-peak 1X, 2X, 3X / c.
     wall_time_s : ndarray, shape (n_points,)
+    steady_start : ndarray of str, shape (n_points,)
+        "shooting" or "integrate": how each point's record started (files written before
+        this field read as "integrate").
     inputs : dict
         unbalance, mechanism, node, direction, revolutions, tolerances, plant.
     """
@@ -303,10 +320,11 @@ class SweepResult:
     pkpk: np.ndarray
     orders: np.ndarray
     wall_time_s: np.ndarray
+    steady_start: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=str))
     inputs: dict = field(default_factory=dict)
 
     _ARRAYS = ("values", "speed_rpm", "misalignment", "poincare", "sections", "status", "motion", "period",
-               "lle_per_rev", "lle_per_s", "lle_stderr_per_rev", "pkpk", "orders", "wall_time_s")
+               "lle_per_rev", "lle_per_s", "lle_stderr_per_rev", "pkpk", "orders", "wall_time_s", "steady_start")
 
     @property
     def clearance_m(self) -> float:
@@ -335,6 +353,7 @@ class SweepResult:
             pkpk=np.array([p.pkpk for p in points], dtype=float),
             orders=np.stack([p.orders for p in points]).astype(float),
             wall_time_s=np.array([p.wall_time_s for p in points], dtype=float),
+            steady_start=np.array([p.steady_start for p in points]),
             inputs=dict(inputs),
         )
 
@@ -367,6 +386,9 @@ class SweepResult:
                 raise ValueError(f"{path} is not a rotordiag sweep file")
             data = {}
             for name in cls._ARRAYS:
+                if name == "steady_start" and name not in f:  # written before the shooting start existed
+                    data[name] = np.full(len(f["values"]), "integrate")
+                    continue
                 arr = f[name][()]
                 data[name] = arr.astype(str) if arr.dtype.kind == "S" else arr
             return cls(parameter=str(f.attrs["parameter"]), inputs=json.loads(f.attrs["inputs_json"]), **data)
@@ -385,8 +407,12 @@ def _values(name: str, values: Iterable[float], lo: float, hi: float) -> np.ndar
 def _tasks(plant: Any, pairs: Iterable[tuple[float, float]], unbalance: float, *, mechanism: str,
            transient_revs: int, record_revs: int, samples_per_rev: int, rtol: float, atol: float, node: int,
            direction: str, lle_revs: int, seed: int, keep_waveform: bool = False,
-           sim_kwargs: dict | None = None) -> list[PointTask]:
+           sim_kwargs: dict | None = None, steady_start: str = "shooting") -> list[PointTask]:
+    from rotordiag.simulator.steady.start import STEADY_STARTS
+
     _check_node_direction(node, direction)
+    if steady_start not in STEADY_STARTS:
+        raise ValueError(f"steady_start must be one of {STEADY_STARTS}, got {steady_start!r}")
     if isinstance(lle_revs, bool) or int(lle_revs) != lle_revs or lle_revs < 0:
         raise ValueError(f"lle_revs must be an integer >= 0 (0 = no Lyapunov exponent), got {lle_revs!r}")
     if int(record_revs) != record_revs or record_revs < 8:
@@ -396,7 +422,8 @@ def _tasks(plant: Any, pairs: Iterable[tuple[float, float]], unbalance: float, *
                      mechanism=mechanism, transient_revs=int(transient_revs), record_revs=int(record_revs),
                      samples_per_rev=int(samples_per_rev), rtol=float(rtol), atol=float(atol), node=int(node),
                      direction=direction, lle_revs=int(lle_revs), lle_seed=int(seed),
-                     keep_waveform=keep_waveform, sim_kwargs=tuple(sorted((sim_kwargs or {}).items())))
+                     keep_waveform=keep_waveform, sim_kwargs=tuple(sorted((sim_kwargs or {}).items())),
+                     steady_start=steady_start)
     tasks = [replace(base, speed_rpm=float(s), misalignment=float(d)) for s, d in pairs]
     # validate the operating points here, in the caller's process, with the simulator's own messages
     from rotordiag.simulator import build_system
@@ -429,6 +456,7 @@ def speed_sweep(
     atol: float = 1e-8,
     lle_revs: int = 0,
     seed: int = 0,
+    steady_start: str = "shooting",
     n_workers: int | None = None,
     scheduler_address: str | None = None,
     client: Any = None,
@@ -453,6 +481,11 @@ def speed_sweep(
         As for :func:`simulator.simulate` (the paper: 400 transient revolutions, rtol 1e-6).
     lle_revs : int
         Revolutions of the Benettin LLE at each point (0: not computed).
+    steady_start : {"shooting", "integrate"}
+        "shooting" (default): start each record on the period-1 orbit found by shooting where
+        the transient approaches a clearly stable one, else integrate the rest of the transient
+        (:func:`rotordiag.simulator.steady.start.steady_start`; ``SweepResult.steady_start``
+        says which); "integrate": always the whole transient from MODEL.md's start.
     seed : int
         Seed of the LLE's initial perturbation direction.
     n_workers, scheduler_address, client, progress
@@ -468,13 +501,13 @@ def speed_sweep(
     tasks = _tasks(plant, [(s, misalignment) for s in speeds], unbalance, mechanism=mechanism,
                    transient_revs=transient_revs, record_revs=record_revs, samples_per_rev=samples_per_rev,
                    rtol=rtol, atol=atol, node=node, direction=direction, lle_revs=lle_revs, seed=seed,
-                   sim_kwargs=sim_kwargs)
+                   sim_kwargs=sim_kwargs, steady_start=steady_start)
     points = run_points(tasks, n_workers=n_workers, scheduler_address=scheduler_address, client=client,
                         progress=progress, desc=f"speed sweep Δ={misalignment:g}")
     return SweepResult.from_points("speed_rpm", points, _inputs(
         plant, unbalance, mechanism=mechanism, node=node, direction=direction, transient_revs=transient_revs,
         record_revs=record_revs, samples_per_rev=samples_per_rev, rtol=rtol, atol=atol, lle_revs=lle_revs,
-        seed=seed, misalignment=float(misalignment), **sim_kwargs))
+        seed=seed, misalignment=float(misalignment), steady_start=steady_start, **sim_kwargs))
 
 
 def misalignment_sweep(
@@ -493,6 +526,7 @@ def misalignment_sweep(
     atol: float = 1e-8,
     lle_revs: int = 0,
     seed: int = 0,
+    steady_start: str = "shooting",
     n_workers: int | None = None,
     scheduler_address: str | None = None,
     client: Any = None,
@@ -508,13 +542,13 @@ def misalignment_sweep(
     tasks = _tasks(plant, [(speed_rpm, d) for d in deltas], unbalance, mechanism=mechanism,
                    transient_revs=transient_revs, record_revs=record_revs, samples_per_rev=samples_per_rev,
                    rtol=rtol, atol=atol, node=node, direction=direction, lle_revs=lle_revs, seed=seed,
-                   sim_kwargs=sim_kwargs)
+                   sim_kwargs=sim_kwargs, steady_start=steady_start)
     points = run_points(tasks, n_workers=n_workers, scheduler_address=scheduler_address, client=client,
                         progress=progress, desc=f"Δ sweep {speed_rpm:g} r/min")
     return SweepResult.from_points("misalignment", points, _inputs(
         plant, unbalance, mechanism=mechanism, node=node, direction=direction, transient_revs=transient_revs,
         record_revs=record_revs, samples_per_rev=samples_per_rev, rtol=rtol, atol=atol, lle_revs=lle_revs,
-        seed=seed, speed_rpm=float(speed_rpm), **sim_kwargs))
+        seed=seed, speed_rpm=float(speed_rpm), steady_start=steady_start, **sim_kwargs))
 
 
 def amplitude_speed_curves(
@@ -545,5 +579,5 @@ def amplitude_speed_curves(
 
 
 _SWEEP_DEFAULTS = dict(mechanism="pin", node=3, direction="x", transient_revs=400, record_revs=128,
-                       samples_per_rev=64, rtol=1e-6, atol=1e-8, lle_revs=0, seed=0)
+                       samples_per_rev=64, rtol=1e-6, atol=1e-8, lle_revs=0, seed=0, steady_start="shooting")
 _SWEEP_OPTIONS = set(_SWEEP_DEFAULTS)

@@ -108,6 +108,9 @@ def _dataset_attrs() -> dict[str, dict[str, Any]]:
         "labels/severity": {"names_json": json.dumps(list(bands.names)), "edges_json": json.dumps(list(bands.edges))},
         "labels/status": {"codes_json": json.dumps(STATUS_CODES)},
         "diagnostics/wall_time_s": {"description": "simulator wall time (not reproducible between runs)"},
+        "diagnostics/steady_start": {"description": "how the record started: shooting (on the period-1 orbit) "
+                                                    "or integrate (after the transient)"},
+        "diagnostics/steady_start_note": {"description": "why integrate when shooting was asked for"},
     }
 
 
@@ -143,6 +146,8 @@ def _rows(p: SampleParams, out: SampleOutput) -> dict[str, Any]:
     rows["diagnostics/nfev"] = out.nfev
     rows["diagnostics/wall_time_s"] = out.wall_time_s
     rows["diagnostics/message"] = out.message.encode("utf-8", "replace")[:256]
+    rows["diagnostics/steady_start"] = out.steady_start.encode()[:16]
+    rows["diagnostics/steady_start_note"] = out.steady_note.encode("utf-8", "replace")[:96]
     return rows
 
 

@@ -9,7 +9,7 @@ See ``examples/dataset_small.toml`` for a commented example and
 ``[plant]``        base plant (``file``, ``shaftline`` or ``preset``, and/or ``set``), or a machine family
                    (``presets`` and/or ``shaftlines``, weighted), relative ``perturb``-ations and ``scale`` factors
 ``[measurement]``  probes, sample rate, duration, SNR, runout, speed fluctuation
-``[simulation]``   transient_revs, samples_per_rev, rtol, atol, classify_motion
+``[simulation]``   transient_revs, samples_per_rev, rtol, atol, classify_motion, steady_start
 
 A *value* is a number; a *list* ``[a, b, c]`` is a set of levels; a *range*
 ``{min = .., max = ..}`` is a continuous interval (``n = k`` levels for a grid).
@@ -349,6 +349,11 @@ class Simulation(_Strict):
     record_revs_min: int = Field(default=32, ge=1, le=100_000,
                                  description="record at least this many revolutions (Poincaré points for the motion label)")
     classify_motion: bool = Field(default=True, description="label the motion type with simulator.analysis")
+    steady_start: Literal["shooting", "integrate"] = Field(
+        default="shooting",
+        description="start each record on the period-1 orbit found by shooting where that converges to a stable "
+                    "orbit (else integrate the transient; diagnostics/steady_start says which), or always "
+                    "integrate transient_revs revolutions")
 
 
 class DatasetSpec(_Strict):

@@ -53,6 +53,7 @@ _MESSAGE_LEN = 256
 RESUME_LOG_SLOTS = 64
 RESUME_LOG_LEN = 512
 _KIND_LEN = 16
+_NOTE_LEN = 96
 #: The waveforms' filter pipeline, in HDF5's write order: byte shuffle, then deflate (gzip) at this level.
 WAVEFORM_GZIP_LEVEL = 4
 WAVEFORM_DTYPE = "<f4"
@@ -110,6 +111,8 @@ def layout(n_channels: int, n_points: int, n_bearings: int,
     L["diagnostics/nfev"] = ((), "i8")
     L["diagnostics/wall_time_s"] = ((), "f8")
     L["diagnostics/message"] = ((), f"S{_MESSAGE_LEN}")
+    L["diagnostics/steady_start"] = ((), f"S{_KIND_LEN}")
+    L["diagnostics/steady_start_note"] = ((), f"S{_NOTE_LEN}")
     return L
 
 

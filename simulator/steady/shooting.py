@@ -8,10 +8,18 @@ multipliers are the eigenvalues of M at the converged point: |μ| < 1 for all of
 them is a stable orbit, any |μ| > 1 an unstable one (it exists, but no
 integration from a nearby start stays on it).
 
+``method="chord"`` (what :func:`steady_state` uses by default) reuses one cheap
+monodromy matrix (rtol 1e-3) for all iterations, each of which then costs one plain
+map evaluation; it converges to the same fixed point and hands over to Newton if it
+stalls.
+
 :func:`steady_state` is the rotor entry point: build the system, warm up by
-integration (which also proposes the period n ≤ 16 from the recurrence of the
-Poincaré points), shoot, and return a :class:`PeriodicOrbit` with the orbit
-sampled over its n revolutions.
+integration (at most ``warmup_revs``, ending once the Poincaré points settle; the
+warm-up also proposes the period n ≤ 16 from their recurrence), shoot, and return a
+:class:`PeriodicOrbit` with the orbit sampled over its n revolutions. Measured at
+1950 r/min on one core (``benchmarks/bench_steady.py``): 15–19 ms per period-1
+point from MODEL.md's start with exact multipliers, against 75–101 ms for 400
+brute-force revolutions.
 """
 from __future__ import annotations
 
@@ -31,7 +39,7 @@ from .maps import MapEval, PeriodicMap, RotorMap
 
 __all__ = [
     "FixedPoint", "PeriodicOrbit", "find_fixed_point", "steady_state", "stability_verdict",
-    "MAX_PERIOD", "NEWTON_TOL", "MULTIPLIER_TOL",
+    "MAX_PERIOD", "NEWTON_TOL", "MULTIPLIER_TOL", "CHORD_JACOBIAN_RTOL", "METHODS",
 ]
 
 #: longest period searched (MODEL.md §8)
@@ -42,6 +50,12 @@ NEWTON_TOL = 1e-9
 MULTIPLIER_TOL = 1e-5
 #: largest Newton step (non-dimensional, ∞-norm): a far start is pulled in, not thrown out
 MAX_NEWTON_STEP = 0.2
+#: relative tolerance of the approximate monodromy matrix of the chord iterations
+#: (M to ~3e-4 relative, |μ| to ~1e-5, at about a quarter of the cost of an rtol-1e-6 matrix)
+CHORD_JACOBIAN_RTOL = 1e-3
+#: a chord step must cut the residual at least by this factor, else the matrix is recomputed
+CHORD_CONTRACTION = 0.5
+METHODS = ("newton", "chord")
 
 
 def stability_verdict(multipliers: np.ndarray, tol: float = MULTIPLIER_TOL) -> str:
@@ -102,8 +116,23 @@ class FixedPoint:
 
 
 def find_fixed_point(pmap: PeriodicMap, x0: np.ndarray, n_periods: int = 1, *, tol: float = NEWTON_TOL,
-                     max_iter: int = 30, max_step: float = MAX_NEWTON_STEP) -> FixedPoint:
-    """Newton's method on Pⁿ(x) − x = 0 with the variational monodromy matrix.
+                     max_iter: int = 30, max_step: float = MAX_NEWTON_STEP, method: str = "newton",
+                     jacobian_rtol: float | None = None, exact_multipliers: bool = True,
+                     newton_fallback: bool = True) -> FixedPoint:
+    """Newton's method (or chord iterations) on Pⁿ(x) − x = 0 with the variational monodromy matrix.
+
+    ``method="chord"``: one monodromy matrix M (at the start, optionally at a looser
+    ``jacobian_rtol``; recomputed only when a step fails to halve the residual) is
+    LU-factorised once and reused: each further iteration costs one plain map
+    evaluation (≈ 1/20 to 1/40 of a monodromy). It converges linearly, at a rate
+    ≈ ‖(M − I)⁻¹ δM‖ (≈ 1e-2 from a start near the orbit), to the fixed point of the
+    same map Pⁿ as Newton. When the chord iterations stall, Newton with its line search
+    continues from the best point reached. With ``exact_multipliers`` one monodromy
+    matrix at the system's tolerance is evaluated at the converged point (the Floquet
+    multipliers are then as accurate as Newton's); without it the multipliers are
+    those of the last chord matrix, evaluated at a point within a chord step of the
+    orbit (|μ| to ~1e-4 at ``jacobian_rtol`` 1e-3), enough for a stability verdict
+    away from |μ| = 1.
 
     Parameters
     ----------
@@ -117,9 +146,26 @@ def find_fixed_point(pmap: PeriodicMap, x0: np.ndarray, n_periods: int = 1, *, t
         Convergence: max |Pⁿ(x) − x| ≤ tol (≤ 10·tol once the Newton step is below tol/10).
     max_iter, max_step
         Iteration cap; the largest step (∞-norm) before the line search.
+    method : {"newton", "chord"}
+    jacobian_rtol : float, optional
+        Chord only: relative tolerance of the chord matrix (``CHORD_JACOBIAN_RTOL`` is
+        a good value; default the map's own). Needs a map whose ``evaluate`` takes ``rtol``.
+    exact_multipliers : bool
+        Chord only: see above.
+    newton_fallback : bool
+        Chord only: let Newton continue when the chord iterations stall (default); False
+        returns the chord's failure (a caller that falls back to integration anyway).
     """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     x = np.array(x0, dtype=float, copy=True)
     nfev = 0
+    if method == "chord":
+        chord = _chord(pmap, x, int(n_periods), tol, max_iter, max_step, jacobian_rtol, exact_multipliers)
+        if chord.converged or not newton_fallback:
+            return chord
+        x = chord.x  # best point reached: Newton continues from there
+        nfev = chord.nfev
     ev = pmap.evaluate(x, n_periods, monodromy=True)
     nfev += ev.nfev
     if not ev.ok:
@@ -166,6 +212,70 @@ def find_fixed_point(pmap: PeriodicMap, x0: np.ndarray, n_periods: int = 1, *, t
     if rn <= 10 * tol:
         return _done(x, ev, rn, max_iter, nfev, "converged")
     return _fail(x, ev, nfev, max_iter, f"no convergence in {max_iter} iterations (residual {rn:.3e})")
+
+
+def _chord(pmap: PeriodicMap, x: np.ndarray, n: int, tol: float, max_iter: int, max_step: float,
+           jacobian_rtol: float | None, exact_multipliers: bool) -> FixedPoint:
+    """Chord iterations (see :func:`find_fixed_point`); not converged: ``x`` is the best point reached."""
+    from scipy.linalg import lu_factor, lu_solve
+
+    kw = {} if jacobian_rtol is None else {"rtol": float(jacobian_rtol)}
+    ev = pmap.evaluate(x, n)
+    nfev = ev.nfev
+    if not ev.ok:
+        return _fail(x, ev, nfev, 0, f"the start state's run ended with status {ev.status!r}")
+    r = pmap.difference(ev.value, x)
+    rn = float(np.max(np.abs(r)))
+    eye = np.eye(x.size)
+    lu: Any = None
+    monodromy: np.ndarray | None = None
+    fresh = False
+    n_matrices = 0
+    it = 0
+    while rn > tol:
+        if it >= max_iter:
+            return _fail(x, ev, nfev, it, f"chord: no convergence in {max_iter} iterations (residual {rn:.3e})")
+        if lu is None:
+            evm = pmap.evaluate(x, n, monodromy=True, **kw)
+            nfev += evm.nfev
+            if not evm.ok or evm.monodromy is None or not np.all(np.isfinite(evm.monodromy)):
+                return _fail(x, ev, nfev, it, f"chord: monodromy run ended with status {evm.status!r}")
+            monodromy = evm.monodromy
+            lu = lu_factor(monodromy - eye, check_finite=False)
+            fresh = True
+            n_matrices += 1
+        dx = lu_solve(lu, -r, check_finite=False)
+        big = float(np.max(np.abs(dx)))
+        if not math.isfinite(big):
+            return _fail(x, ev, nfev, it, "chord: non-finite step (a multiplier at 1: fold?)")
+        if big > max_step:
+            dx *= max_step / big
+        xt = x + dx
+        evt = pmap.evaluate(xt, n)
+        nfev += evt.nfev
+        it += 1
+        rtn = float(np.max(np.abs(pmap.difference(evt.value, xt)))) if evt.ok else math.inf
+        if rtn <= CHORD_CONTRACTION * rn or rtn <= tol or (big < 0.1 * tol and rtn <= 10 * tol):
+            x, ev, r, rn = xt, evt, pmap.difference(evt.value, xt), rtn
+            fresh = False
+            if big < 0.1 * tol:
+                break  # the step is below the map's own noise
+        elif fresh:
+            return _fail(x, ev, nfev, it, f"chord: a fresh matrix does not contract (residual {rn:.3e} -> {rtn:.3e})")
+        else:
+            if rtn < rn:
+                x, ev, r, rn = xt, evt, pmap.difference(evt.value, xt), rtn
+            lu = None  # recompute the matrix where we are
+    if rn > 10 * tol:
+        return _fail(x, ev, nfev, it, f"chord stalled at residual {rn:.3e}")
+    if exact_multipliers or monodromy is None:
+        evm = pmap.evaluate(x, n, monodromy=True)
+        nfev += evm.nfev
+        if not evm.ok or evm.monodromy is None:
+            return _fail(x, ev, nfev, it, f"monodromy run at the fixed point ended with status {evm.status!r}")
+        monodromy = evm.monodromy
+    return FixedPoint(x, monodromy, floquet_multipliers(monodromy), ev.sections, rn, True, it, nfev, ev.status,
+                      f"converged (chord, {n_matrices} matrix evaluation(s))")
 
 
 def _done(x: np.ndarray, ev: MapEval, rn: float, it: int, nfev: int, msg: str) -> FixedPoint:
@@ -278,6 +388,9 @@ def steady_state(
     tol: float = NEWTON_TOL,
     max_iter: int = 30,
     central: bool = False,
+    method: str = "chord",
+    jacobian_rtol: float | None = CHORD_JACOBIAN_RTOL,
+    exact_multipliers: bool = True,
     **system_kwargs: Any,
 ) -> PeriodicOrbit:
     """Periodic steady state of the rotor by shooting on the once-per-revolution map.
@@ -293,8 +406,9 @@ def steady_state(
         Start (full state at τ ≡ 0), e.g. a neighbouring orbit's ``state``;
         default MODEL.md §5's start.
     warmup_revs : int
-        Revolutions integrated from the start before Newton (0: shoot from the
-        start at once, right for a good ``initial_state``).
+        Most revolutions integrated from the start before Newton (0: shoot from the
+        start at once, right for a good ``initial_state``); the warm-up ends after
+        the first 10-revolution chunk whose Poincaré points have settled (:func:`warm_up`).
     samples_per_rev : int
         Samples per revolution of the returned ``orbit``.
     rtol, atol : float
@@ -304,6 +418,16 @@ def steady_state(
         Newton tolerance (max |Pⁿ(x) − x|, non-dimensional) and iteration cap.
     central : bool
         Central directional differences in the variational equations.
+    method : {"chord", "newton"}
+        Chord iterations (one cheap monodromy matrix at ``jacobian_rtol``, reused; Newton
+        takes over if they stall) or Newton with a monodromy matrix per iteration. Both
+        converge to the same fixed point of the same map (see :func:`find_fixed_point`).
+    jacobian_rtol : float, optional
+        Chord only: tolerance of the chord matrix (None: ``rtol``).
+    exact_multipliers : bool
+        Chord only: evaluate the monodromy matrix at the fixed point at ``rtol`` for the
+        multipliers (default); False reports the chord matrix's (|μ| to ~1e-4, one
+        monodromy cheaper: what a dataset's stable/unstable decision needs).
     **system_kwargs
         ``unbalance_phase_rad``, ``offset_angle_rad``, ... (``RotorSystem``).
 
@@ -318,41 +442,100 @@ def steady_state(
         raise ValueError(f"period must be an integer in 1..{MAX_PERIOD}, got {period!r}")
     if int(warmup_revs) != warmup_revs or warmup_revs < 0:
         raise ValueError(f"warmup_revs must be an integer >= 0, got {warmup_revs!r}")
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    solver = dict(tol=tol, max_iter=max_iter, method=method, jacobian_rtol=jacobian_rtol,
+                  exact_multipliers=exact_multipliers)
     system = RotorSystem(plant, speed_rpm, misalignment, unbalance, mechanism=mechanism, rtol=rtol, atol=atol,
                          **system_kwargs)
     pmap = RotorMap(system, central=central)
     y0 = system.initial_state() if initial_state is None else system.check_state(initial_state)
     x0 = pmap.reduce(y0)
     nfev = 0
+    settled = False
     if warmup_revs > 0:
-        ev = pmap.evaluate(x0, int(warmup_revs))
-        nfev += ev.nfev
-        if not ev.ok:
-            return _orbit_failed(system, y0, nfev, start, f"warm-up ended with status {ev.status!r}")
-        x0 = ev.value
-        recent = ev.sections[-min(len(ev.sections), 2 * MAX_PERIOD + 1):]
+        wu = warm_up(pmap, x0, int(warmup_revs))
+        nfev += wu.nfev
+        if not wu.ok:
+            return _orbit_failed(system, y0, nfev, start, f"warm-up ended with status {wu.status!r}")
+        x0, settled = wu.x, wu.settled
+        recent = wu.sections[-min(len(wu.sections), 2 * MAX_PERIOD + 1):]
     else:
         recent = np.zeros((0, x0.size))
     if period is not None:
         periods = [int(period)]
     elif len(recent) > 2:
         periods = candidate_periods(recent)
+        if settled:  # the warm-up's points contract onto one: period 1 first
+            periods = [1] + [n for n in periods if n != 1][:2]
     else:
         periods = [1]
     messages = []
     for n in periods:
-        fp = find_fixed_point(pmap, x0, n, tol=tol, max_iter=max_iter)
+        fp = find_fixed_point(pmap, x0, n, **solver)  # type: ignore[arg-type]
         nfev += fp.nfev
         if fp.converged:
             n_least = _reduce_period(pmap, fp, n, tol) if period is None else n
             if n_least != n:
-                fp = find_fixed_point(pmap, fp.x, n_least, tol=tol, max_iter=max_iter)
+                fp = find_fixed_point(pmap, fp.x, n_least, **solver)  # type: ignore[arg-type]
                 nfev += fp.nfev
                 n = n_least
             if fp.converged:
                 return _orbit(system, pmap, fp, n, nfev, start, samples_per_rev)
         messages.append(f"period {n}: {fp.message}")
     return _orbit_failed(system, pmap.full(x0), nfev, start, "; ".join(messages))
+
+
+#: the warm-up runs in chunks of this many revolutions (and at least one chunk)
+WARMUP_CHUNK_REVS = 10
+#: the warm-up ends early once consecutive Poincaré points differ by less than this (∞-norm,
+#: non-dimensional) and the differences have fallen over the last chunk: period-1 motion settling
+WARMUP_SETTLED = 1e-2
+
+
+@dataclass
+class WarmUp:
+    """Outcome of :func:`warm_up` (reduced states)."""
+
+    x: np.ndarray
+    sections: np.ndarray
+    revs: int
+    settled: bool
+    status: str
+    nfev: int
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+
+def warm_up(pmap: RotorMap, x0: np.ndarray, max_revs: int, *, chunk_revs: int = WARMUP_CHUNK_REVS,
+            settled_tol: float = WARMUP_SETTLED) -> WarmUp:
+    """Integrate up to ``max_revs`` revolutions from ``x0`` in chunks, ending early once settled.
+
+    Settled: the last two Poincaré points differ by at most ``settled_tol`` and by no more
+    than the first two of the chunk (the differences fall: a period-1 orbit being approached;
+    period-n, quasi-periodic and chaotic motion never settle this way). The revolutions are
+    the same ones a brute-force transient integrates (``x`` after k of them is that
+    run's state at revolution k, up to the integrator's restart at each chunk).
+    """
+    x = np.array(x0, dtype=float, copy=True)
+    pts: list[np.ndarray] = []
+    nfev, done, last = 0, 0, x
+    while done < max_revs:
+        k = min(int(chunk_revs), max_revs - done)
+        ev = pmap.evaluate(x, k)
+        nfev += ev.nfev
+        if not ev.ok:
+            return WarmUp(x, np.array(pts).reshape(-1, x.size), done, False, ev.status, nfev)
+        pts.extend(ev.sections)
+        done += k
+        chain = np.vstack([last[None, :], ev.sections])
+        d = np.max(np.abs(pmap.difference(chain[1:], chain[:-1])), axis=1)
+        x, last = ev.value, ev.value
+        if d[-1] <= settled_tol and d[-1] <= max(d[0], 1e-7):
+            return WarmUp(x, np.array(pts), done, True, "ok", nfev)
+    return WarmUp(x, np.array(pts).reshape(-1, x.size), done, False, "ok", nfev)
 
 
 def _inputs(system: RotorSystem) -> dict[str, Any]:
