@@ -350,6 +350,54 @@ def _dense(y_old, K, h, theta, out_row):
 
 
 @njit(**NUMBA_OPTIONS)
+def dp_trial_step(tau, h, y, p, K, Ys, y_new, rtol, atol):
+    """One Dormand–Prince 5(4) trial step from ``(tau, y)``, with ``K[0] = f(tau, y)`` (FSAL).
+
+    Fills the stage derivatives ``K[1..6]``, the stage states ``Ys[0..5]`` (``Ys[0] = y``) and
+    the 5th-order solution ``y_new``; returns the RMS norm of the embedded error estimate,
+    scaled by ``atol + rtol·max(|y|, |y_new|)`` (< 1: accept). Shared by :func:`integrate` and
+    the variational integrator of :mod:`rotordiag.simulator.steady` (6 calls of ``rhs``).
+    """
+    n = y.shape[0]
+    for i in range(n):
+        Ys[0, i] = y[i]
+    for s in range(1, 6):
+        for i in range(n):
+            acc = 0.0
+            for j in range(s):
+                acc += _A[s, j] * K[j, i]
+            Ys[s, i] = y[i] + h * acc
+        rhs(tau + _C[s] * h, Ys[s], p, K[s])
+    for i in range(n):
+        acc = 0.0
+        for j in range(6):
+            acc += _B[j] * K[j, i]
+        y_new[i] = y[i] + h * acc
+    rhs(tau + h, y_new, p, K[6])
+    err2 = 0.0
+    for i in range(n):
+        e = 0.0
+        for j in range(7):
+            e += _E[j] * K[j, i]
+        e *= h
+        sc = atol + rtol * max(abs(y[i]), abs(y_new[i]))
+        err2 += (e / sc) ** 2
+    return math.sqrt(err2 / n)
+
+
+@njit(**NUMBA_OPTIONS)
+def dp_step_factor(err, step_rejected):
+    """Growth factor of the next step after an accepted step with error norm ``err``."""
+    if err == 0.0:
+        factor = _MAX_FACTOR
+    else:
+        factor = min(_MAX_FACTOR, _SAFETY * err ** -0.2)
+    if step_rejected:
+        factor = min(1.0, factor)
+    return factor
+
+
+@njit(**NUMBA_OPTIONS)
 def integrate(y0, tau0, p, rtol, atol, h0, grid_t0, grid_dt, grid_out, pc_t0, pc_dt, pc_out,
               tau_end, max_steps):
     """Integrate from ``tau0`` to ``tau_end`` with adaptive Dormand–Prince 5(4).
@@ -369,7 +417,7 @@ def integrate(y0, tau0, p, rtol, atol, h0, grid_t0, grid_dt, grid_out, pc_t0, pc
     y = y0.copy()
     y_new = np.empty(n)
     K = np.zeros((7, n))
-    ytmp = np.empty(n)
+    Ys = np.empty((6, n))
     tau = tau0
     rhs(tau, y, p, K[0])
     nfev = 1
@@ -406,42 +454,15 @@ def integrate(y0, tau0, p, rtol, atol, h0, grid_t0, grid_dt, grid_out, pc_t0, pc
             if h < hmin:  # floating-point remainder of the interval
                 tau = tau_end
                 break
-        # Stages 2..6
-        for s in range(1, 6):
-            for i in range(n):
-                acc = 0.0
-                for j in range(s):
-                    acc += _A[s, j] * K[j, i]
-                ytmp[i] = y[i] + h * acc
-            rhs(tau + _C[s] * h, ytmp, p, K[s])
-        for i in range(n):
-            acc = 0.0
-            for j in range(6):
-                acc += _B[j] * K[j, i]
-            y_new[i] = y[i] + h * acc
-        rhs(tau + h, y_new, p, K[6])
+        err = dp_trial_step(tau, h, y, p, K, Ys, y_new, rtol, atol)
         nfev += 6
-        err2 = 0.0
-        for i in range(n):
-            e = 0.0
-            for j in range(7):
-                e += _E[j] * K[j, i]
-            e *= h
-            sc = atol + rtol * max(abs(y[i]), abs(y_new[i]))
-            err2 += (e / sc) ** 2
-        err = math.sqrt(err2 / n)
         if not math.isfinite(err):
             h *= _MIN_FACTOR
             nrej += 1
             step_rejected = True
             continue
         if err < 1.0:
-            if err == 0.0:
-                factor = _MAX_FACTOR
-            else:
-                factor = min(_MAX_FACTOR, _SAFETY * err ** -0.2)
-            if step_rejected:
-                factor = min(1.0, factor)
+            factor = dp_step_factor(err, step_rejected)
             tau_new = tau + h
             # dense output for the samples inside (tau, tau_new]
             while ng < n_grid:

@@ -41,7 +41,6 @@ from .._kernels import (
     _B,
     _C,
     _E,
-    _MAX_FACTOR,
     _MIN_FACTOR,
     _SAFETY,
     CONTACT_ECCENTRICITY,
@@ -49,6 +48,8 @@ from .._kernels import (
     STATUS_CONTACT,
     STATUS_DIVERGED,
     STATUS_OK,
+    dp_step_factor,
+    dp_trial_step,
     max_eccentricity,
     rhs,
 )
@@ -162,31 +163,8 @@ def integrate_variational(y0, phi0, tau0, tau_end, p, rtol, atol, h0, max_steps,
                         pc_out[npc, i] = y[i]
                     npc += 1
                 continue
-        for i in range(n):
-            Ys[0, i] = y[i]
-        for s in range(1, 6):
-            for i in range(n):
-                acc = 0.0
-                for j in range(s):
-                    acc += _A[s, j] * K[j, i]
-                Ys[s, i] = y[i] + h * acc
-            rhs(tau + _C[s] * h, Ys[s], p, K[s])
-        for i in range(n):
-            acc = 0.0
-            for j in range(6):
-                acc += _B[j] * K[j, i]
-            y_new[i] = y[i] + h * acc
-        rhs(tau + h, y_new, p, K[6])
+        err = dp_trial_step(tau, h, y, p, K, Ys, y_new, rtol, atol)
         nfev += 6
-        err2 = 0.0
-        for i in range(n):
-            e = 0.0
-            for j in range(7):
-                e += _E[j] * K[j, i]
-            e *= h
-            sc = atol + rtol * max(abs(y[i]), abs(y_new[i]))
-            err2 += (e / sc) ** 2
-        err = math.sqrt(err2 / n)
         if not math.isfinite(err):
             h *= _MIN_FACTOR
             nrej += 1
@@ -228,12 +206,7 @@ def integrate_variational(y0, phi0, tau0, tau_end, p, rtol, atol, h0, max_steps,
                 for c in range(m):
                     Phi[i, c] = Phi_new[i, c]
                     KV[0, i, c] = KV[6, i, c]
-            if err == 0.0:
-                factor = _MAX_FACTOR
-            else:
-                factor = min(_MAX_FACTOR, _SAFETY * err ** -0.2)
-            if step_rejected:
-                factor = min(1.0, factor)
+            factor = dp_step_factor(err, step_rejected)
             tau = tau + h
             for i in range(n):
                 y[i] = y_new[i]
