@@ -18,13 +18,11 @@ import argparse
 import multiprocessing as mp
 import os
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
 import threading
 import time
-import urllib.request
 from pathlib import Path
 
 import numpy as np
@@ -32,7 +30,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_service import _drive_entry, _tree, payloads, recording  # noqa: E402
+from bench_service import _drive_entry, _tree, payloads, recording, start_server  # noqa: E402
 
 CONCURRENCY = 4
 
@@ -103,24 +101,9 @@ def main() -> None:
     data, bearings, angles = recording()
     path, ctype, body = payloads(data, bearings, angles)["binary"]
     tmp = Path(tempfile.mkdtemp(prefix="bench_failover_"))
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    env = dict(os.environ, ROTORDIAG_DATA_DIR=str(tmp / "data"), ROTORDIAG_API_KEY="bench",
-               ROTORDIAG_LOG_LEVEL="critical", ROTORDIAG_DIAGNOSIS_WORKERS="2")
-    exe = Path(sys.executable).parent / "rotordiag"
-    server = subprocess.Popen([str(exe), "serve", "--host", "127.0.0.1", "--port", str(port)], cwd=tmp, env=env,
-                              stderr=subprocess.DEVNULL)
+    server, port = start_server(tmp, {"ROTORDIAG_LOG_LEVEL": "critical", "ROTORDIAG_DIAGNOSIS_WORKERS": "2"},
+                                quiet=True)
     try:
-        for _ in range(300):
-            try:
-                with urllib.request.urlopen(f"http://127.0.0.1:{port}/health", timeout=2) as r:
-                    if r.status == 200:
-                        break
-            except OSError:
-                time.sleep(0.2)
-        else:
-            raise SystemExit("server did not become healthy")
         _phase(port, (path, ctype, body), 3.0, None, server.pid)            # warm-up
         print(f"2 diagnosis workers, concurrency {CONCURRENCY}, binary NPY body {len(body) / 1e6:.2f} MB, "
               f"{args.duration:g} s per phase; cores available: {len(os.sched_getaffinity(0))}")

@@ -199,6 +199,26 @@ class MemorySampler:
         self._thread.join()
 
 
+def start_server(tmp: Path, env_extra: dict[str, str], quiet: bool = False) -> tuple[subprocess.Popen, int]:
+    """``rotordiag serve`` on a free local port with its data under ``tmp``; returns once /health is 200."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    env = dict(os.environ, ROTORDIAG_DATA_DIR=str(tmp / "data"), ROTORDIAG_API_KEY="bench", **env_extra)
+    exe = Path(sys.executable).parent / "rotordiag"
+    server = subprocess.Popen([str(exe), "serve", "--host", "127.0.0.1", "--port", str(port)], cwd=tmp, env=env,
+                              stderr=subprocess.DEVNULL if quiet else None)
+    for _ in range(300):
+        try:
+            with urllib.request.urlopen(f"http://127.0.0.1:{port}/health", timeout=2) as r:
+                if r.status == 200:
+                    return server, port
+        except OSError:
+            time.sleep(0.2)
+    server.terminate()
+    raise SystemExit("server did not become healthy")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=10.0, help="seconds per (form, concurrency)")
@@ -227,23 +247,8 @@ def main() -> None:
         ts.append(time.perf_counter() - t0)
     inproc_ms = 1e3 * float(np.median(ts))
 
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    env = dict(os.environ, ROTORDIAG_DATA_DIR=str(tmp / "data"), ROTORDIAG_API_KEY="bench",
-               ROTORDIAG_LOG_LEVEL="warning")
-    exe = Path(sys.executable).parent / "rotordiag"
-    server = subprocess.Popen([str(exe), "serve", "--host", "127.0.0.1", "--port", str(port)], cwd=tmp, env=env)
+    server, port = start_server(tmp, {"ROTORDIAG_LOG_LEVEL": "warning"})
     try:
-        for _ in range(300):
-            try:
-                with urllib.request.urlopen(f"http://127.0.0.1:{port}/health", timeout=2) as r:
-                    if r.status == 200:
-                        break
-            except OSError:
-                time.sleep(0.2)
-        else:
-            raise SystemExit("server did not become healthy")
         print(f"recording: 4 bearings x 2 probes x {N_POINTS} samples; body sizes: "
               f"json {len(bodies['json'][2]) / 1e6:.2f} MB, binary (NPY float32) {len(bodies['binary'][2]) / 1e6:.2f} MB")
         print(f"in-process diagnosis (features + verdict, no HTTP): median {inproc_ms:.1f} ms")
