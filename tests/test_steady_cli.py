@@ -49,3 +49,18 @@ def test_modal_margin_changes_sign_at_the_located_torus_bifurcation(tmp_path):
     margins = [modal(Plant.default(), s).stability_margin_per_s for s in (ns - 15, ns + 15)]
     assert margins[0] < 0 < margins[1]
     assert np.isfinite(ns)
+
+
+def test_continue_writes_a_branch_without_bifurcations(tmp_path):
+    """A short period-1 branch with no fold/PD/NS is written and read back (an empty bifurcation list
+    once crashed the HDF5 writer); the light-exciter plant file is accepted."""
+    out = tmp_path / "b.h5"
+    res = CliRunner().invoke(app, ["continue", "--over", "speed", "--from", "1800", "--to", "1900",
+                                   "--misalignment", "0.02", "--plant", "docs/figures/light-exciter-plant.toml",
+                                   "--brute-points", "0", "--ds-max", "0.1", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    br = read_branches(out)["branches"][0]
+    assert len(br["bifurcations"]["kind"]) == 0
+    assert br["bifurcations"]["section_x"].shape == (0, 1)
+    assert br["parameter"].min() <= 1800 + 1e-9 and br["parameter"].max() >= 1900 - 1e-9
+    assert set(br["stability"]) == {"stable"}

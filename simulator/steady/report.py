@@ -42,9 +42,10 @@ def write_branches(path: str | Path, family: RotorFamily, branches: list[Branch]
             bg.create_dataset("parameter", data=np.array([b.parameter for b in br.bifurcations], dtype=float))
             bg.create_dataset("located", data=np.array([b.located for b in br.bifurcations], dtype=bool))
             bg.create_dataset("index", data=np.array([b.index for b in br.bifurcations], dtype=np.int64))
-            bg.create_dataset("section_x", data=np.array(
-                [_section_one(family, b.parameter, b.sections, node, direction) for b in br.bifurcations]
-            ).reshape(len(br.bifurcations), -1))
+            bx = [_section_one(family, b.parameter, b.sections, node, direction) for b in br.bifurcations]
+            # a branch without bifurcations still needs a (0, n) array (reshape(0, -1) is ambiguous)
+            bg.create_dataset("section_x", data=np.array(bx).reshape(len(bx), -1) if bx
+                              else np.empty((0, br.n_periods)))
         if brute is not None:
             g = f.create_group("brute_force")
             g.create_dataset("values", data=brute.values)
