@@ -386,6 +386,19 @@ def dp_trial_step(tau, h, y, p, K, Ys, y_new, rtol, atol):
 
 
 @njit(**NUMBA_OPTIONS)
+def accepted_state_status(tau, y, p):
+    """``(status, emax)`` after an accepted step: contact when a journal reached
+    ``CONTACT_ECCENTRICITY``, diverged when the state is non-finite or beyond ``DIVERGENCE_LIMIT``."""
+    emax = max_eccentricity(tau, y, p)
+    if emax >= CONTACT_ECCENTRICITY:
+        return STATUS_CONTACT, emax
+    for i in range(y.shape[0]):
+        if not math.isfinite(y[i]) or abs(y[i]) > DIVERGENCE_LIMIT:
+            return STATUS_DIVERGED, emax
+    return STATUS_OK, emax
+
+
+@njit(**NUMBA_OPTIONS)
 def dp_step_factor(err, step_rejected):
     """Growth factor of the next step after an accepted step with error norm ``err``."""
     if err == 0.0:
@@ -484,16 +497,8 @@ def integrate(y0, tau0, p, rtol, atol, h0, grid_t0, grid_dt, grid_out, pc_t0, pc
             nacc += 1
             step_rejected = False
             h *= factor
-            emax = max_eccentricity(tau, y, p)
-            if emax >= CONTACT_ECCENTRICITY:
-                status = STATUS_CONTACT
-                break
-            bad = False
-            for i in range(n):
-                if not math.isfinite(y[i]) or abs(y[i]) > DIVERGENCE_LIMIT:
-                    bad = True
-            if bad:
-                status = STATUS_DIVERGED
+            status, emax = accepted_state_status(tau, y, p)
+            if status != STATUS_OK:
                 break
         else:
             h *= max(_MIN_FACTOR, _SAFETY * err ** -0.2)

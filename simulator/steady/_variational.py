@@ -43,11 +43,10 @@ from .._kernels import (
     _E,
     _MIN_FACTOR,
     _SAFETY,
-    CONTACT_ECCENTRICITY,
-    DIVERGENCE_LIMIT,
     STATUS_CONTACT,
     STATUS_DIVERGED,
     STATUS_OK,
+    accepted_state_status,
     dp_step_factor,
     dp_trial_step,
     max_eccentricity,
@@ -218,16 +217,8 @@ def integrate_variational(y0, phi0, tau0, tau_end, p, rtol, atol, h0, max_steps,
                 for i in range(n):
                     pc_out[npc, i] = y[i]
                 npc += 1
-            emax = max_eccentricity(tau, y, p)
-            if emax >= CONTACT_ECCENTRICITY:
-                status = STATUS_CONTACT
-                break
-            bad = False
-            for i in range(n):
-                if not math.isfinite(y[i]) or abs(y[i]) > DIVERGENCE_LIMIT:
-                    bad = True
-            if bad:
-                status = STATUS_DIVERGED
+            status, emax = accepted_state_status(tau, y, p)
+            if status != STATUS_OK:
                 break
         else:
             h *= max(_MIN_FACTOR, _SAFETY * err ** -0.2)
