@@ -37,8 +37,8 @@ class SandboxError(ValueError):
     """The isolated parser ran out of memory or time, or its process died."""
 
 
-def _address_space_bytes() -> int | None:
-    """This process's virtual size (Linux ``/proc``), or ``None`` where unknown."""
+def address_space_bytes() -> int | None:
+    """This process's virtual size in bytes (what ``RLIMIT_AS`` bounds; Linux ``/proc``), or ``None`` where unknown."""
     try:
         with open("/proc/self/statm") as fh:
             pages = int(fh.read().split()[0])
@@ -47,30 +47,32 @@ def _address_space_bytes() -> int | None:
         return None
 
 
-def address_space_bytes() -> int | None:
-    """This process's virtual size in bytes (what ``RLIMIT_AS`` bounds), or ``None`` where unknown."""
-    return _address_space_bytes()
+def limit_address_space(memory_bytes: int) -> int | None:
+    """Lower this process's ``RLIMIT_AS`` to its size now plus ``memory_bytes`` (never above the hard limit).
 
-
-def _limit_memory(memory_bytes: int) -> None:
+    Returns
+    -------
+    int or None
+        The limit set, or ``None`` where it cannot be set (not POSIX, size unknown, ``memory_bytes`` ≤ 0):
+        then only a time limit applies.
+    """
     try:
         import resource
-    except ImportError:  # not POSIX: only the time limit applies
-        return
-    size = _address_space_bytes()
-    if size is None:
-        return
-    limit = size + memory_bytes
+    except ImportError:  # not POSIX
+        return None
+    size = address_space_bytes()
+    if size is None or memory_bytes <= 0:
+        return None
     _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    if hard != resource.RLIM_INFINITY:
-        limit = min(limit, hard)
+    limit = size + memory_bytes if hard == resource.RLIM_INFINITY else min(size + memory_bytes, hard)
     resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+    return limit
 
 
 def _child(conn: Any, fn: Callable[..., Any], args: tuple, kwargs: dict[str, Any], memory_bytes: int) -> None:
     """Child process body: limit memory, run ``fn``, send ``(tag, payload)``."""
     try:
-        _limit_memory(memory_bytes)
+        limit_address_space(memory_bytes)
         result = fn(*args, **kwargs)
         conn.send(("ok", result))
     except MemoryError:

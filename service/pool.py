@@ -85,23 +85,6 @@ def _warm(version: str | None) -> None:
         fast_predictor(_store().load(version).model)
 
 
-def _limit_memory(memory_bytes: int) -> int | None:
-    """Lower this process's ``RLIMIT_AS`` to its size now plus ``memory_bytes``; the limit set, or ``None``."""
-    from rotordiag.features.sandbox import address_space_bytes
-
-    try:
-        import resource
-    except ImportError:  # pragma: no cover - not POSIX: only the time limit applies
-        return None
-    size = address_space_bytes()
-    if size is None or memory_bytes <= 0:
-        return None
-    _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    limit = size + memory_bytes if hard == resource.RLIM_INFINITY else min(size + memory_bytes, hard)
-    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
-    return limit
-
-
 def _load_check(version: str) -> dict[str, Any]:
     """The model this worker holds for ``version``: ``{"sha256", "problem"}`` (``problem`` is ``None``
     when a diagnosis with it would work). Reloads the file when it changed on disk."""
@@ -210,7 +193,9 @@ def _worker_main(sock: socket.socket, registry_root: str, version: str | None, m
     except Exception as exc:  # noqa: BLE001 - reported per request (503) by _load_check/_work
         log.warning("diagnosis worker %d: could not preload model %s: %s", os.getpid(), version, exc)
     _MEMORY_BYTES = memory_bytes
-    _limit_memory(memory_bytes)
+    from rotordiag.features.sandbox import limit_address_space
+
+    limit_address_space(memory_bytes)
     ready = pickle.dumps(("ready", os.getpid()), protocol=pickle.HIGHEST_PROTOCOL)
     sock.sendall(_HEADER.pack(len(ready)) + ready)
     while True:
