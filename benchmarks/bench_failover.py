@@ -18,7 +18,6 @@ import argparse
 import multiprocessing as mp
 import os
 import signal
-import subprocess
 import sys
 import tempfile
 import threading
@@ -30,7 +29,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_service import _drive_entry, _tree, payloads, recording, start_server  # noqa: E402
+from bench_service import _drive_entry, _tree, payloads, recording, start_server, stop_server  # noqa: E402
 
 CONCURRENCY = 4
 
@@ -123,11 +122,7 @@ def main() -> None:
             time.sleep(3.0)   # let the replacement finish warming before the next pair
         print("p99 during a kill / steady p99: " + ", ".join(f"{r:.2f}" for r in ratios) + "  (target <= 2)")
     finally:
-        server.send_signal(signal.SIGINT)
-        try:
-            server.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            server.kill()
+        stop_server(server)
 
 
 if __name__ == "__main__":

@@ -219,6 +219,15 @@ def start_server(tmp: Path, env_extra: dict[str, str], quiet: bool = False) -> t
     raise SystemExit("server did not become healthy")
 
 
+def stop_server(server: subprocess.Popen) -> None:
+    """Stop a server from :func:`start_server` (SIGINT, then kill after 30 s)."""
+    server.send_signal(signal.SIGINT)
+    try:
+        server.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        server.kill()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=10.0, help="seconds per (form, concurrency)")
@@ -283,11 +292,7 @@ def main() -> None:
         print(f"peak RSS (VmHWM) per process, MiB: sum {sum(rss.values()):.0f} = "
               + ", ".join(f"{k} {v:.0f}" for k, v in rss.items()))
     finally:
-        server.send_signal(signal.SIGINT)
-        try:
-            server.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            server.kill()
+        stop_server(server)
 
 
 if __name__ == "__main__":
