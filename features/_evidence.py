@@ -11,14 +11,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._config import PHASE_PAIRS
+from ._config import CENTRELINE_MAX_ECC, PHASE_PAIRS
 
 __all__ = ["EvidenceItem", "evidence"]
 
 COUPLING = PHASE_PAIRS[0]                     # (2, 3): the bearings either side of the coupling
-#: a shaft-centreline position is reported only when the mean reading lies within this many
-#: clearances of the probes' zero (otherwise the DC part is a raw gap, not a position)
-CENTRELINE_MAX_ECC = 1.5
 
 
 @dataclass(frozen=True)

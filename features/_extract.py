@@ -175,6 +175,21 @@ def _subsync_peak_orders(pb: np.ndarray, lo: int, hi: int, total_ms: np.ndarray,
     return out
 
 
+def _centreline_per_c(mean_x_um: np.ndarray, mean_y_um: np.ndarray, clearance_um: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Static journal position per bearing in clearances: x, y and eccentricity ratio.
+
+    NaN when the clearance is unknown or the mean reading lies more than
+    ``CENTRELINE_MAX_ECC`` clearances from the probes' zero (then the DC part is a raw
+    probe gap, not a position inside the bearing).
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ex, ey = mean_x_um / clearance_um, mean_y_um / clearance_um
+        ecc = np.hypot(ex, ey)
+    bad = ~(ecc <= cfg.CENTRELINE_MAX_ECC)
+    return np.where(bad, np.nan, ex), np.where(bad, np.nan, ey), np.where(bad, np.nan, ecc)
+
+
 def _subtract_slow_roll(rec: Recording, bearings: tuple[int, ...], coeffs: np.ndarray) -> None:
     """Subtract the probes' slow-roll (runout) vectors from the fitted x/y orders, in place.
 
@@ -382,6 +397,7 @@ def _extract(recording: Recording) -> FeatureResult:
         cols.append(_subsync_peak_orders(pb_all, sub_lo, sub_hi, total_ms, orders_axis, float(orders_axis[1])))
         cols.append(_ratios(res_ms[0::2] + res_ms[1::2], total_ms))
         cols += [poincare_rms, poincare_rms / c, _ratios(poincare_rms, np.sqrt(total_ms))]
+        cols += list(_centreline_per_c(mean[0::2], mean[1::2], c))
     table = np.column_stack(cols)                                      # (n_bearings, features per bearing)
 
     details: dict[int, BearingDetail] = {}

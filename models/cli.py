@@ -49,7 +49,7 @@ def register(app: typer.Typer) -> None:
         try:
             cfg = TrainConfig.from_file(config) if config is not None else TrainConfig()
             typer.echo(f"reading {', '.join(map(str, data))} and extracting features …", err=True)
-            table = load_feature_tables(data, cache=cache)
+            table = load_feature_tables(data, cache=cache, augment=cfg.augment)
             typer.echo(
                 f"{len(table)} samples from {len(set(table.plant_id.tolist()))} plants "
                 f"(skipped: {table.meta.get('skipped')}; features {table.meta['feature_time_s']} s, "
