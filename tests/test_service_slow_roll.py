@@ -4,6 +4,7 @@ a hostile or mismatched second file is a 4xx that says what to fix, the same thr
 from __future__ import annotations
 
 import io
+import json
 
 import numpy as np
 import pytest
@@ -23,8 +24,12 @@ from tests.test_features_slow_roll import (
 
 
 @pytest.fixture(scope="module")
-def clients(tmp_path_factory):
-    registry = shipped_or_tiny_registry(tmp_path_factory.mktemp("registry"))
+def registry(tmp_path_factory):
+    return shipped_or_tiny_registry(tmp_path_factory.mktemp("registry"))
+
+
+@pytest.fixture(scope="module")
+def clients(tmp_path_factory, registry):
     pooled = create_app(make_settings(tmp_path_factory.mktemp("pooled"), shipped_registry_dir=registry,
                                       diagnosis_workers=1))
     plain = create_app(make_settings(tmp_path_factory.mktemp("plain"), shipped_registry_dir=registry))
@@ -143,3 +148,35 @@ def test_slow_roll_part_must_be_a_file(clients, recs):
                               files={"file": ("running.csv", _csv(running), "text/csv")},
                               data={"slow_roll_file": "not a file"})
     assert r.status_code == 400 and "slow_roll_file" in r.json()["detail"]
+
+
+def _json_file(path, rec):
+    path.write_text(json.dumps({"sample_rate_hz": rec.sample_rate_hz,
+                                "keyphasor_times_s": rec.keyphasor_times_s.tolist(),
+                                "channels": [{"bearing": c.bearing, "angle_deg": c.angle_deg, "units": "um",
+                                              "data": c.data.tolist()} for c in rec.channels]}))
+    return path
+
+
+def test_cli_slow_roll(registry, recs, tmp_path):
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    running, slow = recs
+    run_f, slow_f = _json_file(tmp_path / "running.json", running), _json_file(tmp_path / "slow.json", slow)
+    res = CliRunner().invoke(app, ["diagnose", str(run_f), "--registry", str(registry), "--json",
+                                   "--slow-roll", str(slow_f)])
+    assert res.exit_code == 0, res.output
+    v = json.loads(res.output)
+    assert any(n.startswith("slow-roll compensation: runout vectors measured at 180 r/min") for n in v["notes"])
+    assert [e["scope"] for e in v["evidence"] if e["name"] == "slow-roll compensation"] == ["bearing 2", "bearing 3"]
+    assert abs(_vector_um_pp(v, 2, "1X x") - 2 * abs(_truth_um(2, "x", 1))) < TOL_UM_PP
+    # the running file given as the slow roll: refused, naming the option and the fix
+    res = CliRunner().invoke(app, ["diagnose", str(run_f), "--registry", str(registry), "--slow-roll", str(run_f)])
+    assert res.exit_code != 0 and "at most 20 %" in res.output
+    # a garbage slow-roll file
+    bad = tmp_path / "bad.h5"
+    bad.write_bytes(b"\x89HDF\r\n\x1a\njunk")
+    res = CliRunner().invoke(app, ["diagnose", str(run_f), "--registry", str(registry), "--slow-roll", str(bad)])
+    assert res.exit_code != 0 and f"--slow-roll {bad}" in res.output
