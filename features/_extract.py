@@ -71,6 +71,10 @@ class BearingDetail:
     phase_valid : ndarray of bool, shape (2, 3), optional
         Whether the 1X–3X phase of x and y stands out of the noise (``PHASE_MIN_SNR``); where
         not, the phase features are NaN and :meth:`phase_deg` returns NaN.
+    slow_roll_um_pp : tuple of (mapping or None), optional
+        The slow-roll (runout) vectors subtracted from each probe's orders, in channel order
+        (``ProbeChannel.slow_roll_um_pp``; an empty mapping: compensation asked for, no order above
+        the noise at slow roll); None when no compensation was asked for at this bearing.
     """
 
     bearing: int
@@ -89,6 +93,7 @@ class BearingDetail:
     features: dict[str, float] = field(repr=False)
     line_noise_um: np.ndarray | None = field(default=None, repr=False)
     phase_valid: np.ndarray | None = field(default=None, repr=False)
+    slow_roll_um_pp: tuple[Any, Any] | None = field(default=None, repr=False)
 
     def phase_deg(self, direction: str, order: int) -> float:
         """Phase lag (deg, [0, 360)) of ``order`` in direction ``"x"`` or ``"y"``."""
@@ -417,7 +422,9 @@ def _extract(recording: Recording) -> FeatureResult:
             probe_coeffs_um=probe, forward_um=fw_all[i].copy(), reverse_um=rv_all[i].copy(),
             mean_um=(float(mean[ix]), float(mean[iy])), noise_rms_um=(float(noise[ix]), float(noise[iy])),
             poincare_um=pts_all[:, ix:iy + 1], orbit12=orb.shape(i), features=dict(zip(names, row.tolist())),
-            line_noise_um=line_noise[ix:iy + 1].copy(), phase_valid=phase_ok[ix:iy + 1].copy())
+            line_noise_um=line_noise[ix:iy + 1].copy(), phase_valid=phase_ok[ix:iy + 1].copy(),
+            slow_roll_um_pp=None if chans[0].slow_roll_um_pp is None and chans[1].slow_roll_um_pp is None
+            else (chans[0].slow_roll_um_pp, chans[1].slow_roll_um_pp))
 
     for k in (1, 2):
         for bi, bj in cfg.PHASE_PAIRS:

@@ -151,13 +151,23 @@ def register(app: typer.Typer) -> None:
         as_json: bool = typer.Option(False, "--json", help="Print the verdict(s) as JSON."),
         out: Optional[Path] = typer.Option(None, "--out", help="Write one table of verdicts, one row per file: .csv or .json."),
         output_units: str = typer.Option("um", "--output-units", help="Units of the offset and amplitudes in the output: um | mil."),
+        slow_roll: Optional[Path] = typer.Option(None, "--slow-roll", help="A recording of the same probes at slow roll (<= 20 % of the running speed; keyphasor in both files): its 1X/2X runout vectors are subtracted from every recording's. Read with the options above (not --speed-rpm/--sample) and its own sidecar."),
+        slow_roll_sample_rate_hz: Optional[float] = typer.Option(None, "--slow-roll-sample-rate-hz", help="Sample rate of the --slow-roll file, Hz (default: --sample-rate-hz, its sidecar or its time column)."),
     ) -> None:
         """Diagnose coupling misalignment from one or many recordings (the model is loaded once)."""
         import json
 
         from rotordiag.core.units import um_to
 
-        from .diagnose_files import collect_files, diagnose_one, load_options, verdict_json, verdict_row, write_table
+        from .diagnose_files import (
+            collect_files,
+            diagnose_one,
+            load_options,
+            slow_roll_from_file,
+            verdict_json,
+            verdict_row,
+            write_table,
+        )
         from .predict import format_verdict, load_bundle
         from .registry import RegistryError
 
@@ -171,6 +181,11 @@ def register(app: typer.Typer) -> None:
                 "rotation": rotation, "viewed_from": viewed_from, "speed_rpm": speed_rpm,
                 "clearance_um": clearance_um, "sample_index": sample,
             }
+            runout = None
+            if slow_roll is not None:
+                slow_given = {**given, "speed_rpm": None, "sample_index": None,
+                              "sample_rate_hz": slow_roll_sample_rate_hz or sample_rate_hz}
+                runout = slow_roll_from_file(slow_roll, load_options(slow_roll, None, slow_given))
         except ValueError as exc:
             _fail(str(exc))
         loaded: list = []
@@ -186,7 +201,7 @@ def register(app: typer.Typer) -> None:
         for path in paths:
             try:
                 opts = load_options(path, sidecar, given)
-                verdict, res = diagnose_one(bundle, path, opts)
+                verdict, res = diagnose_one(bundle, path, opts, runout)
             except RegistryError as exc:
                 _fail(str(exc))
             except ValueError as exc:
