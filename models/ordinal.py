@@ -129,7 +129,9 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
         return HistGradientBoostingClassifier(
             learning_rate=self.learning_rate, max_iter=self.max_iter, max_leaf_nodes=self.max_leaf_nodes,
             min_samples_leaf=self.min_samples_leaf, l2_regularization=self.l2_regularization,
-            monotonic_cst=cst, class_weight="balanced", early_stopping=False, random_state=self.random_state,
+            # No class weights: scikit-learn ≥ 1.8 then bins with weighted percentiles, ~40× slower
+            # (28 s vs 0.7 s for 3000 × 316 rows); the Platt maps absorb each edge's base rate.
+            monotonic_cst=cst, early_stopping=False, random_state=self.random_state,
         )
 
     def _constraints(self, n_features: int):
