@@ -321,3 +321,33 @@ def test_angular_offset_cli_and_dataset_spec(tmp_path):
     with pytest.raises(SpecError, match="angular_misalignment_mrad"):
         parse_spec(text.replace("mechanism = {pin = 1, rigid = 1}", "angular_misalignment_mrad = 50.0\n"
                                 "mechanism = {pin = 1, rigid = 1}"))
+
+
+def test_flexible_range_and_angular_surveys(tmp_path):
+    from rotordiag.simulator.analysis import mechanisms as ms
+
+    pts = ms.flexible_range_survey(speeds_rpm=(1950.0,), stiffnesses_n_m=(1e8,), phases_deg=(0.0, 180.0),
+                                   deltas=(0.1, 0.3), record_revs=8, workers=0)
+    assert len(pts) == 1 + 2 * 2 and all(p.status == "ok" for p in pts)
+    v = ms._range_verdict(pts, 1950.0, 1e8, 2)
+    # the verdict is the runs' own numbers: growth per phase, ratio range at the largest Δ
+    last = [p for p in pts if p.misalignment == 0.3]
+    assert v["ratio"] == (min(p.ratio(2) for p in last), max(p.ratio(2) for p in last))
+    grows = sum(
+        next(p for p in pts if p.misalignment == 0.3 and p.coupling_phase_deg == psi).amp_2x_um_0pk[2][0]
+        > next(p for p in pts if p.misalignment == 0.1 and p.coupling_phase_deg == psi).amp_2x_um_0pk[2][0]
+        for psi in (0.0, 180.0))
+    assert v["grows"] == f"{grows}/2"
+    md = ms.range_markdown(pts)
+    assert "| 1950 | 1e+08 | 3 |" in md
+    ms.range_figure(pts, tmp_path / "r.png")
+    assert (tmp_path / "r.png").stat().st_size > 10_000
+
+    ang = ms.angular_survey(speeds_rpm=(1950.0,), alphas_mrad=(0.06,), record_revs=8, workers=0)
+    by = {p.case: p for p in ang}
+    assert all(p.status == "ok" for p in ang)
+    assert by["angular-down"].angular_misalignment_mrad == 0.06
+    # a downward tilt lowers bearing 4: it unloads (lumped model) while bearing 3's load barely moves
+    assert by["angular-down"].static_load_n[3][1] < by["aligned"].static_load_n[3][1] - 3e3
+    assert abs(by["angular-down"].static_load_n[2][1] - by["aligned"].static_load_n[2][1]) < 1e3
+    assert "| angular-down | 1950 | 0 | 0.06 |" in ms.angular_markdown(ang)

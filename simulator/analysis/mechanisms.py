@@ -278,8 +278,8 @@ def range_markdown(points: list[SurveyPoint]) -> str:
             lines.append(f"| {p.speed_rpm:g} | {p.coupling_stiffness_n_m:.0e} | {p.coupling_phase_deg:g} | "
                          f"{p.misalignment:g} | {p.status} | | |")
             continue
-        kc = "—" if p.case == "aligned" else f"{p.coupling_stiffness_n_m:.0e}"
-        lines.append(f"| {p.speed_rpm:g} | {kc} | {p.coupling_phase_deg:g} | {p.misalignment:g} | "
+        kc_text = "—" if p.case == "aligned" else f"{p.coupling_stiffness_n_m:.0e}"
+        lines.append(f"| {p.speed_rpm:g} | {kc_text} | {p.coupling_phase_deg:g} | {p.misalignment:g} | "
                      f"{p.amp_1x_um_0pk[1][0]:.1f}, {p.amp_1x_um_0pk[2][0]:.1f} | "
                      f"{p.amp_2x_um_0pk[1][0]:.2f}, {p.amp_2x_um_0pk[2][0]:.2f} | {p.ratio(1):.2f}, {p.ratio(2):.2f} |")
     return "\n".join(lines) + "\n"
