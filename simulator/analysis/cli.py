@@ -198,6 +198,9 @@ def register(app: typer.Typer) -> None:
             False, "--flexible-range",
             help="Instead: flexible only, at the three speeds across k_c 1e7–1e9 N/m, ψ = 0/90/180/270° and "
                  "Δ ≤ 0.3 (flexible_range.png/.md/.json)."),
+        exciter_unbalance: float = typer.Option(
+            0.0, "--exciter-unbalance", min=0.0, max=0.5,
+            help="With --flexible-range: exciter unbalance a2/c of every run (default 0)."),
         angular: bool = typer.Option(
             False, "--angular",
             help="Instead: the angular shaft-line offset (offset mechanism, α = 0.03/0.06/0.09 mrad, down and "
@@ -232,10 +235,10 @@ def register(app: typer.Typer) -> None:
             typer.echo(f"{len(points)} runs; wrote {out / 'angular.md'}, angular.json")
             return
         if flexible_range:
-            points = flexible_range_survey(load_plant(plant), workers=workers)
+            points = flexible_range_survey(load_plant(plant), workers=workers, exciter_unbalance=exciter_unbalance)
             (out / "flexible_range.json").write_text(json.dumps([asdict(p) for p in points], indent=1))
             (out / "flexible_range.md").write_text(range_markdown(points))
-            range_figure(points, out / "flexible_range.png")
+            range_figure(points, out / "flexible_range.png", exciter_unbalance=exciter_unbalance)
             typer.echo(f"{len(points)} runs; wrote {out / 'flexible_range.png'}, flexible_range.md, flexible_range.json")
             return
         if quick:

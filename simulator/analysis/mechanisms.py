@@ -62,10 +62,11 @@ def _run(task: tuple) -> SurveyPoint:
 
     case, mech, angle, speed, delta, psi_deg, kc, plant_dict, unbalance, revs = task[:10]
     alpha_mrad = float(task[10]) if len(task) > 10 else 0.0  # angular offset (offset/flexible)
+    exciter_unbalance = float(task[11]) if len(task) > 11 else 0.0
     plant = Plant.from_dict(plant_dict).replace(coupling_stiffness_n_m=kc)
     res = simulate(plant, speed, delta, unbalance, mechanism=mech if delta > 0 or alpha_mrad else "aligned",
                    offset_angle_rad=angle, coupling_phase_rad=math.radians(psi_deg),
-                   angular_misalignment_mrad=alpha_mrad,
+                   angular_misalignment_mrad=alpha_mrad, exciter_unbalance=exciter_unbalance,
                    transient_revs=400, record_revs=revs, samples_per_rev=64, settle_tol=1e-8)
     if res.status != "ok":
         return SurveyPoint(case, mech, speed, delta, psi_deg, kc, res.status, wall_time_s=res.wall_time_s,
@@ -209,16 +210,19 @@ def flexible_range_survey(plant: Any = None, *, speeds_rpm: tuple[float, ...] = 
                           stiffnesses_n_m: tuple[float, ...] = RANGE_STIFFNESSES_N_M,
                           phases_deg: tuple[float, ...] = RANGE_PHASES_DEG,
                           deltas: tuple[float, ...] = RANGE_DELTAS, unbalance: float = 0.05,
-                          record_revs: int = 32, workers: int | None = None) -> list[SurveyPoint]:
+                          exciter_unbalance: float = 0.0, record_revs: int = 32,
+                          workers: int | None = None) -> list[SurveyPoint]:
     """``flexible`` over speed × k_c × ψ × Δ (offset horizontal), plus the aligned run per speed
-    (case ``"aligned"``, Δ = 0). Same measurements as :func:`mechanism_survey`."""
+    (case ``"aligned"``, Δ = 0). Same measurements as :func:`mechanism_survey`; ``exciter_unbalance``
+    a2/c (phase 0) for every run."""
     from rotordiag.simulator import Plant
 
     plant = Plant.default() if plant is None else plant
     pd = plant.to_dict()
-    tasks = [("aligned", "flexible", 0.0, s, 0.0, 0.0, plant.coupling_stiffness_n_m, pd, unbalance, record_revs)
-             for s in speeds_rpm]
-    tasks += [("flexible-range", "flexible", 0.0, s, d, float(psi), kc, pd, unbalance, record_revs)
+    a2 = float(exciter_unbalance)
+    tasks = [("aligned", "flexible", 0.0, s, 0.0, 0.0, plant.coupling_stiffness_n_m, pd, unbalance, record_revs,
+              0.0, a2) for s in speeds_rpm]
+    tasks += [("flexible-range", "flexible", 0.0, s, d, float(psi), kc, pd, unbalance, record_revs, 0.0, a2)
               for s in speeds_rpm for kc in stiffnesses_n_m for psi in phases_deg for d in deltas]
     n = len(os.sched_getaffinity(0)) if workers is None else int(workers)
     if n <= 0:
@@ -285,9 +289,9 @@ def range_markdown(points: list[SurveyPoint]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def range_figure(points: list[SurveyPoint], path: str | Path) -> None:
+def range_figure(points: list[SurveyPoint], path: str | Path, exciter_unbalance: float = 0.0) -> None:
     """PNG: 2X/1X (x) at bearings 2 and 3 versus Δ, one panel per speed and bearing, a line per k_c with
-    the spread over ψ shaded (min–max) and ψ = 0 drawn."""
+    the spread over ψ shaded (min–max) and ψ = 0 drawn; ``exciter_unbalance`` (a2/c) goes in the title."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -318,7 +322,8 @@ def range_figure(points: list[SurveyPoint], path: str | Path) -> None:
             ax.set_ylabel("2X/1X (x probe)")
             ax.set_title(f"{s:g} r/min, bearing {b + 1} ({'generator' if b == 1 else 'exciter'}, coupling end)")
     axes[0, 0].legend(fontsize=7)
-    fig.suptitle("flexible: 2X/1X vs Δ across the coupling stiffness k_c and phase ψ (default plant, A = 0.05)")
+    fig.suptitle("flexible: 2X/1X vs Δ across the coupling stiffness k_c and phase ψ (default plant, A = 0.05, "
+                 f"exciter unbalance a2/c = {exciter_unbalance:g})")
     fig.tight_layout()
     fig.savefig(path, dpi=80)
     plt.close(fig)
