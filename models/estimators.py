@@ -51,7 +51,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from rotordiag.core.bands import DEFAULT_EDGES, DEFAULT_NAMES, SeverityBands
 
 from ._sklearn_private import Interval, StrOptions
-from .ordinal import OrdinalSeverityClassifier, median_class
+from .ordinal import OrdinalSeverityClassifier
 
 _CALIBRATION_METHODS = ("temperature", "sigmoid", "isotonic", "none")
 
@@ -621,10 +621,13 @@ class MisalignmentModel(BaseEstimator):
         return isinstance(getattr(self, "classifier_", None), OrdinalSeverityClassifier)
 
     def band_index(self, proba: np.ndarray) -> np.ndarray:
-        """The predicted band of each row of band probabilities: the median band for an ordinal
-        classifier (monotone in the constrained features), else the most probable one."""
+        """The predicted band of each row of band probabilities: for an ordinal classifier the
+        largest band whose edges all pass their thresholds (the median band with 0.5 thresholds;
+        monotone in the constrained features), else the most probable one."""
         proba = np.atleast_2d(np.asarray(proba, dtype=float))
-        return median_class(proba) if self.ordinal_ else np.argmax(proba, axis=1)
+        if self.ordinal_:
+            return self.classifier_.class_index(proba)
+        return np.argmax(proba, axis=1)
 
     def __sklearn_tags__(self):
         return _nan_tags(super().__sklearn_tags__())

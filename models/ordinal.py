@@ -11,9 +11,12 @@ on out-of-fold scores (folds keep every plant on one side). The cumulative proba
 are made non-increasing in *k* by a running minimum, and the band probabilities are their
 differences.
 
-The predicted band is the **median** of that distribution — the number of edges with
-``P(band ≥ k) ≥ 0.5``. Each step is non-decreasing in a feature constrained with +1 (the
-trees by construction, ``a > 0``, the running minimum, the count), so the predicted band
+The predicted band is the largest k whose edges 1..k all reach their thresholds — the
+**median** of that distribution when every threshold is 0.5. ``max_false_alarm`` raises the
+first edge's threshold until at most that share of the lowest band's rows pass it out of fold
+(a false alarm on a healthy machine sends a crew; the price is recall in the second band).
+Each step is non-decreasing in a feature constrained with +1 (the trees by construction,
+``a > 0``, the running minimum, fixed thresholds, the sequential count), so the predicted band
 never falls when such a feature grows: the property ``tests/test_models_ordinal.py`` checks.
 """
 from __future__ import annotations
@@ -76,6 +79,11 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
     cv : int, default=5
         Folds of the out-of-fold scores the Platt maps are fitted on (whole groups per fold
         when ``groups`` are given; reduced to the number of groups).
+    max_false_alarm : float or None, default=None
+        If given, the first edge's decision threshold is raised (never below 0.5) until at
+        most this share of the lowest class's rows pass it *out of fold* (on plants the
+        edge's model did not see): a Neyman–Pearson choice that bounds false alarms on
+        healthy machines at the cost of recall in the second class.
     random_state : int, default=0
 
     Attributes
@@ -85,6 +93,10 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
     platt_ : ndarray of shape (K − 1, 2)
         ``(a, b)`` of each edge's map ``σ(a·s + b)`` on the trees' decision value ``s``;
         ``(1, 0)`` (the trees' own probability) where calibration was not possible.
+    thresholds_ : ndarray of shape (K − 1,)
+        Decision threshold of each edge on its calibrated ``P(class ≥ k)`` (0.5, except the
+        first edge under ``max_false_alarm``). The predicted class is the largest k whose
+        edges 1..k all pass — monotone in every +1-constrained feature.
     n_iter_ : int
     """
 
@@ -96,6 +108,7 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
         "l2_regularization": [Interval(Real, 0, None, closed="left")],
         "monotonic_cst": ["array-like", None],
         "cv": [Interval(Integral, 2, None, closed="left")],
+        "max_false_alarm": [Interval(Real, 0, 0.5, closed="neither"), None],
         "random_state": ["random_state"],
     }
 
@@ -109,6 +122,7 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
         l2_regularization: float = 1.0,
         monotonic_cst=None,
         cv: int = 5,
+        max_false_alarm: float | None = None,
         random_state: int = 0,
     ) -> None:
         self.learning_rate = learning_rate
@@ -118,6 +132,7 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
         self.l2_regularization = l2_regularization
         self.monotonic_cst = monotonic_cst
         self.cv = cv
+        self.max_false_alarm = max_false_alarm
         self.random_state = random_state
 
     def __sklearn_tags__(self):
@@ -171,13 +186,18 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
         X = _blank(X, self.sparse_columns_)
         self.models_ = []
         platt = np.tile([1.0, 0.0], (len(self.classes_) - 1, 1))
+        thresholds = np.full(len(self.classes_) - 1, 0.5)
         for k in range(1, len(self.classes_)):
             target = (y_idx >= k).astype(int)
             self.models_.append(self._binary(X, target, cst))
             scores = self._oof_scores(X, target, groups, cst)
             if scores is not None:
                 platt[k - 1] = self._platt(scores, target)
+                if k == 1 and self.max_false_alarm is not None:
+                    p_low = _sigmoid(platt[0, 0] * scores[y_idx == 0] + platt[0, 1])
+                    thresholds[0] = max(0.5, float(np.quantile(p_low, 1.0 - self.max_false_alarm)))
         self.platt_ = platt
+        self.thresholds_ = thresholds
         self.n_iter_ = int(max(getattr(m, "n_iter_", 0) for m in self.models_))
         return self
 
@@ -234,9 +254,19 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
         """Calibrated class probabilities, shape (n_samples, n_classes), in class order."""
         return self.proba_from_scores(self.edge_scores(X))
 
+    def class_index(self, proba: np.ndarray) -> np.ndarray:
+        """The predicted class of each row of class probabilities: the largest k whose edges
+        1..k all reach their threshold (the median class when every threshold is 0.5)."""
+        proba = np.atleast_2d(np.asarray(proba, dtype=float))
+        cum = np.cumsum(proba[:, ::-1], axis=1)[:, ::-1][:, 1:]        # P(class ≥ k), k = 1..K−1
+        thresholds = getattr(self, "thresholds_", np.full(cum.shape[1], 0.5))
+        passed = cum >= thresholds[None, :] - 1e-12
+        return np.cumprod(passed, axis=1).sum(axis=1).astype(int)
+
     def predict(self, X) -> np.ndarray:
-        """The median class of each row (monotone in the constrained features)."""
-        index = median_class(self.predict_proba(X))
+        """The predicted class of each row (see :meth:`class_index`; monotone in the constrained
+        features)."""
+        index = self.class_index(self.predict_proba(X))
         return self.classes_[index]
 
 

@@ -39,7 +39,7 @@ def test_cumulative_to_proba_is_a_distribution_and_repairs_crossing_edges():
 
 def _ordinal_model(seed: int = 0, mono=MONO) -> tuple[MisalignmentModel, object]:
     t = make_table(n_plants=40, per_plant=10, seed=seed, nan_rate=0.05)
-    cfg = TrainConfig.from_dict({"classifier": {"kind": "ordinal", "max_iter": 40},
+    cfg = TrainConfig.from_dict({"classifier": {"kind": "ordinal", "max_iter": 40, "max_false_alarm": 0.05},
                                  "regressor": {"max_iter": 40},
                                  "features": {"monotonic_increasing": list(mono)}})
     return cfg.make_model(t.feature_names).fit(t.X, t.misalignment, groups=t.plant_id), t
@@ -123,3 +123,19 @@ def test_ood_threshold_is_calibrated_on_held_out_groups_not_on_near_duplicates()
     small = KNNDistanceOOD(threshold_quantile=0.95).fit(X[:400], groups=groups[:400])
     assert small.calibration_ == "group k-fold"
     assert np.mean(small.predict(rng.normal(size=(2000, 6))) == -1) < 0.25
+
+
+def test_max_false_alarm_bounds_false_alarms_on_new_plants():
+    t = make_table(n_plants=60, per_plant=10, seed=2, nan_rate=0.05)
+    q = make_table(n_plants=40, per_plant=10, seed=12, nan_rate=0.05)
+    rates = {}
+    for fa in (None, 0.03):
+        cfg = TrainConfig.from_dict({"classifier": {"kind": "ordinal", "max_iter": 40, "max_false_alarm": fa}
+                                     if fa else {"kind": "ordinal", "max_iter": 40},
+                                     "regressor": {"max_iter": 40}})
+        model = cfg.make_model(t.feature_names).fit(t.X, t.misalignment, groups=t.plant_id)
+        aligned = q.misalignment < 0.05
+        rates[fa] = float(np.mean(model.predict(q.X[aligned]) != "aligned"))
+        if fa:
+            assert model.classifier_.thresholds_[0] >= 0.5 and np.all(model.classifier_.thresholds_[1:] == 0.5)
+    assert rates[0.03] <= 0.08 and rates[0.03] <= rates[None]
