@@ -38,7 +38,6 @@ import argparse
 import math
 import sys
 import time
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 

@@ -81,8 +81,8 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
         when ``groups`` are given; reduced to the number of groups).
     max_false_alarm : float or None, default=None
         If given, the first edge's decision threshold is raised (never below 0.5) until at
-        most this share of the lowest class's rows pass it *out of fold* (on plants the
-        edge's model did not see): a Neyman–Pearson choice that bounds false alarms on
+        most this share of the ``healthy`` rows (default: the lowest class's) pass it *out of
+        fold* (on plants the edge's model did not see): a Neyman–Pearson choice that bounds false alarms on
         healthy machines at the cost of recall in the second class.
     random_state : int, default=0
 
@@ -158,7 +158,7 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
                              f"{cst.shape} with values {np.unique(cst).tolist()[:5]}")
         return None if not cst.any() else cst.astype(int)
 
-    def fit(self, X, y, groups=None) -> OrdinalSeverityClassifier:
+    def fit(self, X, y, groups=None, healthy=None) -> OrdinalSeverityClassifier:
         """Fit one constrained boosted model and one Platt map per class edge.
 
         Parameters
@@ -167,6 +167,9 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
         y : array-like of shape (n_samples,), ordered class labels
         groups : array-like of shape (n_samples,), optional
             Plant identifiers; calibration folds never split a plant.
+        healthy : array-like of bool, shape (n_samples,), optional
+            Rows on which ``max_false_alarm`` is bounded (``MisalignmentModel`` passes the
+            perfectly aligned machines, Δ = 0); default: the rows of the lowest class.
         """
         from .estimators import _blank, _sparse_columns
 
@@ -182,6 +185,9 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
             if groups.shape[0] != X.shape[0]:
                 raise ValueError(f"groups: length {groups.shape[0]} does not match X ({X.shape[0]} rows)")
         cst = self._constraints(X.shape[1])
+        healthy = (y_idx == 0) if healthy is None else np.asarray(healthy, dtype=bool)
+        if healthy.shape != (X.shape[0],):
+            raise ValueError(f"healthy: need one flag per row ({X.shape[0]}), got shape {healthy.shape}")
         self.sparse_columns_ = _sparse_columns(X)
         X = _blank(X, self.sparse_columns_)
         self.models_ = []
@@ -194,8 +200,9 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
             if scores is not None:
                 platt[k - 1] = self._platt(scores, target)
                 if k == 1 and self.max_false_alarm is not None:
-                    p_low = _sigmoid(platt[0, 0] * scores[y_idx == 0] + platt[0, 1])
-                    thresholds[0] = max(0.5, float(np.quantile(p_low, 1.0 - self.max_false_alarm)))
+                    if healthy.any():
+                        p_low = _sigmoid(platt[0, 0] * scores[healthy] + platt[0, 1])
+                        thresholds[0] = max(0.5, float(np.quantile(p_low, 1.0 - self.max_false_alarm)))
         self.platt_ = platt
         self.thresholds_ = thresholds
         self.n_iter_ = int(max(getattr(m, "n_iter_", 0) for m in self.models_))

@@ -221,6 +221,16 @@ def diagnose(
         return _diagnose(bundle, feature_result, clearance_um=clearance_um, top_k=top_k)
 
 
+def _alarm(model, proba: np.ndarray, cls: int) -> tuple[float, float] | None:
+    """(P(misaligned), its threshold) when an ordinal model calls the machine aligned, else None."""
+    if cls != 0 or not getattr(model, "ordinal_", False):
+        return None
+    thresholds = getattr(model.classifier_, "thresholds_", None)
+    if thresholds is None:
+        return None
+    return float(1.0 - proba[0]), float(thresholds[0])
+
+
 def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     if isinstance(bundle, ModelBundle):
         model, version = bundle.model, bundle.version
@@ -272,7 +282,7 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
         sanity=getattr(feature_result, "sanity", ()) or (), ood_score=ood_score, probabilities=proba,
         class_delta_agree=agree, names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
         never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
-        warnings=warnings)
+        warnings=warnings, alarm=_alarm(model, proba, cls))
     shown: float | None = delta
     shown_iv: tuple[float | None, float | None] = (lo, hi)
     if status == INCONCLUSIVE:

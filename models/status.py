@@ -6,8 +6,9 @@
   training data's typical level. No severity is given.
 - ``uncertain``: a sanity warning, OOD score above 1, vibration ``SCALE_UNCERTAIN`` times
   away from the training level, an ambiguous speed estimate, features the model always had
-  missing here, no class above ``CONFIDENT_MIN_PROBABILITY``, or a Δ regressor whose interval
-  does not reach the classifier's band.
+  missing here, no class above ``CONFIDENT_MIN_PROBABILITY``, a Δ regressor whose interval
+  does not reach the classifier's band, or "aligned" although misalignment is more likely than
+  not (below the ordinal classifier's false-alarm threshold).
 - ``confident``: none of these.
 
 Class and Δ are consistent by construction (:func:`consistent_estimate`): the severity is
@@ -113,7 +114,7 @@ def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray) ->
 def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float], class_delta_agree: bool,
            names: Sequence[str], row: np.ndarray, feature_median: np.ndarray,
            never_missing: Sequence[str], speed_source: str | None,
-           warnings: Iterable[str]) -> tuple[str, list[Reason]]:
+           warnings: Iterable[str], alarm: tuple[float, float] | None = None) -> tuple[str, list[Reason]]:
     """The verdict's status and its reasons (worst first).
 
     Parameters
@@ -132,6 +133,10 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
         ``"keyphasor"``, ``"given"`` or ``"estimated"``.
     warnings : iterable of str
         The feature extractor's warnings (an ambiguous speed estimate is one).
+    alarm : (probability, threshold), optional
+        For a verdict of "aligned" from an ordinal classifier: P(misaligned, any band) and the
+        threshold it must reach to be reported (false-alarm control). Between 0.5 and the
+        threshold the verdict is uncertain, and says so.
     """
     reasons: list[Reason] = []
     for f in sanity:
@@ -159,6 +164,11 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
         reasons.append(Reason("low_probability", UNCERTAIN,
                               f"no severity class is likely enough (highest probability {pmax:.0%} < "
                               f"{CONFIDENT_MIN_PROBABILITY:.0%}): the recording lies between classes"))
+    if alarm is not None and alarm[0] >= 0.5:
+        reasons.append(Reason("below_alarm_threshold", UNCERTAIN,
+                              f"misalignment is more likely than not ({alarm[0]:.0%}) but below the {alarm[1]:.0%} "
+                              "the model needs to report it (set to keep false alarms on healthy machines at 5 %): "
+                              "called aligned — recheck, or compare with this machine's baseline"))
     if not class_delta_agree:
         reasons.append(Reason("class_delta_disagree", UNCERTAIN,
                               "the severity classifier and the Δ regressor disagree (the regressor's interval does "

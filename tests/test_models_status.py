@@ -68,3 +68,18 @@ def test_shipped_model_never_gives_a_severity_to_an_impossible_recording():
     assert v.status != INCONCLUSIVE
     band = int(np.searchsorted(v.bands["edges"], v.misalignment, side="right"))
     assert v.bands["names"][band] == v.severity
+
+
+def test_aligned_below_the_alarm_threshold_is_uncertain_and_says_why():
+    import numpy as np
+
+    from rotordiag.models.status import UNCERTAIN, assess
+
+    common = dict(sanity=(), ood_score=0.2, probabilities=[0.9, 0.05, 0.03, 0.02], class_delta_agree=True,
+                  names=["a"], row=np.array([1.0]), feature_median=np.array([1.0]), never_missing=[],
+                  speed_source="given", warnings=[])
+    status, reasons = assess(**common, alarm=(0.72, 0.82))
+    assert status == UNCERTAIN and [r.code for r in reasons] == ["below_alarm_threshold"]
+    assert "72%" in reasons[0].message and "82%" in reasons[0].message
+    status, reasons = assess(**common, alarm=(0.3, 0.82))
+    assert status == "confident" and reasons == []
