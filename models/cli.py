@@ -151,12 +151,16 @@ def register(app: typer.Typer) -> None:
         as_json: bool = typer.Option(False, "--json", help="Print the verdict(s) as JSON."),
         out: Optional[Path] = typer.Option(None, "--out", help="Write one table of verdicts, one row per file: .csv or .json."),
         output_units: str = typer.Option("um", "--output-units", help="Units of the offset and amplitudes in the output: um | mil."),
+        baseline: Optional[Path] = typer.Option(None, "--baseline", help="An asset baseline as JSON (`rotordiag baseline "
+                                                "show ASSET --json` or GET /assets/{id}/baseline): also say what "
+                                                "changed since it."),
     ) -> None:
         """Diagnose coupling misalignment from one or many recordings (the model is loaded once)."""
         import json
 
         from rotordiag.core.units import um_to
 
+        from .change import compare, format_change, load_baseline_file
         from .diagnose_files import collect_files, diagnose_one, load_options, verdict_json, verdict_row, write_table
         from .predict import format_verdict, load_bundle
         from .registry import RegistryError
@@ -171,6 +175,7 @@ def register(app: typer.Typer) -> None:
                 "rotation": rotation, "viewed_from": viewed_from, "speed_rpm": speed_rpm,
                 "clearance_um": clearance_um, "sample_index": sample,
             }
+            base, rule = load_baseline_file(baseline) if baseline is not None else (None, None)
         except ValueError as exc:
             _fail(str(exc))
         loaded: list = []
@@ -186,7 +191,7 @@ def register(app: typer.Typer) -> None:
         for path in paths:
             try:
                 opts = load_options(path, sidecar, given)
-                verdict, res = diagnose_one(bundle, path, opts)
+                verdict, res, sig = diagnose_one(bundle, path, opts)
             except RegistryError as exc:
                 _fail(str(exc))
             except ValueError as exc:
@@ -197,12 +202,19 @@ def register(app: typer.Typer) -> None:
                 rows.append({"file": str(path), "error": str(exc)})
                 full.append({"file": str(path), "error": str(exc)})
                 continue
+            section = compare(sig, base, rule) if rule is not None else None
             rows.append(verdict_row(path, verdict, res, output_units))
             full.append(verdict_json(path, verdict, res, output_units))
+            if section is not None:
+                rows[-1].update({"baseline_compared": section["compared"], "baseline_changed": section["changed"],
+                                 "baseline_exceeded": " ".join(section["exceeded"])})
+                full[-1]["baseline"] = section
             if out is None and not as_json:
                 if len(paths) > 1:
                     typer.echo(f"== {path}")
                 typer.echo(format_verdict(verdict, output_units))
+                if section is not None:
+                    typer.echo(format_change(section))
                 for note in res.notes:
                     typer.echo(f"note: {note}")
                 if res.truth:

@@ -120,10 +120,13 @@ def coupling_clearance_um(recording: Any) -> float | None:
     return None
 
 
-def diagnose_one(bundle: Any, path: Path, options: ReadOptions) -> tuple[Any, ReadResult]:
+def diagnose_one(bundle: Any, path: Path, options: ReadOptions) -> tuple[Any, ReadResult, dict[str, Any]]:
     """Read ``path`` and diagnose it with ``bundle`` (a loaded model, or a callable that loads it: the
-    file is read first, so a bad file is reported before the model is loaded); ValueError says what to fix."""
-    from rotordiag.features import extract_features
+    file is read first, so a bad file is reported before the model is loaded); ValueError says what to fix.
+
+    Returns the verdict, the reader's result and the recording's ``features.signature`` (what an asset
+    baseline compares, ``models.change.compare``)."""
+    from rotordiag.features import extract_features, signature
 
     from .predict import diagnose
 
@@ -131,7 +134,7 @@ def diagnose_one(bundle: Any, path: Path, options: ReadOptions) -> tuple[Any, Re
     if callable(bundle):
         bundle = bundle()
     fr = extract_features(res.recording)
-    return diagnose(bundle, fr, clearance_um=coupling_clearance_um(res.recording)), res
+    return diagnose(bundle, fr, clearance_um=coupling_clearance_um(res.recording)), res, signature(fr)
 
 
 def verdict_row(path: Path, verdict: Any, res: ReadResult, output_units: str = "um") -> dict[str, Any]:
