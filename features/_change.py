@@ -243,7 +243,7 @@ def average_signatures(signatures: list[dict[str, Any]]) -> dict[str, Any]:
     if not signatures:
         raise ValueError("average_signatures needs at least one signature")
 
-    def mean(vals: list[float]) -> float | None:
+    def mean(vals: list[Any]) -> float | None:
         arr = np.array([_f(v) for v in vals], dtype=float)
         return _opt(float(arr.mean())) if len(arr) and np.isfinite(arr).all() else None
 

@@ -39,7 +39,7 @@ def _iso(t: dt.datetime | None) -> str | None:
 
 def baseline_dict(row: AssetBaseline, *, with_signature: bool = True) -> dict[str, Any]:
     """The API form of a stored baseline (what ``models.change.compare`` takes, plus its provenance)."""
-    out = {"asset_id": row.asset_id, "set_at": _iso(row.created_at), "recorded_at": _iso(row.recorded_at),
+    out: dict[str, Any] = {"asset_id": row.asset_id, "set_at": _iso(row.created_at), "recorded_at": _iso(row.recorded_at),
            "source": row.source, "diagnosis_ids": list(row.diagnosis_ids or []), "speed_rpm": row.speed_rpm,
            "model_version": row.model_version}
     if with_signature:
@@ -118,9 +118,9 @@ def propose(session: Session, asset_id: str, n: int = AUTO_N) -> dict[str, Any]:
     if len(rows) < n:
         raise InputError(f"asset {asset_id!r} has {len(rows)} stored recording(s) with a signature; an automatic "
                          f"baseline needs {n} (POST /diagnose with asset_id, or set one from a recording)", "conflict")
-    speeds = [r.speed_rpm for r in rows]
-    if any(v is None or not math.isfinite(v) for v in speeds):
+    if any(r.speed_rpm is None or not math.isfinite(r.speed_rpm) for r in rows):
         raise InputError("an automatic baseline needs the speed of every recording; one has none", "conflict")
+    speeds = [float(r.speed_rpm or 0.0) for r in rows]
     med = sorted(speeds)[len(speeds) // 2]
     far = [(r.id, v) for r, v in zip(rows, speeds) if abs(v / med - 1.0) > SPEED_BAND_FRAC]
     if far:
@@ -129,7 +129,7 @@ def propose(session: Session, asset_id: str, n: int = AUTO_N) -> dict[str, Any]:
             + ", ".join(f"{v:.0f}" for v in speeds) + f" r/min (diagnoses {', '.join(str(i) for i, _ in far)} "
             f"more than ±{100 * SPEED_BAND_FRAC:g} % from the median {med:.0f}); set the baseline from a recording "
             "or a diagnosis id instead", "conflict")
-    sig = average_signatures([r.signature for r in rows])
+    sig = average_signatures([r.signature or {} for r in rows])
     versions = sorted({r.model_version for r in rows})
     return {"diagnosis_ids": [r.id for r in rows], "recorded_at": rows[-1].created_at, "speed_rpm": sig["speed_rpm"],
             "model_version": versions[-1], "signature": sig}
