@@ -175,3 +175,41 @@ def test_an_old_database_gets_the_new_columns(tmp_path, registry_src):
         r = c.post(f"/assets/old/baseline?diagnosis_id={h['points'][0]['id']}", headers=auth())
         assert r.status_code == 409 and "send its recording" in r.json()["detail"]
         assert c.post("/diagnose", json=_body("old")).json()["diagnosis_id"] == 2
+
+
+def test_cli_sets_shows_and_uses_a_baseline(tmp_path, monkeypatch, registry_src):
+    """`rotordiag baseline set|show|clear` on the service database, and `rotordiag diagnose --baseline`."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    monkeypatch.setenv("ROTORDIAG_DATA_DIR", str(tmp_path / "data"))
+    monkeypatch.setenv("ROTORDIAG_SHIPPED_REGISTRY_DIR", str(registry_src))
+    body = _body()
+    rec = tmp_path / "after-alignment.json"
+    rec.write_text(json.dumps(body))
+    shifted = tmp_path / "later.json"
+    shifted.write_text(json.dumps(_body(dc_shift_um=60.0, seed=9)))
+    run = CliRunner().invoke
+    res = run(app, ["baseline", "show", "unit-cli"])
+    assert res.exit_code == 0 and "no baseline" in res.output
+    res = run(app, ["baseline", "set", "unit-cli"])
+    assert res.exit_code == 2 and "exactly one" in res.output
+    res = run(app, ["baseline", "set", "unit-cli", str(rec)])
+    assert res.exit_code == 0, res.output
+    assert "baseline set from recording" in res.output and "1800 r/min" in res.output
+    res = run(app, ["baseline", "show", "unit-cli", "--json"])
+    assert res.exit_code == 0
+    saved = tmp_path / "unit-cli.json"
+    saved.write_text(res.output)
+    assert json.loads(res.output)["baseline"]["source"] == "recording"
+    res = run(app, ["diagnose", str(shifted), "--baseline", str(saved), "--registry", str(registry_src)])
+    assert res.exit_code == 0, res.output
+    assert "baseline: changed since the baseline" in res.output and "dc shift" in res.output
+    res = run(app, ["diagnose", str(rec), "--baseline", str(saved), "--registry", str(registry_src), "--json"])
+    assert json.loads(res.output)["baseline"]["changed"] is False
+    assert run(app, ["baseline", "clear", "unit-cli"]).exit_code == 0
+    res = run(app, ["baseline", "clear", "unit-cli"])
+    assert res.exit_code == 2 and "has no baseline" in res.output
