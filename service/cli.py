@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Optional
 
 import typer
 
@@ -48,8 +49,6 @@ def register(app: typer.Typer) -> None:
 
 def _register_baseline(app: typer.Typer) -> None:
     """``rotordiag baseline show|set|clear ASSET``: the asset baselines of the service's database."""
-    from typing import Optional
-
     baseline_app = typer.Typer(help="Asset baselines in the service's database (ROTORDIAG_* settings, as "
                                "`rotordiag serve`): show, set (from a recording, a stored diagnosis or the first "
                                "recordings), clear.", no_args_is_help=True)
