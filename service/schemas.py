@@ -194,7 +194,7 @@ class BaselineOut(BaseModel):
 
     model_config = ConfigDict(protected_namespaces=())
 
-    asset_id: str
+    asset_id: str = Field(..., description="The asset.")
     set_at: str | None = Field(None, description="When it was set (UTC).")
     recorded_at: str | None = Field(None, description="When its (last) recording was diagnosed (UTC).")
     source: str = Field(..., description="`recording`, `diagnosis` or `auto`.")
@@ -208,7 +208,7 @@ class BaselineOut(BaseModel):
 class AssetBaselineOut(BaseModel):
     """GET /assets/{id}/baseline: the baseline, or the automatic proposal when none is set."""
 
-    asset_id: str
+    asset_id: str = Field(..., description="The asset.")
     baseline: BaselineOut | None = Field(None, description="The baseline (null: none set).")
     proposal: dict[str, Any] | None = Field(None, description="When none is set: the automatic proposal "
                                             "(`diagnosis_ids`, `speed_rpm`) or why there is none (`reason`).")
