@@ -74,6 +74,7 @@ def _amplitudes(verdict: dict | None) -> dict[str, float | None]:
 
 
 _BASELINE_ERRORS: dict[int | str, dict] = {
+    400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
     401: {"model": ErrorOut, "description": "No X-API-Key header."},
     403: {"model": ErrorOut, "description": "Wrong API key."},
     404: {"model": ErrorOut, "description": "No such diagnosis of this asset / no baseline to delete."},
