@@ -16,6 +16,13 @@ check_recording(recording, feature_result) -> tuple of SanityFinding
     Physics sanity checks (flat / clipped / all-zero channels, orbit vs clearance and probe
     range, implausible DC gap, all-reverse whirl, no 1X above noise); ``extract_features``
     runs them and puts the findings in ``FeatureResult.sanity``.
+slow_roll_vectors(slow_roll_recording) -> SlowRollVectors
+    Per-probe 1X/2X runout vectors of a slow-roll recording (keyphasor-referenced; an order in
+    the noise is absent).
+apply_slow_roll(recording, slow_roll) -> (Recording, SlowRollVectors)
+    The running recording with those vectors set for subtraction (``ProbeChannel.slow_roll_um_pp``);
+    refuses without a keyphasor in both, with different probes, or a slow roll above
+    ``SLOW_ROLL_MAX_SPEED_FRACTION`` of the running speed.
 evidence(feature_result) -> list of EvidenceItem
     The model-independent evidence: 1X/2X vectors, 2X/1X, phase across the coupling, orbit
     shape, shaft centreline, each with what it usually means.
@@ -51,6 +58,7 @@ from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
 from ._orbit import OrbitShape
 from ._recording import ProbeChannel, Recording
 from ._sanity import SanityFinding, check_recording
+from ._slow_roll import SLOW_ROLL_MAX_SPEED_FRACTION, SlowRollVectors, apply_slow_roll, slow_roll_vectors
 
 tune_malloc()
 
@@ -59,5 +67,5 @@ __all__ = [
     "FEATURE_NAMES", "FEATURE_SPECS", "FeatureSpec", "feature_names", "ALLOWED_UNITS", "MIN_REVS",
     "MIN_REVS_MOTION", "WHIRL_BAND", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",
-    "CHANGE_QUANTITIES",
+    "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
 ]

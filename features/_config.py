@@ -94,3 +94,7 @@ POINCARE_FALSE_ALARM = 1e-3
 #: overhead and contend with the caller's own parallelism — 3–4× slower on a busy 2-core
 #: machine); None leaves the BLAS setting alone
 BLAS_THREADS: int | None = 1
+
+#: a shaft-centreline position (evidence, ``b?_centre_*_per_c`` features) is used only when the mean
+#: reading lies within this many clearances of the probes' zero (else the DC part is a raw gap)
+CENTRELINE_MAX_ECC = 1.5

@@ -3,7 +3,8 @@ engineer reads, each with a one-line meaning.
 
 Per coupling bearing (2 and 3, else whatever is present): 1X and 2X vectors of each probe
 direction (µm pk-pk and phase lag), 2X/1X, orbit shape and the shaft-centreline position;
-across the coupling: the 1X and 2X phase differences. Nothing here uses the ML model.
+across the coupling: the 1X and 2X phase differences; first, when runout was compensated, the
+slow-roll vectors subtracted at each bearing. Nothing here uses the ML model.
 """
 from __future__ import annotations
 
@@ -11,14 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._config import PHASE_PAIRS
+from ._config import CENTRELINE_MAX_ECC, PHASE_PAIRS
 
 __all__ = ["EvidenceItem", "evidence"]
 
 COUPLING = PHASE_PAIRS[0]                     # (2, 3): the bearings either side of the coupling
-#: a shaft-centreline position is reported only when the mean reading lies within this many
-#: clearances of the probes' zero (otherwise the DC part is a raw gap, not a position)
-CENTRELINE_MAX_ECC = 1.5
 
 
 @dataclass(frozen=True)
@@ -126,6 +124,23 @@ def _centreline(det) -> EvidenceItem:
                         meaning, ecc)
 
 
+def _slow_roll_item(det) -> EvidenceItem | None:
+    """What slow-roll (runout) compensation subtracted at this bearing, or None when none was asked for."""
+    if det.slow_roll_um_pp is None:
+        return None
+    parts = []
+    for angle, vec in zip(det.probe_angles_deg, det.slow_roll_um_pp):
+        vec = vec or {}
+        got = [f"{k}X {vec[k][0]:.3g} µm pk-pk ∠ {vec[k][1]:.0f}°" for k in (1, 2) if k in vec]
+        left = [f"{k}X" for k in (1, 2) if k not in vec]
+        parts.append(f"{angle:g}° probe: " + (", ".join(got) + " subtracted" if got else "nothing subtracted")
+                     + (f" ({'/'.join(left)} not given or in the noise at slow roll)" if left else ""))
+    return EvidenceItem(f"bearing {det.bearing}", "slow-roll compensation", "; ".join(parts),
+                        "runout (mechanical/electrical, fixed to the shaft surface) measured at slow roll with the "
+                        "keyphasor, subtracted as vectors: the 1X/2X vectors reported are the shaft's vibration "
+                        "without it", None)
+
+
 def _bearing_items(det) -> list[EvidenceItem]:
     b = det.bearing
     scope = f"bearing {b}"
@@ -184,12 +199,14 @@ def evidence(fr) -> list[EvidenceItem]:
     Returns
     -------
     list of EvidenceItem
-        Across-the-coupling phase differences, then each coupling bearing present (2, 3); when
+        The slow-roll vectors subtracted at each bearing (when runout was compensated), the
+        across-the-coupling phase differences, then each coupling bearing present (2, 3); when
         neither coupling bearing is present, every bearing present.
     """
     present = sorted(fr.bearings)
     chosen = [b for b in present if b in COUPLING] or present
-    items = _coupling_items(fr)
+    items = [it for b in present if (it := _slow_roll_item(fr.bearings[b])) is not None]
+    items += _coupling_items(fr)
     for b in chosen:
         items += _bearing_items(fr.bearings[b])
     return items

@@ -71,6 +71,10 @@ class BearingDetail:
     phase_valid : ndarray of bool, shape (2, 3), optional
         Whether the 1X–3X phase of x and y stands out of the noise (``PHASE_MIN_SNR``); where
         not, the phase features are NaN and :meth:`phase_deg` returns NaN.
+    slow_roll_um_pp : tuple of (mapping or None), optional
+        The slow-roll (runout) vectors subtracted from each probe's orders, in channel order
+        (``ProbeChannel.slow_roll_um_pp``; an empty mapping: compensation asked for, no order above
+        the noise at slow roll); None when no compensation was asked for at this bearing.
     """
 
     bearing: int
@@ -89,6 +93,7 @@ class BearingDetail:
     features: dict[str, float] = field(repr=False)
     line_noise_um: np.ndarray | None = field(default=None, repr=False)
     phase_valid: np.ndarray | None = field(default=None, repr=False)
+    slow_roll_um_pp: tuple[Any, Any] | None = field(default=None, repr=False)
 
     def phase_deg(self, direction: str, order: int) -> float:
         """Phase lag (deg, [0, 360)) of ``order`` in direction ``"x"`` or ``"y"``."""
@@ -173,6 +178,21 @@ def _subsync_peak_orders(pb: np.ndarray, lo: int, hi: int, total_ms: np.ndarray,
             delta = 0.5 * (lp[0] - lp[2]) / den if den < 0 else 0.0
             out[i] = float(orders[k] + delta * bin_orders)
     return out
+
+
+def _centreline_per_c(mean_x_um: np.ndarray, mean_y_um: np.ndarray, clearance_um: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Static journal position per bearing in clearances: x, y and eccentricity ratio.
+
+    NaN when the clearance is unknown or the mean reading lies more than
+    ``CENTRELINE_MAX_ECC`` clearances from the probes' zero (then the DC part is a raw
+    probe gap, not a position inside the bearing).
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ex, ey = mean_x_um / clearance_um, mean_y_um / clearance_um
+        ecc = np.hypot(ex, ey)
+    bad = ~(ecc <= cfg.CENTRELINE_MAX_ECC)
+    return np.where(bad, np.nan, ex), np.where(bad, np.nan, ey), np.where(bad, np.nan, ecc)
 
 
 def _subtract_slow_roll(rec: Recording, bearings: tuple[int, ...], coeffs: np.ndarray) -> None:
@@ -382,6 +402,7 @@ def _extract(recording: Recording) -> FeatureResult:
         cols.append(_subsync_peak_orders(pb_all, sub_lo, sub_hi, total_ms, orders_axis, float(orders_axis[1])))
         cols.append(_ratios(res_ms[0::2] + res_ms[1::2], total_ms))
         cols += [poincare_rms, poincare_rms / c, _ratios(poincare_rms, np.sqrt(total_ms))]
+        cols += list(_centreline_per_c(mean[0::2], mean[1::2], c))
     table = np.column_stack(cols)                                      # (n_bearings, features per bearing)
 
     details: dict[int, BearingDetail] = {}
@@ -401,7 +422,9 @@ def _extract(recording: Recording) -> FeatureResult:
             probe_coeffs_um=probe, forward_um=fw_all[i].copy(), reverse_um=rv_all[i].copy(),
             mean_um=(float(mean[ix]), float(mean[iy])), noise_rms_um=(float(noise[ix]), float(noise[iy])),
             poincare_um=pts_all[:, ix:iy + 1], orbit12=orb.shape(i), features=dict(zip(names, row.tolist())),
-            line_noise_um=line_noise[ix:iy + 1].copy(), phase_valid=phase_ok[ix:iy + 1].copy())
+            line_noise_um=line_noise[ix:iy + 1].copy(), phase_valid=phase_ok[ix:iy + 1].copy(),
+            slow_roll_um_pp=None if chans[0].slow_roll_um_pp is None and chans[1].slow_roll_um_pp is None
+            else (chans[0].slow_roll_um_pp, chans[1].slow_roll_um_pp))
 
     for k in (1, 2):
         for bi, bj in cfg.PHASE_PAIRS:

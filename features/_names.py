@@ -74,6 +74,11 @@ def _bearing_specs(b: int) -> list[FeatureSpec]:
     add("poincare_rms_um", "µm rms", "RMS scatter of the once-per-revolution (θ = 2πm) orbit points about their centroid")
     add("poincare_rms_per_c", "1", "poincare_rms_um / radial clearance")
     add("poincare_disp", "1", "poincare_rms_um / RMS AC orbit displacement (0 for period-1 motion)")
+    add("centre_x_per_c", "1", "static (mean) horizontal journal position / radial clearance; NaN when the clearance "
+        "is unknown or the mean lies > 1.5 c from the probes' zero (a raw gap, not a position)")
+    add("centre_y_per_c", "1", "static (mean) vertical journal position / radial clearance (< 0: below the centre); "
+        "NaN as centre_x_per_c")
+    add("centre_ecc_per_c", "1", "static eccentricity ratio hypot(centre_x, centre_y) / clearance; NaN as centre_x_per_c")
     return out
 
 

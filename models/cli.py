@@ -49,7 +49,7 @@ def register(app: typer.Typer) -> None:
         try:
             cfg = TrainConfig.from_file(config) if config is not None else TrainConfig()
             typer.echo(f"reading {', '.join(map(str, data))} and extracting features …", err=True)
-            table = load_feature_tables(data, cache=cache)
+            table = load_feature_tables(data, cache=cache, augment=cfg.augment)
             typer.echo(
                 f"{len(table)} samples from {len(set(table.plant_id.tolist()))} plants "
                 f"(skipped: {table.meta.get('skipped')}; features {table.meta['feature_time_s']} s, "
@@ -151,6 +151,8 @@ def register(app: typer.Typer) -> None:
         as_json: bool = typer.Option(False, "--json", help="Print the verdict(s) as JSON."),
         out: Optional[Path] = typer.Option(None, "--out", help="Write one table of verdicts, one row per file: .csv or .json."),
         output_units: str = typer.Option("um", "--output-units", help="Units of the offset and amplitudes in the output: um | mil."),
+        slow_roll: Optional[Path] = typer.Option(None, "--slow-roll", help="A recording of the same probes at slow roll (<= 20 % of the running speed; keyphasor in both files): its 1X/2X runout vectors are subtracted from every recording's. Read with the options above (not --speed-rpm/--sample) and its own sidecar."),
+        slow_roll_sample_rate_hz: Optional[float] = typer.Option(None, "--slow-roll-sample-rate-hz", help="Sample rate of the --slow-roll file, Hz (default: --sample-rate-hz, its sidecar or its time column)."),
         baseline: Optional[Path] = typer.Option(None, "--baseline", help="An asset baseline as JSON (`rotordiag baseline "
                                                 "show ASSET --json` or GET /assets/{id}/baseline): also say what "
                                                 "changed since it."),
@@ -161,7 +163,15 @@ def register(app: typer.Typer) -> None:
         from rotordiag.core.units import um_to
 
         from .change import compare, format_change, load_baseline_file
-        from .diagnose_files import collect_files, diagnose_one, load_options, verdict_json, verdict_row, write_table
+        from .diagnose_files import (
+            collect_files,
+            diagnose_one,
+            load_options,
+            slow_roll_from_file,
+            verdict_json,
+            verdict_row,
+            write_table,
+        )
         from .predict import format_verdict, load_bundle
         from .registry import RegistryError
 
@@ -176,6 +186,11 @@ def register(app: typer.Typer) -> None:
                 "clearance_um": clearance_um, "sample_index": sample,
             }
             base, rule = load_baseline_file(baseline) if baseline is not None else (None, None)
+            runout = None
+            if slow_roll is not None:
+                slow_given = {**given, "speed_rpm": None, "sample_index": None,
+                              "sample_rate_hz": slow_roll_sample_rate_hz or sample_rate_hz}
+                runout = slow_roll_from_file(slow_roll, load_options(slow_roll, None, slow_given))
         except ValueError as exc:
             _fail(str(exc))
         loaded: list = []
@@ -191,7 +206,7 @@ def register(app: typer.Typer) -> None:
         for path in paths:
             try:
                 opts = load_options(path, sidecar, given)
-                verdict, res, sig = diagnose_one(bundle, path, opts)
+                verdict, res, sig = diagnose_one(bundle, path, opts, runout)
             except RegistryError as exc:
                 _fail(str(exc))
             except ValueError as exc:

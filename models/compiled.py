@@ -31,6 +31,7 @@ from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostin
 
 from ._sklearn_private import hgb_trees, single_calibration
 from .estimators import _blank  # the estimators' own column blanking (sparse training columns → 0)
+from .ordinal import OrdinalSeverityClassifier
 
 
 @dataclass(frozen=True)
@@ -231,12 +232,18 @@ class CompiledModel:
         n = len(model.feature_names_)
         self.n_features = n
         clf = model.classifier_
-        inner = clf.model_
-        self._calibrated = bool(clf.calibrated_)
-        boosted = inner.calibrated_classifiers_[0].estimator if self._calibrated else inner
-        self._clf_forest = compile_forest([boosted], n)
+        self._ordinal = isinstance(clf, OrdinalSeverityClassifier)
+        if self._ordinal:
+            # One binary ensemble per band edge: its raw column is that edge's decision value.
+            self._calibrated = False
+            self._clf_forest = compile_forest(list(clf.models_), n)
+        else:
+            inner = clf.model_
+            self._calibrated = bool(clf.calibrated_)
+            boosted = inner.calibrated_classifiers_[0].estimator if self._calibrated else inner
+            self._clf_forest = compile_forest([boosted], n)
         self._clf_blank = np.asarray(clf.sparse_columns_, bool)
-        self._clf_order = np.array([list(clf.classes_).index(c) for c in model.bands_.names])
+        self._clf_order = np.asarray(model.band_order())
         reg = model.regressor_
         parts = [reg.point_model_, reg.center_model_] + ([reg.scale_model_] if reg.scale_model_ is not None else [])
         self._reg_forest = compile_forest(parts, n)
@@ -261,6 +268,8 @@ class CompiledModel:
         return X
 
     def _proba_from_raw(self, raw: np.ndarray) -> np.ndarray:
+        if self._ordinal:
+            return self.model.classifier_.proba_from_scores(raw)[:, self._clf_order]
         if self._calibrated:
             proba = _calibrated_proba(self.model.classifier_.model_, raw)
         else:

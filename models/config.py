@@ -15,9 +15,11 @@ Every section and key is optional; the defaults are the documented ones::
     clearance_features = ["*_per_c", "*_per_c2"]   # features that need the clearance
     clearance_dropout = 0.5     # share of training rows whose clearance features are
                                 # blanked, so the model also works without the clearance
+    monotonic_increasing = []   # patterns along which severity and Δ must not decrease
+                                # (needs kind = "ordinal")
 
-    [classifier]                # SeverityClassifier parameters
-    calibration = "temperature"
+    [classifier]                # kind = "multiclass" (SeverityClassifier, default) or
+    calibration = "temperature" # "ordinal" (OrdinalSeverityClassifier); then its parameters
     [regressor]                 # ConformalIntervalRegressor parameters
     alpha = 0.1
     [ood]                       # KNNDistanceOOD parameters
@@ -30,6 +32,13 @@ Every section and key is optional; the defaults are the documented ones::
     [baselines]
     ratio_features = ["b?_[xy]_2x_1x_ratio"]   # 2X/1X of each bearing's x and y
     rule_cuts = [0.5, 1.0, 2.0]
+
+    [augment]                   # measurement realities added to the table (models/augment.py)
+    copies = 0                  # augmented rows per sample
+    gain_mismatch = 0.0         # ±relative probe gain error
+    bearing_sets = []           # [{bearings = [2, 3], weight = 1}, ...]
+    speed_unknown = 0.0         # share of copies extracted without the speed
+    seed = 0
 """
 from __future__ import annotations
 
@@ -43,12 +52,16 @@ from typing import Any
 from rotordiag.core.bands import SeverityBands
 
 from .baselines import DEFAULT_RATIO_PATTERNS, DEFAULT_RULE_CUTS
+from .augment import Augmentation
 from .estimators import ConformalIntervalRegressor, KNNDistanceOOD, SeverityClassifier
+from .ordinal import OrdinalSeverityClassifier
+
+_CLASSIFIERS = {"multiclass": SeverityClassifier, "ordinal": OrdinalSeverityClassifier}
 
 DEFAULT_EXCLUDE: tuple[str, ...] = ("b?_[xy]_[123]x_phase_deg",)
 DEFAULT_CLEARANCE_FEATURES: tuple[str, ...] = ("*_per_c", "*_per_c2")
-_FEATURE_KEYS = {"exclude", "clearance_features", "clearance_dropout"}
-_SECTIONS = {"seed", "bands", "features", "classifier", "regressor", "ood", "evaluation", "baselines"}
+_FEATURE_KEYS = {"exclude", "clearance_features", "clearance_dropout", "monotonic_increasing"}
+_SECTIONS = {"seed", "bands", "features", "classifier", "regressor", "ood", "evaluation", "baselines", "augment"}
 
 
 def _params(cls, section: str, d: Mapping[str, Any] | None) -> dict:
@@ -69,6 +82,8 @@ class TrainConfig:
     exclude_features: tuple[str, ...] = DEFAULT_EXCLUDE
     clearance_features: tuple[str, ...] = DEFAULT_CLEARANCE_FEATURES
     clearance_dropout: float = 0.5
+    monotonic_increasing: tuple[str, ...] = ()
+    classifier_kind: str = "multiclass"
     classifier: dict = field(default_factory=dict)
     regressor: dict = field(default_factory=dict)
     ood: dict = field(default_factory=dict)
@@ -76,6 +91,7 @@ class TrainConfig:
     speed_bands_rpm: tuple[float, ...] = (1200.0, 1800.0, 2400.0, 3000.0)
     ratio_features: tuple[str, ...] = DEFAULT_RATIO_PATTERNS
     rule_cuts: tuple[float, ...] = DEFAULT_RULE_CUTS
+    augment: Augmentation = field(default_factory=Augmentation)
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any] | None) -> TrainConfig:
@@ -118,19 +134,32 @@ class TrainConfig:
             raise ValueError(
                 f"[baselines] rule_cuts: need one cut per band edge ({bands.n_bands - 1}), got {list(rule_cuts)}"
             )
+        clf = dict(d.get("classifier", {}))
+        kind = clf.pop("kind", "multiclass")
+        if kind not in _CLASSIFIERS:
+            raise ValueError(f"[classifier] kind: one of {sorted(_CLASSIFIERS)}, got {kind!r}")
+        mono = feats.get("monotonic_increasing", ())
+        if not isinstance(mono, (list, tuple)) or not all(isinstance(p, str) for p in mono):
+            raise ValueError(f"[features] monotonic_increasing: a list of feature-name patterns, got {mono!r}")
+        if mono and kind != "ordinal":
+            raise ValueError("[features] monotonic_increasing: needs [classifier] kind = \"ordinal\" (a multiclass "
+                             "classifier cannot take monotonic constraints)")
         cfg = cls(
             seed=seed,
             bands=bands,
             exclude_features=tuple(str(p) for p in feats.get("exclude", DEFAULT_EXCLUDE)),
             clearance_features=tuple(str(p) for p in feats.get("clearance_features", DEFAULT_CLEARANCE_FEATURES)),
             clearance_dropout=float(dropout),
-            classifier=_params(SeverityClassifier, "classifier", d.get("classifier")),
+            monotonic_increasing=tuple(mono),
+            classifier_kind=kind,
+            classifier=_params(_CLASSIFIERS[kind], "classifier", clf),
             regressor=_params(ConformalIntervalRegressor, "regressor", d.get("regressor")),
             ood=_params(KNNDistanceOOD, "ood", d.get("ood")),
             n_splits=n_splits,
             speed_bands_rpm=sb,
             ratio_features=tuple(str(p) for p in bl.get("ratio_features", DEFAULT_RATIO_PATTERNS)),
             rule_cuts=rule_cuts,
+            augment=Augmentation.from_dict(d.get("augment")),
         )
         # Validate the parameter values now, with messages naming the section.
         m = cfg.make_model(("x",))
@@ -162,12 +191,14 @@ class TrainConfig:
                 "exclude": list(self.exclude_features),
                 "clearance_features": list(self.clearance_features),
                 "clearance_dropout": self.clearance_dropout,
+                "monotonic_increasing": list(self.monotonic_increasing),
             },
-            "classifier": dict(self.classifier),
+            "classifier": {"kind": self.classifier_kind, **dict(self.classifier)},
             "regressor": dict(self.regressor),
             "ood": dict(self.ood),
             "evaluation": {"n_splits": self.n_splits, "speed_bands_rpm": list(self.speed_bands_rpm)},
             "baselines": {"ratio_features": list(self.ratio_features), "rule_cuts": list(self.rule_cuts)},
+            "augment": self.augment.to_dict(),
         }
 
     def make_model(self, feature_names):
@@ -179,8 +210,9 @@ class TrainConfig:
         return MisalignmentModel(
             band_edges=self.bands.edges,
             band_names=self.bands.names,
-            classifier=SeverityClassifier(**{**seeded, **self.classifier}),
+            classifier=_CLASSIFIERS[self.classifier_kind](**{**seeded, **self.classifier}),
             regressor=ConformalIntervalRegressor(**reg),
             ood=KNNDistanceOOD(**{**seeded, **self.ood}),
             feature_names=tuple(feature_names),
+            monotonic_increasing=self.monotonic_increasing,
         )

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from .augment import Augmentation, Variant
 from .table import FeatureTable
 
 _CACHE_VERSION = 1
@@ -84,7 +85,10 @@ def dataset_hash(path: str | Path) -> str:
     return h.hexdigest()
 
 
-def _extract_rows(f, rows, progress: Callable | None) -> tuple[np.ndarray, list[str], list[tuple[int, str]]]:
+def _extract_rows(f, rows, progress: Callable | None, augment: Augmentation | None = None,
+                  ) -> tuple[np.ndarray, list[str], list[tuple[int, str]]]:
+    """Features of the samples ``rows``; with ``augment``, of their augmented copies instead
+    (``len(rows) * augment.copies`` rows, copy-major within each sample)."""
     from rotordiag.features import FEATURE_NAMES, ProbeChannel, Recording, extract_features
 
     fs = float(f.attrs["sample_rate_hz"])
@@ -94,22 +98,28 @@ def _extract_rows(f, rows, progress: Callable | None) -> tuple[np.ndarray, list[
     angles = [float(a) for a in ch["angle_deg"]]
     speed = f["parameters/speed_rpm"][...]
     clearance_m = f["parameters/plant/clearance_m"][...] if "parameters/plant/clearance_m" in f else None
-    X = np.full((len(rows), len(FEATURE_NAMES)), np.nan)
+    copies = augment.copies if augment is not None else 1
+    X = np.full((len(rows) * copies, len(FEATURE_NAMES)), np.nan)
     failed: list[tuple[int, str]] = []
     wf = f["waveforms"]
     for k, i in enumerate(rows):
         data = wf[i]
-        try:
-            rec = Recording(
-                sample_rate_hz=fs,
-                channels=[ProbeChannel(bearing=b, angle_deg=a, units=units, data=data[c])
-                          for c, (b, a) in enumerate(zip(bearings, angles))],
-                speed_rpm=float(speed[i]),
-                clearance_um=None if clearance_m is None else float(clearance_m[i]) * 1e6,
-            )
-            X[k] = extract_features(rec).values
-        except ValueError as exc:
-            failed.append((int(i), str(exc)))
+        if augment is None:
+            variants = [Variant(np.ones(len(bearings)), np.ones(len(bearings), bool), True)]
+        else:
+            variants = augment.variants(int(i), bearings)
+        for c, v in enumerate(variants):
+            try:
+                rec = Recording(
+                    sample_rate_hz=fs,
+                    channels=[ProbeChannel(bearing=b, angle_deg=a, units=units, data=data[j] * v.gains[j])
+                              for j, (b, a) in enumerate(zip(bearings, angles)) if v.keep[j]],
+                    speed_rpm=float(speed[i]) if v.speed_known else None,
+                    clearance_um=None if clearance_m is None else float(clearance_m[i]) * 1e6,
+                )
+                X[k * copies + c] = extract_features(rec).values
+            except ValueError as exc:
+                failed.append((int(i), str(exc)))
         if progress is not None:
             progress(k + 1, len(rows))
     return X, list(FEATURE_NAMES), failed
@@ -120,6 +130,7 @@ def load_feature_table(
     *,
     cache: bool = True,
     progress: Callable[[int, int], None] | None = None,
+    augment: Augmentation | None = None,
 ) -> FeatureTable:
     """Feature table of a dataset file (finished, ``ok`` samples only).
 
@@ -130,6 +141,9 @@ def load_feature_table(
         Read/write the feature cache next to the file.
     progress : callable(done, total), optional
         Called after each extracted sample.
+    augment : Augmentation, optional
+        Add ``augment.copies`` rows per sample with measurement realities
+        (:mod:`rotordiag.models.augment`), after the original rows; cached separately.
 
     Returns
     -------
@@ -217,8 +231,15 @@ def load_feature_table(
             good = np.array([i not in bad for i in rows])
         r = rows[good]
         assert X is not None and names is not None
+        X = X[good]
+        if augment is not None and augment.copies > 0:
+            X_aug = _augmented_rows(f, r, augment, key, path, cache)
+            ok_aug = ~np.all(np.isnan(X_aug), axis=1)
+            meta["augment"] = {**augment.to_dict(), "rows": int(ok_aug.sum()), "failed": int((~ok_aug).sum())}
+            r = np.concatenate([r, np.repeat(r, augment.copies)[ok_aug]])
+            X = np.vstack([X, X_aug[ok_aug]])
         return FeatureTable(
-            X=X[good],
+            X=X,
             feature_names=tuple(names),
             misalignment=f["labels/misalignment"][...][r],
             plant_id=_str_array(f["parameters/plant_id"][...][r]),
@@ -229,13 +250,32 @@ def load_feature_table(
         )
 
 
-def load_feature_tables(paths, *, cache: bool = True) -> FeatureTable:
+def _augmented_rows(f, rows: np.ndarray, augment: Augmentation, key: str, path: Path, cache: bool) -> np.ndarray:
+    """Features of the augmented copies of ``rows`` (cached next to the dataset, keyed by the augmentation)."""
+    akey = hashlib.sha256(f"{key}|{augment.key}".encode()).hexdigest()[:16]
+    cache_path = path.with_name(f"{path.name}.augmented-{akey}.npz")
+    if cache and cache_path.is_file():
+        try:
+            with np.load(cache_path, allow_pickle=False) as z:
+                if np.array_equal(z["rows"], rows):
+                    return np.asarray(z["X"])
+        except (OSError, KeyError, ValueError):
+            pass
+    X, _names, _failed = _extract_rows(f, rows, None, augment)
+    if cache:
+        tmp = cache_path.with_name(cache_path.name + ".tmp.npz")
+        np.savez(tmp, X=X, rows=rows)
+        tmp.replace(cache_path)
+    return X
+
+
+def load_feature_tables(paths, *, cache: bool = True, augment: Augmentation | None = None) -> FeatureTable:
     """:func:`load_feature_table` of each file, concatenated (one model from several files).
 
     The combined ``dataset_hash`` is the SHA-256 of the files' hashes in order; the other
     provenance fields become lists.
     """
-    tables = [load_feature_table(p, cache=cache) for p in paths]
+    tables = [load_feature_table(p, cache=cache, augment=augment) for p in paths]
     if len(tables) == 1:
         return tables[0]
     out = FeatureTable.concat(tables)

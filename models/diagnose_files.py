@@ -15,7 +15,7 @@ from rotordiag.core.units import um_to
 from rotordiag.features.reader import FORMATS, ReadLimits, ReadOptions, ReadResult, parse_layout, read_recording
 
 __all__ = ["collect_files", "load_options", "diagnose_one", "verdict_row", "verdict_json", "write_table", "CLI_LIMITS",
-           "coupling_clearance_um"]
+           "coupling_clearance_um", "slow_roll_from_file"]
 
 #: a local file is the user's own: a dataset file may be large (its samples are read one at a time)
 CLI_LIMITS = ReadLimits(max_file_bytes=2**31, max_hdf5_bytes=2**40, max_points=10_000_000, max_chunk_ratio=1e5,
@@ -120,21 +120,41 @@ def coupling_clearance_um(recording: Any) -> float | None:
     return None
 
 
-def diagnose_one(bundle: Any, path: Path, options: ReadOptions) -> tuple[Any, ReadResult, dict[str, Any]]:
+def slow_roll_from_file(path: Path, options: ReadOptions) -> Any:
+    """The runout vectors (``features.SlowRollVectors``) of a slow-roll recording file, read like any
+    recording; ValueError (naming the file) says what to fix."""
+    from rotordiag.features import slow_roll_vectors
+
+    try:
+        return slow_roll_vectors(read_recording(path, options=options, limits=CLI_LIMITS).recording)
+    except ValueError as exc:
+        raise ValueError(f"--slow-roll {path}: {exc}") from None
+
+
+def diagnose_one(bundle: Any, path: Path, options: ReadOptions,
+                 slow_roll: Any = None) -> tuple[Any, ReadResult, dict[str, Any]]:
     """Read ``path`` and diagnose it with ``bundle`` (a loaded model, or a callable that loads it: the
     file is read first, so a bad file is reported before the model is loaded); ValueError says what to fix.
+    ``slow_roll`` (``features.SlowRollVectors``, :func:`slow_roll_from_file`): runout vectors subtracted
+    from the recording's 1X/2X (the reader's notes say so and what was left out).
 
     Returns the verdict, the reader's result and the recording's ``features.signature`` (what an asset
     baseline compares, ``models.change.compare``)."""
-    from rotordiag.features import extract_features, signature
+    from rotordiag.features import apply_slow_roll, extract_features, signature
 
     from .predict import diagnose
 
     res = read_recording(path, options=options, limits=CLI_LIMITS)
+    recording = res.recording
+    if slow_roll is not None:
+        recording = apply_slow_roll(recording, slow_roll)[0]
+        res.notes.append(f"slow-roll compensation: runout vectors measured at {slow_roll.speed_rpm:.0f} r/min "
+                         f"({slow_roll.n_revs} revolutions) subtracted from the 1X/2X of every probe")
+        res.notes.extend(slow_roll.notes)
     if callable(bundle):
         bundle = bundle()
-    fr = extract_features(res.recording)
-    return diagnose(bundle, fr, clearance_um=coupling_clearance_um(res.recording)), res, signature(fr)
+    fr = extract_features(recording)
+    return diagnose(bundle, fr, clearance_um=coupling_clearance_um(recording)), res, signature(fr)
 
 
 def verdict_row(path: Path, verdict: Any, res: ReadResult, output_units: str = "um") -> dict[str, Any]:

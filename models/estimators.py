@@ -51,6 +51,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from rotordiag.core.bands import DEFAULT_EDGES, DEFAULT_NAMES, SeverityBands
 
 from ._sklearn_private import Interval, StrOptions
+from .ordinal import OrdinalSeverityClassifier, median_class
 
 _CALIBRATION_METHODS = ("temperature", "sigmoid", "isotonic", "none")
 
@@ -272,6 +273,7 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
         "max_leaf_nodes": [Interval(Integral, 2, None, closed="left")],
         "min_samples_leaf": [Interval(Integral, 1, None, closed="left")],
         "l2_regularization": [Interval(Real, 0, None, closed="left")],
+        "monotonic_cst": ["array-like", None],
         "random_state": ["random_state"],
     }
 
@@ -286,6 +288,7 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
         max_leaf_nodes: int = 15,
         min_samples_leaf: int = 10,
         l2_regularization: float = 1.0,
+        monotonic_cst=None,
         random_state: int = 0,
     ) -> None:
         self.alpha = alpha
@@ -296,6 +299,7 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
         self.max_leaf_nodes = max_leaf_nodes
         self.min_samples_leaf = min_samples_leaf
         self.l2_regularization = l2_regularization
+        self.monotonic_cst = monotonic_cst
         self.random_state = random_state
 
     def __sklearn_tags__(self):
@@ -344,9 +348,16 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
             split = ShuffleSplit(n_splits=1, test_size=self.calibration_fraction, random_state=self.random_state)
             proper, calib = next(split.split(X, y))
         a = float(self.alpha)
-        self.point_model_ = self._boosted(loss="squared_error").fit(X, y)
+        cst = None
+        if self.monotonic_cst is not None:
+            cst = np.asarray(self.monotonic_cst)
+            if cst.shape != (X.shape[1],) or not np.isin(cst, (-1, 0, 1)).all():
+                raise ValueError(f"monotonic_cst: need one of -1, 0, +1 per feature ({X.shape[1]}), got shape "
+                                 f"{cst.shape}")
+            cst = cst.astype(int) if cst.any() else None
+        self.point_model_ = self._boosted(loss="squared_error", monotonic_cst=cst).fit(X, y)
         Xp, yp = X[proper], y[proper]
-        self.center_model_ = self._boosted(loss="squared_error").fit(Xp, yp)
+        self.center_model_ = self._boosted(loss="squared_error", monotonic_cst=cst).fit(Xp, yp)
         self.scale_model_ = None
         self.scale_floor_ = 1.0
         if len(proper) >= 6:
@@ -355,7 +366,8 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
                 folds = list(GroupKFold(n_splits=3).split(Xp, yp, gp))
             else:
                 folds = list(KFold(n_splits=3, shuffle=True, random_state=self.random_state).split(Xp))
-            resid = np.abs(yp - cross_val_predict(self._boosted(loss="squared_error"), Xp, yp, cv=folds))
+            resid = np.abs(yp - cross_val_predict(self._boosted(loss="squared_error", monotonic_cst=cst), Xp, yp,
+                                                  cv=folds))
             floor = float(np.quantile(resid, 0.1))
             if floor > 0 or resid.max() > 0:
                 self.scale_floor_ = floor if floor > 0 else float(resid[resid > 0].min())
@@ -401,17 +413,19 @@ class KNNDistanceOOD(OutlierMixin, BaseEstimator):
     Features are median-imputed (a feature that is always missing becomes 0) and
     standardised with the training statistics. A row's distance is the Euclidean
     distance to its ``n_neighbors``-th nearest reference row; the threshold is the
-    ``threshold_quantile`` of the same distance over the training rows, each measured
-    with itself left out. So about ``1 − threshold_quantile`` of rows like the
-    training data are flagged, and rows far from all of it always are.
+    ``threshold_quantile`` of the same distance over training rows of groups (plants) kept
+    out of the reference (see :meth:`fit`). So about ``1 − threshold_quantile`` of
+    recordings of *new* plants like the training data are flagged, and rows far from all
+    of it always are.
 
     Parameters
     ----------
     n_neighbors : int, default=5
     threshold_quantile : float, default=0.99
     max_reference : int, default=2000
-        At most this many training rows (a seeded random subset) are kept as the
-        reference set, which bounds model size and query time.
+        At most this many training rows (whole groups, a seeded random choice) are kept as
+        the reference set, which bounds model size and query time; the other rows
+        calibrate the threshold.
     random_state : int, default=0
 
     Attributes
@@ -448,50 +462,81 @@ class KNNDistanceOOD(OutlierMixin, BaseEstimator):
     def __sklearn_tags__(self):
         return _nan_tags(super().__sklearn_tags__())
 
-    def fit(self, X, y=None) -> KNNDistanceOOD:
+    def fit(self, X, y=None, groups=None) -> KNNDistanceOOD:
         """Store the standardised reference set and the distance threshold.
+
+        The threshold is calibrated on rows of groups (plants) that are **not** in the
+        reference set: whole groups, in a seeded random order, fill the reference up to
+        ``max_reference`` rows, and the threshold is the ``threshold_quantile`` of the other
+        groups' distances — what a new plant of the same family scores. When every row fits
+        in the reference, the distances come from a 5-fold split by group instead (each
+        fold measured against the other folds). Rows of one group (e.g. augmented copies
+        of one plant's recording) never measure each other, so near-duplicates cannot
+        shrink the threshold.
 
         Parameters
         ----------
         X : array-like of shape (n_samples, n_features); NaN allowed
         y : ignored
+        groups : array-like of shape (n_samples,), optional
+            Plant identifiers (default: every row its own group).
         """
         self._validate_params()
         X = validate_data(self, X, ensure_all_finite="allow-nan")
-        if X.shape[0] < 2:
-            raise ValueError(f"X: need at least 2 samples to fit an OOD scorer, got n_samples = {X.shape[0]}")
+        n = X.shape[0]
+        if n < 2:
+            raise ValueError(f"X: need at least 2 samples to fit an OOD scorer, got n_samples = {n}")
+        groups = np.arange(n) if groups is None else np.asarray(groups)
+        if groups.shape[0] != n:
+            raise ValueError(f"groups: length {groups.shape[0]} does not match X ({n} rows)")
         self.preprocess_ = Pipeline(
             [
                 ("impute", SimpleImputer(strategy="median", keep_empty_features=True)),
                 ("scale", StandardScaler()),
             ]
         ).fit(X)
-        Z = self.preprocess_.transform(X)
+        Z = self.preprocess_.transform(X).astype(np.float32)
         rng = np.random.default_rng(self.random_state)
-        if Z.shape[0] > self.max_reference:
-            keep = np.sort(rng.choice(Z.shape[0], size=self.max_reference, replace=False))
-            Z = Z[keep]
-        self.reference_ = Z.astype(np.float32)
-        self.k_ = int(min(self.n_neighbors, self.reference_.shape[0] - 1))
-        # Leave-one-out distances of the reference rows: query k + 1, drop self.
-        d, _ = self._neighbors().kneighbors(self.reference_, n_neighbors=self.k_ + 1)
-        train_dist = d[:, self.k_]
-        self.threshold_ = float(np.quantile(train_dist, self.threshold_quantile))
+        uniq, inverse = np.unique(groups, return_inverse=True)
+        order = rng.permutation(len(uniq))
+        sizes = np.bincount(inverse)[order]
+        n_ref_groups = max(1, int(np.searchsorted(np.cumsum(sizes), self.max_reference, side="right")))
+        in_ref = np.zeros(len(uniq), bool)
+        in_ref[order[:n_ref_groups]] = True
+        ref_rows = in_ref[inverse]
+        if (~ref_rows).sum() >= 2 and ref_rows.sum() >= 2:
+            self.reference_ = Z[ref_rows]
+            self.k_ = int(min(self.n_neighbors, self.reference_.shape[0]))
+            calib = self._kth_distance(Z[~ref_rows])
+            self.calibration_ = "held-out groups"
+        else:
+            self.reference_ = Z
+            self.k_ = int(min(self.n_neighbors, n - 1))
+            fold_of_group = rng.permutation(len(uniq)) % min(5, len(uniq))
+            fold = fold_of_group[inverse]
+            calib = np.empty(n)
+            for f in np.unique(fold):
+                rest = Z[fold != f]
+                k = int(min(self.k_, rest.shape[0]))
+                d, _ = NearestNeighbors(n_neighbors=k).fit(rest).kneighbors(Z[fold == f])
+                calib[fold == f] = d[:, k - 1]
+            self.calibration_ = "group k-fold"
+        self.n_calibration_ = int(calib.size)
+        self.threshold_ = float(np.quantile(calib, self.threshold_quantile))
         self.offset_ = -self.threshold_
         return self
 
-    def _neighbors(self) -> NearestNeighbors:
-        # Rebuilt on demand (cheap for ≤ a few thousand rows) so the stored model holds
-        # only plain arrays.
-        return NearestNeighbors(n_neighbors=self.k_ + 1).fit(self.reference_)
+    def _kth_distance(self, Z: np.ndarray) -> np.ndarray:
+        d, _ = NearestNeighbors(n_neighbors=self.k_).fit(self.reference_).kneighbors(Z)
+        return d[:, self.k_ - 1].astype(float)
 
     def distance(self, X) -> np.ndarray:
         """Distance to the k-th nearest reference row, shape (n_samples,)."""
         check_is_fitted(self, "reference_")
         X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
-        Z = self.preprocess_.transform(X).astype(np.float32)
-        d, _ = self._neighbors().kneighbors(Z, n_neighbors=self.k_)
-        return d[:, self.k_ - 1].astype(float)
+        # The neighbour index is rebuilt per call (cheap for ≤ a few thousand rows), so the
+        # stored model holds only plain arrays.
+        return self._kth_distance(self.preprocess_.transform(X).astype(np.float32))
 
     def score_samples(self, X) -> np.ndarray:
         """Negative distance (higher = more normal)."""
@@ -526,6 +571,12 @@ class MisalignmentModel(BaseEstimator):
     ood : KNNDistanceOOD or None
     feature_names : sequence of str or None
         Names of the columns of X, in order; stored as ``feature_names_``.
+    monotonic_increasing : sequence of str, default=()
+        Glob patterns of feature names along which severity and Δ must not decrease (physics
+        priors: e.g. the coupling bearings' 2X/1X). Applied as ``monotonic_cst`` = +1 to the
+        classifier (an :class:`~rotordiag.models.ordinal.OrdinalSeverityClassifier`; a
+        multiclass :class:`SeverityClassifier` cannot take constraints) and to the Δ
+        regressor's point and centre models. Needs ``feature_names``.
 
     Attributes
     ----------
@@ -538,17 +589,23 @@ class MisalignmentModel(BaseEstimator):
     feature_nan_rate_ : ndarray of shape (n_features,)
         Share of training rows in which each feature was missing.
     classes_ : ndarray of str, the band names in order
+    monotonic_cst_ : ndarray of int of shape (n_features,)
+        +1 where ``monotonic_increasing`` matched, else 0.
     """
+
+    #: models saved before this parameter existed load without it
+    monotonic_increasing: Sequence[str] = ()
 
     def __init__(
         self,
         *,
         band_edges: Sequence[float] = DEFAULT_EDGES,
         band_names: Sequence[str] = DEFAULT_NAMES,
-        classifier: SeverityClassifier | None = None,
+        classifier: SeverityClassifier | OrdinalSeverityClassifier | None = None,
         regressor: ConformalIntervalRegressor | None = None,
         ood: KNNDistanceOOD | None = None,
         feature_names: Sequence[str] | None = None,
+        monotonic_increasing: Sequence[str] = (),
     ) -> None:
         self.band_edges = band_edges
         self.band_names = band_names
@@ -556,6 +613,18 @@ class MisalignmentModel(BaseEstimator):
         self.regressor = regressor
         self.ood = ood
         self.feature_names = feature_names
+        self.monotonic_increasing = monotonic_increasing
+
+    @property
+    def ordinal_(self) -> bool:
+        """Whether the classifier is ordinal (its class is the median band, not the most probable)."""
+        return isinstance(getattr(self, "classifier_", None), OrdinalSeverityClassifier)
+
+    def band_index(self, proba: np.ndarray) -> np.ndarray:
+        """The predicted band of each row of band probabilities: the median band for an ordinal
+        classifier (monotone in the constrained features), else the most probable one."""
+        proba = np.atleast_2d(np.asarray(proba, dtype=float))
+        return median_class(proba) if self.ordinal_ else np.argmax(proba, axis=1)
 
     def __sklearn_tags__(self):
         return _nan_tags(super().__sklearn_tags__())
@@ -592,14 +661,26 @@ class MisalignmentModel(BaseEstimator):
                 "every severity band needs examples (check the dataset's Δ range and band_edges)"
             )
         self.classes_ = np.asarray(self.bands_.names, dtype=object)
+        self.monotonic_cst_ = self._monotonic_cst()
+        cst = self.monotonic_cst_ if self.monotonic_cst_.any() else None
         self.classifier_ = clone(self.classifier if self.classifier is not None else SeverityClassifier())
-        self.classifier_.fit(X, labels, groups=groups)
+        if isinstance(self.classifier_, OrdinalSeverityClassifier):
+            # Band indices 0..K−1: numpy's sort order is the bands' order.
+            self.classifier_.set_params(monotonic_cst=cst)
+            self.classifier_.fit(X, self.bands_.index(y), groups=groups)
+        else:
+            if cst is not None:
+                raise ValueError("monotonic_increasing: needs an OrdinalSeverityClassifier (a multiclass "
+                                 "SeverityClassifier cannot take monotonic constraints)")
+            self.classifier_.fit(X, labels, groups=groups)
         self.regressor_ = clone(
             self.regressor if self.regressor is not None else ConformalIntervalRegressor(lower_bound=0.0)
         )
+        if cst is not None:
+            self.regressor_.set_params(monotonic_cst=cst)
         self.regressor_.fit(X, y, groups=groups)
         self.ood_ = clone(self.ood if self.ood is not None else KNNDistanceOOD())
-        self.ood_.fit(X)
+        self.ood_.fit(X, groups=groups)
         nan = np.isnan(X)
         self.feature_nan_rate_ = nan.mean(axis=0)
         with np.errstate(all="ignore"):
@@ -607,19 +688,32 @@ class MisalignmentModel(BaseEstimator):
         self.feature_median_ = np.where(np.isfinite(med), med, 0.0)
         return self
 
+    def _monotonic_cst(self) -> np.ndarray:
+        import fnmatch
+
+        pats = tuple(str(p) for p in self.monotonic_increasing)
+        cst = np.array([1 if any(fnmatch.fnmatchcase(n, p) for p in pats) else 0 for n in self.feature_names_],
+                       dtype=int)
+        unmatched = [p for p in pats if not any(fnmatch.fnmatchcase(n, p) for n in self.feature_names_)]
+        if unmatched:
+            raise ValueError(f"monotonic_increasing: pattern(s) {unmatched} match no feature name")
+        return cst
+
+    def band_order(self) -> list[int]:
+        """Columns of the classifier's probabilities in band order."""
+        if isinstance(self.classifier_, OrdinalSeverityClassifier):
+            return list(range(len(self.bands_.names)))
+        return [list(self.classifier_.classes_).index(n) for n in self.bands_.names]
+
     def predict_proba(self, X) -> np.ndarray:
         """Severity probabilities, shape (n_samples, n_bands), columns in band order."""
         check_is_fitted(self, "classifier_")
         X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
-        proba = self.classifier_.predict_proba(X)
-        # Reorder the classifier's (sorted) columns into band order.
-        order = [list(self.classifier_.classes_).index(n) for n in self.bands_.names]
-        return proba[:, order]
+        return self.classifier_.predict_proba(X)[:, self.band_order()]
 
     def predict(self, X) -> np.ndarray:
-        """Most probable severity band of each row (array of str)."""
-        proba = self.predict_proba(X)
-        return self.classes_[np.argmax(proba, axis=1)]
+        """Severity band of each row (array of str): see :meth:`band_index`."""
+        return self.classes_[self.band_index(self.predict_proba(X))]
 
     def predict_misalignment(self, X) -> tuple[np.ndarray, np.ndarray]:
         """Δ estimate and its interval: ``(point (n,), interval (n, 2))``."""

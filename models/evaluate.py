@@ -49,6 +49,7 @@ class OutOfFold:
     proba_no_clearance: np.ndarray | None = None
     delta_no_clearance: np.ndarray | None = None
     interval_no_clearance: np.ndarray | None = None
+    pred_no_clearance: np.ndarray | None = None
 
 
 def blank_clearance(X: np.ndarray, columns: np.ndarray, share: float, seed: int) -> np.ndarray:
@@ -89,6 +90,7 @@ def cross_validate(table: FeatureTable, config: TrainConfig) -> OutOfFold:
         out.proba_no_clearance = np.full((n, k), np.nan)
         out.delta_no_clearance = np.full(n, np.nan)
         out.interval_no_clearance = np.full((n, 2), np.nan)
+        out.pred_no_clearance = np.empty(n, dtype=object)
     rule = RuleOfThumb(bands.names, config.rule_cuts)
     splitter = GroupKFold(n_splits=min(config.n_splits, n_groups), shuffle=True, random_state=config.seed)
     for f, (tr, te) in enumerate(splitter.split(table.X, labels, table.plant_id)):
@@ -100,9 +102,11 @@ def cross_validate(table: FeatureTable, config: TrainConfig) -> OutOfFold:
                 and out.interval_no_clearance is not None:
             Xnc = blank_clearance(table.X[te], clear_cols, 1.0, 0)
             out.proba_no_clearance[te] = model.predict_proba(Xnc)
+            if out.pred_no_clearance is not None:
+                out.pred_no_clearance[te] = model.classes_[model.band_index(out.proba_no_clearance[te])]
             out.delta_no_clearance[te], out.interval_no_clearance[te] = model.predict_misalignment(Xnc)
         out.proba[te] = model.predict_proba(table.X[te])
-        out.pred["model"][te] = model.classes_[np.argmax(out.proba[te], axis=1)]
+        out.pred["model"][te] = model.classes_[model.band_index(out.proba[te])]
         out.delta_pred["model"][te], out.interval[te] = model.predict_misalignment(table.X[te])
         out.ood_ratio[te] = model.ood_ratio(table.X[te])
         out.pred["rule_of_thumb"][te] = rule.predict(ratio[te])
@@ -163,7 +167,8 @@ def build_report(table: FeatureTable, config: TrainConfig, oof: OutOfFold) -> di
     if oof.proba_no_clearance is not None and oof.delta_no_clearance is not None \
             and oof.interval_no_clearance is not None:
         names = config.bands.names
-        pred_nc = np.asarray(names, dtype=object)[np.argmax(oof.proba_no_clearance, axis=1)]
+        pred_nc = oof.pred_no_clearance if oof.pred_no_clearance is not None else \
+            np.asarray(names, dtype=object)[np.argmax(oof.proba_no_clearance, axis=1)]
         groups["clearance_unknown"] = {}
         for name, sel in [("all", np.ones(len(table), bool))] + list(_subsets(table, config)["mechanism"].items()):
             r = classification_metrics(oof.labels_true[sel], pred_nc[sel], names, oof.proba_no_clearance[sel])

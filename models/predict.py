@@ -249,7 +249,7 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     X = row[None, :]
     fast = fast_predictor(model)
     proba = fast.predict_proba(X)[0]
-    cls = int(np.argmax(proba))
+    cls = int(model.band_index(proba)[0])
     point, interval = fast.predict_misalignment(X)
     ood_score = float(fast.ood_ratio(X)[0])
     ood = ood_score > 1.0

@@ -52,6 +52,7 @@ TRUSTED_TYPES: tuple[str, ...] = (
     "rotordiag.models.estimators.KNNDistanceOOD",
     "rotordiag.models.estimators.MisalignmentModel",
     "rotordiag.models.estimators.SeverityClassifier",
+    "rotordiag.models.ordinal.OrdinalSeverityClassifier",
     "numpy.dtype",
     *PRIVATE_TRUSTED_TYPES,
 )

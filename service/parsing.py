@@ -119,7 +119,41 @@ def parse_batch(body: bytes) -> Any:
     return _validated_json(BatchRequest, body)
 
 
-def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> tuple[Any, str | None, str | None]:
+#: query parameters that apply to the slow-roll file instead of the main file's (the rest are shared:
+#: it is recorded with the same probes and acquisition set-up)
+SLOW_ROLL_QUERY_KEYS = {"slow_roll_sample_rate_hz": "sample_rate_hz", "slow_roll_keyphasor_times_s": "keyphasor_times_s"}
+
+
+def _slow_roll_recording(slow_roll: tuple[bytes, str], query: dict[str, Any]) -> Any:
+    """The slow-roll upload read like the main one: same reader, limits and sandbox; its own sample rate and
+    keyphasor times when given (``slow_roll_sample_rate_hz``, ``slow_roll_keyphasor_times_s``), no speed."""
+    from rotordiag.features.reader import read_recording
+
+    data, name = slow_roll
+    if not data:
+        raise InputError(f"slow_roll_file {name!r} is empty: send the slow-roll recording (CSV/NPY/HDF5/UFF/JSON) "
+                         "or leave the part out")
+    # the main file's keyphasor times and speed are not the slow roll's; its sample rate is unless given
+    q = {k: v for k, v in query.items() if k not in ("speed_rpm", "sample_index", "keyphasor_times_s",
+                                                     *SLOW_ROLL_QUERY_KEYS)}
+    for own, shared in SLOW_ROLL_QUERY_KEYS.items():
+        if query.get(own) is not None:
+            q[shared] = query[own]
+    try:
+        opts = options_from_query(q)
+    except InputError as exc:
+        raise InputError(f"slow_roll_file: {exc}") from None
+    try:
+        return read_recording(data, filename=name, options=opts, limits=service_limits()).recording
+    except ValueError as exc:
+        if "unknown file type" in str(exc):
+            raise InputError(f"slow_roll_file {name!r}: unknown file type; send .csv, .npy, .h5, .hdf5, .uff, .unv "
+                             "or .json", "unsupported_type") from None
+        raise InputError(f"slow_roll_file {name!r}: {exc}") from None
+
+
+def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any],
+               slow_roll: tuple[bytes, str] | None = None) -> tuple[Any, str | None, str | None]:
     """Recording, asset_id, plant from a request body.
 
     Parameters
@@ -131,6 +165,10 @@ def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> 
         The uploaded file's name (``upload`` only).
     query : dict
         The binary/multipart metadata query parameters (``None`` = not given).
+    slow_roll : (bytes, str), optional
+        A slow-roll recording uploaded beside the main file (multipart part ``slow_roll_file``) and its
+        file name: read the same way, its 1X/2X runout vectors are subtracted from the recording's
+        (``features.apply_slow_roll``; the evidence says so).
 
     Raises
     ------
@@ -139,6 +177,9 @@ def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> 
     """
     from rotordiag.features.reader import read_recording
 
+    if slow_roll is not None and kind != "upload":
+        raise InputError("a slow-roll recording comes as a second file (part 'slow_roll_file') of a multipart "
+                         "upload; with a JSON body give the slow-roll vectors per channel (channels[].slow_roll)")
     if kind == "json":
         req = _validated_json(DiagnoseRequest, body)
         return checked(recording_from_model, req), req.asset_id, req.plant
@@ -160,4 +201,13 @@ def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> 
         raise _read_error(exc) from None
     asset_id = query.get("asset_id") or res.asset_id
     plant = query.get("plant") or res.plant
-    return res.recording, asset_id, plant
+    recording = res.recording
+    if slow_roll is not None:
+        from rotordiag.features import apply_slow_roll
+
+        slow = _slow_roll_recording(slow_roll, query)
+        try:
+            recording = apply_slow_roll(recording, slow)[0]
+        except ValueError as exc:
+            raise InputError(f"slow_roll_file: {exc}") from None
+    return recording, asset_id, plant

@@ -126,13 +126,15 @@ def _tagged(fn: Callable[[], tuple]) -> tuple:
         return ("input", "invalid", str(exc))
 
 
-def _work(kind: str, body: bytes, filename: str, query: dict[str, Any], version: str | None) -> tuple:
+def _work(kind: str, body: bytes, filename: str, query: dict[str, Any], slow_roll: tuple[bytes, str] | None,
+          version: str | None) -> tuple:
     """Parse and diagnose one request in the worker: ``("ok", verdict, asset_id, plant)`` or an error
-    tuple (:func:`_tagged`)."""
+    tuple (:func:`_tagged`). ``slow_roll``: an uploaded slow-roll recording and its file name, parsed
+    here like the main body (:func:`service.parsing.parse_body`)."""
     from .parsing import parse_body
 
     def run() -> tuple:
-        recording, asset_id, plant = parse_body(kind, body, filename, query)
+        recording, asset_id, plant = parse_body(kind, body, filename, query, slow_roll)
         return ("ok", _store().diagnose(recording, version), asset_id, plant)
 
     return _tagged(run)
@@ -505,9 +507,9 @@ class DiagnosisPool:
                             "if the recording is very large, send a shorter one")
 
     async def run(self, kind: str, body: bytes, filename: str, query: dict[str, Any],
-                  version: str | None) -> tuple:
+                  version: str | None, slow_roll: tuple[bytes, str] | None = None) -> tuple:
         """:func:`_work` in a worker process (returns its tagged tuple)."""
-        return await self._call("work", (kind, body, filename, query, version))
+        return await self._call("work", (kind, body, filename, query, slow_roll, version))
 
     async def call(self, name: str, *args: Any) -> tuple:
         """One of the worker functions (``record``, ``batch_parse``, ``plot``) in a worker process."""

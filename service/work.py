@@ -207,13 +207,13 @@ def run_retrain(params: dict[str, Any], ctx) -> dict[str, Any]:
     out = ctx.settings.datasets_dir / f"retrain-{ctx.job_id}.h5"
     dataset = _generate(params["spec_toml"], out, ctx, 0.0, 0.6)
     ctx.progress(0.6, "features", "extracting features")
-    table = load_feature_table(out, progress=_progress_cb(ctx, 0.6, 0.8, "features"))
+    config = TrainConfig.from_dict(params["training"])
+    table = load_feature_table(out, progress=_progress_cb(ctx, 0.6, 0.8, "features"), augment=config.augment)
     field = params.get("field_data") or []
     if field:
         table = _with_field_rows(table, field)
     table, dropped = _drop_unmeasured(table)
     ctx.progress(0.8, "training", f"training on {len(table)} rows (held-out-plant evaluation, then final fit)")
-    config = TrainConfig.from_dict(params["training"])
     activate = bool(params.get("activate"))
     version, _report = train_and_register(
         table, config, ctx.models.registry, activate=activate,

@@ -10,7 +10,7 @@ import typer
 MECHANISM_HELP = (
     "Coupling model: pin (the paper's holonomic constraint); rigid (the offset turns with the shaft: "
     "a rotating coupling eccentricity, reads as 1X runout/unbalance); offset (stationary parallel offset "
-    "of the exciter shaft line, coupling rigid); flexible (stationary offset across a flexible coupling "
+    "of the exciter shaft line, coupling rigid; with --angular-misalignment-mrad also tilted about the coupling); flexible (stationary offset across a flexible coupling "
     "with its 2X reaction, stiffness from the plant's coupling_stiffness_n_m); aligned."
 )
 
@@ -32,7 +32,9 @@ def _summary(res) -> dict:
 
     out = {"status": res.status, "message": res.message, "speed_rpm": res.speed_rpm,
            "misalignment": res.inputs["misalignment"], "unbalance": res.inputs["unbalance"],
-           "mechanism": res.inputs["mechanism"], "wall_time_s": round(res.wall_time_s, 4),
+           "mechanism": res.inputs["mechanism"],
+           "angular_misalignment_mrad": res.inputs.get("angular_misalignment_mrad", 0.0),
+           "wall_time_s": round(res.wall_time_s, 4),
            "steps_per_rev": round(res.n_accepted / max(1, res.inputs["transient_revs"] + res.inputs["record_revs"]), 1),
            "bearings": []}
     d = res.journal_displacements_m * 1e6
@@ -234,6 +236,11 @@ def register(app: typer.Typer) -> None:
             0.0, help="Offset direction φ0, degrees from +x toward +y: rotating eccentricity at t = 0 (rigid) "
                       "or stationary exciter shaft-line offset (offset, flexible; -90 = downward)."),
         coupling_phase_deg: float = typer.Option(0.0, help="flexible: phase ψ of the coupling's 2X excitation, degrees."),
+        angular_misalignment_mrad: float = typer.Option(
+            0.0, "--angular-misalignment-mrad",
+            help="offset/flexible: angular offset α, mrad: the exciter shaft line tilted about the coupling in the "
+                 "offset direction (bearing 4 moves by α × the plant's exciter_bearing_span_m); may be used with "
+                 "misalignment 0."),
         as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
         plot: Optional[Path] = typer.Option(None, help="Write a PNG: journal orbits with Poincaré points, spectra."),
         out: Optional[Path] = typer.Option(None, help="Write the simulator's time series (journal positions, m) to this HDF5 file."),
@@ -255,7 +262,8 @@ def register(app: typer.Typer) -> None:
                       exciter_unbalance=exciter_unbalance,
                       exciter_unbalance_phase_rad=math.radians(exciter_unbalance_phase_deg),
                       offset_angle_rad=math.radians(offset_angle_deg),
-                      coupling_phase_rad=math.radians(coupling_phase_deg))
+                      coupling_phase_rad=math.radians(coupling_phase_deg),
+                      angular_misalignment_mrad=angular_misalignment_mrad)
         except ValueError as exc:
             raise typer.BadParameter(str(exc)) from None
         summary = _summary(res)

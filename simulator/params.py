@@ -23,6 +23,8 @@ JOURNAL_NODES: tuple[int, int, int, int] = (1, 3, 4, 6)
 #: eccentricity) and ``aligned``, plus the stationary shaft-line ``offset`` and the
 #: ``flexible`` coupling with its 2X misalignment reaction (docs/model.md).
 MECHANISMS: tuple[str, ...] = ("pin", "rigid", "aligned", "offset", "flexible")
+#: Default bearing-3-to-bearing-4 span (m): the ``gen200_2pole`` shaft line's exciter (examples/shaftline_200mw.toml).
+DEFAULT_EXCITER_BEARING_SPAN_M = 3.4
 
 #: Physically sourced range of the flexible coupling's radial stiffness (N/m), docs/model.md.
 COUPLING_STIFFNESS_RANGE_N_M: tuple[float, float] = (1.0e6, 1.0e10)
@@ -90,6 +92,12 @@ class Plant:
         Capone short-bearing oil film (default) or linear isotropic springs.
     linear_bearing_stiffness_n_m, linear_bearing_damping_n_s_m : float
         Coefficients of the ``"linear"`` bearing model.
+    coupling_stiffness_n_m, coupling_damping_n_s_m : float
+        Radial stiffness k_c and damping c_c of the ``flexible`` mechanism's coupling.
+    exciter_bearing_span_m : float
+        Axial distance from bearing 3 (at the coupling) to bearing 4, metres: the lever of an
+        angular shaft-line offset (``simulate(angular_misalignment_mrad=...)``). Default 3.4 m,
+        the exciter span of the ``gen200_2pole`` shaft line.
     """
 
     journal1_mass_kg: float = 4000.0
@@ -117,6 +125,7 @@ class Plant:
     linear_bearing_damping_n_s_m: float = 0.0
     coupling_stiffness_n_m: float = 1.0e8
     coupling_damping_n_s_m: float = 0.0
+    exciter_bearing_span_m: float = DEFAULT_EXCITER_BEARING_SPAN_M
 
     # ------------------------------------------------------------------ validation
     def __post_init__(self) -> None:
@@ -139,7 +148,7 @@ class Plant:
             "journal1_mass_kg", "generator_mass_kg", "journal3_mass_kg", "journal4_mass_kg",
             "exciter_mass_kg", "journal6_mass_kg", "generator_stiffness_n_m",
             "exciter_stiffness_n_m", "clearance_m", "viscosity_pa_s", "linear_bearing_stiffness_n_m",
-            "coupling_stiffness_n_m",
+            "coupling_stiffness_n_m", "exciter_bearing_span_m",
         ]
         for name in positive:
             if not getattr(self, name) > 0:
@@ -249,7 +258,8 @@ class Plant:
 
 
 #: Plant fields added later, with the defaults that keep earlier plant ids.
-_LATER_FIELD_DEFAULTS: dict[str, float] = {"coupling_stiffness_n_m": 1.0e8, "coupling_damping_n_s_m": 0.0}
+_LATER_FIELD_DEFAULTS: dict[str, float] = {"coupling_stiffness_n_m": 1.0e8, "coupling_damping_n_s_m": 0.0,
+                                           "exciter_bearing_span_m": DEFAULT_EXCITER_BEARING_SPAN_M}
 
 
 def check_range(name: str, value: float, lo: float, hi: float, *, hi_inclusive: bool = True) -> float:

@@ -130,6 +130,7 @@ def simulate(
     record_state: bool = False,
     settle_tol: float | None = None,
     coupling_phase_rad: float = 0.0,
+    angular_misalignment_mrad: float = 0.0,
 ) -> SimulationResult:
     """Simulate the generator–exciter rotor and record its steady state.
 
@@ -144,7 +145,7 @@ def simulate(
     unbalance : float
         Non-dimensional generator unbalance A = a/c, in [0, 0.5].
     mechanism : {"pin", "rigid", "aligned", "offset", "flexible"}
-        Coupling model (docs/model.md); Δ = 0 always runs ``aligned``.
+        Coupling model (docs/model.md); Δ = 0 without an angular offset always runs ``aligned``.
 
         - ``pin``: the paper's holonomic constraint |r3 − r4| = δ (MODEL.md 3a).
         - ``rigid``: the offset is fixed in the rotating shaft: kinematically a
@@ -153,6 +154,7 @@ def simulate(
         - ``offset``: a **stationary** parallel offset of the shaft lines: the exciter's
           bearing centres are displaced by δ in direction ``offset_angle_rad``, the
           coupling is rigid in translation. Changes static journal positions and loads.
+          With ``angular_misalignment_mrad`` the exciter line is also tilted about the coupling.
         - ``flexible``: the stationary offset of ``offset`` across a flexible coupling
           of radial stiffness ``plant.coupling_stiffness_n_m``, with its kinematic 2X
           misalignment reaction (amplitude k_c·δ/2, phase ``coupling_phase_rad``).
@@ -180,6 +182,11 @@ def simulate(
         ``flexible``; 0 horizontal, −π/2 downward).
     coupling_phase_rad : float
         ``flexible`` only: phase ψ of the coupling's 2X excitation at t = 0.
+    angular_misalignment_mrad : float
+        ``offset``/``flexible`` only: a stationary **angular** offset: the exciter shaft line
+        tilted about the coupling by α (mrad) in direction ``offset_angle_rad`` — bearing 3
+        (at the coupling) stays, bearing 4's centre moves by α·``plant.exciter_bearing_span_m``
+        (on top of the parallel δ). |α|·L ≤ 0.9 c. May be used with Δ = 0 (pure angular offset).
     record_state : bool
         Also keep the full non-dimensional states at the samples.
     settle_tol : float, optional
@@ -210,7 +217,8 @@ def simulate(
         plant, speed_rpm, misalignment, unbalance, mechanism=mechanism,
         unbalance_phase_rad=unbalance_phase_rad, exciter_unbalance=exciter_unbalance,
         exciter_unbalance_phase_rad=exciter_unbalance_phase_rad, offset_angle_rad=offset_angle_rad,
-        coupling_phase_rad=coupling_phase_rad, rtol=rtol, atol=atol,
+        coupling_phase_rad=coupling_phase_rad, angular_misalignment_mrad=angular_misalignment_mrad,
+        rtol=rtol, atol=atol,
     )
     if sample_rate_hz is None:
         samples_per_rev = _count("samples_per_rev", samples_per_rev, 4)
@@ -261,6 +269,7 @@ def simulate(
         offset_angle_rad=float(offset_angle_rad), initial_state_given=initial_state is not None,
         settle_tol=settle_tol, transient_revs_used=transient_used,
         coupling_phase_rad=float(coupling_phase_rad),
+        angular_misalignment_mrad=system.angular_misalignment_mrad,
     )
     loads = system.bearing_forces_n(tau, states).mean(axis=0) if ng else np.full((4, 2), np.nan)
     return SimulationResult(

@@ -50,27 +50,48 @@ MECHANISM_CODES: dict[str, int] = {
 MECHANISM_NAMES: dict[int, str] = {v: k for k, v in MECHANISM_CODES.items()}
 
 
-def resolve_mechanism(mechanism: str, misalignment: float) -> int:
-    """Kernel code of the coupling mechanism; Δ = 0 is always ``aligned``."""
+def resolve_mechanism(mechanism: str, misalignment: float, angular_misalignment_mrad: float = 0.0) -> int:
+    """Kernel code of the coupling mechanism; no offset at all (Δ = 0 and no angular offset) is
+    always ``aligned``. An angular offset is a stationary shaft-line offset: ``offset`` or ``flexible`` only."""
     if mechanism not in MECHANISMS:
         raise ValueError(f"mechanism must be one of {MECHANISMS}, got {mechanism!r}")
     if mechanism == "aligned" and misalignment != 0.0:
         raise ValueError(f"mechanism 'aligned' needs misalignment = 0, got {misalignment!r}")
-    if misalignment == 0.0 or mechanism == "aligned":
+    if angular_misalignment_mrad != 0.0 and mechanism not in ("offset", "flexible"):
+        raise ValueError("angular_misalignment_mrad is a stationary shaft-line offset: it needs mechanism "
+                         f"'offset' or 'flexible', got {mechanism!r}")
+    if (misalignment == 0.0 and angular_misalignment_mrad == 0.0) or mechanism == "aligned":
         return K.MECH_ALIGNED
     return MECHANISM_CODES[mechanism]
 
 
 def mechanism_bearing_offsets(plant: Plant, misalignment: float, mechanism_code: int,
-                              offset_angle_rad: float) -> np.ndarray:
+                              offset_angle_rad: float, angular_misalignment_mrad: float = 0.0) -> np.ndarray:
     """Bearing centres (m, shape (4, 2)) the kernels use: the plant's offsets, plus, for the
-    stationary shaft-line mechanisms (``offset``, ``flexible``), the exciter's two bearing
-    centres displaced by δ = Δ·c in direction φ0 (a parallel offset of the exciter shaft line)."""
+    stationary shaft-line mechanisms (``offset``, ``flexible``), the exciter shaft line moved in
+    direction φ0: parallel by δ = Δ·c (both exciter bearings) and tilted about the coupling by
+    α = ``angular_misalignment_mrad`` (bearing 3, at the coupling, by 0; bearing 4 by α·L with
+    L = ``plant.exciter_bearing_span_m``)."""
     centres = np.asarray(plant.bearing_offset_m, dtype=float).copy()
     if mechanism_code in (K.MECH_OFFSET, K.MECH_FLEXIBLE):
+        e = np.array([math.cos(offset_angle_rad), math.sin(offset_angle_rad)])
         d = misalignment * plant.clearance_m
-        centres[2:4] += d * np.array([math.cos(offset_angle_rad), math.sin(offset_angle_rad)])
+        centres[2] += d * e
+        centres[3] += (d + 1e-3 * angular_misalignment_mrad * plant.exciter_bearing_span_m) * e
     return centres
+
+
+def check_angular_misalignment(plant: Plant, angular_misalignment_mrad: float) -> float:
+    """Validate α (mrad): finite, and the far exciter bearing's displacement |α|·L at most 0.9 c
+    (the bound Δ ≤ 0.9 puts on the parallel offset). Raises ValueError naming the parameter."""
+    a = _finite("angular_misalignment_mrad", angular_misalignment_mrad)
+    limit = 0.9 * plant.clearance_m / plant.exciter_bearing_span_m * 1e3
+    if abs(a) > limit:
+        raise ValueError(
+            f"angular_misalignment_mrad must be within ±{limit:.4g} mrad for this plant (the far exciter bearing "
+            f"moves by α·L, L = exciter_bearing_span_m = {plant.exciter_bearing_span_m:g} m, at most 0.9 of the "
+            f"clearance {plant.clearance_m:g} m), got {angular_misalignment_mrad!r}")
+    return a
 
 
 def pack_parameters(
@@ -85,6 +106,7 @@ def pack_parameters(
     exciter_unbalance_phase_rad: float = 0.0,
     offset_angle_rad: float = 0.0,
     coupling_phase_rad: float = 0.0,
+    angular_misalignment_mrad: float = 0.0,
 ) -> np.ndarray:
     """Validate inputs and pack the non-dimensional parameter vector of the kernels."""
     if not isinstance(plant, Plant):
@@ -97,7 +119,8 @@ def pack_parameters(
     exciter_unbalance_phase_rad = _finite("exciter_unbalance_phase_rad", exciter_unbalance_phase_rad)
     offset_angle_rad = _finite("offset_angle_rad", offset_angle_rad)
     coupling_phase_rad = _finite("coupling_phase_rad", coupling_phase_rad)
-    mech = resolve_mechanism(mechanism, misalignment)
+    angular_misalignment_mrad = check_angular_misalignment(plant, angular_misalignment_mrad)
+    mech = resolve_mechanism(mechanism, misalignment, angular_misalignment_mrad)
 
     w = speed_rad_s(speed_rpm)
     c = plant.clearance_m
@@ -116,7 +139,8 @@ def pack_parameters(
     p[K.P_C2] = plant.exciter_damping_n_s_m / w
     p[K.P_G] = plant.gravity_m_s2 / (c * w**2)
     p[K.P_SB:K.P_SB + 4] = plant.bearing_force_scale_n(w) / (c * w**2)
-    p[K.P_OFF:K.P_OFF + 8] = mechanism_bearing_offsets(plant, misalignment, mech, offset_angle_rad).ravel() / c
+    p[K.P_OFF:K.P_OFF + 8] = mechanism_bearing_offsets(plant, misalignment, mech, offset_angle_rad,
+                                                        angular_misalignment_mrad).ravel() / c
     p[K.P_A1] = unbalance
     p[K.P_TH1] = unbalance_phase_rad
     p[K.P_A2] = exciter_unbalance
@@ -161,7 +185,7 @@ class RotorSystem:
     unbalance : float
         Generator unbalance A = a/c (0–0.5).
     mechanism : {"pin", "rigid", "aligned", "offset", "flexible"}
-        Coupling model (docs/model.md). Δ = 0 always uses ``aligned``.
+        Coupling model (docs/model.md). Δ = 0 without an angular offset always uses ``aligned``.
     unbalance_phase_rad, exciter_unbalance, exciter_unbalance_phase_rad, offset_angle_rad : float
         Generator unbalance phase, exciter unbalance a2/c and its phase θ2,
         and the offset direction φ0: of the rotating eccentricity at t = 0
@@ -169,6 +193,9 @@ class RotorSystem:
         ``flexible``; 0 = +x horizontal, −π/2 = downward). All angles from +x toward +y.
     coupling_phase_rad : float
         ``flexible`` only: phase ψ of the coupling's 2X excitation.
+    angular_misalignment_mrad : float
+        ``offset``/``flexible`` only: tilt α of the exciter shaft line about the coupling, mrad,
+        in direction φ0 (bearing 4's centre moves by α·``plant.exciter_bearing_span_m``).
     rtol, atol : float
         Integrator tolerances (atol on the non-dimensional state).
     """
@@ -186,6 +213,7 @@ class RotorSystem:
         exciter_unbalance_phase_rad: float = 0.0,
         offset_angle_rad: float = 0.0,
         coupling_phase_rad: float = 0.0,
+        angular_misalignment_mrad: float = 0.0,
         rtol: float = DEFAULT_RTOL,
         atol: float = DEFAULT_ATOL,
     ) -> None:
@@ -193,7 +221,7 @@ class RotorSystem:
             plant, speed_rpm, misalignment, unbalance, mechanism=mechanism,
             unbalance_phase_rad=unbalance_phase_rad, exciter_unbalance=exciter_unbalance,
             exciter_unbalance_phase_rad=exciter_unbalance_phase_rad, offset_angle_rad=offset_angle_rad,
-            coupling_phase_rad=coupling_phase_rad,
+            coupling_phase_rad=coupling_phase_rad, angular_misalignment_mrad=angular_misalignment_mrad,
         )
         rtol = _finite("rtol", rtol)
         atol = _finite("atol", atol)
@@ -211,8 +239,9 @@ class RotorSystem:
         #: Length of the state vector: 22, or 26 for ``flexible`` (node 3 is a coordinate).
         self.n_state = K.N_STATE_FLEXIBLE if self.mechanism_code == K.MECH_FLEXIBLE else K.N_STATE
         #: Bearing centres used by the kernels (m, shape (4, 2)): plant offsets + stationary shaft-line offset.
+        self.angular_misalignment_mrad = float(angular_misalignment_mrad)
         self.bearing_centres_m = mechanism_bearing_offsets(plant, self.misalignment, self.mechanism_code,
-                                                           float(offset_angle_rad))
+                                                           float(offset_angle_rad), self.angular_misalignment_mrad)
         self.rtol = rtol
         self.atol = atol
         self._h = TWO_PI / 200.0  # last step size, reused between calls
@@ -243,11 +272,13 @@ class RotorSystem:
             y[21] = 1.0
         if self.mechanism_code in (K.MECH_OFFSET, K.MECH_FLEXIBLE):
             # Exciter nodes start where the aligned start puts them relative to the displaced centres.
-            shift = (self.bearing_centres_m[2] - np.asarray(self.plant.bearing_offset_m[2])) / self.plant.clearance_m
+            moved = (self.bearing_centres_m - np.asarray(self.plant.bearing_offset_m)) / self.plant.clearance_m
+            shift, shift_far = moved[2], moved[3]
             if self.mechanism_code == K.MECH_FLEXIBLE:
                 y[22:24] = y[4:6]  # node 3 stays with its (undisplaced) generator bearing
-            for j in (4, 6, 8):
-                y[j:j + 2] += shift
+            y[4:6] += shift
+            y[6:8] += 0.5 * (shift + shift_far)  # exciter body half-way along the (tilted) line
+            y[8:10] += shift_far
             if self.mechanism_code == K.MECH_OFFSET:
                 # journals 3 and 4 are one point between two bearing centres δ apart: start half-way
                 y[4:6] = np.array([0.0, -0.3]) + 0.5 * shift

@@ -94,6 +94,19 @@ def test_clearance_scalar_and_per_bearing():
     assert all(np.isfinite(fr2[n]) for n in FEATURE_NAMES if "amp_um_pp" in n)
 
 
+def test_centreline_features_are_the_static_position_in_clearances():
+    fr = extract_features(make_recording(speed_rpm=RPM, offset_um=(-70.0, -140.0), clearance_um=350.0))
+    for b in (2, 3):
+        assert fr[f"b{b}_centre_x_per_c"] == pytest.approx(-0.2, abs=2e-3)
+        assert fr[f"b{b}_centre_y_per_c"] == pytest.approx(-0.4, abs=2e-3)
+        assert fr[f"b{b}_centre_ecc_per_c"] == pytest.approx(np.hypot(0.2, 0.4), abs=2e-3)
+    # A DC part of 2 clearances is a raw probe gap, not a position: missing, not a number.
+    gap = extract_features(make_recording(speed_rpm=RPM, offset_um=(0.0, 700.0), clearance_um=350.0))
+    assert np.isnan(gap["b2_centre_y_per_c"]) and np.isnan(gap["b2_centre_ecc_per_c"])
+    unknown = extract_features(make_recording(speed_rpm=RPM, offset_um=(-70.0, -140.0)))
+    assert np.isnan(unknown["b2_centre_x_per_c"])
+
+
 def test_missing_bearings_give_nan_columns_in_the_same_schema():
     comps = {2: [(1, 30.0, 10.0, 25.0, 100.0), (2, 10.0, 50.0, 8.0, 140.0)],
              3: [(1, 20.0, 200.0, 18.0, 290.0), (2, 6.0, 30.0, 5.0, 120.0)]}

@@ -197,3 +197,37 @@ def test_diagnose_without_sample_rate_or_model(tmp_path):
                                    "--sample-rate-hz", "2560",
                                    "--channels", ",".join(f"{b}@{a:g}" for b, a in CHANNELS)])
     assert res.exit_code == 2 and "no active model" in res.output
+
+
+def test_augmented_table_adds_gain_mismatch_missing_bearings_and_unknown_speed(dataset):
+    from rotordiag.models.augment import Augmentation
+
+    path, delta, _ = dataset
+    aug = Augmentation.from_dict({"copies": 2, "gain_mismatch": 0.1, "speed_unknown": 0.5, "seed": 3,
+                                  "bearing_sets": [{"bearings": [2, 3], "weight": 1},
+                                                   {"bearings": [1, 2, 3, 4], "weight": 1}]})
+    plain = load_feature_table(path)
+    tab = load_feature_table(path, augment=aug)
+    n = len(plain)
+    assert len(tab) == 3 * n and tab.meta["augment"]["rows"] == 2 * n
+    np.testing.assert_array_equal(tab.X[:n], plain.X)                  # originals unchanged, first
+    np.testing.assert_array_equal(tab.sample_index[n:], np.repeat(plain.sample_index, 2))
+    np.testing.assert_array_equal(tab.plant_id[n:], np.repeat(plain.plant_id, 2))   # same plant: same group
+    aug_rows = tab.X[n:]
+    b1 = tab.feature_names.index("b1_x_1x_amp_um_pp")
+    b2 = tab.feature_names.index("b2_x_1x_amp_um_pp")
+    missing_b1 = np.isnan(aug_rows[:, b1])
+    assert 0.25 < missing_b1.mean() < 0.75 and not np.isnan(aug_rows[:, b2]).any()
+    # Gains: every channel within ±10 % of the original, and not all equal to it.
+    orig = np.repeat(plain.X[:, b2], 2)
+    ratio = aug_rows[:, b2] / orig
+    assert np.all(np.abs(ratio - 1) <= 0.1 + 1e-3) and np.std(ratio) > 0.02
+    # Deterministic, and cached under the augmentation's own key.
+    again = load_feature_table(path, augment=aug)
+    np.testing.assert_array_equal(again.X, tab.X)
+    other = load_feature_table(path, augment=Augmentation.from_dict({"copies": 1, "seed": 4}))
+    assert len(other) == 2 * n
+    with pytest.raises(ValueError, match="bearing_sets"):
+        Augmentation.from_dict({"bearing_sets": [{"bearings": [5]}]})
+    with pytest.raises(ValueError, match="unknown key"):
+        Augmentation.from_dict({"copise": 2})

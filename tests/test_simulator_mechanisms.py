@@ -217,3 +217,137 @@ def test_mechanism_survey_table_and_figure(tmp_path, monkeypatch):
     assert "| flexible | 1950 | 0.2 |" in md and "| ψ (°) |" in md
     ms.survey_figure(pts, tmp_path / "m.png")
     assert (tmp_path / "m.png").stat().st_size > 10_000
+
+
+# ---------------------------------------------------------------------------------- angular offset
+@pytest.mark.parametrize("delta, alpha_mrad, angle_deg", [(0.0, 0.08, -90.0), (0.2, -0.05, 30.0)])
+def test_angular_offset_static_bearing_loads_match_hand_calculation(delta, alpha_mrad, angle_deg):
+    """Exciter line tilted about the coupling (bearing 3 at the coupling stays, bearing 4 moves by α·L),
+    plus an optional parallel δ: the same 5×5 hand solution of the lumped chain as the parallel case."""
+    pl = Plant.default().replace(**LINEAR, exciter_bearing_span_m=2.5)
+    res = simulate(pl, 1950.0, delta, 0.0, mechanism="offset", offset_angle_rad=math.radians(angle_deg),
+                   angular_misalignment_mrad=alpha_mrad, transient_revs=300, record_revs=4, samples_per_rev=16,
+                   settle_tol=1e-10)
+    assert res.ok and res.inputs["mechanism"] == "offset"
+    assert res.inputs["angular_misalignment_mrad"] == alpha_mrad
+    e = np.array([math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))])
+    centres = np.zeros((4, 2))
+    centres[2] = delta * pl.clearance_m * e
+    centres[3] = (delta * pl.clearance_m + alpha_mrad * 1e-3 * 2.5) * e
+    np.testing.assert_allclose(res.bearing_offset_m, centres, atol=1e-15)
+    hand = _hand_static_loads(pl, centres)
+    np.testing.assert_allclose(res.mean_bearing_load_n, hand, rtol=1e-6, atol=1e-6 * np.abs(hand).max())
+    # the tilt itself moves load (against the same δ without it)
+    centres_par = centres.copy()
+    centres_par[3] = centres[2]
+    assert np.abs(hand - _hand_static_loads(pl, centres_par)).max() > 1e3
+    # static journal positions are reported relative to the moved bearing centres
+    assert res.static_position_m.shape == (4, 2) and np.all(res.static_eccentricity < 1)
+
+
+def test_angular_offset_tends_to_aligned_and_zero_is_aligned():
+    pl = Plant.default()
+    kw = dict(transient_revs=200, record_revs=8, samples_per_rev=32, settle_tol=1e-9)
+    ref = simulate(pl, 1950.0, 0.0, 0.05, mechanism="aligned", **kw)
+    diffs = []
+    for alpha in (1e-2, 1e-3):
+        r = simulate(pl, 1950.0, 0.0, 0.05, mechanism="offset", offset_angle_rad=-math.pi / 2,
+                     angular_misalignment_mrad=alpha, **kw)
+        assert r.inputs["mechanism"] == "offset"
+        diffs.append(np.abs(r.journal_displacements_m - ref.journal_displacements_m).max() / pl.clearance_m)
+    assert 0 < diffs[1] < diffs[0] < 0.1
+    assert diffs[1] / diffs[0] == pytest.approx(0.1, rel=0.2)  # first order in α
+    for mech in ("offset", "flexible"):
+        r0 = simulate(pl, 1950.0, 0.0, 0.05, mechanism=mech, angular_misalignment_mrad=0.0, **kw)
+        assert r0.inputs["mechanism"] == "aligned"
+        np.testing.assert_array_equal(r0.positions_m, ref.positions_m)
+
+
+def test_angular_offset_bad_input_names_the_parameter():
+    pl = Plant.default()
+    for mech in ("pin", "rigid", "aligned"):
+        with pytest.raises(ValueError, match="angular_misalignment_mrad .*'offset' or 'flexible'"):
+            simulate(pl, 1950.0, 0.1 if mech != "aligned" else 0.0, 0.05, mechanism=mech,
+                     angular_misalignment_mrad=0.05)
+    with pytest.raises(ValueError, match=r"angular_misalignment_mrad must be within ±0.09265 mrad"):
+        simulate(pl, 1950.0, 0.1, 0.05, mechanism="offset", angular_misalignment_mrad=0.2)
+    with pytest.raises(ValueError, match="angular_misalignment_mrad must be a finite number"):
+        simulate(pl, 1950.0, 0.1, 0.05, mechanism="offset", angular_misalignment_mrad=float("nan"))
+    with pytest.raises(ValueError, match="exciter_bearing_span_m must be > 0"):
+        Plant.default().replace(exciter_bearing_span_m=0.0)
+    # the new plant field keeps earlier plant ids at its default
+    assert Plant.default().replace(exciter_bearing_span_m=3.4).plant_id() == "468b143a1dc382b0"
+
+
+def test_angular_offset_cli_and_dataset_spec(tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+    from rotordiag.simulator.dataset.design import build_design
+    from rotordiag.simulator.dataset.spec import SpecError, parse_spec
+    from rotordiag.simulator.dataset.store import ANGULAR_DATASETS, layout
+    from tests.dataset_support import SMALL_SPEC
+
+    out = CliRunner().invoke(app, ["simulate", "--speed-rpm", "1950", "--misalignment", "0", "--mechanism", "offset",
+                                   "--angular-misalignment-mrad", "0.05", "--offset-angle-deg", "-90",
+                                   "--transient-revs", "60", "--record-revs", "4", "--json"])
+    assert out.exit_code == 0, out.output
+    summary = json.loads(out.output)
+    assert summary["mechanism"] == "offset" and summary["angular_misalignment_mrad"] == 0.05
+    bad = CliRunner().invoke(app, ["simulate", "--speed-rpm", "1950", "--misalignment", "0.1", "--mechanism", "pin", "--angular-misalignment-mrad", "0.05",
+                                   "--transient-revs", "10", "--record-revs", "2"], env={"COLUMNS": "400"})
+    assert bad.exit_code != 0 and "angular_misalignment_mrad" in bad.output
+
+    text = SMALL_SPEC.format(n_samples=8, seed=7, sample_rate_hz=1024.0, transient_revs=30)
+    plain = parse_spec(text)
+    angular = parse_spec(text.replace("mechanism = {pin = 1, rigid = 1}",
+                                      "angular_misalignment_mrad = {min = -0.05, max = 0.05}\n"
+                                      "mechanism = {offset = 1, flexible = 1}"))
+    # a spec without it: same hash as an explicit 0, and a design and layout without it
+    assert parse_spec(text.replace("mechanism = {pin = 1, rigid = 1}",
+                                   "angular_misalignment_mrad = 0.0\nmechanism = {pin = 1, rigid = 1}")
+                      ).spec_hash == plain.spec_hash
+    assert angular.spec_hash != plain.spec_hash
+    d_plain = build_design(plain)
+    assert all(d_plain[i].angular_misalignment_mrad == 0.0 for i in range(len(d_plain)))
+    d_ang = build_design(angular)
+    alphas = [d_ang[i].angular_misalignment_mrad for i in range(len(d_ang))]
+    assert min(alphas) >= -0.05 and max(alphas) <= 0.05 and len(set(alphas)) == len(alphas)
+    L0 = layout(8, 64, 4, plain.base_plant.to_dict())
+    L1 = layout(8, 64, 4, angular.base_plant.to_dict(), angular=True)
+    assert not set(ANGULAR_DATASETS) & set(L0) and set(ANGULAR_DATASETS) <= set(L1)
+    with pytest.raises(SpecError, match="angular_misalignment_mrad"):
+        parse_spec(text.replace("mechanism = {pin = 1, rigid = 1}", "angular_misalignment_mrad = 50.0\n"
+                                "mechanism = {pin = 1, rigid = 1}"))
+
+
+def test_flexible_range_and_angular_surveys(tmp_path):
+    from rotordiag.simulator.analysis import mechanisms as ms
+
+    pts = ms.flexible_range_survey(speeds_rpm=(1950.0,), stiffnesses_n_m=(1e8,), phases_deg=(0.0, 180.0),
+                                   deltas=(0.1, 0.3), record_revs=8, workers=0)
+    assert len(pts) == 1 + 2 * 2 and all(p.status == "ok" for p in pts)
+    v = ms._range_verdict(pts, 1950.0, 1e8, 2)
+    # the verdict is the runs' own numbers: growth per phase, ratio range at the largest Δ
+    last = [p for p in pts if p.misalignment == 0.3]
+    assert v["ratio"] == (min(p.ratio(2) for p in last), max(p.ratio(2) for p in last))
+    grows = sum(
+        next(p for p in pts if p.misalignment == 0.3 and p.coupling_phase_deg == psi).amp_2x_um_0pk[2][0]
+        > next(p for p in pts if p.misalignment == 0.1 and p.coupling_phase_deg == psi).amp_2x_um_0pk[2][0]
+        for psi in (0.0, 180.0))
+    assert v["grows"] == f"{grows}/2"
+    md = ms.range_markdown(pts)
+    assert "| 1950 | 1e+08 | 3 |" in md
+    ms.range_figure(pts, tmp_path / "r.png")
+    assert (tmp_path / "r.png").stat().st_size > 10_000
+
+    ang = ms.angular_survey(speeds_rpm=(1950.0,), alphas_mrad=(0.06,), record_revs=8, workers=0)
+    by = {p.case: p for p in ang}
+    assert all(p.status == "ok" for p in ang)
+    assert by["angular-down"].angular_misalignment_mrad == 0.06
+    # a downward tilt lowers bearing 4: it unloads (lumped model) while bearing 3's load barely moves
+    assert by["angular-down"].static_load_n[3][1] < by["aligned"].static_load_n[3][1] - 3e3
+    assert abs(by["angular-down"].static_load_n[2][1] - by["aligned"].static_load_n[2][1]) < 1e3
+    assert "| angular-down | 1950 | 0 | 0.06 |" in ms.angular_markdown(ang)

@@ -194,12 +194,32 @@ def register(app: typer.Typer) -> None:
         plant: Optional[Path] = typer.Option(None, help="Plant file (TOML or JSON); default MODEL.md's plant."),
         workers: Optional[int] = typer.Option(None, help="Worker processes (default: usable CPUs; 0 = here)."),
         quick: bool = typer.Option(False, "--quick", help="One speed (1950 r/min) and Δ = 0, 0.1, 0.3 only."),
+        flexible_range: bool = typer.Option(
+            False, "--flexible-range",
+            help="Instead: flexible only, at the three speeds across k_c 1e7–1e9 N/m, ψ = 0/90/180/270° and "
+                 "Δ ≤ 0.3 (flexible_range.png/.md/.json)."),
+        exciter_unbalance: float = typer.Option(
+            0.0, "--exciter-unbalance", min=0.0, max=0.5,
+            help="With --flexible-range: exciter unbalance a2/c of every run (default 0)."),
+        angular: bool = typer.Option(
+            False, "--angular",
+            help="Instead: the angular shaft-line offset (offset mechanism, α = 0.03/0.06/0.09 mrad, down and "
+                 "horizontal, alone and with Δ = 0.2) at the three speeds (angular.md/.json)."),
     ) -> None:
         """Every coupling mechanism at 1500, 1950, 3000 r/min versus Δ: 1X, 2X, 2X/1X, static journal positions,
         and the flexible coupling's phase and stiffness sensitivity (docs/reproduction.md)."""
         from dataclasses import asdict
 
-        from rotordiag.simulator.analysis.mechanisms import mechanism_survey, survey_figure, survey_markdown
+        from rotordiag.simulator.analysis.mechanisms import (
+            angular_markdown,
+            angular_survey,
+            flexible_range_survey,
+            mechanism_survey,
+            range_figure,
+            range_markdown,
+            survey_figure,
+            survey_markdown,
+        )
         from rotordiag.simulator.cli import load_plant
 
         if workers is not None and workers < 0:
@@ -208,6 +228,19 @@ def register(app: typer.Typer) -> None:
             out.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise typer.BadParameter(f"cannot create {out}: {exc}", param_hint="--out") from None
+        if angular:
+            points = angular_survey(load_plant(plant), workers=workers)
+            (out / "angular.json").write_text(json.dumps([asdict(p) for p in points], indent=1))
+            (out / "angular.md").write_text(angular_markdown(points))
+            typer.echo(f"{len(points)} runs; wrote {out / 'angular.md'}, angular.json")
+            return
+        if flexible_range:
+            points = flexible_range_survey(load_plant(plant), workers=workers, exciter_unbalance=exciter_unbalance)
+            (out / "flexible_range.json").write_text(json.dumps([asdict(p) for p in points], indent=1))
+            (out / "flexible_range.md").write_text(range_markdown(points))
+            range_figure(points, out / "flexible_range.png", exciter_unbalance=exciter_unbalance)
+            typer.echo(f"{len(points)} runs; wrote {out / 'flexible_range.png'}, flexible_range.md, flexible_range.json")
+            return
         if quick:
             points = mechanism_survey(load_plant(plant), workers=workers, speeds_rpm=(1950.0,), deltas=(0.0, 0.1, 0.3))
         else:

@@ -51,6 +51,8 @@ __all__ = ["VARIABLES", "Design", "SampleParams", "build_design", "sample_seed"]
 VARIABLES: tuple[str, ...] = (
     "speed_rpm", "misalignment", "unbalance", "unbalance_phase_rad", "exciter_unbalance",
     "exciter_unbalance_phase_rad", "offset_angle_rad", "coupling_phase_rad",
+    # appended last: a spec that leaves it constant keeps its design (no new dimension before the others)
+    "angular_misalignment_mrad",
 )
 
 
@@ -77,6 +79,7 @@ class SampleParams:
     sample_seed: int
     coupling_phase_rad: float = 0.0
     plant_source: str = "default"     # label of the base plant (ResolvedSpec.sources)
+    angular_misalignment_mrad: float = 0.0  # applied to offset/flexible samples only (worker)
 
 
 class Design:

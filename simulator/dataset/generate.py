@@ -120,7 +120,8 @@ def _rows(p: SampleParams, out: SampleOutput) -> dict[str, Any]:
     bands = severity_bands()
     rows: dict[str, Any] = {"waveforms": out.waveforms_um}
     for name in ("speed_rpm", "misalignment", "unbalance", "unbalance_phase_rad", "exciter_unbalance",
-                 "exciter_unbalance_phase_rad", "offset_angle_rad", "coupling_phase_rad"):
+                 "exciter_unbalance_phase_rad", "offset_angle_rad", "coupling_phase_rad",
+                 "angular_misalignment_mrad"):
         rows[f"parameters/{name}"] = getattr(p, name)
     rows["parameters/mechanism"] = MECHANISM_CODES[p.mechanism]
     rows["parameters/simulated_mechanism"] = SIMULATED_MECHANISM_CODES[out.simulated_mechanism]
@@ -236,7 +237,8 @@ def generate(
     sim = SimulationSettings.from_spec(resolved.spec)
     from rotordiag.core.version import code_version
 
-    L = layout(len(meas.channels), meas.n_points, len(meas.bearings), resolved.base_plant.to_dict())
+    angular = resolved.spec.operating.angular_misalignment_mrad != 0.0  # a constant 0 or a range/levels
+    L = layout(len(meas.channels), meas.n_points, len(meas.bearings), resolved.base_plant.to_dict(), angular=angular)
     own_client = None
     if scheduler_address is not None:  # connect first: an unreachable scheduler leaves no file behind
         from distributed import Client
@@ -288,7 +290,7 @@ def _run(resolved, design, meas, sim, L, out, n_workers, client, progress, on_pr
                                 on_ready=ready)
         for _, output in results:
             params = design[output.index]
-            writer.write_sample(output.index, _rows(params, output))
+            writer.write_sample(output.index, {k: v for k, v in _rows(params, output).items() if k in L})
             counts[output.status] += 1
             if not math.isfinite(t_first):
                 t_first = time.perf_counter() - t_start

@@ -26,7 +26,12 @@ from typing import Annotated, Any, Literal, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from rotordiag.simulator.params import MISALIGNMENT_RANGE, SPEED_RANGE_RPM, UNBALANCE_RANGE
+from rotordiag.simulator.params import (
+    DEFAULT_EXCITER_BEARING_SPAN_M,
+    MISALIGNMENT_RANGE,
+    SPEED_RANGE_RPM,
+    UNBALANCE_RANGE,
+)
 
 __all__ = ["SpecError", "DatasetSpec", "Range", "load_spec", "parse_spec", "PERTURBABLE"]
 
@@ -44,6 +49,9 @@ PERTURBABLE: tuple[str, ...] = (
 #: Factor bounds of ``plant.scale`` ranges, and the most members of a machine family.
 SCALE_RANGE: tuple[float, float] = (0.1, 10.0)
 MAX_FAMILY = 64
+#: Spec-level bound on ``operating.angular_misalignment_mrad`` (mrad); simulate checks the plant's own
+#: |α|·L ≤ 0.9 c (0.093 mrad on the default plant).
+ANGULAR_LIMIT_MRAD = 10.0
 
 
 class SpecError(ValueError):
@@ -178,6 +186,7 @@ class Operating(_Strict):
     exciter_unbalance_phase_rad: Variable = 0.0
     offset_angle_rad: Variable = 0.0
     coupling_phase_rad: Variable = 0.0
+    angular_misalignment_mrad: Variable = 0.0
     mechanism: Mechanism = "rigid"
 
     @field_validator("speed_rpm")
@@ -194,6 +203,12 @@ class Operating(_Strict):
     @classmethod
     def _unb(cls, v: Variable) -> Variable:
         return _check_bounds("unbalance", v, *UNBALANCE_RANGE)
+
+    @field_validator("angular_misalignment_mrad")
+    @classmethod
+    def _angular(cls, v: Variable) -> Variable:
+        # the plant-dependent bound (|α|·L ≤ 0.9 c) is checked by simulate; this keeps it finite and sane
+        return _check_bounds("angular_misalignment_mrad", v, -ANGULAR_LIMIT_MRAD, ANGULAR_LIMIT_MRAD, " mrad")
 
     @field_validator("unbalance_phase_rad", "exciter_unbalance_phase_rad", "offset_angle_rad", "coupling_phase_rad")
     @classmethod
@@ -498,11 +513,22 @@ class ResolvedSpec:
         for key in ("presets", "scale"):  # absent when unused, so specs written before them keep their hash
             if not dumped["plant"].get(key):
                 dumped["plant"].pop(key, None)
-        canonical: dict[str, Any] = {"spec": dumped, "base_plant": self.base_plant.to_dict()}
+        if dumped["operating"].get("angular_misalignment_mrad") == 0.0:  # likewise
+            dumped["operating"].pop("angular_misalignment_mrad")
+        canonical: dict[str, Any] = {"spec": dumped, "base_plant": _hashed_plant(self.base_plant)}
         if ps.is_family:
-            canonical["sources"] = {k: [p.to_dict(), self.source_weights[k]] for k, p in self.sources.items()}
+            canonical["sources"] = {k: [_hashed_plant(p), self.source_weights[k]] for k, p in self.sources.items()}
         blob = json.dumps(canonical, sort_keys=True, allow_nan=True).encode()
         self.spec_hash = hashlib.sha256(blob).hexdigest()
+
+
+def _hashed_plant(plant: Any) -> dict[str, Any]:
+    """The plant as the spec hash sees it: ``exciter_bearing_span_m`` (added with the angular offset)
+    is left out at its default, so specs hashed before it keep their hash."""
+    d = plant.to_dict()
+    if d.get("exciter_bearing_span_m") == DEFAULT_EXCITER_BEARING_SPAN_M:
+        d.pop("exciter_bearing_span_m")
+    return d
 
 
 def _plant_members(ps: PlantSpec, base_dir: Path) -> dict[str, tuple[Any, float]]:

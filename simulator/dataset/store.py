@@ -81,15 +81,22 @@ def _plant_layout(plant_dict: dict[str, Any]) -> dict[str, tuple[tuple[int, ...]
     return out
 
 
+#: Per-sample datasets that only files whose spec sets ``operating.angular_misalignment_mrad`` have,
+#: so that files written before the angular offset keep their layout (and can be resumed and merged).
+ANGULAR_DATASETS: tuple[str, ...] = ("parameters/angular_misalignment_mrad", "parameters/plant/exciter_bearing_span_m")
+
+
 def layout(n_channels: int, n_points: int, n_bearings: int,
-           plant_dict: dict[str, Any]) -> dict[str, tuple[tuple[int, ...], str]]:
-    """Per-sample datasets: name → (shape after the sample axis, dtype)."""
+           plant_dict: dict[str, Any], *, angular: bool = False) -> dict[str, tuple[tuple[int, ...], str]]:
+    """Per-sample datasets: name → (shape after the sample axis, dtype); ``angular``: the spec uses
+    an angular offset (adds :data:`ANGULAR_DATASETS`)."""
     L: dict[str, tuple[tuple[int, ...], str]] = {
         "waveforms": ((n_channels, n_points), "f4"),
         "done": ((), "u1"),
     }
     for name in ("speed_rpm", "misalignment", "unbalance", "unbalance_phase_rad", "exciter_unbalance",
-                 "exciter_unbalance_phase_rad", "offset_angle_rad", "coupling_phase_rad"):
+                 "exciter_unbalance_phase_rad", "offset_angle_rad", "coupling_phase_rad",
+                 "angular_misalignment_mrad"):
         L[f"parameters/{name}"] = ((), "f8")
     L["parameters/mechanism"] = ((), "i1")
     L["parameters/simulated_mechanism"] = ((), "i1")
@@ -98,6 +105,9 @@ def layout(n_channels: int, n_points: int, n_bearings: int,
     L["parameters/plant_source"] = ((), f"S{PLANT_SOURCE_LEN}")
     L["parameters/record_revs"] = ((), "i4")
     L.update(_plant_layout(plant_dict))
+    if not angular:
+        for name in ANGULAR_DATASETS:
+            L.pop(name, None)
     L["measurement/snr_db"] = ((), "f8")
     L["measurement/start_angle_rad"] = ((), "f8")
     L["measurement/speed_fluctuation_phase_rad"] = ((), "f8")

@@ -101,7 +101,9 @@ def run_sample(task: SampleTask) -> SampleOutput:
         plant = Plant.from_dict(p.plant)
         kw = dict(mechanism=p.mechanism, rtol=sim.rtol, atol=sim.atol, unbalance_phase_rad=p.unbalance_phase_rad,
                   exciter_unbalance=p.exciter_unbalance, exciter_unbalance_phase_rad=p.exciter_unbalance_phase_rad,
-                  offset_angle_rad=p.offset_angle_rad, coupling_phase_rad=p.coupling_phase_rad)
+                  offset_angle_rad=p.offset_angle_rad, coupling_phase_rad=p.coupling_phase_rad,
+                  angular_misalignment_mrad=p.angular_misalignment_mrad if p.mechanism in ("offset", "flexible")
+                  else 0.0)
         start = steady_start(build_system(plant, p.speed_rpm, p.misalignment, p.unbalance, **kw),
                              sim.transient_revs, sim.steady_start)
         res = simulate(plant, p.speed_rpm, p.misalignment, p.unbalance, transient_revs=start.transient_revs,

@@ -73,7 +73,12 @@ _BINARY_BODY = {
             "multipart/form-data": {"schema": {
                 "type": "object", "required": ["file"],
                 "properties": {"file": {"type": "string", "format": "binary",
-                                        "description": "CSV (one probe per column), .npy or .h5/.hdf5 file"}}}},
+                                        "description": "CSV (one probe per column), .npy or .h5/.hdf5 file"},
+                               "slow_roll_file": {
+                                   "type": "string", "format": "binary",
+                                   "description": "Optional (POST /diagnose only): a recording of the same probes "
+                                   "at slow roll (<= 20 % of the running speed), with a keyphasor in both files; "
+                                   "its 1X/2X runout vectors are subtracted from the recording's (docs/recordings.md)"}}}},
         },
     }
 }
@@ -86,23 +91,32 @@ def _media_type(request: Request) -> str:
     return request.headers.get("content-type", "").split(";")[0].strip().lower()
 
 
-async def _read_body(request: Request) -> tuple[str, bytes, str]:
-    """``(kind, bytes, file name)`` of the body: kind is ``json``, ``npy`` or ``upload``; 415 for anything else.
+async def _read_body(request: Request, slow_roll: bool = False) -> tuple[str, bytes, str, tuple[bytes, str] | None]:
+    """``(kind, bytes, file name, slow roll)`` of the body: kind is ``json``, ``npy`` or ``upload``; 415 for
+    anything else. ``slow roll`` is the multipart part ``slow_roll_file`` as ``(bytes, file name)`` (only
+    where ``slow_roll`` is allowed; else a second file is refused), or None.
 
     Only the I/O happens here, on the event loop; parsing runs off the loop (``service.parsing.parse_body``).
     """
     media = _media_type(request)
     if media in JSON_TYPES:
-        return "json", await request.body(), ""
+        return "json", await request.body(), "", None
     if media in NPY_TYPES:
-        return "npy", await request.body(), ""
+        return "npy", await request.body(), "", None
     if media == "multipart/form-data":
-        form = await _read_form(request)
+        form = await _read_form(request, max_files=2 if slow_roll else 1)
         try:
             upload = form.get("file")
             if upload is None or isinstance(upload, str):
                 raise InputError("multipart upload: put the waveform file in a part named 'file' (with a filename)")
-            return "upload", await upload.read(), upload.filename or ""
+            second = None
+            if slow_roll and "slow_roll_file" in form:
+                part = form.get("slow_roll_file")
+                if isinstance(part, str):
+                    raise InputError("multipart upload: 'slow_roll_file' must be a file part (with a filename) "
+                                     "holding the slow-roll recording", "malformed")
+                second = (await part.read(), part.filename or "")
+            return "upload", await upload.read(), upload.filename or "", second
         finally:
             await form.close()
     raise InputError(
@@ -110,14 +124,14 @@ async def _read_body(request: Request) -> tuple[str, bytes, str]:
         "application/octet-stream (an NPY array) or multipart/form-data (a CSV/NPY/HDF5 file in part 'file')", "unsupported_type")
 
 
-async def _read_form(request: Request) -> Any:
+async def _read_form(request: Request, max_files: int = 1) -> Any:
     """The multipart form, with the parser's complaints in the client's terms (400)."""
     from python_multipart.exceptions import FormParserError
     from starlette.exceptions import HTTPException as StarletteHTTPException
     from starlette.formparsers import MultiPartException
 
     try:
-        return await request.form(max_files=1, max_fields=8)
+        return await request.form(max_files=max_files, max_fields=8)
     except (MultiPartException, StarletteHTTPException, FormParserError) as exc:
         # FormParserError: python-multipart's own, which starlette < 1.7 lets through on garbage bodies
         if isinstance(exc, StarletteHTTPException) and exc.status_code != 400:
@@ -154,7 +168,7 @@ async def recording_answer(request: Request, state, query: dict[str, Any], name:
     Used by the web page's ``/ui/plot-data`` (service/web/routes.py): the same body forms and messages as
     /diagnose, and the same isolation.
     """
-    kind, body, filename = await _read_body(request)
+    kind, body, filename, _ = await _read_body(request)
     if state.pool is not None:
         return (await in_worker(state, name, kind, body, filename, query))[1]
 
@@ -226,25 +240,33 @@ async def diagnose(
                                                description="Diagnose with this registered version instead of the "
                                                "active one.")] = None,
     output_units: OutputUnitsQuery = "um",
+    slow_roll_sample_rate_hz: Annotated[float | None, Query(
+        gt=0, le=1e6, allow_inf_nan=False, description="Multipart with `slow_roll_file` only: the slow-roll file's "
+        "sample rate, Hz (default: `sample_rate_hz`).")] = None,
+    slow_roll_keyphasor_times_s: Annotated[str | None, Query(
+        max_length=200_000, description="Multipart with `slow_roll_file` only: the slow-roll file's keyphasor pulse "
+        "times, s, comma-separated (or a keyphasor column/channel in that file).")] = None,
 ) -> dict:
     query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=asset_id,
                  plant=plant, units=units, bearings=bearings, angles_deg=angles_deg,
                  keyphasor_times_s=keyphasor_times_s, sample_index=sample_index, **reader)
-    verdict, _ = await diagnose_from_request(request, state, query, model_version)
+    query.update(slow_roll_sample_rate_hz=slow_roll_sample_rate_hz, slow_roll_keyphasor_times_s=slow_roll_keyphasor_times_s)
+    verdict, _ = await diagnose_from_request(request, state, query, model_version, slow_roll_allowed=True)
     return verdict_in_units(verdict, output_units)   # stored in µm; answered in the units asked for
 
 
 async def diagnose_from_request(request: Request, state, query: dict[str, Any], version: str | None,
-                                 store: bool = True) -> tuple[dict, str | None]:
+                                store: bool = True, slow_roll_allowed: bool = False) -> tuple[dict, str | None]:
     """Read the body, parse and diagnose it in a worker process (``service.pool``, which bounds the requests
     in flight per worker) or a thread; with ``store``, compare with the asset's baseline and store the result
     here (``service.baseline.record_verdict``). Returns the verdict and the request's asset id."""
-    kind, body, filename = await _read_body(request)
+    kind, body, filename, slow_roll = await _read_body(request, slow_roll=slow_roll_allowed)
     if state.pool is not None:
-        _, verdict, asset_id, plant = await in_worker(state, "work", kind, body, filename, query, version)
+        _, verdict, asset_id, plant = await in_worker(state, "work", kind, body, filename, query, slow_roll, version)
     else:
         verdict, asset_id, plant = await anyio.to_thread.run_sync(_parse_and_diagnose, state, kind, body, filename,
-                                                                  query, version, limiter=_diagnosis_limiter(state))
+                                                                  query, slow_roll, version,
+                                                                  limiter=_diagnosis_limiter(state))
     if store:
         await run_in_threadpool(record_verdict, state, asset_id, plant, verdict)
     return verdict, asset_id
@@ -259,8 +281,9 @@ def _diagnosis_limiter(state) -> anyio.CapacityLimiter:
     return limiter
 
 
-def _parse_and_diagnose(state, kind, body, filename, query, model_version) -> tuple[dict, str | None, str | None]:
-    recording, asset_id, plant = parse_body(kind, body, filename, query)
+def _parse_and_diagnose(state, kind, body, filename, query, slow_roll,
+                        model_version) -> tuple[dict, str | None, str | None]:
+    recording, asset_id, plant = parse_body(kind, body, filename, query, slow_roll)
     return _diagnose_sync(state, recording, model_version), asset_id, plant
 
 

@@ -1,0 +1,136 @@
+"""Measurement realities added when a training table is built (issue 15, item 5).
+
+A dataset sample's probe waveforms already carry what the simulator's measurement model
+draws per sample (runout, noise, speed fluctuation: ``simulator.dataset.measurement``). Two
+realities of a plant's instrumentation are cheaper to add to the stored waveforms than to
+simulate again, because they act on the measured signal as a whole:
+
+- **probe gain mismatch**: each channel scaled by ``1 + u``, ``u`` uniform in
+  ``[−gain_mismatch, +gain_mismatch]`` (a probe/driver sensitivity off its nominal
+  7.87 V/mm; scaling the whole reading is exactly what it does);
+- **missing bearings**: only a subset of the bearings instrumented (its channels dropped
+  before extraction, so every feature of the other bearings is missing, as in the field);
+- **speed unknown**: features extracted without the nominal speed, from the speed the
+  extractor estimates (what a user without a keyphasor or a speed value gets).
+
+Each sample gets ``copies`` extra rows (the original row is kept unchanged); copies keep
+the sample's plant id, so held-out evaluation never splits a plant. Draws come from
+``numpy.random.default_rng([seed, sample_index, copy])``: a table is reproducible and a
+sample's copies do not depend on which other samples are in the file.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Augmentation", "Variant"]
+
+_KEYS = {"copies", "gain_mismatch", "bearing_sets", "speed_unknown", "seed"}
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One augmented copy of a sample.
+
+    Attributes
+    ----------
+    gains : ndarray of shape (n_channels,)
+        Factor applied to each channel's waveform.
+    keep : ndarray of bool, shape (n_channels,)
+        Channels kept (the others' bearing is "not instrumented").
+    speed_known : bool
+        Whether the extractor is given the nominal speed.
+    """
+
+    gains: np.ndarray
+    keep: np.ndarray
+    speed_known: bool
+
+
+@dataclass(frozen=True)
+class Augmentation:
+    """The ``[augment]`` table of ``train.toml``.
+
+    Parameters
+    ----------
+    copies : int
+        Augmented rows per sample (0 = none).
+    gain_mismatch : float
+        Relative half-width of the per-channel gain error (0.1 = ±10 %).
+    bearing_sets : sequence of (bearings, weight)
+        Instrumented-bearing subsets a copy draws from (weights need not sum to 1); empty =
+        every bearing of the dataset.
+    speed_unknown : float
+        Share of copies extracted without the nominal speed.
+    seed : int
+    """
+
+    copies: int = 0
+    gain_mismatch: float = 0.0
+    bearing_sets: tuple[tuple[tuple[int, ...], float], ...] = ()
+    speed_unknown: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.copies, int) or not 0 <= self.copies <= 16:
+            raise ValueError(f"[augment] copies: an integer in 0..16, got {self.copies!r}")
+        if not 0.0 <= self.gain_mismatch < 0.5:
+            raise ValueError(f"[augment] gain_mismatch: a relative half-width in [0, 0.5), got {self.gain_mismatch!r}")
+        if not 0.0 <= self.speed_unknown <= 1.0:
+            raise ValueError(f"[augment] speed_unknown: a share in [0, 1], got {self.speed_unknown!r}")
+        for bearings, w in self.bearing_sets:
+            if not bearings or any(b not in (1, 2, 3, 4) for b in bearings) or len(set(bearings)) != len(bearings):
+                raise ValueError(f"[augment] bearing_sets: each set is distinct bearings 1–4, got {list(bearings)}")
+            if not w >= 0:
+                raise ValueError(f"[augment] bearing_sets: weights must be ≥ 0, got {w!r}")
+        if self.bearing_sets and sum(w for _, w in self.bearing_sets) <= 0:
+            raise ValueError("[augment] bearing_sets: the weights are all zero")
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any] | None) -> Augmentation:
+        """From the TOML table: ``bearing_sets = [{bearings = [2, 3], weight = 1}, ...]``."""
+        d = dict(d or {})
+        unknown = set(d) - _KEYS
+        if unknown:
+            raise ValueError(f"[augment]: unknown key(s) {sorted(unknown)}; allowed: {sorted(_KEYS)}")
+        sets = []
+        for item in d.get("bearing_sets", ()):
+            if not isinstance(item, Mapping) or "bearings" not in item:
+                raise ValueError(f"[augment] bearing_sets: each item is {{bearings = [...], weight = w}}, got {item!r}")
+            sets.append((tuple(int(b) for b in item["bearings"]), float(item.get("weight", 1.0))))
+        seed = d.get("seed", 0)
+        copies = d.get("copies", 0)
+        if not isinstance(seed, int) or seed < 0:
+            raise ValueError(f"[augment] seed: a non-negative integer, got {seed!r}")
+        return cls(copies=copies, gain_mismatch=float(d.get("gain_mismatch", 0.0)), bearing_sets=tuple(sets),
+                   speed_unknown=float(d.get("speed_unknown", 0.0)), seed=seed)
+
+    def to_dict(self) -> dict:
+        return {"copies": self.copies, "gain_mismatch": self.gain_mismatch,
+                "bearing_sets": [{"bearings": list(b), "weight": w} for b, w in self.bearing_sets],
+                "speed_unknown": self.speed_unknown, "seed": self.seed}
+
+    @property
+    def key(self) -> str:
+        """A string that changes whenever the augmented rows would (for the feature cache)."""
+        return repr(sorted(self.to_dict().items()))
+
+    def variants(self, sample_index: int, channel_bearings: Sequence[int]) -> list[Variant]:
+        """The ``copies`` variants of one sample whose channels sit at ``channel_bearings``."""
+        bearings = np.asarray(channel_bearings, dtype=int)
+        out = []
+        present = set(bearings.tolist())
+        sets = [(tuple(b), w) for b, w in self.bearing_sets if set(b) <= present] or [(tuple(sorted(present)), 1.0)]
+        weights = np.array([w for _, w in sets], dtype=float)
+        weights = weights / weights.sum()
+        for c in range(self.copies):
+            rng = np.random.default_rng([self.seed, int(sample_index), c])
+            gains = 1.0 + rng.uniform(-self.gain_mismatch, self.gain_mismatch, size=bearings.size)
+            chosen = sets[int(rng.choice(len(sets), p=weights))][0]
+            keep = np.isin(bearings, chosen)
+            speed_known = bool(rng.uniform() >= self.speed_unknown)
+            out.append(Variant(gains=gains, keep=keep, speed_known=speed_known))
+        return out
