@@ -238,19 +238,26 @@ class RossCase:
     bearings: tuple[int, ...]
     sample_rate_hz: float
     waveforms_um: np.ndarray          # (2 * len(bearings), n) — bearing order, probes 45°, 135°
+    keyphasor_times_s: np.ndarray | None = None   # times at which the shaft angle passes 0 (mod 2π)
 
 
 PROBE_ANGLES_DEG = (45.0, 135.0)
 
 
 def load_ross_set(path: Path = DEFAULT_PATH, *, sample_rate_hz: float = 2560.0, revs: float = 48.0,
-                  snr_db: float = 40.0, seed: int = SEED) -> list[RossCase]:
+                  snr_db: float = 40.0, seed: int = SEED, runout_1x_um: tuple[float, float] = (0.0, 0.0),
+                  runout_2x_um: tuple[float, float] = (0.0, 0.0), runout_seed: int | None = None) -> list[RossCase]:
     """The cached ROSS set as probe waveforms (NumPy only; no ROSS needed).
 
     Each probe reads ``x cos α + y sin α`` (α from +x horizontal toward +y up, as
     ``rotordiag.core.conventions``), x/y from the stored DC + 1X..4X harmonics, sampled at
     ``sample_rate_hz`` for ``revs`` revolutions from a seeded random shaft angle, plus white
-    noise at ``snr_db`` (of each channel's AC power).
+    noise at ``snr_db`` (of each channel's AC power). With ``runout_1x_um`` / ``runout_2x_um``
+    ranges, each probe also reads a shaft-surface runout ``a1 cos(ψ − β1) + a2 cos(2ψ − β2)``,
+    ψ = α − θ (as ``simulator.dataset.measurement``), amplitudes uniform in the range and phases
+    uniform, drawn per bearing from a second generator (``runout_seed``, default ``seed + 10_000``) so the
+    waveforms without runout stay what they were; the same ``runout_seed`` with another ``seed`` gives
+    the same shaft runout with new noise and start angles (a re-recording of the same machine). ``keyphasor_times_s`` gives the times at which θ passes 2πm.
 
     Raises
     ------
@@ -262,6 +269,8 @@ def load_ross_set(path: Path = DEFAULT_PATH, *, sample_rate_hz: float = 2560.0, 
                                 "`.venv/bin/python benchmarks/ross_validation.py` (needs the [validation] extra)")
     z = np.load(path, allow_pickle=False)
     rng = np.random.default_rng(seed)
+    rng_runout = np.random.default_rng(seed + 10_000 if runout_seed is None else runout_seed)
+    with_runout = max(runout_1x_um) > 0 or max(runout_2x_um) > 0
     out = []
     for i in range(len(z["machine"])):
         rpm = float(z["speed_rpm"][i])
@@ -275,16 +284,30 @@ def load_ross_set(path: Path = DEFAULT_PATH, *, sample_rate_hz: float = 2560.0, 
         bearings = tuple(b for b in (1, 2, 3, 4) if bool(z["instrumented"][i][b - 1]))
         chans = []
         for b in bearings:
+            ro = (rng_runout.uniform(*runout_1x_um), rng_runout.uniform(0, 2 * math.pi),
+                  rng_runout.uniform(*runout_2x_um), rng_runout.uniform(0, 2 * math.pi)) if with_runout else None
             for a in PROBE_ANGLES_DEG:
                 r = math.radians(a)
-                chans.append(xy[b - 1, 0] * math.cos(r) + xy[b - 1, 1] * math.sin(r))
+                ch = xy[b - 1, 0] * math.cos(r) + xy[b - 1, 1] * math.sin(r)
+                if ro is not None:
+                    psi = r - theta
+                    ch = ch + ro[0] * np.cos(psi - ro[1]) + ro[2] * np.cos(2 * psi - ro[3])
+                chans.append(ch)
         w = np.asarray(chans)
         if math.isfinite(snr_db):
             sig = w.std(axis=1, keepdims=True)
             w = w + rng.standard_normal(w.shape) * sig * 10 ** (-snr_db / 20)
         out.append(RossCase(str(z["machine"][i]), rpm, float(z["clearance_um"][i]), float(z["delta"][i]),
-                            float(z["grade_mm_s"][i]), bearings, sample_rate_hz, w))
+                            float(z["grade_mm_s"][i]), bearings, sample_rate_hz, w,
+                            keyphasor_times(theta, np.arange(n) / sample_rate_hz)))
     return out
+
+
+def keyphasor_times(theta: np.ndarray, time_s: np.ndarray) -> np.ndarray:
+    """Times (s) at which the shaft angle ``theta`` (increasing, rad, sampled at ``time_s``) passes 2πm."""
+    t = time_s
+    m = np.arange(math.ceil(theta[0] / (2 * math.pi)), math.floor(theta[-1] / (2 * math.pi)) + 1)
+    return np.interp(2 * math.pi * m, theta, t)
 
 
 def main(argv=None) -> int:

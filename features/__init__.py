@@ -26,6 +26,9 @@ apply_slow_roll(recording, slow_roll) -> (Recording, SlowRollVectors)
 evidence(feature_result) -> list of EvidenceItem
     The model-independent evidence: 1X/2X vectors, 2X/1X, phase across the coupling, orbit
     shape, shaft centreline, each with what it usually means.
+signature(feature_result) -> dict; change_features(base_signature, signature) -> ChangeResult
+    Change against an asset's baseline (issue 17): 1X/2X vector changes per probe, centreline
+    displacement, orbit-shape change, compared within ``SPEED_BAND_FRAC`` of the baseline's speed.
 FEATURE_NAMES, FEATURE_SPECS, feature_names()
     The fixed schema (always bearings 1–4; absent bearings give NaN), with units and
     definitions (docs/features.md).
@@ -38,6 +41,16 @@ Importing the package raises glibc's malloc mmap/trim thresholds (see ``features
 (``features._config.BLAS_THREADS``): both measured to matter more than the arithmetic.
 """
 from ._alloc import tune_malloc
+from ._change import (
+    CHANGE_QUANTITIES,
+    SPEED_BAND_FRAC,
+    ChangeResult,
+    average_signatures,
+    change_array,
+    change_features,
+    signature,
+    speed_comparable,
+)
 from ._config import ALLOWED_UNITS, MIN_REVS, MIN_REVS_MOTION, WHIRL_BAND
 from ._evidence import EvidenceItem, evidence
 from ._extract import BearingDetail, FeatureResult, extract_features
@@ -53,5 +66,6 @@ __all__ = [
     "ProbeChannel", "Recording", "extract_features", "FeatureResult", "BearingDetail", "OrbitShape",
     "FEATURE_NAMES", "FEATURE_SPECS", "FeatureSpec", "feature_names", "ALLOWED_UNITS", "MIN_REVS",
     "MIN_REVS_MOTION", "WHIRL_BAND", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
-    "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
+    "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",
+    "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
 ]

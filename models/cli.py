@@ -153,12 +153,16 @@ def register(app: typer.Typer) -> None:
         output_units: str = typer.Option("um", "--output-units", help="Units of the offset and amplitudes in the output: um | mil."),
         slow_roll: Optional[Path] = typer.Option(None, "--slow-roll", help="A recording of the same probes at slow roll (<= 20 % of the running speed; keyphasor in both files): its 1X/2X runout vectors are subtracted from every recording's. Read with the options above (not --speed-rpm/--sample) and its own sidecar."),
         slow_roll_sample_rate_hz: Optional[float] = typer.Option(None, "--slow-roll-sample-rate-hz", help="Sample rate of the --slow-roll file, Hz (default: --sample-rate-hz, its sidecar or its time column)."),
+        baseline: Optional[Path] = typer.Option(None, "--baseline", help="An asset baseline as JSON (`rotordiag baseline "
+                                                "show ASSET --json` or GET /assets/{id}/baseline): also say what "
+                                                "changed since it."),
     ) -> None:
         """Diagnose coupling misalignment from one or many recordings (the model is loaded once)."""
         import json
 
         from rotordiag.core.units import um_to
 
+        from .change import compare, format_change, load_baseline_file
         from .diagnose_files import (
             collect_files,
             diagnose_one,
@@ -181,6 +185,7 @@ def register(app: typer.Typer) -> None:
                 "rotation": rotation, "viewed_from": viewed_from, "speed_rpm": speed_rpm,
                 "clearance_um": clearance_um, "sample_index": sample,
             }
+            base, rule = load_baseline_file(baseline) if baseline is not None else (None, None)
             runout = None
             if slow_roll is not None:
                 slow_given = {**given, "speed_rpm": None, "sample_index": None,
@@ -201,7 +206,7 @@ def register(app: typer.Typer) -> None:
         for path in paths:
             try:
                 opts = load_options(path, sidecar, given)
-                verdict, res = diagnose_one(bundle, path, opts, runout)
+                verdict, res, sig = diagnose_one(bundle, path, opts, runout)
             except RegistryError as exc:
                 _fail(str(exc))
             except ValueError as exc:
@@ -212,12 +217,19 @@ def register(app: typer.Typer) -> None:
                 rows.append({"file": str(path), "error": str(exc)})
                 full.append({"file": str(path), "error": str(exc)})
                 continue
+            section = compare(sig, base, rule) if rule is not None else None
             rows.append(verdict_row(path, verdict, res, output_units))
             full.append(verdict_json(path, verdict, res, output_units))
+            if section is not None:
+                rows[-1].update({"baseline_compared": section["compared"], "baseline_changed": section["changed"],
+                                 "baseline_exceeded": " ".join(section["exceeded"])})
+                full[-1]["baseline"] = section
             if out is None and not as_json:
                 if len(paths) > 1:
                     typer.echo(f"== {path}")
                 typer.echo(format_verdict(verdict, output_units))
+                if section is not None:
+                    typer.echo(format_change(section))
                 for note in res.notes:
                     typer.echo(f"note: {note}")
                 if res.truth:

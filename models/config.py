@@ -51,8 +51,8 @@ from typing import Any
 
 from rotordiag.core.bands import SeverityBands
 
-from .baselines import DEFAULT_RATIO_PATTERNS, DEFAULT_RULE_CUTS
 from .augment import Augmentation
+from .baselines import DEFAULT_RATIO_PATTERNS, DEFAULT_RULE_CUTS
 from .estimators import ConformalIntervalRegressor, KNNDistanceOOD, SeverityClassifier
 from .ordinal import OrdinalSeverityClassifier
 

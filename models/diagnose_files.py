@@ -132,12 +132,15 @@ def slow_roll_from_file(path: Path, options: ReadOptions) -> Any:
 
 
 def diagnose_one(bundle: Any, path: Path, options: ReadOptions,
-                 slow_roll: Any = None) -> tuple[Any, ReadResult]:
+                 slow_roll: Any = None) -> tuple[Any, ReadResult, dict[str, Any]]:
     """Read ``path`` and diagnose it with ``bundle`` (a loaded model, or a callable that loads it: the
     file is read first, so a bad file is reported before the model is loaded); ValueError says what to fix.
     ``slow_roll`` (``features.SlowRollVectors``, :func:`slow_roll_from_file`): runout vectors subtracted
-    from the recording's 1X/2X (the reader's notes say so and what was left out)."""
-    from rotordiag.features import apply_slow_roll, extract_features
+    from the recording's 1X/2X (the reader's notes say so and what was left out).
+
+    Returns the verdict, the reader's result and the recording's ``features.signature`` (what an asset
+    baseline compares, ``models.change.compare``)."""
+    from rotordiag.features import apply_slow_roll, extract_features, signature
 
     from .predict import diagnose
 
@@ -151,7 +154,7 @@ def diagnose_one(bundle: Any, path: Path, options: ReadOptions,
     if callable(bundle):
         bundle = bundle()
     fr = extract_features(recording)
-    return diagnose(bundle, fr, clearance_um=coupling_clearance_um(recording)), res
+    return diagnose(bundle, fr, clearance_um=coupling_clearance_um(recording)), res, signature(fr)
 
 
 def verdict_row(path: Path, verdict: Any, res: ReadResult, output_units: str = "um") -> dict[str, Any]:

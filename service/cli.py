@@ -1,6 +1,9 @@
 """CLI command that starts the HTTP service (``rotordiag serve``)."""
 from __future__ import annotations
 
+from pathlib import Path
+from typing import Optional
+
 import typer
 
 
@@ -40,3 +43,135 @@ def register(app: typer.Typer) -> None:
         except OSError as exc:  # e.g. address in use
             typer.secho(f"error: cannot listen on {host}:{port}: {exc}", fg="red", err=True)
             raise typer.Exit(2) from None
+
+    _register_baseline(app)
+
+
+def _register_baseline(app: typer.Typer) -> None:
+    """``rotordiag baseline show|set|clear ASSET``: the asset baselines of the service's database."""
+    baseline_app = typer.Typer(help="Asset baselines in the service's database (ROTORDIAG_* settings, as "
+                               "`rotordiag serve`): show, set (from a recording, a stored diagnosis or the first "
+                               "recordings), clear.", no_args_is_help=True)
+    app.add_typer(baseline_app, name="baseline")
+
+    def _open():
+        from pydantic import ValidationError
+
+        from rotordiag.service.core.config import Settings
+        from rotordiag.service.core.db import init_db, make_engine
+
+        try:
+            settings = Settings()
+        except ValidationError as exc:
+            typer.secho(f"error: invalid settings: {exc}", fg="red", err=True)
+            raise typer.Exit(2) from None
+        settings.data_dir.mkdir(parents=True, exist_ok=True)
+        return _DbState(init_db(make_engine(settings.effective_database_url))), settings
+
+    def _fail(message: str) -> None:
+        typer.secho(f"error: {message}", fg="red", err=True)
+        raise typer.Exit(2)
+
+    @baseline_app.command("show")
+    def show(asset_id: str = typer.Argument(..., help="The asset."),
+             as_json: bool = typer.Option(False, "--json", help="Print it as JSON (what `rotordiag diagnose "
+                                          "--baseline` reads; the same as GET /assets/{id}/baseline).")) -> None:
+        """Show an asset's baseline (or the automatic proposal) and its alarm thresholds."""
+        import json
+
+        from rotordiag.service.baseline import baseline_dict, propose, rule_for
+        from rotordiag.service.errors import InputError
+        from rotordiag.service.store import get_baseline, get_thresholds
+
+        state, _ = _open()
+        with state.sessions() as s:
+            row = get_baseline(s, asset_id)
+            out: dict = {"asset_id": asset_id, "baseline": baseline_dict(row) if row is not None else None,
+                         "thresholds": rule_for(s, asset_id).thresholds,
+                         "edited_thresholds": get_thresholds(s, asset_id)}
+            if row is None:
+                try:
+                    p = propose(s, asset_id)
+                    out["proposal"] = {"diagnosis_ids": p["diagnosis_ids"], "speed_rpm": p["speed_rpm"]}
+                except InputError as exc:
+                    out["proposal"] = {"reason": str(exc)}
+        if as_json:
+            typer.echo(json.dumps(out, indent=2, default=str))
+            return
+        b = out["baseline"]
+        if b is None:
+            typer.echo(f"asset {asset_id}: no baseline")
+            p = out["proposal"]
+            typer.echo(f"  automatic proposal: diagnoses {p['diagnosis_ids']} at {p['speed_rpm']:.0f} r/min "
+                       f"(`rotordiag baseline set {asset_id} --auto`)" if "diagnosis_ids" in p else f"  {p['reason']}")
+        else:
+            speed = "unknown" if b["speed_rpm"] is None else f"{b['speed_rpm']:.0f} r/min"
+            typer.echo(f"asset {asset_id}: baseline set {b['set_at']} from {b['source']} (diagnoses "
+                       f"{b['diagnosis_ids']}), speed {speed} (compared within ±5 %), model {b['model_version']}")
+        typer.echo("  alarm thresholds: " + ", ".join(f"{k} {v:.3g}" for k, v in out["thresholds"].items()
+                                                      if v is not None))
+
+    @baseline_app.command("set")
+    def set_(
+        asset_id: str = typer.Argument(..., help="The asset."),
+        recording: Optional[Path] = typer.Argument(None, help="A recording (as `rotordiag diagnose` reads: CSV, NPY, "
+                                                   "HDF5, JSON; options from its sidecar JSON or below)."),
+        diagnosis_id: Optional[int] = typer.Option(None, "--diagnosis-id", help="A stored diagnosis of the asset."),
+        auto: bool = typer.Option(False, "--auto", help="The average of the asset's first --n stored recordings."),
+        n: int = typer.Option(3, "--n", min=1, max=50, help="With --auto: recordings to average."),
+        sample_rate_hz: Optional[float] = typer.Option(None, "--sample-rate-hz"),
+        units: Optional[str] = typer.Option(None, "--units"),
+        speed_rpm: Optional[float] = typer.Option(None, "--speed-rpm"),
+        clearance_um: Optional[float] = typer.Option(None, "--clearance-um"),
+        channels: Optional[str] = typer.Option(None, "--channels", help="BEARING@ANGLE list, as `rotordiag diagnose`."),
+    ) -> None:
+        """Set (or replace) an asset's baseline: from a recording, --diagnosis-id or --auto."""
+        from rotordiag.service.baseline import from_diagnosis, record_verdict, set_auto
+        from rotordiag.service.errors import InputError
+
+        if sum([recording is not None, diagnosis_id is not None, auto]) != 1:
+            _fail("give exactly one of a RECORDING, --diagnosis-id or --auto")
+        state, settings = _open()
+        try:
+            if diagnosis_id is not None:
+                b = from_diagnosis(state, asset_id, diagnosis_id)  # type: ignore[arg-type]
+            elif auto:
+                b = set_auto(state, asset_id, n)  # type: ignore[arg-type]
+            else:
+                from rotordiag.features.reader import read_recording
+                from rotordiag.models.diagnose_files import CLI_LIMITS, load_options
+                from rotordiag.service.inference import ModelStore
+
+                assert recording is not None
+                opts = load_options(recording, None, {"sample_rate_hz": sample_rate_hz, "units": units,
+                                                      "speed_rpm": speed_rpm, "clearance_um": clearance_um,
+                                                      "channels": channels})
+                rec = read_recording(recording, options=opts, limits=CLI_LIMITS).recording
+                verdict = ModelStore.open(settings).diagnose(rec)
+                did = record_verdict(state, asset_id, None, verdict)  # type: ignore[arg-type]
+                assert did is not None
+                b = from_diagnosis(state, asset_id, did, "recording")  # type: ignore[arg-type]
+        except InputError as exc:
+            _fail(str(exc))
+        except ValueError as exc:
+            _fail(f"{recording}: {exc}")
+        typer.echo(f"asset {asset_id}: baseline set from {b['source']} (diagnoses {b['diagnosis_ids']}), speed "
+                   f"{b['speed_rpm']:.0f} r/min, model {b['model_version']}" if b["speed_rpm"] is not None else
+                   f"asset {asset_id}: baseline set from {b['source']} (diagnoses {b['diagnosis_ids']})")
+
+    @baseline_app.command("clear")
+    def clear(asset_id: str = typer.Argument(..., help="The asset.")) -> None:
+        """Remove an asset's baseline (its diagnoses stay)."""
+        from rotordiag.service.store import delete_baseline
+
+        state, _ = _open()
+        if not delete_baseline(state, asset_id):  # type: ignore[arg-type]
+            _fail(f"asset {asset_id!r} has no baseline")
+        typer.echo(f"asset {asset_id}: baseline removed")
+
+
+class _DbState:
+    """The part of ``AppState`` that the baseline functions use (the database), for the CLI."""
+
+    def __init__(self, sessions) -> None:
+        self.sessions = sessions

@@ -157,7 +157,8 @@ class ModelStore:
 
         The verdict (``models.predict.Verdict``) is returned as is, plus
         ``bearings`` (the features package's per-bearing details) and
-        ``key_features`` (the contributing features' values, stored in asset history).
+        ``key_features`` (the contributing features' values, stored in asset history) and
+        ``signature`` (``features.signature``: what an asset baseline compares).
 
         Raises
         ------
@@ -166,7 +167,7 @@ class ModelStore:
         ModelUnavailable
             No model to diagnose with.
         """
-        from rotordiag.features import extract_features
+        from rotordiag.features import extract_features, signature
         from rotordiag.models.predict import diagnose
 
         bundle = self.load(version)
@@ -182,6 +183,7 @@ class ModelStore:
         out["model_version"] = out.get("model_version") or bundle.version
         out["bearings"] = _bearings(fr)
         out["key_features"] = {f["name"]: f["value"] for f in out.get("top_features", [])}
+        out["signature"] = signature(fr)   # for the asset baseline (service.baseline takes it out of the answer)
         return out
 
 

@@ -1,4 +1,6 @@
-"""Prometheus metrics: request latency histograms (prometheus-fastapi-instrumentator) plus job counts.
+"""Prometheus metrics: request latency histograms (prometheus-fastapi-instrumentator) plus job counts and,
+per asset with a baseline, the latest change against it (``rotordiag_asset_change{asset, quantity}``) and
+its trend alarm (``rotordiag_asset_alarm{asset}``).
 
 Each app gets its own ``CollectorRegistry`` so several apps (tests) can live in one process.
 """
@@ -32,6 +34,28 @@ class _JobCollector:
         if version is not None:
             model.add_metric([version], 1)
         yield model
+        yield from _asset_metrics(state)
+
+
+def _asset_metrics(state):
+    """The change quantities (largest over the bearings; µm, µm pk-pk or 1) of each asset's latest diagnosis
+    compared with its baseline, and whether its trend alarm is raised (1) or not (0)."""
+    from rotordiag.models.change import QUANTITIES
+
+    from .store import latest_changes
+
+    change = GaugeMetricFamily("rotordiag_asset_change", "Latest change against the asset's baseline, per quantity "
+                               "(largest over the bearings; units as the quantity name).", labels=["asset", "quantity"])
+    alarm = GaugeMetricFamily("rotordiag_asset_alarm", "1 while the asset's trend alarm is raised.", labels=["asset"])
+    with state.sessions() as s:
+        rows = latest_changes(s)
+    for asset, ch in rows:
+        for q, info in (ch.get("quantities") or {}).items():
+            if isinstance(info, dict) and info.get("value") is not None:
+                change.add_metric([asset, QUANTITIES[q][0] if q in QUANTITIES else q], float(info["value"]))
+        alarm.add_metric([asset], 1.0 if ch.get("changed") else 0.0)
+    yield change
+    yield alarm
 
 
 def install_metrics(app: FastAPI) -> None:

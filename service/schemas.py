@@ -147,8 +147,90 @@ class JobOut(BaseModel):
 
 # --- assets ---------------------------------------------------------------------------------
 
+class ChangeQuantityOut(BaseModel):
+    """One change quantity against the baseline (largest over the bearings)."""
+
+    value: float | None = Field(None, description="Largest value over the bearings (µm, µm pk-pk or 1: see `unit`).")
+    unit: str = Field(..., description="Unit of `value` and `threshold`.")
+    bearing: int | None = Field(None, description="Bearing of the largest value.")
+    threshold: float | None = Field(None, description="Alarm threshold (null: not alarmed on).")
+    value_per_c: float | None = Field(None, description="`value` as a fraction of the radial clearance, when known.")
+    threshold_per_c: float | None = Field(None, description="Alarm threshold on `value_per_c` (both must be exceeded).")
+    exceeded: bool = Field(..., description="Over the threshold(s).")
+
+
+class BaselineSectionOut(BaseModel):
+    """Whether a baseline was used for this answer, and what changed since it."""
+
+    used: bool = Field(..., description="True when the recording was compared with the asset's baseline.")
+    compared: bool = Field(..., description="Same as `used` (false also when the speed is too far from the baseline's).")
+    message: str = Field(..., description="One sentence: no baseline / not compared and why / changed or not.")
+    set_at: str | None = Field(None, description="When the baseline was set (UTC, ISO 8601).")
+    speed_rpm: float | None = Field(None, description="Speed of the baseline, r/min.")
+    model_version: str | None = Field(None, description="Model version that diagnosed the baseline recording(s).")
+    source: str | None = Field(None, description="`recording`, `diagnosis` or `auto`.")
+    changed: bool | None = Field(None, description="True when a change quantity is over its alarm threshold "
+                                 "(null when not compared).")
+    exceeded: list[str] = Field(default_factory=list, description="The quantities over their thresholds.")
+    quantities: dict[str, ChangeQuantityOut] = Field(default_factory=dict, description="`1x_change`, `2x_change`, "
+                                                     "`dc_shift`, `orbit_ellipticity_change`, `orbit_2x_1x_change`.")
+    values: dict[str, float | None] = Field(default_factory=dict, description="Every change feature "
+                                            "(features.change_features: per bearing and probe direction).")
+    speed_change_frac: float | None = Field(None, description="speed / baseline speed − 1.")
+    notes: list[str] = Field(default_factory=list, description="Why some change quantities are missing.")
+
+
+class AlarmEvent(BaseModel):
+    """A trend alarm raised or cleared."""
+
+    time: dt.datetime = Field(..., description="Time of the diagnosis that raised or cleared it (UTC).")
+    event: Literal["raised", "cleared"] = Field(..., description="What happened.")
+    diagnosis_id: int = Field(..., description="The diagnosis.")
+    quantities: list[str] = Field(default_factory=list, description="Quantities over their thresholds (raised).")
+
+
+class BaselineOut(BaseModel):
+    """An asset's baseline."""
+
+    model_config = ConfigDict(protected_namespaces=())
+
+    asset_id: str = Field(..., description="The asset.")
+    set_at: str | None = Field(None, description="When it was set (UTC).")
+    recorded_at: str | None = Field(None, description="When its (last) recording was diagnosed (UTC).")
+    source: str = Field(..., description="`recording`, `diagnosis` or `auto`.")
+    diagnosis_ids: list[int] = Field(..., description="Stored diagnoses it was made of.")
+    speed_rpm: float | None = Field(None, description="Its speed, r/min; recordings are compared within ±5 %.")
+    model_version: str = Field(..., description="Model version that diagnosed its recording(s).")
+    signature: dict[str, Any] | None = Field(None, description="The 1X/2X vectors, centreline and orbit shape per "
+                                             "bearing (features.signature).")
+
+
+class AssetBaselineOut(BaseModel):
+    """GET /assets/{id}/baseline: the baseline, or the automatic proposal when none is set."""
+
+    asset_id: str = Field(..., description="The asset.")
+    baseline: BaselineOut | None = Field(None, description="The baseline (null: none set).")
+    proposal: dict[str, Any] | None = Field(None, description="When none is set: the automatic proposal "
+                                            "(`diagnosis_ids`, `speed_rpm`) or why there is none (`reason`).")
+    thresholds: dict[str, float | None] = Field(..., description="The alarm thresholds in force.")
+    edited_thresholds: dict[str, float | None] = Field(..., description="This asset's edits of them.")
+
+
+class ThresholdsIn(_Strict):
+    """PUT /assets/{id}/thresholds: alarm thresholds to override (null: do not alarm on it)."""
+
+    thresholds: dict[str, float | None] = Field(..., description="Change-feature name → threshold, e.g. "
+                                                "`{\"dc_shift_um\": 25}`; `{}` restores the shipped thresholds.")
+
+
 class AssetPoint(BaseModel):
     """One stored diagnosis of an asset."""
+
+    id: int | None = Field(None, description="Diagnosis id (for POST /assets/{id}/baseline?diagnosis_id=).")
+    alarm: bool | None = Field(None, description="Trend alarm state after this diagnosis: true changed since the "
+                               "baseline, false compared and unchanged, null not compared.")
+    change: dict[str, Any] | None = Field(None, description="The comparison with the baseline (as `baseline` in the "
+                                          "/diagnose answer, without evidence), when compared.")
 
     time: dt.datetime = Field(..., description="When the diagnosis was made (UTC).")
     severity: str = Field(..., description="Severity class.")
@@ -172,6 +254,8 @@ class AssetHistory(BaseModel):
     asset_id: str = Field(..., description="The asset.")
     count: int = Field(..., description="Number of points returned.")
     points: list[AssetPoint] = Field(..., description="Diagnoses, oldest first.")
+    alarms: list[AlarmEvent] = Field(default_factory=list, description="Trend alarms raised and cleared among "
+                                     "these points, oldest first.")
 
 
 # --- health ---------------------------------------------------------------------------------
@@ -286,6 +370,10 @@ class DiagnoseResponse(BaseModel):
     bands: dict[str, Any] = Field(..., description="The model's severity bands: `edges` (Δ) and `names`.")
     warnings: list[str] = Field(..., description="Anything that makes the verdict less certain.")
     bearings: list[BearingOut] = Field(..., description="Per-bearing key features from the features package.")
+    diagnosis_id: int | None = Field(None, description="With an `asset_id`: the id of the stored diagnosis.")
+    baseline: BaselineSectionOut | None = Field(None, description="With an `asset_id`: whether the asset's baseline "
+                                                "was used, its date, and what changed since it (the change items are "
+                                                "also in `evidence`, scope `change since baseline`).")
     key_features: dict[str, float | None] = Field(..., description="Values of `top_features` by name (stored in the "
                                                   "asset history).")
 

@@ -184,7 +184,7 @@ def test_plot_data_follows_the_diagnose_key_setting(keyed, plain, rec):
     assert plain.post("/ui/plot-data", json=body).status_code == 200
 
 
-@pytest.mark.parametrize("path", ["/models/retrain", "/datasets", "/diagnose"])
+@pytest.mark.parametrize("path", ["/models/retrain", "/datasets", "/diagnose", "/assets/pump-1/baseline"])
 def test_keyless_write_bodies_are_refused_before_a_byte_is_read(keyed, path):
     """Drive the ASGI app directly and count what it pulls from ``receive``: nothing without a key."""
     app = keyed.app

@@ -513,3 +513,37 @@ def test_lengths_in_mils(server, browser):
     _screenshot(browser, "lengths-in-mils")
     reasons = browser.find_element("id", "verdict-reasons").text
     assert "speed_rpm" not in reasons and "keyphasor_times_s" not in reasons, reasons
+
+
+def test_baseline_and_change_are_shown(server, browser, recordings, tmp_path):
+    """An asset with a baseline (set through the API from its first diagnosis): a later, more misaligned
+    recording diagnosed on the page shows that the baseline was used and what changed; the trend shows
+    the baseline and the raised alarm."""
+    asset = "web-base-1"
+    body = {"sample_rate_hz": FS_HZ, "clearance_um": CLEARANCE_UM, "asset_id": asset, **_json_body(recordings[0.05])}
+    req = urllib.request.Request(server + "/diagnose", data=json.dumps(body).encode(),
+                                 headers={"Content-Type": "application/json"})
+    with urllib.request.urlopen(req, timeout=120) as r:
+        first = json.loads(r.read())
+    req = urllib.request.Request(f"{server}/assets/{asset}/baseline?diagnosis_id={first['diagnosis_id']}",
+                                 data=b"", method="POST", headers={"X-API-Key": "web-test-key"})
+    with urllib.request.urlopen(req, timeout=60) as r:
+        base = json.loads(r.read())
+    assert base["source"] == "diagnosis"
+
+    _open(browser, server)
+    _submit_file(browser, _write_npy(tmp_path / "later.npy", recordings[0.45]), asset=asset,
+                 sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
+    box = browser.find_element("id", "verdict-baseline")
+    assert box.is_displayed()
+    assert f"Baseline of {base['set_at']} used" in box.text and "changed since the baseline" in box.text
+    assert "changed" in box.get_attribute("class").split()
+    rows = browser.find_elements("css selector", "#verdict-evidence tbody tr")
+    assert any(r.text.startswith("change since baseline") and "CHANGED" in r.text for r in rows)
+    _wait(browser, lambda d: d.find_element("id", "trend-baseline-box").is_displayed(), 30, "the baseline in the trend")
+    assert "from diagnosis" in browser.find_element("id", "trend-baseline").text
+    alarms = browser.find_element("id", "trend-alarms").text
+    status, history = _get(f"{server}/assets/{asset}/history")
+    assert history["alarms"][0]["event"] == "raised"
+    assert f"alarm raised ({', '.join(history['alarms'][0]['quantities'])})" in alarms
+    _screenshot(browser, "baseline-changed")

@@ -1,4 +1,5 @@
-"""Database engine, session factory and the two tables: jobs and asset diagnoses (SQLAlchemy 2)."""
+"""Database engine, session factory and the tables: jobs, asset diagnoses, asset baselines and asset
+alarm settings (SQLAlchemy 2); :func:`init_db` adds columns that an older database lacks."""
 from __future__ import annotations
 
 import datetime as dt
@@ -74,6 +75,37 @@ class AssetDiagnosis(Base):
     ood: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
     verdict: Mapped[dict[str, Any]] = mapped_column(JSON)             # the full verdict as returned
     key_features: Mapped[dict[str, Any]] = mapped_column(JSON)
+    # features.signature of the recording (what a baseline is made of); None for rows stored before issue 17
+    signature: Mapped[dict[str, Any] | None] = mapped_column(JSON(none_as_null=True), nullable=True)
+    # the comparison with the asset's baseline (models.change.compare, without its evidence) and the alarm
+    # state it gave: True changed, False compared and unchanged, None not compared
+    change: Mapped[dict[str, Any] | None] = mapped_column(JSON(none_as_null=True), nullable=True)
+    alarm: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
+
+
+class AssetBaseline(Base):
+    """An asset's known-good reference state (issue 17): one per asset, replaced by a new one."""
+
+    __tablename__ = "asset_baselines"
+
+    asset_id: Mapped[str] = mapped_column(String(128), primary_key=True)
+    created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow)
+    source: Mapped[str] = mapped_column(String(16))                    # "recording" | "diagnosis" | "auto"
+    diagnosis_ids: Mapped[list[int]] = mapped_column(JSON)             # the stored diagnoses it was made of
+    recorded_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime(), nullable=True)  # of the (last) recording
+    speed_rpm: Mapped[float | None] = mapped_column(Float, nullable=True)
+    model_version: Mapped[str] = mapped_column(String(128))
+    signature: Mapped[dict[str, Any]] = mapped_column(JSON)
+
+
+class AssetSettings(Base):
+    """Per-asset alarm thresholds on the change (overrides of ``models.change``'s shipped ones)."""
+
+    __tablename__ = "asset_settings"
+
+    asset_id: Mapped[str] = mapped_column(String(128), primary_key=True)
+    thresholds: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
+    updated_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow, onupdate=utcnow)
 
 
 def make_engine(url: str) -> Engine:
@@ -94,6 +126,30 @@ def make_engine(url: str) -> Engine:
 
 
 def init_db(engine: Engine) -> sessionmaker:
-    """Create missing tables and return a session factory."""
+    """Create missing tables, add missing (nullable) columns to existing ones, return a session factory."""
     Base.metadata.create_all(engine)
+    add_missing_columns(engine)
     return sessionmaker(engine, expire_on_commit=False)
+
+
+def add_missing_columns(engine: Engine) -> list[str]:
+    """Schema migration for databases made by an older version: ``ALTER TABLE … ADD COLUMN`` for every
+    nullable column of the models that a table lacks (new columns are always nullable). Returns
+    ``table.column`` of each column added."""
+    from sqlalchemy import inspect, text
+
+    added = []
+    insp = inspect(engine)
+    with engine.begin() as conn:
+        for table in Base.metadata.sorted_tables:
+            have = {c["name"] for c in insp.get_columns(table.name)}
+            for col in table.columns:
+                if col.name in have:
+                    continue
+                if not col.nullable:
+                    raise RuntimeError(f"database table {table.name} lacks the required column {col.name}; "
+                                       "it cannot be added in place")
+                ddl = col.type.compile(dialect=engine.dialect)
+                conn.execute(text(f'ALTER TABLE "{table.name}" ADD COLUMN "{col.name}" {ddl}'))
+                added.append(f"{table.name}.{col.name}")
+    return added

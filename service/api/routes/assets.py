@@ -1,18 +1,33 @@
-"""GET /assets/{asset_id}/history."""
+"""GET /assets/{asset_id}/history; the asset baseline (GET/POST/DELETE /assets/{asset_id}/baseline) and
+alarm thresholds (GET/PUT /assets/{asset_id}/thresholds)."""
 from __future__ import annotations
 
 import datetime as dt
 from typing import Annotated
 
-from fastapi import APIRouter, Path, Query
+from fastapi import APIRouter, Path, Query, Request
+from fastapi.concurrency import run_in_threadpool
 from pydantic import BeforeValidator
 
-from ...schemas import MAX_LABEL_LEN, AssetHistory, AssetPoint, ErrorOut
-from ...store import asset_history
-from ..deps import SessionDep
+from ...baseline import AUTO_N, alarm_events, baseline_dict, from_diagnosis, propose, record_verdict, rule_for, set_auto
+from ...schemas import (
+    MAX_LABEL_LEN,
+    AssetBaselineOut,
+    AssetHistory,
+    AssetPoint,
+    BaselineOut,
+    ErrorOut,
+    ThresholdsIn,
+)
+from ...store import asset_history, delete_baseline, get_baseline, get_thresholds, put_thresholds
+from ..deps import ApiKeyDep, JsonBodyDep, SessionDep, StateDep
 from ..errors import InputError
+from .diagnose import ReaderQueryDep
 
 router = APIRouter(tags=["assets"])
+
+AssetPath = Annotated[str, Path(min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:-]+$",
+                                description="The `asset_id` sent with /diagnose.")]
 
 
 def _iso_time(value: object) -> object:
@@ -30,8 +45,7 @@ def _iso_time(value: object) -> object:
             responses={404: {"model": ErrorOut, "description": "No diagnosis stored for this asset."}},
             summary="Trend of an asset's diagnoses")
 def history(
-    asset_id: Annotated[str, Path(min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:-]+$",
-                                  description="The `asset_id` sent with /diagnose.")],
+    asset_id: AssetPath,
     session: SessionDep,
     limit: Annotated[int, Query(ge=1, le=10_000, description="Most recent points to return.")] = 500,
     since: Annotated[dt.datetime | None, BeforeValidator(_iso_time), Query(description="Only points at or after this time (ISO 8601; "
@@ -41,11 +55,11 @@ def history(
     if not rows and since is None:
         raise InputError(f"no diagnosis stored for asset {asset_id!r}; POST /diagnose with \"asset_id\": "
                          f"\"{asset_id}\" to start its history", "not_found")
-    points = [AssetPoint(time=r.created_at, severity=r.severity, misalignment=r.misalignment,
+    points = [AssetPoint(id=r.id, alarm=r.alarm, change=r.change, time=r.created_at, severity=r.severity, misalignment=r.misalignment,
                          misalignment_low=r.misalignment_low, misalignment_high=r.misalignment_high,
                          speed_rpm=r.speed_rpm, ood=r.ood, model_version=r.model_version, plant=r.plant,
                          key_features=r.key_features, amplitudes_um_pp=_amplitudes(r.verdict)) for r in rows]
-    return AssetHistory(asset_id=asset_id, count=len(points), points=points)
+    return AssetHistory(asset_id=asset_id, count=len(points), points=points, alarms=alarm_events(rows))
 
 
 def _amplitudes(verdict: dict | None) -> dict[str, float | None]:
@@ -57,3 +71,110 @@ def _amplitudes(verdict: dict | None) -> dict[str, float | None]:
             if name in feats:
                 out[name] = feats[name]
     return out
+
+
+_BASELINE_ERRORS: dict[int | str, dict] = {
+    400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
+    401: {"model": ErrorOut, "description": "No X-API-Key header."},
+    403: {"model": ErrorOut, "description": "Wrong API key."},
+    404: {"model": ErrorOut, "description": "No such diagnosis of this asset / no baseline to delete."},
+    409: {"model": ErrorOut, "description": "No automatic baseline possible (too few recordings, or not at one "
+          "operating condition), or the diagnosis keeps no signature."},
+    413: {"model": ErrorOut, "description": "Body over the size limit."},
+    415: {"model": ErrorOut, "description": "Content-Type is not JSON, NPY or multipart."},
+    422: {"model": ErrorOut, "description": "The recording cannot be diagnosed; `detail` says what to fix."},
+}
+
+
+@router.get("/assets/{asset_id}/baseline", response_model=AssetBaselineOut, summary="An asset's baseline")
+def get_asset_baseline(asset_id: AssetPath, session: SessionDep) -> AssetBaselineOut:
+    """The baseline (with its signature), or, when none is set, the automatic proposal (the first
+    recordings at one operating condition) or why there is none; and the alarm thresholds in force."""
+    row = get_baseline(session, asset_id)
+    proposal = None
+    if row is None:
+        try:
+            p = propose(session, asset_id)
+            proposal = {"diagnosis_ids": p["diagnosis_ids"], "speed_rpm": p["speed_rpm"], "n": AUTO_N,
+                        "how": f"POST /assets/{asset_id}/baseline?auto=true"}
+        except InputError as exc:
+            proposal = {"reason": str(exc)}
+    return AssetBaselineOut(asset_id=asset_id,
+                            baseline=BaselineOut(**baseline_dict(row)) if row is not None else None,
+                            proposal=proposal, thresholds=rule_for(session, asset_id).thresholds,
+                            edited_thresholds=get_thresholds(session, asset_id))
+
+
+@router.post(
+    "/assets/{asset_id}/baseline", response_model=BaselineOut, responses=_BASELINE_ERRORS, dependencies=[ApiKeyDep],
+    summary="Set (or replace) an asset's baseline",
+    description="Three ways, e.g. right after an alignment job: `?diagnosis_id=N` (a stored diagnosis of the asset, "
+    "see GET /assets/{id}/history), `?auto=true` (the average of its first `n` stored recordings, refused unless "
+    "they lie within ±5 % of their median speed), or a recording in the body — the same forms and query "
+    "parameters as POST /diagnose; it is diagnosed, stored in the asset's history and made the baseline. The "
+    "API key is checked before the body is read.",
+    openapi_extra={"requestBody": {"required": False, "content": {
+        "application/json": {"schema": {"$ref": "#/components/schemas/DiagnoseRequest"}},
+        "application/octet-stream": {"schema": {"type": "string", "format": "binary"}},
+        "multipart/form-data": {"schema": {"type": "object", "properties": {
+            "file": {"type": "string", "format": "binary"}}}}}}},
+)
+async def set_asset_baseline(
+    request: Request, asset_id: AssetPath, state: StateDep, reader: ReaderQueryDep,
+    diagnosis_id: Annotated[int | None, Query(ge=1, description="Make this stored diagnosis the baseline.")] = None,
+    auto: Annotated[bool, Query(description="Make the automatic proposal the baseline.")] = False,
+    n: Annotated[int, Query(ge=1, le=50, description="With `auto`: recordings to average.")] = AUTO_N,
+    sample_rate_hz: Annotated[float | None, Query(gt=0, le=1e6, allow_inf_nan=False)] = None,
+    speed_rpm: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False)] = None,
+    clearance_um: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False)] = None,
+    units: Annotated[str | None, Query(min_length=1, max_length=16)] = None,
+    bearings: Annotated[str | None, Query(max_length=64, pattern=r"^[0-9, ]*$")] = None,
+    angles_deg: Annotated[str | None, Query(max_length=256)] = None,
+    keyphasor_times_s: Annotated[str | None, Query(max_length=200_000)] = None,
+) -> dict:
+    if diagnosis_id is not None and auto:
+        raise InputError("give either diagnosis_id or auto=true, not both")
+    if diagnosis_id is not None:
+        return await run_in_threadpool(from_diagnosis, state, asset_id, diagnosis_id)
+    if auto:
+        return await run_in_threadpool(set_auto, state, asset_id, n)
+    if not request.headers.get("content-type"):
+        raise InputError("send a recording in the body (as for POST /diagnose), or use ?diagnosis_id= or ?auto=true")
+    from .diagnose import diagnose_from_request
+
+    query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=asset_id,
+                 plant=None, units=units, bearings=bearings, angles_deg=angles_deg,
+                 keyphasor_times_s=keyphasor_times_s, sample_index=0, **reader)
+    verdict, body_asset = await diagnose_from_request(request, state, query, None, store=False)
+    if body_asset is not None and body_asset != asset_id:
+        raise InputError(f"the body's asset_id {body_asset!r} is not the asset of the path ({asset_id!r})")
+    verdict.pop("baseline", None)
+    did = await run_in_threadpool(record_verdict, state, asset_id, None, verdict)
+    assert did is not None
+    return await run_in_threadpool(from_diagnosis, state, asset_id, did, "recording")
+
+
+@router.delete("/assets/{asset_id}/baseline", status_code=204, dependencies=[ApiKeyDep],
+               responses=_BASELINE_ERRORS, summary="Remove an asset's baseline")
+def delete_asset_baseline(asset_id: AssetPath, state: StateDep) -> None:
+    if not delete_baseline(state, asset_id):
+        raise InputError(f"asset {asset_id!r} has no baseline", "not_found")
+
+
+@router.put("/assets/{asset_id}/thresholds", response_model=AssetBaselineOut,
+            dependencies=[ApiKeyDep, JsonBodyDep], responses=_BASELINE_ERRORS,
+            summary="Edit an asset's alarm thresholds on the change")
+def put_asset_thresholds(asset_id: AssetPath, body: ThresholdsIn, state: StateDep, session: SessionDep):
+    """Override some of the shipped thresholds (`models/default/change_thresholds.json`) for this asset;
+    `{}` restores them. Names: those of GET /assets/{id}/baseline's `thresholds`."""
+    from rotordiag.models.change import shipped_rule
+
+    try:
+        shipped_rule().with_overrides(body.thresholds)
+    except ValueError as exc:
+        raise InputError(f"thresholds: {exc}") from None
+    bad = [k for k, v in body.thresholds.items() if v is not None and not (v >= 0 and v < 1e9)]
+    if bad:
+        raise InputError(f"thresholds: {', '.join(bad)} must be a non-negative number (or null to not alarm on it)")
+    put_thresholds(state, asset_id, body.thresholds)
+    return get_asset_baseline(asset_id, session)

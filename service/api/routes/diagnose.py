@@ -12,10 +12,10 @@ from fastapi.concurrency import run_in_threadpool
 
 from rotordiag.models.output_units import verdict_in_units
 
+from ...baseline import record_verdict
 from ...inference import ModelUnavailable
 from ...parsing import checked, parse_batch, parse_body, recording_from_model
 from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
-from ...store import store_diagnosis
 from ..deps import DiagnoseKeyDep, JsonBodyDep, ModelsDep, StateDep
 from ..errors import STATUS_OF_KIND, InputError, RequestInvalid, raise_worker_error
 from ..routing import FiniteJSONRoute
@@ -178,7 +178,7 @@ async def recording_answer(request: Request, state, query: dict[str, Any], name:
     return await anyio.to_thread.run_sync(run, limiter=_diagnosis_limiter(state))
 
 
-def _diagnose_sync(state, recording, asset_id: str | None, plant: str | None, version: str | None) -> dict:
+def _diagnose_sync(state, recording, version: str | None) -> dict:
     try:
         verdict = state.models.diagnose(recording, version)
     except ModelUnavailable as exc:
@@ -187,8 +187,6 @@ def _diagnose_sync(state, recording, asset_id: str | None, plant: str | None, ve
         raise HTTPException(503, str(exc)) from None
     except ValueError as exc:  # the features/models packages' messages for bad recordings
         raise InputError(str(exc)) from None
-    if asset_id is not None:
-        store_diagnosis(state, asset_id, plant, verdict)
     return verdict
 
 
@@ -252,24 +250,26 @@ async def diagnose(
     query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=asset_id,
                  plant=plant, units=units, bearings=bearings, angles_deg=angles_deg,
                  keyphasor_times_s=keyphasor_times_s, sample_index=sample_index, **reader)
-    kind, body, filename, slow_roll = await _read_body(request, slow_roll=True)
     query.update(slow_roll_sample_rate_hz=slow_roll_sample_rate_hz, slow_roll_keyphasor_times_s=slow_roll_keyphasor_times_s)
-    if state.pool is not None:
-        verdict = await _diagnose_in_pool(state, kind, body, filename, query, slow_roll, model_version)
-    else:
-        verdict = await anyio.to_thread.run_sync(_parse_and_diagnose, state, kind, body, filename, query,
-                                                 slow_roll, model_version, limiter=_diagnosis_limiter(state))
+    verdict, _ = await diagnose_from_request(request, state, query, model_version, slow_roll_allowed=True)
     return verdict_in_units(verdict, output_units)   # stored in µm; answered in the units asked for
 
 
-async def _diagnose_in_pool(state, kind: str, body: bytes, filename: str, query: dict[str, Any],
-                            slow_roll: tuple[bytes, str] | None, version: str | None) -> dict:
-    """Parse and diagnose in a worker process (``service.pool``, which bounds the requests in flight
-    per worker); store the result here."""
-    _, verdict, asset_id, plant = await in_worker(state, "work", kind, body, filename, query, slow_roll, version)
-    if asset_id is not None:
-        await run_in_threadpool(store_diagnosis, state, asset_id, plant, verdict)
-    return verdict
+async def diagnose_from_request(request: Request, state, query: dict[str, Any], version: str | None,
+                                store: bool = True, slow_roll_allowed: bool = False) -> tuple[dict, str | None]:
+    """Read the body, parse and diagnose it in a worker process (``service.pool``, which bounds the requests
+    in flight per worker) or a thread; with ``store``, compare with the asset's baseline and store the result
+    here (``service.baseline.record_verdict``). Returns the verdict and the request's asset id."""
+    kind, body, filename, slow_roll = await _read_body(request, slow_roll=slow_roll_allowed)
+    if state.pool is not None:
+        _, verdict, asset_id, plant = await in_worker(state, "work", kind, body, filename, query, slow_roll, version)
+    else:
+        verdict, asset_id, plant = await anyio.to_thread.run_sync(_parse_and_diagnose, state, kind, body, filename,
+                                                                  query, slow_roll, version,
+                                                                  limiter=_diagnosis_limiter(state))
+    if store:
+        await run_in_threadpool(record_verdict, state, asset_id, plant, verdict)
+    return verdict, asset_id
 
 
 def _diagnosis_limiter(state) -> anyio.CapacityLimiter:
@@ -281,9 +281,10 @@ def _diagnosis_limiter(state) -> anyio.CapacityLimiter:
     return limiter
 
 
-def _parse_and_diagnose(state, kind, body, filename, query, slow_roll, model_version) -> dict:
+def _parse_and_diagnose(state, kind, body, filename, query, slow_roll,
+                        model_version) -> tuple[dict, str | None, str | None]:
     recording, asset_id, plant = parse_body(kind, body, filename, query, slow_roll)
-    return _diagnose_sync(state, recording, asset_id, plant, model_version)
+    return _diagnose_sync(state, recording, model_version), asset_id, plant
 
 
 _BATCH_BODY = {"requestBody": {"required": True, "content": {
@@ -339,8 +340,7 @@ async def _batch_item(state, i: int, record: dict[str, Any], version: str | None
         if exc.status_code >= 500:
             raise
         return BatchItem(index=i, status_code=exc.status_code, error=str(exc.detail))
-    if asset_id is not None:
-        await run_in_threadpool(store_diagnosis, state, asset_id, plant, verdict)
+    await run_in_threadpool(record_verdict, state, asset_id, plant, verdict)
     return BatchItem(index=i, status_code=200, result=verdict)
 
 
@@ -349,7 +349,8 @@ def _batch_sync(state, records, model_version: str | None) -> list[BatchItem]:
     for i, rec in enumerate(records):
         try:
             recording = checked(recording_from_model, rec)
-            verdict = _diagnose_sync(state, recording, rec.asset_id, rec.plant, model_version)
+            verdict = _diagnose_sync(state, recording, model_version)
+            record_verdict(state, rec.asset_id, rec.plant, verdict)
             items.append(BatchItem(index=i, status_code=200, result=verdict))
         except InputError as exc:
             items.append(BatchItem(index=i, status_code=STATUS_OF_KIND[exc.kind], error=str(exc)))

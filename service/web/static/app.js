@@ -499,6 +499,7 @@
         `(OOD score ${num(v.ood_score)}, flagged above 1). Treat the verdict with caution.`;
     }
     show(ood, Boolean(v.ood));
+    renderBaselineSection(v.baseline);
     const tb = $("verdict-probs").tBodies[0];
     tb.replaceChildren();
     const ranges = Object.fromEntries(bandRanges(v.bands || {}));
@@ -521,6 +522,18 @@
     const wl = $("verdict-warnings");
     wl.replaceChildren(...(v.warnings || []).map((w) => el("li", { text: plainWords(w) })));
     show($("verdict"), true);
+  }
+
+  // the answer's baseline section: whether the asset's baseline was used, its date, what changed
+  function renderBaselineSection(b) {
+    const box = $("verdict-baseline");
+    if (!b) { show(box, false); return; }
+    box.className = "baseline " + (b.changed ? "changed" : (b.used ? "unchanged" : "none"));
+    const parts = [b.used ? `Baseline of ${b.set_at} used (${b.source}, ${fixed(b.speed_rpm, 0)} r/min).` :
+      "No baseline used."];
+    parts.push(plainWords(b.message));
+    box.textContent = parts.join(" ");
+    show(box, true);
   }
 
   // ---- diagnose ---------------------------------------------------------------------------------
@@ -660,12 +673,44 @@
       $("trend-info").textContent = `${h.count} diagnos${h.count === 1 ? "is" : "es"} of ${h.asset_id}` +
         (last ? `; latest: ${last.severity}, Δ = ${fixed(last.misalignment, 3)} (model ${last.model_version}).` : ".");
       renderTrend();
+      await loadBaseline(asset, h);
     } catch (exc) {
       state.history = null;
       show($("trend-plots"), false);
       $("trend-info").textContent = "";
       setError($("trend-error"), exc.message);
     }
+  }
+
+  async function loadBaseline(asset, h) {
+    const b = await api(`/assets/${encodeURIComponent(asset)}/baseline`);
+    const base = b.baseline;
+    let text;
+    if (base) {
+      text = `Set ${base.set_at} from ${base.source} (diagnoses ${base.diagnosis_ids.join(", ")}), ` +
+        `${fixed(base.speed_rpm, 0)} r/min (recordings within ±5 % are compared), model ${base.model_version}.`;
+    } else if (b.proposal && b.proposal.diagnosis_ids) {
+      text = `None set. Automatic proposal: diagnoses ${b.proposal.diagnosis_ids.join(", ")} at ` +
+        `${fixed(b.proposal.speed_rpm, 0)} r/min (${b.proposal.how}).`;
+    } else {
+      text = `None set. ${plainWords((b.proposal && b.proposal.reason) || "")}`;
+    }
+    $("trend-baseline").textContent = text;
+    const alarms = (h && h.alarms) || [];
+    const last = h && h.points.length ? h.points[h.points.length - 1] : null;
+    const items = alarms.map((a) => el("li", { class: a.event,
+      text: `${a.time}: alarm ${a.event}` + (a.quantities.length ? ` (${a.quantities.join(", ")})` : "") +
+        ` — diagnosis ${a.diagnosis_id}` }));
+    if (!items.length) items.push(el("li", { text: base ? "No alarm raised." : "No baseline: no change alarms." }));
+    if (last && last.change) {
+      const q = last.change.quantities || {};
+      const shown = Object.entries(q).filter(([, x]) => x.value !== null).map(([k, x]) =>
+        `${k.replace(/_/g, " ")} ${num(x.value, 3)} ${x.unit}${x.exceeded ? " (over " + num(x.threshold, 3) + ")" : ""}`);
+      items.push(el("li", { class: "latest", text: `Latest change: ${shown.join("; ")}` }));
+    }
+    $("trend-alarms").replaceChildren(...items);
+    for (const n of document.querySelectorAll(".api-base")) n.textContent = window.location.origin;
+    show($("trend-baseline-box"), true);
   }
 
   // ---- models, health ---------------------------------------------------------------------------

@@ -1,0 +1,215 @@
+"""Asset baselines and trend alarms through the HTTP API (issue 17): set/show/replace/delete, the
+/diagnose answer's baseline section, a speed too far from the baseline's, the alarm firing and
+clearing in the history and the Prometheus gauges, the automatic proposal, the schema migration."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+
+from rotordiag.service.main import create_app
+from tests.service_util import auth, diagnose_json, make_settings, shipped_or_tiny_registry, simulated_channels
+
+SPEED_RPM = 1800.0
+FS_HZ = 2048.0
+
+
+@pytest.fixture(scope="module")
+def registry_src(tmp_path_factory):
+    return shipped_or_tiny_registry(tmp_path_factory.mktemp("registry"))
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory, registry_src):
+    tmp = tmp_path_factory.mktemp("svc")
+    app = create_app(make_settings(tmp, shipped_registry_dir=registry_src))
+    with TestClient(app) as c:
+        yield c
+
+
+def _body(asset=None, *, dc_shift_um=0.0, speed_rpm=SPEED_RPM, seed=0):
+    """An aligned-machine recording with a keyphasor; ``dc_shift_um`` moves bearing 3's journal (both probes
+    see their projection of a vertical shift), new noise per ``seed``."""
+    fs, chans = simulated_channels(misalignment=0.0, speed_rpm=speed_rpm, sample_rate_hz=FS_HZ, record_revs=40,
+                                   mechanism="rigid")
+    rng = np.random.default_rng(seed)
+    out = []
+    for b, a, d in chans:
+        d = np.asarray(d, float) + 0.05 * rng.standard_normal(len(d))
+        if b == 3:
+            d = d + dc_shift_um * np.sin(np.radians(a))
+        out.append((b, a, d))
+    n = len(out[0][2])
+    period = 60.0 / speed_rpm
+    kp = [float(v) for v in np.arange(0.0, (n - 1) / fs, period)]
+    extra = {"keyphasor_times_s": kp, "clearance_um": 350.0}
+    if asset:
+        extra["asset_id"] = asset
+    return diagnose_json(fs, out, **extra)
+
+
+def test_baseline_needs_the_key(client):
+    assert client.post("/assets/k1/baseline?auto=true").status_code == 401
+    assert client.post("/assets/k1/baseline?auto=true", headers={"X-API-Key": "wrong"}).status_code == 403
+    assert client.delete("/assets/k1/baseline").status_code == 401
+    assert client.put("/assets/k1/thresholds", json={"thresholds": {}}).status_code == 401
+
+
+def test_no_baseline_then_a_baseline_then_change_alarm_fires_and_clears(client):
+    asset = "unit-7"
+    v0 = client.post("/diagnose", json=_body(asset)).json()
+    assert v0["baseline"]["used"] is False and "no baseline" in v0["baseline"]["message"]
+    assert isinstance(v0["diagnosis_id"], int) and "signature" not in v0
+    g = client.get(f"/assets/{asset}/baseline").json()
+    assert g["baseline"] is None and "reason" in g["proposal"]
+
+    r = client.post(f"/assets/{asset}/baseline", json=_body(asset, seed=1), headers=auth())
+    assert r.status_code == 200, r.text
+    b = r.json()
+    assert b["source"] == "recording" and b["speed_rpm"] == pytest.approx(SPEED_RPM, rel=1e-3)
+    assert b["model_version"] and b["set_at"]
+    g = client.get(f"/assets/{asset}/baseline").json()
+    assert g["baseline"]["diagnosis_ids"] == b["diagnosis_ids"] and g["baseline"]["signature"]["bearings"]
+
+    same = client.post("/diagnose", json=_body(asset, seed=2)).json()
+    assert same["baseline"]["used"] and same["baseline"]["changed"] is False, same["baseline"]
+    assert same["baseline"]["set_at"] == b["set_at"]
+    shifted = client.post("/diagnose", json=_body(asset, dc_shift_um=60.0, seed=3)).json()
+    sec = shifted["baseline"]
+    assert sec["changed"] is True and "dc_shift" in sec["exceeded"], sec
+    assert sec["quantities"]["dc_shift"]["bearing"] == 3
+    assert sec["quantities"]["dc_shift"]["value"] == pytest.approx(60.0, abs=2.0)
+    assert any(e["scope"] == "change since baseline" and e["name"] == "dc shift" for e in shifted["evidence"])
+    metrics = client.get("/metrics").text
+    assert f'rotordiag_asset_change{{asset="{asset}",quantity="dc_shift_um"}}' in metrics
+    assert f'rotordiag_asset_alarm{{asset="{asset}"}} 1.0' in metrics
+
+    back = client.post("/diagnose", json=_body(asset, seed=4)).json()
+    assert back["baseline"]["changed"] is False
+    assert f'rotordiag_asset_alarm{{asset="{asset}"}} 0.0' in client.get("/metrics").text
+    h = client.get(f"/assets/{asset}/history").json()
+    assert [e["event"] for e in h["alarms"]] == ["raised", "cleared"]
+    assert h["alarms"][0]["diagnosis_id"] == shifted["diagnosis_id"] and h["alarms"][0]["quantities"]
+    assert h["alarms"][1]["diagnosis_id"] == back["diagnosis_id"]
+    alarm_of = {p["id"]: p["alarm"] for p in h["points"]}
+    assert alarm_of[v0["diagnosis_id"]] is None and alarm_of[shifted["diagnosis_id"]] is True
+
+    # thresholds are editable per asset: with a dc threshold above the shift, the same recording is no change
+    t = client.put(f"/assets/{asset}/thresholds", json={"thresholds": {"dc_shift_um": 500.0}}, headers=auth())
+    assert t.status_code == 200 and t.json()["thresholds"]["dc_shift_um"] == 500.0
+    assert client.post("/diagnose", json=_body(asset, dc_shift_um=60.0, seed=5)).json()["baseline"]["changed"] is False
+    bad = client.put(f"/assets/{asset}/thresholds", json={"thresholds": {"nonsense": 1.0}}, headers=auth())
+    assert bad.status_code == 422 and "unknown change quantities" in bad.text
+    assert client.put(f"/assets/{asset}/thresholds", json={"thresholds": {}}, headers=auth()).status_code == 200
+
+    # replace from a stored diagnosis (the shifted one), then delete
+    r = client.post(f"/assets/{asset}/baseline?diagnosis_id={shifted['diagnosis_id']}", headers=auth())
+    assert r.status_code == 200 and r.json()["source"] == "diagnosis"
+    assert client.post("/diagnose", json=_body(asset, dc_shift_um=60.0, seed=6)).json()["baseline"]["changed"] is False
+    assert client.post(f"/assets/{asset}/baseline?diagnosis_id=999999", headers=auth()).status_code == 404
+    assert client.delete(f"/assets/{asset}/baseline", headers=auth()).status_code == 204
+    assert client.delete(f"/assets/{asset}/baseline", headers=auth()).status_code == 404
+    assert client.post("/diagnose", json=_body(asset)).json()["baseline"]["used"] is False
+
+
+def test_a_recording_at_another_speed_is_not_compared(client):
+    asset = "unit-speed"
+    assert client.post(f"/assets/{asset}/baseline", json=_body(asset), headers=auth()).status_code == 200
+    far = client.post("/diagnose", json=_body(asset, speed_rpm=2100.0)).json()["baseline"]
+    assert far["used"] is False and far["compared"] is False and far["changed"] is None
+    assert "speed differs" in far["message"] and "+16.7 %" in far["message"]
+    h = client.get(f"/assets/{asset}/history").json()
+    assert h["points"][-1]["alarm"] is None and h["alarms"] == []
+
+
+def test_automatic_baseline_from_the_first_recordings_at_one_speed(client):
+    asset = "unit-auto"
+    for seed in range(2):
+        client.post("/diagnose", json=_body(asset, seed=seed))
+    r = client.post(f"/assets/{asset}/baseline?auto=true", headers=auth())
+    assert r.status_code == 409 and "needs 3" in r.json()["detail"]
+    client.post("/diagnose", json=_body(asset, seed=2))
+    prop = client.get(f"/assets/{asset}/baseline").json()["proposal"]
+    assert len(prop["diagnosis_ids"]) == 3 and prop["speed_rpm"] == pytest.approx(SPEED_RPM, rel=1e-3)
+    r = client.post(f"/assets/{asset}/baseline?auto=true", headers=auth())
+    assert r.status_code == 200 and r.json()["source"] == "auto" and r.json()["diagnosis_ids"] == prop["diagnosis_ids"]
+
+
+def test_automatic_baseline_refuses_recordings_of_different_speed_bands(client):
+    asset = "unit-mixed"
+    for speed in (SPEED_RPM, SPEED_RPM, 2100.0):
+        client.post("/diagnose", json=_body(asset, speed_rpm=speed))
+    r = client.post(f"/assets/{asset}/baseline?auto=true", headers=auth())
+    assert r.status_code == 409 and "not at one operating condition" in r.json()["detail"]
+
+
+def test_baseline_request_mistakes_are_4xx(client):
+    asset = "unit-bad"
+    r = client.post(f"/assets/{asset}/baseline", headers=auth())
+    assert r.status_code == 422 and "send a recording" in r.json()["detail"]
+    r = client.post(f"/assets/{asset}/baseline?auto=true&diagnosis_id=1", headers=auth())
+    assert r.status_code == 422
+    r = client.post(f"/assets/{asset}/baseline", json=_body("someone-else"), headers=auth())
+    assert r.status_code == 422 and "not the asset of the path" in r.json()["detail"]
+
+
+def test_an_old_database_gets_the_new_columns(tmp_path, registry_src):
+    """A database made before baselines existed (no signature/change/alarm columns) is migrated at startup."""
+    import sqlite3
+
+    settings = make_settings(tmp_path, shipped_registry_dir=registry_src)
+    settings.data_dir.mkdir(parents=True)
+    db = settings.effective_database_url.removeprefix("sqlite:///")
+    con = sqlite3.connect(db)
+    con.execute("CREATE TABLE asset_diagnoses (id INTEGER PRIMARY KEY, asset_id VARCHAR(128), plant VARCHAR(128), "
+                "created_at DATETIME, model_version VARCHAR(128), severity VARCHAR(32), misalignment FLOAT, "
+                "misalignment_low FLOAT, misalignment_high FLOAT, speed_rpm FLOAT, ood BOOLEAN, verdict JSON, "
+                "key_features JSON)")
+    con.execute("INSERT INTO asset_diagnoses (asset_id, created_at, model_version, severity, verdict, key_features) "
+                "VALUES ('old', '2025-01-01 00:00:00', 'v0001', 'aligned', '{}', '{}')")
+    con.commit()
+    con.close()
+    with TestClient(create_app(settings)) as c:
+        h = c.get("/assets/old/history").json()
+        assert h["count"] == 1 and h["points"][0]["alarm"] is None
+        r = c.post(f"/assets/old/baseline?diagnosis_id={h['points'][0]['id']}", headers=auth())
+        assert r.status_code == 409 and "send its recording" in r.json()["detail"]
+        assert c.post("/diagnose", json=_body("old")).json()["diagnosis_id"] == 2
+
+
+def test_cli_sets_shows_and_uses_a_baseline(tmp_path, monkeypatch, registry_src):
+    """`rotordiag baseline set|show|clear` on the service database, and `rotordiag diagnose --baseline`."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    monkeypatch.setenv("ROTORDIAG_DATA_DIR", str(tmp_path / "data"))
+    monkeypatch.setenv("ROTORDIAG_SHIPPED_REGISTRY_DIR", str(registry_src))
+    body = _body()
+    rec = tmp_path / "after-alignment.json"
+    rec.write_text(json.dumps(body))
+    shifted = tmp_path / "later.json"
+    shifted.write_text(json.dumps(_body(dc_shift_um=60.0, seed=9)))
+    run = CliRunner().invoke
+    res = run(app, ["baseline", "show", "unit-cli"])
+    assert res.exit_code == 0 and "no baseline" in res.output
+    res = run(app, ["baseline", "set", "unit-cli"])
+    assert res.exit_code == 2 and "exactly one" in res.output
+    res = run(app, ["baseline", "set", "unit-cli", str(rec)])
+    assert res.exit_code == 0, res.output
+    assert "baseline set from recording" in res.output and "1800 r/min" in res.output
+    res = run(app, ["baseline", "show", "unit-cli", "--json"])
+    assert res.exit_code == 0
+    saved = tmp_path / "unit-cli.json"
+    saved.write_text(res.output)
+    assert json.loads(res.output)["baseline"]["source"] == "recording"
+    res = run(app, ["diagnose", str(shifted), "--baseline", str(saved), "--registry", str(registry_src)])
+    assert res.exit_code == 0, res.output
+    assert "baseline: changed since the baseline" in res.output and "dc shift" in res.output
+    res = run(app, ["diagnose", str(rec), "--baseline", str(saved), "--registry", str(registry_src), "--json"])
+    assert json.loads(res.output)["baseline"]["changed"] is False
+    assert run(app, ["baseline", "clear", "unit-cli"]).exit_code == 0
+    res = run(app, ["baseline", "clear", "unit-cli"])
+    assert res.exit_code == 2 and "has no baseline" in res.output
