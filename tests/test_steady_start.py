@@ -21,7 +21,7 @@ from rotordiag.simulator.dataset.spec import load_spec
 from rotordiag.simulator.dataset.worker import SampleTask, SimulationSettings, run_sample
 from rotordiag.simulator.steady.start import steady_start
 
-SPEC = Path(__file__).resolve().parent.parent / "models" / "default" / "dataset_misaligned.toml"
+SPEC = Path(__file__).resolve().parent / "reference" / "steady_start_spec.toml"
 #: waveform agreement, µm: the two starts differ by the integrator's error (~1e-7 of the state);
 #: float32 storage of ~300 µm values rounds at ~3e-5 µm
 WAVE_TOL_UM = 1e-3
@@ -44,7 +44,7 @@ def shipped():
     return build_design(resolved), MeasurementSettings.from_spec(resolved.spec), sim
 
 
-# samples of the shipped default-model spec: period-1 pin and rigid at 1330-2210 r/min (shooting),
+# samples of the first shipped default-model spec (a frozen copy): period-1 pin and rigid at 1330-2210 r/min (shooting),
 # and rigid at 2764 r/min, whose orbit has max |μ| ≈ 0.994 (> 0.99: integration)
 @pytest.mark.parametrize("index, expected_path", [(21, "shooting"), (1, "shooting"), (12, "shooting"),
                                                   (18, "shooting"), (15, "integrate")])
