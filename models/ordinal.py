@@ -33,7 +33,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ._sklearn_private import Interval
 
-__all__ = ["OrdinalSeverityClassifier", "cumulative_to_proba", "median_class"]
+__all__ = ["OrdinalSeverityClassifier", "cumulative_to_proba"]
 
 
 def cumulative_to_proba(cum: np.ndarray) -> np.ndarray:
@@ -46,17 +46,6 @@ def cumulative_to_proba(cum: np.ndarray) -> np.ndarray:
     upper = np.column_stack([np.ones(n), cum])
     lower = np.column_stack([cum, np.zeros(n)])
     return upper - lower
-
-
-def median_class(proba: np.ndarray) -> np.ndarray:
-    """Index of the median band of each row of band probabilities (ties go to the lower band).
-
-    For rows made by :func:`cumulative_to_proba` this is the number of edges with
-    ``P(band ≥ k) > 0.5`` (up to rounding).
-    """
-    proba = np.asarray(proba, dtype=float)
-    cdf = np.cumsum(proba, axis=1)
-    return np.argmax(cdf >= 0.5 - 1e-12, axis=1)
 
 
 def _sigmoid(z: np.ndarray) -> np.ndarray:

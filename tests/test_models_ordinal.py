@@ -10,7 +10,7 @@ from threadpoolctl import threadpool_limits
 from rotordiag.models.compiled import CompiledModel
 from rotordiag.models.config import TrainConfig
 from rotordiag.models.estimators import KNNDistanceOOD, MisalignmentModel
-from rotordiag.models.ordinal import OrdinalSeverityClassifier, cumulative_to_proba, median_class
+from rotordiag.models.ordinal import OrdinalSeverityClassifier, cumulative_to_proba
 from tests.models_synthetic import make_table
 
 MONO = ("b2_x_2x_1x_ratio", "b3_x_2x_1x_ratio")
@@ -34,7 +34,13 @@ def test_cumulative_to_proba_is_a_distribution_and_repairs_crossing_edges():
     np.testing.assert_allclose(p.sum(axis=1), 1.0)
     assert (p >= 0).all()                       # P(≥2) > P(≥1) repaired by the running minimum
     np.testing.assert_allclose(p[0], [0.1, 0.0, 0.8, 0.1])
-    assert median_class(p).tolist() == [2, 0, 3]
+    # Thresholds 0.5 (an unfitted classifier's default): the median band.
+    assert OrdinalSeverityClassifier().class_index(p).tolist() == [2, 0, 3]
+    # A first-edge threshold of 0.95 keeps row 0 (P(≥1) = 0.9) aligned although P(≥2) = 0.9 too:
+    # edges are passed in order.
+    clf = OrdinalSeverityClassifier()
+    clf.thresholds_ = np.array([0.95, 0.5, 0.5])
+    assert clf.class_index(p).tolist() == [0, 0, 3]
 
 
 def _ordinal_model(seed: int = 0, mono=MONO) -> tuple[MisalignmentModel, object]:

@@ -5,7 +5,7 @@ import secrets
 from collections.abc import Iterator
 from typing import Annotated
 
-from fastapi import Depends, HTTPException, Request, Security
+from fastapi import Depends, HTTPException, Query, Request, Security
 from fastapi.security import APIKeyHeader
 from sqlalchemy.orm import Session
 
@@ -79,3 +79,27 @@ def require_json(request: Request) -> None:
 
 
 JsonBodyDep = Depends(require_json)
+
+
+# The query parameters that describe an uploaded recording's layout (binary or multipart uploads:
+# /diagnose, /assets/{id}/baseline, /ui/plot-data), declared once.
+SampleRateQuery = Annotated[float | None, Query(gt=0, le=1e6, allow_inf_nan=False,
+                                                description="Binary/multipart only: sample rate, Hz.")]
+SpeedQuery = Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False,
+                                           description="Binary/multipart only: running speed, r/min.")]
+ClearanceQuery = Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False,
+                                               description="Binary/multipart only: radial clearance, µm.")]
+UnitsQuery = Annotated[str | None, Query(min_length=1, max_length=16,
+                                         description="Binary/multipart only: units of the array (`um`, `mm`, `m`, "
+                                         "`mil`, or `V` with `sensitivity_v_per_mm`); "
+                                         "default `um` (or the HDF5 file's `units` attribute).")]
+BearingsQuery = Annotated[str | None, Query(max_length=64, pattern=r"^[0-9, ]*$",
+                                            description="Binary/multipart only: bearing (1-4) of each row, "
+                                            "comma-separated; default 1,1,2,2,3,3,4,4 for 8 rows.")]
+AnglesQuery = Annotated[str | None, Query(max_length=256,
+                                          description="Binary/multipart only: probe angle of each row in degrees "
+                                          "from horizontal x towards vertical-up y, comma-separated; "
+                                          "default 45,135 repeated.")]
+KeyphasorQuery = Annotated[str | None, Query(max_length=200_000,
+                                             description="Binary/multipart only: keyphasor pulse times, s, "
+                                             "comma-separated.")]

@@ -16,7 +16,17 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Query, Request
 from fastapi.responses import FileResponse
 
-from ..api.deps import DiagnoseKeyDep, StateDep
+from ..api.deps import (
+    AnglesQuery,
+    BearingsQuery,
+    ClearanceQuery,
+    DiagnoseKeyDep,
+    KeyphasorQuery,
+    SampleRateQuery,
+    SpeedQuery,
+    StateDep,
+    UnitsQuery,
+)
 from ..api.routes.diagnose import ReaderQueryDep, recording_answer  # same body forms and messages as /diagnose
 from ..errors import InputError
 from .plotdata import plot_data
@@ -101,13 +111,13 @@ async def plot(
     request: Request,
     state: StateDep,
     reader: ReaderQueryDep,
-    sample_rate_hz: Annotated[float | None, Query(gt=0, le=1e6, allow_inf_nan=False)] = None,
-    speed_rpm: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False)] = None,
-    clearance_um: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False)] = None,
-    units: Annotated[str | None, Query(min_length=1, max_length=16)] = None,
-    bearings: Annotated[str | None, Query(max_length=64, pattern=r"^[0-9, ]*$")] = None,
-    angles_deg: Annotated[str | None, Query(max_length=256)] = None,
-    keyphasor_times_s: Annotated[str | None, Query(max_length=200_000)] = None,
+    sample_rate_hz: SampleRateQuery = None,
+    speed_rpm: SpeedQuery = None,
+    clearance_um: ClearanceQuery = None,
+    units: UnitsQuery = None,
+    bearings: BearingsQuery = None,
+    angles_deg: AnglesQuery = None,
+    keyphasor_times_s: KeyphasorQuery = None,
     sample_index: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
 ) -> dict[str, Any]:
     """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.web.plotdata``).

@@ -20,7 +20,19 @@ from ...schemas import (
     ThresholdsIn,
 )
 from ...store import asset_history, delete_baseline, get_baseline, get_thresholds, put_thresholds
-from ..deps import ApiKeyDep, JsonBodyDep, SessionDep, StateDep
+from ..deps import (
+    AnglesQuery,
+    ApiKeyDep,
+    BearingsQuery,
+    ClearanceQuery,
+    JsonBodyDep,
+    KeyphasorQuery,
+    SampleRateQuery,
+    SessionDep,
+    SpeedQuery,
+    StateDep,
+    UnitsQuery,
+)
 from ..errors import InputError
 from .diagnose import ReaderQueryDep
 
@@ -121,16 +133,16 @@ def get_asset_baseline(asset_id: AssetPath, session: SessionDep) -> AssetBaselin
 )
 async def set_asset_baseline(
     request: Request, asset_id: AssetPath, state: StateDep, reader: ReaderQueryDep,
-    diagnosis_id: Annotated[int | None, Query(ge=1, description="Make this stored diagnosis the baseline.")] = None,
+    diagnosis_id: Annotated[int | None, Query(ge=1, le=2**63 - 1, description="Make this stored diagnosis the baseline.")] = None,
     auto: Annotated[bool, Query(description="Make the automatic proposal the baseline.")] = False,
     n: Annotated[int, Query(ge=1, le=50, description="With `auto`: recordings to average.")] = AUTO_N,
-    sample_rate_hz: Annotated[float | None, Query(gt=0, le=1e6, allow_inf_nan=False)] = None,
-    speed_rpm: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False)] = None,
-    clearance_um: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False)] = None,
-    units: Annotated[str | None, Query(min_length=1, max_length=16)] = None,
-    bearings: Annotated[str | None, Query(max_length=64, pattern=r"^[0-9, ]*$")] = None,
-    angles_deg: Annotated[str | None, Query(max_length=256)] = None,
-    keyphasor_times_s: Annotated[str | None, Query(max_length=200_000)] = None,
+    sample_rate_hz: SampleRateQuery = None,
+    speed_rpm: SpeedQuery = None,
+    clearance_um: ClearanceQuery = None,
+    units: UnitsQuery = None,
+    bearings: BearingsQuery = None,
+    angles_deg: AnglesQuery = None,
+    keyphasor_times_s: KeyphasorQuery = None,
 ) -> dict:
     if diagnosis_id is not None and auto:
         raise InputError("give either diagnosis_id or auto=true, not both")

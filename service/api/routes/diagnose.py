@@ -16,7 +16,19 @@ from ...baseline import record_verdict
 from ...inference import ModelUnavailable
 from ...parsing import checked, parse_batch, parse_body, recording_from_model
 from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
-from ..deps import DiagnoseKeyDep, JsonBodyDep, ModelsDep, StateDep
+from ..deps import (
+    AnglesQuery,
+    BearingsQuery,
+    ClearanceQuery,
+    DiagnoseKeyDep,
+    JsonBodyDep,
+    KeyphasorQuery,
+    ModelsDep,
+    SampleRateQuery,
+    SpeedQuery,
+    StateDep,
+    UnitsQuery,
+)
 from ..errors import STATUS_OF_KIND, InputError, RequestInvalid, raise_worker_error
 from ..routing import FiniteJSONRoute
 
@@ -210,26 +222,13 @@ async def diagnose(
     state: StateDep,
     models: ModelsDep,
     reader: ReaderQueryDep,
-    sample_rate_hz: Annotated[float | None, Query(gt=0, le=1e6, allow_inf_nan=False,
-                                                  description="Binary/multipart only: sample rate, Hz.")] = None,
-    speed_rpm: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False,
-                                             description="Binary/multipart only: running speed, r/min.")] = None,
-    clearance_um: Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False,
-                                                description="Binary/multipart only: radial clearance, µm.")] = None,
-    units: Annotated[str | None, Query(min_length=1, max_length=16,
-                                       description="Binary/multipart only: units of the array (`um`, `mm`, `m`, `mil`, "
-                                       "or `V` with `sensitivity_v_per_mm`); "
-                                       "default `um` (or the HDF5 file's `units` attribute).")] = None,
-    bearings: Annotated[str | None, Query(max_length=64, pattern=r"^[0-9, ]*$",
-                                          description="Binary/multipart only: bearing (1-4) of each row, "
-                                          "comma-separated; default 1,1,2,2,3,3,4,4 for 8 rows.")] = None,
-    angles_deg: Annotated[str | None, Query(max_length=256,
-                                            description="Binary/multipart only: probe angle of each row in degrees "
-                                            "from horizontal x towards vertical-up y, comma-separated; "
-                                            "default 45,135 repeated.")] = None,
-    keyphasor_times_s: Annotated[str | None, Query(max_length=200_000,
-                                                   description="Binary/multipart only: keyphasor pulse times, s, "
-                                                   "comma-separated.")] = None,
+    sample_rate_hz: SampleRateQuery = None,
+    speed_rpm: SpeedQuery = None,
+    clearance_um: ClearanceQuery = None,
+    units: UnitsQuery = None,
+    bearings: BearingsQuery = None,
+    angles_deg: AnglesQuery = None,
+    keyphasor_times_s: KeyphasorQuery = None,
     asset_id: Annotated[AssetId | None, Query(description="Binary/multipart only: asset identifier (stores the "
                                               "diagnosis in the asset's history).")] = None,
     plant: Annotated[str | None, Query(min_length=1, max_length=MAX_LABEL_LEN,
