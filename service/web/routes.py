@@ -17,15 +17,8 @@ from fastapi import APIRouter, Query, Request
 from fastapi.responses import FileResponse
 
 from ..api.deps import (
-    AnglesQuery,
-    BearingsQuery,
-    ClearanceQuery,
     DiagnoseKeyDep,
-    KeyphasorQuery,
-    SampleRateQuery,
-    SpeedQuery,
     StateDep,
-    UnitsQuery,
 )
 from ..api.routes.diagnose import ReaderQueryDep, recording_answer  # same body forms and messages as /diagnose
 from ..errors import InputError
@@ -111,13 +104,6 @@ async def plot(
     request: Request,
     state: StateDep,
     reader: ReaderQueryDep,
-    sample_rate_hz: SampleRateQuery = None,
-    speed_rpm: SpeedQuery = None,
-    clearance_um: ClearanceQuery = None,
-    units: UnitsQuery = None,
-    bearings: BearingsQuery = None,
-    angles_deg: AnglesQuery = None,
-    keyphasor_times_s: KeyphasorQuery = None,
     sample_index: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
 ) -> dict[str, Any]:
     """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.web.plotdata``).
@@ -126,7 +112,5 @@ async def plot(
     ``ROTORDIAG_DIAGNOSIS_WORKERS=0`` in a thread of the server (HDF5 still decoded in the sandbox).
     Needs the API key when /diagnose does (``ROTORDIAG_DIAGNOSE_REQUIRES_KEY``).
     """
-    query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=None,
-                 plant=None, units=units, bearings=bearings, angles_deg=angles_deg,
-                 keyphasor_times_s=keyphasor_times_s, sample_index=sample_index, **reader)
+    query = dict(asset_id=None, plant=None, sample_index=sample_index, **reader)
     return await recording_answer(request, state, query, "plot", _plot_sync)

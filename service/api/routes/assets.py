@@ -21,17 +21,10 @@ from ...schemas import (
 )
 from ...store import asset_history, delete_baseline, get_baseline, get_thresholds, put_thresholds
 from ..deps import (
-    AnglesQuery,
     ApiKeyDep,
-    BearingsQuery,
-    ClearanceQuery,
     JsonBodyDep,
-    KeyphasorQuery,
-    SampleRateQuery,
     SessionDep,
-    SpeedQuery,
     StateDep,
-    UnitsQuery,
 )
 from ..errors import InputError
 from .diagnose import ReaderQueryDep
@@ -136,13 +129,6 @@ async def set_asset_baseline(
     diagnosis_id: Annotated[int | None, Query(ge=1, le=2**63 - 1, description="Make this stored diagnosis the baseline.")] = None,
     auto: Annotated[bool, Query(description="Make the automatic proposal the baseline.")] = False,
     n: Annotated[int, Query(ge=1, le=50, description="With `auto`: recordings to average.")] = AUTO_N,
-    sample_rate_hz: SampleRateQuery = None,
-    speed_rpm: SpeedQuery = None,
-    clearance_um: ClearanceQuery = None,
-    units: UnitsQuery = None,
-    bearings: BearingsQuery = None,
-    angles_deg: AnglesQuery = None,
-    keyphasor_times_s: KeyphasorQuery = None,
 ) -> dict:
     if diagnosis_id is not None and auto:
         raise InputError("give either diagnosis_id or auto=true, not both")
@@ -154,9 +140,7 @@ async def set_asset_baseline(
         raise InputError("send a recording in the body (as for POST /diagnose), or use ?diagnosis_id= or ?auto=true")
     from .diagnose import diagnose_from_request
 
-    query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=asset_id,
-                 plant=None, units=units, bearings=bearings, angles_deg=angles_deg,
-                 keyphasor_times_s=keyphasor_times_s, sample_index=0, **reader)
+    query = dict(asset_id=asset_id, plant=None, sample_index=0, **reader)
     verdict, body_asset = await diagnose_from_request(request, state, query, None, store=False)
     if body_asset is not None and body_asset != asset_id:
         raise InputError(f"the body's asset_id {body_asset!r} is not the asset of the path ({asset_id!r})")

@@ -36,6 +36,13 @@ router = APIRouter(tags=["diagnose"], route_class=FiniteJSONRoute)
 
 
 def reader_query(
+    sample_rate_hz: SampleRateQuery = None,
+    speed_rpm: SpeedQuery = None,
+    clearance_um: ClearanceQuery = None,
+    units: UnitsQuery = None,
+    bearings: BearingsQuery = None,
+    angles_deg: AnglesQuery = None,
+    keyphasor_times_s: KeyphasorQuery = None,
     sensitivity_v_per_mm: Annotated[float | None, Query(gt=0, le=1e3, allow_inf_nan=False, description=(
         "Binary/multipart with `units=V` only: probe scale factor, V/mm (7.87 = 200 mV/mil)."))] = None,
     gap_voltage_v: Annotated[float | None, Query(ge=-100, le=100, allow_inf_nan=False, description=(
@@ -52,8 +59,11 @@ def reader_query(
     keyphasor_threshold_v: Annotated[float | None, Query(allow_inf_nan=False, description=(
         "Keyphasor threshold in the channel's units (default: halfway between its 1st and 99th percentile)."))] = None,
 ) -> dict[str, Any]:
-    """Query parameters of the recording reader beyond the basic metadata (``features.reader.ReadOptions``)."""
-    return dict(sensitivity_v_per_mm=sensitivity_v_per_mm, gap_voltage_v=gap_voltage_v, rotation=rotation,
+    """Query parameters that describe an uploaded recording (its layout and the reader's options,
+    ``features.reader.ReadOptions``), shared by every route that takes one."""
+    return dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, units=units,
+                bearings=bearings, angles_deg=angles_deg, keyphasor_times_s=keyphasor_times_s,
+                sensitivity_v_per_mm=sensitivity_v_per_mm, gap_voltage_v=gap_voltage_v, rotation=rotation,
                 viewed_from=viewed_from, keyphasor_channel=keyphasor_channel, keyphasor_edge=keyphasor_edge,
                 keyphasor_threshold_v=keyphasor_threshold_v)
 
@@ -222,13 +232,6 @@ async def diagnose(
     state: StateDep,
     models: ModelsDep,
     reader: ReaderQueryDep,
-    sample_rate_hz: SampleRateQuery = None,
-    speed_rpm: SpeedQuery = None,
-    clearance_um: ClearanceQuery = None,
-    units: UnitsQuery = None,
-    bearings: BearingsQuery = None,
-    angles_deg: AnglesQuery = None,
-    keyphasor_times_s: KeyphasorQuery = None,
     asset_id: Annotated[AssetId | None, Query(description="Binary/multipart only: asset identifier (stores the "
                                               "diagnosis in the asset's history).")] = None,
     plant: Annotated[str | None, Query(min_length=1, max_length=MAX_LABEL_LEN,
@@ -246,9 +249,7 @@ async def diagnose(
         max_length=200_000, description="Multipart with `slow_roll_file` only: the slow-roll file's keyphasor pulse "
         "times, s, comma-separated (or a keyphasor column/channel in that file).")] = None,
 ) -> dict:
-    query = dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, asset_id=asset_id,
-                 plant=plant, units=units, bearings=bearings, angles_deg=angles_deg,
-                 keyphasor_times_s=keyphasor_times_s, sample_index=sample_index, **reader)
+    query = dict(asset_id=asset_id, plant=plant, sample_index=sample_index, **reader)
     query.update(slow_roll_sample_rate_hz=slow_roll_sample_rate_hz, slow_roll_keyphasor_times_s=slow_roll_keyphasor_times_s)
     verdict, _ = await diagnose_from_request(request, state, query, model_version, slow_roll_allowed=True)
     return verdict_in_units(verdict, output_units)   # stored in µm; answered in the units asked for
