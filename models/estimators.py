@@ -110,6 +110,9 @@ class SeverityClassifier(ClassifierMixin, BaseEstimator):
     model_ : fitted classifier (calibrated or plain boosted trees)
     calibrated_ : bool
         Whether ``model_`` carries a calibration map.
+    calibration_note_ : str
+        Only when temperature scaling failed to optimise (scikit-learn raises on NaN): why the
+        trees' own probabilities are used.
     n_iter_ : int
         Boosting iterations of the trees.
     """
@@ -202,9 +205,21 @@ class SeverityClassifier(ClassifierMixin, BaseEstimator):
         else:
             splitter = StratifiedKFold(n_splits=n_splits, shuffle=True, random_state=self.random_state)
             splits = list(splitter.split(X, y))
-        self.model_ = CalibratedClassifierCV(
-            self._boosted(), method=self.calibration, cv=splits, ensemble=False
-        ).fit(X, y)
+        try:
+            self.model_ = CalibratedClassifierCV(
+                self._boosted(), method=self.calibration, cv=splits, ensemble=False
+            ).fit(X, y)
+        except RuntimeError as exc:
+            # scikit-learn's temperature scaling raises when its 1-D optimisation meets NaN
+            # (out-of-fold scores that separate the classes perfectly); the trees' own
+            # probabilities are then the honest answer, and the fit says so.
+            if self.calibration != "temperature" or "Temperature scaling" not in str(exc):
+                raise
+            self.calibrated_ = False
+            self.calibration_note_ = f"calibration skipped: {exc}"
+            self.model_ = self._boosted().fit(X, y)
+            self.n_iter_ = int(self.model_.n_iter_)
+            return self
         self.n_iter_ = int(self.model_.calibrated_classifiers_[0].estimator.n_iter_)
         return self
 

@@ -204,3 +204,25 @@ def test_sparse_and_all_nan_columns_are_tolerated():
     assert np.mean(clf.predict(X) == y) > 0.9
     reg = ConformalIntervalRegressor(max_iter=10).fit(X, X[:, 0])
     assert np.isfinite(reg.predict_interval(X)).all()
+
+
+def test_classifier_falls_back_to_the_trees_when_temperature_scaling_fails(monkeypatch):
+    import sklearn.calibration
+
+    def fail(self, X, y, **kw):
+        raise RuntimeError("Temperature scaling fails to optimize during calibration. Reason: NaN result encountered.")
+
+    monkeypatch.setattr(sklearn.calibration.CalibratedClassifierCV, "fit", fail)
+    t = make_table(n_plants=20, per_plant=6)
+    labels = SeverityBands().label(t.misalignment)
+    clf = SeverityClassifier(max_iter=10, cv=3).fit(t.X, labels, groups=t.plant_id)
+    assert clf.calibrated_ is False and "Temperature scaling" in clf.calibration_note_
+    p = clf.predict_proba(t.X[:5])
+    np.testing.assert_allclose(p.sum(axis=1), 1.0)
+
+    def other(self, X, y, **kw):
+        raise RuntimeError("something else")
+
+    monkeypatch.setattr(sklearn.calibration.CalibratedClassifierCV, "fit", other)
+    with pytest.raises(RuntimeError, match="something else"):
+        SeverityClassifier(max_iter=10, cv=3).fit(t.X, labels, groups=t.plant_id)
