@@ -530,6 +530,13 @@ def test_baseline_and_change_are_shown(server, browser, recordings, tmp_path):
     with urllib.request.urlopen(req, timeout=60) as r:
         base = json.loads(r.read())
     assert base["source"] == "diagnosis"
+    status, shown = _get(f"{server}/assets/{asset}/baseline")
+    same = shown["thresholds"]["orbit_2x_1x_change"]          # an edit to the same value: origin "edited"
+    req = urllib.request.Request(f"{server}/assets/{asset}/thresholds", method="PUT",
+                                 data=json.dumps({"thresholds": {"orbit_2x_1x_change": same}}).encode(),
+                                 headers={"X-API-Key": "web-test-key", "Content-Type": "application/json"})
+    with urllib.request.urlopen(req, timeout=60) as r:
+        assert json.loads(r.read())["thresholds_origin"]["orbit_2x_1x_change"] == "edited"
 
     _open(browser, server)
     _submit_file(browser, _write_npy(tmp_path / "later.npy", recordings[0.45]), asset=asset,
@@ -541,7 +548,9 @@ def test_baseline_and_change_are_shown(server, browser, recordings, tmp_path):
     rows = browser.find_elements("css selector", "#verdict-evidence tbody tr")
     assert any(r.text.startswith("change since baseline") and "CHANGED" in r.text for r in rows)
     _wait(browser, lambda d: d.find_element("id", "trend-baseline-box").is_displayed(), 30, "the baseline in the trend")
-    assert "from diagnosis" in browser.find_element("id", "trend-baseline").text
+    trend = browser.find_element("id", "trend-baseline").text
+    assert "from diagnosis" in trend and "Alarm thresholds of this asset: orbit 2x 1x change" in trend, trend
+    assert "(edited); the others shipped" in trend, trend
     alarms = browser.find_element("id", "trend-alarms").text
     status, history = _get(f"{server}/assets/{asset}/history")
     assert history["alarms"][0]["event"] == "raised"

@@ -689,6 +689,11 @@
     if (base) {
       text = `Set ${base.set_at} from ${base.source} (diagnoses ${base.diagnosis_ids.join(", ")}), ` +
         `${fixed(base.speed_rpm, 0)} r/min (recordings within ±5 % are compared), model ${base.model_version}.`;
+      const own = Object.entries(b.thresholds_origin || {}).filter(([, o]) => o !== "shipped");
+      text += own.length ? " Alarm thresholds of this asset: " + own.map(([k, o]) =>
+        `${k.replace(/_/g, " ")} ${b.thresholds[k] === null ? "off" : num(b.thresholds[k], 3)} (${o === "repeatability" ?
+          "from its baseline recordings' repeatability" : "edited"})`).join("; ") + "; the others shipped." :
+        " Alarm thresholds: the shipped ones (a baseline of 3 recordings, ?auto=true, sets this asset's own).";
     } else if (b.proposal && b.proposal.diagnosis_ids) {
       text = `None set. Automatic proposal: diagnoses ${b.proposal.diagnosis_ids.join(", ")} at ` +
         `${fixed(b.proposal.speed_rpm, 0)} r/min (${b.proposal.how}).`;
