@@ -240,12 +240,13 @@ def repeatability_thresholds(signatures: list[dict[str, Any]], *, margin: float 
     Returns
     -------
     dict or None
-        None with fewer than :data:`REPEAT_MIN` recordings or when they are not comparable (speeds apart);
+        None with fewer than :data:`REPEAT_MIN` recordings or when one is more than 10 % in speed from the
+        average of the others (an automatic baseline's recordings lie within ±5 % of their median);
         else ``{"thresholds": {name: value}, "spread": {name: largest leave-one-out change},
         "n_recordings", "margin"}`` where ``thresholds`` holds the µm names and their ``_per_c`` twins as None
         (a quantity not measured in every recording is left out: the shipped threshold stays).
     """
-    from rotordiag.features import average_signatures, change_features
+    from rotordiag.features import SPEED_BAND_FRAC, average_signatures, change_features
 
     floors = dict(REPEAT_FLOOR if floors is None else floors)
     if len(signatures) < REPEAT_MIN:
@@ -253,7 +254,8 @@ def repeatability_thresholds(signatures: list[dict[str, Any]], *, margin: float 
     spread: dict[str, float] = {}
     for i, sig in enumerate(signatures):
         rest = average_signatures([s for j, s in enumerate(signatures) if j != i])
-        res = change_features(rest, sig)
+        # recordings each within ±5 % of their median speed can be 10 % apart from each other
+        res = change_features(rest, sig, band=2 * SPEED_BAND_FRAC)
         if not res.comparable:
             return None
         for q in REPEAT_QUANTITIES:

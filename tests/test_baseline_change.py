@@ -198,6 +198,9 @@ def test_repeatability_needs_three_comparable_recordings():
 
     assert repeatability_thresholds([_sig(seed=1), _sig(seed=2)]) is None
     assert repeatability_thresholds([_sig(seed=1), _sig(seed=2), _sig(seed=3, speed_rpm=2100.0)]) is None
+    # an automatic baseline's recordings lie within ±5 % of their median: 9 % apart from each other is fine
+    spread = [_sig(seed=4, speed_rpm=SPEED_RPM * 0.955), _sig(seed=5), _sig(seed=6, speed_rpm=SPEED_RPM * 1.045)]
+    assert repeatability_thresholds(spread) is not None
     rule = shipped_rule()
     assert rule.with_repeatability(None) is rule
     with pytest.raises(ValueError, match="unknown change quantity"):
