@@ -381,6 +381,15 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
         raise ValueError("cannot estimate the running speed: no candidate line in the search range; "
                          "give speed_rpm or keyphasor_times_s")
     candidates.sort(key=lambda c: (-c[1], -c[2]))
+    # never a sub-harmonic: a family at twice the best one's frequency with as many lines present,
+    # whose own line is the stronger (a weaker 1/2X of period-2 motion explains 1X, 1.5X… as well),
+    # is the running speed
+    f0 = candidates[0][0]
+    double = [c for c in candidates[1:] if abs(c[0] - 2 * f0) < 1.5 * df and c[1] >= candidates[0][1]
+              and _hann_amplitude_at(power, c[0], df) > _hann_amplitude_at(power, f0, df)]
+    if double:
+        candidates.remove(double[0])
+        candidates.insert(0, double[0])
     f_best, n_best, s_best = candidates[0][:3]
     warnings: list[str] = []
     f_best, switched = _above_subsynchronous(x, fs, df, candidates)
