@@ -411,11 +411,11 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
                 f"the line family at {60 * whip_hz:.1f} cpm ({whip_hz / f_partner:.3f}X) is a sub-synchronous "
                 f"whirl / whip: {n_lines} lines at combinations mΩ + kω of it with the running speed Ω "
                 f"({60 * f_partner:.1f} r/min)")
-            weak = r1 < cfg.SPEED_PARTNER_CLEAR_SNR
+            weak_1x = r1 < cfg.SPEED_PARTNER_CLEAR_SNR
             close = len(partners) > 1 and partners[1][1] >= cfg.SPEED_PARTNER_RIVAL_REL * score
-            if weak or close:
+            if weak_1x or close:
                 why = (f"its own 1X line is {'not seen' if r1 == 0 else f'only {10 * np.log10(r1):.0f} dB above the noise'}"
-                       if weak else
+                       if weak_1x else
                        f"{60 * partners[1][0]:.1f} r/min explains the combination lines almost as well")
                 warnings.append(
                     f"speed estimate ambiguous: {60 * f_partner:.1f} r/min chosen from the combination lines of a "
