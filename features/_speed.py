@@ -568,7 +568,8 @@ def shaft_angle(rec, data: np.ndarray) -> ShaftAngle:
     if rec.speed_rpm is not None:
         f1, source = rec.speed_rpm / 60.0, "given"
     else:
-        f1, est_warn = estimate_speed_hz(data, fs)
+        rng = rec.speed_range_rpm
+        f1, est_warn = estimate_speed_hz(data, fs, None if rng is None else (rng[0] / 60.0, rng[1] / 60.0))
         warnings.extend(est_warn)
         source = "estimated"
     spr = fs / f1
