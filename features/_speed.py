@@ -397,14 +397,14 @@ def estimate_speed_hz(data: np.ndarray, fs: float,
     seed_idx = peak_idx
     if speed_range_hz is not None:
         # a weak 1X (or its 2X, 3X) inside the given range need not be among the strongest peaks
-        extra = []
+        extra: list[int] = []
         for m in (1, 2, 3):
             a, b = max(int(np.floor(m * c_lo / df)), 1), min(int(np.ceil(m * c_hi / df)), power.size - 2)
             kk = np.arange(a, b + 1)
             if kk.size:
                 ok = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= cfg.SPEED_LINE_MIN_SNR * floor)
                 extra.extend(int(k) for k in kk[ok] if k not in peak_idx)
-        seed_idx = np.concatenate([peak_idx, np.array(sorted(set(extra), key=lambda k: -power[k]), dtype=int)])
+        seed_idx = np.concatenate([peak_idx, np.asarray(sorted(set(extra), key=lambda k: -power[k]), dtype=np.int64)])
     logp = np.log(np.maximum(power, np.finfo(float).tiny))
     snr_level = cfg.SPEED_LINE_MIN_SNR * floor
     present_level = max(snr_level, cfg.SPEED_HARMONIC_MIN_REL ** 2 * pmax)
@@ -416,7 +416,7 @@ def estimate_speed_hz(data: np.ndarray, fs: float,
         fp = (k + delta) * df
         for d in (1, 2, 3):
             f = fp / d
-            if not (c_lo <= f <= c_hi):
+            if not (f_lo <= f <= f_hi):
                 continue
             if any(abs(f - c[0]) < 1.5 * df for c in candidates):
                 continue
@@ -426,14 +426,26 @@ def estimate_speed_hz(data: np.ndarray, fs: float,
             amps = [a if a * a >= present_level else 0.0 for a in weak]
             candidates.append((f, int(sum(a > 0 for a in amps)), float(sum(amps)),
                                int(sum(a > 0 for a in weak)), float(sum(weak))))
-    if not candidates and speed_range_hz is None:
+    if not candidates:
         raise ValueError("cannot estimate the running speed: no candidate line in the search range; "
                          "give speed_rpm or keyphasor_times_s")
-    if not candidates:
-        raise ValueError(
+    # with a speed range: its candidates only; when none has a 1X line there, the best family outside
+    # (a whirl / whip) is kept so that the running speed can be found from its combination lines
+    in_range = [c for c in candidates if c_lo <= c[0] <= c_hi]
+    f_top = float(peak_idx[0]) * df
+    if speed_range_hz is not None and f_top < c_lo:
+        # the largest line lies below the range (a whirl / whip): its harmonics are not running speeds
+        in_range = [c for c in in_range if abs(c[0] - round(c[0] / f_top) * f_top) > 1.5 * df]
+    only_partner = speed_range_hz is not None and not in_range
+    if speed_range_hz is not None and in_range:
+        candidates = in_range
+
+    def no_line_in_range() -> ValueError:
+        return ValueError(
             f"cannot estimate the running speed: no spectral line of a running speed (1X with its own line) lies "
             f"within speed_range_rpm {60 * c_lo:.0f}–{60 * c_hi:.0f} r/min; check the range or give speed_rpm or "
             "keyphasor_times_s")
+
     candidates.sort(key=lambda c: (-c[1], -c[2]))
     # never a sub-harmonic: a family at twice the best one's frequency with as many lines present,
     # whose own line is the stronger (a weaker 1/2X of period-2 motion explains 1X, 1.5X… as well),
@@ -446,7 +458,7 @@ def estimate_speed_hz(data: np.ndarray, fs: float,
         candidates.insert(0, double[0])
     f_best, n_best, s_best = candidates[0][:3]
     warnings: list[str] = []
-    f_best, switched = _above_subsynchronous(x, fs, df, candidates)
+    f_best, switched = (f_best, None) if only_partner else _above_subsynchronous(x, fs, df, candidates)
     whip_hz: float | None = None
     f_partner: float | None = None
     if switched is not None:
@@ -455,6 +467,8 @@ def estimate_speed_hz(data: np.ndarray, fs: float,
     else:
         seeds = _non_harmonic_lines(power, peak_idx, df, f_best, snr_level)
         partners = _combination_partners(power, logp, df, floor, f_best, seeds, c_lo, c_hi, 0.45 * fs)
+        if only_partner and not partners:
+            raise no_line_in_range()
         if partners:
             whip_hz = refine_line_hz(x, fs, f_best, iterations=2)
             if abs(whip_hz - f_best) > 2 * df:

@@ -162,6 +162,7 @@ def register(app: typer.Typer) -> None:
         import json
 
         from rotordiag.core.units import um_to
+        from rotordiag.features import parse_speed_range
 
         from .change import compare, format_change, load_baseline_file
         from .diagnose_files import (
@@ -173,8 +174,6 @@ def register(app: typer.Typer) -> None:
             verdict_row,
             write_table,
         )
-        from rotordiag.features import parse_speed_range
-
         from .predict import format_verdict, load_bundle
         from .registry import RegistryError
 

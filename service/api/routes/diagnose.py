@@ -23,10 +23,10 @@ from ..deps import (
     DiagnoseKeyDep,
     JsonBodyDep,
     KeyphasorQuery,
-    SpeedRangeQuery,
     ModelsDep,
     SampleRateQuery,
     SpeedQuery,
+    SpeedRangeQuery,
     StateDep,
     UnitsQuery,
 )
