@@ -5,8 +5,10 @@ Public API
 ProbeChannel(bearing, angle_deg, units, data)
     One proximity probe (bearing 1–4, mounting angle from horizontal +x toward +y, units
     "um" / "mm" / "m" / "mil").
-Recording(sample_rate_hz, channels, speed_rpm=None, keyphasor_times_s=None, clearance_um=None)
+Recording(sample_rate_hz, channels, speed_rpm=None, keyphasor_times_s=None, clearance_um=None, speed_range_rpm=None)
     An x/y probe pair per bearing present, sampled together; validated on construction.
+    ``speed_range_rpm=(min, max)``: the operator's knowledge of the speed (nominal speed),
+    restricting the estimate when neither speed nor keyphasor is given.
 extract_features(recording) -> FeatureResult
     Running speed, order analysis (1X–3X amplitude/phase, ratios, forward/reverse),
     cross-coupling phase differences, orbit shape, sub-harmonic and non-synchronous
@@ -56,14 +58,14 @@ from ._evidence import EvidenceItem, evidence
 from ._extract import BearingDetail, FeatureResult, extract_features
 from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
 from ._orbit import OrbitShape
-from ._recording import ProbeChannel, Recording
+from ._recording import ProbeChannel, Recording, parse_speed_range
 from ._sanity import SanityFinding, check_recording
 from ._slow_roll import SLOW_ROLL_MAX_SPEED_FRACTION, SlowRollVectors, apply_slow_roll, slow_roll_vectors
 
 tune_malloc()
 
 __all__ = [
-    "ProbeChannel", "Recording", "extract_features", "FeatureResult", "BearingDetail", "OrbitShape",
+    "ProbeChannel", "Recording", "parse_speed_range", "extract_features", "FeatureResult", "BearingDetail", "OrbitShape",
     "FEATURE_NAMES", "FEATURE_SPECS", "FeatureSpec", "feature_names", "ALLOWED_UNITS", "MIN_REVS",
     "MIN_REVS_MOTION", "WHIRL_BAND", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",

@@ -71,6 +71,15 @@ SPEED_PARTNER_CLEAR_SNR = 100.0
 #: the speed from a whirl's combination lines is "ambiguous" when the runner-up candidate scores
 #: at least this fraction of the best
 SPEED_PARTNER_RIVAL_REL = 0.8
+#: … and a candidate running speed must explain at least this many combination lines (Ω ± kω,
+#: 2Ω − kω, k ≠ 0): with one, the true 1X read as a whirl finds a spurious partner (bench_speed
+#: seed 15: every partner with a single combination line was wrong, 7 of 7)
+SPEED_PARTNER_MIN_COMBINATIONS = 2
+#: the estimate is "ambiguous" when its 1X is the largest line and the orbits there are nearly
+#: circular: the median over bearings of backward / forward circular component (or its inverse)
+#: below this (default plant, bench_speed seed 15: where the largest line is a whip, median 0.004,
+#: 0.031–0.042 on the two that a tighter 0.03 left silently wrong; where it is 1X, 0.0875 and above)
+SPEED_WHIRL_MAX_BACKWARD = 0.05
 #: phase-difference refinement iterations of the estimated / given speed
 SPEED_REFINE_ITERATIONS = 3
 #: a given ``speed_rpm`` that differs from the signal's refined 1X line by more than this

@@ -8,7 +8,7 @@ import numpy as np
 
 from ._config import ALLOWED_UNITS, BEARINGS, UNITS_TO_UM
 
-__all__ = ["ProbeChannel", "Recording"]
+__all__ = ["ProbeChannel", "Recording", "parse_speed_range"]
 
 
 def _finite_positive(value: object, name: str, hint: str) -> float:
@@ -19,6 +19,34 @@ def _finite_positive(value: object, name: str, hint: str) -> float:
     if not (np.isfinite(v) and v > 0):
         raise ValueError(f"{name} must be finite and > 0, got {value!r}; {hint}")
     return v
+
+
+def parse_speed_range(value: object, name: str = "speed_range_rpm") -> tuple[float, float]:
+    """``(min, max)`` running speed in r/min from two numbers or a ``"min,max"`` string.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``: not two finite numbers, min <= 0, or min >= max.
+    """
+    hint = "give the running speed's range as two numbers min,max in r/min, e.g. 2900,3100"
+    if isinstance(value, str):
+        value = [v.strip() for v in value.replace(";", ",").split(",")]
+    if isinstance(value, (bytes, Mapping)) or not isinstance(value, Sequence) and not isinstance(value, np.ndarray):
+        raise ValueError(f"{name} must be two numbers (min, max), got {value!r}; {hint}")
+    if len(value) != 2:
+        raise ValueError(f"{name} must be two numbers (min, max), got {len(value)}; {hint}")
+    try:
+        lo, hi = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be two numbers (min, max), got {list(value)!r}; {hint}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        raise ValueError(f"{name} must be finite, got {lo:g}, {hi:g}; {hint}")
+    if lo <= 0:
+        raise ValueError(f"{name}: the minimum must be > 0 r/min, got {lo:g}; {hint}")
+    if lo >= hi:
+        raise ValueError(f"{name}: the minimum ({lo:g}) must be below the maximum ({hi:g}); {hint}")
+    return lo, hi
 
 
 def _slow_roll(value: object, bearing: int, angle: float) -> dict[int, tuple[float, float]]:
@@ -132,6 +160,11 @@ class Recording:
         at t = 0). Gives the speed revolution by revolution and the phase reference.
     clearance_um : float or mapping {bearing: float}, optional
         Radial bearing clearance; enables the ``*_per_c`` features.
+    speed_range_rpm : (float, float), optional
+        What the operator knows of the running speed without measuring it (the machine's nominal
+        speed: a grid-synchronous generator runs at 1500/1800/3000/3600 r/min): when the speed is
+        estimated from the signal, only candidates in [min, max] are considered. A given
+        ``speed_rpm`` must lie inside it; a keyphasor's speed is not restricted.
     """
 
     sample_rate_hz: float
@@ -139,6 +172,7 @@ class Recording:
     speed_rpm: float | None = None
     keyphasor_times_s: np.ndarray | None = None
     clearance_um: float | Mapping[int, float] | None = None
+    speed_range_rpm: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         fs = _finite_positive(self.sample_rate_hz, "Recording.sample_rate_hz",
@@ -171,6 +205,12 @@ class Recording:
         if self.speed_rpm is not None:
             object.__setattr__(self, "speed_rpm", _finite_positive(
                 self.speed_rpm, "Recording.speed_rpm", "give the running speed in r/min or leave it None"))
+        if self.speed_range_rpm is not None:
+            rng = parse_speed_range(self.speed_range_rpm, "Recording.speed_range_rpm")
+            object.__setattr__(self, "speed_range_rpm", rng)
+            if self.speed_rpm is not None and not rng[0] <= self.speed_rpm <= rng[1]:
+                raise ValueError(f"Recording.speed_rpm {self.speed_rpm:g} lies outside speed_range_rpm "
+                                 f"{rng[0]:g}–{rng[1]:g} r/min; correct one of them (or leave the range out)")
         if self.keyphasor_times_s is not None:
             try:
                 kp = np.asarray(self.keyphasor_times_s, dtype=np.float64)

@@ -163,7 +163,8 @@ def _combination_partners(power: np.ndarray, logp: np.ndarray, df: float, floor:
     candidate scores the log-power of each line it explains (within ``SPEED_PARTNER_TOL_BINS``
     of the lattice point) minus that of each line it leaves unexplained, so that a lattice with
     another basis (Ω' = 2Ω − ω reads part of the 2Ω − kω comb as Ω' ± ω, but not its top, the
-    2X at 2Ω) loses to the one that explains every line. A candidate needs at least one combination line.
+    2X at 2Ω) loses to the one that explains every line. A candidate needs at least
+    ``SPEED_PARTNER_MIN_COMBINATIONS`` combination lines.
 
     Returns
     -------
@@ -210,7 +211,7 @@ def _combination_partners(power: np.ndarray, logp: np.ndarray, df: float, floor:
                 hit = np.abs(f_lines - (m * om_c + k * f_w)) <= tol * df * (2 if k == 0 and m > 1 else 1)
                 n_comb += int(k != 0 and bool((hit & ~explained).any()))
                 explained |= hit
-        if n_comb == 0 or any(abs(om_c - c[0]) < 0.5 * df for c in scored):
+        if n_comb < cfg.SPEED_PARTNER_MIN_COMBINATIONS or any(abs(om_c - c[0]) < 0.5 * df for c in scored):
             continue
         score = float(w_lines[explained & ~whirl_family].sum() - w_lines[~explained].sum())
         scored.append((om_c, score, n_comb, float(np.exp(w_lines[own].max())) if own.any() else 0.0))
@@ -301,7 +302,27 @@ def refine_line_hz(data: np.ndarray, fs: float, f0: float, iterations: int = cfg
     return f
 
 
-def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
+def _circular_fraction(spec: np.ndarray, k: int) -> float:
+    """How far from a circle the orbits are at FFT bin ``k``: the median over bearings of min(F, B) / max(F, B).
+
+    ``spec`` holds the Hann spectra of the x, y rows of each bearing in turn (as
+    :func:`estimate_speed_hz` receives them); F and B are the magnitudes of the forward and backward
+    circular components (x ∓ iy) of the line. 0 for perfectly circular orbits in either direction,
+    1 for straight lines; NaN without an x/y pair.
+    """
+    n_b = spec.shape[0] // 2
+    if n_b == 0:
+        return float("nan")
+    x, y = spec[0:2 * n_b:2, k], spec[1:2 * n_b:2, k]
+    fwd, bwd = np.abs(x - 1j * y), np.abs(x + 1j * y)
+    big = np.maximum(fwd, bwd)
+    if not np.any(big > 0):
+        return float("nan")
+    return float(np.median(np.minimum(fwd, bwd)[big > 0] / big[big > 0]))
+
+
+def estimate_speed_hz(data: np.ndarray, fs: float,
+                      speed_range_hz: tuple[float, float] | None = None) -> tuple[float, list[str]]:
     """Running speed (Hz) from the waveforms: the refined spectral line of 1X.
 
     Parameters
@@ -310,6 +331,10 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
         x/y displacements, µm.
     fs : float
         Sample rate, Hz.
+    speed_range_hz : (float, float), optional
+        The running speed is known to lie in [min, max] Hz (the machine's nominal speed, e.g.
+        a grid-synchronous generator): only candidates in that range are considered. Raises
+        ``ValueError`` when none has a line there.
 
     Returns
     -------
@@ -329,6 +354,12 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
     harmonic) is refined by :func:`refine_line_hz`. Period-2 motion (a 1/2X line) and a
     2X-dominated signal can look alike to any spectral method: a warning is given when the
     two best candidates have the same number of lines and amplitudes within 20 %.
+
+    A running speed whose 1X is the largest line and whose orbits there are nearly circular
+    (backward / forward component below ``SPEED_WHIRL_MAX_BACKWARD``, the signature of a
+    self-excited whirl or whip) is flagged ambiguous when a running speed above it (at least
+    ``1 / SPEED_SUBSYNC_MAX_RATIO`` times faster) is still possible: a lone whip family with no
+    line of the running speed looks exactly like a machine running at the whip frequency.
     """
     n = data.shape[1]
     n_fft = fast_length(n)
@@ -343,6 +374,13 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
         raise ValueError(
             f"cannot estimate the running speed: the record ({n} samples at {fs:g} Hz) is too short to resolve "
             f"{cfg.SPEED_SEARCH_RPM[0]:g}–{cfg.SPEED_SEARCH_RPM[1]:g} r/min; give speed_rpm or keyphasor_times_s")
+    c_lo, c_hi = f_lo, f_hi                 # where the running speed may lie
+    if speed_range_hz is not None:
+        c_lo, c_hi = max(f_lo, float(speed_range_hz[0])), min(f_hi, float(speed_range_hz[1]))
+        if c_lo > c_hi:
+            raise ValueError(
+                f"speed_range_rpm {60 * speed_range_hz[0]:g}–{60 * speed_range_hz[1]:g} r/min lies outside what this "
+                f"record can resolve ({60 * f_lo:.0f}–{60 * f_hi:.0f} r/min at {fs:g} Hz); check the range or give speed_rpm")
     band = power[k_lo:k_hi + 1]
     floor = float(np.median(band))
     inner = band[1:-1]
@@ -356,12 +394,23 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
     order = np.argsort(-power[peak_idx], kind="stable")[:cfg.SPEED_CANDIDATE_PEAKS]
     peak_idx = peak_idx[order]
     pmax = power[peak_idx[0]]
+    seed_idx = peak_idx
+    if speed_range_hz is not None:
+        # a weak 1X (or its 2X, 3X) inside the given range need not be among the strongest peaks
+        extra: list[int] = []
+        for m in (1, 2, 3):
+            a, b = max(int(np.floor(m * c_lo / df)), 1), min(int(np.ceil(m * c_hi / df)), power.size - 2)
+            kk = np.arange(a, b + 1)
+            if kk.size:
+                ok = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= cfg.SPEED_LINE_MIN_SNR * floor)
+                extra.extend(int(k) for k in kk[ok] if k not in peak_idx)
+        seed_idx = np.concatenate([peak_idx, np.asarray(sorted(set(extra), key=lambda k: -power[k]), dtype=np.int64)])
     logp = np.log(np.maximum(power, np.finfo(float).tiny))
     snr_level = cfg.SPEED_LINE_MIN_SNR * floor
     present_level = max(snr_level, cfg.SPEED_HARMONIC_MIN_REL ** 2 * pmax)
     # (f, lines present, their summed amplitude, lines above the noise, their summed amplitude)
     candidates: list[tuple[float, int, float, int, float]] = []
-    for k in peak_idx:
+    for k in seed_idx:
         den = logp[k - 1] - 2 * logp[k] + logp[k + 1]
         delta = 0.5 * (logp[k - 1] - logp[k + 1]) / den if den < 0 else 0.0
         fp = (k + delta) * df
@@ -380,6 +429,23 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
     if not candidates:
         raise ValueError("cannot estimate the running speed: no candidate line in the search range; "
                          "give speed_rpm or keyphasor_times_s")
+    # with a speed range: its candidates only; when none has a 1X line there, the best family outside
+    # (a whirl / whip) is kept so that the running speed can be found from its combination lines
+    in_range = [c for c in candidates if c_lo <= c[0] <= c_hi]
+    f_top = float(peak_idx[0]) * df
+    if speed_range_hz is not None and f_top < c_lo:
+        # the largest line lies below the range (a whirl / whip): its harmonics are not running speeds
+        in_range = [c for c in in_range if abs(c[0] - round(c[0] / f_top) * f_top) > 1.5 * df]
+    only_partner = speed_range_hz is not None and not in_range
+    if speed_range_hz is not None and in_range:
+        candidates = in_range
+
+    def no_line_in_range() -> ValueError:
+        return ValueError(
+            f"cannot estimate the running speed: no spectral line of a running speed (1X with its own line) lies "
+            f"within speed_range_rpm {60 * c_lo:.0f}–{60 * c_hi:.0f} r/min; check the range or give speed_rpm or "
+            "keyphasor_times_s")
+
     candidates.sort(key=lambda c: (-c[1], -c[2]))
     # never a sub-harmonic: a family at twice the best one's frequency with as many lines present,
     # whose own line is the stronger (a weaker 1/2X of period-2 motion explains 1X, 1.5X… as well),
@@ -392,7 +458,7 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
         candidates.insert(0, double[0])
     f_best, n_best, s_best = candidates[0][:3]
     warnings: list[str] = []
-    f_best, switched = _above_subsynchronous(x, fs, df, candidates)
+    f_best, switched = (f_best, None) if only_partner else _above_subsynchronous(x, fs, df, candidates)
     whip_hz: float | None = None
     f_partner: float | None = None
     if switched is not None:
@@ -400,7 +466,9 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
         n_best, s_best = next((c[1], c[2]) for c in candidates if c[0] == f_best)
     else:
         seeds = _non_harmonic_lines(power, peak_idx, df, f_best, snr_level)
-        partners = _combination_partners(power, logp, df, floor, f_best, seeds, f_lo, f_hi, 0.45 * fs)
+        partners = _combination_partners(power, logp, df, floor, f_best, seeds, c_lo, c_hi, 0.45 * fs)
+        if only_partner and not partners:
+            raise no_line_in_range()
         if partners:
             whip_hz = refine_line_hz(x, fs, f_best, iterations=2)
             if abs(whip_hz - f_best) > 2 * df:
@@ -426,7 +494,7 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
     if whip_hz is not None:
         foreign = [g for g in foreign if not _on_lattice(g, f_best, whip_hz, df)]
     elif switched is None:
-        foreign += [g for g in _weak_lines_above(power, df, floor, f_best, f_hi) if g not in foreign]
+        foreign += [g for g in _weak_lines_above(power, df, floor, f_best, c_hi) if g not in foreign]
     if foreign:
         warnings.append(
             f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but the lines at "
@@ -452,6 +520,16 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
             f = f_best
     k_top = int(peak_idx[0])
     top_order = k_top * df / f
+    if (f_partner is None and switched is None and abs(k_top * df - f) <= 1.5 * df
+            and c_hi >= f / cfg.SPEED_SUBSYNC_MAX_RATIO
+            and not any(w.startswith("speed estimate ambiguous") for w in warnings)):
+        circ = _circular_fraction(spec, k_top)
+        if circ < cfg.SPEED_WHIRL_MAX_BACKWARD:
+            warnings.append(
+                f"speed estimate ambiguous: {60 * f:.1f} r/min chosen, but its 1X line, the largest, whirls in "
+                f"nearly circular orbits (backward / forward {circ:.3f}), the signature of oil whirl / whip; if the "
+                f"machine runs above {60 * f / cfg.SPEED_SUBSYNC_MAX_RATIO:.0f} r/min this is the whip and the running "
+                "speed's own line is hidden: give speed_rpm, speed_range_rpm or keyphasor_times_s")
     if abs(top_order - round(top_order)) > 0.05 or round(top_order) == 0:
         warnings.append(
             f"the largest spectral line ({60 * k_top * df:.1f} cpm = {top_order:.2f}X) is not synchronous: "
@@ -504,7 +582,8 @@ def shaft_angle(rec, data: np.ndarray) -> ShaftAngle:
     if rec.speed_rpm is not None:
         f1, source = rec.speed_rpm / 60.0, "given"
     else:
-        f1, est_warn = estimate_speed_hz(data, fs)
+        rng = rec.speed_range_rpm
+        f1, est_warn = estimate_speed_hz(data, fs, None if rng is None else (rng[0] / 60.0, rng[1] / 60.0))
         warnings.extend(est_warn)
         source = "estimated"
     spr = fs / f1

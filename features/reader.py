@@ -71,7 +71,7 @@ import numpy as np
 
 from rotordiag.core.units import INPUT_UNITS, UNITS_TO_UM, volts_to_um
 
-from ._recording import ProbeChannel, Recording
+from ._recording import ProbeChannel, Recording, parse_speed_range
 from .safe_io import check_hdf5, load_npy_bounded, loads_json_finite
 from .sandbox import call_isolated
 
@@ -140,6 +140,9 @@ class ReadOptions:
     keyphasor_times_s : sequence of float, optional
         Pulse times (s from the first sample); wins over a keyphasor channel.
     speed_rpm, clearance_um : float, optional
+    speed_range_rpm : (float, float) or str, optional
+        The running speed's range (min, max) r/min, or ``"min,max"``, when the speed is not
+        known exactly (the machine's nominal speed): restricts the speed estimate.
     rotation : {"ccw", "cw"}
         Shaft rotation seen from the driver end.
     viewed_from : {"driver", "non-driver"}
@@ -159,6 +162,7 @@ class ReadOptions:
     keyphasor_times_s: Sequence[float] | None = None
     speed_rpm: float | None = None
     clearance_um: float | Mapping[int, float] | None = None
+    speed_range_rpm: str | Sequence[float] | None = None
     rotation: Literal["ccw", "cw"] = "ccw"
     viewed_from: Literal["driver", "non-driver"] = "driver"
     sample_index: int | None = None
@@ -728,9 +732,11 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
     clearance = opts.clearance_um if opts.clearance_um is not None else info.get("clearance_um")
     if isinstance(clearance, Mapping):
         clearance = {int(k): float(v) for k, v in clearance.items()}
+    speed_range = opts.speed_range_rpm if opts.speed_range_rpm is not None else info.get("speed_range_rpm")
     rec = Recording(sample_rate_hz=float(fs), channels=channels, speed_rpm=speed,
                     keyphasor_times_s=None if kp is None else np.asarray(kp, dtype=np.float64),
-                    clearance_um=clearance)
+                    clearance_um=clearance,
+                    speed_range_rpm=None if speed_range is None else parse_speed_range(speed_range))
     return ReadResult(recording=rec, format=fmt, notes=notes, truth=info.get("truth"))
 
 
@@ -788,7 +794,7 @@ def recording_from_dict(obj: Any, options: ReadOptions | None = None, limits: Re
             raise ValueError(f"JSON: channels[{k}].slow_roll must be a list of {{order, amp_um_pp, phase_deg}}") from None
     if any(v is not None for v in slow):
         info["slow_roll"] = slow
-    for key in ("sample_rate_hz", "speed_rpm", "clearance_um"):
+    for key in ("sample_rate_hz", "speed_rpm", "clearance_um", "speed_range_rpm"):
         if obj.get(key) is not None:
             info[key] = obj[key]
     if isinstance(info.get("clearance_um"), Mapping):

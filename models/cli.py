@@ -147,6 +147,7 @@ def register(app: typer.Typer) -> None:
         viewed_from: str = typer.Option("driver", "--viewed-from", help="End the probe angles are measured from: driver | non-driver."),
         speed_rpm: Optional[float] = typer.Option(None, "--speed-rpm", help="Running speed, r/min (estimated from the signal if omitted)."),
         clearance_um: Optional[float] = typer.Option(None, "--clearance-um", help="Radial bearing clearance, µm (gives the offset in µm)."),
+        speed_range_rpm: Optional[str] = typer.Option(None, "--speed-range-rpm", help="MIN,MAX r/min: the running speed's range when it is not known exactly (the machine's nominal speed, e.g. 2900,3100): the speed estimate is sought only there."),
         sample: Optional[int] = typer.Option(None, "--sample", help="Row of a rotordiag dataset HDF5 file."),
         as_json: bool = typer.Option(False, "--json", help="Print the verdict(s) as JSON."),
         out: Optional[Path] = typer.Option(None, "--out", help="Write one table of verdicts, one row per file: .csv or .json."),
@@ -161,6 +162,7 @@ def register(app: typer.Typer) -> None:
         import json
 
         from rotordiag.core.units import um_to
+        from rotordiag.features import parse_speed_range
 
         from .change import compare, format_change, load_baseline_file
         from .diagnose_files import (
@@ -184,11 +186,13 @@ def register(app: typer.Typer) -> None:
                 "keyphasor_edge": keyphasor_edge, "keyphasor_threshold_v": keyphasor_threshold,
                 "rotation": rotation, "viewed_from": viewed_from, "speed_rpm": speed_rpm,
                 "clearance_um": clearance_um, "sample_index": sample,
+                "speed_range_rpm": None if speed_range_rpm is None else parse_speed_range(speed_range_rpm,
+                                                                                          "--speed-range-rpm"),
             }
             base, rule = load_baseline_file(baseline) if baseline is not None else (None, None)
             runout = None
             if slow_roll is not None:
-                slow_given = {**given, "speed_rpm": None, "sample_index": None,
+                slow_given = {**given, "speed_rpm": None, "sample_index": None, "speed_range_rpm": None,
                               "sample_rate_hz": slow_roll_sample_rate_hz or sample_rate_hz}
                 runout = slow_roll_from_file(slow_roll, load_options(slow_roll, None, slow_given))
         except ValueError as exc:

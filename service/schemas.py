@@ -79,6 +79,12 @@ class RecordingIn(_Strict):
     keyphasor_times_s: list[FiniteFloat] | None = Field(
         None, max_length=MAX_KEYPHASOR_PULSES,
         description="Once-per-revolution keyphasor pulse times, seconds from the first sample, increasing.")
+    speed_range_rpm: list[FiniteFloat] | None = Field(
+        None, min_length=2, max_length=2,
+        description="[min, max] of the running speed, r/min, when it is not known exactly (the machine's nominal "
+        "speed, e.g. [2900, 3100] for a 3000 r/min generator): the speed estimated from the signals is sought only "
+        "there (a whirl or whip line is then not taken for 1X). 0 < min < max; `speed_rpm`, when given, must lie "
+        "inside.", examples=[[2900.0, 3100.0]])
     clearance_um: FiniteFloat | None = Field(
         None, gt=0, le=100_000,
         description="Radial bearing clearance c, micrometres; when given, amplitudes are also reported divided by c "

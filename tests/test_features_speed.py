@@ -172,3 +172,69 @@ def test_simulated_whip_speed_is_right_or_flagged():
             chans.append(ProbeChannel(b + 1, a, "um", p + rng.normal(0, 0.01 * p.std(), p.size)))
     fr = extract_features(Recording(sample_rate_hz=2048.0, channels=chans))
     assert abs(fr.speed_rpm / rpm - 1) <= 5e-3 or any("speed estimate ambiguous" in w for w in fr.warnings)
+
+
+def test_lone_circular_whip_family_is_flagged():
+    """Only a whip and its harmonics (no line of the running speed): it looks like a machine running
+    at the whip frequency, but its orbit is circular, so the estimate is declared ambiguous."""
+    fr = extract_features(_whip_recording(3075.0, 20.5, one_x_um=0.0, comb_um=0.0))
+    assert fr.speed_rpm == pytest.approx(60 * 20.5, rel=5e-3)
+    assert any("speed estimate ambiguous" in w and "circular" in w for w in fr.warnings)
+
+
+def test_elliptical_1x_family_is_not_flagged():
+    """An ordinary 1X-dominated machine (elliptical orbits, no other lines) is not flagged."""
+    comps = {b: [(1, 20.0, 20.0 * b, 8.0, 110.0), (2, 3.0, 40.0, 2.0, 130.0)] for b in (1, 2, 3, 4)}
+    fr = extract_features(make_recording(components=comps, rpm=1500.0, noise_um=0.05, seed=6))
+    assert fr.speed_rpm == pytest.approx(1500.0, rel=1e-5)
+    assert not any("ambiguous" in w for w in fr.warnings)
+
+
+def test_speed_range_hint_skips_the_whip():
+    """With the machine's nominal speed range the whip is not a candidate: the weak 1X is found and
+    the circular-whip flag (the running speed could not lie above the whip) is not raised."""
+    rpm = 3075.0
+    rec = _whip_recording(rpm, 20.5, one_x_um=0.3, comb_um=0.0)
+    free = extract_features(rec)
+    assert any("speed estimate ambiguous" in w for w in free.warnings)
+    hinted = extract_features(make_recording_like(rec, speed_range_rpm=(2900.0, 3200.0)))
+    assert hinted.speed_source == "estimated"
+    assert hinted.speed_rpm == pytest.approx(rpm, rel=5e-4)
+
+
+def test_speed_range_without_a_line_in_it_is_refused():
+    rec = _whip_recording(3075.0, 20.5, one_x_um=0.0, comb_um=0.0)
+    with pytest.raises(ValueError, match="speed_range_rpm 2900–3200"):
+        extract_features(make_recording_like(rec, speed_range_rpm=(2900.0, 3200.0)))
+
+
+@pytest.mark.parametrize("rng,kw,needle", [
+    ((3100.0, 2900.0), {}, "must be below the maximum"),
+    ((-10.0, 3100.0), {}, "must be > 0"),
+    ((2900.0,), {}, "two numbers"),
+    ("2900,abc", {}, "two numbers"),
+    ((2900.0, 3100.0), {"speed_rpm": 1500.0}, "speed_rpm 1500 lies outside"),
+])
+def test_bad_speed_range_names_the_field(rng, kw, needle):
+    from rotordiag.features import Recording
+
+    rec = make_recording(rpm=1500.0, n=4096)
+    with pytest.raises(ValueError, match="speed_range_rpm") as exc:
+        Recording(rec.sample_rate_hz, rec.channels, speed_range_rpm=rng, **kw)
+    assert needle in str(exc.value)
+
+
+def test_speed_range_does_not_touch_given_speed_or_keyphasor():
+    rpm = 1953.7
+    given = extract_features(make_recording(rpm=rpm, speed_rpm=rpm, speed_range_rpm=(1900.0, 2000.0)))
+    ref = extract_features(make_recording(rpm=rpm, speed_rpm=rpm))
+    np.testing.assert_array_equal(given.values, ref.values)
+    kp = extract_features(make_recording(rpm=rpm, keyphasor_times_s=keyphasor_times(rpm, 3.2),
+                                         speed_range_rpm=(100.0, 200.0)))
+    assert kp.speed_source == "keyphasor" and kp.speed_rpm == pytest.approx(rpm, rel=1e-9)
+
+
+def make_recording_like(rec, **kw):
+    from rotordiag.features import Recording
+
+    return Recording(rec.sample_rate_hz, rec.channels, **kw)

@@ -177,6 +177,10 @@ def test_diagnose_npy_csv_and_dataset_row(trained, dataset, tmp_path):
         (["--channels", "1@45,1@135"], "layout names 2 channels"),
         (["--channels", "9@45"], "--channels"),
         (["--sidecar", "nope.json"], "--sidecar"),
+        (["--speed-range-rpm", "3100,2900"], "--speed-range-rpm: the minimum (3100) must be below the maximum"),
+        (["--speed-range-rpm", "-5,3000"], "--speed-range-rpm: the minimum must be > 0"),
+        (["--speed-range-rpm", "3000"], "--speed-range-rpm must be two numbers"),
+        (["--speed-range-rpm", "2900,3100", "--speed-rpm", "1500"], "speed_rpm 1500 lies outside speed_range_rpm"),
     ],
 )
 def test_diagnose_errors_are_clean(trained, tmp_path, args, msg):
@@ -186,6 +190,22 @@ def test_diagnose_errors_are_clean(trained, tmp_path, args, msg):
     res = CliRunner().invoke(app, ["diagnose", str(npy), "--registry", str(reg), "--sample-rate-hz", "2560", *args])
     assert res.exit_code == 2
     assert msg in res.output and "Traceback" not in res.output
+
+
+def test_diagnose_speed_range_hint(trained, tmp_path):
+    """--speed-range-rpm reaches the speed estimate: inside the range it is found, a range without
+    the machine's line is refused naming the option's field."""
+    reg, _ = trained
+    wf, _ = _waveforms(0.5, 1800.0, np.random.default_rng(5))
+    npy = tmp_path / "rec.npy"
+    np.save(npy, wf)
+    base = ["diagnose", str(npy), "--registry", str(reg), "--sample-rate-hz", str(FS),
+            "--channels", ",".join(f"{b}@{a:g}" for b, a in CHANNELS)]
+    res = CliRunner().invoke(app, [*base, "--speed-range-rpm", "1700,1900", "--json"])
+    assert res.exit_code == 0, res.output
+    assert abs(json.loads(res.output)["speed_rpm"] - 1800.0) < 0.5
+    res = CliRunner().invoke(app, [*base, "--speed-range-rpm", "2500,2600"])
+    assert res.exit_code == 2 and "speed_range_rpm 2500–2600" in res.output
 
 
 def test_diagnose_without_sample_rate_or_model(tmp_path):

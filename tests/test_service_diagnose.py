@@ -359,3 +359,28 @@ def test_slow_roll_without_keyphasor_is_a_422(client, rec):
     body["channels"][0]["slow_roll"] = [{"order": 1, "amp_um_pp": 2.0, "phase_deg": 30.0}]
     r = client.post("/diagnose", json=body)
     assert r.status_code == 422 and "keyphasor" in r.text
+
+
+def test_speed_range_hint_json_and_query(client, rec):
+    """speed_range_rpm (JSON field, query parameter) restricts the speed estimate; a bad range is a
+    422 naming the field."""
+    fs, channels = rec
+    r = _post_channels(client, channels, speed_range_rpm=[1700.0, 1900.0])
+    assert r.status_code == 200, r.text
+    assert r.json()["speed_rpm"] == pytest.approx(1800.0, rel=5e-4)
+    data = np.array([d for _, _, d in channels])
+    q = {k: v for k, v in _binary_query(channels).items() if k != "speed_rpm"}
+    r = client.post("/diagnose", params={**q, "speed_range_rpm": "1700,1900"}, content=_npy(data),
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 200, r.text
+    assert r.json()["speed_rpm"] == pytest.approx(1800.0, rel=5e-4)
+    for bad, needle in (([1900.0, 1700.0], "must be below the maximum"), ([-5.0, 1900.0], "must be > 0")):
+        r = _post_channels(client, channels, speed_range_rpm=bad)
+        assert r.status_code == 422 and "speed_range_rpm" in r.json()["detail"] and needle in r.json()["detail"]
+    r = _post_channels(client, channels, speed_rpm=1800.0, speed_range_rpm=[2900.0, 3100.0])
+    assert r.status_code == 422 and "lies outside speed_range_rpm" in r.json()["detail"]
+    r = _post_channels(client, channels, speed_range_rpm=[1700.0])
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"][-1] == "speed_range_rpm"
+    r = client.post("/diagnose", params={**q, "speed_range_rpm": "1900,1700"}, content=_npy(data),
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 422 and "speed_range_rpm" in r.json()["detail"]

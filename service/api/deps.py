@@ -100,6 +100,9 @@ AnglesQuery = Annotated[str | None, Query(max_length=256,
                                           description="Binary/multipart only: probe angle of each row in degrees "
                                           "from horizontal x towards vertical-up y, comma-separated; "
                                           "default 45,135 repeated.")]
+SpeedRangeQuery = Annotated[str | None, Query(max_length=64, description=(
+    "Binary/multipart only: the running speed's range `min,max` in r/min (e.g. `2900,3100` for a 3000 r/min "
+    "generator) when it is not known exactly: the speed estimate is sought only there."))]
 KeyphasorQuery = Annotated[str | None, Query(max_length=200_000,
                                              description="Binary/multipart only: keyphasor pulse times, s, "
                                              "comma-separated.")]

@@ -26,6 +26,7 @@ from ..deps import (
     ModelsDep,
     SampleRateQuery,
     SpeedQuery,
+    SpeedRangeQuery,
     StateDep,
     UnitsQuery,
 )
@@ -38,6 +39,7 @@ router = APIRouter(tags=["diagnose"], route_class=FiniteJSONRoute)
 def reader_query(
     sample_rate_hz: SampleRateQuery = None,
     speed_rpm: SpeedQuery = None,
+    speed_range_rpm: SpeedRangeQuery = None,
     clearance_um: ClearanceQuery = None,
     units: UnitsQuery = None,
     bearings: BearingsQuery = None,
@@ -61,7 +63,8 @@ def reader_query(
 ) -> dict[str, Any]:
     """Query parameters that describe an uploaded recording (its layout and the reader's options,
     ``features.reader.ReadOptions``), shared by every route that takes one."""
-    return dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um, units=units,
+    return dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, speed_range_rpm=speed_range_rpm,
+                clearance_um=clearance_um, units=units,
                 bearings=bearings, angles_deg=angles_deg, keyphasor_times_s=keyphasor_times_s,
                 sensitivity_v_per_mm=sensitivity_v_per_mm, gap_voltage_v=gap_voltage_v, rotation=rotation,
                 viewed_from=viewed_from, keyphasor_channel=keyphasor_channel, keyphasor_edge=keyphasor_edge,
