@@ -325,6 +325,27 @@ def estimate_speed_hz(data: np.ndarray, fs: float,
                       speed_range_hz: tuple[float, float] | None = None) -> tuple[float, list[str]]:
     """Running speed (Hz) from the waveforms: the refined spectral line of 1X.
 
+    With ``speed_range_hz`` the estimate without it is kept when it lies in the range (with its
+    warnings); only when it does not (or fails) is the range-restricted search of
+    :func:`_estimate_speed_hz` used. So a stated range can turn an answer outside it into one
+    inside it, or into a refusal, but never change an answer that already agreed with it.
+    Parameters, returns and notes as :func:`_estimate_speed_hz`.
+    """
+    if speed_range_hz is None:
+        return _estimate_speed_hz(data, fs, None)
+    try:
+        f, warnings = _estimate_speed_hz(data, fs, None)
+        if float(speed_range_hz[0]) <= f <= float(speed_range_hz[1]):
+            return f, warnings
+    except ValueError:
+        pass
+    return _estimate_speed_hz(data, fs, speed_range_hz)
+
+
+def _estimate_speed_hz(data: np.ndarray, fs: float,
+                       speed_range_hz: tuple[float, float] | None = None) -> tuple[float, list[str]]:
+    """Running speed (Hz) from the waveforms: the refined spectral line of 1X (see :func:`estimate_speed_hz`).
+
     Parameters
     ----------
     data : ndarray, shape (n_channels, n_points)
