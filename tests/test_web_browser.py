@@ -596,3 +596,19 @@ def test_baseline_is_set_from_the_page(server, browser, recordings):
     status, b = _get(f"{server}/assets/{asset}/baseline")
     _, h = _get(f"{server}/assets/{asset}/history")
     assert b["baseline"]["source"] == "diagnosis" and b["baseline"]["diagnosis_ids"] == [h["points"][-1]["id"]]
+
+
+def test_speed_range_field(server, browser, recordings, tmp_path):
+    """The nominal speed range goes with the upload: inside it the speed is estimated as without it; a range
+    with min ≥ max is refused in the form's words."""
+    path = _write_npy(tmp_path / "range.npy", recordings[0.05])
+    _open(browser, server)
+    browser.find_element("id", "speed-range").send_keys("1700,1900")
+    _submit_file(browser, path, sample_rate=str(FS_HZ))
+    verdict = browser.execute_script("return window.rotordiag.state.verdict")
+    assert verdict["speed_rpm"] == pytest.approx(SPEED_RPM, rel=5e-3)
+    browser.find_element("id", "speed-range").clear()
+    browser.find_element("id", "speed-range").send_keys("1900,1700")
+    _submit_file(browser, path, sample_rate=str(FS_HZ), expect="error")
+    text = browser.find_element("id", "form-error").text
+    assert "the nominal speed range (r/min)" in text and "speed_range_rpm" not in text, text

@@ -35,6 +35,7 @@
   // the form's words for the service's parameter names (messages are written for API clients too)
   const FIELD_WORDS = {
     sample_rate_hz: "the sample rate (Hz)", speed_rpm: "the running speed (r/min)", clearance_um: "the bearing clearance (µm)",
+    speed_range_rpm: "the nominal speed range (r/min)",
     keyphasor_times_s: "keyphasor pulse times", units: "the units of the waveforms", bearings: "the bearing of each channel",
     angles_deg: "the probe angle of each channel", asset_id: "the asset id", sample_index: "the sample index",
     sensitivity_v_per_mm: "the probe sensitivity (V/mm)", gap_voltage_v: "the gap voltage (V)",
@@ -553,6 +554,9 @@
       for (const [key, id] of Object.entries(numeric)) {
         if (!(key in body) && formValue(id) !== null) body[key] = Number(formValue(id));
       }
+      if (!("speed_range_rpm" in body) && formValue("speed-range") !== null) {
+        body.speed_range_rpm = formValue("speed-range").split(/[,;\s]+/).filter((x) => x).map(Number);
+      }
       if (!("asset_id" in body) && formValue("asset")) body.asset_id = formValue("asset");
       const json = JSON.stringify(body);
       const opts = () => ({ method: "POST", headers: { "Content-Type": "application/json" }, body: json });
@@ -569,7 +573,8 @@
     }
     if (!file) throw new Error("Choose a waveform file (CSV, NPY, HDF5 or UFF), or switch the source to an example or “Paste JSON”.");
     for (const [key, id] of Object.entries(numeric)) if (formValue(id) !== null) q.set(key, formValue(id));
-    for (const [key, id] of [["units", "units"], ["bearings", "bearings"], ["angles_deg", "angles"]]) {
+    for (const [key, id] of [["units", "units"], ["bearings", "bearings"], ["angles_deg", "angles"],
+      ["speed_range_rpm", "speed-range"]]) {
       if (formValue(id) !== null) q.set(key, formValue(id));
     }
     if (formValue("sample-index") !== null && formValue("sample-index") !== "0") q.set("sample_index", formValue("sample-index"));
