@@ -2,6 +2,7 @@
 
     .venv/bin/pip install -e '.[validation]'                      # ross-rotordynamics, plotly<6
     .venv/bin/python benchmarks/ross_validation.py [--out benchmarks/ross_set.npz]
+    .venv/bin/python benchmarks/ross_validation.py --band          # benchmarks/ross_band_set.npz (issue 17)
 
 ROSS (``ross-rotordynamics`` 2.3.0, a finite-element rotordynamics code independent of this
 project) is used **only here, for validation**: nothing is trained on this set, and rotordiag
@@ -41,6 +42,11 @@ nodes are stored.
 Cases per machine: healthy (unbalance only) at balance grades G1, G2.5 and G6.3; parallel
 misalignment Δ = δ/c ∈ :data:`DELTAS` (c = the stated radial bearing clearance) at G2.5 with the
 same unbalance phases as the healthy G2.5 case.
+
+The speed-band set (``--band``, :func:`generate_band`, for the asset-baseline benchmark): per machine
+the healthy G2.5 case at the rated speed, :data:`BAND_HEALTHY` healthy ones and :data:`BAND_PER_DELTA`
+of each misaligned case at speeds uniform within ±:data:`BAND_SPREAD` of rated, each solved by ROSS at its
+own speed with the rated speed's unbalance (a fixed mass eccentricity).
 """
 from __future__ import annotations
 
@@ -54,6 +60,11 @@ from pathlib import Path
 import numpy as np
 
 DEFAULT_PATH = Path(__file__).resolve().parent / "ross_set.npz"
+#: the speed-band set (:func:`generate_band`): healthy and misaligned recordings within ±BAND_SPREAD of rated speed
+BAND_PATH = Path(__file__).resolve().parent / "ross_band_set.npz"
+BAND_HEALTHY = 12
+BAND_PER_DELTA = 2
+BAND_SPREAD = 0.048
 #: stated parallel offsets, as fractions of the radial bearing clearance
 DELTAS = (0.1, 0.2, 0.3, 0.45, 0.6)
 #: balance grades of the healthy cases, mm/s (ISO 21940-11); misaligned cases use the middle one
@@ -152,17 +163,20 @@ def _mass_kg(rotor, first_node: int, last_node: int) -> float:
     return float(sum(e.m for e in rotor.shaft_elements if first_node <= e.n < last_node))
 
 
-def solve_case(spec: MachineSpec, built, delta: float, grade_mm_s: float, phases_rad: tuple[float, float]) -> np.ndarray:
+def solve_case(spec: MachineSpec, built, delta: float, grade_mm_s: float, phases_rad: tuple[float, float],
+               speed_rpm: float | None = None) -> np.ndarray:
     """DC and 1X..4X displacement of the bearing nodes, µm: complex array (4 bearings, 2 [x, y], 1 + N_HARMONICS).
 
     Index 0 is the static position (real); index k the complex amplitude of order k, the motion
-    being ``Re(X_k exp(i k Ω t))``.
+    being ``Re(X_k exp(i k Ω t))``. ``speed_rpm`` (default the machine's rated speed) is the running
+    speed; the unbalance is the balance grade's at the rated speed (a fixed mass eccentricity).
     """
     from ross.faults.misalignment import MisalignmentFlex  # type: ignore[import-not-found]
     from ross.harmonic_balance import HarmonicBalance  # type: ignore[import-not-found]
 
     rotor, nodes, n_coupling, gen_node, exc_node = built
-    omega = spec.speed_rpm * math.pi / 30.0
+    omega = (spec.speed_rpm if speed_rpm is None else speed_rpm) * math.pi / 30.0
+    omega_rated = spec.speed_rpm * math.pi / 30.0
     n_t = 512
     t = np.arange(n_t) / n_t * 2 * math.pi / omega
     f_ext = None
@@ -175,7 +189,7 @@ def solve_case(spec: MachineSpec, built, delta: float, grade_mm_s: float, phases
         f_ext = fault.compute_reaction_force(omega * t)
     m_gen = _mass_kg(rotor, 0, n_coupling)
     m_exc = _mass_kg(rotor, n_coupling + 1, len(rotor.shaft_elements))
-    e_m = grade_mm_s * 1e-3 / omega                      # ISO 21940: G = e·Ω
+    e_m = grade_mm_s * 1e-3 / omega_rated                # ISO 21940: G = e·Ω at the rated speed
     forces = [
         {"node": gen_node, "magnitudes": [m_gen * e_m * omega ** 2], "phases": [phases_rad[0]], "harmonics": [1]},
         {"node": exc_node, "magnitudes": [m_exc * e_m * omega ** 2], "phases": [phases_rad[1]], "harmonics": [1]},
@@ -226,6 +240,43 @@ def generate(path: Path = DEFAULT_PATH, seed: int = SEED) -> dict:
     return arrays
 
 
+def generate_band(path: Path = BAND_PATH, seed: int = SEED, n_healthy: int = BAND_HEALTHY,
+                  n_per_delta: int = BAND_PER_DELTA, spread: float = BAND_SPREAD) -> dict:
+    """The speed-band set (issue 17's baselines): per machine the healthy G2.5 case at the rated speed, then
+    ``n_healthy`` healthy re-recordings and ``n_per_delta`` recordings of each misaligned case (Δ ∈
+    :data:`DELTAS`) at speeds uniform within ±``spread`` of the rated speed (same unbalance as the
+    baseline). Same layout as :func:`generate` (``speed_rpm`` per case), written to ``path``."""
+    import ross  # type: ignore[import-not-found]
+
+    rng = np.random.default_rng(seed + 1)
+    rows: dict[str, list] = {k: [] for k in ("machine", "speed_rpm", "clearance_um", "delta", "grade_mm_s",
+                                              "harmonics_um", "instrumented", "phases_rad")}
+    for spec in MACHINES:
+        t0 = time.perf_counter()
+        built = _build(spec)
+        phases = (float(rng.uniform(0, 2 * math.pi)), float(rng.uniform(0, 2 * math.pi)))
+        cases = [(0.0, spec.speed_rpm)]
+        cases += [(0.0, spec.speed_rpm * (1 + float(rng.uniform(-spread, spread)))) for _ in range(n_healthy)]
+        cases += [(d, spec.speed_rpm * (1 + float(rng.uniform(-spread, spread)))) for d in DELTAS
+                  for _ in range(n_per_delta)]
+        for delta, rpm in cases:
+            rows["machine"].append(spec.name)
+            rows["speed_rpm"].append(rpm)
+            rows["clearance_um"].append(spec.clearance_um)
+            rows["delta"].append(delta)
+            rows["grade_mm_s"].append(GRADES_MM_S[1])
+            rows["harmonics_um"].append(solve_case(spec, built, delta, GRADES_MM_S[1], phases, rpm))
+            rows["instrumented"].append([b in spec.instrumented for b in (1, 2, 3, 4)])
+            rows["phases_rad"].append(phases)
+        print(f"{spec.name}: {len(cases)} cases in {time.perf_counter() - t0:.1f} s")
+    arrays = {k: np.asarray(v) for k, v in rows.items()}
+    arrays["ross_version"] = np.asarray(str(ross.__version__))
+    arrays["seed"] = np.asarray(seed)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, **arrays)
+    return arrays
+
+
 @dataclass(frozen=True)
 class RossCase:
     """One recording of the ROSS set: probe waveforms in µm at 45° and 135° per instrumented bearing."""
@@ -246,7 +297,8 @@ PROBE_ANGLES_DEG = (45.0, 135.0)
 
 def load_ross_set(path: Path = DEFAULT_PATH, *, sample_rate_hz: float = 2560.0, revs: float = 48.0,
                   snr_db: float = 40.0, seed: int = SEED, runout_1x_um: tuple[float, float] = (0.0, 0.0),
-                  runout_2x_um: tuple[float, float] = (0.0, 0.0), runout_seed: int | None = None) -> list[RossCase]:
+                  runout_2x_um: tuple[float, float] = (0.0, 0.0), runout_seed: int | None = None,
+                  runout_per_machine: bool = False) -> list[RossCase]:
     """The cached ROSS set as probe waveforms (NumPy only; no ROSS needed).
 
     Each probe reads ``x cos α + y sin α`` (α from +x horizontal toward +y up, as
@@ -257,7 +309,10 @@ def load_ross_set(path: Path = DEFAULT_PATH, *, sample_rate_hz: float = 2560.0, 
     ψ = α − θ (as ``simulator.dataset.measurement``), amplitudes uniform in the range and phases
     uniform, drawn per bearing from a second generator (``runout_seed``, default ``seed + 10_000``) so the
     waveforms without runout stay what they were; the same ``runout_seed`` with another ``seed`` gives
-    the same shaft runout with new noise and start angles (a re-recording of the same machine). ``keyphasor_times_s`` gives the times at which θ passes 2πm.
+    the same shaft runout with new noise and start angles (a re-recording of the same machine). With
+    ``runout_per_machine`` every case of a machine gets that machine's one runout (drawn from
+    ``(runout_seed, machine index)``): the same shaft in every recording of a set like the speed-band one.
+    ``keyphasor_times_s`` gives the times at which θ passes 2πm.
 
     Raises
     ------
@@ -282,6 +337,10 @@ def load_ross_set(path: Path = DEFAULT_PATH, *, sample_rate_hz: float = 2560.0, 
         phasors = np.exp(1j * np.outer(k, theta))                  # (N, n)
         xy = h[..., :1].real + np.real(np.einsum("bjk,kn->bjn", h[..., 1:], phasors))  # (4, 2, n)
         bearings = tuple(b for b in (1, 2, 3, 4) if bool(z["instrumented"][i][b - 1]))
+        if runout_per_machine:
+            names = list(dict.fromkeys(str(m) for m in z["machine"]))
+            rng_runout = np.random.default_rng([seed + 10_000 if runout_seed is None else runout_seed,
+                                                names.index(str(z["machine"][i]))])
         chans = []
         for b in bearings:
             ro = (rng_runout.uniform(*runout_1x_um), rng_runout.uniform(0, 2 * math.pi),
@@ -314,7 +373,14 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=DEFAULT_PATH)
     ap.add_argument("--seed", type=int, default=SEED)
+    ap.add_argument("--band", action="store_true", help="write the speed-band set (generate_band) instead, to "
+                    "--out or benchmarks/ross_band_set.npz")
     args = ap.parse_args(argv)
+    if args.band:
+        out = BAND_PATH if args.out == DEFAULT_PATH else args.out
+        arrays = generate_band(out, args.seed)
+        print(f"wrote {out} ({out.stat().st_size / 1e3:.1f} kB, {len(arrays['machine'])} cases)")
+        return 0
     arrays = generate(args.out, args.seed)
     h = arrays["harmonics_um"]
     for i in range(len(arrays["machine"])):

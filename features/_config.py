@@ -60,6 +60,17 @@ SPEED_INTEGER_RATIO_TOL = 2e-3
 SPEED_FOREIGN_MIN_SNR = 30.0
 #: … and its amplitude at least this fraction of the largest line
 SPEED_FOREIGN_MIN_REL = 0.002
+#: a line of a whirl / whip's combination lattice mΩ + kω (features._speed._combination_partners)
+#: counts when it is a local maximum this many times above the median spectrum (8 channels of
+#: noise: probability < 1e-6 per bin; 2 channels: ~1e-3, and a candidate needs two such lines) …
+SPEED_PARTNER_LINE_SNR = 4.0
+#: … within this many FFT bins of where the lattice puts it
+SPEED_PARTNER_TOL_BINS = 0.5
+#: … and is not "ambiguous" only when its own 1X line stands this many times above the median spectrum
+SPEED_PARTNER_CLEAR_SNR = 100.0
+#: the speed from a whirl's combination lines is "ambiguous" when the runner-up candidate scores
+#: at least this fraction of the best
+SPEED_PARTNER_RIVAL_REL = 0.8
 #: phase-difference refinement iterations of the estimated / given speed
 SPEED_REFINE_ITERATIONS = 3
 #: a given ``speed_rpm`` that differs from the signal's refined 1X line by more than this

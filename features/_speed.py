@@ -125,6 +125,148 @@ def _above_subsynchronous(x: np.ndarray, fs: float, df: float,
     return best[0], note
 
 
+def _local_peak_ratio(power: np.ndarray, f: float, df: float, floor: float, tol_bins: float) -> float:
+    """Power of the highest local maximum of ``power`` within ``tol_bins`` of ``f``, over ``floor``
+    (0 when there is none)."""
+    k0 = int(round(f / df))
+    r = int(np.ceil(tol_bins))
+    lo, hi = max(k0 - r, 1), min(k0 + r, power.size - 2)
+    best = 0.0
+    for k in range(lo, hi + 1):
+        if abs(k - f / df) <= tol_bins and power[k] >= power[k - 1] and power[k] > power[k + 1]:
+            best = max(best, float(power[k]) / floor)
+    return best
+
+
+#: the lattice lines mΩ + kω a whirl / whip ω makes with the running speed Ω: 1X and Ω ± ω (bearing
+#: nonlinearity), the mirror images 2Ω − kω of the whirl's harmonics (2X asymmetry) ending at 2X, 3X
+_COMBINATIONS: tuple[tuple[int, tuple[int, ...]], ...] = ((1, (0, -1, 1)), (2, (0, -1, -2, -3, -4)), (3, (0,)))
+
+
+def _combination_partners(power: np.ndarray, logp: np.ndarray, df: float, floor: float, f_w: float,
+                          foreign_hz: list[float], f_lo: float, f_hi: float,
+                          f_top: float) -> list[tuple[float, float, int, float]]:
+    """Candidate running speeds Ω when the dominant line family at ``f_w`` is a sub-synchronous whirl / whip.
+
+    A whirl or whip line ω is not locked to the running speed Ω, but it mixes with it: the
+    rotor's 2X asymmetry (misalignment, gravity, a two-pole rotor) turns the forward whirl ω and
+    its harmonics kω into lines at 2Ω − kω (their mirror image about Ω), and the nonlinear
+    bearings add Ω ± kω. Every line of the record then lies on the lattice mΩ + kω, and the
+    running speed's own 1X line is there even when it is a thousand times weaker than the whip.
+
+    Candidates are built from the lines ``foreign_hz`` that are not harmonics of ω (each read as
+    1X, Ω ± kω or 2Ω − kω) and kept when ω ≤ ``SPEED_SUBSYNC_MAX_RATIO`` Ω (a self-excited whirl
+    runs below the running speed) and their own 1X or 2X line is a local maximum. The lines of the
+    record (local maxima at least ``SPEED_PARTNER_LINE_SNR`` × the median spectrum, up to
+    ``f_top``) are then read as lattice points ``_COMBINATIONS`` (1X, Ω ± ω, 2Ω − kω for
+    k = 0…4, 3X): a
+    candidate scores the log-power of each line it explains (within ``SPEED_PARTNER_TOL_BINS``
+    of the lattice point) minus that of each line it leaves unexplained, so that a lattice with
+    another basis (Ω' = 2Ω − ω reads part of the 2Ω − kω comb as Ω' ± ω, but not its top, the
+    2X at 2Ω) loses to the one that explains every line. A candidate needs at least one combination line.
+
+    Returns
+    -------
+    list of (Ω in Hz, score, combination lines explained, 1X power over the floor), best first;
+    empty when no candidate qualifies.
+    """
+    tol = cfg.SPEED_PARTNER_TOL_BINS
+    k_top = min(int(f_top / df), power.size - 2)
+    kk = np.arange(2, k_top)
+    is_line = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= cfg.SPEED_PARTNER_LINE_SNR * floor)
+    k_lines = kk[is_line]
+    den = logp[k_lines - 1] - 2 * logp[k_lines] + logp[k_lines + 1]
+    delta = np.where(den < 0, 0.5 * (logp[k_lines - 1] - logp[k_lines + 1]) / np.where(den < 0, den, -1.0), 0.0)
+    f_lines = (k_lines + delta) * df
+    w_lines = np.log(power[k_lines] / floor)
+    j = np.rint(f_lines / f_w)
+    whirl_family = (j >= 1) & (np.abs(f_lines - j * f_w) <= 1.5 * df)
+
+    def near_whirl_harmonic(f: float) -> bool:
+        i = round(f / f_w)
+        return i >= 1 and abs(f - i * f_w) < 2.5 * df
+
+    seeds: list[float] = []
+    for g in foreign_hz:
+        seeds += [g] + [(g + i * f_w) / 2 for i in range(0, 5)] + [g + i * f_w for i in (-2, -1, 1, 2)] + [g / 3]
+    tried: list[float] = []
+    scored: list[tuple[float, float, int, float]] = []
+    for om in seeds:
+        if not (f_lo <= om <= f_hi) or f_w > cfg.SPEED_SUBSYNC_MAX_RATIO * om or near_whirl_harmonic(om):
+            continue
+        if any(abs(om - t) < 0.5 * df for t in tried):
+            continue
+        tried.append(om)
+        own = np.abs(f_lines - om) <= tol * df
+        own2 = np.abs(f_lines - 2 * om) <= 2 * tol * df
+        if not (own.any() or own2.any()):
+            continue                                    # a running speed shows its 1X or its 2X line
+        om_c = float(f_lines[own][np.argmax(w_lines[own])]) if own.any() else \
+            float(f_lines[own2][np.argmax(w_lines[own2])]) / 2
+        explained = whirl_family.copy()
+        n_comb = 0
+        for m, ks in _COMBINATIONS:
+            for k in ks:
+                hit = np.abs(f_lines - (m * om_c + k * f_w)) <= tol * df * (2 if k == 0 and m > 1 else 1)
+                n_comb += int(k != 0 and bool((hit & ~explained).any()))
+                explained |= hit
+        if n_comb == 0 or any(abs(om_c - c[0]) < 0.5 * df for c in scored):
+            continue
+        score = float(w_lines[explained & ~whirl_family].sum() - w_lines[~explained].sum())
+        scored.append((om_c, score, n_comb, float(np.exp(w_lines[own].max())) if own.any() else 0.0))
+    scored.sort(key=lambda s: -s[1])
+    return scored
+
+
+def _weak_lines_above(power: np.ndarray, df: float, floor: float, f1: float, f_hi: float) -> list[float]:
+    """Lines (local maxima ``SPEED_PARTNER_LINE_SNR`` × the median spectrum) above f1 / ``SPEED_SUBSYNC_MAX_RATIO``
+    and up to ``f_hi`` that are not within 1.5 bins of a harmonic of ``f1``: if ``f1`` were a whirl / whip,
+    one of them could be the running speed's weak 1X line."""
+    k_lo = int(np.ceil(f1 / cfg.SPEED_SUBSYNC_MAX_RATIO / df))
+    k_hi = min(int(f_hi / df), power.size - 2)
+    kk = np.arange(max(k_lo, 2), k_hi + 1)
+    if kk.size == 0:
+        return []
+    is_line = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= cfg.SPEED_PARTNER_LINE_SNR * floor)
+    f = kk[is_line] * df
+    m = np.rint(f / f1)
+    return [float(v) for v in f[np.abs(f - m * f1) > 1.5 * df]]
+
+
+def _on_lattice(f: float, om: float, w: float, df: float) -> bool:
+    """Whether ``f`` lies within 1.5 bins of a line mΩ + kω (m = 0…3, |k| ≤ 6) of speed ``om`` and whirl ``w``."""
+    return any(abs(f - m * om - k * w) <= 1.5 * df for m in range(4) for k in range(-6, 7) if (m, k) != (0, 0))
+
+
+def _refine_partner(x: np.ndarray, fs: float, df: float, power: np.ndarray, floor: float, om: float, w: float) -> float:
+    """Refine a running speed ``om`` found from whirl combination lines (see :func:`_combination_partners`).
+
+    Each lattice line mΩ + kω (m = 1…3, |k| ≤ 4) at least ``SPEED_LINE_MIN_SNR`` above the noise and
+    clear of the whirl's harmonics is refined by :func:`refine_line_hz`; Ω = (f − kω) / m from each,
+    averaged with weights m² × power (the frequency error of a line falls as its amplitude grows, and
+    divides by m). Falls back to ``om`` when no line qualifies or the result wanders off by more than a bin.
+    """
+    num = den = 0.0
+    for m in (1, 2, 3):
+        for k in range(-4, 5):
+            q = m * om + k * w
+            if q <= 2 * df or q > 0.45 * fs or (k != 0 and abs(q - round(q / w) * w) < 2.5 * df):
+                continue
+            r = _local_peak_ratio(power, q, df, floor, cfg.SPEED_PARTNER_TOL_BINS)
+            if r < cfg.SPEED_LINE_MIN_SNR:
+                continue
+            fq = refine_line_hz(x, fs, q, iterations=2)
+            if abs(fq - q) > df:
+                continue
+            wgt = m * m * r
+            num += wgt * (fq - k * w) / m
+            den += wgt
+    if den == 0.0:
+        return om
+    f = num / den
+    return f if abs(f - om) <= df else om
+
+
 def refine_line_hz(data: np.ndarray, fs: float, f0: float, iterations: int = cfg.SPEED_REFINE_ITERATIONS) -> float:
     """Refine the frequency of a spectral line near ``f0`` (Hz) by the phase-difference method.
 
@@ -239,34 +381,75 @@ def estimate_speed_hz(data: np.ndarray, fs: float) -> tuple[float, list[str]]:
         raise ValueError("cannot estimate the running speed: no candidate line in the search range; "
                          "give speed_rpm or keyphasor_times_s")
     candidates.sort(key=lambda c: (-c[1], -c[2]))
+    # never a sub-harmonic: a family at twice the best one's frequency with as many lines present,
+    # whose own line is the stronger (a weaker 1/2X of period-2 motion explains 1X, 1.5X… as well),
+    # is the running speed
+    f0 = candidates[0][0]
+    double = [c for c in candidates[1:] if abs(c[0] - 2 * f0) < 1.5 * df and c[1] >= candidates[0][1]
+              and _hann_amplitude_at(power, c[0], df) > _hann_amplitude_at(power, f0, df)]
+    if double:
+        candidates.remove(double[0])
+        candidates.insert(0, double[0])
     f_best, n_best, s_best = candidates[0][:3]
     warnings: list[str] = []
     f_best, switched = _above_subsynchronous(x, fs, df, candidates)
+    whip_hz: float | None = None
+    f_partner: float | None = None
     if switched is not None:
         warnings.append(switched)
         n_best, s_best = next((c[1], c[2]) for c in candidates if c[0] == f_best)
+    else:
+        seeds = _non_harmonic_lines(power, peak_idx, df, f_best, snr_level)
+        partners = _combination_partners(power, logp, df, floor, f_best, seeds, f_lo, f_hi, 0.45 * fs)
+        if partners:
+            whip_hz = refine_line_hz(x, fs, f_best, iterations=2)
+            if abs(whip_hz - f_best) > 2 * df:
+                whip_hz = f_best
+            om, score, n_lines, r1 = partners[0]
+            f_partner = _refine_partner(x, fs, df, power, floor, om, whip_hz)
+            warnings.append(
+                f"the line family at {60 * whip_hz:.1f} cpm ({whip_hz / f_partner:.3f}X) is a sub-synchronous "
+                f"whirl / whip: {n_lines} lines at combinations mΩ + kω of it with the running speed Ω "
+                f"({60 * f_partner:.1f} r/min)")
+            weak_1x = r1 < cfg.SPEED_PARTNER_CLEAR_SNR
+            close = len(partners) > 1 and partners[1][1] >= cfg.SPEED_PARTNER_RIVAL_REL * score
+            if weak_1x or close:
+                why = (f"its own 1X line is {'not seen' if r1 == 0 else f'only {10 * np.log10(r1):.0f} dB above the noise'}"
+                       if weak_1x else
+                       f"{60 * partners[1][0]:.1f} r/min explains the combination lines almost as well")
+                warnings.append(
+                    f"speed estimate ambiguous: {60 * f_partner:.1f} r/min chosen from the combination lines of a "
+                    f"whirl / whip at {60 * whip_hz:.1f} cpm, but {why}; give speed_rpm or keyphasor_times_s")
+            f_best = f_partner
     foreign = _non_harmonic_lines(power, peak_idx, df, f_best, max(cfg.SPEED_FOREIGN_MIN_SNR * floor,
                                                                      cfg.SPEED_FOREIGN_MIN_REL ** 2 * pmax))
+    if whip_hz is not None:
+        foreign = [g for g in foreign if not _on_lattice(g, f_best, whip_hz, df)]
+    elif switched is None:
+        foreign += [g for g in _weak_lines_above(power, df, floor, f_best, f_hi) if g not in foreign]
     if foreign:
         warnings.append(
             f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but the lines at "
             f"{', '.join(f'{60 * f:.0f}' for f in foreign[:4])} cpm are not its harmonics (two independent "
             "frequencies: oil whirl / whip or a sub-harmonic, with the running speed possibly elsewhere); "
             "give speed_rpm or keyphasor_times_s")
-    rivals = [c for c in candidates if c[0] != f_best and c[1] > 0]
-    if rivals and rivals[0][1] == n_best and rivals[0][2] >= 0.8 * s_best:
-        warnings.append(
-            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * rivals[0][0]:.1f} r/min "
-            "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
-    # refine on the strongest of the candidate's 1X..3X lines below 0.45 fs
-    harmonics = [m for m in (1, 2, 3) if m * f_best < 0.45 * fs]
-    h = max(harmonics, key=lambda m: _hann_amplitude_at(power, m * f_best, df))
-    k_h = int(round(h * f_best / df))
-    strongest = np.argsort(-np.abs(spec[:, k_h]))[:4]       # the channels that carry the line
-    f = refine_line_hz(x[strongest], fs, h * f_best) / h
-    if abs(f - f_best) > 2 * df:  # refinement wandered off: keep the interpolated peak
-        warnings.append(f"speed refinement did not converge; using the spectral peak {60 * f_best:.2f} r/min")
-        f = f_best
+    if f_partner is not None:
+        f = f_partner
+    else:
+        rivals = [c for c in candidates if c[0] != f_best and c[1] > 0]
+        if rivals and rivals[0][1] == n_best and rivals[0][2] >= 0.8 * s_best:
+            warnings.append(
+                f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * rivals[0][0]:.1f} r/min "
+                "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
+        # refine on the strongest of the candidate's 1X..3X lines below 0.45 fs
+        harmonics = [m for m in (1, 2, 3) if m * f_best < 0.45 * fs]
+        h = max(harmonics, key=lambda m: _hann_amplitude_at(power, m * f_best, df))
+        k_h = int(round(h * f_best / df))
+        strongest = np.argsort(-np.abs(spec[:, k_h]))[:4]       # the channels that carry the line
+        f = refine_line_hz(x[strongest], fs, h * f_best) / h
+        if abs(f - f_best) > 2 * df:  # refinement wandered off: keep the interpolated peak
+            warnings.append(f"speed refinement did not converge; using the spectral peak {60 * f_best:.2f} r/min")
+            f = f_best
     k_top = int(peak_idx[0])
     top_order = k_top * df / f
     if abs(top_order - round(top_order)) > 0.05 or round(top_order) == 0:

@@ -26,8 +26,9 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ChangeRule", "THRESHOLDS_PATH", "QUANTITIES", "fit_thresholds", "shipped_rule", "assess_change", "compare", "load_baseline_file", "format_change",
-           "UNITS"]
+__all__ = ["ChangeRule", "THRESHOLDS_PATH", "QUANTITIES", "fit_thresholds", "shipped_rule", "assess_change", "compare",
+           "load_baseline_file", "format_change", "UNITS", "repeatability_thresholds", "REPEAT_MIN", "REPEAT_MARGIN",
+           "REPEAT_FLOOR", "REPEAT_QUANTITIES"]
 
 THRESHOLDS_PATH = Path(__file__).resolve().parent / "default" / "change_thresholds.json"
 
@@ -51,6 +52,21 @@ FIT_MARGIN = 1.25
 SEARCHED = ("1x_change", "dc_shift")
 #: the false-alarm rate on the calibration re-recordings that the fit may not exceed
 FIT_TARGET_FALSE_ALARM = 0.03
+
+#: quantities whose threshold an asset's own repeatability sets, when its baseline is made of
+#: ≥ :data:`REPEAT_MIN` recordings (:func:`repeatability_thresholds`); the orbit-shape changes keep the shipped
+#: thresholds (their spread on unchanged machines is as wide as on misaligned ones)
+REPEAT_QUANTITIES = ("1x_change", "2x_change", "dc_shift")
+#: recordings a baseline needs before its own repeatability is used
+REPEAT_MIN = 3
+#: a repeatability threshold is this factor × the largest leave-one-out change among the baseline's recordings;
+#: chosen on the calibration plants of ``benchmarks/bench_baseline.py`` (the smallest factor of 2, 2.5, … 6 whose
+#: false-alarm rate there is ≤ 3 %), measured on its held-out plants and the ROSS machines
+REPEAT_MARGIN = 4.0
+#: below these no change is alarmed whatever the repeatability (µm pk-pk for vectors, µm for the centreline):
+#: about the resolution of a proximity-probe system (noise ~0.1–0.3 µm pk-pk, 16-bit digitiser); a DC-gap
+#: drift with probe temperature is not simulated and would need a larger centreline floor on a real machine
+REPEAT_FLOOR = {"1x_change_um_pp": 0.5, "2x_change_um_pp": 0.3, "dc_shift_um": 0.3}
 
 
 @dataclass
@@ -84,6 +100,20 @@ class ChangeRule:
         if unknown:
             raise ValueError(f"unknown change quantities {sorted(unknown)}; known: {sorted(self.thresholds)}")
         return ChangeRule({**self.thresholds, **overrides}, self.source, self.path)
+
+    def with_repeatability(self, repeatability: dict[str, Any] | None) -> ChangeRule:
+        """A copy whose :data:`REPEAT_QUANTITIES` thresholds are the asset's own (``repeatability`` as returned by
+        :func:`repeatability_thresholds`, or None: unchanged). Their ``_per_c`` twins are dropped — the µm
+        threshold is already this machine's own scale, the twin only carried a scale across machines."""
+        if not repeatability or not repeatability.get("thresholds"):
+            return self
+        th = dict(self.thresholds)
+        for name, value in repeatability["thresholds"].items():
+            if name not in th:
+                raise ValueError(f"unknown change quantity {name!r} in the repeatability thresholds")
+            th[name] = None if value is None else float(value)
+        src = {**self.source, "repeatability": {k: v for k, v in repeatability.items() if k != "thresholds"}}
+        return ChangeRule(th, src, self.path)
 
     def describe(self) -> str:
         return ", ".join(f"{k} > {v:.3g}" for k, v in self.thresholds.items() if v is not None)
@@ -184,6 +214,64 @@ def fit_thresholds(unchanged: list[Any], changed: list[Any] | None = None, *,
                   f"false alarms ≤ {target_false_alarm:.0%}", "quantiles": quantiles,
            "calibration_false_alarm": fa, "calibration_detection": det, **(source or {})}
     return ChangeRule(th, src)
+
+
+def repeatability_thresholds(signatures: list[dict[str, Any]], *, margin: float = REPEAT_MARGIN,
+                             floors: dict[str, float] | None = None) -> dict[str, Any] | None:
+    """An asset's own thresholds from the recordings its baseline is made of (its repeatability).
+
+    Each recording is compared with the average of the others (leave-one-out,
+    ``features.average_signatures`` + ``features.change_features``); per quantity of
+    :data:`REPEAT_QUANTITIES` the threshold is ``margin`` × the largest such change (over recordings and
+    bearings), and at least its floor (:data:`REPEAT_FLOOR`). Machines differ far more from each other than
+    re-recordings of one machine do: on a machine of another design (the ROSS set of
+    ``benchmarks/bench_baseline.py``) a parallel offset moves the journals by 0.1–3 µm, far below the shipped
+    thresholds, and far above that machine's own repeatability.
+
+    Parameters
+    ----------
+    signatures : list of dict
+        ``features.signature`` of each recording of the baseline (same asset, same operating condition).
+    margin : float
+        Factor on the largest leave-one-out change.
+    floors : dict, optional
+        Smallest threshold per µm quantity (default :data:`REPEAT_FLOOR`).
+
+    Returns
+    -------
+    dict or None
+        None with fewer than :data:`REPEAT_MIN` recordings or when one is more than 10 % in speed from the
+        average of the others (an automatic baseline's recordings lie within ±5 % of their median);
+        else ``{"thresholds": {name: value}, "spread": {name: largest leave-one-out change},
+        "n_recordings", "margin"}`` where ``thresholds`` holds the µm names and their ``_per_c`` twins as None
+        (a quantity not measured in every recording is left out: the shipped threshold stays).
+    """
+    from rotordiag.features import SPEED_BAND_FRAC, average_signatures, change_features
+
+    floors = dict(REPEAT_FLOOR if floors is None else floors)
+    if len(signatures) < REPEAT_MIN:
+        return None
+    spread: dict[str, float] = {}
+    for i, sig in enumerate(signatures):
+        rest = average_signatures([s for j, s in enumerate(signatures) if j != i])
+        # recordings each within ±5 % of their median speed can be 10 % apart from each other
+        res = change_features(rest, sig, band=2 * SPEED_BAND_FRAC)
+        if not res.comparable:
+            return None
+        for q in REPEAT_QUANTITIES:
+            name = QUANTITIES[q][0]
+            v = res.largest(name)[0]
+            if math.isfinite(v):
+                spread[name] = max(spread.get(name, 0.0), float(v))
+    thresholds: dict[str, float | None] = {}
+    for q in REPEAT_QUANTITIES:
+        um_name, c_name = QUANTITIES[q]
+        if um_name not in spread:
+            continue                        # never measured in the baseline: the shipped threshold stays
+        thresholds[um_name] = max(margin * spread[um_name], floors.get(um_name, 0.0))
+        if c_name is not None:
+            thresholds[c_name] = None
+    return {"thresholds": thresholds, "spread": spread, "n_recordings": len(signatures), "margin": float(margin)}
 
 
 def assess_change(result: Any, rule: ChangeRule) -> dict[str, Any]:
@@ -291,8 +379,13 @@ def compare(signature_now: dict[str, Any], baseline: dict[str, Any] | None, rule
                + " above the alarm thresholds")
     else:
         msg = f"no change beyond the alarm thresholds since the baseline of {baseline.get('set_at')}"
+    notes = list(d["notes"])
+    rep = rule.source.get("repeatability")
+    if rep:
+        notes.append(f"1X, 2X and centreline thresholds from this asset's own repeatability ({rep.get('n_recordings')} "
+                     f"baseline recordings, {rep.get('margin'):g} × their largest difference from each other)")
     return {**head, "used": True, "compared": True, "changed": verdict["changed"], "exceeded": verdict["exceeded"],
-            "quantities": verdict["quantities"], "values": d["values"], "notes": d["notes"], "evidence": evidence,
+            "quantities": verdict["quantities"], "values": d["values"], "notes": notes, "evidence": evidence,
             "message": msg, "speed_change_frac": d["speed_change_frac"]}
 
 
@@ -317,7 +410,7 @@ def load_baseline_file(path: str | Path) -> tuple[dict[str, Any], ChangeRule]:
     if not isinstance(base, dict) or not isinstance(base.get("signature"), dict):
         raise ValueError(f"--baseline {path}: no baseline in it (an asset without a baseline, or not a baseline "
                          "file); write one with `rotordiag baseline show ASSET --json`")
-    rule = shipped_rule()
+    rule = shipped_rule().with_repeatability(base.get("repeatability"))
     edited = raw.get("edited_thresholds")
     if isinstance(edited, dict) and edited:
         rule = rule.with_overrides(edited)

@@ -44,14 +44,31 @@ def baseline_dict(row: AssetBaseline, *, with_signature: bool = True) -> dict[st
            "model_version": row.model_version}
     if with_signature:
         out["signature"] = row.signature
+    out["repeatability"] = row.repeatability
     return out
 
 
-def rule_for(session: Session, asset_id: str):
-    """The asset's alarm thresholds: the shipped ones with the asset's edits."""
+def rule_for(session: Session, asset_id: str, row: AssetBaseline | None = None):
+    """The asset's alarm thresholds: the shipped ones, the repeatability ones of its baseline (``row``, read
+    when not given), then the asset's edits."""
     from rotordiag.models.change import shipped_rule
 
-    return shipped_rule().with_overrides(get_thresholds(session, asset_id))
+    if row is None:
+        row = get_baseline(session, asset_id)
+    rep = row.repeatability if row is not None else None
+    return shipped_rule().with_repeatability(rep).with_overrides(get_thresholds(session, asset_id))
+
+
+def thresholds_origin(session: Session, asset_id: str, row: AssetBaseline | None = None) -> dict[str, str]:
+    """Per threshold in force: ``shipped``, ``repeatability`` or ``edited`` (see :func:`rule_for`)."""
+    from rotordiag.models.change import shipped_rule
+
+    if row is None:
+        row = get_baseline(session, asset_id)
+    own = set(((row.repeatability or {}).get("thresholds") or {}) if row is not None else ())
+    edited = set(get_thresholds(session, asset_id))
+    return {k: "edited" if k in edited else "repeatability" if k in own else "shipped"
+            for k in shipped_rule().thresholds}
 
 
 def attach_baseline(state: AppState, asset_id: str, verdict: dict[str, Any], signature: dict[str, Any] | None) -> None:
@@ -60,7 +77,7 @@ def attach_baseline(state: AppState, asset_id: str, verdict: dict[str, Any], sig
 
     with state.sessions() as s:
         row = get_baseline(s, asset_id)
-        rule = rule_for(s, asset_id)
+        rule = rule_for(s, asset_id, row)
         base = baseline_dict(row) if row is not None else None
         hint = "" if row is not None else _auto_hint(s, asset_id)
     if signature is None:
@@ -104,7 +121,8 @@ def from_diagnosis(state: AppState, asset_id: str, diagnosis_id: int, source: st
 
 
 def propose(session: Session, asset_id: str, n: int = AUTO_N) -> dict[str, Any]:
-    """The automatic baseline proposal: the first ``n`` stored recordings, if at one operating condition.
+    """The automatic baseline proposal: the first ``n`` stored recordings, if at one operating condition,
+    averaged, with their repeatability thresholds (None for fewer than ``models.change.REPEAT_MIN``).
 
     Raises
     ------
@@ -129,10 +147,13 @@ def propose(session: Session, asset_id: str, n: int = AUTO_N) -> dict[str, Any]:
             + ", ".join(f"{v:.0f}" for v in speeds) + f" r/min (diagnoses {', '.join(str(i) for i, _ in far)} "
             f"more than ±{100 * SPEED_BAND_FRAC:g} % from the median {med:.0f}); set the baseline from a recording "
             "or a diagnosis id instead", "conflict")
-    sig = average_signatures([r.signature or {} for r in rows])
+    from rotordiag.models.change import repeatability_thresholds
+
+    sigs = [r.signature or {} for r in rows]
+    sig = average_signatures(sigs)
     versions = sorted({r.model_version for r in rows})
     return {"diagnosis_ids": [r.id for r in rows], "recorded_at": rows[-1].created_at, "speed_rpm": sig["speed_rpm"],
-            "model_version": versions[-1], "signature": sig}
+            "model_version": versions[-1], "signature": sig, "repeatability": repeatability_thresholds(sigs)}
 
 
 def set_auto(state: AppState, asset_id: str, n: int = AUTO_N) -> dict[str, Any]:
@@ -141,7 +162,7 @@ def set_auto(state: AppState, asset_id: str, n: int = AUTO_N) -> dict[str, Any]:
         p = propose(s, asset_id, n)
     row = AssetBaseline(asset_id=asset_id, source="auto", diagnosis_ids=p["diagnosis_ids"],
                         recorded_at=p["recorded_at"], speed_rpm=p["speed_rpm"], model_version=p["model_version"],
-                        signature=p["signature"])
+                        signature=p["signature"], repeatability=p["repeatability"])
     return baseline_dict(put_baseline(state, row))
 
 

@@ -79,7 +79,7 @@ def _register_baseline(app: typer.Typer) -> None:
         """Show an asset's baseline (or the automatic proposal) and its alarm thresholds."""
         import json
 
-        from rotordiag.service.baseline import baseline_dict, propose, rule_for
+        from rotordiag.service.baseline import baseline_dict, propose, rule_for, thresholds_origin
         from rotordiag.service.errors import InputError
         from rotordiag.service.store import get_baseline, get_thresholds
 
@@ -87,8 +87,9 @@ def _register_baseline(app: typer.Typer) -> None:
         with state.sessions() as s:
             row = get_baseline(s, asset_id)
             out: dict = {"asset_id": asset_id, "baseline": baseline_dict(row) if row is not None else None,
-                         "thresholds": rule_for(s, asset_id).thresholds,
-                         "edited_thresholds": get_thresholds(s, asset_id)}
+                         "thresholds": rule_for(s, asset_id, row).thresholds,
+                         "edited_thresholds": get_thresholds(s, asset_id),
+                         "thresholds_origin": thresholds_origin(s, asset_id, row)}
             if row is None:
                 try:
                     p = propose(s, asset_id)
@@ -108,8 +109,10 @@ def _register_baseline(app: typer.Typer) -> None:
             speed = "unknown" if b["speed_rpm"] is None else f"{b['speed_rpm']:.0f} r/min"
             typer.echo(f"asset {asset_id}: baseline set {b['set_at']} from {b['source']} (diagnoses "
                        f"{b['diagnosis_ids']}), speed {speed} (compared within ±5 %), model {b['model_version']}")
-        typer.echo("  alarm thresholds: " + ", ".join(f"{k} {v:.3g}" for k, v in out["thresholds"].items()
-                                                      if v is not None))
+        origin = out["thresholds_origin"]
+        typer.echo("  alarm thresholds: " + ", ".join(
+            f"{k} {v:.3g}" + ("" if origin.get(k) == "shipped" else f" ({origin.get(k)})")
+            for k, v in out["thresholds"].items() if v is not None))
 
     @baseline_app.command("set")
     def set_(

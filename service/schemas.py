@@ -203,6 +203,10 @@ class BaselineOut(BaseModel):
     model_version: str = Field(..., description="Model version that diagnosed its recording(s).")
     signature: dict[str, Any] | None = Field(None, description="The 1X/2X vectors, centreline and orbit shape per "
                                              "bearing (features.signature).")
+    repeatability: dict[str, Any] | None = Field(
+        None, description="For a baseline of ≥ 3 recordings (`auto`): the asset's own 1X, 2X and centreline "
+        "thresholds from how much those recordings differ from each other (`thresholds`, `spread`, "
+        "`n_recordings`, `margin`); they replace the shipped ones for this asset. Null otherwise.")
 
 
 class AssetBaselineOut(BaseModel):
@@ -214,6 +218,9 @@ class AssetBaselineOut(BaseModel):
                                             "(`diagnosis_ids`, `speed_rpm`) or why there is none (`reason`).")
     thresholds: dict[str, float | None] = Field(..., description="The alarm thresholds in force.")
     edited_thresholds: dict[str, float | None] = Field(..., description="This asset's edits of them.")
+    thresholds_origin: dict[str, str] = Field(
+        default_factory=dict, description="Where each threshold in force comes from: `shipped` "
+        "(models/default/change_thresholds.json), `repeatability` (this asset's automatic baseline) or `edited`.")
 
 
 class ThresholdsIn(_Strict):

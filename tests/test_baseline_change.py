@@ -161,3 +161,61 @@ def test_compare_without_baseline_and_baseline_file(tmp_path):
     path.write_text(json.dumps({"asset_id": "a", "baseline": None}))
     with pytest.raises(ValueError, match="no baseline"):
         load_baseline_file(path)
+
+
+def test_repeatability_thresholds_are_the_assets_own_and_catch_what_the_shipped_ones_miss():
+    """A small machine (1X 2 µm): three re-recordings of it set its own 1X/2X/centreline thresholds far below
+    the shipped ones (tuned on a family of big machines); a 1.5 µm journal shift — under the shipped 6 µm and
+    0.0135 c — is then a change, while a fourth re-recording of the unchanged machine is not."""
+    from rotordiag.models.change import REPEAT_FLOOR, REPEAT_MARGIN, repeatability_thresholds
+
+    small = dict(vec1=(2.0, 30.0), vec2=(0.4, 60.0), noise_um=0.02)
+    base_sigs = [_sig(**small, seed=40 + i) for i in range(3)]
+    rep = repeatability_thresholds(base_sigs)
+    assert rep is not None and rep["n_recordings"] == 3 and rep["margin"] == REPEAT_MARGIN
+    th = rep["thresholds"]
+    for name in ("1x_change_um_pp", "2x_change_um_pp", "dc_shift_um"):
+        assert th[name] >= REPEAT_FLOOR[name]
+        assert th[name] == pytest.approx(max(REPEAT_MARGIN * rep["spread"][name], REPEAT_FLOOR[name]))
+        assert th[name] < shipped_rule().thresholds[name]
+    assert th["dc_shift_per_c"] is None and th["1x_change_pp_per_c"] is None
+    own = shipped_rule().with_repeatability(rep)
+    assert own.thresholds["orbit_2x_1x_change"] == shipped_rule().thresholds["orbit_2x_1x_change"]
+    base = average_signatures(base_sigs)
+    shifted = change_features(base, _sig(**small, dc=(0.0, -101.5), seed=50))
+    assert not assess_change(shifted, shipped_rule())["changed"]
+    v = assess_change(shifted, own)
+    assert v["changed"] and v["exceeded"] == ["dc_shift"]
+    again = change_features(base, _sig(**small, seed=51))
+    assert not assess_change(again, own)["changed"]
+    # the leave-one-out spread is what the recordings differ by: a noisier machine gets looser thresholds
+    noisy = repeatability_thresholds([_sig(**{**small, "noise_um": 0.6}, seed=60 + i) for i in range(3)])
+    assert noisy is not None and noisy["spread"]["1x_change_um_pp"] > rep["spread"]["1x_change_um_pp"]
+
+
+def test_repeatability_needs_three_comparable_recordings():
+    from rotordiag.models.change import repeatability_thresholds
+
+    assert repeatability_thresholds([_sig(seed=1), _sig(seed=2)]) is None
+    assert repeatability_thresholds([_sig(seed=1), _sig(seed=2), _sig(seed=3, speed_rpm=2100.0)]) is None
+    # an automatic baseline's recordings lie within ±5 % of their median: 9 % apart from each other is fine
+    spread = [_sig(seed=4, speed_rpm=SPEED_RPM * 0.955), _sig(seed=5), _sig(seed=6, speed_rpm=SPEED_RPM * 1.045)]
+    assert repeatability_thresholds(spread) is not None
+    rule = shipped_rule()
+    assert rule.with_repeatability(None) is rule
+    with pytest.raises(ValueError, match="unknown change quantity"):
+        rule.with_repeatability({"thresholds": {"nonsense": 1.0}})
+
+
+def test_a_baseline_file_carries_its_repeatability_thresholds(tmp_path):
+    from rotordiag.models.change import repeatability_thresholds
+
+    sigs = [_sig(seed=70 + i) for i in range(3)]
+    rep = repeatability_thresholds(sigs)
+    path = tmp_path / "b.json"
+    path.write_text(json.dumps({"asset_id": "a", "baseline": {"signature": average_signatures(sigs),
+                                                               "repeatability": rep}, "edited_thresholds": {}}))
+    _, rule = load_baseline_file(path)
+    assert rule.thresholds["dc_shift_um"] == pytest.approx(rep["thresholds"]["dc_shift_um"])
+    section = compare(sigs[0], {"signature": average_signatures(sigs), "set_at": "x"}, rule)
+    assert any("own repeatability" in n for n in section["notes"])

@@ -146,3 +146,39 @@ def test_ross_set_regenerates_from_ross():
     i = int(np.flatnonzero((z["machine"] == spec.name) & (z["delta"] == 0.3))[0])
     again = rv.solve_case(spec, built, 0.3, float(z["grade_mm_s"][i]), tuple(z["phases_rad"][i]))
     np.testing.assert_allclose(again, z["harmonics_um"][i], rtol=1e-6, atol=1e-9)
+
+
+def test_ross_band_set_and_runout_per_machine():
+    """The speed-band set (issue 17's baselines): every case within ±4.8 % of its machine's rated speed, the
+    first of each machine healthy at the rated speed; with ``runout_per_machine`` the runout is the same shaft's
+    in every recording of a machine (seen as the identical 1X/2X of a case with noise off differing only by the
+    response), redrawn otherwise."""
+    cases = rv.load_ross_set(rv.BAND_PATH, snr_db=np.inf)
+    rated = {m.name: m.speed_rpm for m in rv.MACHINES}
+    assert len(cases) == len(rv.MACHINES) * (1 + rv.BAND_HEALTHY + rv.BAND_PER_DELTA * len(rv.DELTAS))
+    firsts = {}
+    for c in cases:
+        assert abs(c.speed_rpm / rated[c.machine] - 1) <= rv.BAND_SPREAD + 1e-12
+        firsts.setdefault(c.machine, c)
+    assert all(c.delta == 0 and c.speed_rpm == rated[c.machine] for c in firsts.values())
+
+    def runout_only(per_machine: bool, seed: int):
+        with_r = rv.load_ross_set(rv.BAND_PATH, snr_db=np.inf, runout_1x_um=(1.0, 3.0), runout_2x_um=(0.5, 1.0),
+                                  runout_seed=7, seed=seed, runout_per_machine=per_machine)
+        without = rv.load_ross_set(rv.BAND_PATH, snr_db=np.inf, seed=seed)
+        return [(a.machine, a.waveforms_um - b.waveforms_um, a.keyphasor_times_s) for a, b in zip(with_r, without)]
+
+    def runout_vector(w, kp, fs):          # the 2X runout of the first probe, relative to the keyphasor
+        t = np.arange(w.shape[1]) / fs
+        theta = np.interp(t, kp, 2 * np.pi * np.arange(len(kp)))
+        sel = (t >= kp[0]) & (t <= kp[-1])
+        return 2 * np.mean(w[0, sel] * np.exp(-2j * theta[sel]))
+
+    fs = cases[0].sample_rate_hz
+    fixed = runout_only(True, 1)
+    redrawn = runout_only(False, 1)
+    m0 = fixed[0][0]
+    v_fixed = [runout_vector(w, kp, fs) for m, w, kp in fixed if m == m0]
+    v_redrawn = [runout_vector(w, kp, fs) for m, w, kp in redrawn if m == m0]
+    assert np.ptp(np.abs(v_fixed)) < 0.02 and np.ptp(np.angle(v_fixed)) < 0.05       # one shaft
+    assert np.ptp(np.abs(v_redrawn)) > 0.05                                            # new draws

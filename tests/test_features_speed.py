@@ -85,3 +85,90 @@ def test_speed_estimate_is_deterministic():
 def test_default_components_have_distinct_bearings():
     # guard for the tests above: the synthetic record has all four bearings
     assert sorted(DEFAULT_COMPONENTS) == [1, 2, 3, 4]
+
+
+def _whip_recording(rpm: float, f_whip_hz: float, one_x_um: float, comb_um: float, *, noise_um: float = 0.05,
+                    seed: int = 3, fs: float = 2048.0, n: int = 2190):
+    """A whip at ``f_whip_hz`` (with harmonics) far stronger than a weak 1X/2X family, plus the
+    combination lines 2Ω − kω (k = 1…3) of amplitude ``comb_um`` that a 2X asymmetry makes."""
+    w = 2 * np.pi * f_whip_hz
+    om = 2 * np.pi * rpm / 60
+
+    def whip(t, b):
+        x = 60 * np.cos(w * t) + 3 * np.cos(2 * w * t + 0.3) + 1 * np.cos(3 * w * t + 1.1)
+        y = 60 * np.sin(w * t) + 3 * np.sin(2 * w * t + 0.3) + 1 * np.sin(3 * w * t + 1.1)
+        for k in (1, 2, 3):
+            x = x + comb_um / k * np.cos((2 * om - k * w) * t + 0.7 * k)
+            y = y - comb_um / k * np.sin((2 * om - k * w) * t + 0.7 * k)
+        return x, y
+
+    comps = {b: [(1, one_x_um, 20.0 * b, one_x_um, 110.0), (2, 0.4 * one_x_um, 40.0, 0.4 * one_x_um, 130.0)]
+             for b in (1, 2, 3, 4)}
+    return make_recording(components=comps, rpm=rpm, fs=fs, n=n, extra=whip, noise_um=noise_um, seed=seed)
+
+
+def test_strong_whip_below_weak_1x_family_gives_the_running_speed():
+    """Oil whip locked at 20.5 Hz, 1X 1/60 of it: the combination lines say which line is 1X."""
+    rpm = 2862.6
+    fr = extract_features(_whip_recording(rpm, 20.5, one_x_um=1.0, comb_um=0.5))
+    assert fr.speed_rpm == pytest.approx(rpm, rel=5e-3)
+    assert any("whirl / whip" in w for w in fr.warnings)
+
+
+def test_whip_without_combination_lines_is_flagged_not_silent():
+    """A whip with a 1X barely above the noise and no combination lines: whatever speed is
+    chosen, the estimate is declared ambiguous (the verdict's speed_ambiguous reason)."""
+    rpm = 3075.0
+    fr = extract_features(_whip_recording(rpm, 20.5, one_x_um=0.08, comb_um=0.0, noise_um=0.3))
+    ok = abs(fr.speed_rpm / rpm - 1) <= 5e-3
+    assert ok or any("speed estimate ambiguous" in w for w in fr.warnings)
+
+
+def test_half_order_subharmonic_is_not_taken_for_the_running_speed():
+    """Period-2 motion (rub): a 1/2X line and its odd multiples next to a 1X/2X/3X family."""
+    rpm = 2400.0
+    comps = {b: [(1, 20.0, 20.0 * b, 18.0, 110.0), (2, 6.0, 40.0, 5.0, 130.0), (3, 2.0, 0.0, 1.5, 90.0)]
+             for b in (1, 2, 3, 4)}
+    f_half = 2 * np.pi * rpm / 120
+
+    def half(t, b):
+        return 8 * np.cos(f_half * t) + 1 * np.cos(3 * f_half * t), 8 * np.sin(f_half * t) + 1 * np.sin(3 * f_half * t)
+
+    fr = extract_features(make_recording(components=comps, rpm=rpm, extra=half, noise_um=0.2, seed=2))
+    assert fr.speed_rpm == pytest.approx(rpm, rel=1e-4)
+
+
+def test_genuinely_ambiguous_pair_is_flagged():
+    """Two independent line families of equal weight (no combination lines): ambiguous."""
+    rpm = 1500.0
+    f2 = 2 * np.pi * 41.3
+
+    def other(t, b):
+        x = 20 * np.cos(f2 * t) + 6 * np.cos(2 * f2 * t) + 2 * np.cos(3 * f2 * t)
+        return x, 20 * np.sin(f2 * t) + 6 * np.sin(2 * f2 * t) + 2 * np.sin(3 * f2 * t)
+
+    comps = {b: [(1, 20.0, 20.0 * b, 20.0, 110.0), (2, 6.0, 40.0, 6.0, 130.0), (3, 2.0, 0.0, 2.0, 90.0)]
+             for b in (1, 2, 3, 4)}
+    fr = extract_features(make_recording(components=comps, rpm=rpm, extra=other, noise_um=0.1, seed=4))
+    assert any("speed estimate ambiguous" in w for w in fr.warnings)
+
+
+@pytest.mark.slow
+def test_simulated_whip_speed_is_right_or_flagged():
+    """The default plant above its whip threshold (64 revolutions at 2048 Hz): right within 0.5 % or flagged."""
+    from rotordiag.features import ProbeChannel, Recording
+    from rotordiag.simulator import Plant, simulate
+
+    rpm = 2862.6
+    res = simulate(Plant.default(), rpm, 0.17, 0.05, mechanism="pin", transient_revs=300, record_revs=64,
+                   sample_rate_hz=2048.0, unbalance_phase_rad=1.0)
+    assert res.status == "ok"
+    d = res.journal_displacements_m * 1e6
+    rng = np.random.default_rng(7)
+    chans = []
+    for b in range(4):
+        for a in (45.0, 135.0):
+            p = d[:, b, 0] * np.cos(np.deg2rad(a)) + d[:, b, 1] * np.sin(np.deg2rad(a))
+            chans.append(ProbeChannel(b + 1, a, "um", p + rng.normal(0, 0.01 * p.std(), p.size)))
+    fr = extract_features(Recording(sample_rate_hz=2048.0, channels=chans))
+    assert abs(fr.speed_rpm / rpm - 1) <= 5e-3 or any("speed estimate ambiguous" in w for w in fr.warnings)

@@ -135,6 +135,34 @@ def test_automatic_baseline_from_the_first_recordings_at_one_speed(client):
     assert r.status_code == 200 and r.json()["source"] == "auto" and r.json()["diagnosis_ids"] == prop["diagnosis_ids"]
 
 
+def test_an_automatic_baseline_sets_the_assets_own_thresholds_from_its_repeatability(client):
+    """Three re-recordings of one machine (only the noise redrawn) make its own 1X/2X/centreline thresholds;
+    a 2 µm journal shift at bearing 3 — below the shipped 6 µm — then raises the alarm, and the answer and
+    GET say where each threshold comes from; an edit still wins."""
+    from rotordiag.models.change import REPEAT_FLOOR, shipped_rule
+
+    asset = "unit-own"
+    for seed in range(3):
+        client.post("/diagnose", json=_body(asset, seed=20 + seed))
+    b = client.post(f"/assets/{asset}/baseline?auto=true", headers=auth()).json()
+    rep = b["repeatability"]
+    assert rep["n_recordings"] == 3 and set(rep["thresholds"]) >= {"1x_change_um_pp", "2x_change_um_pp", "dc_shift_um"}
+    got = client.get(f"/assets/{asset}/baseline").json()
+    assert got["thresholds_origin"]["dc_shift_um"] == "repeatability"
+    assert got["thresholds_origin"]["orbit_2x_1x_change"] == "shipped"
+    assert REPEAT_FLOOR["dc_shift_um"] <= got["thresholds"]["dc_shift_um"] < 2.0 < shipped_rule().thresholds["dc_shift_um"]
+    assert got["thresholds"]["dc_shift_per_c"] is None
+    same = client.post("/diagnose", json=_body(asset, seed=30)).json()["baseline"]
+    assert same["compared"] and not same["changed"]
+    assert any("own repeatability" in n for n in same["notes"])
+    moved = client.post("/diagnose", json=_body(asset, dc_shift_um=2.0, seed=31)).json()["baseline"]
+    assert moved["changed"] and "dc_shift" in moved["exceeded"]
+    r = client.put(f"/assets/{asset}/thresholds", json={"thresholds": {"dc_shift_um": 5.0}}, headers=auth()).json()
+    assert r["thresholds"]["dc_shift_um"] == 5.0 and r["thresholds_origin"]["dc_shift_um"] == "edited"
+    again = client.post("/diagnose", json=_body(asset, dc_shift_um=2.0, seed=32)).json()["baseline"]
+    assert not again["changed"]
+
+
 def test_automatic_baseline_refuses_recordings_of_different_speed_bands(client):
     asset = "unit-mixed"
     for speed in (SPEED_RPM, SPEED_RPM, 2100.0):

@@ -530,6 +530,13 @@ def test_baseline_and_change_are_shown(server, browser, recordings, tmp_path):
     with urllib.request.urlopen(req, timeout=60) as r:
         base = json.loads(r.read())
     assert base["source"] == "diagnosis"
+    status, shown = _get(f"{server}/assets/{asset}/baseline")
+    same = shown["thresholds"]["orbit_2x_1x_change"]          # an edit to the same value: origin "edited"
+    req = urllib.request.Request(f"{server}/assets/{asset}/thresholds", method="PUT",
+                                 data=json.dumps({"thresholds": {"orbit_2x_1x_change": same}}).encode(),
+                                 headers={"X-API-Key": "web-test-key", "Content-Type": "application/json"})
+    with urllib.request.urlopen(req, timeout=60) as r:
+        assert json.loads(r.read())["thresholds_origin"]["orbit_2x_1x_change"] == "edited"
 
     _open(browser, server)
     _submit_file(browser, _write_npy(tmp_path / "later.npy", recordings[0.45]), asset=asset,
@@ -541,9 +548,51 @@ def test_baseline_and_change_are_shown(server, browser, recordings, tmp_path):
     rows = browser.find_elements("css selector", "#verdict-evidence tbody tr")
     assert any(r.text.startswith("change since baseline") and "CHANGED" in r.text for r in rows)
     _wait(browser, lambda d: d.find_element("id", "trend-baseline-box").is_displayed(), 30, "the baseline in the trend")
-    assert "from diagnosis" in browser.find_element("id", "trend-baseline").text
+    trend = browser.find_element("id", "trend-baseline").text
+    assert "from diagnosis" in trend and "Alarm thresholds of this asset: orbit 2x 1x change" in trend, trend
+    assert "(edited); the others shipped" in trend, trend
     alarms = browser.find_element("id", "trend-alarms").text
     status, history = _get(f"{server}/assets/{asset}/history")
     assert history["alarms"][0]["event"] == "raised"
     assert f"alarm raised ({', '.join(history['alarms'][0]['quantities'])})" in alarms
     _screenshot(browser, "baseline-changed")
+
+
+def test_baseline_is_set_from_the_page(server, browser, recordings):
+    """The trend's baseline form: refused without the key and with a wrong one (the service's words shown),
+    then an automatic baseline (3 stored recordings; the asset's own thresholds listed) and the latest
+    diagnosis made the baseline, each shown in the trend after the click."""
+    asset = "web-base-2"
+    rng = np.random.default_rng(5)
+    for _ in range(3):
+        data = recordings[0.05] + 0.05 * rng.standard_normal(recordings[0.05].shape)
+        body = {"sample_rate_hz": FS_HZ, "clearance_um": CLEARANCE_UM, "asset_id": asset, **_json_body(data)}
+        req = urllib.request.Request(server + "/diagnose", data=json.dumps(body).encode(),
+                                     headers={"Content-Type": "application/json"})
+        with urllib.request.urlopen(req, timeout=120) as r:
+            assert r.status == 200
+    _open(browser, server)
+    browser.find_element("id", "trend-asset").send_keys(asset)
+    browser.find_element("id", "trend-btn").click()
+    _wait(browser, lambda d: d.find_element("id", "trend-baseline-box").is_displayed(), 30, "the baseline box")
+    assert "None set. Automatic proposal" in browser.find_element("id", "trend-baseline").text
+    browser.find_element("id", "baseline-auto-btn").click()
+    err = browser.find_element("id", "baseline-error")
+    assert err.is_displayed() and "API key" in err.text
+    browser.find_element("id", "baseline-key").send_keys("wrong-key")
+    browser.find_element("id", "baseline-auto-btn").click()
+    _wait(browser, lambda d: "key" in d.find_element("id", "baseline-error").text.lower()
+          and "Type the API key" not in d.find_element("id", "baseline-error").text, 20, "the wrong-key message")
+    browser.find_element("id", "baseline-key").clear()
+    browser.find_element("id", "baseline-key").send_keys("web-test-key")
+    browser.find_element("id", "baseline-auto-btn").click()
+    _wait(browser, lambda d: "from auto" in d.find_element("id", "trend-baseline").text, 30, "the automatic baseline")
+    text = browser.find_element("id", "trend-baseline").text
+    assert "from its baseline recordings' repeatability" in text, text
+    assert not browser.find_element("id", "baseline-error").is_displayed()
+    _screenshot(browser, "baseline-set-from-page")
+    browser.find_element("id", "baseline-latest-btn").click()
+    _wait(browser, lambda d: "from diagnosis" in d.find_element("id", "trend-baseline").text, 30, "the latest as baseline")
+    status, b = _get(f"{server}/assets/{asset}/baseline")
+    _, h = _get(f"{server}/assets/{asset}/history")
+    assert b["baseline"]["source"] == "diagnosis" and b["baseline"]["diagnosis_ids"] == [h["points"][-1]["id"]]

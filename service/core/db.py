@@ -96,6 +96,9 @@ class AssetBaseline(Base):
     speed_rpm: Mapped[float | None] = mapped_column(Float, nullable=True)
     model_version: Mapped[str] = mapped_column(String(128))
     signature: Mapped[dict[str, Any]] = mapped_column(JSON)
+    # the asset's own thresholds from the repeatability of the recordings it was made of (models.change.
+    # repeatability_thresholds); null for a baseline of fewer than models.change.REPEAT_MIN recordings
+    repeatability: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
 
 
 class AssetSettings(Base):

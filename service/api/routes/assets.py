@@ -9,7 +9,17 @@ from fastapi import APIRouter, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from pydantic import BeforeValidator
 
-from ...baseline import AUTO_N, alarm_events, baseline_dict, from_diagnosis, propose, record_verdict, rule_for, set_auto
+from ...baseline import (
+    AUTO_N,
+    alarm_events,
+    baseline_dict,
+    from_diagnosis,
+    propose,
+    record_verdict,
+    rule_for,
+    set_auto,
+    thresholds_origin,
+)
 from ...schemas import (
     MAX_LABEL_LEN,
     AssetBaselineOut,
@@ -106,8 +116,9 @@ def get_asset_baseline(asset_id: AssetPath, session: SessionDep) -> AssetBaselin
             proposal = {"reason": str(exc)}
     return AssetBaselineOut(asset_id=asset_id,
                             baseline=BaselineOut(**baseline_dict(row)) if row is not None else None,
-                            proposal=proposal, thresholds=rule_for(session, asset_id).thresholds,
-                            edited_thresholds=get_thresholds(session, asset_id))
+                            proposal=proposal, thresholds=rule_for(session, asset_id, row).thresholds,
+                            edited_thresholds=get_thresholds(session, asset_id),
+                            thresholds_origin=thresholds_origin(session, asset_id, row))
 
 
 @router.post(
@@ -161,8 +172,9 @@ def delete_asset_baseline(asset_id: AssetPath, state: StateDep) -> None:
             dependencies=[ApiKeyDep, JsonBodyDep], responses=_BASELINE_ERRORS,
             summary="Edit an asset's alarm thresholds on the change")
 def put_asset_thresholds(asset_id: AssetPath, body: ThresholdsIn, state: StateDep, session: SessionDep):
-    """Override some of the shipped thresholds (`models/default/change_thresholds.json`) for this asset;
-    `{}` restores them. Names: those of GET /assets/{id}/baseline's `thresholds`."""
+    """Override some of the thresholds in force for this asset (the shipped ones,
+    `models/default/change_thresholds.json`, or those of an automatic baseline's repeatability); `{}` removes
+    the edits. Names: those of GET /assets/{id}/baseline's `thresholds`."""
     from rotordiag.models.change import shipped_rule
 
     try:

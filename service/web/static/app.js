@@ -682,6 +682,30 @@
     }
   }
 
+  // set the asset's baseline from the page: the latest stored diagnosis, or the automatic proposal
+  async function setBaseline(how) {
+    setError($("baseline-error"), "");
+    const asset = $("trend-asset").value.trim();
+    const h = state.history;
+    if (!asset || !h) { setError($("baseline-error"), "Show an asset's trend first."); return; }
+    const key = $("baseline-key").value;
+    if (!key) { setError($("baseline-error"), "Type the API key: setting a baseline changes the asset's alarms."); return; }
+    let query = "auto=true";
+    if (how === "latest") {
+      const last = h.points.length ? h.points[h.points.length - 1] : null;
+      if (!last || last.id === null || last.id === undefined) {
+        setError($("baseline-error"), "This asset has no stored diagnosis to make the baseline."); return;
+      }
+      query = `diagnosis_id=${last.id}`;
+    }
+    try {
+      await api(`/assets/${encodeURIComponent(asset)}/baseline?${query}`, { method: "POST", headers: { "X-API-Key": key } });
+      await loadTrend(asset);
+    } catch (exc) {
+      setError($("baseline-error"), plainWords(exc.message));
+    }
+  }
+
   async function loadBaseline(asset, h) {
     const b = await api(`/assets/${encodeURIComponent(asset)}/baseline`);
     const base = b.baseline;
@@ -689,6 +713,11 @@
     if (base) {
       text = `Set ${base.set_at} from ${base.source} (diagnoses ${base.diagnosis_ids.join(", ")}), ` +
         `${fixed(base.speed_rpm, 0)} r/min (recordings within ±5 % are compared), model ${base.model_version}.`;
+      const own = Object.entries(b.thresholds_origin || {}).filter(([, o]) => o !== "shipped");
+      text += own.length ? " Alarm thresholds of this asset: " + own.map(([k, o]) =>
+        `${k.replace(/_/g, " ")} ${b.thresholds[k] === null ? "off" : num(b.thresholds[k], 3)} (${o === "repeatability" ?
+          "from its baseline recordings' repeatability" : "edited"})`).join("; ") + "; the others shipped." :
+        " Alarm thresholds: the shipped ones (a baseline of 3 recordings, ?auto=true, sets this asset's own).";
     } else if (b.proposal && b.proposal.diagnosis_ids) {
       text = `None set. Automatic proposal: diagnoses ${b.proposal.diagnosis_ids.join(", ")} at ` +
         `${fixed(b.proposal.speed_rpm, 0)} r/min (${b.proposal.how}).`;
@@ -796,6 +825,9 @@
     for (const id of ["show-raw", "show-1x", "show-2x", "show-1x2x", "spectrum-scale"]) $(id).addEventListener("change", renderPlots);
     $("length-units").addEventListener("change", () => { renderPlots(); renderTrend(); });
     $("trend-form").addEventListener("submit", (ev) => { ev.preventDefault(); loadTrend($("trend-asset").value.trim()); });
+    $("baseline-form").addEventListener("submit", (ev) => ev.preventDefault());
+    $("baseline-latest-btn").addEventListener("click", () => setBaseline("latest"));
+    $("baseline-auto-btn").addEventListener("click", () => setBaseline("auto"));
     loadHealth();
     loadModels();
     loadExamples();
