@@ -251,8 +251,9 @@ class CompiledModel:
         ood = model.ood_
         imputer, scaler = ood.preprocess_.named_steps["impute"], ood.preprocess_.named_steps["scale"]
         self._ood_fill = np.asarray(imputer.statistics_, float)
-        self._ood_mean = np.asarray(scaler.mean_, float) if scaler.with_mean else np.zeros(n)
-        self._ood_scale = np.asarray(scaler.scale_, float) if scaler.with_std else np.ones(n)
+        n_ood = self._ood_fill.shape[0]        # the OOD scorer's own columns (model.ood_input)
+        self._ood_mean = np.asarray(scaler.mean_, float) if scaler.with_mean else np.zeros(n_ood)
+        self._ood_scale = np.asarray(scaler.scale_, float) if scaler.with_std else np.ones(n_ood)
         self._ood_ref = np.asarray(ood.reference_, np.float32)
         self._ood_ref_sq = np.einsum("ij,ij->i", self._ood_ref.astype(float), self._ood_ref.astype(float))
 
@@ -300,7 +301,7 @@ class CompiledModel:
     def ood_ratio(self, X) -> np.ndarray:
         """k-th-neighbour distance / threshold (as ``MisalignmentModel.ood_ratio``)."""
         ood = self.model.ood_
-        X = self._rows(X)
+        X = self.model.ood_input(self._rows(X))
         X = np.where(np.isnan(X), self._ood_fill, X)
         Z = ((X - self._ood_mean) / self._ood_scale).astype(np.float32).astype(float)
         # ‖z − r‖² = ‖z‖² − 2 z·r + ‖r‖², clipped at 0 against rounding.

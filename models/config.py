@@ -60,7 +60,8 @@ _CLASSIFIERS = {"multiclass": SeverityClassifier, "ordinal": OrdinalSeverityClas
 
 DEFAULT_EXCLUDE: tuple[str, ...] = ("b?_[xy]_[123]x_phase_deg",)
 DEFAULT_CLEARANCE_FEATURES: tuple[str, ...] = ("*_per_c", "*_per_c2")
-_FEATURE_KEYS = {"exclude", "clearance_features", "clearance_dropout", "monotonic_increasing"}
+_FEATURE_KEYS = {"exclude", "clearance_features", "clearance_dropout", "monotonic_increasing", "ood_features",
+                 "ood_log_scales"}
 _SECTIONS = {"seed", "bands", "features", "classifier", "regressor", "ood", "evaluation", "baselines", "augment"}
 
 
@@ -83,6 +84,8 @@ class TrainConfig:
     clearance_features: tuple[str, ...] = DEFAULT_CLEARANCE_FEATURES
     clearance_dropout: float = 0.5
     monotonic_increasing: tuple[str, ...] = ()
+    ood_features: tuple[str, ...] = ()
+    ood_log_scales: dict[str, float] = field(default_factory=dict)
     classifier_kind: str = "multiclass"
     classifier: dict = field(default_factory=dict)
     regressor: dict = field(default_factory=dict)
@@ -144,6 +147,13 @@ class TrainConfig:
         if mono and kind != "ordinal":
             raise ValueError("[features] monotonic_increasing: needs [classifier] kind = \"ordinal\" (a multiclass "
                              "classifier cannot take monotonic constraints)")
+        ood_feats = feats.get("ood_features", ())
+        if not isinstance(ood_feats, (list, tuple)) or not all(isinstance(p, str) for p in ood_feats):
+            raise ValueError(f"[features] ood_features: a list of feature-name patterns, got {ood_feats!r}")
+        ood_log = feats.get("ood_log_scales", {})
+        if not isinstance(ood_log, Mapping) or not all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 for v in ood_log.values()):
+            raise ValueError(f"[features] ood_log_scales: a table of pattern = positive scale, got {ood_log!r}")
         cfg = cls(
             seed=seed,
             bands=bands,
@@ -151,6 +161,8 @@ class TrainConfig:
             clearance_features=tuple(str(p) for p in feats.get("clearance_features", DEFAULT_CLEARANCE_FEATURES)),
             clearance_dropout=float(dropout),
             monotonic_increasing=tuple(mono),
+            ood_features=tuple(ood_feats),
+            ood_log_scales={str(k): float(v) for k, v in ood_log.items()},
             classifier_kind=kind,
             classifier=_params(_CLASSIFIERS[kind], "classifier", clf),
             regressor=_params(ConformalIntervalRegressor, "regressor", d.get("regressor")),
@@ -192,6 +204,8 @@ class TrainConfig:
                 "clearance_features": list(self.clearance_features),
                 "clearance_dropout": self.clearance_dropout,
                 "monotonic_increasing": list(self.monotonic_increasing),
+                "ood_features": list(self.ood_features),
+                "ood_log_scales": dict(self.ood_log_scales),
             },
             "classifier": {"kind": self.classifier_kind, **dict(self.classifier)},
             "regressor": dict(self.regressor),
@@ -215,4 +229,6 @@ class TrainConfig:
             ood=KNNDistanceOOD(**{**seeded, **self.ood}),
             feature_names=tuple(feature_names),
             monotonic_increasing=self.monotonic_increasing,
+            ood_features=self.ood_features,
+            ood_log_scales=dict(self.ood_log_scales),
         )

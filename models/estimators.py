@@ -592,6 +592,17 @@ class MisalignmentModel(BaseEstimator):
         classifier (an :class:`~rotordiag.models.ordinal.OrdinalSeverityClassifier`; a
         multiclass :class:`SeverityClassifier` cannot take constraints) and to the Δ
         regressor's point and centre models. Needs ``feature_names``.
+    ood_features : sequence of str, default=()
+        Glob patterns of the features the OOD scorer sees (default: all). A few physically
+        meaningful features (amplitudes, orbit size and shaft position per clearance, 2X/1X,
+        non-synchronous content) keep the distance from being diluted by hundreds of
+        correlated columns. Needs ``feature_names``.
+    ood_log_scales : mapping of str to float, default={}
+        Pattern → scale *s*: a matching OOD feature *x* enters as ``log1p(max(x, 0) / s)``
+        (first matching pattern wins), so that amplitudes and ratios are compared by their
+        order of magnitude above a physical floor *s* (e.g. 1 µm, 0.01 c, a 2X/1X of 0.05)
+        rather than linearly: a machine vibrating 200× less than the family is far away,
+        one with a clean 0.1 µm 2X is not.
 
     Attributes
     ----------
@@ -608,8 +619,10 @@ class MisalignmentModel(BaseEstimator):
         +1 where ``monotonic_increasing`` matched, else 0.
     """
 
-    #: models saved before this parameter existed load without it
+    #: models saved before these parameters existed load without them
     monotonic_increasing: Sequence[str] = ()
+    ood_features: Sequence[str] = ()
+    ood_log_scales: dict | None = None
 
     def __init__(
         self,
@@ -621,6 +634,8 @@ class MisalignmentModel(BaseEstimator):
         ood: KNNDistanceOOD | None = None,
         feature_names: Sequence[str] | None = None,
         monotonic_increasing: Sequence[str] = (),
+        ood_features: Sequence[str] = (),
+        ood_log_scales: dict | None = None,
     ) -> None:
         self.band_edges = band_edges
         self.band_names = band_names
@@ -629,6 +644,8 @@ class MisalignmentModel(BaseEstimator):
         self.ood = ood
         self.feature_names = feature_names
         self.monotonic_increasing = monotonic_increasing
+        self.ood_features = ood_features
+        self.ood_log_scales = ood_log_scales
 
     @property
     def ordinal_(self) -> bool:
@@ -699,8 +716,9 @@ class MisalignmentModel(BaseEstimator):
         if cst is not None:
             self.regressor_.set_params(monotonic_cst=cst)
         self.regressor_.fit(X, y, groups=groups)
+        self.ood_columns_, self.ood_log_scale_ = self._ood_columns()
         self.ood_ = clone(self.ood if self.ood is not None else KNNDistanceOOD())
-        self.ood_.fit(X, groups=groups)
+        self.ood_.fit(self.ood_input(X), groups=groups)
         nan = np.isnan(X)
         self.feature_nan_rate_ = nan.mean(axis=0)
         with np.errstate(all="ignore"):
@@ -718,6 +736,41 @@ class MisalignmentModel(BaseEstimator):
         if unmatched:
             raise ValueError(f"monotonic_increasing: pattern(s) {unmatched} match no feature name")
         return cst
+
+    def _ood_columns(self) -> tuple[np.ndarray, np.ndarray]:
+        import fnmatch
+
+        pats = tuple(str(p) for p in (self.ood_features or ()))
+        names = self.feature_names_
+        cols = np.arange(len(names)) if not pats else np.array(
+            [j for j, n in enumerate(names) if any(fnmatch.fnmatchcase(n, p) for p in pats)], dtype=int)
+        unmatched = [p for p in pats if not any(fnmatch.fnmatchcase(n, p) for n in names)]
+        if unmatched:
+            raise ValueError(f"ood_features: pattern(s) {unmatched} match no feature name")
+        scales = dict(self.ood_log_scales or {})
+        bad = {p: v for p, v in scales.items() if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0)}
+        if bad:
+            raise ValueError(f"ood_log_scales: every scale must be a positive number, got {bad}")
+        log_scale = np.array([next((float(v) for p, v in scales.items() if fnmatch.fnmatchcase(names[j], p)), 0.0)
+                              for j in cols], dtype=float)
+        return cols, log_scale
+
+    def ood_input(self, X: np.ndarray) -> np.ndarray:
+        """The OOD scorer's columns of X (``ood_features``), log-scaled where ``ood_log_scales`` say.
+
+        Models saved before the OOD feature selection existed see every column, unscaled.
+        """
+        X = np.asarray(X, dtype=float)
+        cols = getattr(self, "ood_columns_", None)
+        if cols is None:
+            return X
+        Z = X[:, cols]
+        log_cols = self.ood_log_scale_ > 0
+        if log_cols.any():
+            Z = np.array(Z, copy=True)
+            with np.errstate(invalid="ignore"):
+                Z[:, log_cols] = np.log1p(np.maximum(Z[:, log_cols], 0.0) / self.ood_log_scale_[log_cols])
+        return Z
 
     def band_order(self) -> list[int]:
         """Columns of the classifier's probabilities in band order."""
@@ -745,4 +798,4 @@ class MisalignmentModel(BaseEstimator):
         """OOD distance / threshold per row (> 1: unlike the training data)."""
         check_is_fitted(self, "ood_")
         X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
-        return self.ood_.ood_ratio(X)
+        return self.ood_.ood_ratio(self.ood_input(X))

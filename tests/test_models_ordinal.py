@@ -145,3 +145,72 @@ def test_max_false_alarm_bounds_false_alarms_on_new_plants():
         if fa:
             assert model.classifier_.thresholds_[0] >= 0.5 and np.all(model.classifier_.thresholds_[1:] == 0.5)
     assert rates[0.03] <= 0.08 and rates[0.03] <= rates[None]
+
+
+def test_tuned_thresholds_recover_a_rare_top_class_the_median_rule_never_calls():
+    from rotordiag.models.ordinal import THRESHOLD_GRID, _macro_f1_thresholds
+
+    rng = np.random.default_rng(5)
+    y = np.repeat([0, 1, 2, 3], [400, 300, 250, 50])
+    # P(class ≥ k) out of fold: well separated for edges 1 and 2; the rare top class only
+    # reaches 0.3–0.45 (its calibrated probability never passes 0.5), the others stay below 0.2.
+    cum = np.column_stack([
+        np.where(y >= 1, rng.uniform(0.75, 0.95, y.size), rng.uniform(0.0, 0.4, y.size)),
+        np.where(y >= 2, rng.uniform(0.6, 0.9, y.size), rng.uniform(0.0, 0.3, y.size)),
+        np.where(y >= 3, rng.uniform(0.3, 0.45, y.size), rng.uniform(0.0, 0.2, y.size)),
+    ])
+    start = np.array([0.7, 0.5, 0.5])        # the first edge's false-alarm bound is 0.7
+    t = _macro_f1_thresholds(cum, y, start)
+    assert t[0] >= 0.7 and set(t[1:]) <= set(THRESHOLD_GRID)
+    assert 0.2 <= t[2] <= 0.3                    # between the two groups of the top edge
+    pred = np.cumprod(cum >= t[None, :] - 1e-12, axis=1).sum(axis=1)
+    assert np.mean(pred[y == 3] == 3) == 1.0
+
+
+def test_tuned_thresholds_keep_the_false_alarm_bound_and_monotonicity():
+    t = make_table(n_plants=60, per_plant=10, seed=2, nan_rate=0.05)
+    common = {"kind": "ordinal", "max_iter": 30, "max_false_alarm": 0.05}
+    models = {}
+    for tune in (False, True):
+        cfg = TrainConfig.from_dict({"classifier": {**common, "tune_thresholds": tune}, "regressor": {"max_iter": 30},
+                                     "features": {"monotonic_increasing": list(MONO)}})
+        models[tune] = cfg.make_model(t.feature_names).fit(t.X, t.misalignment, groups=t.plant_id)
+    bound = models[False].classifier_.thresholds_[0]
+    assert models[True].classifier_.thresholds_[0] >= bound
+    # The predicted band still never falls when a constrained 2X/1X grows.
+    q = make_table(n_plants=10, per_plant=10, seed=9)
+    j = list(q.feature_names).index(MONO[0])
+    lo = models[True].band_index(models[True].predict_proba(q.X))
+    Xs = q.X.copy()
+    Xs[:, j] *= 3.0
+    assert np.all(models[True].band_index(models[True].predict_proba(Xs)) >= lo)
+
+
+def test_ood_on_a_log_scaled_feature_subset_flags_a_machine_far_below_the_family():
+    t = make_table(n_plants=60, per_plant=8, seed=3)
+    cfg = TrainConfig.from_dict({"classifier": {"kind": "ordinal", "max_iter": 20}, "regressor": {"max_iter": 20},
+                                 "ood": {"threshold_quantile": 0.99},
+                                 "features": {"ood_features": ["b?_x_2x_1x_ratio", "b1_x_1x_amp_um"],
+                                              "ood_log_scales": {"*_amp_um": 1.0, "*_ratio": 0.05}}})
+    model = cfg.make_model(t.feature_names).fit(t.X, t.misalignment, groups=t.plant_id)
+    assert model.ood_.reference_.shape[1] == 3            # only the selected columns
+    q = make_table(n_plants=10, per_plant=8, seed=13)
+    quiet = q.X.copy()
+    j = list(q.feature_names).index("b1_x_1x_amp_um")
+    quiet[:, j] /= 200.0                                  # 200x less vibration than the family
+    assert np.mean(model.ood_ratio(q.X) > 1) <= 0.1
+    assert np.all(model.ood_ratio(quiet) > 1)
+    # The noise columns are not part of the distance: changing them changes nothing.
+    noisy = q.X.copy()
+    noisy[:, list(q.feature_names).index("noise_a")] += 100.0
+    np.testing.assert_allclose(model.ood_ratio(noisy), model.ood_ratio(q.X))
+    fast = CompiledModel(model)
+    Xq = quiet.copy()
+    Xq[0] = np.nan
+    np.testing.assert_allclose(fast.ood_ratio(Xq), model.ood_ratio(Xq), rtol=1e-5)
+    with pytest.raises(ValueError, match="ood_log_scales"):
+        TrainConfig.from_dict({"features": {"ood_log_scales": {"*_um": -1.0}}})
+    bad = TrainConfig.from_dict({"classifier": {"kind": "ordinal", "max_iter": 5},
+                                 "features": {"ood_features": ["nothing_like_this"]}})
+    with pytest.raises(ValueError, match="match no feature"):
+        bad.make_model(t.feature_names).fit(t.X, t.misalignment, groups=t.plant_id)
