@@ -83,3 +83,21 @@ def test_aligned_below_the_alarm_threshold_is_uncertain_and_says_why():
     assert "72%" in reasons[0].message and "82%" in reasons[0].message
     status, reasons = assess(**common, alarm=(0.3, 0.82))
     assert status == "confident" and reasons == []
+
+
+def test_a_misalignment_call_without_the_coupling_2x_is_not_confident():
+    """The ROSS machines' healthy cases were called 'slight, confident' with a coupling 2X/1X of 0.00: a
+    misalignment severity needs the classic signature to be confident; an aligned call does not."""
+    names = ["b2_1x_major_um_pp", "b2_x_2x_1x_ratio", "b2_y_2x_1x_ratio", "b3_x_2x_1x_ratio", "b1_x_2x_1x_ratio"]
+    med = np.array([30.0, 0.1, 0.1, 0.1, 0.1])
+
+    def run(ratios, call):
+        return _assess(names=names, row=np.array([30.0, *ratios]), feature_median=med, misaligned_call=call)
+
+    status, reasons = run([0.001, 0.002, 0.0, 3.0], True)           # bearing 1's 2X does not count
+    assert status == UNCERTAIN and [r.code for r in reasons] == ["no_2x_signature"]
+    assert "0.002" in reasons[0].message
+    assert run([0.001, 0.002, 0.0, 3.0], False) == ("confident", [])
+    assert run([0.001, 0.3, 0.0, 0.0], True) == ("confident", [])
+    status, reasons = run([np.nan, np.nan, np.nan, 0.5], True)
+    assert status == UNCERTAIN and "not measured" in reasons[0].message
