@@ -11,7 +11,7 @@ import pytest
 from rotordiag.simulator.analysis import detect_period
 from rotordiag.simulator.steady import find_fixed_point
 from rotordiag.simulator.steady.continuation import continue_branch, switch_period_doubling
-from tests.steady_duffing import DuffingFamily, DuffingMap, harmonic_balance_folds
+from tests.steady_duffing import DuffingFamily, DuffingMap, NoisyDuffingFamily, harmonic_balance_folds
 
 HARDENING = dict(delta=0.1, alpha=1.0, beta=0.1, gamma=0.3)
 # Holmes' double well, x'' + 0.3x' − x + x³ = γ cos 1.2t: period 1 at γ = 0.20, period 2 at 0.28,
@@ -81,3 +81,18 @@ def test_bad_direction():
     fam = DuffingFamily(DuffingMap(omega=0.8, **HARDENING))
     with pytest.raises(ValueError, match="direction"):
         continue_branch(fam, np.zeros(2), 0.8, direction=0)
+
+
+def test_continuation_passes_folds_on_a_map_whose_residual_has_a_noise_floor_above_tol():
+    """The step-control stall (docs/reproduction.md, light-exciter plant, Δ ≈ 0.0386): with map
+    errors of 2e-8 no corrector reaches tol = 1e-9; the corrector must accept its best iterate
+    once Newton stagnates (within 100·tol) and the step must grow again, not fall below ds_min."""
+    fam = NoisyDuffingFamily(DuffingMap(omega=0.8, **HARDENING), noise=2e-8)
+    branch = continue_branch(fam, np.zeros(2), 0.8, p_min=0.8, p_max=2.0, ds=0.05, ds_max=0.1, max_points=300,
+                             tol=1e-9)
+    assert "ds_min" not in branch.message
+    assert branch.values[-1] > 2.0
+    folds = [b for b in branch.bifurcations if b.kind == "fold"]
+    down, up = harmonic_balance_folds(**HARDENING)
+    assert [b.parameter for b in folds] == [pytest.approx(down, rel=5e-3), pytest.approx(up, rel=5e-3)]
+    assert len(branch.points) < 150  # the step grew back (a crawl at ds_min would take thousands)
