@@ -114,3 +114,38 @@ class NoisyDuffingFamily:
 
     def at(self, value: float) -> NoisyDuffingMap:
         return NoisyDuffingMap(replace(self.base, **{self.parameter: float(value)}), self.noise)
+
+
+@dataclass(frozen=True)
+class IsolaMap:
+    """P(x) = x + c·(x₁² + (p − p₀)² − r², x₂), c = −1/2: its fixed points are the circle
+    x₁² + (p − p₀)² = r², x₂ = 0 — a closed branch (isola) with folds at p₀ ± r. The multipliers
+    are 1 − x₁ and 1/2: the half x₁ > 0 is stable, x₁ < 0 unstable."""
+
+    p: float
+    p0: float = 1.0
+    r: float = 0.5
+    dim: int = 2
+
+    def evaluate(self, x: np.ndarray, n_periods: int = 1, monodromy: bool = False) -> MapEval:
+        y = np.asarray(x, dtype=float).copy()
+        m = np.eye(2)
+        secs = []
+        for _ in range(n_periods):
+            jac = np.array([[1.0 - y[0], 0.0], [0.0, 0.5]])
+            y = y - 0.5 * np.array([y[0] ** 2 + (self.p - self.p0) ** 2 - self.r**2, y[1]])
+            m = jac @ m
+            secs.append(y.copy())
+        return MapEval(y, m if monodromy else None, np.array(secs), "ok", n_periods)
+
+    def difference(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.asarray(a) - np.asarray(b)
+
+
+@dataclass(frozen=True)
+class IsolaFamily:
+    parameter: str = "p"
+    scale: float = 1.0
+
+    def at(self, value: float) -> IsolaMap:
+        return IsolaMap(float(value))

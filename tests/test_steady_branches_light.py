@@ -33,3 +33,24 @@ def test_delta_branch_from_002_passes_the_stall_and_the_end_fold(light):
     assert after.min() < 0.035
     assert set(branch.stability[folds[0].index + 2:]) == {"unstable"}
     assert np.all(np.abs(branch.points[-1].multipliers).max() > 50.0)
+
+
+def test_pin_tends_to_aligned_as_delta_tends_to_zero(light):
+    """At Δ = 0 `pin` is singular (φ'' ∝ 1/Δ) and the physically equivalent machine is `aligned`
+    (the Δ = 0 speed branch of docs/reproduction.md). The `pin` orbit must approach the aligned one
+    as O(Δ): the state difference shrinks tenfold from Δ = 1e-3 to 1e-4 and is ≈ Δ in size, and the
+    Floquet multipliers of the aligned orbit are those of the pin orbit (which has two more, of φ)."""
+    from rotordiag.simulator.steady import steady_state
+
+    aligned = steady_state(light, 1843.0, 0.0, 0.05, mechanism="aligned")
+    assert aligned.converged and aligned.stable
+    keep = [i for i in range(aligned.state.size) if i not in (10, 21)]  # φ, φ' (not dynamic for aligned)
+    gaps = []
+    for delta in (1e-3, 1e-4):
+        pin = steady_state(light, 1843.0, delta, 0.05, mechanism="pin", initial_state=aligned.state)
+        assert pin.converged and pin.stable
+        gaps.append(float(np.max(np.abs(pin.state[keep] - aligned.state[keep]))))
+        for mu in aligned.multipliers[:6]:
+            assert np.min(np.abs(pin.multipliers - mu)) < 20 * delta
+    assert 0.3e-3 < gaps[0] < 3e-3
+    assert gaps[1] == pytest.approx(gaps[0] / 10, rel=0.1)

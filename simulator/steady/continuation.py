@@ -377,6 +377,9 @@ def continue_branch(
         if not p_min <= new.parameter <= p_max:
             branch.message = f"left [{p_min:g}, {p_max:g}]"
             break
+        if len(branch.points) > 4 and _closes(problem, branch.points[0], branch.points[-2], new):
+            branch.message = f"closed: the branch returned to its start (an isola) after {len(branch.points)} points"
+            break
         crawl = crawl + 1 if h <= ds_min and iters >= 5 else 0
         if crawl >= MAX_CRAWL_POINTS:
             branch.message = (f"crawling at ds_min at {family.parameter} = {new.parameter:.6g} (the corrector "
@@ -385,6 +388,24 @@ def continue_branch(
     else:
         branch.message = f"max_points = {max_points} reached"
     return branch
+
+
+def _closes(problem: _Problem, first: BranchPoint, a: BranchPoint, b: BranchPoint) -> bool:
+    """True when the step a → b passed the branch's first orbit (a closed branch, an isola): one of
+    the first orbit's n section points (a period-n orbit returns cyclically shifted after one lap)
+    lies within a quarter of the step's length of the segment a–b, in (x, p/scale), angles mod 2π."""
+    pmap = problem.family.at(b.parameter)
+    scale = problem.family.scale
+    seg = np.append(pmap.difference(b.x, a.x), (b.parameter - a.parameter) / scale)
+    length = float(np.linalg.norm(seg))
+    if length == 0.0:
+        return False
+    for x in first.sections:
+        w = np.append(pmap.difference(x, a.x), (first.parameter - a.parameter) / scale)
+        lam = float(np.clip(w @ seg / length**2, 0.0, 1.0))
+        if 0.0 < lam <= 1.0 and float(np.linalg.norm(w - lam * seg)) < 0.25 * length:
+            return True
+    return False
 
 
 def _detect(problem: _Problem, branch: Branch, a: BranchPoint, b: BranchPoint, ds: float, locate: bool) -> None:
