@@ -54,3 +54,20 @@ def test_pin_tends_to_aligned_as_delta_tends_to_zero(light):
             assert np.min(np.abs(pin.multipliers - mu)) < 20 * delta
     assert 0.3e-3 < gaps[0] < 3e-3
     assert gaps[1] == pytest.approx(gaps[0] / 10, rel=0.1)
+
+
+@pytest.mark.slow
+def test_period_three_window_at_1843_rpm_is_an_isola_between_two_folds(light):
+    """The light plant's period-3 point of the Fig 14 sweep (Δ = 0.08, 1843 r/min): shot from a
+    brute-force point (period 3 read from its record), its branch closes on itself; the window is
+    bounded by saddle-node folds at Δ ≈ 0.0797 and 0.0876, with no period doubling on it."""
+    fam = RotorFamily(light, "misalignment", 1843.0, 0.08, 0.05)
+    (branch, *rest) = rotor_branches(fam, 0.08, 0.16, bounds=(0.02, 0.16), start_revs=400, max_points=120)
+    assert branch.n_periods == 3 and not rest
+    assert branch.message.startswith("closed")
+    kinds = {b.kind for b in branch.bifurcations}
+    assert kinds == {"fold"}
+    folds = [b.parameter for b in branch.bifurcations]
+    assert min(folds) == pytest.approx(0.0797, abs=3e-4) and max(folds) == pytest.approx(0.0876, abs=3e-4)
+    assert min(branch.values) >= min(folds) - 1e-6 and max(branch.values) <= max(folds) + 1e-6
+    assert "stable" in set(branch.stability) and "unstable" in set(branch.stability)

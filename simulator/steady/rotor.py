@@ -141,8 +141,11 @@ def brute_force_start(family: RotorFamily, value: float, revs: int,
     """End state and least period (≤ 16, None if none) of a brute-force run at ``value``:
     ``revs`` transient revolutions, then :data:`START_RECORD_REVS` recorded (``detect_period``,
     the sweeps' test)."""
+    # the package's lazy attribute, as everywhere else: importing the submodule (``from ..simulate
+    # import simulate``) before anyone read it rebinds rotordiag.simulator.simulate to the module
+    from rotordiag.simulator import simulate
+
     from ..analysis.motion import detect_period
-    from ..simulate import simulate
 
     if revs < 1:
         raise ValueError(f"revs must be >= 1, got {revs!r}")
