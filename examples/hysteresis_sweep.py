@@ -20,7 +20,7 @@ Light-exciter plant, 1843 r/min, with the period-3 and period-5 windows (isolas)
     rotordiag continue --over misalignment --from 0.14 --to 0.16 --lo 0.02 --speed-rpm 1843 --plant $P \\
         --start-revs 400 --out /tmp/l5.h5 --brute-points 0
     python examples/hysteresis_sweep.py /tmp/l1.h5 docs/figures/light-exciter/continuation_hysteresis_1843.png \\
-        --extra /tmp/l3.h5 --extra /tmp/l5.h5 --from 0.02 --to 0.16 --step 0.001
+        --extra /tmp/l3.h5 --extra /tmp/l5.h5 --from 0.02 --to 0.16 --step 0.001 --record-revs 16
 
 Prints the Δ of each jump (the largest change of the section coordinate between neighbours).
 """
@@ -59,6 +59,20 @@ def sweep(plant: Plant, deltas: np.ndarray, speed_rpm: float, unbalance: float, 
     return out
 
 
+#: two section x/c values repeat when they differ by less than this
+PERIOD_TOL = 1e-4
+
+
+def _period(row: np.ndarray) -> int:
+    """Least n (≤ half the record) with x[k + n] = x[k] within PERIOD_TOL for all k; 0 if none."""
+    if not np.all(np.isfinite(row)):
+        return 0
+    for n in range(1, row.size // 2 + 1):
+        if np.max(np.abs(row[n:] - row[:-n])) < PERIOD_TOL:
+            return n
+    return 0
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("branches", type=Path, help="HDF5 of rotordiag continue --over misalignment")
@@ -85,6 +99,15 @@ def main() -> None:
         m = np.nanmean(x, axis=1)
         j = int(np.nanargmax(np.abs(np.diff(m))))
         print(f"{name}-sweep jump between Δ = {d[j]:.4f} and {d[j + 1]:.4f}: x/c {m[j]:.4f} -> {m[j + 1]:.4f}")
+        periods = [_period(row) for row in x]
+        runs = []
+        for k, n in enumerate(periods):
+            if runs and runs[-1][0] == n:
+                runs[-1][2] = d[k]
+            else:
+                runs.append([n, d[k], d[k]])
+        print(f"  {name}-sweep, period of the recorded x (≤ {args.record_revs // 2}, within {PERIOD_TOL:g} x/c; "
+              "0: none): " + ", ".join(f"{n} @ {a:.4f}–{b:.4f}" for n, a, b in runs))
 
     import matplotlib
 
