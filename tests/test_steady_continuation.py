@@ -93,7 +93,8 @@ def test_continuation_passes_folds_on_a_map_whose_residual_has_a_noise_floor_abo
     """The step-control stall (docs/reproduction.md, light-exciter plant, Δ ≈ 0.0386): with map
     errors of 2e-8 no corrector reaches tol = 1e-9; the corrector must accept its best iterate
     once Newton stagnates (within 100·tol) and the step must grow again, not fall below ds_min."""
-    fam = NoisyDuffingFamily(DuffingMap(omega=0.8, **HARDENING), noise=2e-8)
+    # the integration itself at rtol 1e-9 (its error, ~1e-10, is below the added 2e-8)
+    fam = NoisyDuffingFamily(DuffingMap(omega=0.8, rtol=1e-9, atol=1e-10, **HARDENING), noise=2e-8)
     branch = continue_branch(fam, np.zeros(2), 0.8, p_min=0.8, p_max=2.0, ds=0.05, ds_max=0.1, max_points=300,
                              tol=1e-9)
     assert "ds_min" not in branch.message
