@@ -81,3 +81,71 @@ def harmonic_balance_folds(delta: float, alpha: float, beta: float, gamma: float
     if len(turns) < 2:
         raise ValueError("no folds: the response curve does not bend over at these parameters")
     return float(w[turns[1]]), float(w[turns[0]])
+
+
+@dataclass(frozen=True)
+class NoisyDuffingMap:
+    """A DuffingMap whose Pⁿ carries a deterministic error of size ``noise`` (a hash of the start
+    state seeds it): a map whose residual cannot fall below the integrator's error, like the
+    rotor's on a strongly unstable orbit. The monodromy matrix stays exact."""
+
+    base: DuffingMap
+    noise: float
+    dim: int = 2
+
+    def evaluate(self, x: np.ndarray, n_periods: int = 1, monodromy: bool = False) -> MapEval:
+        ev = self.base.evaluate(x, n_periods, monodromy)
+        seed = int.from_bytes(np.asarray(x, dtype=float).tobytes()[:16], "little") % (2**63) + n_periods
+        err = self.noise * np.random.default_rng(seed).uniform(-1.0, 1.0, 2)
+        sections = ev.sections.copy()
+        sections[-1] += err
+        return MapEval(ev.value + err, ev.monodromy, sections, ev.status, ev.nfev)
+
+    def difference(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.asarray(a) - np.asarray(b)
+
+
+@dataclass(frozen=True)
+class NoisyDuffingFamily:
+    base: DuffingMap
+    noise: float
+    parameter: str = "omega"
+    scale: float = 1.0
+
+    def at(self, value: float) -> NoisyDuffingMap:
+        return NoisyDuffingMap(replace(self.base, **{self.parameter: float(value)}), self.noise)
+
+
+@dataclass(frozen=True)
+class IsolaMap:
+    """P(x) = x + c·(x₁² + (p − p₀)² − r², x₂), c = −1/2: its fixed points are the circle
+    x₁² + (p − p₀)² = r², x₂ = 0 — a closed branch (isola) with folds at p₀ ± r. The multipliers
+    are 1 − x₁ and 1/2: the half x₁ > 0 is stable, x₁ < 0 unstable."""
+
+    p: float
+    p0: float = 1.0
+    r: float = 0.5
+    dim: int = 2
+
+    def evaluate(self, x: np.ndarray, n_periods: int = 1, monodromy: bool = False) -> MapEval:
+        y = np.asarray(x, dtype=float).copy()
+        m = np.eye(2)
+        secs = []
+        for _ in range(n_periods):
+            jac = np.array([[1.0 - y[0], 0.0], [0.0, 0.5]])
+            y = y - 0.5 * np.array([y[0] ** 2 + (self.p - self.p0) ** 2 - self.r**2, y[1]])
+            m = jac @ m
+            secs.append(y.copy())
+        return MapEval(y, m if monodromy else None, np.array(secs), "ok", n_periods)
+
+    def difference(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.asarray(a) - np.asarray(b)
+
+
+@dataclass(frozen=True)
+class IsolaFamily:
+    parameter: str = "p"
+    scale: float = 1.0
+
+    def at(self, value: float) -> IsolaMap:
+        return IsolaMap(float(value))

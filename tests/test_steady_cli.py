@@ -64,3 +64,18 @@ def test_continue_writes_a_branch_without_bifurcations(tmp_path):
     assert br["bifurcations"]["section_x"].shape == (0, 1)
     assert br["parameter"].min() <= 1800 + 1e-9 and br["parameter"].max() >= 1900 - 1e-9
     assert set(br["stability"]) == {"stable"}
+
+
+def test_continue_bounds_must_contain_the_start_and_a_non_periodic_start_is_a_clear_error(tmp_path):
+    out = str(tmp_path / "b.h5")
+    res = CliRunner().invoke(app, ["continue", "--over", "misalignment", "--from", "0.3", "--to", "0.4",
+                                   "--lo", "0.35", "--speed-rpm", "1843", "--out", out])
+    assert res.exit_code == 2 and "--lo" in res.output
+    res = CliRunner().invoke(app, ["continue", "--over", "misalignment", "--from", "0.3", "--to", "0.4",
+                                   "--period", "17", "--speed-rpm", "1843", "--out", out])
+    assert res.exit_code == 2
+    # light-exciter plant at Δ = 0.3: quasi-periodic (racing φ), no period ≤ 16 to shoot for
+    res = CliRunner().invoke(app, ["continue", "--over", "misalignment", "--from", "0.3", "--to", "0.4",
+                                   "--speed-rpm", "1843", "--plant", "docs/figures/light-exciter-plant.toml",
+                                   "--start-revs", "100", "--brute-points", "0", "--out", out])
+    assert res.exit_code == 2 and "no period <= 16" in res.output

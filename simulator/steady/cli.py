@@ -26,6 +26,13 @@ def register(app: typer.Typer) -> None:
         ds: float = typer.Option(0.02, help="First arclength step (state in clearances, speed in 1000 r/min)."),
         ds_max: float = typer.Option(0.05, help="Largest arclength step."),
         switch: bool = typer.Option(True, help="Switch onto period-doubled branches at located PD points."),
+        period: Optional[int] = typer.Option(None, min=1, max=16, help="Period n of the orbit to follow (1–16); "
+                                             "default: what the start shows."),
+        lo: Optional[float] = typer.Option(None, help="Lower bound of the continuation (default: min(--from, --to))."),
+        hi: Optional[float] = typer.Option(None, help="Upper bound of the continuation (default: max(--from, --to))."),
+        start_revs: int = typer.Option(0, min=0, help="Start from a brute-force point: integrate this many "
+                                       "revolutions at --from, then shoot for the period its record shows "
+                                       "(how a period-n window's orbit is reached); 0: a 40-revolution warm-up."),
         brute_points: int = typer.Option(15, help="Brute-force sweep points overlaid on the diagram (0: none)."),
         node: int = typer.Option(3, help="Node of the diagram (1–6)."),
         out: Path = typer.Option(..., help="Branches (HDF5)."),
@@ -50,6 +57,12 @@ def register(app: typer.Typer) -> None:
             raise typer.BadParameter("--over speed needs --misalignment", param_hint="--misalignment")
         if over == "misalignment" and speed_rpm is None:
             raise typer.BadParameter("--over misalignment needs --speed-rpm", param_hint="--speed-rpm")
+        bounds = None
+        if lo is not None or hi is not None:
+            bounds = (min(from_, to) if lo is None else lo, max(from_, to) if hi is None else hi)
+            if not bounds[0] <= from_ <= bounds[1]:
+                raise typer.BadParameter(f"--from {from_:g} must lie in [--lo, --hi] = [{bounds[0]:g}, {bounds[1]:g}]",
+                                         param_hint="--lo/--hi")
         pl = load_plant(plant)
         from rotordiag.simulator.steady.report import bifurcation_figure, read_branches, write_branches
         from rotordiag.simulator.steady.rotor import RotorFamily, rotor_branches
@@ -58,7 +71,8 @@ def register(app: typer.Typer) -> None:
         try:
             fam = RotorFamily(pl, parameter, speed_rpm if speed_rpm is not None else from_,
                               misalignment if misalignment is not None else from_, unbalance, mechanism=mechanism)
-            branches = rotor_branches(fam, from_, to, max_points=max_points, ds=ds, ds_max=ds_max, switch=switch)
+            branches = rotor_branches(fam, from_, to, max_points=max_points, ds=ds, ds_max=ds_max, switch=switch,
+                                      period=period, start_revs=start_revs, bounds=bounds)
         except ValueError as exc:
             typer.secho(f"error: {exc}", fg=typer.colors.RED, err=True)
             raise typer.Exit(code=2) from None
@@ -66,8 +80,8 @@ def register(app: typer.Typer) -> None:
         if brute_points > 0:
             from rotordiag.simulator.analysis.sweeps import misalignment_sweep, speed_sweep
 
-            lo, hi = sorted((from_, to))
-            values = np.linspace(max(lo, fam.floor), hi, brute_points)
+            b_lo, b_hi = bounds if bounds is not None else sorted((from_, to))
+            values = np.linspace(max(b_lo, fam.floor), b_hi, brute_points)
             kw: dict[str, Any] = dict(mechanism=mechanism, node=node, record_revs=32, n_workers=workers,
                                       progress=False)
             if parameter == "speed_rpm":

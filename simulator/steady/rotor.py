@@ -15,7 +15,7 @@ from .continuation import Branch, continue_branch, switch_period_doubling
 from .maps import RotorMap
 from .shooting import steady_state
 
-__all__ = ["RotorFamily", "rotor_branches", "PARAMETERS"]
+__all__ = ["RotorFamily", "rotor_branches", "brute_force_start", "PARAMETERS"]
 
 #: continuation parameter -> (scale of s = p / scale, valid range)
 PARAMETERS: dict[str, tuple[float, tuple[float, float]]] = {
@@ -73,21 +73,43 @@ class RotorFamily:
 
 def rotor_branches(family: RotorFamily, start: float, stop: float, *, max_points: int = 150, ds: float = 0.02,
                    ds_max: float = 0.05, switch: bool = True, max_switches: int = 2,
-                   start_state: np.ndarray | None = None) -> list[Branch]:
-    """Branches from ``start`` toward ``stop`` (either order): the period-1 branch found by
+                   start_state: np.ndarray | None = None, period: int | None = None,
+                   start_revs: int = 0, bounds: tuple[float, float] | None = None) -> list[Branch]:
+    """Branches from ``start`` toward ``stop`` (either order): the periodic orbit found by
     shooting at ``start`` (after a warm-up from MODEL.md's state), continued by pseudo-arclength
     (through folds, back and forth), plus the period-doubled branches switched onto at each
-    located period-doubling point (up to ``max_switches``)."""
+    located period-doubling point (up to ``max_switches``).
+
+    ``start_revs`` > 0 starts from a brute-force point instead: that many revolutions integrated
+    from MODEL.md's state (or ``start_state``), then 48 recorded; shooting for the period the
+    record shows (or ``period``) from the end state. This is how an orbit inside a period-n window
+    is reached (:func:`brute_force_start`).
+
+    The branches stop where the parameter leaves [``start``, ``stop``] (sorted), or ``bounds`` when
+    given (e.g. both sides of a window's start point: a branch that turns at a fold comes back past
+    its start); or where they close on themselves (an isola)."""
     lo_valid, hi_valid = PARAMETERS[family.parameter][1]
     lo, hi = sorted((float(start), float(stop)))
+    if bounds is not None:
+        lo, hi = sorted((float(bounds[0]), float(bounds[1])))
+        if not lo <= start <= hi:
+            raise ValueError(f"the start {start:g} lies outside the bounds [{lo:g}, {hi:g}]")
     lo, hi = max(lo, lo_valid, family.floor), min(hi, hi_valid)
     if not lo < hi:
         raise ValueError(f"empty range for {family.parameter}: [{start}, {stop}]")
     kw: dict[str, Any] = {family.parameter: float(start)}
     kw = dict(speed_rpm=family.speed_rpm, misalignment=family.misalignment) | kw
+    warmup = 40
+    if start_revs > 0:
+        start_state, found = brute_force_start(family, float(start), int(start_revs), start_state)
+        if period is None and found is None:
+            raise ValueError(f"no period <= 16 in the brute-force record at {family.parameter} = {start:g} after "
+                             f"{start_revs} revolutions (quasi-periodic, chaotic or still settling)")
+        period = period if period is not None else found
+        warmup = 0
     orbit = steady_state(family.plant, kw["speed_rpm"], kw["misalignment"], family.unbalance,
-                         mechanism=family.mechanism, rtol=family.rtol, atol=family.atol,
-                         initial_state=start_state, **family.system_kwargs)
+                         mechanism=family.mechanism, rtol=family.rtol, atol=family.atol, period=period,
+                         initial_state=start_state, warmup_revs=warmup, **family.system_kwargs)
     if not orbit.converged:
         raise ValueError(f"no periodic steady state at {family.parameter} = {start:g}: {orbit.message}")
     pmap = family.at(float(start))
@@ -108,6 +130,33 @@ def rotor_branches(family: RotorFamily, start: float, stop: float, *, max_points
                 branches.append(child)
                 todo += [(child, b) for b in child.bifurcations if b.kind == "period_doubling" and b.located]
     return branches
+
+
+#: revolutions recorded by :func:`brute_force_start` (three repeats of the longest period, 16)
+START_RECORD_REVS = 48
+
+
+def brute_force_start(family: RotorFamily, value: float, revs: int,
+                      initial_state: np.ndarray | None = None) -> tuple[np.ndarray, int | None]:
+    """End state and least period (≤ 16, None if none) of a brute-force run at ``value``:
+    ``revs`` transient revolutions, then :data:`START_RECORD_REVS` recorded (``detect_period``,
+    the sweeps' test)."""
+    # the package's lazy attribute, as everywhere else: importing the submodule (``from ..simulate
+    # import simulate``) before anyone read it rebinds rotordiag.simulator.simulate to the module
+    from rotordiag.simulator import simulate
+
+    from ..analysis.motion import detect_period
+
+    if revs < 1:
+        raise ValueError(f"revs must be >= 1, got {revs!r}")
+    sysm = family.system(value)
+    res = simulate(family.plant, sysm.speed_rpm, sysm.misalignment, family.unbalance, mechanism=family.mechanism,
+                   transient_revs=int(revs), record_revs=START_RECORD_REVS, samples_per_rev=8, rtol=family.rtol,
+                   atol=family.atol, initial_state=initial_state, **family.system_kwargs)
+    if res.status != "ok":
+        raise ValueError(f"the brute-force start at {family.parameter} = {value:g} ended with status {res.status!r}")
+    n, _, _ = detect_period(res.poincare_m / res.clearance_m)
+    return res.final_state, n
 
 
 def _finite(v: float) -> bool:
