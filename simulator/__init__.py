@@ -15,6 +15,8 @@ modal, ModalResult, bearing_coefficients, static_equilibrium
 from __future__ import annotations
 
 import importlib
+import sys
+import types
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -50,3 +52,21 @@ def __getattr__(name: str) -> Any:
 
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__))
+
+
+class _Package(types.ModuleType):
+    """This package's module type: the functions ``simulate`` and ``modal`` share their names with
+    the submodules that define them, and importing such a submodule (``import
+    rotordiag.simulator.simulate``) makes the import system set the package attribute to the
+    *module* — after which ``rotordiag.simulator.simulate(...)`` would fail with "'module' object is
+    not callable". A lazily exported name is therefore always set to the object it names. The modules
+    stay reachable as ``from rotordiag.simulator.simulate import …`` and through ``sys.modules``
+    (``import rotordiag.simulator.simulate as m`` gives the function, as the attribute does)."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if isinstance(value, types.ModuleType) and _LAZY.get(name) == "." + name and hasattr(value, name):
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
