@@ -69,7 +69,7 @@ def test_a_converging_motion_stops_at_the_minimum_on_its_attractor(period_one):
     shot = steady_start(period_one, 400)
     assert shot.path == "shooting"
     # after that many revolutions from rest the state is on the period-1 orbit (to the transient's decay)
-    assert np.max(np.abs(st.state[:10] - shot.state[:10])) < 1e-6
+    assert np.max(np.abs(st.state[:10] - shot.state[:10])) < 1e-4  # max |μ| ≈ 0.93: 0.93^128 ≈ 1e-4
 
 
 def test_a_motion_that_is_not_stationary_gets_the_whole_transient(period_one):

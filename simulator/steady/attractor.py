@@ -40,7 +40,7 @@ STATIONARY_TOL = 0.02
 #: revolutions per window (the test runs at the end of every window)
 STATIONARY_WINDOW_REVS = 32
 #: windows per block: each test compares the last BLOCK windows with the BLOCK windows before them
-STATIONARY_BLOCK = 2
+STATIONARY_BLOCK = 1
 #: revolutions always integrated before the test may stop the transient
 STATIONARY_MIN_REVS = 128
 #: consecutive tests within the tolerance required
@@ -149,8 +149,8 @@ def settle_on_attractor(system: RotorSystem, state: np.ndarray, max_revs: int, *
             break
         moments.append(_moments(system, dt * (1 + np.arange(ng)), grid[:ng]))
         if len(moments) >= 2 * block:
-            cur = _mean_std(sum(moments[-block:]))
-            prev = _mean_std(sum(moments[-2 * block:-block]))
+            cur = _mean_std(np.sum(moments[-block:], axis=0))
+            prev = _mean_std(np.sum(moments[-2 * block:-block], axis=0))
             change = float(np.max(np.abs(cur - prev)))
             streak = streak + 1 if change <= tol else 0
             if streak >= windows and revs >= min_revs:
