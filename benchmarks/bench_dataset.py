@@ -186,11 +186,11 @@ def steady_start_rows(n: int, floor: bool, offset: int = 0) -> list[dict]:
     used = [not fnmatch.fnmatch(f, "b?_[xy]_[123]x_phase_deg") for f in FEATURE_NAMES]  # train.toml's exclude
 
     def features(out, meas, p) -> list[float]:
-        rec = Recording(sample_rate_hz=meas.sample_rate_hz, speed_rpm=p.speed_rpm,
-                        clearance_um=p.plant["clearance_m"] * 1e6,
-                        channels=[ProbeChannel(bearing=b, angle_deg=a, units="um", data=out.waveforms_um[c])
-                                  for c, (b, a) in enumerate(meas.channels)])
-        try:
+        try:  # a sample that ended in contact has NaN after it: no features (as in the feature table)
+            rec = Recording(sample_rate_hz=meas.sample_rate_hz, speed_rpm=p.speed_rpm,
+                            clearance_um=p.plant["clearance_m"] * 1e6,
+                            channels=[ProbeChannel(bearing=b, angle_deg=a, units="um", data=out.waveforms_um[c])
+                                      for c, (b, a) in enumerate(meas.channels)])
             return [float(v) for v, u in zip(extract_features(rec).values, used) if u]
         except ValueError:
             return [float("nan")] * sum(used)
@@ -295,11 +295,11 @@ def compare_steady_start(n: int, floor: bool, offset: int = 0) -> None:
             continue
         d = dev(rs, keys[2])
         line = f"{kind}: worst standardised feature deviation from the 400-rev record, per sample: " \
-               f"median {np.median(d):.3f}, max {d.max():.3f}"
+               f"median {np.nanmedian(d):.3f}, max {np.nanmax(d):.3f}"
         fl = [r for r in rs if "floor" in r]
         if fl:
             f = dev(fl, "floor")
-            line += f"; the 400-rev record's own (400 vs 800 revs): median {np.median(f):.3f}, max {f.max():.3f}"
+            line += f"; the 400-rev record's own (400 vs 800 revs): median {np.nanmedian(f):.3f}, max {np.nanmax(f):.3f}"
         print(line)
     print("(x: samples/min ratio against integrate/fixed, the start before issue 16 (400 transient revolutions); "
           "shooting/fixed: the shooting start with the full transient on fallback; shooting/stationary: the default, "

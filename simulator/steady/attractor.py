@@ -169,7 +169,7 @@ def record_start(system: RotorSystem, transient_revs: int, method: str = "shooti
     With ``method="shooting"`` and ``transient_stop="stationary"`` a sample that falls back to
     integration runs :func:`settle_on_attractor` from where the warm-up stopped (the warm-up's
     revolutions count toward ``min_revs`` and ``max_revs``); the returned start's
-    ``transient_revs`` is what is left of the fixed transient (0 after a stationary stop) and its
+    ``transient_revs`` is 0 (the record starts where the settling stopped) and its
     ``note`` begins with ``"transient N/T revs (stationary)"`` or ``"(not stationary)"``.
     ``method="integrate"`` and ``transient_stop="fixed"`` give :func:`.start.steady_start`'s start unchanged.
     A run that ends in contact or divergence during the settling keeps the fixed transient (the
@@ -191,6 +191,7 @@ def record_start(system: RotorSystem, transient_revs: int, method: str = "shooti
         return start
     used = start.warmup_revs + st.revs
     word = "stationary" if st.stationary else "not stationary"
-    return replace(start, state=st.state, transient_revs=start.transient_revs - st.revs,
+    # the record starts where the settling stopped: nothing of the fixed transient is left to integrate
+    return replace(start, state=st.state, transient_revs=0,
                    note=f"transient {used}/{int(transient_revs)} revs ({word}); {start.note}",
                    nfev=start.nfev + st.nfev)
