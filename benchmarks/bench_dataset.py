@@ -51,6 +51,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import traceback
 from pathlib import Path
 
 SPEC = """
@@ -151,57 +152,160 @@ def writer_cost_ms(tmp: Path, n: int = 64) -> tuple[float, float]:
 SHIPPED = sorted((Path(__file__).resolve().parent.parent / "models" / "default").glob("dataset_*.toml"))
 
 
-def compare_steady_start(n: int) -> None:
+#: the ways a record may start, in the order each sample runs them (back to back, so they share the load)
+MODES = (("integrate", "fixed"), ("shooting", "fixed"), ("shooting", "stationary"))
+STEADY_CHILD = r"""
+import json, resource, sys
+sys.path.insert(0, sys.argv[3])
+from bench_dataset import steady_start_rows
+rows = steady_start_rows(int(sys.argv[1]), sys.argv[2] == "1", int(sys.argv[4]))
+print(json.dumps({"rows": rows, "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+"""
+
+
+def _sample_kind(out) -> str:
+    """period-1 (shot), or the fallback's kind from its note."""
+    if out.steady_start == "shooting":
+        return "period-1"
+    return "fallback stationary" if "(stationary)" in out.steady_note else "fallback full"
+
+
+def steady_start_rows(n: int, floor: bool, offset: int = 0) -> list[dict]:
+    """Samples ``offset`` … ``offset + n − 1`` of every shipped spec (Sobol: the same as in the full design), run with every start in MODES back to back
+    (plus, with ``floor``, 800 transient revolutions for the samples that fall back)."""
+    import dataclasses
+    import fnmatch
     import re
 
-    import h5py
+    from rotordiag.features import FEATURE_NAMES, ProbeChannel, Recording, extract_features
+    from rotordiag.simulator.dataset.design import build_design
+    from rotordiag.simulator.dataset.measurement import MeasurementSettings
+    from rotordiag.simulator.dataset.spec import parse_spec
+    from rotordiag.simulator.dataset.worker import SampleTask, SimulationSettings, run_sample
+
+    used = [not fnmatch.fnmatch(f, "b?_[xy]_[123]x_phase_deg") for f in FEATURE_NAMES]  # train.toml's exclude
+
+    def features(out, meas, p) -> list[float]:
+        try:  # a sample that ended in contact has NaN after it: no features (as in the feature table)
+            rec = Recording(sample_rate_hz=meas.sample_rate_hz, speed_rpm=p.speed_rpm,
+                            clearance_um=p.plant["clearance_m"] * 1e6,
+                            channels=[ProbeChannel(bearing=b, angle_deg=a, units="um", data=out.waveforms_um[c])
+                                      for c, (b, a) in enumerate(meas.channels)])
+            return [float(v) for v, u in zip(extract_features(rec).values, used) if u]
+        except ValueError:
+            return [float("nan")] * sum(used)
+
+    rows = []
+    for path in SHIPPED:
+        text = re.sub(r"(?m)^n_samples = \d+", f"n_samples = {n + offset}", path.read_text())
+        resolved = parse_spec(text, base_dir=path.parent)
+        design, meas = build_design(resolved), MeasurementSettings.from_spec(resolved.spec)
+        sim = SimulationSettings.from_spec(resolved.spec)
+        if not rows:  # load the compiled kernels' cache before anything is timed
+            run_sample(SampleTask(design[0], dataclasses.replace(sim, transient_revs=4), meas))
+        for i in range(offset, len(design)):
+            try:
+                rows.append(_steady_start_row(path.stem, i, design[i], sim, meas, floor, features))
+            except Exception as exc:  # noqa: BLE001 - a benchmark reports and goes on
+                traceback.print_exc()
+                print(f"{path.stem} sample {i}: {type(exc).__name__}: {exc}", file=sys.stderr)
+    return rows
+
+
+def _steady_start_row(stem: str, i: int, p, sim, meas, floor: bool, features) -> dict:
+    import dataclasses
+    import time
+
     import numpy as np
 
-    with tempfile.TemporaryDirectory() as tmp:
-        tmp = Path(tmp)
-        warm = tmp / "warm.toml"
-        warm.write_text(SPEC.format(n=1, transient=10))
-        run(warm, tmp / "warm.h5", 0)
-        print(f"steady start: shipped default-model specs, first {n} samples each, serial (one core); "
-              f"load {os.getloadavg()[0]:.2f}")
-        print(f"{'spec':<24}{'integrate /min':>15}{'shooting /min':>14}{'x':>6}{'shot':>8}{'x period-1':>11}"
-              f"{'|dwave| shot um':>16}{'fallback um':>12}{'labels equal':>13}")
-        tot = {"integrate": 0.0, "shooting": 0.0}
-        p1 = {"integrate": 0.0, "shooting": 0.0}
-        n_tot = n_shot = 0
-        for path in SHIPPED:
-            text = re.sub(r"(?m)^n_samples = \d+", f"n_samples = {n}", path.read_text())
-            files, res = {}, {}
-            for mode in ("integrate", "shooting"):
-                spec = tmp / f"{path.stem}_{mode}.toml"
-                spec.write_text(text + f'steady_start = "{mode}"\n')
-                files[mode] = tmp / f"{path.stem}_{mode}.h5"
-                res[mode] = run(spec, files[mode], 0)
-                tot[mode] += res[mode]["elapsed_s"] - res[mode]["startup_s"]
-            with h5py.File(files["integrate"], "r") as a, h5py.File(files["shooting"], "r") as b:
-                shot = b["diagnostics/steady_start"][...] == b"shooting"
-                for mode, f in (("integrate", a), ("shooting", b)):
-                    p1[mode] += float(f["diagnostics/wall_time_s"][...][shot].sum())
-                dw = np.abs(a["waveforms"][...] - b["waveforms"][...]).reshape(n, -1)
-                dshot = float(np.nanmax(dw[shot])) if shot.any() else float("nan")
-                dfall = float(np.nanmax(dw[~shot])) if (~shot).any() else float("nan")
-                same = all(np.array_equal(a[k][...], b[k][...]) for k in
-                           ("labels/status", "labels/severity", "labels/misalignment", "labels/motion_kind",
-                            "labels/motion_period"))
-                wa = a["diagnostics/wall_time_s"][...][shot].sum()
-                wb = b["diagnostics/wall_time_s"][...][shot].sum()
-            n_tot += n
-            n_shot += int(shot.sum())
-            ri, rs = 60 * res["integrate"]["gen_rate"], 60 * res["shooting"]["gen_rate"]
-            print(f"{path.stem:<24}{ri:>15.1f}{rs:>14.1f}{rs / ri:>6.2f}{f'{shot.sum()}/{n}':>8}"
-                  f"{wa / max(wb, 1e-9):>11.2f}{dshot:>16.1e}{dfall:>12.1e}{str(same):>13}")
-        print(f"{'all':<24}{60 * n_tot / tot['integrate']:>15.1f}{60 * n_tot / tot['shooting']:>14.1f}"
-              f"{tot['integrate'] / tot['shooting']:>6.2f}{f'{n_shot}/{n_tot}':>8}"
-              f"{p1['integrate'] / max(p1['shooting'], 1e-9):>11.2f}")
-        print("(x: samples/min ratio shooting vs integrate, generation without start-up; x period-1: sum of "
-              "per-sample times of the samples that took the shooting start, integrate / shooting; |dwave|: "
-              "largest waveform difference between the two files over the samples that took the shooting start, "
-              "and over the others (fallback: chaotic samples are another realisation))")
+    from rotordiag.simulator.dataset.worker import SampleTask, run_sample
+
+    row: dict = {"spec": stem, "index": i}
+    for start, stop in MODES:
+        t0 = time.perf_counter()
+        task = SampleTask(p, dataclasses.replace(sim, steady_start=start, transient_stop=stop), meas)
+        out = run_sample(task)
+        key = f"{start}/{stop}"
+        row[key] = {"s": time.perf_counter() - t0, "kind": _sample_kind(out), "note": out.steady_note,
+                    "labels": [out.status, out.simulated_mechanism, out.motion_kind, out.motion_period],
+                    "features": features(out, meas, p),
+                    "wave": out.waveforms_um.astype(float).tolist() if start == "integrate" else None}
+        if start != "integrate":
+            ref = np.array(row["integrate/fixed"]["wave"])
+            row[key]["dwave_um"] = float(np.nanmax(np.abs(out.waveforms_um - ref)))
+    row["integrate/fixed"]["wave"] = None
+    if floor and row["shooting/stationary"]["kind"] != "period-1":
+        out = run_sample(SampleTask(p, dataclasses.replace(sim, steady_start="integrate",
+                                                           transient_revs=2 * sim.transient_revs), meas))
+        row["floor"] = {"features": features(out, meas, p)}
+    return row
+
+
+def compare_steady_start(n: int, floor: bool, offset: int = 0) -> None:
+    """Samples/min of the three starts on the shipped specs, by sample kind, and the features' deviation."""
+    import numpy as np
+
+    load0 = os.getloadavg()[0]
+    res = subprocess.run([sys.executable, "-c", STEADY_CHILD, str(n), "1" if floor else "0",
+                          str(Path(__file__).resolve().parent), str(offset)], stdout=subprocess.PIPE, text=True,
+                         check=True)
+    data = json.loads(res.stdout.strip().splitlines()[-1])
+    rows = data["rows"]
+    print(f"steady start: shipped default-model specs, samples {offset}-{offset + n - 1} of each ({len(rows)}), each sample run with "
+          f"every start back to back, in one process (one core); load {load0:.2f} -> {os.getloadavg()[0]:.2f}; "
+          f"peak RSS {data['rss_mb']:.0f} MiB")
+    keys = [f"{a}/{b}" for a, b in MODES]
+    print(f"{'spec':<26}" + "".join(f"{k + ' /min':>28}" for k in keys) + f"{'x fixed':>9}{'x stationary':>13}")
+    groups = {stem.stem: [r for r in rows if r["spec"] == stem.stem] for stem in SHIPPED}
+    groups["all"] = rows
+    for name, rs in groups.items():
+        if not rs:
+            continue
+        rate = [60 * len(rs) / sum(r[k]["s"] for r in rs) for k in keys]
+        print(f"{name:<26}" + "".join(f"{v:>28.1f}" for v in rate) + f"{rate[1] / rate[0]:>9.2f}{rate[2] / rate[0]:>13.2f}")
+    print("by sample kind (the stationary start's; seconds summed over the samples):")
+    print(f"{'kind':<22}{'n':>4}" + "".join(f"{k + ' s':>24}" for k in keys) + f"{'share':>7}{'x fixed':>9}"
+          f"{'x stationary':>13}{'transient revs':>16}")
+    total0 = sum(r[keys[0]]["s"] for r in rows)
+    for kind in ("period-1", "fallback stationary", "fallback full"):
+        rs = [r for r in rows if r[keys[2]]["kind"] == kind]
+        if not rs:
+            continue
+        t = [sum(r[k]["s"] for r in rs) for k in keys]
+        revs = [int(r[keys[2]]["note"].split()[1].split("/")[0]) if r[keys[2]]["note"].startswith("transient ")
+                else 0 if kind == "period-1" else 400 for r in rs]
+        print(f"{kind:<22}{len(rs):>4}" + "".join(f"{v:>24.1f}" for v in t) + f"{t[0] / total0:>7.0%}"
+              f"{t[0] / t[1]:>9.2f}{t[0] / t[2]:>13.2f}{f'{min(revs)}-{max(revs)}':>16}")
+    same = all(r[k]["labels"] == r[keys[0]]["labels"] for r in rows for k in keys[1:])
+    shot = [r for r in rows if r[keys[2]]["kind"] == "period-1"]
+    print(f"labels (status, simulated mechanism, motion) equal in all three: {same}; largest waveform difference "
+          f"of the period-1 samples: {max((r[keys[2]]['dwave_um'] for r in shot), default=float('nan')):.1e} um")
+    X0 = np.array([r[keys[0]]["features"] for r in rows])
+    scale = np.nanstd(X0, axis=0)
+    scale[~(scale > 0)] = np.nan
+
+    def dev(rs, k) -> np.ndarray:
+        a = np.array([r[k]["features"] for r in rs])
+        b = np.array([r[keys[0]]["features"] for r in rs])
+        return np.nanmax(np.abs(a - b) / scale, axis=1)  # per sample: the worst feature
+
+    for kind in ("fallback stationary", "fallback full"):
+        rs = [r for r in rows if r[keys[2]]["kind"] == kind]
+        if not rs:
+            continue
+        d = dev(rs, keys[2])
+        line = f"{kind}: worst standardised feature deviation from the 400-rev record, per sample: " \
+               f"median {np.nanmedian(d):.3f}, max {np.nanmax(d):.3f}"
+        fl = [r for r in rs if "floor" in r]
+        if fl:
+            f = dev(fl, "floor")
+            line += f"; the 400-rev record's own (400 vs 800 revs): median {np.nanmedian(f):.3f}, max {np.nanmax(f):.3f}"
+        print(line)
+    print("(x: samples/min ratio against integrate/fixed, the start before issue 16 (400 transient revolutions); "
+          "shooting/fixed: the shooting start with the full transient on fallback; shooting/stationary: the default, "
+          "fallbacks end their transient once stationary; standardised deviation: |feature - 400-rev feature| / "
+          "the feature's standard deviation over these samples, largest over the model's features (phases "
+          "excluded), per sample)")
 
 
 def main() -> None:
@@ -210,9 +314,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steady-start", type=int, default=0, metavar="N",
                     help="compare the shooting and integration starts on the first N samples of each shipped spec")
+    ap.add_argument("--floor", action="store_true",
+                    help="with --steady-start: also run 800 transient revolutions for the fallback samples (the "
+                         "400-revolution reference's own spread)")
+    ap.add_argument("--offset", type=int, default=0, metavar="K",
+                    help="with --steady-start: samples K..K+N-1 of each spec instead of the first N")
     args = ap.parse_args()
     if args.steady_start > 0:
-        compare_steady_start(args.steady_start)
+        compare_steady_start(args.steady_start, args.floor, args.offset)
         return
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)

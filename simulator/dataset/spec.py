@@ -9,7 +9,7 @@ See ``examples/dataset_small.toml`` for a commented example and
 ``[plant]``        base plant (``file``, ``shaftline`` or ``preset``, and/or ``set``), or a machine family
                    (``presets`` and/or ``shaftlines``, weighted), relative ``perturb``-ations and ``scale`` factors
 ``[measurement]``  probes, sample rate, duration, SNR, runout, speed fluctuation
-``[simulation]``   transient_revs, samples_per_rev, rtol, atol, classify_motion, steady_start
+``[simulation]``   transient_revs, samples_per_rev, rtol, atol, classify_motion, steady_start, transient_stop
 
 A *value* is a number; a *list* ``[a, b, c]`` is a set of levels; a *range*
 ``{min = .., max = ..}`` is a continuous interval (``n = k`` levels for a grid).
@@ -369,6 +369,11 @@ class Simulation(_Strict):
         description="start each record on the period-1 orbit found by shooting where that converges to a stable "
                     "orbit (else integrate the transient; diagnostics/steady_start says which), or always "
                     "integrate transient_revs revolutions")
+    transient_stop: Literal["stationary", "fixed"] = Field(
+        default="stationary",
+        description="steady_start = shooting, samples that fall back to integration: end the transient once the "
+                    "Poincaré-point statistics are stationary (at most transient_revs; "
+                    "rotordiag.simulator.steady.attractor), or always integrate all of it")
 
 
 class DatasetSpec(_Strict):
@@ -515,6 +520,8 @@ class ResolvedSpec:
                 dumped["plant"].pop(key, None)
         if dumped["operating"].get("angular_misalignment_mrad") == 0.0:  # likewise
             dumped["operating"].pop("angular_misalignment_mrad")
+        if dumped["simulation"].get("transient_stop") == "fixed":  # the transient before it existed: same hash
+            dumped["simulation"].pop("transient_stop")
         canonical: dict[str, Any] = {"spec": dumped, "base_plant": _hashed_plant(self.base_plant)}
         if ps.is_family:
             canonical["sources"] = {k: [_hashed_plant(p), self.source_weights[k]] for k, p in self.sources.items()}

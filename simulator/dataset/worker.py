@@ -39,12 +39,13 @@ class SimulationSettings:
     record_revs_min: int
     classify_motion: bool
     steady_start: str = "shooting"  # as the spec's default
+    transient_stop: str = "stationary"  # likewise
 
     @classmethod
     def from_spec(cls, spec) -> SimulationSettings:
         s = spec.simulation
         return cls(s.transient_revs, s.samples_per_rev, s.rtol, s.atol, s.record_revs_min, s.classify_motion,
-                   s.steady_start)
+                   s.steady_start, s.transient_stop)
 
 
 @dataclass(frozen=True)
@@ -90,7 +91,7 @@ def run_sample(task: SampleTask) -> SampleOutput:
     import time
 
     from rotordiag.simulator import Plant, build_system, simulate
-    from rotordiag.simulator.steady.start import steady_start
+    from rotordiag.simulator.steady.attractor import record_start
 
     p, sim, meas = task.params, task.simulation, task.measurement
     rng = np.random.default_rng(p.sample_seed)
@@ -104,8 +105,8 @@ def run_sample(task: SampleTask) -> SampleOutput:
                   offset_angle_rad=p.offset_angle_rad, coupling_phase_rad=p.coupling_phase_rad,
                   angular_misalignment_mrad=p.angular_misalignment_mrad if p.mechanism in ("offset", "flexible")
                   else 0.0)
-        start = steady_start(build_system(plant, p.speed_rpm, p.misalignment, p.unbalance, **kw),
-                             sim.transient_revs, sim.steady_start)
+        start = record_start(build_system(plant, p.speed_rpm, p.misalignment, p.unbalance, **kw),
+                             sim.transient_revs, sim.steady_start, sim.transient_stop)
         res = simulate(plant, p.speed_rpm, p.misalignment, p.unbalance, transient_revs=start.transient_revs,
                        record_revs=revs, samples_per_rev=sim.samples_per_rev,
                        initial_state=None if start.path == "integrate" and start.warmup_revs == 0 else start.state,
