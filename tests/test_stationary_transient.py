@@ -113,10 +113,13 @@ def test_record_start_settles_only_fallbacks_without_a_stable_orbit(whirl, perio
 
 def test_spec_key_default_refusal_and_hash():
     default = parse_spec(SPEC)
-    assert default.spec.simulation.transient_stop == "stationary"
-    assert SimulationSettings.from_spec(default.spec).transient_stop == "stationary"
+    assert default.spec.simulation.transient_stop == "fixed"          # opt-in: the default is the old behaviour
+    assert SimulationSettings.from_spec(default.spec).transient_stop == "fixed"
     fixed = parse_spec(SPEC + 'transient_stop = "fixed"\n')
-    assert fixed.spec_hash != default.spec_hash
+    assert fixed.spec_hash == default.spec_hash                        # the old hash
+    stationary = parse_spec(SPEC + 'transient_stop = "stationary"\n')
+    assert stationary.spec_hash != default.spec_hash
+    assert SimulationSettings.from_spec(stationary.spec).transient_stop == "stationary"
     with pytest.raises(SpecError, match="transient_stop"):
         parse_spec(SPEC + 'transient_stop = "early"\n')
     s = dataclasses.replace(SimulationSettings.from_spec(fixed.spec))

@@ -39,7 +39,7 @@ class SimulationSettings:
     record_revs_min: int
     classify_motion: bool
     steady_start: str = "shooting"  # as the spec's default
-    transient_stop: str = "stationary"  # likewise
+    transient_stop: str = "fixed"  # likewise
 
     @classmethod
     def from_spec(cls, spec) -> SimulationSettings:
