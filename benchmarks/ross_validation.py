@@ -212,8 +212,7 @@ def generate(path: Path = DEFAULT_PATH, seed: int = SEED) -> dict:
     import ross  # type: ignore[import-not-found]
 
     rng = np.random.default_rng(seed)
-    rows: dict[str, list] = {k: [] for k in ("machine", "speed_rpm", "clearance_um", "delta", "grade_mm_s",
-                                              "harmonics_um", "instrumented", "phases_rad")}
+    rows: dict[str, list] = {k: [] for k in _ROW_KEYS}
     for spec in MACHINES:
         t0 = time.perf_counter()
         built = _build(spec)
@@ -223,17 +222,32 @@ def generate(path: Path = DEFAULT_PATH, seed: int = SEED) -> dict:
         cases.append((0.0, GRADES_MM_S[1], phases))
         cases += [(d, GRADES_MM_S[1], phases) for d in DELTAS]
         for delta, grade, ph in cases:
-            rows["machine"].append(spec.name)
-            rows["speed_rpm"].append(spec.speed_rpm)
-            rows["clearance_um"].append(spec.clearance_um)
-            rows["delta"].append(delta)
-            rows["grade_mm_s"].append(grade)
-            rows["harmonics_um"].append(solve_case(spec, built, delta, grade, ph))
-            rows["instrumented"].append([b in spec.instrumented for b in (1, 2, 3, 4)])
-            rows["phases_rad"].append(ph)
+            _add_case(rows, spec, built, delta, grade, ph, spec.speed_rpm)
         print(f"{spec.name}: {len(cases)} cases in {time.perf_counter() - t0:.1f} s")
+    return _write_set(rows, path, seed, ross.__version__)
+
+
+_ROW_KEYS = ("machine", "speed_rpm", "clearance_um", "delta", "grade_mm_s", "harmonics_um", "instrumented",
+             "phases_rad")
+
+
+def _add_case(rows: dict[str, list], spec: MachineSpec, built, delta: float, grade: float,
+              phases: tuple[float, float], speed_rpm: float) -> None:
+    """Solve one case with ROSS and append it to ``rows`` (the set's columns)."""
+    rows["machine"].append(spec.name)
+    rows["speed_rpm"].append(speed_rpm)
+    rows["clearance_um"].append(spec.clearance_um)
+    rows["delta"].append(delta)
+    rows["grade_mm_s"].append(grade)
+    rows["harmonics_um"].append(solve_case(spec, built, delta, grade, phases,
+                                           None if speed_rpm == spec.speed_rpm else speed_rpm))
+    rows["instrumented"].append([b in spec.instrumented for b in (1, 2, 3, 4)])
+    rows["phases_rad"].append(phases)
+
+
+def _write_set(rows: dict[str, list], path: Path, seed: int, ross_version: str) -> dict:
     arrays = {k: np.asarray(v) for k, v in rows.items()}
-    arrays["ross_version"] = np.asarray(str(ross.__version__))
+    arrays["ross_version"] = np.asarray(str(ross_version))
     arrays["seed"] = np.asarray(seed)
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(path, **arrays)
@@ -249,8 +263,7 @@ def generate_band(path: Path = BAND_PATH, seed: int = SEED, n_healthy: int = BAN
     import ross  # type: ignore[import-not-found]
 
     rng = np.random.default_rng(seed + 1)
-    rows: dict[str, list] = {k: [] for k in ("machine", "speed_rpm", "clearance_um", "delta", "grade_mm_s",
-                                              "harmonics_um", "instrumented", "phases_rad")}
+    rows: dict[str, list] = {k: [] for k in _ROW_KEYS}
     for spec in MACHINES:
         t0 = time.perf_counter()
         built = _build(spec)
@@ -260,21 +273,9 @@ def generate_band(path: Path = BAND_PATH, seed: int = SEED, n_healthy: int = BAN
         cases += [(d, spec.speed_rpm * (1 + float(rng.uniform(-spread, spread)))) for d in DELTAS
                   for _ in range(n_per_delta)]
         for delta, rpm in cases:
-            rows["machine"].append(spec.name)
-            rows["speed_rpm"].append(rpm)
-            rows["clearance_um"].append(spec.clearance_um)
-            rows["delta"].append(delta)
-            rows["grade_mm_s"].append(GRADES_MM_S[1])
-            rows["harmonics_um"].append(solve_case(spec, built, delta, GRADES_MM_S[1], phases, rpm))
-            rows["instrumented"].append([b in spec.instrumented for b in (1, 2, 3, 4)])
-            rows["phases_rad"].append(phases)
+            _add_case(rows, spec, built, delta, GRADES_MM_S[1], phases, rpm)
         print(f"{spec.name}: {len(cases)} cases in {time.perf_counter() - t0:.1f} s")
-    arrays = {k: np.asarray(v) for k, v in rows.items()}
-    arrays["ross_version"] = np.asarray(str(ross.__version__))
-    arrays["seed"] = np.asarray(seed)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(path, **arrays)
-    return arrays
+    return _write_set(rows, path, seed, ross.__version__)
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,8 @@ import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from ._search import coordinate_ascent
+
 DEFAULT_RATIO_PATTERNS: tuple[str, ...] = ("b?_[xy]_2x_1x_ratio",)
 DEFAULT_RULE_CUTS: tuple[float, ...] = (0.5, 1.0, 2.0)
 
@@ -146,20 +148,12 @@ class RatioThresholdClassifier(ClassifierMixin, BaseEstimator):
         props = np.cumsum(np.bincount(yi, minlength=k) / len(yi))[:-1]
         th = np.quantile(finite, np.clip(props, 0, 1)) if finite.size else np.zeros(k - 1)
         th = np.maximum.accumulate(th)
-        best = score(th)
-        for _ in range(self.n_passes):
-            improved = False
-            for j in range(k - 1):
-                lo = th[j - 1] if j > 0 else -np.inf
-                hi = th[j + 1] if j < k - 2 else np.inf
-                for c in cand[(cand >= lo) & (cand <= hi)]:
-                    trial = th.copy()
-                    trial[j] = c
-                    s = score(trial)
-                    if s > best + 1e-12:
-                        best, th, improved = s, trial, True
-            if not improved:
-                break
+        def between_neighbours(j: int, cur: np.ndarray) -> np.ndarray:
+            lo = cur[j - 1] if j > 0 else -np.inf
+            hi = cur[j + 1] if j < k - 2 else np.inf
+            return cand[(cand >= lo) & (cand <= hi)]
+
+        th, best = coordinate_ascent(score, th, between_neighbours, n_passes=self.n_passes, tol=1e-12)
         self.thresholds_ = th
         self.train_macro_f1_ = float(best)
         return self

@@ -31,6 +31,7 @@ from sklearn.model_selection import GroupKFold, StratifiedKFold
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from ._search import coordinate_ascent
 from ._sklearn_private import Interval
 
 __all__ = ["OrdinalSeverityClassifier", "cumulative_to_proba"]
@@ -298,20 +299,9 @@ def _macro_f1_thresholds(cum: np.ndarray, y_idx: np.ndarray, start: np.ndarray) 
         pred = np.cumprod(cum >= t[None, :] - 1e-12, axis=1).sum(axis=1)
         return float(f1_score(y_idx, pred, labels=labels, average="macro", zero_division=0.0))
 
-    best = np.asarray(start, dtype=float).copy()
-    best_score = score(best)
-    for _ in range(3):                       # a few sweeps; usually converged after two
-        moved = False
-        for k in range(cum.shape[1]):
-            grid = THRESHOLD_GRID[THRESHOLD_GRID >= start[0]] if k == 0 else THRESHOLD_GRID
-            for t in grid:
-                trial = best.copy()
-                trial[k] = t
-                s = score(trial)
-                if s > best_score + 1e-9:
-                    best, best_score, moved = trial, s, True
-        if not moved:
-            break
+    first = THRESHOLD_GRID[THRESHOLD_GRID >= start[0]]
+    best, _ = coordinate_ascent(score, start, lambda k, _th: first if k == 0 else THRESHOLD_GRID,
+                                n_passes=3, tol=1e-9)        # a few sweeps; usually converged after two
     return best
 
 
