@@ -549,8 +549,8 @@ def test_baseline_and_change_are_shown(server, browser, recordings, tmp_path):
     assert any(r.text.startswith("change since baseline") and "CHANGED" in r.text for r in rows)
     _wait(browser, lambda d: d.find_element("id", "trend-baseline-box").is_displayed(), 30, "the baseline in the trend")
     trend = browser.find_element("id", "trend-baseline").text
-    assert "from diagnosis" in trend and "Alarm thresholds of this asset: orbit 2x 1x change" in trend, trend
-    assert "(edited); the others shipped" in trend, trend
+    assert "from diagnosis" in trend and "Alarm thresholds of this asset edited: orbit 2x 1x change" in trend, trend
+    assert "the others shipped" in trend, trend
     alarms = browser.find_element("id", "trend-alarms").text
     status, history = _get(f"{server}/assets/{asset}/history")
     assert history["alarms"][0]["event"] == "raised"
@@ -588,7 +588,8 @@ def test_baseline_is_set_from_the_page(server, browser, recordings):
     browser.find_element("id", "baseline-auto-btn").click()
     _wait(browser, lambda d: "from auto" in d.find_element("id", "trend-baseline").text, 30, "the automatic baseline")
     text = browser.find_element("id", "trend-baseline").text
-    assert "from its baseline recordings' repeatability" in text, text
+    assert "from its baseline recordings' repeatability: 1X vector change" in text, text
+    assert "centreline shift" in text and "per c" not in text, text
     assert not browser.find_element("id", "baseline-error").is_displayed()
     _screenshot(browser, "baseline-set-from-page")
     browser.find_element("id", "baseline-latest-btn").click()

@@ -718,10 +718,22 @@
     if (base) {
       text = `Set ${base.set_at} from ${base.source} (diagnoses ${base.diagnosis_ids.join(", ")}), ` +
         `${fixed(base.speed_rpm, 0)} r/min (recordings within ±5 % are compared), model ${base.model_version}.`;
-      const own = Object.entries(b.thresholds_origin || {}).filter(([, o]) => o !== "shipped");
-      text += own.length ? " Alarm thresholds of this asset: " + own.map(([k, o]) =>
-        `${k.replace(/_/g, " ")} ${b.thresholds[k] === null ? "off" : num(b.thresholds[k], 3)} (${o === "repeatability" ?
-          "from its baseline recordings' repeatability" : "edited"})`).join("; ") + "; the others shipped." :
+      const origin = b.thresholds_origin || {};
+      const words = (k) => {
+        const v = b.thresholds[k];
+        if (v === null) return `${k.replace(/_/g, " ")} off`;
+        const m = /^(1x|2x)_change_um_pp$/.exec(k);
+        if (m) return `${m[1].toUpperCase()} vector change ${num(v * lengthUnit().k, 3)} ${lengthUnit().name} pk-pk`;
+        if (k === "dc_shift_um") return `centreline shift ${num(v * lengthUnit().k, 3)} ${lengthUnit().name}`;
+        return `${k.replace(/_/g, " ")} ${num(v, 3)}`;
+      };
+      // a repeatability threshold replaces its per-clearance twin (null): the twin is not listed
+      const own = Object.keys(origin).filter((k) => origin[k] === "repeatability" && b.thresholds[k] !== null);
+      const edited = Object.keys(origin).filter((k) => origin[k] === "edited");
+      const parts = [];
+      if (own.length) parts.push("from its baseline recordings' repeatability: " + own.map(words).join(", "));
+      if (edited.length) parts.push("edited: " + edited.map(words).join(", "));
+      text += parts.length ? ` Alarm thresholds of this asset ${parts.join("; ")}; the others shipped.` :
         " Alarm thresholds: the shipped ones (a baseline of 3 recordings, ?auto=true, sets this asset's own).";
     } else if (b.proposal && b.proposal.diagnosis_ids) {
       text = `None set. Automatic proposal: diagnoses ${b.proposal.diagnosis_ids.join(", ")} at ` +
