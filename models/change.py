@@ -244,7 +244,7 @@ def repeatability_thresholds(signatures: list[dict[str, Any]], *, margin: float 
         average of the others (an automatic baseline's recordings lie within ±5 % of their median);
         else ``{"thresholds": {name: value}, "spread": {name: largest leave-one-out change},
         "n_recordings", "margin"}`` where ``thresholds`` holds the µm names and their ``_per_c`` twins as None
-        (a quantity not measured in every recording is left out: the shipped threshold stays).
+        (a quantity measured in none of the comparisons is left out: its shipped threshold stays).
     """
     from rotordiag.features import SPEED_BAND_FRAC, average_signatures, change_features
 
