@@ -295,20 +295,16 @@ def ross_recordings(seed: int = SEED, *, fixed_runout: bool = False) -> list[dic
 
 
 def repeatability_rule(rule, rep: dict | None, margin: float, combine: str = "own"):
-    """``rule`` with the asset's repeatability thresholds at ``margin`` (``rep`` made at margin 1 and no floors,
-    i.e. the spread); ``combine`` = ``"own"`` (as the service does) or ``"min"`` (never above the shipped)."""
-    from rotordiag.models.change import QUANTITIES, REPEAT_FLOOR
+    """``rule`` with the asset's repeatability thresholds at ``margin`` (from ``rep``'s spread, as the service
+    makes them); ``combine`` = ``"own"`` (as the service does) or ``"min"`` (never above the shipped)."""
+    from rotordiag.models.change import thresholds_from_spread
 
     if rep is None:
         return rule
-    th = {}
-    for name, v in rep["spread"].items():
-        own = max(margin * v, REPEAT_FLOOR.get(name, 0.0))
-        shipped = rule.thresholds.get(name)
-        th[name] = min(own, shipped) if combine == "min" and shipped is not None else own
-        twin = next(c for u, c in QUANTITIES.values() if u == name)
-        if twin is not None:
-            th[twin] = None
+    th = thresholds_from_spread(rep["spread"], margin=margin)
+    if combine == "min":
+        th = {k: (min(v, rule.thresholds[k]) if v is not None and rule.thresholds.get(k) is not None else v)
+              for k, v in th.items()}
     return rule.with_repeatability({"thresholds": th})
 
 

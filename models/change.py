@@ -28,7 +28,7 @@ import numpy as np
 
 __all__ = ["ChangeRule", "THRESHOLDS_PATH", "QUANTITIES", "fit_thresholds", "shipped_rule", "assess_change", "compare",
            "load_baseline_file", "format_change", "UNITS", "repeatability_thresholds", "REPEAT_MIN", "REPEAT_MARGIN",
-           "REPEAT_FLOOR", "REPEAT_QUANTITIES"]
+           "REPEAT_FLOOR", "REPEAT_QUANTITIES", "thresholds_from_spread"]
 
 THRESHOLDS_PATH = Path(__file__).resolve().parent / "default" / "change_thresholds.json"
 
@@ -248,7 +248,6 @@ def repeatability_thresholds(signatures: list[dict[str, Any]], *, margin: float 
     """
     from rotordiag.features import SPEED_BAND_FRAC, average_signatures, change_features
 
-    floors = dict(REPEAT_FLOOR if floors is None else floors)
     if len(signatures) < REPEAT_MIN:
         return None
     spread: dict[str, float] = {}
@@ -263,15 +262,25 @@ def repeatability_thresholds(signatures: list[dict[str, Any]], *, margin: float 
             v = res.largest(name)[0]
             if math.isfinite(v):
                 spread[name] = max(spread.get(name, 0.0), float(v))
+    return {"thresholds": thresholds_from_spread(spread, margin=margin, floors=floors), "spread": spread,
+            "n_recordings": len(signatures), "margin": float(margin)}
+
+
+def thresholds_from_spread(spread: dict[str, float], *, margin: float = REPEAT_MARGIN,
+                           floors: dict[str, float] | None = None) -> dict[str, float | None]:
+    """Repeatability thresholds from the largest leave-one-out changes (``spread``, per µm quantity):
+    ``max(margin × spread, floor)``, their ``_per_c`` twins None; a quantity absent from ``spread`` (never
+    measured in the baseline) is left out, so its shipped threshold stays."""
+    floors = REPEAT_FLOOR if floors is None else floors
     thresholds: dict[str, float | None] = {}
     for q in REPEAT_QUANTITIES:
         um_name, c_name = QUANTITIES[q]
         if um_name not in spread:
-            continue                        # never measured in the baseline: the shipped threshold stays
+            continue
         thresholds[um_name] = max(margin * spread[um_name], floors.get(um_name, 0.0))
         if c_name is not None:
             thresholds[c_name] = None
-    return {"thresholds": thresholds, "spread": spread, "n_recordings": len(signatures), "margin": float(margin)}
+    return thresholds
 
 
 def assess_change(result: Any, rule: ChangeRule) -> dict[str, Any]:
