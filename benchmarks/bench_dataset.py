@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -153,7 +154,11 @@ SHIPPED = sorted((Path(__file__).resolve().parent.parent / "models" / "default")
 
 
 #: the ways a record may start, in the order each sample runs them (back to back, so they share the load)
-MODES = (("integrate", "fixed"), ("shooting", "fixed"), ("shooting", "stationary"))
+#: (steady_start, transient_stop, integrator): the path before issue 16 first (the baseline), then the
+#: default now (shooting start, explicit integration handing stiff runs to LSODA), then the opt-in stop.
+MODES = (("integrate", "fixed", "explicit"), ("shooting", "fixed", "auto"), ("shooting", "stationary", "auto"))
+KEYS = ["/".join(m) for m in MODES]
+BASE = KEYS[0]
 STEADY_CHILD = r"""
 import json, resource, sys
 sys.path.insert(0, sys.argv[3])
@@ -164,9 +169,12 @@ print(json.dumps({"rows": rows, "rss_mb": resource.getrusage(resource.RUSAGE_SEL
 
 
 def _sample_kind(out) -> str:
-    """period-1 (shot), or the fallback's kind from its note."""
+    """period-1 (shot), or the fallback's kind from its note: handed to the stiff solver, stopped once
+    stationary, or neither."""
     if out.steady_start == "shooting":
         return "period-1"
+    if "stiff from rev" in out.steady_note:
+        return "fallback stiff"
     return "fallback stationary" if "(stationary)" in out.steady_note else "fallback full"
 
 
@@ -221,21 +229,23 @@ def _steady_start_row(stem: str, i: int, p, sim, meas, floor: bool, features) ->
     from rotordiag.simulator.dataset.worker import SampleTask, run_sample
 
     row: dict = {"spec": stem, "index": i}
-    for start, stop in MODES:
+    for start, stop, integrator in MODES:
         t0 = time.perf_counter()
-        task = SampleTask(p, dataclasses.replace(sim, steady_start=start, transient_stop=stop), meas)
+        task = SampleTask(p, dataclasses.replace(sim, steady_start=start, transient_stop=stop, integrator=integrator),
+                          meas)
         out = run_sample(task)
-        key = f"{start}/{stop}"
+        key = f"{start}/{stop}/{integrator}"
         row[key] = {"s": time.perf_counter() - t0, "kind": _sample_kind(out), "note": out.steady_note,
                     "labels": [out.status, out.simulated_mechanism, out.motion_kind, out.motion_period],
                     "features": features(out, meas, p),
                     "wave": out.waveforms_um.astype(float).tolist() if start == "integrate" else None}
         if start != "integrate":
-            ref = np.array(row["integrate/fixed"]["wave"])
-            row[key]["dwave_um"] = float(np.nanmax(np.abs(out.waveforms_um - ref)))
-    row["integrate/fixed"]["wave"] = None
-    if floor and row["shooting/stationary"]["kind"] != "period-1":
-        out = run_sample(SampleTask(p, dataclasses.replace(sim, steady_start="integrate",
+            ref = np.array(row[BASE]["wave"])
+            diff = np.abs(out.waveforms_um - ref)
+            row[key]["dwave_um"] = float(np.nanmax(diff)) if np.isfinite(diff).any() else float("nan")
+    row[BASE]["wave"] = None
+    if floor and row[KEYS[2]]["kind"] != "period-1":
+        out = run_sample(SampleTask(p, dataclasses.replace(sim, steady_start="integrate", integrator="explicit",
                                                            transient_revs=2 * sim.transient_revs), meas))
         row["floor"] = {"features": features(out, meas, p)}
     return row
@@ -254,32 +264,38 @@ def compare_steady_start(n: int, floor: bool, offset: int = 0) -> None:
     print(f"steady start: shipped default-model specs, samples {offset}-{offset + n - 1} of each ({len(rows)}), each sample run with "
           f"every start back to back, in one process (one core); load {load0:.2f} -> {os.getloadavg()[0]:.2f}; "
           f"peak RSS {data['rss_mb']:.0f} MiB")
-    keys = [f"{a}/{b}" for a, b in MODES]
-    print(f"{'spec':<26}" + "".join(f"{k + ' /min':>28}" for k in keys) + f"{'x fixed':>9}{'x stationary':>13}")
+    keys = KEYS
+    print(f"{'spec':<26}" + "".join(f"{k + ' /min':>28}" for k in keys) + f"{'x default':>10}{'x stationary':>13}")
     groups = {stem.stem: [r for r in rows if r["spec"] == stem.stem] for stem in SHIPPED}
     groups["all"] = rows
     for name, rs in groups.items():
         if not rs:
             continue
         rate = [60 * len(rs) / sum(r[k]["s"] for r in rs) for k in keys]
-        print(f"{name:<26}" + "".join(f"{v:>28.1f}" for v in rate) + f"{rate[1] / rate[0]:>9.2f}{rate[2] / rate[0]:>13.2f}")
-    print("by sample kind (the stationary start's; seconds summed over the samples):")
-    print(f"{'kind':<22}{'n':>4}" + "".join(f"{k + ' s':>24}" for k in keys) + f"{'share':>7}{'x fixed':>9}"
-          f"{'x stationary':>13}{'transient revs':>16}")
+        print(f"{name:<26}" + "".join(f"{v:>28.1f}" for v in rate) + f"{rate[1] / rate[0]:>10.2f}{rate[2] / rate[0]:>13.2f}")
+    print("by sample kind (as the default run them; seconds summed over the samples):")
+    print(f"{'kind':<22}{'n':>4}" + "".join(f"{k + ' s':>28}" for k in keys) + f"{'share':>7}{'x default':>10}"
+          f"{'x stationary':>13}{'transient revs (stationary)':>29}")
     total0 = sum(r[keys[0]]["s"] for r in rows)
-    for kind in ("period-1", "fallback stationary", "fallback full"):
-        rs = [r for r in rows if r[keys[2]]["kind"] == kind]
+    kinds = ("period-1", "fallback stiff", "fallback full")
+    for kind in kinds:
+        rs = [r for r in rows if r[keys[1]]["kind"] == kind]
         if not rs:
             continue
         t = [sum(r[k]["s"] for r in rs) for k in keys]
-        revs = [int(r[keys[2]]["note"].split()[1].split("/")[0]) if r[keys[2]]["note"].startswith("transient ")
+        revs = [int(m.group(1)) if (m := re.search(r"transient (\d+)/", r[keys[2]]["note"]))
                 else 0 if kind == "period-1" else 400 for r in rs]
-        print(f"{kind:<22}{len(rs):>4}" + "".join(f"{v:>24.1f}" for v in t) + f"{t[0] / total0:>7.0%}"
-              f"{t[0] / t[1]:>9.2f}{t[0] / t[2]:>13.2f}{f'{min(revs)}-{max(revs)}':>16}")
-    same = all(r[k]["labels"] == r[keys[0]]["labels"] for r in rows for k in keys[1:])
-    shot = [r for r in rows if r[keys[2]]["kind"] == "period-1"]
-    print(f"labels (status, simulated mechanism, motion) equal in all three: {same}; largest waveform difference "
-          f"of the period-1 samples: {max((r[keys[2]]['dwave_um'] for r in shot), default=float('nan')):.1e} um")
+        print(f"{kind:<22}{len(rs):>4}" + "".join(f"{v:>28.1f}" for v in t) + f"{t[0] / total0:>7.0%}"
+              f"{t[0] / t[1]:>10.2f}{t[0] / t[2]:>13.2f}{f'{min(revs)}-{max(revs)}':>29}")
+    for k in keys[1:]:
+        differ = [r for r in rows if r[k]["labels"] != r[keys[0]]["labels"]]
+        print(f"labels (status, simulated mechanism, motion) of {k} equal to {keys[0]}'s: "
+              f"{len(rows) - len(differ)}/{len(rows)}" + "".join(
+                  f"; {r['spec']}[{r['index']}] {r[keys[0]]['labels'][0]} -> {r[k]['labels'][0]} ({r[k]['kind']})"
+                  for r in differ))
+    shot = [r for r in rows if r[keys[1]]["kind"] == "period-1"]
+    print(f"largest waveform difference of the period-1 samples: "
+          f"{max((r[keys[1]]['dwave_um'] for r in shot), default=float('nan')):.1e} um")
     X0 = np.array([r[keys[0]]["features"] for r in rows])
     scale = np.nanstd(X0, axis=0)
     scale[~(scale > 0)] = np.nan
@@ -289,23 +305,26 @@ def compare_steady_start(n: int, floor: bool, offset: int = 0) -> None:
         b = np.array([r[keys[0]]["features"] for r in rs])
         return np.nanmax(np.abs(a - b) / scale, axis=1)  # per sample: the worst feature
 
-    for kind in ("fallback stationary", "fallback full"):
-        rs = [r for r in rows if r[keys[2]]["kind"] == kind]
-        if not rs:
-            continue
-        d = dev(rs, keys[2])
-        line = f"{kind}: worst standardised feature deviation from the 400-rev record, per sample: " \
-               f"median {np.nanmedian(d):.3f}, max {np.nanmax(d):.3f}"
-        fl = [r for r in rs if "floor" in r]
-        if fl:
-            f = dev(fl, "floor")
-            line += f"; the 400-rev record's own (400 vs 800 revs): median {np.nanmedian(f):.3f}, max {np.nanmax(f):.3f}"
-        print(line)
-    print("(x: samples/min ratio against integrate/fixed, the start before issue 16 (400 transient revolutions); "
-          "shooting/fixed: the shooting start with the full transient on fallback; shooting/stationary: the default, "
-          "fallbacks end their transient once stationary; standardised deviation: |feature - 400-rev feature| / "
-          "the feature's standard deviation over these samples, largest over the model's features (phases "
-          "excluded), per sample)")
+    for k in keys[1:]:
+        for kind in kinds[1:]:
+            rs = [r for r in rows if r[keys[1]]["kind"] == kind
+                  and r[k]["labels"][0] == "ok" and r[keys[0]]["labels"][0] == "ok"]
+            if not rs:
+                continue
+            d = dev(rs, k)
+            line = f"{k}, {kind} ({len(rs)} ok in both): worst standardised feature deviation from the 400-rev " \
+                   f"record, per sample: median {np.nanmedian(d):.3f}, max {np.nanmax(d):.3f}"
+            fl = [r for r in rs if "floor" in r]
+            if fl:
+                f = dev(fl, "floor")
+                line += f"; the 400-rev record's own (400 vs 800 revs): median {np.nanmedian(f):.3f}, " \
+                        f"max {np.nanmax(f):.3f}"
+            print(line)
+    print(f"(x: samples/min ratio against {keys[0]}, the path before issue 16 (400 transient revolutions, "
+          f"Dormand-Prince throughout); {keys[1]}: the default now (shooting start; fallbacks integrate the full "
+          f"transient, handed to LSODA where they become stiff); {keys[2]}: the opt-in stop, fallbacks end their "
+          "transient once stationary; standardised deviation: |feature - 400-rev feature| / the feature's standard "
+          "deviation over these samples, largest over the model's features (phases excluded), per sample)")
 
 
 def main() -> None:

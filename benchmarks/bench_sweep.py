@@ -10,8 +10,9 @@ Prints wall time, points/s, speed-up vs the in-process loop, peak RSS, and
 checks that every configuration produced bit-identical Poincaré points.
 
 ``--steady-start`` instead compares the two ways a point's record starts (issue 16 item 4),
-in-process on one core: ``steady_start="integrate"`` (400 transient revolutions, the old
-path) vs ``"shooting"`` (the default); it prints points/min of each and the ratio, overall
+in-process on one core: ``steady_start="integrate"`` with ``stiff_solver=False`` (400 transient
+revolutions, Dormand–Prince throughout: the path before issue 16) vs the defaults (``"shooting"``
+and the stiff hand-over to LSODA); it prints points/min of each and the ratio, overall
 and over the points that took the shooting start, the largest Poincaré-point difference
 there, and whether every point's motion label is equal. Add ``--misalignment-sweep`` for
 the paper's Fig 14 Δ sweep at 1843 r/min as well.
@@ -86,30 +87,32 @@ def compare_steady_start(plant, n_points: int, with_delta: bool) -> None:
     kw = dict(transient_revs=400, record_revs=128, samples_per_rev=64, progress=False, n_workers=0)
     speed_sweep(plant, [1500.0], 0.1, 0.05, **{**kw, "transient_revs": 30, "record_revs": 8})  # compile
     cases = [(f"speed 1200-3000 r/min, pin Δ=0.10 ({n_points} pts)",
-              lambda start: speed_sweep(plant, np.linspace(1200.0, 3000.0, n_points), 0.1, 0.05,
-                                        steady_start=start, **kw))]
+              lambda start, stiff: speed_sweep(plant, np.linspace(1200.0, 3000.0, n_points), 0.1, 0.05,
+                                               steady_start=start, stiff_solver=stiff, **kw))]
     if with_delta:
         cases.append((f"Δ 0-0.6 at 1843 r/min, pin ({n_points} pts)",
-                      lambda start: misalignment_sweep(plant, 1843.0, np.linspace(0.0, 0.6, n_points), 0.05,
-                                                       steady_start=start, **kw)))
+                      lambda start, stiff: misalignment_sweep(plant, 1843.0, np.linspace(0.0, 0.6, n_points), 0.05,
+                                                              steady_start=start, stiff_solver=stiff, **kw)))
     print(f"sweep steady start, in-process on one core, 400 transient + 128 recorded revs; "
           f"load {os.getloadavg()[0]:.2f}")
     print(f"{'sweep':<42}{'integrate /min':>15}{'shooting /min':>14}{'x':>6}{'shot':>7}{'x period-1':>11}"
           f"{'max |dpc|':>10}{'motion equal':>13}")
     for name, fn in cases:
         t0 = time.perf_counter()
-        a = fn("integrate")
+        a = fn("integrate", False)  # before issue 16: 400 revolutions, Dormand–Prince throughout
         ta = time.perf_counter() - t0
         t0 = time.perf_counter()
-        b = fn("shooting")
+        b = fn("shooting", True)  # the default now
         tb = time.perf_counter() - t0
         shot = b.steady_start == "shooting"
         dpc = float(np.nanmax(np.abs(a.poincare[shot] - b.poincare[shot]))) if shot.any() else float("nan")
         p1 = a.wall_time_s[shot].sum() / max(b.wall_time_s[shot].sum(), 1e-9)
         print(f"{name:<42}{60 * n_points / ta:>15.1f}{60 * n_points / tb:>14.1f}{ta / tb:>6.2f}"
               f"{f'{shot.sum()}/{n_points}':>7}{p1:>11.2f}{dpc:>10.1e}{str(bool(np.all(a.motion == b.motion))):>13}")
-    print("(max |dpc|: largest difference of the Poincaré points X = x/c of the points that took the shooting "
-          "start; x period-1: sum of their per-point times, integrate / shooting)")
+    print("(integrate: 400 transient revolutions, Dormand-Prince throughout: the path before issue 16; shooting: "
+          "the default now, the shooting start where it converges and the stiff hand-over to LSODA; max |dpc|: "
+          "largest difference of the Poincaré points X = x/c of the points that took the shooting start; x period-1: "
+          "sum of their per-point times, integrate / shooting)")
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak RSS {rss:.0f} MiB")
 

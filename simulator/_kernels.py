@@ -67,6 +67,13 @@ N_STATE_FLEXIBLE = 26
 N_Q = 11
 
 STATUS_OK, STATUS_CONTACT, STATUS_DIVERGED = 0, 1, 2
+#: :func:`integrate` stopped because the motion became stiff (internal: the caller goes on
+#: with a stiff solver, :mod:`rotordiag.simulator._stiff`; never a run's status).
+STATUS_STIFF = 3
+#: Dormand–Prince stiffness test (Hairer, Nørsett & Wanner, *Solving ODEs I*, §IV.2 and DOPRI5):
+#: h·|λ| estimated from the last two stages above this bound on this many accepted steps.
+STIFF_HLAMBDA = 3.25
+STIFF_COUNT = 15
 #: Eccentricity at which an accepted step ends the run with status "contact".
 CONTACT_ECCENTRICITY = 0.999
 #: Any non-dimensional coordinate beyond this (in clearances) counts as divergence.
@@ -412,19 +419,26 @@ def dp_step_factor(err, step_rejected):
 
 @njit(**NUMBA_OPTIONS)
 def integrate(y0, tau0, p, rtol, atol, h0, grid_t0, grid_dt, grid_out, pc_t0, pc_dt, pc_out,
-              tau_end, max_steps):
+              tau_end, max_steps, stiff_steps=0, stiff_window=2.0 * math.pi):
     """Integrate from ``tau0`` to ``tau_end`` with adaptive Dormand–Prince 5(4).
 
     Samples at τ_k = grid_t0 + k·grid_dt (k < len(grid_out)) and Poincaré
     points at τ_j = pc_t0 + j·pc_dt (j < len(pc_out)) are written by dense
     output into ``grid_out`` / ``pc_out`` (rows are full states).
 
+    With ``stiff_steps`` > 0 the run stops early with ``STATUS_STIFF`` when it has become
+    stiff: more than ``stiff_steps`` trial steps within one window of ``stiff_window`` (τ)
+    **and** the stiffness test (h·|λ| > ``STIFF_HLAMBDA`` on ``STIFF_COUNT`` accepted steps
+    without 6 non-stiff ones between them) — an explicit method then crawls along its
+    stability limit (whirl near the bushing wall: film eigenvalues of −4e4 per radian).
+
     Returns
     -------
-    status, tau, y, nfev, n_accepted, n_rejected, n_grid, n_pc, emax
+    status, tau, y, nfev, n_accepted, n_rejected, n_grid, n_pc, emax, h
         ``status``: 0 ok, 1 contact (an accepted state reached ε ≥ 0.999 or
         the step size collapsed near the bushing), 2 diverged (non-finite or
-        unbounded state, step-size collapse, or ``max_steps`` exceeded).
+        unbounded state, step-size collapse, or ``max_steps`` exceeded), 3 stiff
+        (``stiff_steps``; ``tau``/``y`` are the last accepted state).
     """
     n = y0.shape[0]
     y = y0.copy()
@@ -454,10 +468,22 @@ def integrate(y0, tau0, p, rtol, atol, h0, grid_t0, grid_dt, grid_out, pc_t0, pc
             pc_out[npc, i] = y[i]
         npc += 1
     hmin_rel = 1e-13
+    win_tau = tau
+    win_steps = 0
+    n_stiff = 0
+    n_nonstiff = 0
     while tau < tau_end:
         if nacc + nrej >= max_steps:
             status = STATUS_DIVERGED
             break
+        if stiff_steps > 0:
+            if tau >= win_tau + stiff_window:
+                win_tau = tau
+                win_steps = 0
+            win_steps += 1
+            if win_steps > stiff_steps and n_stiff >= STIFF_COUNT:
+                status = STATUS_STIFF
+                break
         hmin = hmin_rel * max(1.0, abs(tau))
         if h < hmin:
             status = STATUS_CONTACT if emax > 0.99 else STATUS_DIVERGED
@@ -494,6 +520,19 @@ def integrate(y0, tau0, p, rtol, atol, h0, grid_t0, grid_dt, grid_out, pc_t0, pc
             for i in range(n):
                 y[i] = y_new[i]
                 K[0, i] = K[6, i]
+            if stiff_steps > 0:  # DOPRI5's test: h·ρ ≈ h‖f(y_new) − f(Ys5)‖ / ‖y_new − Ys5‖ (c6 = 1)
+                num = 0.0
+                den = 0.0
+                for i in range(n):
+                    num += (K[6, i] - K[5, i]) ** 2
+                    den += (y_new[i] - Ys[5, i]) ** 2
+                if den > 0.0 and h * math.sqrt(num / den) > STIFF_HLAMBDA:
+                    n_stiff += 1
+                    n_nonstiff = 0
+                else:
+                    n_nonstiff += 1
+                    if n_nonstiff >= 6:
+                        n_stiff = 0
             nacc += 1
             step_rejected = False
             h *= factor

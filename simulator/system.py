@@ -24,6 +24,10 @@ from .params import (
 )
 
 TWO_PI = 2.0 * math.pi
+#: The explicit integrator hands a run to LSODA (:mod:`._stiff`) once a revolution needs more
+#: trial steps than this while its stiffness test holds (a period-1 revolution takes 100–400
+#: steps, a whirl away from the bushing wall 300–3000, one against it 10⁵–2·10⁵).
+STIFF_STEPS_PER_REV = 6000
 STATUS_NAMES = {K.STATUS_OK: "ok", K.STATUS_CONTACT: "contact", K.STATUS_DIVERGED: "diverged"}
 
 
@@ -167,6 +171,8 @@ class AdvanceStats:
     n_accepted: int
     n_rejected: int
     max_eccentricity: float
+    #: τ where the run became stiff and went on with LSODA (:mod:`._stiff`); NaN if it never did.
+    stiff_from_tau: float = math.nan
 
 
 class RotorSystem:
@@ -216,6 +222,7 @@ class RotorSystem:
         angular_misalignment_mrad: float = 0.0,
         rtol: float = DEFAULT_RTOL,
         atol: float = DEFAULT_ATOL,
+        stiff_solver: bool = True,
     ) -> None:
         self.params = pack_parameters(
             plant, speed_rpm, misalignment, unbalance, mechanism=mechanism,
@@ -244,6 +251,9 @@ class RotorSystem:
                                                            float(offset_angle_rad), self.angular_misalignment_mrad)
         self.rtol = rtol
         self.atol = atol
+        #: Trial steps per revolution above which a stiff run goes on with LSODA (0: never;
+        #: :mod:`._stiff`); ``stiff_solver=False`` keeps the explicit integrator throughout.
+        self.stiff_steps_per_rev = STIFF_STEPS_PER_REV if stiff_solver else 0
         self._h = TWO_PI / 200.0  # last step size, reused between calls
 
     # ---------------------------------------------------------------- states
@@ -329,11 +339,20 @@ class RotorSystem:
         status, tau, y, nfev, nacc, nrej, ng, npc, emax, h = K.integrate(
             np.ascontiguousarray(state, dtype=float), float(tau_start), self.params, self.rtol,
             self.atol, self._h, float(grid_t0), float(grid_dt), grid, float(pc_t0), TWO_PI, pcs,
-            float(tau_end), max_steps,
+            float(tau_end), max_steps, self.stiff_steps_per_rev, TWO_PI,
         )
-        if status == K.STATUS_OK and h > 0:
+        stiff_tau = math.nan
+        if status == K.STATUS_STIFF:
+            from ._stiff import continue_stiff  # here: _stiff needs steady, which needs this module
+
+            stiff_tau = tau
+            status, tau, y, nfev_s, n_s, ng, npc, emax = continue_stiff(
+                self.params, y, tau, float(tau_end), self.rtol, self.atol, max_steps - nacc - nrej,
+                float(grid_t0), float(grid_dt), grid, ng, float(pc_t0), TWO_PI, pcs, npc)
+            nfev, nacc = nfev + nfev_s, nacc + n_s
+        elif status == K.STATUS_OK and h > 0:
             self._h = min(h, TWO_PI / 20.0)
-        stats = AdvanceStats(STATUS_NAMES[status], tau, nfev, nacc, nrej, emax)
+        stats = AdvanceStats(STATUS_NAMES[status], tau, nfev, nacc, nrej, emax, stiff_tau)
         return y, grid, pcs, stats, ng, npc
 
     def advance(self, state: np.ndarray, tau_start: float, n_revs: float) -> tuple[np.ndarray, str]:

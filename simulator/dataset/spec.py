@@ -9,7 +9,7 @@ See ``examples/dataset_small.toml`` for a commented example and
 ``[plant]``        base plant (``file``, ``shaftline`` or ``preset``, and/or ``set``), or a machine family
                    (``presets`` and/or ``shaftlines``, weighted), relative ``perturb``-ations and ``scale`` factors
 ``[measurement]``  probes, sample rate, duration, SNR, runout, speed fluctuation
-``[simulation]``   transient_revs, samples_per_rev, rtol, atol, classify_motion, steady_start, transient_stop
+``[simulation]``   transient_revs, samples_per_rev, rtol, atol, classify_motion, steady_start, transient_stop, integrator
 
 A *value* is a number; a *list* ``[a, b, c]`` is a set of levels; a *range*
 ``{min = .., max = ..}`` is a continuous interval (``n = k`` levels for a grid).
@@ -375,6 +375,11 @@ class Simulation(_Strict):
                     "transient_revs (the default), or end the transient once the Poincaré-point statistics are "
                     "stationary (at most transient_revs; rotordiag.simulator.steady.attractor; opt-in: no overall "
                     "speed-up measured on the shipped specs, docs/datasets.md)")
+    integrator: Literal["auto", "explicit"] = Field(
+        default="auto",
+        description="explicit Dormand-Prince 5(4) that hands a run over to LSODA once it becomes stiff (a journal "
+                    "whirling near its bushing wall; the default), or Dormand-Prince throughout (the integration "
+                    "before issue 16; 10-100x slower on such runs, which may then end 'diverged' on the step budget)")
 
 
 class DatasetSpec(_Strict):
@@ -523,6 +528,8 @@ class ResolvedSpec:
             dumped["operating"].pop("angular_misalignment_mrad")
         if dumped["simulation"].get("transient_stop") == "fixed":  # the transient before it existed: same hash
             dumped["simulation"].pop("transient_stop")
+        if dumped["simulation"].get("integrator") == "auto":  # likewise (the per-sample code version tells runs apart)
+            dumped["simulation"].pop("integrator")
         canonical: dict[str, Any] = {"spec": dumped, "base_plant": _hashed_plant(self.base_plant)}
         if ps.is_family:
             canonical["sources"] = {k: [_hashed_plant(p), self.source_weights[k]] for k, p in self.sources.items()}
