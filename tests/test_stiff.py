@@ -122,3 +122,26 @@ def test_stiff_leg_reports_contact_and_a_spent_budget(state_rev50):
     status, tau, _, _, _, _, _, emax = continue_stiff(p, y, TWO_PI * 50, TWO_PI * 51, 1e-6, 1e-8, 10**6, 0.0, 1.0,
                                                       g, 0, 0.0, TWO_PI, pc, 0)
     assert status == K.STATUS_CONTACT and emax >= K.CONTACT_ECCENTRICITY
+
+
+def test_spec_integrator_setting():
+    """``[simulation] integrator``: "auto" (the default) keeps the spec hash; "explicit" is another
+    spec and reaches the sample runner; anything else is refused with the field named."""
+    from pathlib import Path
+
+    from rotordiag.simulator.dataset.spec import SpecError, parse_spec
+    from rotordiag.simulator.dataset.worker import SimulationSettings
+
+    path = Path(__file__).resolve().parent.parent / "models" / "default" / "dataset_aligned.toml"
+    text = path.read_text()
+
+    def with_line(line: str):
+        return parse_spec(text.replace("[simulation]", f"[simulation]\n{line}", 1), base_dir=path.parent)
+
+    base = parse_spec(text, base_dir=path.parent)
+    auto, explicit = with_line('integrator = "auto"'), with_line('integrator = "explicit"')
+    assert base.spec_hash == auto.spec_hash != explicit.spec_hash
+    assert SimulationSettings.from_spec(base.spec).integrator == "auto"
+    assert SimulationSettings.from_spec(explicit.spec).integrator == "explicit"
+    with pytest.raises(SpecError, match="integrator"):
+        with_line('integrator = "rk4"')
