@@ -94,6 +94,7 @@ class Verdict:
     reasons: list[dict] = field(default_factory=list)
     evidence: list[dict] = field(default_factory=list)
     misalignment_model: float | None = None
+    ood_findings: list[dict] = field(default_factory=list)
     model_severity: str | None = None
     speed_source: str | None = None
 
@@ -262,10 +263,17 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     cls = int(model.band_index(proba)[0])
     point, interval = fast.predict_misalignment(X)
     ood_score = float(fast.ood_ratio(X)[0])
-    ood = ood_score > 1.0
-    if ood:
+    findings = model.envelope_findings(X)[0] if hasattr(model, "envelope_findings") else []
+    ood = ood_score > 1.0 or bool(findings)
+    if ood_score > 1.0:
         warnings.append(
             f"signal unlike the training data (OOD score {ood_score:.2f} > 1): "
+            "treat the verdict with caution"
+        )
+    if findings:
+        warnings.append(
+            f"{len(findings)} feature(s) outside the training data's range "
+            f"({', '.join(f['feature'] for f in findings[:5])}{' …' if len(findings) > 5 else ''}): "
             "treat the verdict with caution"
         )
     if clearance_um is None:
@@ -282,7 +290,7 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
         sanity=getattr(feature_result, "sanity", ()) or (), ood_score=ood_score, probabilities=proba,
         class_delta_agree=agree, names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
         never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
-        warnings=warnings, alarm=_alarm(model, proba, cls), misaligned_call=band > 0)
+        warnings=warnings, alarm=_alarm(model, proba, cls), misaligned_call=band > 0, envelope=findings)
     shown: float | None = delta
     shown_iv: tuple[float | None, float | None] = (lo, hi)
     if status == INCONCLUSIVE:
@@ -311,6 +319,7 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
         top_features=_contributions(model, fast, row, cls, top_k),
         ood=bool(ood),
         ood_score=ood_score,
+        ood_findings=findings,
         speed_rpm=None if speed is None else float(speed),
         model_version=version,
         bands=model.bands_.to_dict(),
@@ -351,6 +360,9 @@ def format_verdict(v: Verdict, output_units: str = "um") -> str:
         val = "missing" if f.value is None else f"{f.value:.4g}"
         lines.append(f"  {f.name:<40s} {val:>10s}  (typical {f.reference:.4g})  {f.contribution:+.3f}")
     lines.append(f"out-of-distribution score: {v.ood_score:.2f}" + ("  ⚠ OOD" if v.ood else ""))
+    for f in v.ood_findings:
+        lines.append(f"  outside the training range: {f['feature']} = {f['value']:.4g} "
+                     f"(training {f['train_min']:.4g} … {f['train_max']:.4g})")
     if v.model_version:
         lines.append(f"model: {v.model_version}")
     for w in v.warnings:
