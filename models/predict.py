@@ -72,7 +72,8 @@ class Verdict:
     Δ / offset (``None``); its probabilities stay available. ``severity`` is the calibrated
     classifier's class; ``misalignment`` is the Δ regressor's estimate clipped into that
     class's band (``misalignment_model`` unclipped), so the two always agree. ``evidence`` is
-    model-independent (``features.evidence``).
+    model-independent (``features.evidence``). ``ood`` is true when the OOD score is above 1 or a
+    feature lies outside the training range (``ood_findings``, from ``MisalignmentModel.envelope_findings``).
     """
 
     severity: str
