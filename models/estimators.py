@@ -929,7 +929,8 @@ class MisalignmentModel(BaseEstimator):
 
         pats = tuple(str(p) for p in (self.envelope_features or ()))
         if not pats:
-            self.envelope_, self.envelope_names_ = None, ()
+            self.envelope_ = None
+            self.envelope_names_: tuple[str, ...] = ()
             return
         candidates = list(self.feature_names_) + self._derived_names()
         chosen = [n for n in candidates if any(fnmatch.fnmatchcase(n, p) for p in pats)]
@@ -952,7 +953,7 @@ class MisalignmentModel(BaseEstimator):
         X = np.atleast_2d(np.asarray(X, dtype=float))
         index = {n: i for i, n in enumerate(self.feature_names_)}
         out = np.empty((X.shape[0], len(self.envelope_names_)))
-        for j, name in enumerate(self.envelope_names_):
+        for j, name in enumerate(tuple(str(n) for n in self.envelope_names_)):
             m = self._ATTITUDE.fullmatch(name)
             if name in index:
                 out[:, j] = X[:, index[name]]

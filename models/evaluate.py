@@ -110,7 +110,8 @@ def cross_validate(table: FeatureTable, config: TrainConfig) -> OutOfFold:
         out.pred["model"][te] = model.classes_[model.band_index(out.proba[te])]
         out.delta_pred["model"][te], out.interval[te] = model.predict_misalignment(table.X[te])
         out.ood_ratio[te] = model.ood_ratio(table.X[te])
-        out.ood_flag[te] = model.ood_flags(table.X[te])
+        if out.ood_flag is not None:
+            out.ood_flag[te] = model.ood_flags(table.X[te])
         out.pred["rule_of_thumb"][te] = rule.predict(ratio[te])
         thr = RatioThresholdClassifier(classes=bands.names).fit(ratio[tr, None], labels[tr])
         out.pred["ratio_threshold"][te] = thr.predict(ratio[te, None])

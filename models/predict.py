@@ -361,9 +361,9 @@ def format_verdict(v: Verdict, output_units: str = "um") -> str:
         val = "missing" if f.value is None else f"{f.value:.4g}"
         lines.append(f"  {f.name:<40s} {val:>10s}  (typical {f.reference:.4g})  {f.contribution:+.3f}")
     lines.append(f"out-of-distribution score: {v.ood_score:.2f}" + ("  ⚠ OOD" if v.ood else ""))
-    for f in v.ood_findings:
-        lines.append(f"  outside the training range: {f['feature']} = {f['value']:.4g} "
-                     f"(training {f['train_min']:.4g} … {f['train_max']:.4g})")
+    for found in v.ood_findings:
+        lines.append(f"  outside the training range: {found['feature']} = {found['value']:.4g} "
+                     f"(training {found['train_min']:.4g} … {found['train_max']:.4g})")
     if v.model_version:
         lines.append(f"model: {v.model_version}")
     for w in v.warnings:
