@@ -990,8 +990,8 @@ class MisalignmentModel(BaseEstimator):
         Z = self.envelope_input(X)
         exc = env.excess(Z)
         logc = self.envelope_log_floor_ > 0
-        lo = np.where(logc, 10.0 ** env.lo_, env.lo_)
-        hi = np.where(logc, 10.0 ** env.hi_, env.hi_)
+        lo, hi = env.lo_.astype(float), env.hi_.astype(float)
+        lo[logc], hi[logc] = 10.0 ** lo[logc], 10.0 ** hi[logc]
         rows = []
         for i in range(X.shape[0]):
             found = []
