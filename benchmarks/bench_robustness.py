@@ -207,6 +207,8 @@ class Outcome:
     severity: str = "refused"
     status: str = "refused"
     ood: bool = False
+    ood_score: float = math.nan
+    outside: list[str] = field(default_factory=list)
     delta_model: float = math.nan
     rule_class: str = "aligned"
     ratio: float = math.nan
@@ -215,13 +217,14 @@ class Outcome:
 
 
 def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ...], fs_hz: float,
-                       speed_rpm: float | None, clearance_um: float | None, out: Outcome) -> Outcome:
-    """Run features + the shipped model + the rule of thumb on one recording (fills ``out``)."""
+                       speed_rpm: float | None, clearance_um: float | None, out: Outcome, units: str = "um") -> Outcome:
+    """Run features + the shipped model + the rule of thumb on one recording (fills ``out``); ``units``
+    is what the channels are declared in (the numbers are µm: ``"mil"`` is the µm-read-as-mils mistake)."""
     from rotordiag.features import ProbeChannel, Recording, extract_features
     from rotordiag.models.baselines import RuleOfThumb, ratio_column
     from rotordiag.models.predict import diagnose
 
-    chans = [ProbeChannel(b, a, "um", waveforms_um[2 * k + j]) for k, b in enumerate(bearings)
+    chans = [ProbeChannel(b, a, units, waveforms_um[2 * k + j]) for k, b in enumerate(bearings)
              for j, a in enumerate(ANGLES_DEG)]
     try:
         fr = extract_features(Recording(sample_rate_hz=fs_hz, channels=chans, speed_rpm=speed_rpm,
@@ -232,6 +235,7 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
         return out
     out.model_class, out.severity, out.status = str(v.model_severity), v.severity, v.status
     out.reasons = [str(r["code"]) for r in v.reasons]
+    out.ood_score, out.outside = float(v.ood_score), [str(f["feature"]) for f in v.ood_findings]
     out.ood, out.delta_model = bool(v.ood), float(v.misalignment_model) if v.misalignment_model is not None else math.nan
     names = list(fr.names)
     out.ratio = float(ratio_column(np.asarray(fr.values, dtype=float)[None, :], names, RULE_PATTERNS)[0])
@@ -264,6 +268,65 @@ def run_ross(bundle, path: Path) -> list[Outcome]:
         outs.append(diagnose_waveforms(bundle, case.waveforms_um, case.bearings, case.sample_rate_hz, case.speed_rpm,
                                        case.clearance_um, o))
     return outs
+
+
+#: Measurement mistakes on the ``clean`` condition's recordings (issue 15, item 7: the OOD check must flag them):
+#: name → (declared units, factor on the stated clearance)
+MISTAKES: dict[str, tuple[str, float]] = {
+    "µm declared as mils": ("mil", 1.0),
+    "clearance stated ×5": ("um", 5.0),
+    "clearance stated ÷5": ("um", 0.2),
+}
+
+
+def run_mistake(bundle, name: str, cases: list[dict], disps: list, seed: int) -> list[Outcome]:
+    """The ``clean`` recordings (same draws) with one of :data:`MISTAKES` made by the user."""
+    units, clearance_factor = MISTAKES[name]
+    clean = CONDITIONS[0]
+    outs = []
+    for i, (c, d) in enumerate(zip(cases, disps)):
+        o = Outcome(c["misalignment"], c["label_mechanism"])
+        if d is None:
+            o.status = "sim failed"
+            outs.append(o)
+            continue
+        w = measure(d, c["speed_rpm"], clean, np.random.default_rng([seed, 0, i]))
+        outs.append(diagnose_waveforms(bundle, w, clean.bearings, FS_HZ, c["speed_rpm"],
+                                       c["plant"]["clearance_m"] * 1e6 * clearance_factor, o, units=units))
+    return outs
+
+
+def ood_summary(outs: list[Outcome]) -> dict:
+    """OOD rate, which check flagged (kNN score > 1 / a feature outside the training range), status shares and the
+    features most often outside."""
+    ran = [o for o in outs if o.status not in ("sim failed", "refused")]
+    counts: dict[str, int] = {}
+    for o in ran:
+        for f in o.outside[:1]:
+            counts[f] = counts.get(f, 0) + 1
+    st = np.array([o.status for o in outs if o.status != "sim failed"], dtype=object)
+    return {
+        "n": len(st), "n_ran": len(ran),
+        "ood": float(np.mean([o.ood for o in ran])) if ran else None,
+        "knn": float(np.mean([o.ood_score > 1 for o in ran])) if ran else None,
+        "envelope": float(np.mean([bool(o.outside) for o in ran])) if ran else None,
+        "status": {k: float(np.mean(st == k)) if len(st) else 0.0
+                   for k in ("confident", "uncertain", "inconclusive", "refused")},
+        "top": sorted(counts.items(), key=lambda t: -t[1])[:3],
+    }
+
+
+def ood_table(rows: dict[str, dict]) -> str:
+    head = ["set", "n", "OOD", "kNN score > 1", "outside the training range",
+            "confident / uncertain / inconclusive / refused", "feature most often furthest outside (count)"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name, r in rows.items():
+        s = r["status"]
+        lines.append("| " + " | ".join([
+            name, str(r["n"]), _f(r["ood"], "{:.0%}"), _f(r["knn"], "{:.0%}"), _f(r["envelope"], "{:.0%}"),
+            " / ".join(f"{s[k]:.0%}" for k in ("confident", "uncertain", "inconclusive", "refused")),
+            ", ".join(f"{f} ({n})" for f, n in r["top"]) or "–"]) + " |")
+    return "\n".join(lines)
 
 
 # ----------------------------------------------------------------------------- metrics
@@ -405,7 +468,7 @@ def _training_summary(bundle) -> str:
             f"{lo:.0f}–{hi:.0f} r/min, {td.get('n_plants', '?')} simulated plants (models/default/*.toml).")
 
 
-def report(rows, ross, args, wall_s, bundle=None) -> str:
+def report(rows, ross, args, wall_s, bundle=None, ood_rows: dict | None = None) -> str:
     conds = "\n".join(f"- **{c.name}** ({c.sim_set} set): {c.what}" for c in CONDITIONS)
     tg = "\n".join(f"| {name} | {'met' if ok else ('not met' if ok is False else '–')} | {val} |"
                    for name, ok, val in targets(rows, ross))
@@ -445,6 +508,17 @@ def report(rows, ross, args, wall_s, bundle=None) -> str:
         "status shares: the ROSS targets about `aligned`+`confident` can be met by the sanity, scale, OOD and "
         "missing-feature checks making a verdict `uncertain` — the honest-verdict layer, not the classifier.",
     ]
+    if ood_rows:
+        text += ["", "## Out-of-distribution check (issue 15, item 7)",
+                 "`OOD` = the verdict's `ood`: the kNN score (distance to the training data over the 0.99 quantile "
+                 "of held-out plants') above 1, or a feature outside its training range plus a margin set on "
+                 "held-out plants (`models.estimators.FeatureEnvelope`: 1X/2X orbit size in µm and per clearance, "
+                 "2X/1X, 3X/1X, centreline eccentricity, orbit shape and whirl, noise shares, speed, and the "
+                 "outboard bearings' centreline attitude angle and its offset from a plain short journal bearing's). "
+                 "In-family rows: the conditions above (held-out plants). Mistakes: the `clean` recordings with "
+                 "the channels' numbers in µm declared as mils, or the stated clearance ×5 / ÷5. ROSS: "
+                 "`benchmarks/ross_set.npz` and the speed-band set `benchmarks/ross_band_set.npz`.",
+                 "", ood_table(ood_rows)]
     if ross is not None:
         text += ["", "## ROSS set, case by case",
                  "| machine | Δ = δ/c | class | status | reasons | OOD | Δ estimate | 2X/1X (coupling) | rule |",
@@ -463,6 +537,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=815)
     ap.add_argument("--cache", type=Path, default=DEFAULT_CACHE)
     ap.add_argument("--ross", type=Path, default=Path(__file__).resolve().parent / "ross_set.npz")
+    ap.add_argument("--ross-band", type=Path, default=Path(__file__).resolve().parent / "ross_band_set.npz",
+                    help="the speed-band ROSS set (OOD table only)")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "robustness.md")
     args = ap.parse_args(argv)
 
@@ -473,20 +549,28 @@ def main(argv=None) -> int:
     sets = {s: simulate_set(s, args.n, args.seed, args.cache) for s in ("base", "presets", "far")}
     print(f"simulated/loaded in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
     rows: dict[str, dict] = {}
+    ood_rows: dict[str, dict] = {}
     for cond in CONDITIONS:
         t1 = time.perf_counter()
         cases, disps = sets[cond.sim_set]
-        rows[cond.name] = summarize(bundle, run_condition(bundle, cond, cases, disps, args.seed))
+        outs = run_condition(bundle, cond, cases, disps, args.seed)
+        rows[cond.name] = summarize(bundle, outs)
+        ood_rows[f"in family: {cond.name}"] = ood_summary(outs)
         print(f"  {cond.name}: {time.perf_counter() - t1:.0f} s", file=sys.stderr)
+    for name in MISTAKES:
+        ood_rows[f"mistake: {name}"] = ood_summary(run_mistake(bundle, name, *sets["base"], args.seed))
     ross = None
     if args.ross.exists():
         outs = run_ross(bundle, args.ross)
         rows["other machines (ROSS)"] = summarize(bundle, outs)
+        ood_rows[f"other machines: ROSS ({args.ross.name})"] = ood_summary(outs)
         ross = ross_targets(bundle, outs)
     else:
         print(f"{args.ross} missing: the ROSS row is left out", file=sys.stderr)
+    if args.ross_band.exists():
+        ood_rows[f"other machines: ROSS ({args.ross_band.name})"] = ood_summary(run_ross(bundle, args.ross_band))
     wall = time.perf_counter() - t0
-    text = report(rows, ross, args, wall, bundle)
+    text = report(rows, ross, args, wall, bundle, ood_rows)
     text += kept_block(args.out)
     args.out.write_text(text)
     print(text)

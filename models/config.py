@@ -24,6 +24,8 @@ Every section and key is optional; the defaults are the documented ones::
     alpha = 0.1
     [ood]                       # KNNDistanceOOD parameters
     threshold_quantile = 0.99
+    [envelope]                  # FeatureEnvelope parameters (used when [features]
+    quantile = 0.99             # envelope_features names features)
 
     [evaluation]
     n_splits = 5                # GroupKFold over plant_id
@@ -53,7 +55,7 @@ from rotordiag.core.bands import SeverityBands
 
 from .augment import Augmentation
 from .baselines import DEFAULT_RATIO_PATTERNS, DEFAULT_RULE_CUTS
-from .estimators import ConformalIntervalRegressor, KNNDistanceOOD, SeverityClassifier
+from .estimators import ConformalIntervalRegressor, FeatureEnvelope, KNNDistanceOOD, SeverityClassifier
 from .ordinal import OrdinalSeverityClassifier
 
 _CLASSIFIERS = {"multiclass": SeverityClassifier, "ordinal": OrdinalSeverityClassifier}
@@ -61,8 +63,9 @@ _CLASSIFIERS = {"multiclass": SeverityClassifier, "ordinal": OrdinalSeverityClas
 DEFAULT_EXCLUDE: tuple[str, ...] = ("b?_[xy]_[123]x_phase_deg",)
 DEFAULT_CLEARANCE_FEATURES: tuple[str, ...] = ("*_per_c", "*_per_c2")
 _FEATURE_KEYS = {"exclude", "clearance_features", "clearance_dropout", "monotonic_increasing", "ood_features",
-                 "ood_log_scales"}
-_SECTIONS = {"seed", "bands", "features", "classifier", "regressor", "ood", "evaluation", "baselines", "augment"}
+                 "ood_log_scales", "envelope_features", "envelope_upper_only"}
+_SECTIONS = {"seed", "bands", "features", "classifier", "regressor", "ood", "envelope", "evaluation", "baselines",
+             "augment"}
 
 
 def _params(cls, section: str, d: Mapping[str, Any] | None) -> dict:
@@ -90,6 +93,9 @@ class TrainConfig:
     classifier: dict = field(default_factory=dict)
     regressor: dict = field(default_factory=dict)
     ood: dict = field(default_factory=dict)
+    envelope_features: tuple[str, ...] = ()
+    envelope_upper_only: tuple[str, ...] = ()
+    envelope: dict = field(default_factory=dict)
     n_splits: int = 5
     speed_bands_rpm: tuple[float, ...] = (1200.0, 1800.0, 2400.0, 3000.0)
     ratio_features: tuple[str, ...] = DEFAULT_RATIO_PATTERNS
@@ -154,6 +160,12 @@ class TrainConfig:
         if not isinstance(ood_log, Mapping) or not all(
                 isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 for v in ood_log.values()):
             raise ValueError(f"[features] ood_log_scales: a table of pattern = positive scale, got {ood_log!r}")
+        env_pats = {}
+        for key in ("envelope_features", "envelope_upper_only"):
+            v = feats.get(key, ())
+            if not isinstance(v, (list, tuple)) or not all(isinstance(p, str) for p in v):
+                raise ValueError(f"[features] {key}: a list of feature-name patterns, got {v!r}")
+            env_pats[key] = tuple(v)
         cfg = cls(
             seed=seed,
             bands=bands,
@@ -167,6 +179,9 @@ class TrainConfig:
             classifier=_params(_CLASSIFIERS[kind], "classifier", clf),
             regressor=_params(ConformalIntervalRegressor, "regressor", d.get("regressor")),
             ood=_params(KNNDistanceOOD, "ood", d.get("ood")),
+            envelope_features=env_pats["envelope_features"],
+            envelope_upper_only=env_pats["envelope_upper_only"],
+            envelope=_params(FeatureEnvelope, "envelope", d.get("envelope")),
             n_splits=n_splits,
             speed_bands_rpm=sb,
             ratio_features=tuple(str(p) for p in bl.get("ratio_features", DEFAULT_RATIO_PATTERNS)),
@@ -175,7 +190,8 @@ class TrainConfig:
         )
         # Validate the parameter values now, with messages naming the section.
         m = cfg.make_model(("x",))
-        for section, est in (("classifier", m.classifier), ("regressor", m.regressor), ("ood", m.ood)):
+        for section, est in (("classifier", m.classifier), ("regressor", m.regressor), ("ood", m.ood),
+                             ("envelope", m.envelope)):
             try:
                 est._validate_params()
             except ValueError as exc:  # sklearn's InvalidParameterError is a ValueError
@@ -206,10 +222,13 @@ class TrainConfig:
                 "monotonic_increasing": list(self.monotonic_increasing),
                 "ood_features": list(self.ood_features),
                 "ood_log_scales": dict(self.ood_log_scales),
+                "envelope_features": list(self.envelope_features),
+                "envelope_upper_only": list(self.envelope_upper_only),
             },
             "classifier": {"kind": self.classifier_kind, **dict(self.classifier)},
             "regressor": dict(self.regressor),
             "ood": dict(self.ood),
+            "envelope": dict(self.envelope),
             "evaluation": {"n_splits": self.n_splits, "speed_bands_rpm": list(self.speed_bands_rpm)},
             "baselines": {"ratio_features": list(self.ratio_features), "rule_cuts": list(self.rule_cuts)},
             "augment": self.augment.to_dict(),
@@ -231,4 +250,7 @@ class TrainConfig:
             monotonic_increasing=self.monotonic_increasing,
             ood_features=self.ood_features,
             ood_log_scales=dict(self.ood_log_scales),
+            envelope_features=self.envelope_features,
+            envelope_upper_only=self.envelope_upper_only,
+            envelope=FeatureEnvelope(**{**seeded, **self.envelope}),
         )

@@ -19,6 +19,8 @@ names; it is the one object the registry stores and :func:`models.predict.diagno
 from __future__ import annotations
 
 import math
+import re
+import warnings
 from collections.abc import Sequence
 from numbers import Integral, Real
 
@@ -49,6 +51,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from rotordiag.core.bands import DEFAULT_EDGES, DEFAULT_NAMES, SeverityBands
+from rotordiag.core.journal import attitude_angle_deg, short_bearing_attitude_deg
 
 from ._sklearn_private import Interval, StrOptions
 from .ordinal import OrdinalSeverityClassifier
@@ -570,6 +573,122 @@ class KNNDistanceOOD(OutlierMixin, BaseEstimator):
         return self.distance(X) / max(self.threshold_, np.finfo(float).tiny)
 
 
+class FeatureEnvelope(BaseEstimator):
+    """Per-feature training range with a margin calibrated on held-out plants.
+
+    Each column's training range ``[lo, hi]`` (min and max over the training rows); a row
+    is outside when a value lies below ``lo`` (only where ``check_low`` says so) or above
+    ``hi`` by more than ``margin_`` × the column's spread (its 5–95 % range). The margin is
+    the ``quantile`` of the largest such excess of rows of plants held out of the range
+    (a group k-fold: rows of one plant, e.g. augmented copies, never bound each other), so
+    about ``1 − quantile`` of recordings of new plants of the family are outside. Unlike a
+    nearest-neighbour distance over many columns, one extreme column is enough, and the
+    excess says which column and by how much.
+
+    Parameters
+    ----------
+    quantile : float, default=0.99
+    n_splits : int, default=5
+        Group folds for the margin.
+    random_state : int, default=0
+
+    Attributes
+    ----------
+    lo_, hi_ : ndarray of shape (n_features,)
+        Training min / max (−inf / +inf for a column never measured).
+    spread_ : ndarray of shape (n_features,)
+    check_low_ : ndarray of bool
+    margin_ : float
+        In spreads; a row is outside when its largest excess is above it.
+    """
+
+    _parameter_constraints = {
+        "quantile": [Interval(Real, 0, 1, closed="right")],
+        "n_splits": [Interval(Integral, 2, None, closed="left")],
+        "random_state": ["random_state"],
+    }
+
+    def __init__(self, *, quantile: float = 0.99, n_splits: int = 5, random_state: int = 0) -> None:
+        self.quantile = quantile
+        self.n_splits = n_splits
+        self.random_state = random_state
+
+    def __sklearn_tags__(self):
+        return _nan_tags(super().__sklearn_tags__())
+
+    @staticmethod
+    def _range(Z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        seen = np.isfinite(Z).any(axis=0)
+        Zs = np.where(seen, Z, 0.0)
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            lo = np.where(seen, np.nanmin(Zs, axis=0), -np.inf)
+            hi = np.where(seen, np.nanmax(Zs, axis=0), np.inf)
+            q = np.nanquantile(Zs, [0.05, 0.95], axis=0)
+        spread = np.where(seen, q[1] - q[0], 1.0)
+        tiny = 1e-9 * np.maximum(np.abs(lo[np.isfinite(lo)]).max(initial=1.0), 1.0)
+        return lo, hi, np.maximum(spread, tiny)
+
+    def _excess(self, Z: np.ndarray, lo: np.ndarray, hi: np.ndarray, spread: np.ndarray,
+                check_low: np.ndarray) -> np.ndarray:
+        with np.errstate(invalid="ignore"):
+            below = np.where(check_low, lo - Z, -np.inf)
+            v = np.maximum(below, Z - hi) / spread
+        return np.where(np.isfinite(v), np.maximum(v, 0.0), 0.0)
+
+    def fit(self, X, y=None, groups=None, check_low=None) -> FeatureEnvelope:
+        """Training range, spread and the margin (see the class docstring).
+
+        Parameters
+        ----------
+        X : array-like of shape (n_samples, n_features); NaN allowed (not measured)
+        y : ignored
+        groups : array-like of shape (n_samples,), optional
+            Plant identifiers (default: every row its own group).
+        check_low : array-like of bool of shape (n_features,), optional
+            Columns whose low side is checked too (default: all); e.g. a noise share that is
+            lower than in training is no reason to doubt a verdict.
+        """
+        self._validate_params()
+        Z = validate_data(self, X, ensure_all_finite="allow-nan").astype(float)
+        n, p = Z.shape
+        if n < 2 * self.n_splits:
+            raise ValueError(f"X: need at least {2 * self.n_splits} samples to fit an envelope, got {n}")
+        groups = np.arange(n) if groups is None else np.asarray(groups)
+        if groups.shape[0] != n:
+            raise ValueError(f"groups: length {groups.shape[0]} does not match X ({n} rows)")
+        self.check_low_ = np.ones(p, bool) if check_low is None else np.asarray(check_low, bool)
+        if self.check_low_.shape != (p,):
+            raise ValueError(f"check_low: expected {p} flags, got shape {self.check_low_.shape}")
+        uniq, inverse = np.unique(groups, return_inverse=True)
+        k = int(min(self.n_splits, len(uniq)))
+        if k < 2:
+            raise ValueError("groups: need at least 2 groups to calibrate the envelope on held-out plants")
+        fold = (np.random.default_rng(self.random_state).permutation(len(uniq)) % k)[inverse]
+        worst = np.empty(n)
+        for f in range(k):
+            lo, hi, spread = self._range(Z[fold != f])
+            worst[fold == f] = self._excess(Z[fold == f], lo, hi, spread, self.check_low_).max(axis=1, initial=0.0)
+        self.margin_ = float(np.quantile(worst, self.quantile))
+        self.calibration_flag_rate_ = float(np.mean(worst > self.margin_))
+        self.lo_, self.hi_, self.spread_ = self._range(Z)
+        return self
+
+    def excess(self, X) -> np.ndarray:
+        """How far each value lies outside the training range, in spreads (0 inside or missing), (n, p)."""
+        check_is_fitted(self, "margin_")
+        Z = validate_data(self, X, reset=False, ensure_all_finite="allow-nan").astype(float)
+        return self._excess(Z, self.lo_, self.hi_, self.spread_, self.check_low_)
+
+    def outside(self, X) -> np.ndarray:
+        """Which values are outside the range plus the margin, bool (n, p)."""
+        return self.excess(X) > self.margin_
+
+    def predict(self, X) -> np.ndarray:
+        """+1 inside, −1 when any value is outside."""
+        return np.where(self.outside(X).any(axis=1), -1, 1)
+
+
 class MisalignmentModel(BaseEstimator):
     """Severity classifier + Δ interval regressor + OOD scorer, with bands and feature names.
 
@@ -603,6 +722,19 @@ class MisalignmentModel(BaseEstimator):
         order of magnitude above a physical floor *s* (e.g. 1 µm, 0.01 c, a 2X/1X of 0.05)
         rather than linearly: a machine vibrating 200× less than the family is far away,
         one with a clean 0.1 µm 2X is not.
+    envelope_features : sequence of str, default=()
+        Glob patterns of the features whose training range is checked one by one
+        (:class:`FeatureEnvelope`; default: none). Besides the feature names, two derived
+        ones can be named, from ``b{n}_centre_x_per_c`` / ``b{n}_centre_y_per_c``:
+        ``b{n}_attitude_deg``, the shaft centreline's attitude angle (from the load line, with
+        rotation), and ``b{n}_attitude_offset_deg``, that angle minus the one a plain short
+        oil-film journal bearing takes at the same eccentricity (``rotordiag.core.journal``).
+        Features matching ``ood_log_scales`` are compared as ``log10(max(x, s / 1000))``.
+    envelope_upper_only : sequence of str, default=()
+        Patterns of envelope features whose low side is not checked (e.g. noise shares: a
+        cleaner signal than in training is no reason for doubt).
+    envelope : FeatureEnvelope or None
+        Template (cloned at fit); ``None`` → ``FeatureEnvelope()``.
 
     Attributes
     ----------
@@ -615,6 +747,8 @@ class MisalignmentModel(BaseEstimator):
     feature_nan_rate_ : ndarray of shape (n_features,)
         Share of training rows in which each feature was missing.
     classes_ : ndarray of str, the band names in order
+    envelope_ : FeatureEnvelope or None
+        Fitted when ``envelope_features`` is given; ``envelope_names_`` its columns.
     monotonic_cst_ : ndarray of int of shape (n_features,)
         +1 where ``monotonic_increasing`` matched, else 0.
     """
@@ -623,6 +757,9 @@ class MisalignmentModel(BaseEstimator):
     monotonic_increasing: Sequence[str] = ()
     ood_features: Sequence[str] = ()
     ood_log_scales: dict | None = None
+    envelope_features: Sequence[str] = ()
+    envelope_upper_only: Sequence[str] = ()
+    envelope: FeatureEnvelope | None = None
 
     def __init__(
         self,
@@ -636,6 +773,9 @@ class MisalignmentModel(BaseEstimator):
         monotonic_increasing: Sequence[str] = (),
         ood_features: Sequence[str] = (),
         ood_log_scales: dict | None = None,
+        envelope_features: Sequence[str] = (),
+        envelope_upper_only: Sequence[str] = (),
+        envelope: FeatureEnvelope | None = None,
     ) -> None:
         self.band_edges = band_edges
         self.band_names = band_names
@@ -646,6 +786,9 @@ class MisalignmentModel(BaseEstimator):
         self.monotonic_increasing = monotonic_increasing
         self.ood_features = ood_features
         self.ood_log_scales = ood_log_scales
+        self.envelope_features = envelope_features
+        self.envelope_upper_only = envelope_upper_only
+        self.envelope = envelope
 
     @property
     def ordinal_(self) -> bool:
@@ -719,6 +862,7 @@ class MisalignmentModel(BaseEstimator):
         self.ood_columns_, self.ood_log_scale_ = self._ood_columns()
         self.ood_ = clone(self.ood if self.ood is not None else KNNDistanceOOD())
         self.ood_.fit(self.ood_input(X), groups=groups)
+        self._fit_envelope(X, groups)
         nan = np.isnan(X)
         self.feature_nan_rate_ = nan.mean(axis=0)
         with np.errstate(all="ignore"):
@@ -771,6 +915,108 @@ class MisalignmentModel(BaseEstimator):
             with np.errstate(invalid="ignore"):
                 Z[:, log_cols] = np.log1p(np.maximum(Z[:, log_cols], 0.0) / self.ood_log_scale_[log_cols])
         return Z
+
+    # ------------------------------------------------------------------ feature envelope
+    _ATTITUDE = re.compile(r"b(\d+)_attitude_(offset_)?deg")
+
+    def _derived_names(self) -> list[str]:
+        names = set(self.feature_names_)
+        return [f"b{b}_attitude_{kind}deg" for b in range(1, 10) for kind in ("", "offset_")
+                if f"b{b}_centre_x_per_c" in names and f"b{b}_centre_y_per_c" in names]
+
+    def _fit_envelope(self, X: np.ndarray, groups) -> None:
+        import fnmatch
+
+        pats = tuple(str(p) for p in (self.envelope_features or ()))
+        if not pats:
+            self.envelope_ = None
+            self.envelope_names_: tuple[str, ...] = ()
+            return
+        candidates = list(self.feature_names_) + self._derived_names()
+        chosen = [n for n in candidates if any(fnmatch.fnmatchcase(n, p) for p in pats)]
+        unmatched = [p for p in pats if not any(fnmatch.fnmatchcase(n, p) for n in candidates)]
+        if unmatched:
+            raise ValueError(f"envelope_features: pattern(s) {unmatched} match no feature name "
+                             "(nor a derived b{n}_attitude_deg / b{n}_attitude_offset_deg)")
+        upper = tuple(str(p) for p in (self.envelope_upper_only or ()))
+        scales = dict(self.ood_log_scales or {})
+        self.envelope_names_ = tuple(chosen)
+        self.envelope_log_floor_ = np.array(
+            [next((float(v) * 1e-3 for p, v in scales.items() if fnmatch.fnmatchcase(n, p)), 0.0)
+             for n in chosen], dtype=float)
+        check_low = np.array([not any(fnmatch.fnmatchcase(n, p) for p in upper) for n in chosen], dtype=bool)
+        self.envelope_ = clone(self.envelope if self.envelope is not None else FeatureEnvelope())
+        self.envelope_.fit(self.envelope_input(X), groups=groups, check_low=check_low)
+
+    def envelope_values(self, X: np.ndarray) -> np.ndarray:
+        """The envelope's columns of X in their own units (derived attitude offsets computed), (n, q)."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        index = {n: i for i, n in enumerate(self.feature_names_)}
+        out = np.empty((X.shape[0], len(self.envelope_names_)))
+        for j, name in enumerate(tuple(str(n) for n in self.envelope_names_)):
+            m = self._ATTITUDE.fullmatch(name)
+            if name in index:
+                out[:, j] = X[:, index[name]]
+            elif m:
+                x, y = X[:, index[f"b{m.group(1)}_centre_x_per_c"]], X[:, index[f"b{m.group(1)}_centre_y_per_c"]]
+                ecc = np.hypot(x, y)
+                att = attitude_angle_deg(x, y) - (short_bearing_attitude_deg(ecc) if m.group(2) else 0.0)
+                out[:, j] = np.where(ecc <= 1.0, (att + 180.0) % 360.0 - 180.0, np.nan)
+            else:                                   # pragma: no cover - names come from _fit_envelope
+                raise KeyError(name)
+        return out
+
+    def envelope_input(self, X: np.ndarray) -> np.ndarray:
+        """:meth:`envelope_values`, log10-scaled where ``envelope_log_floor_`` > 0."""
+        V = self.envelope_values(X)
+        logc = self.envelope_log_floor_ > 0
+        with np.errstate(invalid="ignore", divide="ignore"):
+            V[:, logc] = np.log10(np.maximum(V[:, logc], self.envelope_log_floor_[logc]))
+        return V
+
+    def envelope_findings(self, X) -> list[list[dict]]:
+        """Per row, the envelope features outside the training range, largest excess first.
+
+        Each finding: ``feature``, ``value`` (its own units), ``train_min``, ``train_max``,
+        ``side`` (``below`` | ``above``), ``factor`` (how many times beyond the range, for
+        log-compared features; else None) and ``excess_spreads``. Empty lists when the model
+        has no envelope (saved before it existed, or ``envelope_features`` empty).
+        """
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        env = getattr(self, "envelope_", None)
+        if env is None:
+            return [[] for _ in range(X.shape[0])]
+        V = self.envelope_values(X)
+        Z = self.envelope_input(X)
+        exc = env.excess(Z)
+        logc = self.envelope_log_floor_ > 0
+        lo, hi = env.lo_.astype(float), env.hi_.astype(float)
+        lo[logc], hi[logc] = 10.0 ** lo[logc], 10.0 ** hi[logc]
+        rows = []
+        for i in range(X.shape[0]):
+            found = []
+            for j in np.argsort(-exc[i], kind="stable"):
+                if not exc[i, j] > env.margin_:
+                    break
+                v = float(V[i, j])
+                side = "below" if Z[i, j] < env.lo_[j] else "above"
+                factor = None
+                if logc[j]:
+                    shown = max(v, float(self.envelope_log_floor_[j]))
+                    factor = float(lo[j] / shown if side == "below" else shown / hi[j])
+                found.append({"feature": self.envelope_names_[j], "value": v, "train_min": float(lo[j]),
+                              "train_max": float(hi[j]), "side": side, "factor": factor,
+                              "excess_spreads": float(exc[i, j])})
+            rows.append(found)
+        return rows
+
+    def ood_flags(self, X) -> np.ndarray:
+        """Out of distribution: OOD score above 1 or a feature outside the envelope, bool (n,)."""
+        flags = self.ood_ratio(X) > 1.0
+        env = getattr(self, "envelope_", None)
+        if env is not None:
+            flags |= env.outside(self.envelope_input(X)).any(axis=1)
+        return flags
 
     def band_order(self) -> list[int]:
         """Columns of the classifier's probabilities in band order."""

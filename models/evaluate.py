@@ -44,6 +44,7 @@ class OutOfFold:
     delta_pred: dict      # method -> Δ estimate
     interval: np.ndarray  # model Δ interval (n, 2)
     ood_ratio: np.ndarray
+    ood_flag: np.ndarray | None = None   # OOD score > 1 or outside the feature envelope
     # The model on the same held-out rows with the clearance features blanked
     # (a user who does not know the bearing clearance).
     proba_no_clearance: np.ndarray | None = None
@@ -83,7 +84,7 @@ def cross_validate(table: FeatureTable, config: TrainConfig) -> OutOfFold:
         labels_true=labels, fold=np.full(n, -1), ratio=ratio,
         pred={m: np.empty(n, dtype=object) for m in METHODS}, proba=np.full((n, k), np.nan),
         delta_pred={m: np.full(n, np.nan) for m in METHODS}, interval=np.full((n, 2), np.nan),
-        ood_ratio=np.full(n, np.nan),
+        ood_ratio=np.full(n, np.nan), ood_flag=np.zeros(n, bool),
     )
     clear_cols = table.feature_mask(config.clearance_features)
     if clear_cols.any():
@@ -109,6 +110,8 @@ def cross_validate(table: FeatureTable, config: TrainConfig) -> OutOfFold:
         out.pred["model"][te] = model.classes_[model.band_index(out.proba[te])]
         out.delta_pred["model"][te], out.interval[te] = model.predict_misalignment(table.X[te])
         out.ood_ratio[te] = model.ood_ratio(table.X[te])
+        if out.ood_flag is not None:
+            out.ood_flag[te] = model.ood_flags(table.X[te])
         out.pred["rule_of_thumb"][te] = rule.predict(ratio[te])
         thr = RatioThresholdClassifier(classes=bands.names).fit(ratio[tr, None], labels[tr])
         out.pred["ratio_threshold"][te] = thr.predict(ratio[te, None])
@@ -142,7 +145,8 @@ def _method_metrics(oof: OutOfFold, table: FeatureTable, config: TrainConfig, se
             interval=oof.interval[sel] if m == "model" else None, score=score,
         ))
         if m == "model":
-            r["ood_flag_rate"] = float(np.mean(oof.ood_ratio[sel] > 1)) if sel.any() else None
+            flag = oof.ood_flag if oof.ood_flag is not None else oof.ood_ratio > 1
+            r["ood_flag_rate"] = float(np.mean(flag[sel])) if sel.any() else None
         res[m] = r
     aligned_2x = sel & (oof.labels_true == names[0]) & (oof.ratio > 0.5)
     res["aligned_high_2x"] = {

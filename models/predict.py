@@ -72,7 +72,8 @@ class Verdict:
     Δ / offset (``None``); its probabilities stay available. ``severity`` is the calibrated
     classifier's class; ``misalignment`` is the Δ regressor's estimate clipped into that
     class's band (``misalignment_model`` unclipped), so the two always agree. ``evidence`` is
-    model-independent (``features.evidence``).
+    model-independent (``features.evidence``). ``ood`` is true when the OOD score is above 1 or a
+    feature lies outside the training range (``ood_findings``, from ``MisalignmentModel.envelope_findings``).
     """
 
     severity: str
@@ -94,6 +95,7 @@ class Verdict:
     reasons: list[dict] = field(default_factory=list)
     evidence: list[dict] = field(default_factory=list)
     misalignment_model: float | None = None
+    ood_findings: list[dict] = field(default_factory=list)
     model_severity: str | None = None
     speed_source: str | None = None
 
@@ -262,10 +264,17 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     cls = int(model.band_index(proba)[0])
     point, interval = fast.predict_misalignment(X)
     ood_score = float(fast.ood_ratio(X)[0])
-    ood = ood_score > 1.0
-    if ood:
+    findings = model.envelope_findings(X)[0] if hasattr(model, "envelope_findings") else []
+    ood = ood_score > 1.0 or bool(findings)
+    if ood_score > 1.0:
         warnings.append(
             f"signal unlike the training data (OOD score {ood_score:.2f} > 1): "
+            "treat the verdict with caution"
+        )
+    if findings:
+        warnings.append(
+            f"{len(findings)} feature(s) outside the training data's range "
+            f"({', '.join(f['feature'] for f in findings[:5])}{' …' if len(findings) > 5 else ''}): "
             "treat the verdict with caution"
         )
     if clearance_um is None:
@@ -282,7 +291,7 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
         sanity=getattr(feature_result, "sanity", ()) or (), ood_score=ood_score, probabilities=proba,
         class_delta_agree=agree, names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
         never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
-        warnings=warnings, alarm=_alarm(model, proba, cls), misaligned_call=band > 0)
+        warnings=warnings, alarm=_alarm(model, proba, cls), misaligned_call=band > 0, envelope=findings)
     shown: float | None = delta
     shown_iv: tuple[float | None, float | None] = (lo, hi)
     if status == INCONCLUSIVE:
@@ -311,6 +320,7 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
         top_features=_contributions(model, fast, row, cls, top_k),
         ood=bool(ood),
         ood_score=ood_score,
+        ood_findings=findings,
         speed_rpm=None if speed is None else float(speed),
         model_version=version,
         bands=model.bands_.to_dict(),
@@ -351,6 +361,9 @@ def format_verdict(v: Verdict, output_units: str = "um") -> str:
         val = "missing" if f.value is None else f"{f.value:.4g}"
         lines.append(f"  {f.name:<40s} {val:>10s}  (typical {f.reference:.4g})  {f.contribution:+.3f}")
     lines.append(f"out-of-distribution score: {v.ood_score:.2f}" + ("  ⚠ OOD" if v.ood else ""))
+    for found in v.ood_findings:
+        lines.append(f"  outside the training range: {found['feature']} = {found['value']:.4g} "
+                     f"(training {found['train_min']:.4g} … {found['train_max']:.4g})")
     if v.model_version:
         lines.append(f"model: {v.model_version}")
     for w in v.warnings:

@@ -50,6 +50,7 @@ TRUSTED_TYPES: tuple[str, ...] = (
     "rotordiag.core.bands.SeverityBands",
     "rotordiag.models.estimators.ConformalIntervalRegressor",
     "rotordiag.models.estimators.KNNDistanceOOD",
+    "rotordiag.models.estimators.FeatureEnvelope",
     "rotordiag.models.estimators.MisalignmentModel",
     "rotordiag.models.estimators.SeverityClassifier",
     "rotordiag.models.ordinal.OrdinalSeverityClassifier",

@@ -4,7 +4,9 @@
   recording is far outside the training data (OOD score above ``OOD_INCONCLUSIVE``), or
   the vibration at the coupling bearings is ``SCALE_INCONCLUSIVE`` times away from the
   training data's typical level. No severity is given.
-- ``uncertain``: a sanity warning, OOD score above 1, vibration ``SCALE_UNCERTAIN`` times
+- ``uncertain``: a sanity warning, OOD score above 1, a feature outside the training range
+  (``outside_training``: which feature, its value and the training range, in plain words;
+  inconclusive when ``SCALE_INCONCLUSIVE`` times beyond it), vibration ``SCALE_UNCERTAIN`` times
   away from the training level, an ambiguous speed estimate, features the model always had
   missing here, no class above ``CONFIDENT_MIN_PROBABILITY``, a Δ regressor whose interval
   does not reach the classifier's band, "aligned" although misalignment is more likely than
@@ -19,6 +21,7 @@ that class's band (the unclipped estimate is kept in the verdict as ``misalignme
 """
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
@@ -26,7 +29,7 @@ import numpy as np
 
 __all__ = ["Reason", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY",
-           "SIGNATURE_MIN_2X_1X", "coupling_2x_1x"]
+           "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "describe_feature", "envelope_reasons"]
 
 CONFIDENT = "confident"
 UNCERTAIN = "uncertain"
@@ -120,6 +123,78 @@ def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray) ->
                       " — a different machine design or a very smooth-running one; read the evidence instead"))]
 
 
+_ORDER_AMP = re.compile(r"b(\d+)_(\d)x_major_(um_pp|pp_per_c)")
+_BEARING_FEATURE = re.compile(r"b(\d+)_(.+)")
+#: plain words and unit of the envelope's per-bearing features (``b{n}_`` + key)
+_PLAIN = {
+    "2x_1x_major_ratio": ("2X/1X amplitude ratio (orbit major axes)", ""),
+    "3x_1x_major_ratio": ("3X/1X amplitude ratio (orbit major axes)", ""),
+    "centre_ecc_per_c": ("shaft centreline eccentricity", "× clearance"),
+    "orbit12_pp_per_c": ("orbit size (1X + 2X, peak-to-peak)", "× clearance"),
+    "poincare_rms_per_c": ("cycle-to-cycle scatter of the once-per-turn orbit points (rms)", "× clearance"),
+    "nonsync_frac": ("share of the vibration not at running-speed orders", ""),
+    "subsync_frac": ("share of sub-synchronous vibration (below 1X)", ""),
+    "1x_ellipticity": ("1X orbit ellipticity (minor/major axis)", ""),
+    "1x_whirl_index": ("1X whirl index (+1 forward, −1 reverse)", ""),
+    "attitude_deg": ("shaft centreline attitude angle (from the load line, with rotation)", "°"),
+    "attitude_offset_deg": ("shaft centreline attitude angle relative to a plain oil-film journal bearing's at "
+                            "the same eccentricity (short-bearing theory)", "°"),
+}
+
+
+def describe_feature(name: str) -> tuple[str, str]:
+    """Plain words and unit of a feature name (the name itself and "" when not known)."""
+    if name == "speed_rpm":
+        return "running speed", "r/min"
+    m = _ORDER_AMP.fullmatch(name)
+    if m:
+        b, k, kind = m.groups()
+        return f"{k}X vibration (orbit major axis) at bearing {b}", "µm pk-pk" if kind == "um_pp" else "× clearance pk-pk"
+    m = _BEARING_FEATURE.fullmatch(name)
+    if m and m.group(2) in _PLAIN:
+        words, unit = _PLAIN[m.group(2)]
+        return f"{words} at bearing {m.group(1)}", unit
+    return name, ""
+
+
+def _num(v: float, unit: str = "") -> str:
+    text = f"{round(v) + 0:+d}" if unit == "°" else f"{v:.3g}"
+    return f"{text}{unit}" if unit == "°" else (f"{text} {unit}" if unit else text)
+
+
+def envelope_reasons(findings: Sequence[dict], *, max_reasons: int = 3) -> list[Reason]:
+    """``outside_training`` reasons from ``MisalignmentModel.envelope_findings`` (largest excess first).
+
+    Uncertain; inconclusive when a value is :data:`SCALE_INCONCLUSIVE` times beyond the
+    training range (a tree model is blind there).
+    """
+    out = []
+    for k, f in enumerate(list(findings)[:max_reasons]):
+        words, unit = describe_feature(str(f["feature"]))
+        side, factor = f["side"], f.get("factor")
+        bound = f["train_min"] if side == "below" else f["train_max"]
+        how = f"{factor:.0f}× " if factor is not None and factor >= 2 else ""
+        text = (f"{words} is {_num(f['value'], unit)}, {how}{side} anything in the training data "
+                f"({'min' if side == 'below' else 'max'} {_num(bound, unit)}; training range "
+                f"{_num(f['train_min'], '°' if unit == '°' else '')} … {_num(f['train_max'], unit)}): ")
+        name = str(f["feature"])
+        if "_attitude_" in name:
+            text += ("the shaft does not sit where a plain oil-film journal bearing puts it — bearings of another "
+                     "type (tilting-pad, rolling-element), or the DC gaps, probe angles or rotation direction are "
+                     "wrong; the model knows plain journal bearings only")
+        elif "um_pp" in name and side == "above":
+            text += "check the units (µm vs mils ×25.4) and the probe sensitivity; the model has not seen this"
+        elif "per_c" in name:
+            text += "check the stated bearing clearance, or a machine unlike the training family"
+        else:
+            text += "a machine or measurement unlike the training family; the model has not seen this"
+        if k == max_reasons - 1 and len(findings) > max_reasons:
+            text += f" (and {len(findings) - max_reasons} more feature(s) outside the training range)"
+        status = INCONCLUSIVE if factor is not None and factor >= SCALE_INCONCLUSIVE else UNCERTAIN
+        out.append(Reason("outside_training", status, text))
+    return out
+
+
 def coupling_2x_1x(names: Sequence[str], row: np.ndarray) -> float:
     """The largest 2X/1X amplitude ratio of the coupling bearings' probes (NaN when none is measured)."""
     vals = [float(row[i]) for i, n in enumerate(names)
@@ -132,7 +207,7 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
            names: Sequence[str], row: np.ndarray, feature_median: np.ndarray,
            never_missing: Sequence[str], speed_source: str | None,
            warnings: Iterable[str], alarm: tuple[float, float] | None = None,
-           misaligned_call: bool = False) -> tuple[str, list[Reason]]:
+           misaligned_call: bool = False, envelope: Sequence[dict] = ()) -> tuple[str, list[Reason]]:
     """The verdict's status and its reasons (worst first).
 
     Parameters
@@ -158,6 +233,8 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
     misaligned_call : bool
         The class is a misalignment severity (not the aligned band): it then needs the coupling
         bearings' 2X (:data:`SIGNATURE_MIN_2X_1X`) to be confident.
+    envelope : sequence of dict
+        ``MisalignmentModel.envelope_findings`` of this row: features outside the training range.
     """
     reasons: list[Reason] = []
     for f in sanity:
@@ -167,6 +244,7 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
         reasons.append(Reason("ood", status, f"the recording is unlike the training data (OOD score {ood_score:.2f}; "
                               f"> 1 unusual, > {OOD_INCONCLUSIVE:g} far outside): another machine design, "
                               "operating state or measurement set-up than the model knows"))
+    reasons += envelope_reasons(envelope)
     reasons += _scale_reasons(names, row, feature_median)
     if speed_source == "estimated":
         for w in warnings:

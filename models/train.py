@@ -105,6 +105,9 @@ def train_and_register(
         "bands": config.bands.to_dict(),
         "interval_level": 1 - float(model.regressor_.alpha),
         "ood_threshold": float(model.ood_.threshold_),
+        "envelope": None if getattr(model, "envelope_", None) is None else {
+            "features": list(model.envelope_names_), "margin_spreads": float(model.envelope_.margin_),
+            "held_out_flag_rate": float(model.envelope_.calibration_flag_rate_)},
         "metrics": metrics_summary(report),
         "train_config": config.to_dict(),
         "timing_s": {"evaluation": round(t1 - t0, 2), "final_fit": round(fit_s, 2)},

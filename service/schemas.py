@@ -312,11 +312,27 @@ class BearingOut(BaseModel):
         "null when not measurable). Definitions: docs/features.md.")
 
 
+class OodFindingOut(BaseModel):
+    """One feature outside the range of the model's training data (``models.estimators.FeatureEnvelope``)."""
+
+    feature: str = Field(..., description="Feature name (units in the name; `b{n}_attitude_deg`: shaft centreline "
+                         "attitude angle, `b{n}_attitude_offset_deg`: that angle minus a plain short journal "
+                         "bearing's at the same eccentricity).")
+    value: float | None = Field(None, description="This recording's value.")
+    train_min: float | None = Field(None, description="Smallest value in the training data.")
+    train_max: float | None = Field(None, description="Largest value in the training data.")
+    side: Literal["below", "above"] = Field(..., description="Which side of the training range the value is on.")
+    factor: float | None = Field(None, description="How many times beyond the range (amplitudes and ratios; "
+                                 "null for angles).")
+    excess_spreads: float | None = Field(None, description="Distance beyond the range in the feature's training "
+                                         "spread (5-95 % range, log10 for amplitudes and ratios).")
+
+
 class ReasonOut(BaseModel):
     """Why a verdict is not `confident`."""
 
     code: str = Field(..., description="Stable identifier, e.g. `orbit_exceeds_clearance`, `flat_channel`, "
-                      "`clipped_channel`, `reverse_whirl_all`, `ood`, `scale`, `speed_ambiguous`, `low_probability`.")
+                      "`clipped_channel`, `reverse_whirl_all`, `ood`, `outside_training`, `scale`, `speed_ambiguous`, `low_probability`.")
     status: Literal["uncertain", "inconclusive"] = Field(..., description="What this reason alone makes of the verdict.")
     message: str = Field(..., description="What was found and what to check.")
 
@@ -374,9 +390,12 @@ class DiagnoseResponse(BaseModel):
     top_features: list[FeatureContributionOut] = Field(..., description="Features that drove the verdict, "
                                                        "largest effect first.")
     ood: bool = Field(..., description="True when the recording is unlike the model's training data "
-                      "(out-of-distribution): treat the verdict with caution.")
+                      "(out-of-distribution: `ood_score` > 1 or any `ood_findings`): treat the verdict with caution.")
     ood_score: float | None = Field(None, description="Distance to the training data over its usual distance "
                                     "(> 1 flags OOD).")
+    ood_findings: list[OodFindingOut] = Field(default_factory=list, description="Features outside the range of "
+                                              "the training data (largest excess first); each also in `reasons` "
+                                              "(code `outside_training`). Any of them sets `ood`.")
     speed_rpm: float | None = Field(None, description="Running speed used, r/min (given, from the keyphasor, "
                                     "or estimated from the signals).")
     model_version: str = Field(..., description="Registered model version that produced the verdict.")

@@ -182,3 +182,17 @@ def test_ross_band_set_and_runout_per_machine():
     v_redrawn = [runout_vector(w, kp, fs) for m, w, kp in redrawn if m == m0]
     assert np.ptp(np.abs(v_fixed)) < 0.02 and np.ptp(np.angle(v_fixed)) < 0.05       # one shaft
     assert np.ptp(np.abs(v_redrawn)) > 0.05                                            # new draws
+
+
+def test_ood_summary_counts_which_check_flagged():
+    O = bench.Outcome
+    outs = [O(0.0, "aligned", status="confident", ood=False, ood_score=0.5),
+            O(0.0, "aligned", status="uncertain", ood=True, ood_score=1.5),
+            O(0.2, "pin", status="uncertain", ood=True, ood_score=0.4, outside=["b4_attitude_offset_deg", "x"]),
+            O(0.2, "pin", status="inconclusive", ood=True, ood_score=2.0, outside=["b4_attitude_offset_deg"]),
+            O(0.2, "pin", status="sim failed")]
+    r = bench.ood_summary(outs)
+    assert r["n"] == 4 and r["ood"] == 0.75 and r["knn"] == 0.5 and r["envelope"] == 0.5
+    assert r["status"]["uncertain"] == 0.5 and r["top"] == [("b4_attitude_offset_deg", 2)]
+    assert "b4_attitude_offset_deg (2)" in bench.ood_table({"x": r})
+    assert set(bench.MISTAKES) == {"µm declared as mils", "clearance stated ×5", "clearance stated ÷5"}

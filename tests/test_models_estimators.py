@@ -226,3 +226,85 @@ def test_classifier_falls_back_to_the_trees_when_temperature_scaling_fails(monke
     monkeypatch.setattr(sklearn.calibration.CalibratedClassifierCV, "fit", other)
     with pytest.raises(RuntimeError, match="something else"):
         SeverityClassifier(max_iter=10, cv=3).fit(t.X, labels, groups=t.plant_id)
+
+
+# ----------------------------------------------------------------------------- feature envelope (issue 15, item 7)
+def _envelope_data(n_groups=200, per_group=3, seed=0):
+    rng = np.random.default_rng(seed)
+    groups = np.repeat(np.arange(n_groups), per_group)
+    centre = rng.normal(size=(n_groups, 4))[groups]
+    X = centre + 0.05 * rng.normal(size=(len(groups), 4))
+    return X, groups
+
+
+def test_envelope_flags_few_new_plants_of_the_family_and_names_the_extreme_column():
+    from rotordiag.models.estimators import FeatureEnvelope
+
+    X, groups = _envelope_data()
+    env = FeatureEnvelope(quantile=0.99).fit(X, groups=groups)
+    new, _ = _envelope_data(seed=1)                          # other plants of the same family
+    rate = np.mean(env.predict(new) == -1)
+    assert rate <= 0.05, rate
+    row = new[:1].copy()
+    row[0, 2] = X[:, 2].min() - 3 * (X[:, 2].max() - X[:, 2].min())
+    assert env.predict(row)[0] == -1
+    assert env.outside(row)[0].tolist() == [False, False, True, False]
+    assert env.excess(np.full((1, 4), np.nan))[0].tolist() == [0, 0, 0, 0]     # missing is never outside
+
+
+def test_envelope_checks_only_the_high_side_where_told():
+    from rotordiag.models.estimators import FeatureEnvelope
+
+    X, groups = _envelope_data()
+    env = FeatureEnvelope().fit(X, groups=groups, check_low=[True, False, True, True])
+    low, high = X[:1].copy(), X[:1].copy()
+    low[0, 1], high[0, 1] = -100.0, 100.0
+    assert env.predict(low)[0] == 1 and env.predict(high)[0] == -1
+    with pytest.raises(ValueError, match="check_low"):
+        FeatureEnvelope().fit(X, groups=groups, check_low=[True])
+    with pytest.raises(ValueError, match="2 groups"):
+        FeatureEnvelope().fit(X, groups=np.zeros(len(X)))
+
+
+def test_model_envelope_findings_name_the_feature_and_the_training_range():
+    from rotordiag.models.estimators import FeatureEnvelope, MisalignmentModel
+
+    from .models_synthetic import make_table
+
+    t = make_table(n_plants=60, per_plant=8, seed=3)
+    m = MisalignmentModel(feature_names=t.feature_names, envelope_features=["b1_x_1x_amp_um", "b2_*"],
+                          ood_log_scales={"b1_x_1x_amp_um": 1.0}, envelope=FeatureEnvelope(quantile=0.99))
+    m.fit(t.X, t.misalignment, groups=t.plant_id)
+    assert m.envelope_names_ == ("b2_x_2x_1x_ratio", "b1_x_1x_amp_um")
+    j = list(t.feature_names).index("b1_x_1x_amp_um")
+    row = t.X[:1].copy()
+    assert m.envelope_findings(row) == [[]] and not m.ood_flags(row)[0]
+    row[0, j] = np.nanmin(t.X[:, j]) / 100.0                   # one amplitude ×1/100 below the training minimum
+    (found,) = m.envelope_findings(row)
+    assert m.ood_flags(row)[0]
+    assert [f["feature"] for f in found] == ["b1_x_1x_amp_um"]
+    f = found[0]
+    assert f["side"] == "below" and f["value"] == pytest.approx(row[0, j])
+    assert f["train_min"] == pytest.approx(np.nanmin(t.X[:, j]), rel=1e-9) and f["factor"] == pytest.approx(100, rel=1e-6)
+    with pytest.raises(ValueError, match="envelope_features"):
+        MisalignmentModel(feature_names=t.feature_names, envelope_features=["nope_*"]).fit(
+            t.X, t.misalignment, groups=t.plant_id)
+
+
+def test_derived_attitude_features_follow_the_centreline():
+    from rotordiag.core.journal import attitude_angle_deg, short_bearing_attitude_deg
+    from rotordiag.models.estimators import MisalignmentModel
+
+    assert short_bearing_attitude_deg(0.0) == pytest.approx(90.0)
+    e = 0.5
+    assert np.tan(np.radians(short_bearing_attitude_deg(e))) == pytest.approx(np.pi * np.sqrt(1 - e * e) / (4 * e))
+    assert attitude_angle_deg(0.0, -1.0) == pytest.approx(0.0)          # on the load line, below the centre
+    assert attitude_angle_deg(1.0, 0.0) == pytest.approx(90.0)          # toward rotation (+x)
+    m = MisalignmentModel(feature_names=("b1_centre_x_per_c", "b1_centre_y_per_c"))
+    m.feature_names_ = m.feature_names
+    m.envelope_names_ = ("b1_attitude_deg", "b1_attitude_offset_deg")
+    x, y = 0.3 * np.sin(np.radians(40)), -0.3 * np.cos(np.radians(40))
+    vals = m.envelope_values(np.array([[x, y], [0.0, -1.5]]))
+    assert vals[0, 0] == pytest.approx(40.0)
+    assert vals[0, 1] == pytest.approx(40.0 - short_bearing_attitude_deg(0.3))
+    assert np.isnan(vals[1]).all()                                     # ε > 1: not a position inside the bearing

@@ -101,3 +101,58 @@ def test_a_misalignment_call_without_the_coupling_2x_is_not_confident():
     assert run([0.001, 0.3, 0.0, 0.0], True) == ("confident", [])
     status, reasons = run([np.nan, np.nan, np.nan, 0.5], True)
     assert status == UNCERTAIN and "not measured" in reasons[0].message
+
+
+def test_outside_training_reasons_say_which_feature_in_plain_words_with_units():
+    from rotordiag.models.status import describe_feature, envelope_reasons
+
+    assert describe_feature("b2_1x_major_um_pp") == ("1X vibration (orbit major axis) at bearing 2", "µm pk-pk")
+    assert describe_feature("speed_rpm") == ("running speed", "r/min")
+    assert describe_feature("mystery") == ("mystery", "")
+    f = {"feature": "b2_1x_major_um_pp", "value": 0.4, "train_min": 3.0, "train_max": 900.0, "side": "below",
+         "factor": 7.5, "excess_spreads": 0.3}
+    (r,) = envelope_reasons([f])
+    assert r.code == "outside_training" and r.status == UNCERTAIN
+    assert "1X vibration (orbit major axis) at bearing 2 is 0.4 µm pk-pk" in r.message
+    assert "below anything in the training data (min 3 µm pk-pk" in r.message
+    assert envelope_reasons([{**f, "factor": 150.0}])[0].status == INCONCLUSIVE
+    att = {"feature": "b4_attitude_offset_deg", "value": -88.6, "train_min": -56.0, "train_max": 17.0,
+           "side": "below", "factor": None, "excess_spreads": 1.0}
+    (r,) = envelope_reasons([att])
+    assert "bearing 4 is -89°" in r.message and "plain oil-film journal bearing" in r.message
+    assert len(envelope_reasons([f] * 5)) == 3 and "2 more" in envelope_reasons([f] * 5)[-1].message
+    status, reasons = _assess(envelope=[f])
+    assert status == UNCERTAIN and reasons[0].code == "outside_training"
+
+
+def test_shipped_model_flags_one_bearing_scaled_down_and_names_it():
+    """A recording whose bearing-3 probes read 1/1000 of the vibration (a wrong probe sensitivity): the
+    envelope flags it and the reasons name bearing 3; the unscaled recording is not flagged. (×1/100 is
+    not flagged, and should not be: the default plant's 134 µm at bearing 3 becomes 1.3 µm, inside the
+    training range of 0.04–1280 µm — plants of the family vibrate that little there.)"""
+    from pathlib import Path
+
+    from rotordiag.features import ProbeChannel, Recording, extract_features
+    from rotordiag.models.predict import diagnose, load_bundle
+    from tests.service_util import simulated_channels
+
+    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
+    if not (root / "active").exists():
+        pytest.skip("no shipped registry in this checkout")
+    bundle = load_bundle(root)
+    if getattr(bundle.model, "envelope_", None) is None:
+        pytest.skip("shipped model has no feature envelope")
+    fs, ch = simulated_channels(misalignment=0.2)
+
+    def run(scale3):
+        rec = Recording(fs, [ProbeChannel(b, a, "um", d * (scale3 if b == 3 else 1.0)) for b, a, d in ch],
+                        speed_rpm=1800.0, clearance_um=350.0)
+        return diagnose(bundle, extract_features(rec), clearance_um=350.0)
+
+    v = run(1.0)
+    assert not v.ood_findings and not v.ood
+    v = run(0.001)
+    assert v.ood and v.ood_findings and v.status != "confident"
+    assert all(f["feature"].startswith("b3_") and f["side"] == "below" for f in v.ood_findings)
+    msgs = [r["message"] for r in v.reasons if r["code"] == "outside_training"]
+    assert msgs and all("at bearing 3" in m and "below anything in the training data" in m for m in msgs)

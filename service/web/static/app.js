@@ -496,8 +496,11 @@
     $("verdict-model").textContent = v.model_version;
     const ood = $("ood-warning");
     if (v.ood) {
+      const outside = (v.ood_findings || []).map((f) => f.feature);
       ood.textContent = `Out of distribution: this recording is unlike the model's training data ` +
-        `(OOD score ${num(v.ood_score)}, flagged above 1). Treat the verdict with caution.`;
+        `(OOD score ${num(v.ood_score)}, flagged above 1` +
+        (outside.length ? `; outside the training range: ${outside.slice(0, 5).join(", ")}` : "") +
+        `). Treat the verdict with caution; the reasons above say what to check.`;
     }
     show(ood, Boolean(v.ood));
     renderBaselineSection(v.baseline);

@@ -1,0 +1,35 @@
+"""Static journal position in a plain (fixed-geometry) oil-film bearing.
+
+The shaft centreline sits at eccentricity ε = e/c from the bearing centre and, under a
+vertical (gravity) load, off the load line in the direction of rotation by the attitude
+angle φ. Conventions of :mod:`rotordiag.core.conventions` and ``features.evidence``: x
+horizontal, y up, the load line is −y, φ is measured from −y toward +x (the rotation
+direction).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["attitude_angle_deg", "short_bearing_attitude_deg"]
+
+
+def attitude_angle_deg(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Attitude angle φ in degrees, in (−180, 180]: from the load line (−y) to the line of centres, with rotation.
+
+    Parameters
+    ----------
+    x, y : ndarray
+        Mean journal position relative to the bearing centre (any common unit, e.g. per clearance).
+    """
+    return np.degrees(np.arctan2(np.asarray(x, dtype=float), -np.asarray(y, dtype=float)))
+
+
+def short_bearing_attitude_deg(ecc: np.ndarray) -> np.ndarray:
+    """Attitude angle of a plain short (Ocvirk) journal bearing at eccentricity ratio ``ecc``, degrees.
+
+    ``tan φ = π √(1 − ε²) / (4 ε)``: 90° for a centred journal, falling to 0° as the journal
+    reaches the wall (ε → 1); 0° beyond it (ε ≥ 1 is not a position inside the bearing).
+    """
+    e = np.asarray(ecc, dtype=float)
+    with np.errstate(invalid="ignore"):
+        return np.degrees(np.arctan2(np.pi * np.sqrt(np.clip(1.0 - e * e, 0.0, None)), 4.0 * np.abs(e)))
