@@ -65,9 +65,9 @@ clean:
 DEFAULT_DATA ?= data/default
 default-model: $(STAMP)
 	mkdir -p $(DEFAULT_DATA)
-	for part in aligned presets_aligned misaligned presets; do \
+	for part in aligned presets_aligned misaligned presets severe; do \
 		$(VENV)/bin/rotordiag dataset generate models/default/dataset_$$part.toml --out $(DEFAULT_DATA)/$$part.h5 --no-progress || exit 1; \
 	done
 	rm -rf models/default_registry.new
-	$(VENV)/bin/rotordiag train $(DEFAULT_DATA)/aligned.h5 $(DEFAULT_DATA)/presets_aligned.h5 $(DEFAULT_DATA)/misaligned.h5 $(DEFAULT_DATA)/presets.h5 --config models/default/train.toml --registry models/default_registry.new
+	$(VENV)/bin/rotordiag train $(DEFAULT_DATA)/aligned.h5 $(DEFAULT_DATA)/presets_aligned.h5 $(DEFAULT_DATA)/misaligned.h5 $(DEFAULT_DATA)/presets.h5 $(DEFAULT_DATA)/severe.h5 --config models/default/train.toml --registry models/default_registry.new
 	rm -rf models/default_registry && mv models/default_registry.new models/default_registry

@@ -229,25 +229,42 @@ def test_augmented_table_adds_gain_mismatch_missing_bearings_and_unknown_speed(d
     plain = load_feature_table(path)
     tab = load_feature_table(path, augment=aug)
     n = len(plain)
-    assert len(tab) == 3 * n and tab.meta["augment"]["rows"] == 2 * n
+    off = tab.meta["augment"]["speed_estimate_off"]
+    assert len(tab) == 3 * n - off and tab.meta["augment"]["rows"] == 2 * n - off and off <= n // 4
     np.testing.assert_array_equal(tab.X[:n], plain.X)                  # originals unchanged, first
-    np.testing.assert_array_equal(tab.sample_index[n:], np.repeat(plain.sample_index, 2))
-    np.testing.assert_array_equal(tab.plant_id[n:], np.repeat(plain.plant_id, 2))   # same plant: same group
+    assert set(tab.sample_index[n:]) <= set(plain.sample_index)
+    if off == 0:
+        np.testing.assert_array_equal(tab.sample_index[n:], np.repeat(plain.sample_index, 2))
+        np.testing.assert_array_equal(tab.plant_id[n:], np.repeat(plain.plant_id, 2))   # same plant: same group
+    # speed-unknown copies whose estimate missed the simulated speed by > 2 % are left out
+    est = tab.X[n:, tab.feature_names.index("speed_rpm")]
+    assert np.all(np.abs(est / tab.speed_rpm[n:] - 1) <= 0.02)
     aug_rows = tab.X[n:]
     b1 = tab.feature_names.index("b1_x_1x_amp_um_pp")
     b2 = tab.feature_names.index("b2_x_1x_amp_um_pp")
     missing_b1 = np.isnan(aug_rows[:, b1])
     assert 0.25 < missing_b1.mean() < 0.75 and not np.isnan(aug_rows[:, b2]).any()
     # Gains: every channel within ±10 % of the original, and not all equal to it.
-    orig = np.repeat(plain.X[:, b2], 2)
+    orig = plain.X[np.searchsorted(plain.sample_index, tab.sample_index[n:]), b2]
     ratio = aug_rows[:, b2] / orig
     assert np.all(np.abs(ratio - 1) <= 0.1 + 1e-3) and np.std(ratio) > 0.02
     # Deterministic, and cached under the augmentation's own key.
     again = load_feature_table(path, augment=aug)
     np.testing.assert_array_equal(again.X, tab.X)
     other = load_feature_table(path, augment=Augmentation.from_dict({"copies": 1, "seed": 4}))
-    assert len(other) == 2 * n
+    assert len(other) == 2 * n - other.meta["augment"]["speed_estimate_off"]
     with pytest.raises(ValueError, match="bearing_sets"):
         Augmentation.from_dict({"bearing_sets": [{"bearings": [5]}]})
     with pytest.raises(ValueError, match="unknown key"):
         Augmentation.from_dict({"copise": 2})
+
+
+def test_speed_unknown_copies_with_a_wrong_speed_estimate_are_left_out():
+    """A copy's estimated speed 1/5 of the simulated one (period-5 motion) is not a training row."""
+    from rotordiag.models.dataset import SPEED_COPY_MAX_ERROR, _speed_estimate_off
+
+    names = ["a", "speed_rpm"]
+    X = np.array([[1.0, 1500.0], [1.0, 300.0], [1.0, np.nan], [1.0, 1500.0 * (1 + SPEED_COPY_MAX_ERROR / 2)],
+                  [1.0, 1500.0 * (1 + 2 * SPEED_COPY_MAX_ERROR)]])
+    off = _speed_estimate_off(X, names, np.full(5, 1500.0))
+    assert off.tolist() == [False, True, False, False, True]
