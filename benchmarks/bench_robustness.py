@@ -243,7 +243,9 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
     return out
 
 
-def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed: int) -> list[Outcome]:
+def _over_cases(cases: list[dict], disps: list, diagnose_one) -> list[Outcome]:
+    """One outcome per simulated case: "sim failed" where its simulation failed, else
+    ``diagnose_one(i, case, displacements, outcome)``."""
     outs = []
     for i, (c, d) in enumerate(zip(cases, disps)):
         o = Outcome(c["misalignment"], c["label_mechanism"])
@@ -251,12 +253,18 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
             o.status = "sim failed"
             outs.append(o)
             continue
-        rng = np.random.default_rng([seed, CONDITIONS.index(cond), i])
-        w = measure(d, c["speed_rpm"], cond, rng)
-        clearance = c["plant"]["clearance_m"] * 1e6 if cond.clearance_given else None
-        outs.append(diagnose_waveforms(bundle, w, cond.bearings, FS_HZ, c["speed_rpm"] if cond.speed_given else None,
-                                       clearance, o))
+        outs.append(diagnose_one(i, c, d, o))
     return outs
+
+
+def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed: int) -> list[Outcome]:
+    def one(i: int, c: dict, d, o: Outcome) -> Outcome:
+        w = measure(d, c["speed_rpm"], cond, np.random.default_rng([seed, CONDITIONS.index(cond), i]))
+        clearance = c["plant"]["clearance_m"] * 1e6 if cond.clearance_given else None
+        return diagnose_waveforms(bundle, w, cond.bearings, FS_HZ, c["speed_rpm"] if cond.speed_given else None,
+                                  clearance, o)
+
+    return _over_cases(cases, disps, one)
 
 
 def run_ross(bundle, path: Path) -> list[Outcome]:
@@ -283,17 +291,13 @@ def run_mistake(bundle, name: str, cases: list[dict], disps: list, seed: int) ->
     """The ``clean`` recordings (same draws) with one of :data:`MISTAKES` made by the user."""
     units, clearance_factor = MISTAKES[name]
     clean = CONDITIONS[0]
-    outs = []
-    for i, (c, d) in enumerate(zip(cases, disps)):
-        o = Outcome(c["misalignment"], c["label_mechanism"])
-        if d is None:
-            o.status = "sim failed"
-            outs.append(o)
-            continue
+
+    def one(i: int, c: dict, d, o: Outcome) -> Outcome:
         w = measure(d, c["speed_rpm"], clean, np.random.default_rng([seed, 0, i]))
-        outs.append(diagnose_waveforms(bundle, w, clean.bearings, FS_HZ, c["speed_rpm"],
-                                       c["plant"]["clearance_m"] * 1e6 * clearance_factor, o, units=units))
-    return outs
+        return diagnose_waveforms(bundle, w, clean.bearings, FS_HZ, c["speed_rpm"],
+                                  c["plant"]["clearance_m"] * 1e6 * clearance_factor, o, units=units)
+
+    return _over_cases(cases, disps, one)
 
 
 def ood_summary(outs: list[Outcome]) -> dict:
