@@ -11,7 +11,12 @@ simulate again, because they act on the measured signal as a whole:
 - **missing bearings**: only a subset of the bearings instrumented (its channels dropped
   before extraction, so every feature of the other bearings is missing, as in the field);
 - **speed unknown**: features extracted without the nominal speed, from the speed the
-  extractor estimates (what a user without a keyphasor or a speed value gets).
+  extractor estimates (what a user without a keyphasor or a speed value gets);
+- **less runout**: the sample's recorded shaft runout (1X and 2X, rebuilt exactly from the
+  stored measurement draws: ``simulator.dataset.read.recorded_runout_um``) scaled by a factor
+  ``U(0, 1)``, i.e. partly or wholly subtracted. The spec draws runout uniform in 0–6 µm (1X) and
+  0–2 µm (2X) per bearing, so a well-kept shaft with almost none was rare in training; its
+  recordings sat at the edge of the OOD reference and were flagged.
 
 Each sample gets ``copies`` extra rows (the original row is kept unchanged); copies keep
 the sample's plant id, so held-out evaluation never splits a plant. Draws come from
@@ -28,7 +33,7 @@ import numpy as np
 
 __all__ = ["Augmentation", "Variant"]
 
-_KEYS = {"copies", "gain_mismatch", "bearing_sets", "speed_unknown", "seed"}
+_KEYS = {"copies", "gain_mismatch", "bearing_sets", "speed_unknown", "runout_scaled", "seed"}
 
 
 @dataclass(frozen=True)
@@ -43,11 +48,14 @@ class Variant:
         Channels kept (the others' bearing is "not instrumented").
     speed_known : bool
         Whether the extractor is given the nominal speed.
+    runout_scale : float
+        Factor on the recorded runout (1 = as recorded, 0 = removed).
     """
 
     gains: np.ndarray
     keep: np.ndarray
     speed_known: bool
+    runout_scale: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -65,6 +73,8 @@ class Augmentation:
         every bearing of the dataset.
     speed_unknown : float
         Share of copies extracted without the nominal speed.
+    runout_scaled : float
+        Share of copies whose recorded runout is scaled by a factor drawn uniform in [0, 1].
     seed : int
     """
 
@@ -72,6 +82,7 @@ class Augmentation:
     gain_mismatch: float = 0.0
     bearing_sets: tuple[tuple[tuple[int, ...], float], ...] = ()
     speed_unknown: float = 0.0
+    runout_scaled: float = 0.0
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -81,6 +92,8 @@ class Augmentation:
             raise ValueError(f"[augment] gain_mismatch: a relative half-width in [0, 0.5), got {self.gain_mismatch!r}")
         if not 0.0 <= self.speed_unknown <= 1.0:
             raise ValueError(f"[augment] speed_unknown: a share in [0, 1], got {self.speed_unknown!r}")
+        if not 0.0 <= self.runout_scaled <= 1.0:
+            raise ValueError(f"[augment] runout_scaled: a share in [0, 1], got {self.runout_scaled!r}")
         for bearings, w in self.bearing_sets:
             if not bearings or any(b not in (1, 2, 3, 4) for b in bearings) or len(set(bearings)) != len(bearings):
                 raise ValueError(f"[augment] bearing_sets: each set is distinct bearings 1–4, got {list(bearings)}")
@@ -106,12 +119,13 @@ class Augmentation:
         if not isinstance(seed, int) or seed < 0:
             raise ValueError(f"[augment] seed: a non-negative integer, got {seed!r}")
         return cls(copies=copies, gain_mismatch=float(d.get("gain_mismatch", 0.0)), bearing_sets=tuple(sets),
-                   speed_unknown=float(d.get("speed_unknown", 0.0)), seed=seed)
+                   speed_unknown=float(d.get("speed_unknown", 0.0)),
+                   runout_scaled=float(d.get("runout_scaled", 0.0)), seed=seed)
 
     def to_dict(self) -> dict:
         return {"copies": self.copies, "gain_mismatch": self.gain_mismatch,
                 "bearing_sets": [{"bearings": list(b), "weight": w} for b, w in self.bearing_sets],
-                "speed_unknown": self.speed_unknown, "seed": self.seed}
+                "speed_unknown": self.speed_unknown, "runout_scaled": self.runout_scaled, "seed": self.seed}
 
     @property
     def key(self) -> str:
@@ -132,5 +146,8 @@ class Augmentation:
             chosen = sets[int(rng.choice(len(sets), p=weights))][0]
             keep = np.isin(bearings, chosen)
             speed_known = bool(rng.uniform() >= self.speed_unknown)
-            out.append(Variant(gains=gains, keep=keep, speed_known=speed_known))
+            scale = 1.0
+            if self.runout_scaled > 0 and rng.uniform() < self.runout_scaled:   # drawn after the others:
+                scale = float(rng.uniform())                                  # their draws stay as before
+            out.append(Variant(gains=gains, keep=keep, speed_known=speed_known, runout_scale=scale))
         return out

@@ -90,6 +90,7 @@ def _extract_rows(f, rows, progress: Callable | None, augment: Augmentation | No
     """Features of the samples ``rows``; with ``augment``, of their augmented copies instead
     (``len(rows) * augment.copies`` rows, copy-major within each sample)."""
     from rotordiag.features import FEATURE_NAMES, ProbeChannel, Recording, extract_features
+    from rotordiag.simulator.dataset.read import recorded_runout_um
 
     fs = float(f.attrs["sample_rate_hz"])
     units = str(f.attrs.get("waveform_units", "um"))
@@ -110,9 +111,12 @@ def _extract_rows(f, rows, progress: Callable | None, augment: Augmentation | No
             variants = augment.variants(int(i), bearings)
         for c, v in enumerate(variants):
             try:
+                w = data
+                if v.runout_scale != 1.0 and "measurement" in f:
+                    w = data - (1.0 - v.runout_scale) * recorded_runout_um(f, int(i))
                 rec = Recording(
                     sample_rate_hz=fs,
-                    channels=[ProbeChannel(bearing=b, angle_deg=a, units=units, data=data[j] * v.gains[j])
+                    channels=[ProbeChannel(bearing=b, angle_deg=a, units=units, data=w[j] * v.gains[j])
                               for j, (b, a) in enumerate(zip(bearings, angles)) if v.keep[j]],
                     speed_rpm=float(speed[i]) if v.speed_known else None,
                     clearance_um=None if clearance_m is None else float(clearance_m[i]) * 1e6,

@@ -113,6 +113,71 @@ def test_waveform_equals_the_simulator_seen_through_the_probes(small):
         assert resid.std() == pytest.approx(noise_sd, rel=0.25)
 
 
+def test_recorded_runout_is_the_runout_the_measurement_model_added(small):
+    """``recorded_runout_um`` rebuilds step 3 of the measurement model from the stored draws (what the
+    training augmentation subtracts to make a runout-free copy): checked against the formula by hand."""
+    from rotordiag.simulator.dataset import DatasetReader
+    from rotordiag.simulator.dataset.read import recorded_runout_um
+
+    _, out, _ = small
+    with h5py.File(out, "r") as f:
+        for i in (0, 3):
+            speed = f["parameters/speed_rpm"][i]
+            theta0 = f["measurement/start_angle_rad"][i]
+            phi_m = f["measurement/speed_fluctuation_phase_rad"][i]
+            r1, p1 = f["measurement/runout_1x_um"][i], f["measurement/runout_1x_phase_rad"][i]
+            r2, p2 = f["measurement/runout_2x_um"][i], f["measurement/runout_2x_phase_rad"][i]
+            t = np.arange(164) / 1024.0
+            w, wm = speed * np.pi / 30, 2 * np.pi * 0.5
+            theta = theta0 + w * t + w * 0.002 / wm * (np.cos(phi_m) - np.cos(wm * t + phi_m))
+            got = recorded_runout_um(f, i)
+            assert got.shape == (8, 164)
+            for c in range(8):
+                b, alpha = c // 2, np.radians((45.0, 135.0)[c % 2])
+                psi = alpha - theta
+                hand = r1[b] * np.cos(psi - p1[b]) + r2[b] * np.cos(2 * psi - p2[b])
+                np.testing.assert_allclose(got[c], hand, rtol=0, atol=1e-9)
+            assert np.abs(got).max() > 0.05          # the spec draws runout: not a zero array
+    with DatasetReader(out) as ds:
+        np.testing.assert_array_equal(ds.runout_um(3), got)
+
+
+def test_runout_scaled_training_copies_subtract_the_recorded_runout(small, monkeypatch):
+    """[augment] runout_scaled: a copy's waveforms are the stored ones minus (1 − s) × the recorded runout,
+    s ~ U(0, 1); the other draws of a copy (gains, bearings, speed) are the same as without it."""
+    import rotordiag.features as feats
+    from rotordiag.models.augment import Augmentation
+    from rotordiag.models.dataset import _extract_rows
+    from rotordiag.simulator.dataset.read import recorded_runout_um
+
+    _, out, _ = small
+    seen = []
+
+    class Result:
+        values = np.zeros(len(feats.FEATURE_NAMES))
+
+    monkeypatch.setattr(feats, "extract_features", lambda rec: seen.append(rec) or Result)
+    aug = Augmentation(copies=6, gain_mismatch=0.1, runout_scaled=0.5, seed=1)
+    with h5py.File(out, "r") as f:
+        bearings = [int(b) for b in f["channels"]["bearing"]]
+        _extract_rows(f, np.array([2]), None, aug)
+        w = f["waveforms"][2].astype(float)
+        r = recorded_runout_um(f, 2)
+    variants = aug.variants(2, bearings)
+    scales = [v.runout_scale for v in variants]
+    assert any(s == 1.0 for s in scales) and any(s < 1.0 for s in scales) and all(0 <= s <= 1 for s in scales)
+    assert len(seen) == 6
+    for rec, v in zip(seen, variants):
+        for j, ch in enumerate(rec.channels):
+            np.testing.assert_allclose(ch.data, (w[j] - (1 - v.runout_scale) * r[j]) * v.gains[j], rtol=1e-6, atol=1e-6)
+    plain = Augmentation(copies=6, gain_mismatch=0.1, seed=1).variants(2, bearings)
+    for a, b in zip(plain, variants):
+        np.testing.assert_array_equal(a.gains, b.gains)
+        assert a.speed_known == b.speed_known and a.runout_scale == 1.0
+    with pytest.raises(ValueError, match="runout_scaled"):
+        Augmentation(runout_scaled=1.5)
+
+
 def test_contact_samples_are_kept_with_their_status(tmp_path):
     spec = write_spec(tmp_path / "spec.toml", n_samples=2)
     text = spec.read_text().replace("misalignment = {min = 0.0, max = 0.5}", "misalignment = 0.9") \

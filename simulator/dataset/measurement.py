@@ -40,7 +40,7 @@ import numpy as np
 from rotordiag.core.conventions import project_on_probe
 
 __all__ = ["MeasurementSettings", "MeasurementDraws", "draw_measurement", "shaft_angle_rad",
-           "required_record_revs", "probe_waveforms_um"]
+           "required_record_revs", "probe_waveforms_um", "runout_um"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -134,6 +134,20 @@ def shaft_angle_rad(time_s: np.ndarray, speed_rpm: float, settings: MeasurementS
     return theta
 
 
+def runout_um(theta_rad: np.ndarray, angle_deg: float, draws: MeasurementDraws, k: int) -> np.ndarray:
+    """Runout (µm) that a probe at ``angle_deg`` on the ``k``-th measured bearing reads at shaft angle
+    ``theta_rad``: step 3 of the module docstring, ``R_b(α − θ)``."""
+    r1, r2 = _runout_orders_um(theta_rad, angle_deg, draws, k)
+    return r1 + r2
+
+
+def _runout_orders_um(theta_rad: np.ndarray, angle_deg: float, draws: MeasurementDraws,
+                      k: int) -> tuple[np.ndarray, np.ndarray]:
+    psi = math.radians(angle_deg) - np.asarray(theta_rad, dtype=float)
+    return (draws.runout_1x_um[k] * np.cos(psi - draws.runout_1x_phase_rad[k]),
+            draws.runout_2x_um[k] * np.cos(2.0 * psi - draws.runout_2x_phase_rad[k]))
+
+
 def required_record_revs(speed_rpm: float, settings: MeasurementSettings, draws: MeasurementDraws) -> int:
     """Revolutions the simulator must record so that θ(t) stays inside its record (+1 for the spline)."""
     theta = shaft_angle_rad(settings.time_s, speed_rpm, settings, draws)
@@ -184,13 +198,9 @@ def probe_waveforms_um(
         spline = CubicSpline(tau, disp.reshape(n, 8), axis=0)
         xy = spline(theta[inside]).reshape(-1, 4, 2) * 1e6  # µm
         for c, (b, angle_deg) in enumerate(settings.channels):
-            alpha = math.radians(angle_deg)
-            k = settings.bearings.index(b)
             signal = project_on_probe(xy[:, b - 1, 0], xy[:, b - 1, 1], angle_deg)
-            psi = alpha - theta[inside]
-            signal = signal + draws.runout_1x_um[k] * np.cos(psi - draws.runout_1x_phase_rad[k]) \
-                + draws.runout_2x_um[k] * np.cos(2.0 * psi - draws.runout_2x_phase_rad[k])
-            out[c, inside] = signal
+            r1, r2 = _runout_orders_um(theta[inside], angle_deg, draws, settings.bearings.index(b))
+            out[c, inside] = signal + r1 + r2       # this order: the stored waveforms stay bit-identical
     if math.isfinite(draws.snr_db):
         noise = rng.standard_normal((n_ch, n_pts))
         with np.errstate(invalid="ignore"):

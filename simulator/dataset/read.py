@@ -19,14 +19,46 @@ from typing import Any
 
 import numpy as np
 
+from .measurement import MeasurementDraws, MeasurementSettings, runout_um, shaft_angle_rad
 from .store import open_dataset
 
-__all__ = ["DatasetReader"]
+__all__ = ["DatasetReader", "recorded_runout_um"]
 
 
 def _decode(codes: np.ndarray, codes_json: str) -> np.ndarray:
     names = {v: k for k, v in json.loads(codes_json).items()}
     return np.array([names.get(int(c), "") for c in codes], dtype=object)
+
+
+def recorded_runout_um(f: Any, index: int) -> np.ndarray:
+    """The runout part of row ``index``'s stored waveforms, (n_channels, n_points) µm.
+
+    Rebuilt from the sample's stored measurement draws (``measurement/*``) and the spec's
+    speed fluctuation with :func:`simulator.dataset.measurement.runout_um`, exactly as the
+    measurement model added it; ``waveforms - recorded_runout_um(...)`` is the same recording of
+    a shaft without runout (the noise stays as drawn).
+
+    Parameters
+    ----------
+    f : an open dataset file (h5py.File)
+    index : int
+        Row.
+    """
+    i = int(index)
+    m = json.loads(f.attrs["spec_json"])["measurement"]
+    n_points = int(f["waveforms"].shape[-1])
+    channels = [(int(b), float(a)) for b, a in f["channels"][...].tolist()]
+    bearings = tuple(int(b) for b in m["bearings"])
+    settings = MeasurementSettings(bearings=bearings, probe_angles_deg=tuple(float(a) for a in m["probe_angles_deg"]),
+                                   sample_rate_hz=float(f.attrs["sample_rate_hz"]), n_points=n_points,
+                                   speed_fluctuation=float(m["speed_fluctuation"]),
+                                   speed_fluctuation_hz=float(m["speed_fluctuation_hz"]))
+    g = f["measurement"]
+    draws = MeasurementDraws(float(g["snr_db"][i]), float(g["start_angle_rad"][i]),
+                             float(g["speed_fluctuation_phase_rad"][i]), g["runout_1x_um"][i], g["runout_1x_phase_rad"][i],
+                             g["runout_2x_um"][i], g["runout_2x_phase_rad"][i])
+    theta = shaft_angle_rad(settings.time_s, float(f["parameters/speed_rpm"][i]), settings, draws)
+    return np.stack([runout_um(theta, a, draws, bearings.index(b)) for b, a in channels])
 
 
 class DatasetReader:
@@ -120,6 +152,10 @@ class DatasetReader:
     def waveforms(self, index: int) -> np.ndarray:
         """Waveforms of row ``index``: (n_channels, n_points) float32, µm."""
         return self.f["waveforms"][int(index)]
+
+    def runout_um(self, index: int) -> np.ndarray:
+        """The runout part of row ``index``'s waveforms (:func:`recorded_runout_um`)."""
+        return recorded_runout_um(self.f, index)
 
     def iter_waveforms(self, indices: np.ndarray | None = None) -> Iterator[tuple[int, np.ndarray]]:
         """Yield ``(row, waveforms)`` one sample at a time (memory stays flat); default: finished samples."""
