@@ -63,11 +63,13 @@ clean:
 # then evaluate on held-out plants, fit and register. See docs/models.md.
 .PHONY: default-model
 DEFAULT_DATA ?= data/default
+# the training parts of the shipped model, in the order the model was trained on them (models/default/dataset_<part>.toml)
+DEFAULT_PARTS = aligned presets_aligned misaligned presets severe misaligned_more aligned_more misaligned_more2 aligned_more2 misaligned_more3 aligned_more3 bearings bearings_aligned
 default-model: $(STAMP)
 	mkdir -p $(DEFAULT_DATA)
-	for part in aligned presets_aligned misaligned presets severe; do \
+	for part in $(DEFAULT_PARTS); do \
 		$(VENV)/bin/rotordiag dataset generate models/default/dataset_$$part.toml --out $(DEFAULT_DATA)/$$part.h5 --no-progress || exit 1; \
 	done
 	rm -rf models/default_registry.new
-	$(VENV)/bin/rotordiag train $(DEFAULT_DATA)/aligned.h5 $(DEFAULT_DATA)/presets_aligned.h5 $(DEFAULT_DATA)/misaligned.h5 $(DEFAULT_DATA)/presets.h5 $(DEFAULT_DATA)/severe.h5 --config models/default/train.toml --registry models/default_registry.new
+	$(VENV)/bin/rotordiag train $(foreach part,$(DEFAULT_PARTS),$(DEFAULT_DATA)/$(part).h5) --config models/default/train.toml --registry models/default_registry.new
 	rm -rf models/default_registry && mv models/default_registry.new models/default_registry

@@ -51,7 +51,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from rotordiag.core.bands import DEFAULT_EDGES, DEFAULT_NAMES, SeverityBands
-from rotordiag.core.journal import attitude_angle_deg, short_bearing_attitude_deg
+from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, short_bearing_attitude_deg
 
 from ._sklearn_private import Interval, StrOptions
 from .ordinal import OrdinalSeverityClassifier
@@ -728,8 +728,9 @@ class MisalignmentModel(BaseEstimator):
         ones can be named, from ``b{n}_centre_x_per_c`` / ``b{n}_centre_y_per_c``:
         ``b{n}_attitude_deg``, the shaft centreline's attitude angle (from the load line, with
         rotation), and ``b{n}_attitude_offset_deg``, that angle minus the one a plain short
-        oil-film journal bearing takes at the same eccentricity (``rotordiag.core.journal``).
-        Features matching ``ood_log_scales`` are compared as ``log10(max(x, s / 1000))``.
+        oil-film journal bearing takes at the same eccentricity (``rotordiag.core.journal``);
+        both are missing (not checked) below ``ATTITUDE_MIN_ECC`` = 0.05, where the journal
+        sits at the centre and the angle is not defined. Features matching ``ood_log_scales`` are compared as ``log10(max(x, s / 1000))``.
     envelope_upper_only : sequence of str, default=()
         Patterns of envelope features whose low side is not checked (e.g. noise shares: a
         cleaner signal than in training is no reason for doubt).
@@ -961,7 +962,8 @@ class MisalignmentModel(BaseEstimator):
                 x, y = X[:, index[f"b{m.group(1)}_centre_x_per_c"]], X[:, index[f"b{m.group(1)}_centre_y_per_c"]]
                 ecc = np.hypot(x, y)
                 att = attitude_angle_deg(x, y) - (short_bearing_attitude_deg(ecc) if m.group(2) else 0.0)
-                out[:, j] = np.where(ecc <= 1.0, (att + 180.0) % 360.0 - 180.0, np.nan)
+                defined = (ecc >= ATTITUDE_MIN_ECC) & (ecc <= 1.0)
+                out[:, j] = np.where(defined, (att + 180.0) % 360.0 - 180.0, np.nan)
             else:                                   # pragma: no cover - names come from _fit_envelope
                 raise KeyError(name)
         return out

@@ -273,15 +273,14 @@ def plot_report(report: dict, oof: OutOfFold, table: FeatureTable, path) -> None
     ax.set_xlim(0, 1); ax.set_ylim(0, 1)
     # Δ estimate vs truth, coloured by mechanism.
     ax = axes[-1, 1]
-    for mech, color in (("aligned", "0.4"), ("pin", "tab:orange"), ("rigid", "tab:blue")):
+    mechs = ["aligned"] + sorted(set(table.mechanism.tolist()) - {"aligned"})
+    colors = ["0.4", "tab:orange", "tab:blue", "tab:green", "tab:red", "tab:purple", "tab:brown"]
+    for k, mech in enumerate(mechs):
         s = table.mechanism == mech
         if s.any():
             ax.errorbar(table.misalignment[s], oof.delta_pred["model"][s],
                         yerr=np.abs(oof.interval[s].T - oof.delta_pred["model"][s]),
-                        fmt="o", ms=2.5, lw=0.3, alpha=0.6, color=color, label=mech)
-    other = ~np.isin(table.mechanism, ["aligned", "pin", "rigid"])
-    if other.any():
-        ax.plot(table.misalignment[other], oof.delta_pred["model"][other], "o", ms=2.5, label="other")
+                        fmt="o", ms=2.5, lw=0.3, alpha=0.6, color=colors[k % len(colors)], label=mech)
     top = float(np.nanmax(table.misalignment)) * 1.05 + 1e-9
     ax.plot([0, top], [0, top], "k--", lw=0.8)
     ax.set_xlabel("true Δ"); ax.set_ylabel("estimated Δ (90 % interval)")

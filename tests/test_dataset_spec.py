@@ -113,3 +113,18 @@ def test_plant_file_is_resolved_relative_to_the_spec_and_hashed(tmp_path):
 def test_missing_spec_file():
     with pytest.raises(SpecError, match="does not exist"):
         load_spec("/nonexistent/spec.toml")
+
+
+def test_make_default_model_builds_every_shipped_training_part():
+    """``make default-model`` generates and trains on exactly the specs in models/default/ (no part
+    forgotten, none listed that does not exist), and each of them is a valid spec."""
+    import re
+
+    text = (REPO / "Makefile").read_text()
+    m = re.search(r"^DEFAULT_PARTS\s*=\s*(.+)$", text, re.MULTILINE)
+    assert m, "Makefile: DEFAULT_PARTS not found"
+    parts = m.group(1).split()
+    on_disk = sorted(p.stem.removeprefix("dataset_") for p in (REPO / "models" / "default").glob("dataset_*.toml"))
+    assert sorted(parts) == on_disk and len(set(parts)) == len(parts)
+    seeds = [load_spec(REPO / "models" / "default" / f"dataset_{p}.toml").spec.design.seed for p in parts]
+    assert len(set(seeds)) == len(seeds)        # every part draws its own plants

@@ -304,7 +304,9 @@ def test_derived_attitude_features_follow_the_centreline():
     m.feature_names_ = m.feature_names
     m.envelope_names_ = ("b1_attitude_deg", "b1_attitude_offset_deg")
     x, y = 0.3 * np.sin(np.radians(40)), -0.3 * np.cos(np.radians(40))
-    vals = m.envelope_values(np.array([[x, y], [0.0, -1.5]]))
+    vals = m.envelope_values(np.array([[x, y], [0.0, -1.5], [0.002, 0.001], [0.0, -0.06]]))
     assert vals[0, 0] == pytest.approx(40.0)
     assert vals[0, 1] == pytest.approx(40.0 - short_bearing_attitude_deg(0.3))
     assert np.isnan(vals[1]).all()                                     # ε > 1: not a position inside the bearing
+    assert np.isnan(vals[2]).all()                                     # ε = 0.002: centred, no attitude to read
+    assert vals[3, 0] == pytest.approx(0.0)                            # ε = 0.06 ≥ ATTITUDE_MIN_ECC: read

@@ -10,7 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["attitude_angle_deg", "short_bearing_attitude_deg"]
+__all__ = ["ATTITUDE_MIN_ECC", "attitude_angle_deg", "short_bearing_attitude_deg"]
+
+#: Below this eccentricity ratio the journal sits practically at the bearing centre and its attitude
+#: angle is not defined by the load (a DC error of a few µm turns it anywhere): not read. Training plants
+#: with ε ≤ 0.003 at an outboard bearing (light journal, high speed, thick film) gave angles of −160° to
+#: −75°, which widened the envelope until a linear-bearing machine at ε = 0.26 and 0° passed as in-family.
+ATTITUDE_MIN_ECC = 0.05
 
 
 def attitude_angle_deg(x: np.ndarray, y: np.ndarray) -> np.ndarray:
