@@ -78,7 +78,10 @@ def test_cli_and_http_agree(files, client, registry, name, query):
     for key in ("severity", "probabilities", "misalignment", "misalignment_interval", "ood_score", "speed_rpm"):
         assert http[key] == cli[key], key
     if name.startswith("aligned"):
-        assert cli["severity"] == "aligned" and cli["status"] == "confident"
+        # called aligned; these files do not state the bearing clearance, and without it the shipped model
+        # may be unsure of this machine (P(aligned) 0.54: `uncertain`) — the clearance-given case below is
+        # confident
+        assert cli["severity"] == "aligned" and cli["status"] in ("confident", "uncertain")
     else:   # never confidently wrong: a misaligned machine is not called aligned with confidence
         assert not (cli["severity"] == "aligned" and cli["status"] == "confident"), cli["severity"]
 
@@ -92,7 +95,7 @@ def test_cli_batch_table_over_a_folder_with_a_broken_file(files, registry, tmp_p
     assert res.exit_code == 1, res.output           # one file could not be read
     rows = {r["file"].rsplit("/", 1)[-1]: r for r in json.loads(out.read_text())}
     assert "not a number" in rows["broken.csv"]["error"]
-    assert rows["aligned.h5"]["severity"] == "aligned"
+    assert rows["aligned.h5"]["severity"] == "aligned" and rows["aligned.h5"]["status"] == "confident"
     assert not (rows["misaligned.h5"]["severity"] == "aligned" and rows["misaligned.h5"]["status"] == "confident")
     r = rows["misaligned.h5"]
     assert r["offset_mil"] == pytest.approx(350 * r["misalignment"] / 25.4)
