@@ -730,7 +730,8 @@ class MisalignmentModel(BaseEstimator):
         rotation), and ``b{n}_attitude_offset_deg``, that angle minus the one a plain short
         oil-film journal bearing takes at the same eccentricity (``rotordiag.core.journal``);
         both are missing (not checked) below ``ATTITUDE_MIN_ECC`` = 0.05, where the journal
-        sits at the centre and the angle is not defined. Features matching ``ood_log_scales`` are compared as ``log10(max(x, s / 1000))``.
+        sits at the centre and the angle is not defined. Features matching ``ood_log_scales``
+        are compared as ``log10(max(x, s / 1000))``.
     envelope_upper_only : sequence of str, default=()
         Patterns of envelope features whose low side is not checked (e.g. noise shares: a
         cleaner signal than in training is no reason for doubt).

@@ -142,6 +142,28 @@ def test_recorded_runout_is_the_runout_the_measurement_model_added(small):
         np.testing.assert_array_equal(ds.runout_um(3), got)
 
 
+def test_recorded_runout_of_a_merged_file_uses_each_rows_source_spec(small, tmp_path):
+    """A merged file has no spec of its own (spec_json ""): the runout of a row is rebuilt with its source's."""
+    from rotordiag.simulator.dataset import merge
+    from rotordiag.simulator.dataset.read import recorded_runout_um
+
+    _, out, _ = small
+    spec = write_spec(tmp_path / "other.toml", n_samples=2, seed=8)
+    spec.write_text(spec.read_text().replace("speed_fluctuation = 0.002", "speed_fluctuation = 0.02"))
+    other = tmp_path / "other.h5"
+    generate(spec, other, n_workers=0, progress=False)
+    merged = tmp_path / "merged.h5"
+    merge([out, other], merged)
+    with h5py.File(out, "r") as a, h5py.File(other, "r") as b, h5py.File(merged, "r") as m:
+        assert m.attrs["spec_json"] == "" and m.attrs["merged"]
+        src = m["source"][...]
+        for k in (0, 5, int(np.flatnonzero(src == 1)[0]), int(np.flatnonzero(src == 1)[-1])):
+            f, row = (a, k) if src[k] == 0 else (b, k - int(np.flatnonzero(src == 1)[0]))
+            np.testing.assert_array_equal(m["waveforms"][k], f["waveforms"][row])
+            # (the second source's speed fluctuation is 10× the first's: its rows match only with its own spec)
+            np.testing.assert_allclose(recorded_runout_um(m, k), recorded_runout_um(f, row), rtol=0, atol=1e-12)
+
+
 def test_runout_scaled_training_copies_subtract_the_recorded_runout(small, monkeypatch):
     """[augment] runout_scaled: a copy's waveforms are the stored ones minus (1 − s) × the recorded runout,
     s ~ U(0, 1); the other draws of a copy (gains, bearings, speed) are the same as without it."""

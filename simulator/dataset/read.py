@@ -30,6 +30,23 @@ def _decode(codes: np.ndarray, codes_json: str) -> np.ndarray:
     return np.array([names.get(int(c), "") for c in codes], dtype=object)
 
 
+def _measurement_table(f: Any, i: int) -> dict[str, Any]:
+    """The validated ``[measurement]`` table that row ``i`` was measured with: the file's spec, or for a
+    merged file (no spec of its own) the spec of the row's source."""
+    import tomllib
+
+    from .spec import Measurement
+
+    text = str(f.attrs.get("spec_json", ""))
+    if text:
+        return dict(json.loads(text)["measurement"])
+    if f.attrs.get("merged", False) and "source" in f:
+        src = json.loads(f.attrs["sources_json"])[int(f["source"][i])]
+        table = tomllib.loads(str(src.get("spec_toml", ""))).get("measurement", {})
+        return Measurement.model_validate(table).model_dump()
+    raise ValueError("the dataset file records no spec: the runout it added cannot be rebuilt")
+
+
 def recorded_runout_um(f: Any, index: int) -> np.ndarray:
     """The runout part of row ``index``'s stored waveforms, (n_channels, n_points) µm.
 
@@ -45,7 +62,7 @@ def recorded_runout_um(f: Any, index: int) -> np.ndarray:
         Row.
     """
     i = int(index)
-    m = json.loads(f.attrs["spec_json"])["measurement"]
+    m = _measurement_table(f, i)
     n_points = int(f["waveforms"].shape[-1])
     channels = [(int(b), float(a)) for b, a in f["channels"][...].tolist()]
     bearings = tuple(int(b) for b in m["bearings"])
