@@ -55,6 +55,11 @@ SPEED_SUBSYNC_MAX_RATIO = 0.55
 #: … when their refined frequency ratio r is further than this fraction of r from an integer
 #: (oil whirl / whip lines are not locked to the running speed)
 SPEED_INTEGER_RATIO_TOL = 2e-3
+#: … and whose own line's orbits are not nearly straight lines: backward / forward circular component at
+#: most this (a combination line of the whirl with the running speed beats in a flat orbit; bench_speed
+#: seeds 15, 16 and the bench_robustness base set, seed 815: every one of the 17 families above 0.5 that
+#: the rule took for the running speed was wrong, the 85 correct ones were at 0.002–0.445)
+SPEED_RUNNING_MAX_BACKWARD = 0.5
 #: a spectral peak that is not a harmonic of the chosen speed makes the estimate "ambiguous" when
 #: its power is this many times the median spectrum (noise alone: probability 2^-30) …
 SPEED_FOREIGN_MIN_SNR = 30.0
@@ -75,11 +80,24 @@ SPEED_PARTNER_RIVAL_REL = 0.8
 #: 2Ω − kω, k ≠ 0): with one, the true 1X read as a whirl finds a spurious partner (bench_speed
 #: seed 15: every partner with a single combination line was wrong, 7 of 7)
 SPEED_PARTNER_MIN_COMBINATIONS = 2
+#: a line family is read as a whirl / whip whose running speed is sought among its combination lines
+#: only when its orbits are at most this elliptical (backward / forward; bench_robustness sets, seed
+#: 815: every one of the eleven partner searches from a line above 0.2 gave a wrong speed, where the
+#: line was the running speed's own 1X; correct partners came from lines at 0.001–0.157)
+SPEED_PARTNER_MAX_BACKWARD = 0.2
 #: the estimate is "ambiguous" when its 1X is the largest line and the orbits there are nearly
 #: circular: the median over bearings of backward / forward circular component (or its inverse)
 #: below this (default plant, bench_speed seed 15: where the largest line is a whip, median 0.004,
 #: 0.031–0.042 on the two that a tighter 0.03 left silently wrong; where it is 1X, 0.0875 and above)
-SPEED_WHIRL_MAX_BACKWARD = 0.05
+SPEED_WHIRL_MAX_BACKWARD = 0.1
+#: a line family with a family at twice its frequency (as many harmonics present) is taken for a
+#: half-speed whirl / sub-harmonic, and the double family for the running speed, when its orbits are
+#: this circular (backward / forward; bench_robustness sets, seed 815: 0.002–0.150 where the double
+#: was the running speed or the nearer to it, 0.166–0.614 where the line was the running speed's 1X)
+SPEED_HALF_WHIRL_MAX_BACKWARD = 0.15
+#: ... and regardless of its orbits when its line is below this fraction of the double family's
+#: (amplitude; bench_robustness sets: a flexible coupling's 2X reached 12× the 1X, 22 dB)
+SPEED_HALF_MAX_REL = 0.03
 #: phase-difference refinement iterations of the estimated / given speed
 SPEED_REFINE_ITERATIONS = 3
 #: a given ``speed_rpm`` that differs from the signal's refined 1X line by more than this

@@ -87,7 +87,7 @@ def _non_harmonic_lines(power: np.ndarray, peak_idx: np.ndarray, df: float, f1: 
     return out
 
 
-def _above_subsynchronous(x: np.ndarray, fs: float, df: float,
+def _above_subsynchronous(x: np.ndarray, spec: np.ndarray, fs: float, df: float,
                           candidates: list[tuple[float, int, float, int, float]]) -> tuple[float, str | None]:
     """The running speed when the best-ranked line family is a sub-synchronous whirl or whip.
 
@@ -114,7 +114,8 @@ def _above_subsynchronous(x: np.ndarray, fs: float, df: float,
         if abs(fc - c[0]) > 2 * df:
             fc = c[0]
         r = fc / fb
-        if abs(r - round(r)) > cfg.SPEED_INTEGER_RATIO_TOL * r:
+        if (abs(r - round(r)) > cfg.SPEED_INTEGER_RATIO_TOL * r
+                and not _circular_fraction(spec, int(round(c[0] / df))) > cfg.SPEED_RUNNING_MAX_BACKWARD):
             independent.append(c)
     if not independent:
         return f_best, None
@@ -123,6 +124,33 @@ def _above_subsynchronous(x: np.ndarray, fs: float, df: float,
             f"with the running speed (oil whirl / whip?); the speed is taken from the family at "
             f"{60 * best[0]:.1f} r/min")
     return best[0], note
+
+
+def _half_speed_whirl(spec: np.ndarray, df: float,
+                      candidates: list[tuple[float, int, float, int, float]]) -> str | None:
+    """Never a sub-harmonic: move the family at twice the best one's frequency to the front when the
+    best one is a half-speed whirl or the 1/2X of period-2 motion.
+
+    A family at 2f with as many lines present as the best family at f explains the record as well,
+    spectrally. Physics decides: a self-excited whirl and the sub-harmonic of period-2 motion whirl in
+    nearly circular orbits (backward / forward below ``SPEED_HALF_WHIRL_MAX_BACKWARD``); the
+    running speed's own 1X is elliptical in fluid-film bearings, and then 2f is its 2X (a
+    flexible coupling's may be the larger line) and f is kept. The choice is reported as
+    ambiguous. Returns the warning, or None when ``candidates`` is left as it is.
+    """
+    f0, n0 = candidates[0][0], candidates[0][1]
+    double = [c for c in candidates[1:] if abs(c[0] - 2 * f0) < 1.5 * df and c[1] >= n0]
+    if not double:
+        return None
+    circ = _circular_fraction(spec, int(round(f0 / df)))
+    if not circ < cfg.SPEED_HALF_WHIRL_MAX_BACKWARD:
+        return None
+    candidates.remove(double[0])
+    candidates.insert(0, double[0])
+    return (f"speed estimate ambiguous: {60 * double[0][0]:.1f} r/min chosen; the line at {60 * f0:.1f} cpm, with "
+            f"harmonics of its own, whirls in nearly circular orbits (backward / forward {circ:.3f}) and is read as "
+            f"a half-speed whirl or sub-harmonic; if the machine runs at {60 * f0:.1f} r/min give speed_rpm or "
+            "keyphasor_times_s")
 
 
 def _local_peak_ratio(power: np.ndarray, f: float, df: float, floor: float, tol_bins: float) -> float:
@@ -468,18 +496,19 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
             "keyphasor_times_s")
 
     candidates.sort(key=lambda c: (-c[1], -c[2]))
+    warnings: list[str] = []
     # never a sub-harmonic: a family at twice the best one's frequency with as many lines present,
-    # whose own line is the stronger (a weaker 1/2X of period-2 motion explains 1X, 1.5X… as well),
-    # is the running speed
+    # whose own line is far the stronger, is the running speed (a faint line at half its frequency,
+    # with the lines between, is a sub-harmonic, not a running speed with a 2X thirty times its 1X)
     f0 = candidates[0][0]
     double = [c for c in candidates[1:] if abs(c[0] - 2 * f0) < 1.5 * df and c[1] >= candidates[0][1]
-              and _hann_amplitude_at(power, c[0], df) > _hann_amplitude_at(power, f0, df)]
+              and _hann_amplitude_at(power, f0, df) < cfg.SPEED_HALF_MAX_REL * _hann_amplitude_at(power, c[0], df)]
     if double:
         candidates.remove(double[0])
         candidates.insert(0, double[0])
     f_best, n_best, s_best = candidates[0][:3]
-    warnings: list[str] = []
-    f_best, switched = (f_best, None) if only_partner else _above_subsynchronous(x, fs, df, candidates)
+    f_whirl = f_best
+    f_best, switched = (f_best, None) if only_partner else _above_subsynchronous(x, spec, fs, df, candidates)
     whip_hz: float | None = None
     f_partner: float | None = None
     if switched is not None:
@@ -487,10 +516,17 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
         n_best, s_best = next((c[1], c[2]) for c in candidates if c[0] == f_best)
     else:
         seeds = _non_harmonic_lines(power, peak_idx, df, f_best, snr_level)
-        partners = _combination_partners(power, logp, df, floor, f_best, seeds, c_lo, c_hi, 0.45 * fs)
+        # the whirl / whip a partner is sought for whirls in nearly circular orbits; the running speed's
+        # elliptical 1X read as one finds spurious partners among its own combination lines
+        partners = ([] if not only_partner and (_circular_fraction(spec, int(round(f_best / df)))
+                    >= cfg.SPEED_PARTNER_MAX_BACKWARD or abs(peak_idx[0] * df - f_best) > 1.5 * df) else
+                    _combination_partners(power, logp, df, floor, f_best, seeds, c_lo, c_hi, 0.45 * fs))
         if only_partner and not partners:
             raise no_line_in_range()
-        if partners:
+        if not partners and (half := _half_speed_whirl(spec, df, candidates)) is not None:
+            warnings.append(half)
+            f_best, n_best, s_best = candidates[0][:3]
+        elif partners:
             whip_hz = refine_line_hz(x, fs, f_best, iterations=2)
             if abs(whip_hz - f_best) > 2 * df:
                 whip_hz = f_best
@@ -532,6 +568,9 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
                 "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
         # refine on the strongest of the candidate's 1X..3X lines below 0.45 fs
         harmonics = [m for m in (1, 2, 3) if m * f_best < 0.45 * fs]
+        if switched is not None:
+            # not on a line the whirl's own harmonics overlap (its 2nd harmonic sits next to a 1X, ...)
+            harmonics = [m for m in harmonics if abs(m * f_best - round(m * f_best / f_whirl) * f_whirl) > 2.5 * df] or [1]
         h = max(harmonics, key=lambda m: _hann_amplitude_at(power, m * f_best, df))
         k_h = int(round(h * f_best / df))
         strongest = np.argsort(-np.abs(spec[:, k_h]))[:4]       # the channels that carry the line

@@ -255,3 +255,38 @@ def test_a_range_never_changes_an_estimate_that_agrees_with_it():
     rec2 = make_recording(components=elliptical, rpm=1500.0, noise_um=0.05, seed=6)
     data2 = np.stack([c.data for c in rec2.channels])
     assert estimate_speed_hz(data2, rec2.sample_rate_hz, (20.0, 30.0)) == estimate_speed_hz(data2, rec2.sample_rate_hz)
+
+
+def test_circular_half_order_line_larger_than_1x_gives_the_running_speed_and_is_flagged():
+    """Period-2 motion whose 1/2X, a nearly circular forward whirl with a 1.5X of its own, is five times the
+    elliptical 1X: both the 1/2X family and the 1X family explain their lines, the circular orbit says which
+    is the whirl. The running speed is chosen and the choice declared ambiguous."""
+    rpm = 2400.0
+    comps = {b: [(1, 8.0, 20.0 * b, 3.0, 110.0), (2, 3.0, 40.0, 1.5, 130.0), (3, 1.0, 0.0, 0.5, 90.0)]
+             for b in (1, 2, 3, 4)}
+    w = 2 * np.pi * rpm / 120
+
+    def half(t, b):
+        return (40 * np.cos(w * t) + 4 * np.cos(3 * w * t + 0.4),
+                40 * np.sin(w * t) + 4 * np.sin(3 * w * t + 0.4))
+
+    fr = extract_features(make_recording(components=comps, rpm=rpm, extra=half, noise_um=0.1, seed=5))
+    assert fr.speed_rpm == pytest.approx(rpm, rel=1e-4)
+    assert any("speed estimate ambiguous" in w and "half-speed whirl" in w for w in fr.warnings)
+    # the same lines with an elliptical 1/2X (backward / forward 0.5) are read as a machine at half the speed
+    # with a large 2X, not as a whirl: nothing decides for the double, and the rule does not fire
+    def half_elliptical(t, b):
+        return 40 * np.cos(w * t) + 4 * np.cos(3 * w * t + 0.4), 13.3 * np.sin(w * t) + 1.3 * np.sin(3 * w * t + 0.4)
+
+    fr2 = extract_features(make_recording(components=comps, rpm=rpm, extra=half_elliptical, noise_um=0.1, seed=5))
+    assert not any("half-speed whirl" in w for w in fr2.warnings)
+
+
+def test_large_2x_of_a_flexible_coupling_is_not_taken_for_the_running_speed():
+    """A flexible coupling's 2X twelve times the 1X (22 dB; seen on simulated machines): the 1X line is
+    still the running speed, not a sub-harmonic of a machine running at twice the speed (whose 1X, 2X, 3X
+    would be this machine's 2X, 4X, 6X, all present)."""
+    comps = {b: [(1, 2.0, 20.0 * b, 1.0, 110.0), (2, 24.0, 40.0, 12.0, 130.0), (3, 1.5, 0.0, 1.0, 90.0),
+                 (4, 1.0, 10.0, 0.6, 30.0), (6, 0.5, 50.0, 0.3, 70.0)] for b in (1, 2, 3, 4)}
+    fr = extract_features(make_recording(components=comps, rpm=1800.0, noise_um=0.05, seed=8))
+    assert fr.speed_rpm == pytest.approx(1800.0, rel=1e-5)
