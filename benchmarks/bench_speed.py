@@ -32,6 +32,38 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 FS = 2048.0
 ANGLES = (45.0, 135.0)
+#: an estimate further than this from the simulated speed is wrong (issue 15, item 6: error ≤ 0.5 %)
+SPEED_TOLERANCE = 0.005
+#: how the running speed's own 1X line shows in a recording (:func:`running_speed_line`)
+LINE_CLASSES = ("separate", "merged", "below noise")
+
+
+def running_speed_line(waveforms_um: np.ndarray, fs_hz: float, speed_rpm: float) -> str:
+    """How the true running speed's 1X line shows in the summed Hann spectrum the estimator searches.
+
+    ``"separate"``: a local maximum within half a bin of the true 1X, at least ``SPEED_LINE_MIN_SNR``
+    times the median spectrum (what any spectral estimator needs to find it); ``"merged"``: the 1X bins
+    stand above the noise, but inside the main lobe of a neighbouring line (oil whip locked near half the
+    speed puts its 2nd harmonic there) — not resolvable at this record length; ``"below noise"``: the
+    1X bins are under ``SPEED_LINE_MIN_SNR`` times the median (the speed is not in the signal's 1X).
+    """
+    from rotordiag.features import _config as cfg
+    from rotordiag.features._spectrum import fast_length, hann
+
+    x = waveforms_um - waveforms_um.mean(axis=1, keepdims=True)
+    n = x.shape[1]
+    n_fft = fast_length(n)
+    power = np.sum(np.abs(np.fft.rfft(x * hann(n), n=n_fft, axis=-1)) ** 2, axis=0)
+    df = fs_hz / n_fft
+    floor = float(np.median(power[3:int(0.45 * fs_hz / df)]))
+    k_true = speed_rpm / 60.0 / df
+    k0 = int(round(k_true))
+    level = cfg.SPEED_LINE_MIN_SNR * floor
+    peaks = [k for k in (k0 - 1, k0, k0 + 1) if power[k] >= power[k - 1] and power[k] > power[k + 1]
+             and abs(k - k_true) <= 0.5 + 1e-9]
+    if peaks and power[peaks[0]] >= level:
+        return "separate"
+    return "merged" if power[k0 - 1:k0 + 2].max() >= level else "below noise"
 
 
 def _plant(preset: str | None):
@@ -103,10 +135,11 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     recs = _load(args.cache, args.n, args.revs, args.seed, args.preset)
     t_sim = time.perf_counter() - t0
-    errs, flagged, whirl, rows, statuses = [], [], [], [], []
+    errs, flagged, whirl, rows, statuses, lines = [], [], [], [], [], []
     t1 = time.perf_counter()
     for rpm, delta, mech, snr, probes in recs:
         chans = [ProbeChannel(b, a, "um", probes[2 * (b - 1) + j]) for b in (1, 2, 3, 4) for j, a in enumerate(ANGLES)]
+        lines.append(running_speed_line(probes, FS, rpm))
         try:
             hint = None if args.hint_frac is None else (rpm * (1 - args.hint_frac), rpm * (1 + args.hint_frac))
             fr = extract_features(Recording(sample_rate_hz=FS, channels=chans, speed_range_rpm=hint))
@@ -126,7 +159,7 @@ def main(argv=None) -> int:
     t_est = time.perf_counter() - t1
     errs_a = np.abs(np.array(errs))
     flagged_a, whirl_a = np.array(flagged), np.array(whirl)
-    ok = errs_a <= 5e-3
+    ok = errs_a <= SPEED_TOLERANCE
     n = len(errs_a)
     plant = "default plant" if args.preset is None else f"preset {args.preset}"
     hint = "" if args.hint_frac is None else f"; hint speed_range_rpm = true ±{100 * args.hint_frac:g} %"
@@ -135,6 +168,11 @@ def main(argv=None) -> int:
     print(f"with a sub-synchronous line (whirl/whip, subsync_frac > 0.1): {int(whirl_a.sum())}")
     print(f"|error| <= 0.5 %: {ok.mean():.2%} ({int(ok.sum())}/{n}); target >= 99 %")
     print(f"  of those with whirl/whip: {ok[whirl_a].mean() if whirl_a.any() else float('nan'):.2%}")
+    lines_a = np.array(lines)
+    print("  by how the true 1X line shows (a separate line above the noise / merged with a neighbour's main lobe / "
+          "below the noise): " + "; ".join(
+              f"{c} {int((lines_a == c).sum())}: {ok[lines_a == c].mean() if (lines_a == c).any() else float('nan'):.1%}"
+              for c in LINE_CLASSES))
     q = np.nanpercentile(errs_a, [50, 90, 99, 100])
     print(f"|error| percentiles 50/90/99/max: {q[0]:.2e} {q[1]:.2e} {q[2]:.2e} {q[3]:.2e}")
     wrong = ~ok
@@ -148,7 +186,7 @@ def main(argv=None) -> int:
         sel = (np.array([r[0] for r in rows]) >= lo) & (np.array([r[0] for r in rows]) < hi)
         print(f"  {lo}–{hi} r/min: {ok[sel].mean():.1%} within 0.5 % ({int(sel.sum())} recordings)")
     for rpm, delta, mech, snr, est, e, amb, sub in rows:
-        if abs(e) > 5e-3 or not np.isfinite(e):
+        if abs(e) > SPEED_TOLERANCE or not np.isfinite(e):
             print(f"  {rpm:7.1f} r/min Δ={delta:.2f} {mech:5s} SNR {snr:4.1f} dB → {est:8.1f} ({100 * e:+.1f} %)"
                   f"{'  flagged' if amb else '  SILENT'}  subsync_frac {sub:.2f}")
     return 0

@@ -566,6 +566,15 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
             warnings.append(
                 f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * rivals[0][0]:.1f} r/min "
                 "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
+        elif double_rival := [c for c in candidates if abs(c[0] - 2 * f_best) < 1.5 * df and c[1] >= n_best
+                              and _hann_amplitude_at(power, c[0], df) > _hann_amplitude_at(power, f_best, df)]:
+            # period-2 motion (a 1/2X with its 1.5X, 2.5X …) and a machine whose 2X is its largest line
+            # give the same spectrum: the larger line at twice the speed explains as many lines
+            warnings.append(
+                f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but the larger line family at "
+                f"{60 * double_rival[0][0]:.1f} cpm explains as many lines: if that is the running speed, the "
+                f"{60 * f_best:.1f} cpm line is a 1/2X sub-harmonic (period-2 motion); give speed_rpm or "
+                "keyphasor_times_s")
         # refine on the strongest of the candidate's 1X..3X lines below 0.45 fs
         harmonics = [m for m in (1, 2, 3) if m * f_best < 0.45 * fs]
         if switched is not None:

@@ -196,3 +196,18 @@ def test_ood_summary_counts_which_check_flagged():
     assert r["status"]["uncertain"] == 0.5 and r["top"] == [("b4_attitude_offset_deg", 2)]
     assert "b4_attitude_offset_deg (2)" in bench.ood_table({"x": r})
     assert set(bench.MISTAKES) == {"µm declared as mils", "clearance stated ×5", "clearance stated ÷5"}
+
+
+def test_running_speed_line_classes():
+    """The benches' observability of the true 1X: a separate line, merged into a neighbour's main lobe, or
+    below the noise (the breakdown of the speed-estimate accuracy)."""
+    bs = _load("bench_speed")
+    fs, n, rpm = 2560.0, 3072, 2400.0                     # 0.83 Hz bins; 1X at 40 Hz
+    t = np.arange(n) / fs
+    noise = np.random.default_rng(2).normal(0.0, 0.05, (8, n))
+    one_x = np.cos(2 * np.pi * rpm / 60 * t)
+    assert bs.running_speed_line(noise + one_x, fs, rpm) == "separate"
+    # oil whip's 2nd harmonic 0.6 bins below the 1X and 100 times stronger: no peak of its own
+    whip2 = 100 * np.cos(2 * np.pi * (rpm / 60 - 0.5) * t)
+    assert bs.running_speed_line(noise + one_x + whip2, fs, rpm) == "merged"
+    assert bs.running_speed_line(noise + 0.001 * one_x, fs, rpm) == "below noise"

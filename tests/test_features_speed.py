@@ -290,3 +290,23 @@ def test_large_2x_of_a_flexible_coupling_is_not_taken_for_the_running_speed():
                  (4, 1.0, 10.0, 0.6, 30.0), (6, 0.5, 50.0, 0.3, 70.0)] for b in (1, 2, 3, 4)}
     fr = extract_features(make_recording(components=comps, rpm=1800.0, noise_um=0.05, seed=8))
     assert fr.speed_rpm == pytest.approx(1800.0, rel=1e-5)
+
+
+def test_elliptical_half_order_family_is_right_or_flagged():
+    """Period-2 motion whose 1/2X orbit is as elliptical as the 1X (simulated: backward / forward 0.37 against
+    0.40) and whose 1/2X, 1.5X, 2.5X outweigh the 2X, 3X: the half-order family explains every line, so it is
+    ranked first. The larger 1X at twice its frequency explains as many: a right speed, or the ambiguity said."""
+    rpm = 1560.0
+    comps = {b: [(1, 40.0, 20.0 * b, 17.0, 110.0), (2, 2.5, 40.0, 1.2, 130.0), (3, 2.0, 0.0, 0.9, 90.0)]
+             for b in (1, 2, 3, 4)}
+    w = 2 * np.pi * rpm / 120
+
+    def half(t, b):
+        x = 15 * np.cos(w * t) + 6 * np.cos(3 * w * t + 0.4) + 1.5 * np.cos(5 * w * t + 1.0)
+        y = 6 * np.sin(w * t) + 2.5 * np.sin(3 * w * t + 0.4) + 0.6 * np.sin(5 * w * t + 1.0)
+        return x, y
+
+    fr = extract_features(make_recording(components=comps, rpm=rpm, fs=2560.0, n=4800, extra=half, noise_um=0.05,
+                                         seed=9))
+    right = abs(fr.speed_rpm / rpm - 1) <= 5e-3
+    assert right or any("speed estimate ambiguous" in w for w in fr.warnings), (fr.speed_rpm, fr.warnings)
