@@ -126,6 +126,13 @@ def _above_subsynchronous(x: np.ndarray, spec: np.ndarray, fs: float, df: float,
     return best[0], note
 
 
+def _doubles(candidates: list[tuple[float, int, float, int, float]], f: float, n_lines: int,
+             df: float) -> list[tuple[float, int, float, int, float]]:
+    """The candidate families at twice ``f`` (within 1.5 bins) with at least ``n_lines`` lines present: each
+    explains the record as well as the family at ``f`` (period-2 motion and a 2X-dominated machine look alike)."""
+    return [c for c in candidates if abs(c[0] - 2 * f) < 1.5 * df and c[1] >= n_lines]
+
+
 def _half_speed_whirl(spec: np.ndarray, df: float,
                       candidates: list[tuple[float, int, float, int, float]]) -> str | None:
     """Never a sub-harmonic: move the family at twice the best one's frequency to the front when the
@@ -139,7 +146,7 @@ def _half_speed_whirl(spec: np.ndarray, df: float,
     ambiguous. Returns the warning, or None when ``candidates`` is left as it is.
     """
     f0, n0 = candidates[0][0], candidates[0][1]
-    double = [c for c in candidates[1:] if abs(c[0] - 2 * f0) < 1.5 * df and c[1] >= n0]
+    double = _doubles(candidates, f0, n0, df)
     if not double:
         return None
     circ = _circular_fraction(spec, int(round(f0 / df)))
@@ -501,8 +508,8 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
     # whose own line is far the stronger, is the running speed (a faint line at half its frequency,
     # with the lines between, is a sub-harmonic, not a running speed with a 2X thirty times its 1X)
     f0 = candidates[0][0]
-    double = [c for c in candidates[1:] if abs(c[0] - 2 * f0) < 1.5 * df and c[1] >= candidates[0][1]
-              and _hann_amplitude_at(power, f0, df) < cfg.SPEED_HALF_MAX_REL * _hann_amplitude_at(power, c[0], df)]
+    double = [c for c in _doubles(candidates, f0, candidates[0][1], df)
+              if _hann_amplitude_at(power, f0, df) < cfg.SPEED_HALF_MAX_REL * _hann_amplitude_at(power, c[0], df)]
     if double:
         candidates.remove(double[0])
         candidates.insert(0, double[0])
@@ -566,8 +573,8 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
             warnings.append(
                 f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * rivals[0][0]:.1f} r/min "
                 "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
-        elif double_rival := [c for c in candidates if abs(c[0] - 2 * f_best) < 1.5 * df and c[1] >= n_best
-                              and _hann_amplitude_at(power, c[0], df) > _hann_amplitude_at(power, f_best, df)]:
+        elif double_rival := [c for c in _doubles(candidates, f_best, n_best, df)
+                              if _hann_amplitude_at(power, c[0], df) > _hann_amplitude_at(power, f_best, df)]:
             # period-2 motion (a 1/2X with its 1.5X, 2.5X …) and a machine whose 2X is its largest line
             # give the same spectrum: the larger line at twice the speed explains as many lines
             warnings.append(
