@@ -211,3 +211,13 @@ def test_running_speed_line_classes():
     whip2 = 100 * np.cos(2 * np.pi * (rpm / 60 - 0.5) * t)
     assert bs.running_speed_line(noise + one_x + whip2, fs, rpm) == "merged"
     assert bs.running_speed_line(noise + 0.001 * one_x, fs, rpm) == "below noise"
+
+
+def test_f1_of_delta_error_falls_with_the_error():
+    """The report's bound: an exact Δ estimate bands every case right; a larger error gives a lower F1."""
+    edges = (0.05, 0.15, 0.35)
+    assert bench.f1_of_delta_error(1e-5, 48, edges, draws=20)[0] == pytest.approx(1.0)
+    small, lo, hi = bench.f1_of_delta_error(0.012, 48, edges, draws=100)
+    large = bench.f1_of_delta_error(0.03, 48, edges, draws=100)[0]
+    assert lo <= small <= hi
+    assert large < small - 0.05
