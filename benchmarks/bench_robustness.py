@@ -198,8 +198,6 @@ def measure(disp_m: np.ndarray, speed_rpm: float, cond: Condition, rng: np.rando
     return w
 
 
-
-
 @dataclass
 class Outcome:
     """What the model and the rule said about one recording."""
@@ -379,8 +377,9 @@ def summarize(bundle, outs: list[Outcome]) -> dict:
     row["ood_rate"] = float(np.mean([o.ood for o in ran])) if ran else None
     row["status"] = {s: float(np.mean(st == s)) for s in ("confident", "uncertain", "inconclusive", "refused")}
     used = [o for o in ran if math.isfinite(o.speed_rpm_used) and math.isfinite(o.speed_rpm)]
-    wrong = [o for o in used if abs(o.speed_rpm_used / o.speed_rpm - 1.0) > SPEED_TOLERANCE]
-    right = [o for o in used if o not in wrong]
+    right, wrong = [], []
+    for o in used:
+        (wrong if abs(o.speed_rpm_used / o.speed_rpm - 1.0) > SPEED_TOLERANCE else right).append(o)
     row["speed"] = {"n": len(used), "within": 1.0 - len(wrong) / len(used) if used else None,
                     "wrong": len(wrong), "wrong_confident": sum(o.status == "confident" for o in wrong),
                     "ood_right": float(np.mean([o.ood for o in right])) if right else None, "n_right": len(right),
