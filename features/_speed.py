@@ -99,7 +99,9 @@ def _above_subsynchronous(x: np.ndarray, spec: np.ndarray, fs: float, df: float,
     an integer multiple of it (within ``SPEED_INTEGER_RATIO_TOL`` after refining both lines), is
     an independent source above a sub-synchronous one: no self-excited whirl runs above the
     running speed, so the strongest such family is the running speed. Families at an exact
-    integer ratio (a 2X-dominated signal, or period-n motion) are left to the ranking.
+    integer ratio (a 2X-dominated signal, or period-n motion) are left to the ranking, and so are
+    families whose own line beats in a nearly flat orbit (backward / forward above
+    ``SPEED_RUNNING_MAX_BACKWARD``: a combination line of the whirl with the running speed).
     """
     f_best = candidates[0][0]
     higher = [c for c in candidates[1:] if f_best < cfg.SPEED_SUBSYNC_MAX_RATIO * c[0] and c[3] >= 2]
@@ -115,7 +117,7 @@ def _above_subsynchronous(x: np.ndarray, spec: np.ndarray, fs: float, df: float,
             fc = c[0]
         r = fc / fb
         if (abs(r - round(r)) > cfg.SPEED_INTEGER_RATIO_TOL * r
-                and not _circular_fraction(spec, int(round(c[0] / df))) > cfg.SPEED_RUNNING_MAX_BACKWARD):
+                and not _circular_fraction_at(spec, c[0], df) > cfg.SPEED_RUNNING_MAX_BACKWARD):
             independent.append(c)
     if not independent:
         return f_best, None
@@ -149,7 +151,7 @@ def _half_speed_whirl(spec: np.ndarray, df: float,
     double = _doubles(candidates, f0, n0, df)
     if not double:
         return None
-    circ = _circular_fraction(spec, int(round(f0 / df)))
+    circ = _circular_fraction_at(spec, f0, df)
     if not circ < cfg.SPEED_HALF_WHIRL_MAX_BACKWARD:
         return None
     candidates.remove(double[0])
@@ -335,6 +337,11 @@ def refine_line_hz(data: np.ndarray, fs: float, f0: float, iterations: int = cfg
         dphi = float(np.angle(np.vdot(c1, c2)))
         f = f + dphi * fs / (2 * np.pi * h)
     return f
+
+
+def _circular_fraction_at(spec: np.ndarray, f: float, df: float) -> float:
+    """:func:`_circular_fraction` at the FFT bin nearest ``f`` (Hz; bin width ``df``)."""
+    return _circular_fraction(spec, int(round(f / df)))
 
 
 def _circular_fraction(spec: np.ndarray, k: int) -> float:
@@ -523,11 +530,13 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
         n_best, s_best = next((c[1], c[2]) for c in candidates if c[0] == f_best)
     else:
         seeds = _non_harmonic_lines(power, peak_idx, df, f_best, snr_level)
-        # the whirl / whip a partner is sought for whirls in nearly circular orbits; the running speed's
-        # elliptical 1X read as one finds spurious partners among its own combination lines
-        partners = ([] if not only_partner and (_circular_fraction(spec, int(round(f_best / df)))
-                    >= cfg.SPEED_PARTNER_MAX_BACKWARD or abs(peak_idx[0] * df - f_best) > 1.5 * df) else
-                    _combination_partners(power, logp, df, floor, f_best, seeds, c_lo, c_hi, 0.45 * fs))
+        # the whirl / whip a partner is sought for is the largest line and whirls in a nearly circular
+        # orbit; the running speed's elliptical 1X read as one finds spurious partners among its own
+        # combination lines (with a speed range and no running speed in it, the search is the only way)
+        whirl_like = (abs(peak_idx[0] * df - f_best) <= 1.5 * df
+                      and not _circular_fraction_at(spec, f_best, df) >= cfg.SPEED_PARTNER_MAX_BACKWARD)  # NaN: no x/y pair
+        partners = (_combination_partners(power, logp, df, floor, f_best, seeds, c_lo, c_hi, 0.45 * fs)
+                    if only_partner or whirl_like else [])
         if only_partner and not partners:
             raise no_line_in_range()
         if not partners and (half := _half_speed_whirl(spec, df, candidates)) is not None:
