@@ -373,6 +373,7 @@ def summarize(bundle, outs: list[Outcome]) -> dict:
                 sel = (mech == m if m != "all" else ~aligned) & np.isfinite(score)
                 r[f"mae_{m}"] = float(np.mean(np.abs(score[sel] - delta[sel]))) if sel.any() else None
         row[who] = r
+    row["confident"] = confident_summary(ran, names, edges)
     st = np.array([o.status for o in ran], dtype=object)
     row["ood_rate"] = float(np.mean([o.ood for o in ran])) if ran else None
     row["status"] = {s: float(np.mean(st == s)) for s in ("confident", "uncertain", "inconclusive", "refused")}
@@ -387,6 +388,37 @@ def summarize(bundle, outs: list[Outcome]) -> dict:
                     "by_line": {c: (sum(o.speed_line == c for o in used), sum(o.speed_line == c for o in right))
                                 for c in LINE_CLASSES}}
     return row
+
+
+def confident_summary(outs: list[Outcome], names: list[str], edges: np.ndarray) -> dict:
+    """How right the ``confident`` verdicts are: the shown severity against the true band.
+
+    ``off2``: two or more bands off; ``missed``: a moderate or severe misalignment shown as aligned;
+    ``false_severe``: an aligned machine shown as moderate or severe; ``cases``: (mechanism, Δ, shown)
+    of the ``off2`` ones."""
+    conf = [o for o in outs if o.status == "confident" and o.severity in names]
+    true = np.array([int(np.searchsorted(edges, o.delta, side="right")) for o in conf], dtype=int)
+    shown = np.array([names.index(o.severity) for o in conf], dtype=int)
+    off = np.abs(shown - true)
+    return {"n": len(conf), "exact": float(np.mean(off == 0)) if conf else None,
+            "within_one": float(np.mean(off <= 1)) if conf else None, "off2": int(np.sum(off >= 2)),
+            "missed": int(np.sum((true >= 2) & (shown == 0))), "false_severe": int(np.sum((true == 0) & (shown >= 2))),
+            "cases": [(o.mechanism, o.delta, o.severity) for o, k in zip(conf, off) if k >= 2]}
+
+
+def confident_table(rows: dict[str, dict]) -> str:
+    """Per condition, how right the ``confident`` verdicts are (:func:`confident_summary`)."""
+    head = ["condition", "confident", "right band", "within one band", "two or more bands off",
+            "moderate/severe shown aligned", "aligned shown moderate/severe", "the cases two or more bands off"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name, row in rows.items():
+        c = row["confident"]
+        cases = ", ".join(f"{m} Δ {d:.2f} → {s}" for m, d, s in c["cases"][:6])
+        cases += f" (+{len(c['cases']) - 6} more)" if len(c["cases"]) > 6 else ""
+        lines.append(f"| {name} | {c['n']} of {row['n']} | {_f(c['exact'], '{:.0%}')} | "
+                     f"{_f(c['within_one'], '{:.1%}')} | {c['off2']} | {c['missed']} | {c['false_severe']} | "
+                     f"{cases or '–'} |")
+    return "\n".join(lines)
 
 
 #: Δ-estimate errors (mean absolute) at which :func:`f1_of_delta_error` is reported
@@ -602,6 +634,12 @@ def report(rows, ross, args, wall_s, bundle=None, ood_rows: dict | None = None) 
         "status shares: the ROSS targets about `aligned`+`confident` can be met by the sanity, scale, OOD and "
         "missing-feature checks making a verdict `uncertain` — the honest-verdict layer, not the classifier.",
     ]
+    text += ["", "## Confident verdicts: how often are they wrong?",
+             "A confidently wrong verdict is the worst answer the product can give. Per condition, the `confident` "
+             "verdicts' shown severity against the true band (Δ): the share in the right band, within one band, and "
+             "the counts two or more bands off — above all a moderate or severe misalignment shown as aligned, or an "
+             "aligned machine shown as moderate or severe.",
+             "", confident_table(rows)]
     if bundle is not None:
         text += [""] + delta_error_section({k: v for k, v in rows.items() if k != "other machines (ROSS)"},
                                            args.n, tuple(_bands(bundle)[1]))

@@ -291,7 +291,8 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
         sanity=getattr(feature_result, "sanity", ()) or (), ood_score=ood_score, probabilities=proba,
         class_delta_agree=agree, names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
         never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
-        warnings=warnings, alarm=_alarm(model, proba, cls), misaligned_call=band > 0, envelope=findings)
+        warnings=warnings, alarm=_alarm(model, proba, cls), misaligned_call=band > 0, envelope=findings,
+        call_index=cls, band_names=[str(c) for c in model.classes_])
     shown: float | None = delta
     shown_iv: tuple[float | None, float | None] = (lo, hi)
     if status == INCONCLUSIVE:

@@ -10,9 +10,12 @@
   away from the training level, an ambiguous speed estimate, features the model always had
   missing here, no class above ``CONFIDENT_MIN_PROBABILITY``, a Δ regressor whose interval
   does not reach the classifier's band, "aligned" although misalignment is more likely than
-  not (below the ordinal classifier's false-alarm threshold), or a misalignment severity
+  not (below the ordinal classifier's false-alarm threshold), more than
+  ``CONFIDENT_MAX_FAR_PROBABILITY`` on the bands two or more from the call, or a misalignment severity
   without the coupling bearings' 2X (2X/1X below ``SIGNATURE_MIN_2X_1X``: nothing physical
-  backs the model's call).
+  backs the model's call), or "aligned" without the coupling bearings' shaft-centreline position
+  per clearance (no clearance given, or no DC gap): a stationary shaft-line offset shows mainly
+  there, so "aligned" cannot rule it out.
 - ``confident``: none of these.
 
 Class and Δ are consistent by construction (:func:`consistent_estimate`): the severity is
@@ -29,7 +32,9 @@ import numpy as np
 
 __all__ = ["Reason", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY",
-           "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "describe_feature", "envelope_reasons"]
+           "CONFIDENT_MAX_FAR_PROBABILITY",
+           "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "coupling_centreline_known", "describe_feature",
+           "envelope_reasons"]
 
 CONFIDENT = "confident"
 UNCERTAIN = "uncertain"
@@ -43,6 +48,9 @@ SCALE_UNCERTAIN = 20.0
 SCALE_INCONCLUSIVE = 100.0
 #: the predicted class needs at least this calibrated probability for a confident verdict
 CONFIDENT_MIN_PROBABILITY = 0.6
+#: ... and at most this calibrated probability on the bands two or more away from it (a gross error: a moderate
+#: misalignment called aligned, an aligned machine called moderate)
+CONFIDENT_MAX_FAR_PROBABILITY = 0.1
 #: the bearings either side of the coupling whose 1X level is compared with the training data
 COUPLING_BEARINGS = (2, 3)
 #: a misalignment verdict needs the classic signature to be confident: the largest 2X/1X amplitude ratio of the
@@ -203,11 +211,21 @@ def coupling_2x_1x(names: Sequence[str], row: np.ndarray) -> float:
     return max(vals) if vals else float("nan")
 
 
+def coupling_centreline_known(names: Sequence[str], row: np.ndarray) -> bool:
+    """Whether the shaft-centreline eccentricity per clearance is measured at a coupling bearing.
+
+    It needs the bearing clearance and the probes' DC gaps (``b{n}_centre_ecc_per_c``, NaN
+    without either); a model without the feature never knows it."""
+    wanted = {f"b{b}_centre_ecc_per_c" for b in COUPLING_BEARINGS}
+    return any(n in wanted and np.isfinite(row[i]) for i, n in enumerate(names))
+
+
 def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float], class_delta_agree: bool,
            names: Sequence[str], row: np.ndarray, feature_median: np.ndarray,
            never_missing: Sequence[str], speed_source: str | None,
            warnings: Iterable[str], alarm: tuple[float, float] | None = None,
-           misaligned_call: bool = False, envelope: Sequence[dict] = ()) -> tuple[str, list[Reason]]:
+           misaligned_call: bool = False, envelope: Sequence[dict] = (),
+           call_index: int | None = None, band_names: Sequence[str] = ()) -> tuple[str, list[Reason]]:
     """The verdict's status and its reasons (worst first).
 
     Parameters
@@ -232,9 +250,15 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
         threshold the verdict is uncertain, and says so.
     misaligned_call : bool
         The class is a misalignment severity (not the aligned band): it then needs the coupling
-        bearings' 2X (:data:`SIGNATURE_MIN_2X_1X`) to be confident.
+        bearings' 2X (:data:`SIGNATURE_MIN_2X_1X`) to be confident; an aligned call needs their
+        shaft-centreline position per clearance (:func:`coupling_centreline_known`).
     envelope : sequence of dict
         ``MisalignmentModel.envelope_findings`` of this row: features outside the training range.
+    call_index : int, optional
+        The called band's index into ``probabilities`` (ordered bands): a confident verdict needs at most
+        :data:`CONFIDENT_MAX_FAR_PROBABILITY` on the bands two or more away from it.
+    band_names : sequence of str
+        The bands' names, for that reason's message.
     """
     reasons: list[Reason] = []
     for f in sanity:
@@ -263,6 +287,16 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
         reasons.append(Reason("low_probability", UNCERTAIN,
                               f"no severity class is likely enough (highest probability {pmax:.0%} < "
                               f"{CONFIDENT_MIN_PROBABILITY:.0%}): the recording lies between classes"))
+    if call_index is not None and len(probabilities):
+        far = [k for k in range(len(probabilities)) if abs(k - call_index) >= 2]
+        p_far = float(np.sum(np.asarray(probabilities, dtype=float)[far])) if far else 0.0
+        if p_far > CONFIDENT_MAX_FAR_PROBABILITY:
+            which = " or ".join(str(band_names[k]) for k in far) if len(band_names) == len(probabilities) else \
+                "bands two or more away"
+            reasons.append(Reason("far_band_probability", UNCERTAIN,
+                                  f"the model gives {p_far:.0%} to {which} — two or more bands from its call, more "
+                                  f"than the {CONFIDENT_MAX_FAR_PROBABILITY:.0%} a confident verdict allows: recheck, "
+                                  "or compare with this machine's baseline"))
     if alarm is not None and alarm[0] >= 0.5:
         reasons.append(Reason("below_alarm_threshold", UNCERTAIN,
                               f"misalignment is more likely than not ({alarm[0]:.0%}) but below the {alarm[1]:.0%} "
@@ -277,6 +311,12 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
                                   f"{SIGNATURE_MIN_2X_1X:g}): the classic signature is missing and nothing physical "
                                   "backs the model's call — compare with this machine's baseline, check the "
                                   "centreline, or re-record"))
+    elif not coupling_centreline_known(names, row):
+        reasons.append(Reason("offset_not_assessed", UNCERTAIN,
+                              "called aligned without the shaft-centreline position at the coupling bearings "
+                              "(it needs the bearing clearance and the probes' DC gaps): a stationary shaft-line "
+                              "offset shows mainly there and changes the vibration little, so it is not ruled out "
+                              "— give clearance_um and DC-coupled gaps, or compare with this machine's baseline"))
     if not class_delta_agree:
         reasons.append(Reason("class_delta_disagree", UNCERTAIN,
                               "the severity classifier and the Δ regressor disagree (the regressor's interval does "

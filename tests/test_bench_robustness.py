@@ -221,3 +221,21 @@ def test_f1_of_delta_error_falls_with_the_error():
     large = bench.f1_of_delta_error(0.03, 48, edges, draws=100)[0]
     assert lo <= small <= hi
     assert large < small - 0.05
+
+
+def test_confident_summary_counts_gross_errors_of_confident_verdicts_only():
+    O = bench.Outcome
+    names, edges = ["aligned", "slight", "moderate", "severe"], np.array([0.05, 0.15, 0.35])
+    outs = [O(0.0, "aligned", status="confident", severity="aligned"),
+            O(0.3, "pin", status="confident", severity="aligned"),              # moderate shown aligned
+            O(0.0, "aligned", status="confident", severity="severe"),            # aligned shown severe
+            O(0.1, "rigid", status="confident", severity="moderate"),            # one band off
+            O(0.5, "offset", status="uncertain", severity="aligned"),            # not confident: not counted
+            O(0.5, "offset", status="inconclusive", severity="inconclusive")]
+    c = bench.confident_summary(outs, names, edges)
+    assert c["n"] == 4 and c["exact"] == 0.25 and c["within_one"] == 0.5
+    assert (c["off2"], c["missed"], c["false_severe"]) == (2, 1, 1)
+    assert c["cases"] == [("pin", 0.3, "aligned"), ("aligned", 0.0, "severe")]
+    text = bench.confident_table({"x": {"n": 6, "confident": c}})
+    assert "| x | 4 of 6 | 25% | 50.0% | 2 | 1 | 1 | pin Δ 0.30 → aligned, aligned Δ 0.00 → severe |" in text
+    assert bench.confident_summary([], names, edges)["exact"] is None

@@ -24,10 +24,16 @@ def test_disagreement_is_reported():
 
 
 def _assess(**kw):
+    """assess() on a plain aligned call; ``names``/``row`` given without the coupling-bearing centreline
+    get one appended (measured: 0.3 c at bearing 2), so that only the rule under test speaks."""
     base = dict(sanity=(), ood_score=0.3, probabilities=[0.9, 0.05, 0.03, 0.02], class_delta_agree=True,
                 names=["b2_1x_major_um_pp"], row=np.array([30.0]), feature_median=np.array([30.0]),
                 never_missing=[], speed_source="given", warnings=[])
     base.update(kw)
+    if "b2_centre_ecc_per_c" not in base["names"]:
+        base["names"] = [*base["names"], "b2_centre_ecc_per_c"]
+        base["row"] = np.append(base["row"], 0.3)
+        base["feature_median"] = np.append(base["feature_median"], 0.3)
     return assess(**base)
 
 
@@ -76,7 +82,8 @@ def test_aligned_below_the_alarm_threshold_is_uncertain_and_says_why():
     from rotordiag.models.status import UNCERTAIN, assess
 
     common = dict(sanity=(), ood_score=0.2, probabilities=[0.9, 0.05, 0.03, 0.02], class_delta_agree=True,
-                  names=["a"], row=np.array([1.0]), feature_median=np.array([1.0]), never_missing=[],
+                  names=["a", "b3_centre_ecc_per_c"], row=np.array([1.0, 0.4]), feature_median=np.array([1.0, 0.4]),
+                  never_missing=[],
                   speed_source="given", warnings=[])
     status, reasons = assess(**common, alarm=(0.72, 0.82))
     assert status == UNCERTAIN and [r.code for r in reasons] == ["below_alarm_threshold"]
@@ -101,6 +108,69 @@ def test_a_misalignment_call_without_the_coupling_2x_is_not_confident():
     assert run([0.001, 0.3, 0.0, 0.0], True) == ("confident", [])
     status, reasons = run([np.nan, np.nan, np.nan, 0.5], True)
     assert status == UNCERTAIN and "not measured" in reasons[0].message
+
+
+def test_an_aligned_call_without_the_coupling_centreline_is_not_confident():
+    """A stationary shaft-line offset shows mainly in the centreline position per clearance: without the
+    clearance (or without DC gaps) the shipped model called 9 of 48 moderate/severe offsets "aligned,
+    confident" (docs/robustness.md, clearance unknown). Such an aligned call is uncertain and says what to give;
+    one coupling bearing's centreline is enough; a misalignment call does not need it."""
+    names = ["b2_1x_major_um_pp", "b2_centre_ecc_per_c", "b3_centre_ecc_per_c", "b1_centre_ecc_per_c"]
+    med = np.array([30.0, 0.3, 0.3, 0.3])
+
+    def run(ecc, call=False):
+        return _assess(names=names, row=np.array([30.0, *ecc]), feature_median=med, misaligned_call=call,
+                       probabilities=[0.05, 0.05, 0.1, 0.8] if call else [0.9, 0.05, 0.03, 0.02])
+
+    status, reasons = run([np.nan, np.nan, 0.4])                    # bearing 1's centreline does not count
+    assert status == UNCERTAIN and [r.code for r in reasons] == ["offset_not_assessed"]
+    assert "clearance_um" in reasons[0].message and "stationary shaft-line offset" in reasons[0].message
+    assert run([np.nan, 0.4, np.nan]) == ("confident", [])
+    assert run([0.2, 0.4, 0.4]) == ("confident", [])
+    assert _assess(names=["b2_1x_major_um_pp", "b2_x_2x_1x_ratio", "b2_centre_ecc_per_c"],
+                   row=np.array([30.0, 1.0, np.nan]), feature_median=np.array([30.0, 0.5, 0.3]),
+                   misaligned_call=True, probabilities=[0.05, 0.05, 0.1, 0.8]) == ("confident", [])
+
+
+def test_shipped_model_does_not_rule_out_an_offset_without_the_clearance():
+    """The healthy default plant: with the clearance the centreline is measured and "aligned" stands on it;
+    without it the same recording is called aligned but not confidently, and the reason says what to give."""
+    from pathlib import Path
+
+    from rotordiag.features import ProbeChannel, Recording, extract_features
+    from rotordiag.models.predict import diagnose, load_bundle
+    from tests.service_util import simulated_channels
+
+    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
+    if not (root / "active").exists():
+        pytest.skip("no shipped registry in this checkout")
+    bundle = load_bundle(root)
+    fs, ch = simulated_channels(misalignment=0.0)
+    verdicts = {}
+    for clearance in (350.0, None):
+        rec = Recording(fs, [ProbeChannel(b, a, "um", d) for b, a, d in ch], speed_rpm=1800.0, clearance_um=clearance)
+        verdicts[clearance] = diagnose(bundle, extract_features(rec))
+    with_c, without = verdicts[350.0], verdicts[None]
+    assert with_c.model_severity == without.model_severity == "aligned"
+    assert "offset_not_assessed" not in [r["code"] for r in with_c.reasons]
+    assert without.status != "confident" and "offset_not_assessed" in [r["code"] for r in without.reasons]
+
+
+def test_a_call_with_probability_two_bands_away_is_not_confident():
+    """Confident needs at most 10 % on the bands two or more from the call: the confident gross errors of
+    docs/robustness.md (moderate/severe shown aligned) had 12–34 % there."""
+    names = ["aligned", "slight", "moderate", "severe"]
+    status, reasons = _assess(probabilities=[0.75, 0.01, 0.2, 0.04], call_index=0, band_names=names)
+    assert status == UNCERTAIN and [r.code for r in reasons] == ["far_band_probability"]
+    assert "24% to moderate or severe" in reasons[0].message
+    assert _assess(probabilities=[0.75, 0.16, 0.06, 0.03], call_index=0, band_names=names)[0] == "confident"
+    assert _assess(probabilities=[0.06, 0.04, 0.2, 0.7], call_index=3, band_names=names)[0] == "confident"
+    status, reasons = _assess(probabilities=[0.06, 0.06, 0.18, 0.7], call_index=3, band_names=names)
+    assert status == UNCERTAIN and "12% to aligned or slight" in reasons[0].message
+    assert _assess(probabilities=[0.3, 0.65, 0.05, 0.0], call_index=1, band_names=names)[0] == "confident"
+    status, reasons = _assess(probabilities=[0.1, 0.65, 0.1, 0.15], call_index=1, band_names=names)
+    assert status == UNCERTAIN and "15% to severe" in reasons[0].message
+    assert _assess(probabilities=[0.75, 0.01, 0.2, 0.04])[0] == "confident"   # no call given: rule not applied
 
 
 def test_outside_training_reasons_say_which_feature_in_plain_words_with_units():
