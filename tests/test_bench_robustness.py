@@ -239,3 +239,26 @@ def test_confident_summary_counts_gross_errors_of_confident_verdicts_only():
     text = bench.confident_table({"x": {"n": 6, "confident": c}})
     assert "| x | 4 of 6 | 25% | 50.0% | 2 | 1 | 1 | pin Δ 0.30 → aligned, aligned Δ 0.00 → severe |" in text
     assert bench.confident_summary([], names, edges)["exact"] is None
+
+
+# ----------------------------------------------------------------- bench_learning_curve.py
+lc = _load("bench_learning_curve")
+
+
+def test_plant_subset_keeps_whole_plants_and_is_seeded():
+    plant_id = np.repeat(np.arange(40), 3)                       # three augmented rows per plant
+    keep = lc.plant_subset(plant_id, 0.25)
+    kept = np.unique(plant_id[keep])
+    assert len(kept) == 10 and keep.sum() == 30
+    assert all(keep[plant_id == p].all() for p in kept)
+    assert np.array_equal(keep, lc.plant_subset(plant_id, 0.25))
+    assert not np.array_equal(keep, lc.plant_subset(plant_id, 0.25, seed=2))
+    assert set(np.unique(plant_id[lc.plant_subset(plant_id, 0.5)])) >= set(kept)   # nested: one permutation
+
+
+def test_merged_changes_nested_tables_without_touching_the_base():
+    base = {"seed": 0, "classifier": {"max_iter": 150, "learning_rate": 0.1}, "ood": {"max_reference": 3000}}
+    out = lc.merged(base, {"classifier": {"max_iter": 400}})
+    assert out == {"seed": 0, "classifier": {"max_iter": 400, "learning_rate": 0.1}, "ood": {"max_reference": 3000}}
+    assert base["classifier"]["max_iter"] == 150
+    assert set(lc.VARIANTS) >= {"all plants", "25 % of the plants", "50 % of the plants"}

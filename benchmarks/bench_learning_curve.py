@@ -1,0 +1,153 @@
+"""Does more data or a bigger model lower the Δ error? A learning curve and model-size variants.
+
+    .venv/bin/python benchmarks/bench_learning_curve.py [--data data/default] [--n 48]
+        [--cache /tmp/rotordiag_bench_robustness] [--variants all]
+
+Trains ``MisalignmentModel`` s with ``models.train.fit_final`` on the shipped model's training parts
+(``make default-model`` writes them to ``data/default``; the feature cache next to them is used) and the
+shipped ``models/default/train.toml``, changed per variant (:data:`VARIANTS`: a fraction of the plants,
+chosen with a fixed seed, or more / larger trees). Each is scored on the robustness report's clean
+recordings (``bench_robustness``: base sets of seeds 815 and 816 and the far plants of seed 815,
+simulated or read from ``--cache``): the Δ estimate's mean absolute error on each mechanism's
+misaligned cases and the classifier's macro-F1 per mechanism. The shipped model is scored beside them.
+It answers what a per-mechanism F1 target asks for (docs/models.md, "What would a rigid macro-F1 of
+0.95 take?"). Several minutes per variant on two cores.
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bench_robustness as br  # noqa: E402
+
+#: variant name → (fraction of the training plants, changes to train.toml)
+VARIANTS: dict[str, tuple[float, dict]] = {
+    "25 % of the plants": (0.25, {}),
+    "50 % of the plants": (0.5, {}),
+    "all plants": (1.0, {}),
+    "300 iterations": (1.0, {"classifier": {"max_iter": 300}, "regressor": {"max_iter": 300}}),
+    "400 iterations, learning rate 0.05, 31 leaves": (1.0, {
+        "classifier": {"max_iter": 400, "learning_rate": 0.05, "max_leaf_nodes": 31},
+        "regressor": {"max_iter": 400, "learning_rate": 0.05}}),
+}
+#: (simulated set, seed, bench_robustness condition) scored: the report's ``clean`` and ``far plants`` rows (the
+#: same measurement, each with its own noise draws)
+EVAL_SETS: tuple[tuple[str, int, str], ...] = (("base", 815, "clean"), ("base", 816, "clean"),
+                                               ("far", 815, "far plants (÷2…×2)"))
+PLANT_SEED = 1
+
+
+def merged(base: dict, changes: dict) -> dict:
+    """``base`` with ``changes`` applied (nested tables merged, not replaced)."""
+    out = copy.deepcopy(base)
+    for k, v in changes.items():
+        out[k] = merged(out.get(k, {}), v) if isinstance(v, dict) else v
+    return out
+
+
+def plant_subset(plant_id: np.ndarray, fraction: float, seed: int = PLANT_SEED) -> np.ndarray:
+    """Rows of a seeded ``fraction`` of the plants (whole plants, so augmented copies stay together)."""
+    plants = np.unique(plant_id)
+    keep = np.random.default_rng(seed).permutation(plants)[:int(fraction * len(plants))]
+    return np.isin(plant_id, keep)
+
+
+def eval_rows(names: list[str], n: int, cache: Path) -> dict[tuple[str, int], tuple[np.ndarray, ...]]:
+    """Feature rows (X, Δ, mechanism) of each :data:`EVAL_SETS` set, measured as in bench_robustness."""
+    from rotordiag.features import ProbeChannel, Recording, extract_features
+    from rotordiag.models.predict import feature_vector
+
+    out = {}
+    for sim_set, seed, cond_name in EVAL_SETS:
+        k_cond, cond = next((k, c) for k, c in enumerate(br.CONDITIONS) if c.name == cond_name)
+        cases, disps = br.simulate_set(sim_set, n, seed, cache)
+        X, delta, mech = [], [], []
+        for i, (c, d) in enumerate(zip(cases, disps)):
+            if d is None:
+                continue
+            w = br.measure(d, c["speed_rpm"], cond, np.random.default_rng([seed, k_cond, i]))
+            chans = [ProbeChannel(b, a, "um", w[2 * k + j]) for k, b in enumerate(cond.bearings)
+                     for j, a in enumerate(br.ANGLES_DEG)]
+            fr = extract_features(Recording(sample_rate_hz=br.FS_HZ, channels=chans, speed_rpm=c["speed_rpm"],
+                                            clearance_um=c["plant"]["clearance_m"] * 1e6))
+            X.append(feature_vector(names, fr)[0])
+            delta.append(c["misalignment"])
+            mech.append(c["label_mechanism"])
+        out[(sim_set, seed)] = (np.array(X), np.array(delta), np.array(mech, dtype=object))
+    return out
+
+
+def score(model, rows) -> dict[tuple[str, int], dict[str, tuple[float, float]]]:
+    """Per set and mechanism: (Δ MAE on its misaligned cases, macro-F1 with the aligned ones)."""
+    from sklearn.metrics import f1_score
+
+    edges = np.asarray(model.bands_.edges, dtype=float)
+    out = {}
+    for key, (X, delta, mech) in rows.items():
+        cls = model.band_index(model.predict_proba(X))
+        point = model.predict_misalignment(X)[0]
+        truth = np.searchsorted(edges, delta, side="right")
+        per = {}
+        for m in br.MECHANISMS:
+            sel = (mech == m) | (delta == 0)
+            per[m] = (float(np.mean(np.abs(point[mech == m] - delta[mech == m]))),
+                      float(f1_score(truth[sel], cls[sel], average="macro", labels=np.unique(truth[sel]))))
+        out[key] = per
+    return out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    ap.add_argument("--data", type=Path, default=ROOT / "data" / "default")
+    ap.add_argument("--n", type=int, default=48)
+    ap.add_argument("--cache", type=Path, default=br.DEFAULT_CACHE)
+    ap.add_argument("--variants", default="all", help="comma-separated names of VARIANTS, or 'all'")
+    args = ap.parse_args(argv)
+
+    from rotordiag.models.config import TrainConfig
+    from rotordiag.models.dataset import load_feature_tables
+    from rotordiag.models.predict import load_bundle
+    from rotordiag.models.train import fit_final
+
+    text = (ROOT / "Makefile").read_text()
+    parts = text.split("DEFAULT_PARTS = ", 1)[1].splitlines()[0].split()
+    paths = [args.data / f"{p}.h5" for p in parts]
+    missing = [str(p) for p in paths if not p.exists()]
+    if missing:
+        raise SystemExit(f"training parts missing ({', '.join(missing[:3])} …): run `make default-model` first")
+    base = tomllib.loads((ROOT / "models" / "default" / "train.toml").read_text())
+    cfg0 = TrainConfig.from_dict(base)
+    table = load_feature_tables(paths, cache=True, augment=cfg0.augment).without_features(cfg0.exclude_features)
+    rows = eval_rows(list(table.feature_names), args.n, args.cache)
+    wanted = list(VARIANTS) if args.variants == "all" else [v.strip() for v in args.variants.split(",")]
+    results = {"shipped v0001": score(load_bundle(ROOT / "models" / "default_registry").model, rows)}
+    n_plants = {"shipped v0001": None}
+    for name in wanted:
+        fraction, changes = VARIANTS[name]
+        sub = table.subset(plant_subset(table.plant_id, fraction)) if fraction < 1 else table
+        t0 = time.perf_counter()
+        model = fit_final(sub, TrainConfig.from_dict(merged(base, changes)))
+        print(f"{name}: {len(sub)} rows, fitted in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
+        results[name], n_plants[name] = score(model, rows), len(np.unique(sub.plant_id))
+    sets = [f"{s} {seed}" for s, seed, _ in EVAL_SETS]
+    print("Δ MAE on the misaligned cases, " + " / ".join(br.MECHANISMS) + " (macro-F1 rigid)\n")
+    print("| model | plants | " + " | ".join(sets) + " |")
+    print("|---|---|" + "---|" * len(sets))
+    for name, res in results.items():
+        cells = [" / ".join(f"{res[k][m][0]:.3f}" for m in br.MECHANISMS) + f" ({res[k]['rigid'][1]:.2f})"
+                 for k in rows]
+        print(f"| {name} | {n_plants[name] or '–'} | " + " | ".join(cells) + " |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
