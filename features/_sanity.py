@@ -38,6 +38,10 @@ MAX_DC_UM = 10_000.0
 #: a journal cannot move further than the diametral clearance 2c; allow this factor for
 #: shaft runout, probe gain error and noise before calling an orbit impossible
 ORBIT_CLEARANCE_MARGIN = 1.1
+#: ... plus the peak-to-peak that the channels' broadband noise can add: 2·k·σ, with k the Gaussian quantile that
+#: one of the record's samples exceeds with this probability (white noise at 15 dB SNR on an oil-whip orbit at
+#: 0.9 × 2c reads 1.2-1.3 × 2c pk-pk)
+ORBIT_NOISE_FALSE_ALARM = 1e-3
 #: a channel whose samples sit at its own extreme value this often is clipped …
 CLIP_MIN_FRACTION = 0.02
 #: … provided that is this many times what a quantised sine would give (sampling resolution)
@@ -46,6 +50,9 @@ CLIP_EXCESS = 3.0
 REVERSE_WHIRL_INDEX = -0.2
 #: a 1X zero-to-peak amplitude below this multiple of its noise-equivalent amplitude is "in the noise"
 SYNC_MIN_SNR = 3.0
+#: a sub-synchronous share of the vibration power (``b{n}_subsync_frac``) above this at a bearing reads as oil
+#: whirl / whip dominating it
+WHIRL_DOMINANT_FRACTION = 0.5
 
 
 @dataclass(frozen=True)
@@ -108,6 +115,19 @@ def _channel_checks(rec: Recording) -> list[SanityFinding]:
     return out
 
 
+def noise_peak_to_peak_um(noise_rms_um, n_samples: int, false_alarm: float = ORBIT_NOISE_FALSE_ALARM) -> float:
+    """Peak-to-peak that white noise of the larger of ``noise_rms_um`` (σ, µm) adds to a record.
+
+    2·k·σ, with k such that a Gaussian sample exceeds ±kσ with probability ``false_alarm``
+    anywhere in ``n_samples`` samples (Bonferroni); 0 when σ is unknown."""
+    from scipy.special import ndtri
+
+    sigma = max((float(v) for v in noise_rms_um if np.isfinite(v)), default=0.0)
+    if sigma <= 0 or n_samples < 1:
+        return 0.0
+    return 2.0 * float(-ndtri(false_alarm / (2.0 * n_samples))) * sigma
+
+
 def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
     out: list[SanityFinding] = []
     for b, det in sorted(fr.bearings.items()):
@@ -116,12 +136,15 @@ def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
         c = float(det.clearance_um)
         units = sorted({ch.units for ch in rec.channels if ch.bearing == b})
         units_txt = "/".join(units)
-        if np.isfinite(c) and c > 0 and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c:
+        noise_pp = noise_peak_to_peak_um(det.noise_rms_um, x.size)
+        if np.isfinite(c) and c > 0 and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c + noise_pp:
+            allowance = (f" (allowing {noise_pp:.3g} µm pk-pk for the probes' noise)"
+                         if noise_pp > 0.01 * 2 * c else "")
             out.append(SanityFinding(
                 "orbit_exceeds_clearance", FAIL,
                 f"bearing {b}: the motion is {ptp:.4g} µm pk-pk, {ptp / (2 * c):.1f}× the diametral clearance "
-                f"2c = {2 * c:.4g} µm — a journal cannot move that far inside its bearing. Check the units "
-                f"(data declared in {units_txt!r}; µm read as mils is ×25.4), the probe sensitivity "
+                f"2c = {2 * c:.4g} µm{allowance} — a journal cannot move that far inside its bearing. Check the "
+                f"units (data declared in {units_txt!r}; µm read as mils is ×25.4), the probe sensitivity "
                 "(e.g. 7.87 mV/µm) and clearance_um (radial, in µm)", b))
         elif ptp > PROBE_RANGE_UM:
             out.append(SanityFinding(
@@ -177,6 +200,17 @@ def _signal_checks(fr) -> list[SanityFinding]:
         if np.all(a1 < SYNC_MIN_SNR * noise[:, 0]):
             weak.append(b)
     if weak and len(weak) == len(fr.bearings):
+        values = dict(zip(fr.names, fr.values))
+        whirl = [b for b in weak if float(values.get(f"b{b}_subsync_frac", np.nan)) > WHIRL_DOMINANT_FRACTION]
+        if whirl:
+            order = float(values.get(f"b{whirl[0]}_subsync_peak_order", np.nan))
+            at = f" near {order:.2f}X" if np.isfinite(order) else ""
+            return [SanityFinding("no_sync_signal", FAIL,
+                                  f"no 1X vibration stands out of the noise at any bearing, and sub-synchronous "
+                                  f"vibration{at} dominates at bearing(s) {', '.join(map(str, whirl))} — oil whirl or "
+                                  "whip, a fault to act on in itself (load, oil temperature, bearing clearance); "
+                                  "misalignment cannot be judged from this recording. Re-record with less noise "
+                                  "or a keyphasor, or once the machine runs stably")]
         return [SanityFinding("no_sync_signal", FAIL,
                               "no 1X vibration stands out of the noise at any bearing — the recording carries no "
                               "synchronous signal to diagnose (probes not reading the shaft, wrong speed, or a "
