@@ -241,6 +241,23 @@ def test_confident_summary_counts_gross_errors_of_confident_verdicts_only():
     assert bench.confident_summary([], names, edges)["exact"] is None
 
 
+
+def test_f1_on_right_speed_compares_the_same_recordings():
+    from types import SimpleNamespace
+
+    O = bench.Outcome
+    bands = SimpleNamespace(names=["aligned", "slight", "moderate", "severe"], edges=[0.05, 0.15, 0.35])
+    bundle = SimpleNamespace(model=SimpleNamespace(bands_=bands))
+    truth = [0.0, 0.1, 0.2, 0.5]
+    known = [O(d, "pin", model_class=c, speed_rpm=1800.0, speed_rpm_used=1800.0)
+             for d, c in zip(truth, ["aligned", "slight", "moderate", "severe"])]
+    unknown = [O(d, "pin", model_class=c, speed_rpm=1800.0, speed_rpm_used=u)
+               for d, c, u in zip(truth, ["aligned", "slight", "severe", "aligned"], [1801.0, 1799.0, 1802.0, 900.0])]
+    f_unknown, f_known, n = bench.f1_on_right_speed(bundle, unknown, known)
+    assert n == 3 and f_known == 1.0 and f_unknown < 1.0            # the 900 r/min estimate is left out
+    assert bench.f1_on_right_speed(bundle, unknown[3:], known[3:]) is None
+
+
 # ----------------------------------------------------------------- bench_learning_curve.py
 lc = _load("bench_learning_curve")
 
