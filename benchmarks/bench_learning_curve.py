@@ -61,6 +61,23 @@ def plant_subset(plant_id: np.ndarray, fraction: float, seed: int = PLANT_SEED) 
     return np.isin(plant_id, keep)
 
 
+def default_training_table(data: Path):
+    """(train.toml as a dict, feature table) of the shipped model's training parts in ``data`` (the Makefile's
+    ``DEFAULT_PARTS``, written there by ``make default-model``; features from the cache next to them)."""
+    from rotordiag.models.config import TrainConfig
+    from rotordiag.models.dataset import load_feature_tables
+
+    text = (ROOT / "Makefile").read_text()
+    parts = text.split("DEFAULT_PARTS = ", 1)[1].splitlines()[0].split()
+    paths = [data / f"{p}.h5" for p in parts]
+    missing = [str(p) for p in paths if not p.exists()]
+    if missing:
+        raise SystemExit(f"training parts missing ({', '.join(missing[:3])} …): run `make default-model` first")
+    base = tomllib.loads((ROOT / "models" / "default" / "train.toml").read_text())
+    cfg = TrainConfig.from_dict(base)
+    return base, load_feature_tables(paths, cache=True, augment=cfg.augment).without_features(cfg.exclude_features)
+
+
 def eval_rows(names: list[str], n: int, cache: Path) -> dict[tuple[str, int], tuple[np.ndarray, ...]]:
     """Feature rows (X, Δ, mechanism) of each :data:`EVAL_SETS` set, measured as in bench_robustness."""
     from rotordiag.features import ProbeChannel, Recording, extract_features
@@ -114,19 +131,10 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from rotordiag.models.config import TrainConfig
-    from rotordiag.models.dataset import load_feature_tables
     from rotordiag.models.predict import load_bundle
     from rotordiag.models.train import fit_final
 
-    text = (ROOT / "Makefile").read_text()
-    parts = text.split("DEFAULT_PARTS = ", 1)[1].splitlines()[0].split()
-    paths = [args.data / f"{p}.h5" for p in parts]
-    missing = [str(p) for p in paths if not p.exists()]
-    if missing:
-        raise SystemExit(f"training parts missing ({', '.join(missing[:3])} …): run `make default-model` first")
-    base = tomllib.loads((ROOT / "models" / "default" / "train.toml").read_text())
-    cfg0 = TrainConfig.from_dict(base)
-    table = load_feature_tables(paths, cache=True, augment=cfg0.augment).without_features(cfg0.exclude_features)
+    base, table = default_training_table(args.data)
     rows = eval_rows(list(table.feature_names), args.n, args.cache)
     wanted = list(VARIANTS) if args.variants == "all" else [v.strip() for v in args.variants.split(",")]
     results = {"shipped v0001": score(load_bundle(ROOT / "models" / "default_registry").model, rows)}

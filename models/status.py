@@ -33,7 +33,7 @@ import numpy as np
 __all__ = ["Reason", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY",
            "CONFIDENT_MAX_FAR_PROBABILITY",
-           "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "coupling_centreline_known", "describe_feature",
+           "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "coupling_centreline_known", "describe_feature", "far_band_probability",
            "envelope_reasons"]
 
 CONFIDENT = "confident"
@@ -220,6 +220,17 @@ def coupling_centreline_known(names: Sequence[str], row: np.ndarray) -> bool:
     return any(n in wanted and np.isfinite(row[i]) for i, n in enumerate(names))
 
 
+def far_band_probability(probabilities, call_index):
+    """Probability on the bands two or more from the called one.
+
+    ``probabilities``: shape (..., n_bands), columns in band order; ``call_index``: the called band, shape (...).
+    Returns an array of shape (...) (a float for one verdict)."""
+    p = np.asarray(probabilities, dtype=float)
+    call = np.asarray(call_index)
+    far = np.abs(np.arange(p.shape[-1]) - call[..., None]) >= 2
+    return np.sum(np.where(far, p, 0.0), axis=-1)
+
+
 def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float], class_delta_agree: bool,
            names: Sequence[str], row: np.ndarray, feature_median: np.ndarray,
            never_missing: Sequence[str], speed_source: str | None,
@@ -289,7 +300,7 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
                               f"{CONFIDENT_MIN_PROBABILITY:.0%}): the recording lies between classes"))
     if call_index is not None and len(probabilities):
         far = [k for k in range(len(probabilities)) if abs(k - call_index) >= 2]
-        p_far = float(np.sum(np.asarray(probabilities, dtype=float)[far])) if far else 0.0
+        p_far = float(far_band_probability(probabilities, call_index))
         if p_far > CONFIDENT_MAX_FAR_PROBABILITY:
             which = " or ".join(str(band_names[k]) for k in far) if len(band_names) == len(probabilities) else \
                 "bands two or more away"

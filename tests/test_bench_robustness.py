@@ -279,3 +279,28 @@ def test_merged_changes_nested_tables_without_touching_the_base():
     assert out == {"seed": 0, "classifier": {"max_iter": 400, "learning_rate": 0.1}, "ood": {"max_reference": 3000}}
     assert base["classifier"]["max_iter"] == 150
     assert set(lc.VARIANTS) >= {"all plants", "25 % of the plants", "50 % of the plants"}
+
+
+# ----------------------------------------------------------------- bench_status.py
+status_bench = _load("bench_status")
+
+
+def test_far_probability_and_confident_error_counts():
+    proba = np.array([[0.75, 0.01, 0.2, 0.04],     # aligned call, 24 % two or more bands away
+                      [0.7, 0.25, 0.05, 0.0],      # aligned call, 5 %
+                      [0.06, 0.06, 0.18, 0.7],     # severe call, 12 %
+                      [0.1, 0.65, 0.1, 0.15]])     # slight call, 15 % (severe only)
+    call = np.array([0, 0, 3, 1])
+    from rotordiag.models.status import far_band_probability
+
+    assert np.allclose(far_band_probability(proba, call), [0.24, 0.05, 0.12, 0.15])
+    assert far_band_probability(proba[0], 0) == pytest.approx(0.24)
+    truth = np.array([2, 0, 3, 1])
+    ood = np.array([False, False, False, True])
+    kw = dict(min_probability=0.6)
+    assert status_bench.confident_errors(proba, call, truth, ood, far_limit=None, aligned_allowed=True, **kw) == \
+        {"n": 3, "off2": 1, "right": 2}
+    assert status_bench.confident_errors(proba, call, truth, ood, far_limit=0.1, aligned_allowed=True, **kw) == \
+        {"n": 1, "off2": 0, "right": 1}
+    assert status_bench.confident_errors(proba, call, truth, ood, far_limit=None, aligned_allowed=False, **kw) == \
+        {"n": 1, "off2": 0, "right": 1}
