@@ -136,8 +136,9 @@ def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
         c = float(det.clearance_um)
         units = sorted({ch.units for ch in rec.channels if ch.bearing == b})
         units_txt = "/".join(units)
-        noise_pp = noise_peak_to_peak_um(det.noise_rms_um, x.size)
-        if np.isfinite(c) and c > 0 and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c + noise_pp:
+        beyond = bool(np.isfinite(c) and c > 0 and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c)
+        noise_pp = noise_peak_to_peak_um(det.noise_rms_um, x.size) if beyond else 0.0
+        if beyond and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c + noise_pp:
             allowance = (f" (allowing {noise_pp:.3g} µm pk-pk for the probes' noise)"
                          if noise_pp > 0.01 * 2 * c else "")
             out.append(SanityFinding(
