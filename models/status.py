@@ -14,8 +14,8 @@
   ``CONFIDENT_MAX_FAR_PROBABILITY`` on the bands two or more from the call, or a misalignment severity
   without the coupling bearings' 2X (2X/1X below ``SIGNATURE_MIN_2X_1X``: nothing physical
   backs the model's call), or "aligned" without the coupling bearings' shaft-centreline position
-  per clearance (no clearance given, or no DC gap): a stationary shaft-line offset shows mainly
-  there, so "aligned" cannot rule it out.
+  per clearance (no clearance given, or no DC reading referenced to the bearing centre): a stationary
+  shaft-line offset shows mainly there, so "aligned" cannot rule it out.
 - ``confident``: none of these.
 
 Class and Δ are consistent by construction (:func:`consistent_estimate`): the severity is
@@ -214,8 +214,9 @@ def coupling_2x_1x(names: Sequence[str], row: np.ndarray) -> float:
 def coupling_centreline_known(names: Sequence[str], row: np.ndarray) -> bool:
     """Whether the shaft-centreline eccentricity per clearance is measured at a coupling bearing.
 
-    It needs the bearing clearance and the probes' DC gaps (``b{n}_centre_ecc_per_c``, NaN
-    without either); a model without the feature never knows it."""
+    It needs the bearing clearance and DC probe readings referenced to the bearing centre
+    (``b{n}_centre_ecc_per_c`` is NaN without the clearance, or when the mean is a raw gap,
+    > 1.5 c from the probes' zero); a model without the feature never knows it."""
     wanted = {f"b{b}_centre_ecc_per_c" for b in COUPLING_BEARINGS}
     return any(n in wanted and np.isfinite(row[i]) for i, n in enumerate(names))
 
@@ -325,9 +326,10 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
     elif not coupling_centreline_known(names, row):
         reasons.append(Reason("offset_not_assessed", UNCERTAIN,
                               "called aligned without the shaft-centreline position at the coupling bearings "
-                              "(it needs the bearing clearance and the probes' DC gaps): a stationary shaft-line "
-                              "offset shows mainly there and changes the vibration little, so it is not ruled out "
-                              "— give clearance_um and DC-coupled gaps, or compare with this machine's baseline"))
+                              "(it needs the bearing clearance and DC probe readings referenced to the bearing "
+                              "centre; a raw gap is not a position): a stationary shaft-line offset shows mainly "
+                              "there and changes the vibration little, so it is not ruled out — give clearance_um "
+                              "and centre-referenced DC readings, or compare with this machine's baseline"))
     if not class_delta_agree:
         reasons.append(Reason("class_delta_disagree", UNCERTAIN,
                               "the severity classifier and the Δ regressor disagree (the regressor's interval does "

@@ -112,9 +112,10 @@ def test_a_misalignment_call_without_the_coupling_2x_is_not_confident():
 
 def test_an_aligned_call_without_the_coupling_centreline_is_not_confident():
     """A stationary shaft-line offset shows mainly in the centreline position per clearance: without the
-    clearance (or without DC gaps) the shipped model called 9 of 48 moderate/severe offsets "aligned,
-    confident" (docs/robustness.md, clearance unknown). Such an aligned call is uncertain and says what to give;
-    one coupling bearing's centreline is enough; a misalignment call does not need it."""
+    clearance (or without DC readings referenced to the bearing centre) the shipped model called 9 of 48
+    moderate/severe offsets "aligned, confident" (docs/robustness.md, clearance unknown). Such an aligned call
+    is uncertain and says what to give; one coupling bearing's centreline is enough; a misalignment call does
+    not need it."""
     names = ["b2_1x_major_um_pp", "b2_centre_ecc_per_c", "b3_centre_ecc_per_c", "b1_centre_ecc_per_c"]
     med = np.array([30.0, 0.3, 0.3, 0.3])
 
