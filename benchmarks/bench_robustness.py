@@ -347,13 +347,18 @@ def _bands(bundle):
     return list(b.names), np.asarray(b.edges, dtype=float)
 
 
+def _true_band(outs: list[Outcome], edges: np.ndarray) -> np.ndarray:
+    """Index of the severity band of each outcome's true Δ (lower-inclusive edges, as ``SeverityBands``)."""
+    return np.searchsorted(edges, np.array([o.delta for o in outs], dtype=float), side="right").astype(int)
+
+
 def summarize(bundle, outs: list[Outcome]) -> dict:
     """The row's figures for the model (``model``) and the rule (``rule``)."""
     from rotordiag.models.metrics import classification_metrics, regression_metrics
 
     names, edges = _bands(bundle)
     ran = [o for o in outs if o.status != "sim failed"]
-    truth = np.array([names[int(np.searchsorted(edges, o.delta, side="right"))] for o in ran], dtype=object)
+    truth = np.array(names, dtype=object)[_true_band(ran, edges)]
     delta = np.array([o.delta for o in ran])
     mech = np.array([o.mechanism for o in ran], dtype=object)
     row: dict = {"n": len(ran), "sim_failed": len(outs) - len(ran)}
@@ -400,7 +405,7 @@ def f1_on_right_speed(bundle, unknown: list[Outcome], known: list[Outcome]) -> t
              and abs(u.speed_rpm_used / u.speed_rpm - 1.0) <= SPEED_TOLERANCE]
     if not pairs:
         return None
-    truth = [names[int(np.searchsorted(edges, u.delta, side="right"))] for u, _ in pairs]
+    truth = [names[k] for k in _true_band([u for u, _ in pairs], edges)]
     return (classification_metrics(truth, [u.model_class for u, _ in pairs], names)["macro_f1"],
             classification_metrics(truth, [k.model_class for _, k in pairs], names)["macro_f1"], len(pairs))
 
@@ -412,7 +417,7 @@ def confident_summary(outs: list[Outcome], names: list[str], edges: np.ndarray) 
     ``false_severe``: an aligned machine shown as moderate or severe; ``cases``: (mechanism, Δ, shown)
     of the ``off2`` ones."""
     conf = [o for o in outs if o.status == "confident" and o.severity in names]
-    true = np.array([int(np.searchsorted(edges, o.delta, side="right")) for o in conf], dtype=int)
+    true = _true_band(conf, edges)
     shown = np.array([names.index(o.severity) for o in conf], dtype=int)
     off = np.abs(shown - true)
     return {"n": len(conf), "exact": float(np.mean(off == 0)) if conf else None,
