@@ -281,6 +281,23 @@ def test_merged_changes_nested_tables_without_touching_the_base():
     assert set(lc.VARIANTS) >= {"all plants", "25 % of the plants", "50 % of the plants"}
 
 
+def test_every_variant_is_a_valid_training_configuration():
+    """Each variant's changes merge into the shipped train.toml as a configuration the trainer accepts (a
+    misspelt key or a value out of range fails here, not after minutes of fitting)."""
+    import tomllib
+
+    from rotordiag.models.config import TrainConfig
+
+    base = tomllib.loads((lc.ROOT / "models" / "default" / "train.toml").read_text())
+    for name, (fraction, changes) in lc.VARIANTS.items():
+        assert 0 < fraction <= 1, name
+        cfg = TrainConfig.from_dict(lc.merged(base, changes))
+        for section, values in changes.items():
+            for key, value in values.items():
+                got = cfg.to_dict()[section][key]
+                assert got == value, (name, section, key, got)
+
+
 # ----------------------------------------------------------------- bench_status.py
 status_bench = _load("bench_status")
 
