@@ -18,6 +18,7 @@ Too few revolutions or samples per revolution (3X near Nyquist) are refused earl
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -115,7 +116,8 @@ def _channel_checks(rec: Recording) -> list[SanityFinding]:
     return out
 
 
-def noise_peak_to_peak_um(noise_rms_um, n_samples: int, false_alarm: float = ORBIT_NOISE_FALSE_ALARM) -> float:
+def noise_peak_to_peak_um(noise_rms_um: Iterable[float], n_samples: int,
+                         false_alarm: float = ORBIT_NOISE_FALSE_ALARM) -> float:
     """Peak-to-peak that white noise of the larger of ``noise_rms_um`` (σ, µm) adds to a record.
 
     2·k·σ, with k such that a Gaussian sample exceeds ±kσ with probability ``false_alarm``

@@ -221,15 +221,18 @@ def coupling_centreline_known(names: Sequence[str], row: np.ndarray) -> bool:
     return any(n in wanted and np.isfinite(row[i]) for i, n in enumerate(names))
 
 
-def far_band_probability(probabilities, call_index):
+def _far_bands(n_bands: int, call_index) -> np.ndarray:
+    """Mask, shape (..., n_bands), of the bands two or more from the called one (``call_index``, shape (...))."""
+    return np.abs(np.arange(n_bands) - np.asarray(call_index)[..., None]) >= 2
+
+
+def far_band_probability(probabilities: Sequence[float] | np.ndarray, call_index: int | np.ndarray) -> np.ndarray:
     """Probability on the bands two or more from the called one.
 
     ``probabilities``: shape (..., n_bands), columns in band order; ``call_index``: the called band, shape (...).
-    Returns an array of shape (...) (a float for one verdict)."""
+    Returns an array of shape (...) (a 0-d array for one verdict)."""
     p = np.asarray(probabilities, dtype=float)
-    call = np.asarray(call_index)
-    far = np.abs(np.arange(p.shape[-1]) - call[..., None]) >= 2
-    return np.sum(np.where(far, p, 0.0), axis=-1)
+    return np.sum(np.where(_far_bands(p.shape[-1], call_index), p, 0.0), axis=-1)
 
 
 def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float], class_delta_agree: bool,
@@ -300,10 +303,10 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
                               f"no severity class is likely enough (highest probability {pmax:.0%} < "
                               f"{CONFIDENT_MIN_PROBABILITY:.0%}): the recording lies between classes"))
     if call_index is not None and len(probabilities):
-        far = [k for k in range(len(probabilities)) if abs(k - call_index) >= 2]
+        far = np.flatnonzero(_far_bands(len(probabilities), call_index))
         p_far = float(far_band_probability(probabilities, call_index))
         if p_far > CONFIDENT_MAX_FAR_PROBABILITY:
-            which = " or ".join(str(band_names[k]) for k in far) if len(band_names) == len(probabilities) else \
+            which = " or ".join(str(band_names[int(k)]) for k in far) if len(band_names) == len(probabilities) else \
                 "bands two or more away"
             reasons.append(Reason("far_band_probability", UNCERTAIN,
                                   f"the model gives {p_far:.0%} to {which} — two or more bands from its call, more "
