@@ -39,10 +39,14 @@ VARIANTS: dict[str, tuple[float, dict]] = {
     "400 iterations, learning rate 0.05, 31 leaves": (1.0, {
         "classifier": {"max_iter": 400, "learning_rate": 0.05, "max_leaf_nodes": 31},
         "regressor": {"max_iter": 400, "learning_rate": 0.05}}),
-    # one model for both cases (the shipped clearance_dropout = 0.5) against one for each: every row with its
-    # clearance features (for recordings that state the clearance) / none with them (for those that do not)
-    "clearance dropout 0 (every row with the clearance)": (1.0, {"features": {"clearance_dropout": 0.0}}),
-    "clearance dropout 1 (no row with the clearance)": (1.0, {"features": {"clearance_dropout": 1.0}}),
+    # one classifier and Δ regressor for both clearance cases (v0001: the clearance features blanked in half the
+    # rows) against one model per case: every row with its clearance features (for recordings that state the
+    # clearance) / none with them (for those that do not); the shipped model has a pair per case (clearance_heads)
+    "one pair for both clearance cases (dropout 0.5, as v0001)": (1.0, {"features": {"clearance_heads": False}}),
+    "clearance dropout 0 (every row with the clearance)": (
+        1.0, {"features": {"clearance_heads": False, "clearance_dropout": 0.0}}),
+    "clearance dropout 1 (no row with the clearance)": (
+        1.0, {"features": {"clearance_heads": False, "clearance_dropout": 1.0}}),
 }
 #: (simulated set, seed, bench_robustness condition, column heading) scored: the report's ``clean``, ``far plants``
 #: and ``clearance unknown`` rows (the same measurement, each with its own noise draws)
@@ -118,7 +122,7 @@ def score(model, rows) -> dict[tuple[str, int, str], dict[str, tuple[float, floa
     edges = np.asarray(model.bands_.edges, dtype=float)
     out = {}
     for key, (X, delta, mech) in rows.items():
-        cls = model.band_index(model.predict_proba(X))
+        cls = model.band_index(model.predict_proba(X), X)
         point = model.predict_misalignment(X)[0]
         truth = np.searchsorted(edges, delta, side="right")
         per = {}

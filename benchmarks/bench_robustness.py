@@ -700,12 +700,14 @@ def main(argv=None) -> int:
     ap.add_argument("--ross-band", type=Path, default=Path(__file__).resolve().parent / "ross_band_set.npz",
                     help="the speed-band ROSS set (OOD table only)")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "robustness.md")
+    ap.add_argument("--registry", type=Path, default=ROOT / "models" / "default_registry",
+                    help="the model registry whose active model is measured (default: the shipped model)")
     args = ap.parse_args(argv)
 
     from rotordiag.models.predict import load_bundle
 
     t0 = time.perf_counter()
-    bundle = load_bundle(ROOT / "models" / "default_registry")
+    bundle = load_bundle(args.registry)
     sets = {s: simulate_set(s, args.n, args.seed, args.cache) for s in ("base", "presets", "far")}
     print(f"simulated/loaded in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
     rows: dict[str, dict] = {}

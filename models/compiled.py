@@ -214,6 +214,55 @@ def _softmax(raw: np.ndarray) -> np.ndarray:
     return e / e.sum(axis=1, keepdims=True)
 
 
+class _CompiledHead:
+    """One (classifier, Δ regressor) pair of the model, flattened."""
+
+    def __init__(self, model, clf, reg) -> None:
+        n = len(model.feature_names_)
+        self.clf = clf
+        self.reg = reg
+        self.ordinal = isinstance(clf, OrdinalSeverityClassifier)
+        if self.ordinal:
+            # One binary ensemble per band edge: its raw column is that edge's decision value.
+            self.calibrated = False
+            self.clf_forest = compile_forest(list(clf.models_), n)
+        else:
+            inner = clf.model_
+            self.calibrated = bool(clf.calibrated_)
+            boosted = inner.calibrated_classifiers_[0].estimator if self.calibrated else inner
+            self.clf_forest = compile_forest([boosted], n)
+        self.clf_blank = np.asarray(clf.sparse_columns_, bool)
+        self.clf_order = np.asarray(model.band_order(clf))
+        parts = [reg.point_model_, reg.center_model_] + ([reg.scale_model_] if reg.scale_model_ is not None else [])
+        self.reg_forest = compile_forest(parts, n)
+        self.reg_blank = np.asarray(reg.sparse_columns_, bool)
+
+    def proba_from_raw(self, raw: np.ndarray) -> np.ndarray:
+        if self.ordinal:
+            return self.clf.proba_from_scores(raw)[:, self.clf_order]
+        if self.calibrated:
+            proba = _calibrated_proba(self.clf.model_, raw)
+        else:
+            proba = _softmax(raw)
+        return proba[:, self.clf_order]
+
+    def predict_proba(self, X: np.ndarray) -> np.ndarray:
+        return self.proba_from_raw(raw_predict(self.clf_forest, _blank(X, self.clf_blank)))
+
+    def predict_misalignment(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        reg = self.reg
+        raw = raw_predict(self.reg_forest, _blank(X, self.reg_blank))
+        clip = (lambda v: v) if reg.lower_bound is None else (lambda v: np.maximum(v, reg.lower_bound))
+        point = clip(raw[:, 0])
+        centre = raw[:, 1]
+        scale = np.maximum(raw[:, 2], reg.scale_floor_) if raw.shape[1] > 2 else np.full(len(X), reg.scale_floor_)
+        with np.errstate(invalid="ignore"):
+            half = reg.conformity_quantile_ * scale
+        lo = np.minimum(centre - half, point)
+        hi = np.maximum(centre + half, point)
+        return point, np.column_stack([clip(lo), clip(hi)])
+
+
 class CompiledModel:
     """The inference methods of a fitted ``MisalignmentModel``, without per-call overhead.
 
@@ -224,30 +273,16 @@ class CompiledModel:
     Notes
     -----
     Inputs are not validated beyond shape: callers (:func:`models.predict.diagnose`)
-    build rows in the model's feature order.
+    build rows in the model's feature order. A model with a pair per clearance case
+    (``clearance_heads``) answers each row with its case's pair, as the model does.
     """
 
     def __init__(self, model) -> None:
         self.model = model
-        n = len(model.feature_names_)
-        self.n_features = n
-        clf = model.classifier_
-        self._ordinal = isinstance(clf, OrdinalSeverityClassifier)
-        if self._ordinal:
-            # One binary ensemble per band edge: its raw column is that edge's decision value.
-            self._calibrated = False
-            self._clf_forest = compile_forest(list(clf.models_), n)
-        else:
-            inner = clf.model_
-            self._calibrated = bool(clf.calibrated_)
-            boosted = inner.calibrated_classifiers_[0].estimator if self._calibrated else inner
-            self._clf_forest = compile_forest([boosted], n)
-        self._clf_blank = np.asarray(clf.sparse_columns_, bool)
-        self._clf_order = np.asarray(model.band_order())
-        reg = model.regressor_
-        parts = [reg.point_model_, reg.center_model_] + ([reg.scale_model_] if reg.scale_model_ is not None else [])
-        self._reg_forest = compile_forest(parts, n)
-        self._reg_blank = np.asarray(reg.sparse_columns_, bool)
+        self.n_features = len(model.feature_names_)
+        self._heads = {True: _CompiledHead(model, *model.heads(True))}
+        if getattr(model, "classifier_no_clearance_", None) is not None:
+            self._heads[False] = _CompiledHead(model, *model.heads(False))
         ood = model.ood_
         imputer, scaler = ood.preprocess_.named_steps["impute"], ood.preprocess_.named_steps["scale"]
         self._ood_fill = np.asarray(imputer.statistics_, float)
@@ -268,35 +303,28 @@ class CompiledModel:
             raise ValueError("Input X contains infinity or a value too large for dtype('float64').")
         return X
 
-    def _proba_from_raw(self, raw: np.ndarray) -> np.ndarray:
-        if self._ordinal:
-            return self.model.classifier_.proba_from_scores(raw)[:, self._clf_order]
-        if self._calibrated:
-            proba = _calibrated_proba(self.model.classifier_.model_, raw)
-        else:
-            proba = _softmax(raw)
-        return proba[:, self._clf_order]
+    def _cases(self, X: np.ndarray) -> list[tuple[np.ndarray, _CompiledHead]]:
+        if len(self._heads) == 1:
+            return [(np.ones(X.shape[0], dtype=bool), self._heads[True])]
+        stated = self.model.clearance_stated(X)
+        return [(rows, self._heads[case]) for rows, case in ((stated, True), (~stated, False)) if rows.any()]
 
     # -- the model's methods ---------------------------------------------------------------------
     def predict_proba(self, X) -> np.ndarray:
         """Severity probabilities in band order (as ``MisalignmentModel.predict_proba``)."""
-        X = _blank(self._rows(X), self._clf_blank)
-        return self._proba_from_raw(raw_predict(self._clf_forest, X))
+        X = self._rows(X)
+        out = np.empty((X.shape[0], len(self.model.bands_.names)))
+        for rows, head in self._cases(X):
+            out[rows] = head.predict_proba(X[rows])
+        return out
 
     def predict_misalignment(self, X) -> tuple[np.ndarray, np.ndarray]:
         """Δ point estimate and conformal interval (as ``MisalignmentModel.predict_misalignment``)."""
-        reg = self.model.regressor_
-        X = _blank(self._rows(X), self._reg_blank)
-        raw = raw_predict(self._reg_forest, X)
-        clip = (lambda v: v) if reg.lower_bound is None else (lambda v: np.maximum(v, reg.lower_bound))
-        point = clip(raw[:, 0])
-        centre = raw[:, 1]
-        scale = np.maximum(raw[:, 2], reg.scale_floor_) if raw.shape[1] > 2 else np.full(len(X), reg.scale_floor_)
-        with np.errstate(invalid="ignore"):
-            half = reg.conformity_quantile_ * scale
-        lo = np.minimum(centre - half, point)
-        hi = np.maximum(centre + half, point)
-        return point, np.column_stack([clip(lo), clip(hi)])
+        X = self._rows(X)
+        point, interval = np.empty(X.shape[0]), np.empty((X.shape[0], 2))
+        for rows, head in self._cases(X):
+            point[rows], interval[rows] = head.predict_misalignment(X[rows])
+        return point, interval
 
     def ood_ratio(self, X) -> np.ndarray:
         """k-th-neighbour distance / threshold (as ``MisalignmentModel.ood_ratio``)."""
@@ -313,21 +341,26 @@ class CompiledModel:
     def occlusion_proba(self, row: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Probabilities of ``row`` and of ``row`` with each feature set to its training median.
 
+        The row's clearance case (so its classifier) is that of ``row`` itself: setting one
+        feature to its median explains the answer the row got, it does not switch cases.
+
         Returns
         -------
         base : ndarray (n_bands,)
         occluded : ndarray (n_features, n_bands)
             Row ``j``: probabilities with feature ``j`` replaced by ``feature_median_[j]``.
         """
-        X = _blank(self._rows(row), self._clf_blank)
+        X = self._rows(row)
+        head = self._cases(X[:1])[0][1]
+        X = _blank(X, head.clf_blank)
         ref = self.model.feature_median_.astype(float).copy()
-        ref[self._clf_blank] = 0.0   # a blanked column is 0 whatever it is replaced with
-        raw_base = raw_predict(self._clf_forest, X)
-        base = self._proba_from_raw(raw_base)[0]
-        raw = occlusion_raw(self._clf_forest, X[0], ref)
+        ref[head.clf_blank] = 0.0   # a blanked column is 0 whatever it is replaced with
+        raw_base = raw_predict(head.clf_forest, X)
+        base = head.proba_from_raw(raw_base)[0]
+        raw = occlusion_raw(head.clf_forest, X[0], ref)
         # Features whose replacement moves no tree leave the raw scores, so the probabilities, as they were.
         changed = np.any(raw != raw_base, axis=1)
         occluded = np.repeat(base[None, :], raw.shape[0], axis=0)
         if changed.any():
-            occluded[changed] = self._proba_from_raw(raw[changed])
+            occluded[changed] = head.proba_from_raw(raw[changed])
         return base, occluded

@@ -15,6 +15,9 @@ Every section and key is optional; the defaults are the documented ones::
     clearance_features = ["*_per_c", "*_per_c2"]   # features that need the clearance
     clearance_dropout = 0.5     # share of training rows whose clearance features are
                                 # blanked, so the model also works without the clearance
+    clearance_heads = false     # a classifier and a Δ regressor for each case (with and
+                                # without the clearance); the dropout then shapes only the
+                                # OOD scorer, the envelope and the training medians
     monotonic_increasing = []   # patterns along which severity and Δ must not decrease
                                 # (needs kind = "ordinal")
 
@@ -62,7 +65,7 @@ _CLASSIFIERS = {"multiclass": SeverityClassifier, "ordinal": OrdinalSeverityClas
 
 DEFAULT_EXCLUDE: tuple[str, ...] = ("b?_[xy]_[123]x_phase_deg",)
 DEFAULT_CLEARANCE_FEATURES: tuple[str, ...] = ("*_per_c", "*_per_c2")
-_FEATURE_KEYS = {"exclude", "clearance_features", "clearance_dropout", "monotonic_increasing", "ood_features",
+_FEATURE_KEYS = {"exclude", "clearance_features", "clearance_dropout", "clearance_heads", "monotonic_increasing", "ood_features",
                  "ood_log_scales", "envelope_features", "envelope_upper_only"}
 _SECTIONS = {"seed", "bands", "features", "classifier", "regressor", "ood", "envelope", "evaluation", "baselines",
              "augment"}
@@ -86,6 +89,7 @@ class TrainConfig:
     exclude_features: tuple[str, ...] = DEFAULT_EXCLUDE
     clearance_features: tuple[str, ...] = DEFAULT_CLEARANCE_FEATURES
     clearance_dropout: float = 0.5
+    clearance_heads: bool = False
     monotonic_increasing: tuple[str, ...] = ()
     ood_features: tuple[str, ...] = ()
     ood_log_scales: dict[str, float] = field(default_factory=dict)
@@ -119,6 +123,9 @@ class TrainConfig:
         dropout = feats.get("clearance_dropout", 0.5)
         if not isinstance(dropout, (int, float)) or not (0.0 <= float(dropout) <= 1.0):
             raise ValueError(f"[features] clearance_dropout: must lie in [0, 1], got {dropout!r}")
+        heads = feats.get("clearance_heads", False)
+        if not isinstance(heads, bool):
+            raise ValueError(f"[features] clearance_heads: true or false, got {heads!r}")
         ev = dict(d.get("evaluation", {}))
         if set(ev) - {"n_splits", "speed_bands_rpm"}:
             raise ValueError(
@@ -172,6 +179,7 @@ class TrainConfig:
             exclude_features=tuple(str(p) for p in feats.get("exclude", DEFAULT_EXCLUDE)),
             clearance_features=tuple(str(p) for p in feats.get("clearance_features", DEFAULT_CLEARANCE_FEATURES)),
             clearance_dropout=float(dropout),
+            clearance_heads=heads,
             monotonic_increasing=tuple(mono),
             ood_features=tuple(ood_feats),
             ood_log_scales={str(k): float(v) for k, v in ood_log.items()},
@@ -219,6 +227,7 @@ class TrainConfig:
                 "exclude": list(self.exclude_features),
                 "clearance_features": list(self.clearance_features),
                 "clearance_dropout": self.clearance_dropout,
+                "clearance_heads": self.clearance_heads,
                 "monotonic_increasing": list(self.monotonic_increasing),
                 "ood_features": list(self.ood_features),
                 "ood_log_scales": dict(self.ood_log_scales),
@@ -234,8 +243,11 @@ class TrainConfig:
             "augment": self.augment.to_dict(),
         }
 
-    def make_model(self, feature_names):
-        """An unfitted :class:`~models.estimators.MisalignmentModel` with this configuration."""
+    def make_model(self, feature_names, *, clearance_seed: int | None = None):
+        """An unfitted :class:`~models.estimators.MisalignmentModel` with this configuration.
+
+        ``clearance_seed`` seeds the rows whose clearance features are blanked (default ``seed``).
+        """
         from .estimators import MisalignmentModel
 
         seeded = {"random_state": self.seed}
@@ -253,4 +265,8 @@ class TrainConfig:
             envelope_features=self.envelope_features,
             envelope_upper_only=self.envelope_upper_only,
             envelope=FeatureEnvelope(**{**seeded, **self.envelope}),
+            clearance_features=self.clearance_features,
+            clearance_dropout=self.clearance_dropout,
+            clearance_heads=self.clearance_heads,
+            random_state=self.seed if clearance_seed is None else clearance_seed,
         )

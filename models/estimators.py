@@ -81,6 +81,16 @@ def _blank(X: np.ndarray, columns: np.ndarray) -> np.ndarray:
     return X
 
 
+def blank_clearance(X: np.ndarray, columns: np.ndarray, share: float, seed: int) -> np.ndarray:
+    """Copy of X with the clearance ``columns`` set to NaN in a seeded ``share`` of the rows."""
+    X = np.array(X, dtype=float, copy=True)
+    if share <= 0 or not np.any(columns):
+        return X
+    rows = np.random.default_rng(seed).random(X.shape[0]) < share
+    X[np.ix_(np.asarray(rows), np.asarray(columns))] = np.nan
+    return X
+
+
 def _nan_tags(tags):
     tags.input_tags.allow_nan = True
     return tags
@@ -737,11 +747,33 @@ class MisalignmentModel(BaseEstimator):
         cleaner signal than in training is no reason for doubt).
     envelope : FeatureEnvelope or None
         Template (cloned at fit); ``None`` → ``FeatureEnvelope()``.
+    clearance_features : sequence of str, default=()
+        Glob patterns of the features that need the bearing clearance (``*_per_c``): a
+        recording *states the clearance* when any of them is finite. Needs ``feature_names``.
+    clearance_dropout : float, default=0.0
+        Share of the training rows (seeded by ``random_state``) whose clearance features are
+        blanked before the OOD scorer, the envelope and the training medians are fitted, so
+        that a recording without the clearance looks like the training data. With
+        ``clearance_heads=False`` the classifier and the regressor are fitted on the same
+        blanked rows (one model for both cases).
+    clearance_heads : bool, default=False
+        Fit a classifier and a Δ regressor for each case: ``classifier_`` / ``regressor_`` on
+        every row as given (clearance stated) and ``classifier_no_clearance_`` /
+        ``regressor_no_clearance_`` on every row with the clearance features blanked. Each
+        recording is answered by the pair of its case (:meth:`clearance_stated`). One model
+        for both cases loses accuracy on the recordings that state the clearance
+        (docs/models.md, the clearance-dropout variants of ``bench_learning_curve``).
+    random_state : int, default=0
+        Seed of the ``clearance_dropout`` rows.
 
     Attributes
     ----------
     bands_ : SeverityBands
     classifier_, regressor_, ood_ : fitted components
+    classifier_no_clearance_, regressor_no_clearance_ : fitted components or None
+        The pair for recordings without the clearance (``clearance_heads``), else None.
+    clearance_columns_ : ndarray of bool of shape (n_features,)
+        The columns ``clearance_features`` matched.
     feature_names_ : tuple of str
     feature_median_ : ndarray of shape (n_features,)
         Training median of each feature (NaN-ignoring), the reference value used to
@@ -762,6 +794,12 @@ class MisalignmentModel(BaseEstimator):
     envelope_features: Sequence[str] = ()
     envelope_upper_only: Sequence[str] = ()
     envelope: FeatureEnvelope | None = None
+    clearance_features: Sequence[str] = ()
+    clearance_dropout: float = 0.0
+    clearance_heads: bool = False
+    random_state: int = 0
+    classifier_no_clearance_: SeverityClassifier | OrdinalSeverityClassifier | None = None
+    regressor_no_clearance_: ConformalIntervalRegressor | None = None
 
     def __init__(
         self,
@@ -778,6 +816,10 @@ class MisalignmentModel(BaseEstimator):
         envelope_features: Sequence[str] = (),
         envelope_upper_only: Sequence[str] = (),
         envelope: FeatureEnvelope | None = None,
+        clearance_features: Sequence[str] = (),
+        clearance_dropout: float = 0.0,
+        clearance_heads: bool = False,
+        random_state: int = 0,
     ) -> None:
         self.band_edges = band_edges
         self.band_names = band_names
@@ -791,20 +833,52 @@ class MisalignmentModel(BaseEstimator):
         self.envelope_features = envelope_features
         self.envelope_upper_only = envelope_upper_only
         self.envelope = envelope
+        self.clearance_features = clearance_features
+        self.clearance_dropout = clearance_dropout
+        self.clearance_heads = clearance_heads
+        self.random_state = random_state
 
     @property
     def ordinal_(self) -> bool:
         """Whether the classifier is ordinal (its class is the median band, not the most probable)."""
         return isinstance(getattr(self, "classifier_", None), OrdinalSeverityClassifier)
 
-    def band_index(self, proba: np.ndarray) -> np.ndarray:
+    def band_index(self, proba: np.ndarray, X=None) -> np.ndarray:
         """The predicted band of each row of band probabilities: for an ordinal classifier the
         largest band whose edges all pass their thresholds (the median band with 0.5 thresholds;
-        monotone in the constrained features), else the most probable one."""
+        monotone in the constrained features), else the most probable one.
+
+        ``X`` (the rows' features) is needed when the model has a pair per clearance case
+        (``clearance_heads``): each case's classifier has its own thresholds.
+        """
         proba = np.atleast_2d(np.asarray(proba, dtype=float))
-        if self.ordinal_:
+        if not self.ordinal_:
+            return np.argmax(proba, axis=1)
+        if self.classifier_no_clearance_ is None:
             return self.classifier_.class_index(proba)
-        return np.argmax(proba, axis=1)
+        if X is None:
+            raise ValueError("band_index: this model has a classifier per clearance case; pass X, the rows' "
+                             "features, so that each row is read with its own case's thresholds")
+        stated = self.clearance_stated(X)
+        out = np.empty(proba.shape[0], dtype=int)
+        for case, clf in ((stated, self.classifier_), (~stated, self.classifier_no_clearance_)):
+            if case.any():
+                out[case] = clf.class_index(proba[case])
+        return out
+
+    def clearance_stated(self, X) -> np.ndarray:
+        """Per row, whether the recording states the clearance (any clearance feature finite), bool (n,)."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        cols = getattr(self, "clearance_columns_", None)
+        if cols is None or not cols.any():
+            return np.ones(X.shape[0], dtype=bool)
+        return np.isfinite(X[:, cols]).any(axis=1)
+
+    def heads(self, stated: bool):
+        """The ``(classifier, regressor)`` that answers recordings of one clearance case."""
+        if not stated and self.classifier_no_clearance_ is not None and self.regressor_no_clearance_ is not None:
+            return self.classifier_no_clearance_, self.regressor_no_clearance_
+        return self.classifier_, self.regressor_
 
     def __sklearn_tags__(self):
         return _nan_tags(super().__sklearn_tags__())
@@ -842,35 +916,59 @@ class MisalignmentModel(BaseEstimator):
             )
         self.classes_ = np.asarray(self.bands_.names, dtype=object)
         self.monotonic_cst_ = self._monotonic_cst()
+        self.clearance_columns_ = self._clearance_columns()
+        share = float(self.clearance_dropout)
+        if not 0.0 <= share <= 1.0:
+            raise ValueError(f"clearance_dropout: must lie in [0, 1], got {self.clearance_dropout!r}")
+        # What a recording without the clearance looks like, in the seeded share of the rows.
+        X_shared = blank_clearance(X, self.clearance_columns_, share, int(self.random_state))
+        self.classifier_no_clearance_ = self.regressor_no_clearance_ = None
+        if self.clearance_heads:
+            if not self.clearance_columns_.any():
+                raise ValueError("clearance_heads: needs clearance_features that match feature names")
+            self.classifier_, self.regressor_ = self._fit_heads(X, y, groups)
+            X_none = blank_clearance(X, self.clearance_columns_, 1.0, 0)
+            self.classifier_no_clearance_, self.regressor_no_clearance_ = self._fit_heads(X_none, y, groups)
+        else:
+            self.classifier_, self.regressor_ = self._fit_heads(X_shared, y, groups)
+        self.ood_columns_, self.ood_log_scale_ = self._ood_columns()
+        self.ood_ = clone(self.ood if self.ood is not None else KNNDistanceOOD())
+        self.ood_.fit(self.ood_input(X_shared), groups=groups)
+        self._fit_envelope(X_shared, groups)
+        nan = np.isnan(X_shared)
+        self.feature_nan_rate_ = nan.mean(axis=0)
+        with np.errstate(all="ignore"):
+            med = np.nanmedian(np.where(nan.all(axis=0), 0.0, X_shared), axis=0)
+        self.feature_median_ = np.where(np.isfinite(med), med, 0.0)
+        return self
+
+    def _fit_heads(self, X: np.ndarray, y: np.ndarray, groups) -> tuple:
+        """A fitted (classifier, Δ regressor) pair on rows X."""
         cst = self.monotonic_cst_ if self.monotonic_cst_.any() else None
-        self.classifier_ = clone(self.classifier if self.classifier is not None else SeverityClassifier())
-        if isinstance(self.classifier_, OrdinalSeverityClassifier):
+        clf = clone(self.classifier if self.classifier is not None else SeverityClassifier())
+        if isinstance(clf, OrdinalSeverityClassifier):
             # Band indices 0..K−1: numpy's sort order is the bands' order.
-            self.classifier_.set_params(monotonic_cst=cst)
+            clf.set_params(monotonic_cst=cst)
             # False alarms are bounded on perfectly aligned machines (Δ = 0), not on the aligned
             # band's near-edge rows, which are legitimately close to "slight".
-            self.classifier_.fit(X, self.bands_.index(y), groups=groups, healthy=(y == 0) if (y == 0).any() else None)
+            clf.fit(X, self.bands_.index(y), groups=groups, healthy=(y == 0) if (y == 0).any() else None)
         else:
             if cst is not None:
                 raise ValueError("monotonic_increasing: needs an OrdinalSeverityClassifier (a multiclass "
                                  "SeverityClassifier cannot take monotonic constraints)")
-            self.classifier_.fit(X, labels, groups=groups)
-        self.regressor_ = clone(
-            self.regressor if self.regressor is not None else ConformalIntervalRegressor(lower_bound=0.0)
-        )
+            clf.fit(X, self.bands_.label(y), groups=groups)
+        reg = clone(self.regressor if self.regressor is not None else ConformalIntervalRegressor(lower_bound=0.0))
         if cst is not None:
-            self.regressor_.set_params(monotonic_cst=cst)
-        self.regressor_.fit(X, y, groups=groups)
-        self.ood_columns_, self.ood_log_scale_ = self._ood_columns()
-        self.ood_ = clone(self.ood if self.ood is not None else KNNDistanceOOD())
-        self.ood_.fit(self.ood_input(X), groups=groups)
-        self._fit_envelope(X, groups)
-        nan = np.isnan(X)
-        self.feature_nan_rate_ = nan.mean(axis=0)
-        with np.errstate(all="ignore"):
-            med = np.nanmedian(np.where(nan.all(axis=0), 0.0, X), axis=0)
-        self.feature_median_ = np.where(np.isfinite(med), med, 0.0)
-        return self
+            reg.set_params(monotonic_cst=cst)
+        reg.fit(X, y, groups=groups)
+        return clf, reg
+
+    def _clearance_columns(self) -> np.ndarray:
+        import fnmatch
+
+        pats = tuple(str(p) for p in (self.clearance_features or ()))
+        cols = np.array([any(fnmatch.fnmatchcase(n, p) for p in pats) for n in self.feature_names_], dtype=bool)
+        return cols
 
     def _monotonic_cst(self) -> np.ndarray:
         import fnmatch
@@ -1021,27 +1119,43 @@ class MisalignmentModel(BaseEstimator):
             flags |= env.outside(self.envelope_input(X)).any(axis=1)
         return flags
 
-    def band_order(self) -> list[int]:
-        """Columns of the classifier's probabilities in band order."""
-        if isinstance(self.classifier_, OrdinalSeverityClassifier):
+    def band_order(self, classifier=None) -> list[int]:
+        """Columns of ``classifier``'s (default ``classifier_``) probabilities in band order."""
+        clf = self.classifier_ if classifier is None else classifier
+        if isinstance(clf, OrdinalSeverityClassifier):
             return list(range(len(self.bands_.names)))
-        return [list(self.classifier_.classes_).index(n) for n in self.bands_.names]
+        return [list(clf.classes_).index(n) for n in self.bands_.names]
+
+    def _cases(self, X: np.ndarray):
+        """``(rows, classifier, regressor)`` for each clearance case present in X."""
+        if self.classifier_no_clearance_ is None:
+            return [(np.ones(X.shape[0], dtype=bool), self.classifier_, self.regressor_)]
+        stated = self.clearance_stated(X)
+        return [(rows, *self.heads(case)) for rows, case in ((stated, True), (~stated, False)) if rows.any()]
 
     def predict_proba(self, X) -> np.ndarray:
-        """Severity probabilities, shape (n_samples, n_bands), columns in band order."""
+        """Severity probabilities, shape (n_samples, n_bands), columns in band order; each row from
+        its clearance case's classifier."""
         check_is_fitted(self, "classifier_")
         X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
-        return self.classifier_.predict_proba(X)[:, self.band_order()]
+        out = np.empty((X.shape[0], len(self.bands_.names)))
+        for rows, clf, _ in self._cases(X):
+            out[rows] = clf.predict_proba(X[rows])[:, self.band_order(clf)]
+        return out
 
     def predict(self, X) -> np.ndarray:
         """Severity band of each row (array of str): see :meth:`band_index`."""
-        return self.classes_[self.band_index(self.predict_proba(X))]
+        return self.classes_[self.band_index(self.predict_proba(X), X)]
 
     def predict_misalignment(self, X) -> tuple[np.ndarray, np.ndarray]:
-        """Δ estimate and its interval: ``(point (n,), interval (n, 2))``."""
+        """Δ estimate and its interval: ``(point (n,), interval (n, 2))``, each row from its
+        clearance case's regressor."""
         check_is_fitted(self, "regressor_")
         X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
-        return self.regressor_.predict(X), self.regressor_.predict_interval(X)
+        point, interval = np.empty(X.shape[0]), np.empty((X.shape[0], 2))
+        for rows, _, reg in self._cases(X):
+            point[rows], interval[rows] = reg.predict(X[rows]), reg.predict_interval(X[rows])
+        return point, interval
 
     def ood_ratio(self, X) -> np.ndarray:
         """OOD distance / threshold per row (> 1: unlike the training data)."""

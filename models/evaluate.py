@@ -24,6 +24,7 @@ from sklearn.model_selection import GroupKFold
 
 from .baselines import RatioThresholdClassifier, RuleOfThumb, ratio_column
 from .config import TrainConfig
+from .estimators import blank_clearance
 from .metrics import classification_metrics, regression_metrics
 from .table import FeatureTable
 
@@ -51,16 +52,6 @@ class OutOfFold:
     delta_no_clearance: np.ndarray | None = None
     interval_no_clearance: np.ndarray | None = None
     pred_no_clearance: np.ndarray | None = None
-
-
-def blank_clearance(X: np.ndarray, columns: np.ndarray, share: float, seed: int) -> np.ndarray:
-    """Copy of X with the clearance ``columns`` set to NaN in a seeded ``share`` of the rows."""
-    X = np.array(X, dtype=float, copy=True)
-    if share <= 0 or not columns.any():
-        return X
-    rows = np.random.default_rng(seed).random(X.shape[0]) < share
-    X[np.ix_(np.asarray(rows), np.asarray(columns))] = np.nan
-    return X
 
 
 def cross_validate(table: FeatureTable, config: TrainConfig) -> OutOfFold:
@@ -95,19 +86,19 @@ def cross_validate(table: FeatureTable, config: TrainConfig) -> OutOfFold:
     rule = RuleOfThumb(bands.names, config.rule_cuts)
     splitter = GroupKFold(n_splits=min(config.n_splits, n_groups), shuffle=True, random_state=config.seed)
     for f, (tr, te) in enumerate(splitter.split(table.X, labels, table.plant_id)):
-        model = config.make_model(table.feature_names)
-        Xtr = blank_clearance(table.X[tr], clear_cols, config.clearance_dropout, config.seed + 1000 + f)
-        model.fit(Xtr, table.misalignment[tr], groups=table.plant_id[tr])
+        # The model blanks the clearance features itself (config.clearance_dropout), seeded per fold.
+        model = config.make_model(table.feature_names, clearance_seed=config.seed + 1000 + f)
+        model.fit(table.X[tr], table.misalignment[tr], groups=table.plant_id[tr])
         out.fold[te] = f
         if out.proba_no_clearance is not None and out.delta_no_clearance is not None \
                 and out.interval_no_clearance is not None:
             Xnc = blank_clearance(table.X[te], clear_cols, 1.0, 0)
             out.proba_no_clearance[te] = model.predict_proba(Xnc)
             if out.pred_no_clearance is not None:
-                out.pred_no_clearance[te] = model.classes_[model.band_index(out.proba_no_clearance[te])]
+                out.pred_no_clearance[te] = model.classes_[model.band_index(out.proba_no_clearance[te], Xnc)]
             out.delta_no_clearance[te], out.interval_no_clearance[te] = model.predict_misalignment(Xnc)
         out.proba[te] = model.predict_proba(table.X[te])
-        out.pred["model"][te] = model.classes_[model.band_index(out.proba[te])]
+        out.pred["model"][te] = model.classes_[model.band_index(out.proba[te], table.X[te])]
         out.delta_pred["model"][te], out.interval[te] = model.predict_misalignment(table.X[te])
         out.ood_ratio[te] = model.ood_ratio(table.X[te])
         if out.ood_flag is not None:
@@ -205,7 +196,10 @@ def build_report(table: FeatureTable, config: TrainConfig, oof: OutOfFold) -> di
             "baseline_delta": "band representative of the predicted band",
             "clearance": "main results with the bearing clearance known (the *_per_c features); "
                          "'clearance_unknown' repeats the model's figures with those features blanked; "
-                         f"training rows had them blanked with probability {config.clearance_dropout}",
+                         + (f"one classifier and Δ regressor for each case (clearance_heads); the OOD "
+                            f"scorer's training rows had them blanked with probability {config.clearance_dropout}"
+                            if config.clearance_heads else
+                            f"training rows had them blanked with probability {config.clearance_dropout}"),
         },
         "bands": config.bands.to_dict(),
         "class_counts": {n: int(np.sum(oof.labels_true == n)) for n in config.bands.names},

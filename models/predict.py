@@ -169,6 +169,11 @@ def _contributions(model, fast, row: np.ndarray, cls: int, top_k: int) -> list[F
     else:
         trial = np.repeat(row[None, :], len(names), axis=0)
         trial[np.arange(len(names)), np.arange(len(names))] = ref
+        cols = getattr(model, "clearance_columns_", None)
+        if cols is not None and not model.clearance_stated(row[None, :])[0]:
+            # the row's own case answers every occluded copy (as the compiled path): a clearance
+            # feature given a median value would move the copy to the other case's classifier
+            trial[:, cols] = np.nan
         base = model.predict_proba(row[None, :])[0, cls]
         drops = base - model.predict_proba(trial)[:, cls]
     order = np.argsort(-np.abs(drops), kind="stable")[:top_k]
@@ -223,11 +228,14 @@ def diagnose(
         return _diagnose(bundle, feature_result, clearance_um=clearance_um, top_k=top_k)
 
 
-def _alarm(model, proba: np.ndarray, cls: int) -> tuple[float, float] | None:
-    """(P(misaligned), its threshold) when an ordinal model calls the machine aligned, else None."""
+def _alarm(model, proba: np.ndarray, cls: int, X: np.ndarray) -> tuple[float, float] | None:
+    """(P(misaligned), its threshold) when an ordinal model calls the machine aligned, else None;
+    the threshold is that of the classifier of the row's clearance case."""
     if cls != 0 or not getattr(model, "ordinal_", False):
         return None
-    thresholds = getattr(model.classifier_, "thresholds_", None)
+    heads = getattr(model, "heads", None)
+    clf = heads(bool(model.clearance_stated(X)[0]))[0] if heads is not None else model.classifier_
+    thresholds = getattr(clf, "thresholds_", None)
     if thresholds is None:
         return None
     return float(1.0 - proba[0]), float(thresholds[0])
@@ -261,7 +269,7 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     X = row[None, :]
     fast = fast_predictor(model)
     proba = fast.predict_proba(X)[0]
-    cls = int(model.band_index(proba)[0])
+    cls = int(model.band_index(proba, X)[0])
     point, interval = fast.predict_misalignment(X)
     ood_score = float(fast.ood_ratio(X)[0])
     findings = model.envelope_findings(X)[0] if hasattr(model, "envelope_findings") else []
@@ -291,7 +299,7 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
         sanity=getattr(feature_result, "sanity", ()) or (), ood_score=ood_score, probabilities=proba,
         class_delta_agree=agree, names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
         never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
-        warnings=warnings, alarm=_alarm(model, proba, cls), misaligned_call=band > 0, envelope=findings,
+        warnings=warnings, alarm=_alarm(model, proba, cls, X), misaligned_call=band > 0, envelope=findings,
         call_index=cls, band_names=[str(c) for c in model.classes_])
     shown: float | None = delta
     shown_iv: tuple[float | None, float | None] = (lo, hi)

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from .config import TrainConfig
-from .evaluate import METHODS, blank_clearance, evaluate, plot_report
+from .evaluate import METHODS, evaluate, plot_report
 from .registry import TRUSTED_TYPES, Registry, dumps_json
 from .table import FeatureTable
 
@@ -42,11 +42,10 @@ def metrics_summary(report: dict) -> dict:
 
 
 def fit_final(table: FeatureTable, config: TrainConfig):
-    """The deployable model: fitted on every row of ``table`` (clearance features blanked
-    in ``config.clearance_dropout`` of the rows, as in the evaluation)."""
-    X = blank_clearance(table.X, table.feature_mask(config.clearance_features),
-                        config.clearance_dropout, config.seed + 999)
-    return config.make_model(table.feature_names).fit(X, table.misalignment, groups=table.plant_id)
+    """The deployable model: fitted on every row of ``table`` (the clearance features handled as in
+    the evaluation: ``config.clearance_dropout`` and ``config.clearance_heads``)."""
+    model = config.make_model(table.feature_names, clearance_seed=config.seed + 999)
+    return model.fit(table.X, table.misalignment, groups=table.plant_id)
 
 
 def train_and_register(

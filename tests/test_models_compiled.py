@@ -110,3 +110,32 @@ def test_diagnose_uses_the_compiled_path_and_matches_the_plain_one():
     plain = _contributions(model, model, row, cls, top_k=len(row))
     compiled = _contributions(model, fast, row, cls, top_k=len(row))
     assert {c.name: round(c.contribution, 10) for c in plain} == {c.name: round(c.contribution, 10) for c in compiled}
+
+
+def test_a_pair_per_clearance_case_compiles_to_the_same_numbers():
+    t = make_table(n_plants=30, per_plant=8, seed=2, nan_rate=0.05)
+    cfg = TrainConfig.from_dict({
+        "classifier": {"kind": "ordinal", "max_iter": 25, "cv": 3}, "regressor": {"max_iter": 25},
+        "features": {"clearance_features": ["coupling_1x_phase_diff_deg", "*_per_clearance"],
+                     "clearance_heads": True}})
+    model = cfg.make_model(t.feature_names).fit(t.X, t.misalignment, groups=t.plant_id)
+    fast = CompiledModel(model)
+    X = _queries()
+    X[2::3, model.clearance_columns_] = np.nan          # a third of the rows without the clearance
+    stated = model.clearance_stated(X)
+    assert stated.any() and not stated.all()
+    np.testing.assert_allclose(fast.predict_proba(X), model.predict_proba(X), rtol=0, atol=1e-12)
+    for a, b in zip(fast.predict_misalignment(X), model.predict_misalignment(X)):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+    # explanations: the compiled occlusion equals the plain one for both cases (a row without the
+    # clearance is explained by its own pair, not moved to the other by a median clearance feature)
+    for i in (2, 3, 5, 8):
+        row = X[i]
+        cls = int(model.band_index(model.predict_proba(row[None]), row[None])[0])
+        plain = _contributions(model, model, row, cls, top_k=len(row))
+        compiled = _contributions(model, fast, row, cls, top_k=len(row))
+        assert {c.name: round(c.contribution, 10) for c in plain} == \
+            {c.name: round(c.contribution, 10) for c in compiled}
+        verdict = diagnose(model, SimpleNamespace(names=FEATURE_NAMES, values=row))
+        np.testing.assert_allclose(list(verdict.probabilities.values()), model.predict_proba(row[None])[0],
+                                   atol=1e-12)

@@ -310,3 +310,86 @@ def test_derived_attitude_features_follow_the_centreline():
     assert np.isnan(vals[1]).all()                                     # ε > 1: not a position inside the bearing
     assert np.isnan(vals[2]).all()                                     # ε = 0.002: centred, no attitude to read
     assert vals[3, 0] == pytest.approx(0.0)                            # ε = 0.06 ≥ ATTITUDE_MIN_ECC: read
+
+
+# ---------------------------------------------------------------- a pair per clearance case
+CLEARANCE = ("coupling_1x_phase_diff_deg", "*_per_clearance")   # the phase feature carries Δ: the cases differ
+
+
+def _clearance_model(heads: bool, dropout: float = 0.5, seed: int = 3, **clearance):
+    from rotordiag.models.ordinal import OrdinalSeverityClassifier
+
+    t = make_table(n_plants=40, per_plant=10, seed=11, nan_rate=0.02)
+    m = MisalignmentModel(
+        classifier=OrdinalSeverityClassifier(max_iter=40, cv=3),
+        regressor=ConformalIntervalRegressor(max_iter=40, lower_bound=0.0),
+        feature_names=FEATURE_NAMES,
+        **({"clearance_features": CLEARANCE, "clearance_dropout": dropout, "clearance_heads": heads,
+            "random_state": seed} | clearance),
+    ).fit(t.X, t.misalignment, groups=t.plant_id)
+    return m, t
+
+
+def _mixed_queries(model):
+    from rotordiag.models.estimators import blank_clearance
+
+    q = make_table(n_plants=10, per_plant=8, seed=12)
+    Xn = blank_clearance(q.X, model.clearance_columns_, 1.0, 0)
+    X = q.X.copy()
+    X[1::2] = Xn[1::2]                                   # every other recording without the clearance
+    return X, q
+
+
+def test_each_recording_is_answered_by_its_clearance_cases_pair():
+    m, _ = _clearance_model(heads=True)
+    assert m.classifier_no_clearance_ is not None and m.regressor_no_clearance_ is not None
+    X, q = _mixed_queries(m)
+    stated = m.clearance_stated(X)
+    assert stated.tolist() == [i % 2 == 0 for i in range(len(X))]
+    proba = m.predict_proba(X)
+    np.testing.assert_array_equal(proba[stated], m.classifier_.predict_proba(X[stated]))
+    np.testing.assert_array_equal(proba[~stated], m.classifier_no_clearance_.predict_proba(X[~stated]))
+    point, iv = m.predict_misalignment(X)
+    np.testing.assert_array_equal(point[~stated], m.regressor_no_clearance_.predict(X[~stated]))
+    np.testing.assert_array_equal(iv[stated], m.regressor_.predict_interval(X[stated]))
+    # each case's own thresholds; without the rows' features the band cannot be read
+    band = m.band_index(proba, X)
+    assert band[stated].tolist() == m.classifier_.class_index(proba[stated]).tolist()
+    assert band[~stated].tolist() == m.classifier_no_clearance_.class_index(proba[~stated]).tolist()
+    assert m.predict(X).tolist() == m.classes_[band].tolist()
+    with pytest.raises(ValueError, match="pass X"):
+        m.band_index(proba)
+    # the no-clearance pair never reads the clearance features, even when a row has them
+    np.testing.assert_array_equal(m.classifier_no_clearance_.predict_proba(q.X),
+                                  m.classifier_no_clearance_.predict_proba(np.where(m.clearance_columns_, np.nan, q.X)))
+    # and the stated case is what the clearance buys: its Δ error is smaller than the other pair's
+    err_stated = np.mean(np.abs(m.regressor_.predict(q.X) - q.misalignment))
+    err_none = np.mean(np.abs(m.regressor_no_clearance_.predict(q.X) - q.misalignment))
+    assert err_stated < 0.7 * err_none
+
+
+def test_one_pair_for_both_cases_is_the_pair_fitted_on_the_dropout_rows():
+    from rotordiag.models.estimators import blank_clearance
+
+    one, t = _clearance_model(heads=False)
+    assert one.classifier_no_clearance_ is None
+    plain = MisalignmentModel(**{k: v for k, v in one.get_params(deep=False).items()
+                                 if not k.startswith("clearance") and k != "random_state"})
+    plain.fit(blank_clearance(t.X, one.clearance_columns_, 0.5, 3), t.misalignment, groups=t.plant_id)
+    X, _ = _mixed_queries(one)
+    np.testing.assert_array_equal(one.predict_proba(X), plain.predict_proba(X))
+    np.testing.assert_array_equal(one.predict_misalignment(X)[1], plain.predict_misalignment(X)[1])
+    np.testing.assert_array_equal(one.ood_ratio(X), plain.ood_ratio(X))
+    np.testing.assert_array_equal(one.feature_nan_rate_, plain.feature_nan_rate_)
+    # with a pair per case, the OOD scorer and the medians stay those of the dropout rows
+    two, _ = _clearance_model(heads=True)
+    np.testing.assert_array_equal(two.ood_ratio(X), one.ood_ratio(X))
+    np.testing.assert_array_equal(two.feature_median_, one.feature_median_)
+    assert not np.array_equal(two.predict_misalignment(X)[0], one.predict_misalignment(X)[0])
+
+
+def test_clearance_heads_need_clearance_features():
+    with pytest.raises(ValueError, match="clearance_heads"):
+        _clearance_model(heads=True, clearance_features=("nothing_matches_*",))
+    with pytest.raises(ValueError, match="clearance_dropout"):
+        _clearance_model(heads=False, dropout=1.5)

@@ -159,6 +159,8 @@ def test_evaluation_needs_two_plants():
         ({"bands": {"edges": [0.1, 0.2]}}, "bands.names"),
         ({"bands": {"edges": [0.1], "names": ["ok", "bad"]}}, "rule_cuts"),
         ({"classifier": {"calibration": "x"}}, "calibration"),
+        ({"features": {"clearance_heads": "yes"}}, r"\[features\] clearance_heads"),
+        ({"features": {"clearance_dropout": 2}}, r"\[features\] clearance_dropout"),
     ],
 )
 def test_config_errors_name_the_key(cfg, msg):
@@ -169,7 +171,10 @@ def test_config_errors_name_the_key(cfg, msg):
 def test_config_round_trips(tmp_path):
     import tomli_w
 
-    cfg = TrainConfig.from_dict({"seed": 3, "classifier": {"max_iter": 50}, "features": {"exclude": ["*_um"]}})
+    cfg = TrainConfig.from_dict({"seed": 3, "classifier": {"max_iter": 50},
+                                 "features": {"exclude": ["*_um"], "clearance_heads": True}})
     p = tmp_path / "t.toml"
     p.write_bytes(tomli_w.dumps(cfg.to_dict()).encode())
     assert TrainConfig.from_file(p) == cfg
+    model = cfg.make_model(("a_per_c", "b"))
+    assert model.clearance_heads and model.clearance_features == cfg.clearance_features

@@ -61,7 +61,7 @@ def test_severity_and_delta_never_fall_when_the_coupling_2x_1x_grows():
     for row in rows:
         X = np.repeat(row[None, :], len(factors), axis=0)
         X[:, cols] = row[cols] * factors[:, None]
-        band = model.band_index(model.predict_proba(X))
+        band = model.band_index(model.predict_proba(X), X)
         delta, _ = model.predict_misalignment(X)
         assert np.all(np.diff(band) >= 0), band
         assert np.all(np.diff(delta) >= -1e-12), delta
@@ -180,10 +180,10 @@ def test_tuned_thresholds_keep_the_false_alarm_bound_and_monotonicity():
     # The predicted band still never falls when a constrained 2X/1X grows.
     q = make_table(n_plants=10, per_plant=10, seed=9)
     j = list(q.feature_names).index(MONO[0])
-    lo = models[True].band_index(models[True].predict_proba(q.X))
+    lo = models[True].band_index(models[True].predict_proba(q.X), q.X)
     Xs = q.X.copy()
     Xs[:, j] *= 3.0
-    assert np.all(models[True].band_index(models[True].predict_proba(Xs)) >= lo)
+    assert np.all(models[True].band_index(models[True].predict_proba(Xs), Xs) >= lo)
 
 
 def test_ood_on_a_log_scaled_feature_subset_flags_a_machine_far_below_the_family():

@@ -53,6 +53,22 @@ def test_register_load_round_trip_predicts_identically(tmp_path, fitted):
     assert not list((tmp_path / "reg").glob(".incoming-*"))
 
 
+def test_a_pair_per_clearance_case_round_trips(tmp_path):
+    t = make_table(n_plants=16, per_plant=8, seed=1, nan_rate=0.01)
+    cfg = TrainConfig.from_dict({"classifier": {"max_iter": 20, "cv": 3}, "regressor": {"max_iter": 20},
+                                 "features": {"clearance_features": ["*_per_clearance"], "clearance_heads": True}})
+    with threadpool_limits(1):
+        model = cfg.make_model(t.feature_names).fit(t.X, t.misalignment, groups=t.plant_id)
+    reg = Registry(tmp_path)
+    reg.register(model, {})
+    loaded, _ = reg.load()
+    X = t.X.copy()
+    X[::2, model.clearance_columns_] = np.nan
+    assert loaded.classifier_no_clearance_ is not None
+    np.testing.assert_array_equal(loaded.predict_proba(X), model.predict_proba(X))
+    np.testing.assert_array_equal(loaded.predict_misalignment(X)[1], model.predict_misalignment(X)[1])
+
+
 def test_activate_and_rollback(tmp_path, fitted):
     model, _ = fitted
     reg = Registry(tmp_path)
