@@ -128,3 +128,26 @@ def test_make_default_model_builds_every_shipped_training_part():
     assert sorted(parts) == on_disk and len(set(parts)) == len(parts)
     seeds = [load_spec(REPO / "models" / "default" / f"dataset_{p}.toml").spec.design.seed for p in parts]
     assert len(set(seeds)) == len(seeds)        # every part draws its own plants
+
+
+def test_the_shipped_model_was_trained_on_the_shipped_recipe():
+    """The shipped model's card names the specs on disk, part by part in ``DEFAULT_PARTS`` order, and
+    ``train.toml``'s configuration: ``make default-model`` rebuilds that model, not another (a spec or
+    train.toml edited without retraining fails here)."""
+    import json
+    import re
+
+    from rotordiag.models.config import TrainConfig
+    from rotordiag.models.registry import Registry
+
+    registry = Registry(REPO / "models" / "default_registry")
+    card = json.loads((registry.root / str(registry.active_version()) / "card.json").read_text())
+    parts = re.search(r"^DEFAULT_PARTS\s*=\s*(.+)$", (REPO / "Makefile").read_text(), re.MULTILINE).group(1).split()
+    data = card["training_data"]
+    assert [Path(p).stem for p in data["path"]] == parts
+    for part, trained in zip(parts, data["spec"]):
+        on_disk = load_spec(REPO / "models" / "default" / f"dataset_{part}.toml").spec.model_dump(mode="json")
+        changed = {k: sorted(kk for kk in set(on_disk[k]) | set(trained[k]) if on_disk[k].get(kk) != trained[k].get(kk))
+                   for k in on_disk if on_disk[k] != trained.get(k)}
+        assert not changed, f"dataset_{part}.toml differs from what the shipped model was trained on: {changed}"
+    assert card["train_config"] == TrainConfig.from_file(REPO / "models" / "default" / "train.toml").to_dict()

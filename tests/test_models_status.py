@@ -139,7 +139,7 @@ def test_shipped_model_does_not_rule_out_an_offset_without_the_clearance():
     from pathlib import Path
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.predict import diagnose, feature_vector, load_bundle
     from tests.service_util import simulated_channels
 
     root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
@@ -148,13 +148,23 @@ def test_shipped_model_does_not_rule_out_an_offset_without_the_clearance():
     bundle = load_bundle(root)
     fs, ch = simulated_channels(misalignment=0.0)
     verdicts = {}
+    rows = {}
     for clearance in (350.0, None):
         rec = Recording(fs, [ProbeChannel(b, a, "um", d) for b, a, d in ch], speed_rpm=1800.0, clearance_um=clearance)
-        verdicts[clearance] = diagnose(bundle, extract_features(rec))
+        feats = extract_features(rec)
+        verdicts[clearance] = diagnose(bundle, feats)
+        rows[clearance] = feature_vector(bundle.model.feature_names_, feats)[0][None, :]
     with_c, without = verdicts[350.0], verdicts[None]
     assert with_c.model_severity == without.model_severity == "aligned"
     assert "offset_not_assessed" not in [r["code"] for r in with_c.reasons]
     assert without.status != "confident" and "offset_not_assessed" in [r["code"] for r in without.reasons]
+    # the shipped model answers each case with its own pair (docs/models.md, "Missing clearance")
+    model = bundle.model
+    assert model.clearance_heads and model.classifier_no_clearance_ is not None
+    for clearance, clf in ((350.0, model.classifier_), (None, model.classifier_no_clearance_)):
+        assert model.clearance_stated(rows[clearance])[0] == (clearance is not None)
+        expected = clf.predict_proba(rows[clearance])[0, model.band_order(clf)]
+        np.testing.assert_allclose(list(verdicts[clearance].probabilities.values()), expected, atol=1e-9)
 
 
 def test_a_call_with_probability_two_bands_away_is_not_confident():

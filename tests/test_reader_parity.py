@@ -79,8 +79,8 @@ def test_cli_and_http_agree(files, client, registry, name, query):
         assert http[key] == cli[key], key
     if name.startswith("aligned"):
         # called aligned; these files do not state the bearing clearance, and without it the shipped model
-        # may be unsure of this machine (P(aligned) 0.54: `uncertain`) — the clearance-given case below is
-        # confident
+        # may be unsure of this machine (P(aligned) 0.75 with 25 % on moderate or severe: `uncertain`) — the
+        # clearance-given case below is confident
         assert cli["severity"] == "aligned" and cli["status"] in ("confident", "uncertain")
     else:   # never confidently wrong: a misaligned machine is not called aligned with confidence
         assert not (cli["severity"] == "aligned" and cli["status"] == "confident"), cli["severity"]
