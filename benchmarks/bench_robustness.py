@@ -2,6 +2,7 @@
 
     .venv/bin/python benchmarks/bench_robustness.py [--n 12] [--seed 815] [--out docs/robustness.md]
         [--cache /tmp/rotordiag_bench_robustness] [--ross benchmarks/ross_set.npz]
+        [--registry models/default_registry]   (a candidate model: its registry, with an --out of its own)
 
 Simulates held-out recordings with the project's own simulator (cached per set in ``--cache``,
 so a re-run only re-measures and re-diagnoses), applies each *condition* of the measurement
