@@ -304,10 +304,7 @@ class CompiledModel:
         return X
 
     def _cases(self, X: np.ndarray) -> list[tuple[np.ndarray, _CompiledHead]]:
-        if len(self._heads) == 1:
-            return [(np.ones(X.shape[0], dtype=bool), self._heads[True])]
-        stated = self.model.clearance_stated(X)
-        return [(rows, self._heads[case]) for rows, case in ((stated, True), (~stated, False)) if rows.any()]
+        return [(rows, self._heads[stated]) for rows, stated in self.model.clearance_cases(X)]
 
     # -- the model's methods ---------------------------------------------------------------------
     def predict_proba(self, X) -> np.ndarray:

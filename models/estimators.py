@@ -859,11 +859,9 @@ class MisalignmentModel(BaseEstimator):
         if X is None:
             raise ValueError("band_index: this model has a classifier per clearance case; pass X, the rows' "
                              "features, so that each row is read with its own case's thresholds")
-        stated = self.clearance_stated(X)
         out = np.empty(proba.shape[0], dtype=int)
-        for case, clf in ((stated, self.classifier_), (~stated, self.classifier_no_clearance_)):
-            if case.any():
-                out[case] = clf.class_index(proba[case])
+        for rows, stated in self.clearance_cases(X):
+            out[rows] = self.heads(stated)[0].class_index(proba[rows])
         return out
 
     def clearance_stated(self, X) -> np.ndarray:
@@ -1126,12 +1124,19 @@ class MisalignmentModel(BaseEstimator):
             return list(range(len(self.bands_.names)))
         return [list(clf.classes_).index(n) for n in self.bands_.names]
 
+    def clearance_cases(self, X) -> list[tuple[np.ndarray, bool]]:
+        """``(rows, stated)`` for each clearance case present in X: the rows (bool mask) that a
+        pair answers, and whether that pair is the clearance-stated one. One case, every row,
+        for a model with a single pair."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        if self.classifier_no_clearance_ is None:
+            return [(np.ones(X.shape[0], dtype=bool), True)]
+        stated = self.clearance_stated(X)
+        return [(rows, case) for rows, case in ((stated, True), (~stated, False)) if rows.any()]
+
     def _cases(self, X: np.ndarray):
         """``(rows, classifier, regressor)`` for each clearance case present in X."""
-        if self.classifier_no_clearance_ is None:
-            return [(np.ones(X.shape[0], dtype=bool), self.classifier_, self.regressor_)]
-        stated = self.clearance_stated(X)
-        return [(rows, *self.heads(case)) for rows, case in ((stated, True), (~stated, False)) if rows.any()]
+        return [(rows, *self.heads(case)) for rows, case in self.clearance_cases(X)]
 
     def predict_proba(self, X) -> np.ndarray:
         """Severity probabilities, shape (n_samples, n_bands), columns in band order; each row from
