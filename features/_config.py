@@ -98,6 +98,16 @@ SPEED_HALF_WHIRL_MAX_BACKWARD = 0.15
 #: ... and regardless of its orbits when its line is below this fraction of the double family's
 #: (amplitude; bench_robustness sets: a flexible coupling's 2X reached 12× the 1X, 22 dB)
 SPEED_HALF_MAX_REL = 0.03
+#: the comb of a line family reads as period-3 motion (features._speed._period_three) only when its 3X
+#: holds at least this fraction of its 1X (amplitude; bench_robustness base set, seed 815: 0.37 on the one
+#: period-3 recording)
+SPEED_PERIOD3_MIN_REL = 0.1
+#: the running speed's 1X hidden in the main lobe of an oil whirl's 2nd harmonic (features._speed._hidden_running_line)
+#: is sought between these many record bins (fs / n) above that harmonic …
+SPEED_HIDDEN_MIN_BINS = 0.3
+SPEED_HIDDEN_MAX_BINS = 6.0
+#: … and accepted when the two-line fit leaves at most this fraction of the one-line fit's residual
+SPEED_HIDDEN_MAX_RESIDUAL = 0.2
 #: phase-difference refinement iterations of the estimated / given speed
 SPEED_REFINE_ITERATIONS = 3
 #: a given ``speed_rpm`` that differs from the signal's refined 1X line by more than this

@@ -162,6 +162,86 @@ def _half_speed_whirl(spec: np.ndarray, df: float,
             "keyphasor_times_s")
 
 
+def _period_three(power: np.ndarray, logp: np.ndarray, df: float, f: float, level: float, f_hi: float) -> bool:
+    """Whether the harmonic comb of ``f`` reads as period-3 motion of a machine running at 3f.
+
+    A machine running at ``f`` has a comb of 1X, 2X, 3X … lines that, misalignment or not, does
+    not peak at 3X; in period-3 motion at the running speed 3f (a 1/3X sub-harmonic with its 2/3X,
+    4/3X … from the nonlinear bearings) every line is a harmonic of f as well, but the running
+    speed's own 1X and 2X, at 3f and 6f, stand above their neighbours in the comb. True when the
+    genuine lines (``_line_amplitude`` at ``level``) at 3f and at 6f are each larger than those at
+    2f and 4f, and 5f and 7f, the line at 3f holds at least ``SPEED_PERIOD3_MIN_REL`` of the one
+    at f, and 3f lies at or below ``f_hi``. (bench_robustness base set, seed 815: 1 recording of
+    240, the one whose estimate was the 1/3X; a 4X comb peak, by contrast, is a flexible
+    coupling's and is common.)
+    """
+    if 3 * f > f_hi or 7 * f >= df * (power.size - 3):
+        return False
+    a = [0.0] + [_line_amplitude(power, logp, m * f, df, level) for m in range(1, 8)]
+    return (a[1] > 0 and a[3] >= cfg.SPEED_PERIOD3_MIN_REL * a[1]
+            and a[3] > max(a[2], a[4]) and a[6] > max(a[5], a[7]))
+
+
+def _hann_kernel(theta: np.ndarray, n: int) -> np.ndarray:
+    """DTFT of the symmetric Hann window of length ``n`` at angular frequencies ``theta`` (rad/sample):
+    Σ w_k e^{-jθk}, from the Dirichlet kernel (so a windowed line at ω shows as ``_hann_kernel(ν − ω)``)."""
+    def dirichlet(t: np.ndarray) -> np.ndarray:
+        s = np.sin(t / 2)
+        small = np.abs(s) < 1e-12
+        return np.exp(-0.5j * t * (n - 1)) * np.where(small, float(n), np.sin(n * t / 2) / np.where(small, 1.0, s))
+
+    a = 2 * np.pi / (n - 1)
+    return 0.5 * dirichlet(theta) - 0.25 * dirichlet(theta - a) - 0.25 * dirichlet(theta + a)
+
+
+def _hidden_running_line(x: np.ndarray, fs: float, f_whirl: float) -> tuple[float, float, float] | None:
+    """The running speed's 1X hidden in the main lobe of an oil whirl's 2nd harmonic, by a two-line fit.
+
+    Oil whirl runs just below half the running speed Ω (0.42–0.49X), so its 2nd harmonic 2ω lies
+    within a bin or two below Ω on a record of a few dozen revolutions: the two lines merge into
+    one spectral peak and no peak-picking sees the 1X. Here the Hann spectra of the channels
+    (``x``, mean removed) between 2ω − 5 and 2ω + 8 record bins are fitted, channel by channel,
+    with a line at exactly 2ω (``f_whirl`` is the refined whirl) and a second line at g, for g
+    from 2ω + ``SPEED_HIDDEN_MIN_BINS`` to 2ω + ``SPEED_HIDDEN_MAX_BINS`` record bins (Ω > 2ω), the
+    line shapes from the window's exact transform. Returns (g in Hz, residual with g over the
+    residual with 2ω alone, amplitude of g over that of 2ω) for the best g when the second line
+    lowers the residual below ``SPEED_HIDDEN_MAX_RESIDUAL`` of the one-line fit, else None.
+    """
+    n = x.shape[1]
+    dfr = fs / n
+    h2 = 2.0 * f_whirl
+    nu = h2 + np.arange(-5.0, 8.0 + 1e-9, 0.25) * dfr
+    k = np.arange(n)
+    e = np.exp(-2j * np.pi * np.outer(nu, k) / fs) * hann(n)[None, :]
+    y = e @ x.T                                             # (bins, channels)
+    k0 = _hann_kernel(2 * np.pi * (nu - h2) / fs, n)
+
+    def fit(g: float | None) -> tuple[float, np.ndarray]:
+        a = k0[:, None] if g is None else np.stack([k0, _hann_kernel(2 * np.pi * (nu - g) / fs, n)], axis=1)
+        z, *_ = np.linalg.lstsq(a, y, rcond=None)
+        return float(np.sum(np.abs(y - a @ z) ** 2)), z
+
+    r1, _ = fit(None)
+    if not r1 > 0:
+        return None
+    grid = h2 + np.arange(cfg.SPEED_HIDDEN_MIN_BINS, cfg.SPEED_HIDDEN_MAX_BINS + 1e-9, 0.05) * dfr
+    r = np.array([fit(float(g))[0] for g in grid])
+    i = int(np.argmin(r))
+    lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    for _ in range(12):                                     # golden-section refinement between the neighbours
+        m1, m2 = hi - 0.618 * (hi - lo), lo + 0.618 * (hi - lo)
+        if fit(m1)[0] < fit(m2)[0]:
+            hi = m2
+        else:
+            lo = m1
+    g = 0.5 * (lo + hi)
+    r2, z = fit(g)
+    if not r2 < cfg.SPEED_HIDDEN_MAX_RESIDUAL * r1:
+        return None
+    a0, ag = np.sqrt(np.sum(np.abs(z[0]) ** 2)), np.sqrt(np.sum(np.abs(z[1]) ** 2))
+    return g, r2 / r1, float(ag / a0) if a0 > 0 else float("inf")
+
+
 def _local_peak_ratio(power: np.ndarray, f: float, df: float, floor: float, tol_bins: float) -> float:
     """Power of the highest local maximum of ``power`` within ``tol_bins`` of ``f``, over ``floor``
     (0 when there is none)."""
@@ -361,6 +441,36 @@ def _circular_fraction(spec: np.ndarray, k: int) -> float:
     if not np.any(big > 0):
         return float("nan")
     return float(np.median(np.minimum(fwd, bwd)[big > 0] / big[big > 0]))
+
+
+def _hidden_1x(x: np.ndarray, spec: np.ndarray, fs: float, df: float, k_top: int, f: float,
+               c_lo: float, c_hi: float) -> tuple[float, str] | None:
+    """The running speed when the chosen ``f`` is an oil whirl (or its 2nd harmonic) whose 2nd harmonic hides the 1X.
+
+    Applies when the largest line (FFT bin ``k_top``) whirls in nearly circular orbits (backward /
+    forward below ``SPEED_HALF_WHIRL_MAX_BACKWARD``) and ``f`` is that line or twice it: the running
+    speed is then sought by :func:`_hidden_running_line`. Returns (speed in Hz, the warning) when a
+    line within ``[c_lo, c_hi]`` is found, else None. The estimate stays "ambiguous": it rests on a fit.
+    """
+    f_top = k_top * df
+    if not (abs(f - f_top) <= 1.5 * df or abs(f - 2 * f_top) <= 2.5 * df):
+        return None
+    circ = _circular_fraction(spec, k_top)
+    if not circ < cfg.SPEED_HALF_WHIRL_MAX_BACKWARD:        # NaN (no x/y pair): no
+        return None
+    f_w = refine_line_hz(x, fs, f_top, iterations=2)
+    if abs(f_w - f_top) > 2 * df:
+        f_w = f_top
+    found = _hidden_running_line(x, fs, f_w)
+    if found is None or not (c_lo <= found[0] <= c_hi):
+        return None
+    g, rel_res, rel_amp = found
+    return g, (f"speed estimate ambiguous: {60 * g:.1f} r/min chosen: the largest line, at {60 * f_w:.1f} cpm "
+               f"({f_w / g:.3f}X), whirls in nearly circular orbits (backward / forward {circ:.3f}), read as oil "
+               f"whirl; the running speed's 1X ({rel_amp:.2f} × the whirl's 2nd harmonic) lies "
+               f"{(g - 2 * f_w) * x.shape[1] / fs:.1f} record bins above that harmonic, inside its main lobe, and is "
+               f"separated by a two-line fit (residual {rel_res:.3f} of one line's); confirm with speed_rpm or "
+               "keyphasor_times_s")
 
 
 def estimate_speed_hz(data: np.ndarray, fs: float,
@@ -578,7 +688,15 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
         f = f_partner
     else:
         rivals = [c for c in candidates if c[0] != f_best and c[1] > 0]
-        if rivals and rivals[0][1] == n_best and rivals[0][2] >= 0.8 * s_best:
+        if switched is None and _period_three(power, logp, df, f_best, snr_level, c_hi):
+            # never a sub-harmonic: the comb's 3X and 6X stand out, so f_best is a 1/3X
+            warnings.append(
+                f"speed estimate ambiguous: {60 * 3 * f_best:.1f} r/min chosen over {60 * f_best:.1f} r/min: the lines at "
+                f"3 and 6 times {60 * f_best:.1f} cpm stand above their neighbours, the signature of period-3 motion (a "
+                f"1/3X sub-harmonic with its 2/3X, 4/3X …); if the machine runs at {60 * f_best:.1f} r/min give "
+                "speed_rpm or keyphasor_times_s")
+            f_best = 3 * f_best
+        elif rivals and rivals[0][1] == n_best and rivals[0][2] >= 0.8 * s_best:
             warnings.append(
                 f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * rivals[0][0]:.1f} r/min "
                 "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
@@ -604,6 +722,11 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
             warnings.append(f"speed refinement did not converge; using the spectral peak {60 * f_best:.2f} r/min")
             f = f_best
     k_top = int(peak_idx[0])
+    if f_partner is None:
+        hidden = _hidden_1x(x, spec, fs, df, k_top, f, c_lo, c_hi)
+        if hidden is not None:
+            f, note = hidden
+            warnings = [w for w in warnings if not w.startswith("speed estimate ambiguous")] + [note]
     top_order = k_top * df / f
     if (f_partner is None and switched is None and abs(k_top * df - f) <= 1.5 * df
             and c_hi >= f / cfg.SPEED_SUBSYNC_MAX_RATIO

@@ -310,3 +310,77 @@ def test_elliptical_half_order_family_is_right_or_flagged():
                                          seed=9))
     right = abs(fr.speed_rpm / rpm - 1) <= 5e-3
     assert right or any("speed estimate ambiguous" in w for w in fr.warnings), (fr.speed_rpm, fr.warnings)
+
+
+def test_period_three_motion_is_not_taken_for_a_machine_at_a_third_of_the_speed():
+    """Period-3 motion (bench_robustness base set, seed 815, a pin coupling at 2127 r/min): a 1/3X three times
+    the 1X, with 2/3X, 4/3X, 5/3X … between the 1X and 2X. Every line is a harmonic of the 1/3X, so that family
+    explains them all; but the running speed's 1X and 2X stand above their neighbours in its comb. The running
+    speed is chosen and the choice declared ambiguous (before this, 709 r/min was chosen silently)."""
+    rpm = 2127.5
+    comps = {b: [(1, 34.0, 20.0 * b, 20.0, 110.0), (2, 8.0, 40.0, 5.0, 130.0), (3, 1.5, 0.0, 1.0, 90.0)]
+             for b in (1, 2, 3, 4)}
+    w = 2 * np.pi * rpm / 180
+
+    def third(t, b):
+        amps = {1: 97.0, 2: 27.0, 4: 12.0, 5: 5.0, 7: 2.4, 8: 3.7}
+        x = sum(a * np.cos(k * w * t + 0.3 * k) for k, a in amps.items())
+        y = sum(0.6 * a * np.sin(k * w * t + 0.3 * k) for k, a in amps.items())
+        return x, y
+
+    fr = extract_features(make_recording(components=comps, rpm=rpm, fs=2560.0, n=3465, extra=third, noise_um=0.05,
+                                         seed=11))
+    assert fr.speed_rpm == pytest.approx(rpm, rel=5e-3)
+    assert any("speed estimate ambiguous" in w and "period-3" in w for w in fr.warnings)
+
+
+def test_ordinary_comb_is_not_read_as_period_three():
+    """A 1X-dominated comb whose 3X is large (a third of the 1X) but below the 2X: no period-3 reading."""
+    comps = {b: [(1, 20.0, 20.0 * b, 8.0, 110.0), (2, 9.0, 40.0, 4.0, 130.0), (3, 6.0, 0.0, 3.0, 90.0),
+                 (4, 2.0, 10.0, 1.0, 30.0), (6, 1.0, 50.0, 0.5, 70.0)] for b in (1, 2, 3, 4)}
+    fr = extract_features(make_recording(components=comps, rpm=1500.0, noise_um=0.05, seed=6))
+    assert fr.speed_rpm == pytest.approx(1500.0, rel=1e-5)
+    assert not any("period-3" in w for w in fr.warnings)
+
+
+def _oil_whirl_recording(rpm: float, whirl_ratio: float, one_x_um: float, *, revs: int = 48, seed: int = 12):
+    """Oil whirl at ``whirl_ratio`` × the running speed (a circular forward orbit, 60 µm, with a 2nd
+    harmonic of 12 µm) over an elliptical 1X of ``one_x_um``; ``revs`` revolutions at 2560 Hz."""
+    fs = 2560.0
+    w = 2 * np.pi * whirl_ratio * rpm / 60
+
+    def whirl(t, b):
+        return (60 * np.cos(w * t) + 12 * np.cos(2 * w * t + 0.5),
+                60 * np.sin(w * t) + 12 * np.sin(2 * w * t + 0.5))
+
+    comps = {b: [(1, one_x_um, 20.0 * b, 0.5 * one_x_um, 110.0), (2, 0.3 * one_x_um, 40.0, 0.2 * one_x_um, 130.0)]
+             for b in (1, 2, 3, 4)}
+    return make_recording(components=comps, rpm=rpm, fs=fs, n=int(round(revs * 60 / rpm * fs)), extra=whirl,
+                          noise_um=0.02, seed=seed)
+
+
+@pytest.mark.parametrize("whirl_ratio", [0.49, 0.485, 0.48])
+def test_running_speed_inside_the_main_lobe_of_the_whirls_2nd_harmonic_is_found(whirl_ratio):
+    """Oil whirl just below half speed on 48 revolutions: its 2nd harmonic lies 0.96–1.9 bins below the 1X, so
+    the two merge into one spectral peak (bench_robustness base set, seed 815: 9 of its 34 wrong estimates,
+    the whirl or its 2nd harmonic taken for the running speed). A two-line fit separates them: the running
+    speed is found, and the estimate still declared ambiguous (it rests on a fit)."""
+    rpm = 2533.3
+    fr = extract_features(_oil_whirl_recording(rpm, whirl_ratio, one_x_um=8.0))
+    assert fr.speed_rpm == pytest.approx(rpm, rel=5e-3), fr.warnings
+    assert any("speed estimate ambiguous" in w and "two-line fit" in w for w in fr.warnings)
+
+
+def test_circular_1x_with_its_own_2x_finds_no_hidden_line():
+    """A machine whose largest line, its 1X, whirls in a circle and whose 2X is exactly twice it (isotropic
+    bearings, a 2X from the coupling): the two-line fit finds nothing beside the 2X, and the speed stays."""
+    rpm = 1500.0
+    w = 2 * np.pi * rpm / 60
+
+    def circular(t, b):
+        return 30 * np.cos(w * t) + 6 * np.cos(2 * w * t + 0.5), 30 * np.sin(w * t) + 6 * np.sin(2 * w * t + 0.5)
+
+    fr = extract_features(make_recording(components={b: [] for b in (1, 2, 3, 4)}, rpm=rpm, fs=2560.0,
+                                         n=int(48 * 60 / rpm * 2560), extra=circular, noise_um=0.02, seed=13))
+    assert fr.speed_rpm == pytest.approx(rpm, rel=1e-4)
+    assert not any("two-line fit" in w for w in fr.warnings)
