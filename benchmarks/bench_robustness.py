@@ -560,7 +560,8 @@ def targets(rows: dict[str, dict], ross: dict | None) -> list[tuple[str, bool | 
     a, b = rows["speed unknown"]["model"]["f1_all"], clean["f1_all"]
     right = (rows["speed unknown"].get("speed") or {}).get("f1_right")
     out.append(("speed unknown within 0.02 of speed known (macro-F1, all mechanisms)",
-                a is not None and b is not None and abs(a - b) <= 0.02, f"{_f(a)} vs {_f(b)}" + (
+                a is not None and b is not None and abs(a - b) <= 0.02,
+                (f"{a:.3f} vs {b:.3f}" if a is not None and b is not None else f"{_f(a)} vs {_f(b)}") + (
                     f"; on the {right[2]} recordings whose speed estimate is right: {_f(right[0])} vs {_f(right[1])}"
                     if right else "")))
     sp = rows["speed unknown"].get("speed") or {}

@@ -162,24 +162,29 @@ def _half_speed_whirl(spec: np.ndarray, df: float,
             "keyphasor_times_s")
 
 
-def _period_three(power: np.ndarray, logp: np.ndarray, df: float, f: float, level: float, f_hi: float) -> bool:
-    """Whether the harmonic comb of ``f`` reads as period-3 motion of a machine running at 3f.
+def _period_three(power: np.ndarray, logp: np.ndarray, df: float, f: float, level: float, f_hi: float) -> int:
+    """How strongly the harmonic comb of ``f`` reads as period-3 motion of a machine running at 3f.
 
-    A machine running at ``f`` has a comb of 1X, 2X, 3X … lines that, misalignment or not, does
-    not peak at 3X; in period-3 motion at the running speed 3f (a 1/3X sub-harmonic with its 2/3X,
-    4/3X … from the nonlinear bearings) every line is a harmonic of f as well, but the running
-    speed's own 1X and 2X, at 3f and 6f, stand above their neighbours in the comb. True when the
-    genuine lines (``_line_amplitude`` at ``level``) at 3f and at 6f are each larger than those at
-    2f and 4f, and 5f and 7f, the line at 3f holds at least ``SPEED_PERIOD3_MIN_REL`` of the one
-    at f, and 3f lies at or below ``f_hi``. (bench_robustness base set, seed 815: 1 recording of
-    240, the one whose estimate was the 1/3X; a 4X comb peak, by contrast, is a flexible
-    coupling's and is common.)
+    A machine running at ``f`` has a comb of 1X, 2X, 3X … lines that rarely peaks at 3X; in
+    period-3 motion at the running speed 3f (a 1/3X sub-harmonic with its 2/3X, 4/3X … from the
+    nonlinear bearings) every line is a harmonic of f as well, but the running speed's own 1X and
+    2X, at 3f and 6f, stand above their neighbours in the comb, below the sub-harmonic at f.
+    With the genuine lines of :func:`_line_amplitude` at ``level``: 0 when the line at 3f is not
+    larger than those at 2f and 4f, or holds less than ``SPEED_PERIOD3_MIN_REL`` or more than
+    ``SPEED_PERIOD3_MAX_REL`` of the line at f (a machine whose 3X is that large is running at f,
+    near a resonance at 3X), or when 3f lies above ``f_hi``; 2 when the line at 6f also stands above
+    those at 5f and 7f; else 1. (bench_robustness sets, seeds 815 and 816: the two period-3
+    recordings read at the 1/3X had 3f at 0.35 and 0.18 of f, the 6f peak on the first; four
+    recordings read right with a 3X comb peak had 3f at 0.59–2.9 of f. A 4X comb peak, by contrast,
+    is a flexible coupling's and common.)
     """
     if 3 * f > f_hi or 7 * f >= df * (power.size - 3):
-        return False
+        return 0
     a = [0.0] + [_line_amplitude(power, logp, m * f, df, level) for m in range(1, 8)]
-    return (a[1] > 0 and a[3] >= cfg.SPEED_PERIOD3_MIN_REL * a[1]
-            and a[3] > max(a[2], a[4]) and a[6] > max(a[5], a[7]))
+    if not (a[1] > 0 and cfg.SPEED_PERIOD3_MIN_REL * a[1] <= a[3] <= cfg.SPEED_PERIOD3_MAX_REL * a[1]
+            and a[3] > max(a[2], a[4])):
+        return 0
+    return 2 if a[6] > max(a[5], a[7]) else 1
 
 
 def _hann_kernel(theta: np.ndarray, n: int) -> np.ndarray:
@@ -688,7 +693,13 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
         f = f_partner
     else:
         rivals = [c for c in candidates if c[0] != f_best and c[1] > 0]
-        if switched is None and _period_three(power, logp, df, f_best, snr_level, c_hi):
+        period3 = _period_three(power, logp, df, f_best, snr_level, c_hi) if switched is None else 0
+        if period3 == 1:
+            warnings.append(
+                f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but its 3X line stands above its 2X and 4X, "
+                f"as the running speed's 1X does in period-3 motion (then {60 * f_best:.1f} cpm is a 1/3X sub-harmonic); "
+                f"if the machine runs at {60 * 3 * f_best:.1f} r/min give speed_rpm or keyphasor_times_s")
+        if period3 == 2:
             # never a sub-harmonic: the comb's 3X and 6X stand out, so f_best is a 1/3X
             warnings.append(
                 f"speed estimate ambiguous: {60 * 3 * f_best:.1f} r/min chosen over {60 * f_best:.1f} r/min: the lines at "
