@@ -55,6 +55,7 @@ from pathlib import Path
 from typing import Any
 
 from rotordiag.core.bands import SeverityBands
+from rotordiag.core.tables import deep_merge
 
 from .augment import Augmentation
 from .baselines import DEFAULT_RATIO_PATTERNS, DEFAULT_RULE_CUTS
@@ -207,6 +208,18 @@ class TrainConfig:
         return cfg
 
     @classmethod
+    def shipped(cls, overrides: Mapping[str, Any] | None = None) -> TrainConfig:
+        """The shipped model's recipe (``models/default/train.toml``), with ``overrides`` laid over it.
+
+        ``overrides`` holds train.toml tables or keys (``{"classifier": {"max_iter": 30}}``); each
+        replaces only what it names (:func:`rotordiag.core.tables.deep_merge`; a list, such as
+        ``[features] monotonic_increasing`` or ``[augment] bearing_sets``, is replaced whole). So a
+        plant's retraining keeps the shipped model's physics priors, OOD and envelope features and
+        measurement augmentation unless it says otherwise. Errors name the key, as :meth:`from_dict`.
+        """
+        return cls.from_dict(deep_merge(shipped_train_dict(), dict(overrides or {})))
+
+    @classmethod
     def from_file(cls, path: str | Path) -> TrainConfig:
         p = Path(path)
         try:
@@ -270,3 +283,10 @@ class TrainConfig:
             clearance_heads=self.clearance_heads,
             random_state=self.seed if clearance_seed is None else clearance_seed,
         )
+
+
+def shipped_train_dict() -> dict[str, Any]:
+    """The tables of the shipped model's ``train.toml`` (package data of ``rotordiag.models.default``)."""
+    from importlib.resources import files
+
+    return tomllib.loads(files("rotordiag.models.default").joinpath("train.toml").read_text(encoding="utf-8"))

@@ -512,8 +512,9 @@ class RetrainRequest(_Strict):
         "overriding the retraining defaults (see docs/service.md).",
         examples=[{"design": {"n_samples": 200}, "operating": {"speed_rpm": {"min": 2900, "max": 3100}}}])
     training: dict[str, Any] = Field(default_factory=dict,
-                                     description="Training configuration tables (as in train.toml: seed, bands, "
-                                     "classifier, regressor, ood, evaluation, baselines).")
+                                     description="Tables and keys of train.toml (seed, bands, features, classifier, "
+                                     "regressor, ood, envelope, augment, evaluation, baselines) that override the "
+                                     "shipped model's recipe, models/default/train.toml; what is not named is kept.")
     field_data: list[FieldRecord] = Field(default_factory=list, max_length=1000,
                                           description="Optional field-labelled recordings added to the training set.")
     activate: bool = Field(False, description="Make the new version active when training succeeds.")

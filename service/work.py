@@ -9,9 +9,10 @@
 """
 from __future__ import annotations
 
-import copy
 import math
 from typing import Any
+
+from rotordiag.core.tables import deep_merge
 
 from .core.config import Settings
 from .errors import InputError
@@ -78,16 +79,6 @@ def prepare_dataset_job(body: Any, settings: Settings) -> dict[str, Any]:
     return {"spec_toml": text, "spec_hash": resolved.spec_hash, "name": body.name}
 
 
-def _deep_merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
-    out = copy.deepcopy(base)
-    for key, value in override.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict) and key != "mechanism":
-            out[key] = _deep_merge(out[key], value)
-        else:
-            out[key] = copy.deepcopy(value)
-    return out
-
-
 def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
     """Validate a POST /models/retrain body (plant, sweep, training options, field data)."""
     from rotordiag.models.config import TrainConfig
@@ -111,7 +102,7 @@ def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
         if extra:
             raise InputError(f"sweep.plant: only {' and '.join(sorted(RETRAIN_SWEEP_PLANT_KEYS))} may be given "
                              "here; put plant values in `plant` and a shaft-line description in `shaftline`")
-    spec = _deep_merge(RETRAIN_DEFAULT_SWEEP, sweep)
+    spec = deep_merge(RETRAIN_DEFAULT_SWEEP, sweep, whole=("mechanism",))   # a mechanism table is a whole mix
     spec.setdefault("plant", {})["set"] = {k: v for k, v in plant.to_dict().items() if k in body.plant} \
         if body.plant else {}
     if not spec["plant"]["set"]:
@@ -121,7 +112,7 @@ def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
     text = _spec_toml_from_dict(spec)
     resolved = _validate_spec_text(text)
     try:
-        train_cfg = TrainConfig.from_dict(body.training)
+        train_cfg = TrainConfig.shipped(body.training)
     except (TypeError, ValueError) as exc:
         raise InputError(f"training: {exc}") from None
     field = [r.model_dump(mode="json") for r in body.field_data]

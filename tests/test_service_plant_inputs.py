@@ -34,6 +34,26 @@ def test_retrain_builds_its_sweep_on_the_shaftline_plant_with_overrides(tmp_path
     assert params["spec_hash"] == resolved.spec_hash and params["shaftline"] is True
 
 
+def test_retrain_trains_on_the_shipped_recipe_with_the_requests_overrides(tmp_path):
+    """A plant's retraining gets the shipped model's train.toml (physics priors, clearance heads, OOD and
+    envelope features, measurement augmentation), not the library defaults, which have none of them;
+    the request's `training` tables override only the keys they name."""
+    from rotordiag.models.config import TrainConfig
+
+    shipped = TrainConfig.from_file(Path(__file__).resolve().parents[1] / "models" / "default" / "train.toml").to_dict()
+    assert shipped != TrainConfig.from_dict({}).to_dict()
+    plain = prepare_retrain_job(RetrainRequest.model_validate({}), make_settings(tmp_path))
+    assert plain["training"] == shipped
+    body = RetrainRequest.model_validate({"training": {"seed": 3, "classifier": {"max_iter": 30},
+                                                       "features": {"clearance_heads": False}}})
+    got = prepare_retrain_job(body, make_settings(tmp_path))["training"]
+    assert got["seed"] == 3 and got["classifier"]["max_iter"] == 30 and got["features"]["clearance_heads"] is False
+    assert got["classifier"]["min_samples_leaf"] == shipped["classifier"]["min_samples_leaf"]
+    assert got["features"]["monotonic_increasing"] == shipped["features"]["monotonic_increasing"] != []
+    assert got["features"]["envelope_features"] == shipped["features"]["envelope_features"] != []
+    assert got["augment"] == shipped["augment"]
+
+
 def test_dataset_job_takes_an_inline_shaftline_and_a_preset_family(tmp_path):
     spec = {"design": {"method": "sobol", "n_samples": 8, "seed": 1},
             "operating": {"speed_rpm": {"min": 1500, "max": 2100}, "misalignment": {"min": 0, "max": 0.4},
