@@ -199,26 +199,28 @@ def _hann_kernel(theta: np.ndarray, n: int) -> np.ndarray:
     return 0.5 * dirichlet(theta) - 0.25 * dirichlet(theta - a) - 0.25 * dirichlet(theta + a)
 
 
-def _hidden_running_line(x: np.ndarray, fs: float, f_whirl: float) -> tuple[float, float, float] | None:
+def _hidden_running_line(spec: np.ndarray, fs: float, n: int, df: float,
+                         f_whirl: float) -> tuple[float, float, float] | None:
     """The running speed's 1X hidden in the main lobe of an oil whirl's 2nd harmonic, by a two-line fit.
 
     Oil whirl runs just below half the running speed Ω (0.42–0.49X), so its 2nd harmonic 2ω lies
     within a bin or two below Ω on a record of a few dozen revolutions: the two lines merge into
     one spectral peak and no peak-picking sees the 1X. Here the Hann spectra of the channels
-    (``x``, mean removed) between 2ω − 5 and 2ω + 8 record bins are fitted, channel by channel,
+    (``spec``: rfft of the ``n``-sample records, mean removed, times the Hann window, bin width
+    ``df``) between 2ω − 5 and 2ω + 8 record bins (fs / n) are fitted, channel by channel,
     with a line at exactly 2ω (``f_whirl`` is the refined whirl) and a second line at g, for g
     from 2ω + ``SPEED_HIDDEN_MIN_BINS`` to 2ω + ``SPEED_HIDDEN_MAX_BINS`` record bins (Ω > 2ω), the
     line shapes from the window's exact transform. Returns (g in Hz, residual with g over the
     residual with 2ω alone, amplitude of g over that of 2ω) for the best g when the second line
     lowers the residual below ``SPEED_HIDDEN_MAX_RESIDUAL`` of the one-line fit, else None.
     """
-    n = x.shape[1]
     dfr = fs / n
     h2 = 2.0 * f_whirl
-    nu = h2 + np.arange(-5.0, 8.0 + 1e-9, 0.25) * dfr
-    k = np.arange(n)
-    e = np.exp(-2j * np.pi * np.outer(nu, k) / fs) * hann(n)[None, :]
-    y = e @ x.T                                             # (bins, channels)
+    k_lo, k_hi = max(int(np.ceil((h2 - 5.0 * dfr) / df)), 1), min(int(np.floor((h2 + 8.0 * dfr) / df)), spec.shape[1] - 1)
+    if k_hi - k_lo < 8:
+        return None
+    nu = np.arange(k_lo, k_hi + 1) * df
+    y = spec[:, k_lo:k_hi + 1].T                            # (bins, channels)
     k0 = _hann_kernel(2 * np.pi * (nu - h2) / fs, n)
 
     def fit(g: float | None) -> tuple[float, np.ndarray]:
@@ -466,7 +468,7 @@ def _hidden_1x(x: np.ndarray, spec: np.ndarray, fs: float, df: float, k_top: int
     f_w = refine_line_hz(x, fs, f_top, iterations=2)
     if abs(f_w - f_top) > 2 * df:
         f_w = f_top
-    found = _hidden_running_line(x, fs, f_w)
+    found = _hidden_running_line(spec, fs, x.shape[1], df, f_w)
     if found is None or not (c_lo <= found[0] <= c_hi):
         return None
     g, rel_res, rel_amp = found
