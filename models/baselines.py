@@ -24,13 +24,13 @@ The ratio of a row is the largest 2X/1X over the probes named by the configurati
 """
 from __future__ import annotations
 
-import fnmatch
 from collections.abc import Sequence
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from ._patterns import name_mask
 from ._search import coordinate_ascent
 
 DEFAULT_RATIO_PATTERNS: tuple[str, ...] = ("b?_[xy]_2x_1x_ratio",)
@@ -39,7 +39,7 @@ DEFAULT_RULE_CUTS: tuple[float, ...] = (0.5, 1.0, 2.0)
 
 def match_features(names: Sequence[str], patterns: Sequence[str]) -> list[int]:
     """Indices of the feature names that match any of the glob ``patterns``."""
-    return [i for i, n in enumerate(names) if any(fnmatch.fnmatchcase(n, p) for p in patterns)]
+    return np.flatnonzero(name_mask(names, patterns)).tolist()
 
 
 def ratio_column(X: np.ndarray, names: Sequence[str], patterns: Sequence[str] = DEFAULT_RATIO_PATTERNS) -> np.ndarray:

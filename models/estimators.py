@@ -53,6 +53,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from rotordiag.core.bands import DEFAULT_EDGES, DEFAULT_NAMES, SeverityBands
 from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, short_bearing_attitude_deg
 
+from ._patterns import name_mask, pattern_value, require_matches
 from ._sklearn_private import Interval, StrOptions
 from .ordinal import OrdinalSeverityClassifier
 
@@ -962,39 +963,23 @@ class MisalignmentModel(BaseEstimator):
         return clf, reg
 
     def _clearance_columns(self) -> np.ndarray:
-        import fnmatch
-
-        pats = tuple(str(p) for p in (self.clearance_features or ()))
-        cols = np.array([any(fnmatch.fnmatchcase(n, p) for p in pats) for n in self.feature_names_], dtype=bool)
-        return cols
+        return name_mask(self.feature_names_, tuple(str(p) for p in (self.clearance_features or ())))
 
     def _monotonic_cst(self) -> np.ndarray:
-        import fnmatch
-
         pats = tuple(str(p) for p in self.monotonic_increasing)
-        cst = np.array([1 if any(fnmatch.fnmatchcase(n, p) for p in pats) else 0 for n in self.feature_names_],
-                       dtype=int)
-        unmatched = [p for p in pats if not any(fnmatch.fnmatchcase(n, p) for n in self.feature_names_)]
-        if unmatched:
-            raise ValueError(f"monotonic_increasing: pattern(s) {unmatched} match no feature name")
-        return cst
+        require_matches("monotonic_increasing", pats, self.feature_names_)
+        return name_mask(self.feature_names_, pats).astype(int)
 
     def _ood_columns(self) -> tuple[np.ndarray, np.ndarray]:
-        import fnmatch
-
         pats = tuple(str(p) for p in (self.ood_features or ()))
         names = self.feature_names_
-        cols = np.arange(len(names)) if not pats else np.array(
-            [j for j, n in enumerate(names) if any(fnmatch.fnmatchcase(n, p) for p in pats)], dtype=int)
-        unmatched = [p for p in pats if not any(fnmatch.fnmatchcase(n, p) for n in names)]
-        if unmatched:
-            raise ValueError(f"ood_features: pattern(s) {unmatched} match no feature name")
+        cols = np.arange(len(names)) if not pats else np.flatnonzero(name_mask(names, pats))
+        require_matches("ood_features", pats, names)
         scales = dict(self.ood_log_scales or {})
         bad = {p: v for p, v in scales.items() if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0)}
         if bad:
             raise ValueError(f"ood_log_scales: every scale must be a positive number, got {bad}")
-        log_scale = np.array([next((float(v) for p, v in scales.items() if fnmatch.fnmatchcase(names[j], p)), 0.0)
-                              for j in cols], dtype=float)
+        log_scale = np.array([pattern_value(names[j], scales, 0.0) for j in cols], dtype=float)
         return cols, log_scale
 
     def ood_input(self, X: np.ndarray) -> np.ndarray:
@@ -1023,26 +1008,20 @@ class MisalignmentModel(BaseEstimator):
                 if f"b{b}_centre_x_per_c" in names and f"b{b}_centre_y_per_c" in names]
 
     def _fit_envelope(self, X: np.ndarray, groups) -> None:
-        import fnmatch
-
         pats = tuple(str(p) for p in (self.envelope_features or ()))
         if not pats:
             self.envelope_ = None
             self.envelope_names_: tuple[str, ...] = ()
             return
         candidates = list(self.feature_names_) + self._derived_names()
-        chosen = [n for n in candidates if any(fnmatch.fnmatchcase(n, p) for p in pats)]
-        unmatched = [p for p in pats if not any(fnmatch.fnmatchcase(n, p) for n in candidates)]
-        if unmatched:
-            raise ValueError(f"envelope_features: pattern(s) {unmatched} match no feature name "
-                             "(nor a derived b{n}_attitude_deg / b{n}_attitude_offset_deg)")
+        chosen = [n for n, hit in zip(candidates, name_mask(candidates, pats)) if hit]
+        require_matches("envelope_features", pats, candidates,
+                        " (nor a derived b{n}_attitude_deg / b{n}_attitude_offset_deg)")
         upper = tuple(str(p) for p in (self.envelope_upper_only or ()))
         scales = dict(self.ood_log_scales or {})
         self.envelope_names_ = tuple(chosen)
-        self.envelope_log_floor_ = np.array(
-            [next((float(v) * 1e-3 for p, v in scales.items() if fnmatch.fnmatchcase(n, p)), 0.0)
-             for n in chosen], dtype=float)
-        check_low = np.array([not any(fnmatch.fnmatchcase(n, p) for p in upper) for n in chosen], dtype=bool)
+        self.envelope_log_floor_ = np.array([pattern_value(n, scales, 0.0) * 1e-3 for n in chosen], dtype=float)
+        check_low = ~name_mask(chosen, upper)
         self.envelope_ = clone(self.envelope if self.envelope is not None else FeatureEnvelope())
         self.envelope_.fit(self.envelope_input(X), groups=groups, check_low=check_low)
 

@@ -1,11 +1,12 @@
 """A labelled feature table: the input of training and evaluation."""
 from __future__ import annotations
 
-import fnmatch
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from ._patterns import name_mask
 
 
 @dataclass
@@ -94,14 +95,13 @@ class FeatureTable:
 
     def feature_mask(self, patterns: Sequence[str]) -> np.ndarray:
         """Boolean mask of the columns whose names match any glob pattern."""
-        return np.array([any(fnmatch.fnmatchcase(n, p) for p in patterns) for n in self.feature_names], bool)
+        return name_mask(self.feature_names, patterns)
 
     def without_features(self, patterns: Sequence[str]) -> FeatureTable:
         """Drop the columns whose names match any glob pattern."""
         if not patterns:
             return self
-        keep = [i for i, n in enumerate(self.feature_names)
-                if not any(fnmatch.fnmatchcase(n, p) for p in patterns)]
+        keep = np.flatnonzero(~name_mask(self.feature_names, patterns)).tolist()
         if not keep:
             raise ValueError(f"features.exclude: {list(patterns)} removes every feature")
         return FeatureTable(

@@ -1,0 +1,30 @@
+"""Feature names against the glob patterns of train.toml's feature lists (``b?_[xy]_2x_1x_ratio``)."""
+from __future__ import annotations
+
+import fnmatch
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+__all__ = ["name_mask", "pattern_value", "require_matches"]
+
+
+def _matches(name: str, patterns: Sequence[str]) -> bool:
+    return any(fnmatch.fnmatchcase(name, p) for p in patterns)
+
+
+def name_mask(names: Sequence[str], patterns: Sequence[str]) -> np.ndarray:
+    """Boolean mask over ``names``: True where a name matches any of the glob ``patterns`` (case-sensitive)."""
+    return np.array([_matches(n, patterns) for n in names], dtype=bool)
+
+
+def pattern_value(name: str, table: Mapping[str, float], default: float) -> float:
+    """The value of the first pattern of ``table`` (in its order) that ``name`` matches, else ``default``."""
+    return next((float(v) for p, v in table.items() if fnmatch.fnmatchcase(name, p)), default)
+
+
+def require_matches(key: str, patterns: Sequence[str], names: Sequence[str], hint: str = "") -> None:
+    """Raise ``ValueError`` naming ``key`` when one of ``patterns`` matches none of ``names``."""
+    unmatched = [p for p in patterns if not any(fnmatch.fnmatchcase(n, p) for n in names)]
+    if unmatched:
+        raise ValueError(f"{key}: pattern(s) {unmatched} match no feature name{hint}")
