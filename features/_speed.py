@@ -214,6 +214,8 @@ def _hidden_running_line(spec: np.ndarray, fs: float, n: int, df: float,
     residual with 2ω alone, amplitude of g over that of 2ω) for the best g when the second line
     lowers the residual below ``SPEED_HIDDEN_MAX_RESIDUAL`` of the one-line fit, else None.
     """
+    from scipy.optimize import minimize_scalar
+
     dfr = fs / n
     h2 = 2.0 * f_whirl
     k_lo, k_hi = max(int(np.ceil((h2 - 5.0 * dfr) / df)), 1), min(int(np.floor((h2 + 8.0 * dfr) / df)), spec.shape[1] - 1)
@@ -234,14 +236,9 @@ def _hidden_running_line(spec: np.ndarray, fs: float, n: int, df: float,
     grid = h2 + np.arange(cfg.SPEED_HIDDEN_MIN_BINS, cfg.SPEED_HIDDEN_MAX_BINS + 1e-9, 0.05) * dfr
     r = np.array([fit(float(g))[0] for g in grid])
     i = int(np.argmin(r))
-    lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
-    for _ in range(12):                                     # golden-section refinement between the neighbours
-        m1, m2 = hi - 0.618 * (hi - lo), lo + 0.618 * (hi - lo)
-        if fit(m1)[0] < fit(m2)[0]:
-            hi = m2
-        else:
-            lo = m1
-    g = 0.5 * (lo + hi)
+    best = minimize_scalar(lambda v: fit(v)[0], bounds=(grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]),
+                           method="bounded", options={"xatol": 1e-3 * dfr})  # between the grid neighbours
+    g = float(best.x)
     r2, z = fit(g)
     if not r2 < cfg.SPEED_HIDDEN_MAX_RESIDUAL * r1:
         return None
