@@ -15,8 +15,13 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(VENV)/bin/rotordiag serve
 
+# Two pytest-xdist workers (one per core of the development machine); a test file stays on one
+# worker (--dist loadfile), so its module-scoped servers and clusters start once.
+TEST_WORKERS ?= 2
+PYTEST_PARALLEL := -n $(TEST_WORKERS) --dist loadfile
+
 test: $(STAMP)
-	$(VENV)/bin/pytest -q
+	$(VENV)/bin/pytest -q $(PYTEST_PARALLEL)
 
 # ruff (lint + import order) and mypy. mypy reads the packages through build/typecheck/rotordiag,
 # a tree of symlinks that gives the top-level folders their import names (rotordiag.simulator, ...).
@@ -47,7 +52,7 @@ test-lowest: $(STAMP)
 	$(PY) .ci/lowest_constraints.py > $(LOWEST_VENV)/constraints.txt
 	$(LOWEST_VENV)/bin/python -m pip install --quiet -c $(LOWEST_VENV)/constraints.txt -e '.[dev]'
 	$(LOWEST_VENV)/bin/python -m pip check
-	ROTORDIAG_EXPECT_FLOORS=1 $(LOWEST_VENV)/bin/pytest -q
+	ROTORDIAG_EXPECT_FLOORS=1 $(LOWEST_VENV)/bin/pytest -q $(PYTEST_PARALLEL)
 
 test-slow: $(STAMP)
 	$(VENV)/bin/pytest -q -m slow

@@ -176,3 +176,12 @@ def test_service_domain_modules_do_not_use_the_web_framework(name):
     assert not used & {"fastapi", "starlette"}, (
         f"service/{name}.py imports {sorted(used & {'fastapi', 'starlette'})}: raise service.errors exceptions "
         "and let service/api/errors.py give them HTTP statuses")
+
+
+def test_every_collected_test_has_its_own_node_id(request):
+    """Two items with one node id run once under pytest-xdist (it schedules by node id) and are
+    indistinguishable in reports; ``make test`` runs on two workers."""
+    from collections import Counter
+
+    shared = sorted(i for i, n in Counter(item.nodeid for item in request.session.items).items() if n > 1)
+    assert not shared, f"tests that share a node id: {shared[:5]}"

@@ -212,9 +212,12 @@ _H5 = h5_bytes(lambda f: good_waveforms(f, "gzip"))
 _FUZZ_LIMITS = ReadLimits(max_hdf5_bytes=64 * MB, hdf5_memory_bytes=256 * MB, hdf5_timeout_s=20.0)
 
 
-@settings(max_examples=FUZZ_EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.lists(st.tuples(st.integers(0, len(_H5) - 1), st.integers(0, 255)), min_size=1, max_size=8))
-def test_fuzz_hdf5_reader(flips):
+_FLIPS = st.lists(st.tuples(st.integers(0, len(_H5) - 1), st.integers(0, 255)), min_size=1, max_size=8)
+#: each example starts a sandboxed reader process (~0.13 s); the slow run tries ten times as many
+FUZZ_HDF5_EXAMPLES = 100
+
+
+def _read_flipped_hdf5(flips: list[tuple[int, int]]) -> None:
     """Byte-flipped HDF5 through the production path: structure check and decoding in the sandbox.
 
     The HDF5 library itself can loop while allocating on some flipped files (seen: ~250 MiB/s
@@ -230,6 +233,19 @@ def test_fuzz_hdf5_reader(flips):
     except ValueError:
         pass
     assert time.monotonic() - t0 < _FUZZ_LIMITS.hdf5_timeout_s + 10
+
+
+@settings(max_examples=FUZZ_HDF5_EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_FLIPS)
+def test_fuzz_hdf5_reader(flips):
+    _read_flipped_hdf5(flips)
+
+
+@pytest.mark.slow
+@settings(max_examples=10 * FUZZ_HDF5_EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_FLIPS)
+def test_fuzz_hdf5_reader_long(flips):
+    _read_flipped_hdf5(flips)
 
 
 def _all_finite(obj) -> bool:

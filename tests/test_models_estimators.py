@@ -272,8 +272,10 @@ def test_model_envelope_findings_name_the_feature_and_the_training_range():
     from .models_synthetic import make_table
 
     t = make_table(n_plants=60, per_plant=8, seed=3)
+    small = {"classifier": SeverityClassifier(max_iter=20, cv=3),       # the envelope is under test, not the trees
+             "regressor": ConformalIntervalRegressor(max_iter=20, lower_bound=0.0)}
     m = MisalignmentModel(feature_names=t.feature_names, envelope_features=["b1_x_1x_amp_um", "b2_*"],
-                          ood_log_scales={"b1_x_1x_amp_um": 1.0}, envelope=FeatureEnvelope(quantile=0.99))
+                          ood_log_scales={"b1_x_1x_amp_um": 1.0}, envelope=FeatureEnvelope(quantile=0.99), **small)
     m.fit(t.X, t.misalignment, groups=t.plant_id)
     assert m.envelope_names_ == ("b2_x_2x_1x_ratio", "b1_x_1x_amp_um")
     j = list(t.feature_names).index("b1_x_1x_amp_um")
@@ -287,7 +289,7 @@ def test_model_envelope_findings_name_the_feature_and_the_training_range():
     assert f["side"] == "below" and f["value"] == pytest.approx(row[0, j])
     assert f["train_min"] == pytest.approx(np.nanmin(t.X[:, j]), rel=1e-9) and f["factor"] == pytest.approx(100, rel=1e-6)
     with pytest.raises(ValueError, match="envelope_features"):
-        MisalignmentModel(feature_names=t.feature_names, envelope_features=["nope_*"]).fit(
+        MisalignmentModel(feature_names=t.feature_names, envelope_features=["nope_*"], **small).fit(
             t.X, t.misalignment, groups=t.plant_id)
 
 

@@ -48,10 +48,23 @@ def _no_real_jobs():
 schema = schemathesis.openapi.from_asgi("/openapi.json", APP)
 
 
+# One explicit parametrization so that every operation's test has its own node id: pytest ≥ 9.2 builds a
+# node id from the function's name and its callspec only, and schemathesis's per-operation items (named
+# "test_no_server_errors[POST /diagnose]") carry no callspec of their own, so without this all 15 items
+# share one id, and pytest-xdist (keyed by node id) runs one of them. test_every_operation_has_its_own_id.
 @schema.parametrize()
+@pytest.mark.parametrize("headers", [{"X-API-Key": API_KEY}], ids=["with key"])
 @settings(max_examples=N_EXAMPLES, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much, HealthCheck.data_too_large,
                                  HealthCheck.function_scoped_fixture])
-def test_no_server_errors(case):
-    case.call_and_validate(headers={"X-API-Key": API_KEY}, checks=[not_a_server_error, response_schema_conformance,
+def test_no_server_errors(case, headers):
+    case.call_and_validate(headers=headers, checks=[not_a_server_error, response_schema_conformance,
                                                                      status_code_conformance])
+
+
+def test_every_operation_has_its_own_id(request):
+    """One fuzz item per operation, each with its own node id (pytest-xdist schedules by node id)."""
+    fuzz = {item.nodeid for item in request.session.items if "::test_no_server_errors[" in item.nodeid}
+    if not fuzz:
+        pytest.skip("the fuzz items were not collected in this run (-k or a node id selected this test)")
+    assert len(fuzz) == sum(1 for _ in schema.get_all_operations()), sorted(fuzz)

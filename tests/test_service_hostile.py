@@ -347,11 +347,14 @@ def test_a_killed_workers_requests_go_to_the_warm_worker_at_once(pooled, rec):
     _wait_ready(pool)
 
 
-def test_health_sees_the_model_file_change_under_the_workers(pooled, rec):
+def test_health_sees_the_model_file_change_under_the_workers(pooled, rec, monkeypatch):
     import shutil
 
-    from rotordiag.service.pool import MODEL_CHECK_INTERVAL_S
+    from rotordiag.service import pool as pool_module
 
+    # /health reuses the workers' answer for MODEL_CHECK_INTERVAL_S (5 s in service); shorter here
+    monkeypatch.setattr(pool_module, "MODEL_CHECK_INTERVAL_S", 0.5)
+    MODEL_CHECK_INTERVAL_S = pool_module.MODEL_CHECK_INTERVAL_S
     fs, channels = rec
     pool = pooled.app.state.rd.pool
     _wait_ready(pool)
