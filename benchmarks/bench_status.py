@@ -10,8 +10,9 @@ gross error a plant acts on wrongly. "Confident" is approximated from the model'
 ≥ ``CONFIDENT_MIN_PROBABILITY`` and not OOD (the sanity, scale, speed, missing-feature, 2X-signature and
 class/Δ reasons of ``models.status`` are left out), then with the status rules that use only those outputs:
 at most a share of probability on the bands two or more from the call (``CONFIDENT_MAX_FAR_PROBABILITY``
-and the alternatives in :data:`FAR_LIMITS`) and, without the clearance, no confident ``aligned``
-(``offset_not_assessed``). About 10 minutes on two cores.
+and the alternatives in :data:`FAR_LIMITS`), without the clearance no confident ``aligned``
+(``offset_not_assessed``), and, with the shipped far-band limit, the Δ regressor's interval within one band
+of the call (``far_band_interval``). About 20 minutes on two cores.
 """
 from __future__ import annotations
 
@@ -30,13 +31,17 @@ FAR_LIMITS: tuple[float | None, ...] = (None, 0.1, 0.15, 0.2)
 
 
 def confident_errors(proba: np.ndarray, call: np.ndarray, truth: np.ndarray, ood: np.ndarray, *,
-                     min_probability: float, far_limit: float | None, aligned_allowed: bool) -> dict[str, int]:
-    """Counts of the approximately confident verdicts: ``n``, ``off2`` (two or more bands off), ``right``."""
-    from rotordiag.models.status import far_band_probability
+                     min_probability: float, far_limit: float | None, aligned_allowed: bool,
+                     interval: np.ndarray | None = None, edges=()) -> dict[str, int]:
+    """Counts of the approximately confident verdicts: ``n``, ``off2`` (two or more bands off), ``right``.
+    With ``interval`` (n, 2) and the bands' ``edges``: also no Δ interval reaching two bands from the call."""
+    from rotordiag.models.status import far_band_probability, interval_far_bands
 
     conf = (np.max(proba, axis=1) >= min_probability) & ~ood
     if far_limit is not None:
         conf &= far_band_probability(proba, call) <= far_limit
+    if interval is not None:
+        conf &= ~interval_far_bands(interval, call, edges)
     if not aligned_allowed:
         conf &= call > 0
     off = np.abs(call - truth)
@@ -60,21 +65,24 @@ def main(argv=None) -> int:
     print(f"{len(table)} out-of-fold rows, {len(np.unique(table.plant_id))} plants; confident ≈ top class ≥ "
           f"{CONFIDENT_MIN_PROBABILITY:.0%} and not OOD (shipped limit on the far bands: "
           f"{CONFIDENT_MAX_FAR_PROBABILITY:.0%})\n")
-    print("| clearance | limit on the far bands | aligned may be confident | confident | two or more bands off | "
-          "right |")
-    print("|---|---|---|---|---|---|")
-    for label, proba, pred in (("given", oof.proba, oof.pred["model"]),
-                               ("not given", oof.proba_no_clearance, oof.pred_no_clearance)):
+    print("| clearance | limit on the far bands | aligned may be confident | Δ interval within one band | confident | "
+          "two or more bands off | right |")
+    print("|---|---|---|---|---|---|---|")
+    edges = np.asarray(cfg.bands.edges, dtype=float)
+    for label, proba, pred, interval in (("given", oof.proba, oof.pred["model"], oof.interval),
+                                         ("not given", oof.proba_no_clearance, oof.pred_no_clearance,
+                                          oof.interval_no_clearance)):
         if proba is None:
             continue
         call = np.array([names.index(p) for p in pred])
         for limit in FAR_LIMITS:
             for aligned_allowed in ((True,) if label == "given" else (True, False)):
-                c = confident_errors(proba, call, truth, oof.ood_flag, min_probability=CONFIDENT_MIN_PROBABILITY,
-                                     far_limit=limit, aligned_allowed=aligned_allowed)
-                print(f"| {label} | {'none' if limit is None else f'{limit:.0%}'} | "
-                      f"{'yes' if aligned_allowed else 'no'} | {c['n']} | {c['off2']} "
-                      f"({c['off2'] / max(c['n'], 1):.1%}) | {c['right']} |")
+                for iv in (None, interval) if limit == CONFIDENT_MAX_FAR_PROBABILITY else (None,):
+                    c = confident_errors(proba, call, truth, oof.ood_flag, min_probability=CONFIDENT_MIN_PROBABILITY,
+                                         far_limit=limit, aligned_allowed=aligned_allowed, interval=iv, edges=edges)
+                    print(f"| {label} | {'none' if limit is None else f'{limit:.0%}'} | "
+                          f"{'yes' if aligned_allowed else 'no'} | {'no rule' if iv is None else 'yes'} | {c['n']} | "
+                          f"{c['off2']} ({c['off2'] / max(c['n'], 1):.1%}) | {c['right']} |")
     return 0
 
 

@@ -300,7 +300,9 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
         class_delta_agree=agree, names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
         never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
         warnings=warnings, alarm=_alarm(model, proba, cls, X), misaligned_call=band > 0, envelope=findings,
-        call_index=cls, band_names=[str(c) for c in model.classes_])
+        call_index=cls, band_names=[str(c) for c in model.classes_],
+        delta_interval=(float(interval[0, 0]), float(interval[0, 1])), band_edges=bands.edges,
+        interval_level=1.0 - float(model.regressor_.alpha))
     shown: float | None = delta
     shown_iv: tuple[float | None, float | None] = (lo, hi)
     if status == INCONCLUSIVE:

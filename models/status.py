@@ -11,7 +11,8 @@
   missing here, no class above ``CONFIDENT_MIN_PROBABILITY``, a Δ regressor whose interval
   does not reach the classifier's band, "aligned" although misalignment is more likely than
   not (below the ordinal classifier's false-alarm threshold), more than
-  ``CONFIDENT_MAX_FAR_PROBABILITY`` on the bands two or more from the call, or a misalignment severity
+  ``CONFIDENT_MAX_FAR_PROBABILITY`` on the bands two or more from the call, a Δ regressor's interval
+  that reaches a band two or more from the call (:func:`interval_far_bands`), or a misalignment severity
   without the coupling bearings' 2X (2X/1X below ``SIGNATURE_MIN_2X_1X``: nothing physical
   backs the model's call), or "aligned" without the coupling bearings' shaft-centreline position
   per clearance (no clearance given, or no DC reading referenced to the bearing centre): a stationary
@@ -34,7 +35,7 @@ __all__ = ["Reason", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", 
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY",
            "CONFIDENT_MAX_FAR_PROBABILITY",
            "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "coupling_centreline_known", "describe_feature", "far_band_probability",
-           "envelope_reasons"]
+           "interval_far_bands", "envelope_reasons"]
 
 CONFIDENT = "confident"
 UNCERTAIN = "uncertain"
@@ -235,12 +236,33 @@ def far_band_probability(probabilities: Sequence[float] | np.ndarray, call_index
     return np.sum(np.where(_far_bands(p.shape[-1], call_index), p, 0.0), axis=-1)
 
 
+def interval_far_bands(interval: Sequence[float] | np.ndarray, call_index: int | np.ndarray,
+                       edges: Sequence[float]) -> np.ndarray:
+    """Whether a Δ interval reaches a band two or more from the called one.
+
+    ``interval``: shape (..., 2), (low, high) Δ; ``call_index``: the called band, shape (...); ``edges``: the
+    bands' inner edges (``SeverityBands.edges``; a band's upper edge is exclusive, as ``SeverityBands.index``).
+    Returns a bool array of shape (...) (0-d for one verdict)."""
+    lo_band, hi_band = _interval_bands(interval, edges)
+    call = np.asarray(call_index)
+    return (call - lo_band >= 2) | (hi_band - call >= 2)
+
+
+def _interval_bands(interval: Sequence[float] | np.ndarray, edges: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+    """The bands of an interval's low and high ends (``interval``: shape (..., 2))."""
+    iv = np.asarray(interval, dtype=float)
+    e = np.asarray(edges, dtype=float)
+    return np.searchsorted(e, iv[..., 0], side="right"), np.searchsorted(e, iv[..., 1], side="right")
+
+
 def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float], class_delta_agree: bool,
            names: Sequence[str], row: np.ndarray, feature_median: np.ndarray,
            never_missing: Sequence[str], speed_source: str | None,
            warnings: Iterable[str], alarm: tuple[float, float] | None = None,
            misaligned_call: bool = False, envelope: Sequence[dict] = (),
-           call_index: int | None = None, band_names: Sequence[str] = ()) -> tuple[str, list[Reason]]:
+           call_index: int | None = None, band_names: Sequence[str] = (),
+           delta_interval: tuple[float, float] | None = None, band_edges: Sequence[float] = (),
+           interval_level: float = 0.9) -> tuple[str, list[Reason]]:
     """The verdict's status and its reasons (worst first).
 
     Parameters
@@ -274,6 +296,15 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
         :data:`CONFIDENT_MAX_FAR_PROBABILITY` on the bands two or more away from it.
     band_names : sequence of str
         The bands' names, for that reason's message.
+    delta_interval : (float, float), optional
+        The Δ regressor's own interval (before it is widened to the class's band). With ``call_index`` and
+        ``band_edges``: a confident verdict needs it within one band of the call (:func:`interval_far_bands`):
+        the regressor is the second model of the verdict, and an interval that reaches two bands away does
+        not rule out the gross error the far-band probability limit guards against.
+    band_edges : sequence of float
+        The bands' inner edges.
+    interval_level : float
+        The interval's coverage, for that reason's message.
     """
     reasons: list[Reason] = []
     for f in sanity:
@@ -312,6 +343,17 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
                                   f"the model gives {p_far:.0%} to {which} — two or more bands from its call, more "
                                   f"than the {CONFIDENT_MAX_FAR_PROBABILITY:.0%} a confident verdict allows: recheck, "
                                   "or compare with this machine's baseline"))
+    reached: list[int] = []
+    if call_index is not None and delta_interval is not None and len(band_edges):
+        lo, hi = float(delta_interval[0]), float(delta_interval[1])
+        lo_band, hi_band = _interval_bands((lo, hi), band_edges)
+        reached = [k for k in range(int(lo_band), int(hi_band) + 1) if abs(k - call_index) >= 2]
+    if reached:
+        which = " or ".join(str(band_names[k]) if len(band_names) > k else f"band {k}" for k in reached)
+        reasons.append(Reason("far_band_interval", UNCERTAIN,
+                              f"the Δ estimate's {interval_level:.0%} interval ({lo:.3f}–{hi:.3f}) reaches {which} — "
+                              "two or more bands from the call: the Δ regressor does not rule out a gross error; "
+                              "recheck, or compare with this machine's baseline"))
     if alarm is not None and alarm[0] >= 0.5:
         reasons.append(Reason("below_alarm_threshold", UNCERTAIN,
                               f"misalignment is more likely than not ({alarm[0]:.0%}) but below the {alarm[1]:.0%} "

@@ -321,3 +321,7 @@ def test_far_probability_and_confident_error_counts():
         {"n": 1, "off2": 0, "right": 1}
     assert status_bench.confident_errors(proba, call, truth, ood, far_limit=None, aligned_allowed=False, **kw) == \
         {"n": 1, "off2": 0, "right": 1}
+    # the Δ interval of the first (aligned call, truly moderate) reaches moderate: not confident either
+    interval = np.array([[0.0, 0.2], [0.0, 0.1], [0.3, 0.6], [0.05, 0.2]])
+    assert status_bench.confident_errors(proba, call, truth, ood, far_limit=None, aligned_allowed=True, **kw,
+                                         interval=interval, edges=[0.05, 0.15, 0.35]) == {"n": 2, "off2": 0, "right": 2}

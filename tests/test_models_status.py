@@ -167,6 +167,41 @@ def test_shipped_model_does_not_rule_out_an_offset_without_the_clearance():
         np.testing.assert_allclose(list(verdicts[clearance].probabilities.values()), expected, atol=1e-9)
 
 
+def test_interval_far_bands_uses_the_bands_upper_edges_exclusive():
+    from rotordiag.models.status import interval_far_bands
+
+    edges = [0.05, 0.15, 0.35]
+    # aligned call: moderate starts at 0.15 exactly (SeverityBands.index: the upper edge is exclusive)
+    assert not interval_far_bands((0.0, 0.1499), 0, edges) and interval_far_bands((0.0, 0.15), 0, edges)
+    # severe call: slight ends below 0.15; moderate (one band away) does not count
+    assert interval_far_bands((0.149, 0.5), 3, edges) and not interval_far_bands((0.15, 0.5), 3, edges)
+    # slight call: only severe is two bands away (nothing below aligned)
+    assert not interval_far_bands((0.0, 0.349), 1, edges) and interval_far_bands((0.0, 0.35), 1, edges)
+    np.testing.assert_array_equal(interval_far_bands([[0.0, 0.1], [0.04, 0.3], [0.2, 0.6]], [0, 2, 2], edges),
+                                  [False, True, False])
+
+
+def test_a_delta_interval_reaching_two_bands_away_is_not_confident():
+    """Confident needs the Δ regressor's interval within one band of the call: of docs/robustness.md's seven
+    confident gross errors (seed 815) four had an interval reaching the true band's side, e.g. an aligned
+    flexible coupling (Δ 0.02, runout) called moderate with Δ interval 0.041–0.467."""
+    names, edges = ["aligned", "slight", "moderate", "severe"], [0.05, 0.15, 0.35]
+    moderate = dict(probabilities=[0.1, 0.1, 0.75, 0.05], call_index=2, band_names=names, band_edges=edges,
+                    names=["b2_1x_major_um_pp", "b2_x_2x_1x_ratio"], row=np.array([30.0, 0.5]),
+                    feature_median=np.array([30.0, 0.5]), misaligned_call=True)
+    assert _assess(**moderate, delta_interval=(0.06, 0.467))[0] == "confident"
+    status, reasons = _assess(**moderate, delta_interval=(0.041, 0.467))
+    assert status == UNCERTAIN and [r.code for r in reasons] == ["far_band_interval"]
+    assert "90% interval (0.041–0.467) reaches aligned" in reasons[0].message
+    status, reasons = _assess(probabilities=[0.95, 0.03, 0.01, 0.01], call_index=0, band_names=names,
+                              band_edges=edges, delta_interval=(0.0, 0.4), interval_level=0.8)
+    assert [r.code for r in reasons] == ["far_band_interval"]
+    assert "80% interval (0.000–0.400) reaches moderate or severe" in reasons[0].message
+    # without the call or the edges the rule is not applied
+    assert _assess(probabilities=[0.95, 0.03, 0.01, 0.01], delta_interval=(0.0, 0.4))[0] == "confident"
+    assert _assess(probabilities=[0.95, 0.03, 0.01, 0.01], call_index=0, delta_interval=(0.0, 0.4))[0] == "confident"
+
+
 def test_a_call_with_probability_two_bands_away_is_not_confident():
     """Confident needs at most 10 % on the bands two or more from the call: the confident gross errors of
     docs/robustness.md (moderate/severe shown aligned) had 12–34 % there."""
