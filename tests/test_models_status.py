@@ -272,3 +272,32 @@ def test_shipped_model_flags_one_bearing_scaled_down_and_names_it():
     assert all(f["feature"].startswith("b3_") and f["side"] == "below" for f in v.ood_findings)
     msgs = [r["message"] for r in v.reasons if r["code"] == "outside_training"]
     assert msgs and all("at bearing 3" in m and "below anything in the training data" in m for m in msgs)
+
+
+def test_shipped_verdict_checks_the_regressors_own_interval():
+    """The wiring: the verdict's status sees the Δ regressor's interval. The shipped example `aligned.csv`
+    without its clearance gets a 90 % interval up to about 0.43 on an aligned call (moderate and severe two
+    bands away), with 350 µm one that ends in slight (docs/recordings.md)."""
+    from pathlib import Path
+
+    from rotordiag.features import extract_features
+    from rotordiag.features.examples import example_path
+    from rotordiag.features.reader import ReadOptions, read_recording
+    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.status import interval_far_bands
+
+    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
+    if not (root / "active").exists():
+        pytest.skip("no shipped registry in this checkout")
+    bundle = load_bundle(root)
+    edges = bundle.model.bands_.edges
+    codes = {}
+    for clearance in (None, 350.0):
+        rec = read_recording(example_path("aligned.csv"), options=ReadOptions(clearance_um=clearance)).recording
+        v = diagnose(bundle, extract_features(rec))
+        call = list(bundle.model.bands_.names).index(v.model_severity)
+        far = bool(interval_far_bands(v.misalignment_interval, call, edges))
+        codes[clearance] = [r["code"] for r in v.reasons]
+        assert ("far_band_interval" in codes[clearance]) == far, (clearance, v.misalignment_interval, codes[clearance])
+    assert "far_band_interval" in codes[None]
+    assert "far_band_interval" not in codes[350.0]
