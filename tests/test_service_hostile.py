@@ -352,9 +352,8 @@ def test_health_sees_the_model_file_change_under_the_workers(pooled, rec, monkey
 
     from rotordiag.service import pool as pool_module
 
-    # /health reuses the workers' answer for MODEL_CHECK_INTERVAL_S (5 s in service); shorter here
-    monkeypatch.setattr(pool_module, "MODEL_CHECK_INTERVAL_S", 0.5)
-    MODEL_CHECK_INTERVAL_S = pool_module.MODEL_CHECK_INTERVAL_S
+    interval_s = 0.5       # /health reuses the workers' answer this long (MODEL_CHECK_INTERVAL_S, 5 s in service)
+    monkeypatch.setattr(pool_module, "MODEL_CHECK_INTERVAL_S", interval_s)
     fs, channels = rec
     pool = pooled.app.state.rd.pool
     _wait_ready(pool)
@@ -366,7 +365,7 @@ def test_health_sees_the_model_file_change_under_the_workers(pooled, rec, monkey
         h = pooled.get("/health")
         assert h.status_code == 200 and h.json()["model_sha256"], h.text
         (registry / "v0997" / "model.skops").write_bytes(b"corrupted under the running service")
-        time.sleep(MODEL_CHECK_INTERVAL_S + 0.2)
+        time.sleep(interval_s + 0.2)
         h = pooled.get("/health")
         assert h.status_code == 503 and "v0997" in h.json()["detail"], h.text
         r = pooled.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0))
@@ -374,7 +373,7 @@ def test_health_sees_the_model_file_change_under_the_workers(pooled, rec, monkey
     finally:
         assert pooled.post(f"/models/{first}/activate", headers=auth()).status_code == 200
         shutil.rmtree(registry / "v0997")
-    time.sleep(MODEL_CHECK_INTERVAL_S + 0.2)
+    time.sleep(interval_s + 0.2)
     assert pooled.get("/health").status_code == 200
 
 
