@@ -48,7 +48,7 @@ def _no_real_jobs():
 schema = schemathesis.openapi.from_asgi("/openapi.json", APP)
 
 
-# One explicit parametrization so that every operation's test has its own node id: pytest ≥ 9.2 builds a
+# One explicit parametrization so that every operation's test has its own node id: pytest 9.2 builds a
 # node id from the function's name and its callspec only, and schemathesis's per-operation items (named
 # "test_no_server_errors[POST /diagnose]") carry no callspec of their own, so without this all 15 items
 # share one id, and pytest-xdist (keyed by node id) runs one of them. test_every_operation_has_its_own_id.
@@ -59,7 +59,7 @@ schema = schemathesis.openapi.from_asgi("/openapi.json", APP)
                                  HealthCheck.function_scoped_fixture])
 def test_no_server_errors(case, headers):
     case.call_and_validate(headers=headers, checks=[not_a_server_error, response_schema_conformance,
-                                                                     status_code_conformance])
+                                                    status_code_conformance])
 
 
 def test_every_operation_has_its_own_id(request):
