@@ -243,16 +243,18 @@ def interval_far_bands(interval: Sequence[float] | np.ndarray, call_index: int |
     ``interval``: shape (..., 2), (low, high) Δ; ``call_index``: the called band, shape (...); ``edges``: the
     bands' inner edges (``SeverityBands.edges``; a band's upper edge is exclusive, as ``SeverityBands.index``).
     Returns a bool array of shape (...) (0-d for one verdict)."""
-    lo_band, hi_band = _interval_bands(interval, edges)
-    call = np.asarray(call_index)
-    return (call - lo_band >= 2) | (hi_band - call >= 2)
+    return np.any(_interval_far_mask(interval, call_index, edges), axis=-1)
 
 
-def _interval_bands(interval: Sequence[float] | np.ndarray, edges: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
-    """The bands of an interval's low and high ends (``interval``: shape (..., 2))."""
+def _interval_far_mask(interval: Sequence[float] | np.ndarray, call_index: int | np.ndarray,
+                       edges: Sequence[float]) -> np.ndarray:
+    """Mask, shape (..., n_bands), of the bands the interval reaches that are two or more from the call."""
     iv = np.asarray(interval, dtype=float)
     e = np.asarray(edges, dtype=float)
-    return np.searchsorted(e, iv[..., 0], side="right"), np.searchsorted(e, iv[..., 1], side="right")
+    bands = np.arange(e.size + 1)
+    lo_band = np.searchsorted(e, iv[..., 0], side="right")[..., None]
+    hi_band = np.searchsorted(e, iv[..., 1], side="right")[..., None]
+    return (bands >= lo_band) & (bands <= hi_band) & _far_bands(e.size + 1, call_index)
 
 
 def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float], class_delta_agree: bool,
@@ -346,8 +348,7 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
     reached: list[int] = []
     if call_index is not None and delta_interval is not None and len(band_edges):
         lo, hi = float(delta_interval[0]), float(delta_interval[1])
-        lo_band, hi_band = _interval_bands((lo, hi), band_edges)
-        reached = [k for k in range(int(lo_band), int(hi_band) + 1) if abs(k - call_index) >= 2]
+        reached = [int(k) for k in np.flatnonzero(_interval_far_mask((lo, hi), call_index, band_edges))]
     if reached:
         which = " or ".join(str(band_names[k]) if len(band_names) > k else f"band {k}" for k in reached)
         reasons.append(Reason("far_band_interval", UNCERTAIN,
