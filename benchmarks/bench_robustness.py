@@ -146,10 +146,12 @@ def design(sim_set: str, n: int, seed: int) -> list[dict]:
     return cases
 
 
-def simulate_set(sim_set: str, n: int, seed: int, cache: Path) -> tuple[list[dict], list[np.ndarray | None]]:
-    """The cases and their journal displacements (n, 4, 2) in m (None where the run failed); cached."""
+def simulate_set(sim_set: str, n: int, seed: int, cache: Path,
+                 revs: int = REVS) -> tuple[list[dict], list[np.ndarray | None]]:
+    """The cases and their journal displacements (n, 4, 2) in m (None where the run failed); cached.
+    ``revs``: the recorded revolutions (the report's :data:`REVS`; longer for bench_speed's record-length runs)."""
     cases = design(sim_set, n, seed)
-    path = cache / f"{sim_set}_n{n}_s{seed}.npz"
+    path = cache / (f"{sim_set}_n{n}_s{seed}.npz" if revs == REVS else f"{sim_set}_n{n}_s{seed}_r{revs}.npz")
     if path.exists():
         z = np.load(path, allow_pickle=False)
         return cases, [z[f"d{i}"] if f"d{i}" in z.files else None for i in range(len(cases))]
@@ -160,7 +162,7 @@ def simulate_set(sim_set: str, n: int, seed: int, cache: Path) -> tuple[list[dic
     for i, c in enumerate(cases):
         try:
             res = simulate(Plant.from_dict(c["plant"]), c["speed_rpm"], c["misalignment"], c["unbalance"],
-                           mechanism=c["mechanism"], transient_revs=400, record_revs=REVS + 3,
+                           mechanism=c["mechanism"], transient_revs=400, record_revs=revs + 3,
                            samples_per_rev=SAMPLES_PER_REV, unbalance_phase_rad=c["unbalance_phase_rad"],
                            exciter_unbalance=c["exciter_unbalance"],
                            exciter_unbalance_phase_rad=c["exciter_unbalance_phase_rad"],
@@ -179,15 +181,15 @@ def simulate_set(sim_set: str, n: int, seed: int, cache: Path) -> tuple[list[dic
 
 # ----------------------------------------------------------------------------- conditions
 def measure(disp_m: np.ndarray, speed_rpm: float, cond: Condition, rng: np.random.Generator, *,
-            speed_fluctuation: float = SPEED_FLUCTUATION) -> np.ndarray:
-    """Probe waveforms (2 × len(cond.bearings), n) in µm of one simulated run under ``cond``.
+            speed_fluctuation: float = SPEED_FLUCTUATION, revs: int = REVS) -> np.ndarray:
+    """Probe waveforms (2 × len(cond.bearings), n) in µm of ``revs`` revolutions of one simulated run under ``cond``.
 
     Runout, noise and speed fluctuation are ``simulator.dataset.measurement``'s (the training
     data's measurement model); the gain mismatch multiplies each channel by U(1 − g, 1 + g).
     """
     from rotordiag.simulator.dataset.measurement import MeasurementSettings, draw_measurement, probe_waveforms_um
 
-    n_points = int(round(REVS * 60.0 / speed_rpm * FS_HZ))
+    n_points = int(round(revs * 60.0 / speed_rpm * FS_HZ))
     settings = MeasurementSettings(bearings=tuple(cond.bearings), probe_angles_deg=ANGLES_DEG, sample_rate_hz=FS_HZ,
                                    n_points=n_points, snr_db=(cond.snr_db, cond.snr_db),
                                    runout_1x_um=cond.runout_1x_um, runout_2x_um=cond.runout_2x_um,

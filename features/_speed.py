@@ -52,18 +52,78 @@ def _hann_amplitude_at(power: np.ndarray, f: float, df: float) -> float:
     return float(np.sqrt(np.max(power[k - 1:k + 2])))
 
 
-def _line_amplitude(power: np.ndarray, logp: np.ndarray, f: float, df: float, level: float) -> float:
+def _modulation_sidebands(power: np.ndarray, df: float, level: float) -> np.ndarray:
+    """Bins of the spectral peaks that are modulation sidebands of a stronger line: ``(power.size,)`` bool.
+
+    A running speed that wanders (Ω(1 + ε sin 2πf_m t): a governor, the grid) phase-modulates every
+    order kΩ into a carrier with sidebands at kΩ ± j f_m, pairs of equal amplitude, growing with k; on
+    a long record they are resolved, and a family of them (kΩ − f_m …) would pass for an independent
+    running speed, or for a whirl's combination lines. A peak at g is a sideband of a line c within
+    ``SPEED_SIDEBAND_MAX_REL`` × c of it (and at least two bins away: the window's own main lobe) when c
+    stands ``SPEED_SIDEBAND_MIN_DROP`` times above the pair g, 2c − g and the pair's powers (each the
+    largest within a bin: a twin beside a strong line may ride on its skirt, no peak of its own) lie
+    within ``SPEED_SIDEBAND_MIRROR`` times of each other. The comb c ± j·d (d = |g − c|, j = 2, 3, …) is
+    followed while its pairs pass the same test. Peaks are those above ``level``; lines are tried as
+    carriers strongest first, and a sideband is no carrier. A whirl's combination line beside its 2nd
+    harmonic (Ω = 2ω + d) has no such twin (4ω − Ω is a higher-order combination, far weaker); the
+    mirror pairs kω, 2Ω − kω of a whip about the 1X lie further out than ``SPEED_SIDEBAND_MAX_REL``.
+    """
+    kk = np.arange(2, power.size - 1)
+    is_pk = np.zeros(power.size, dtype=bool)
+    is_pk[kk] = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= level)
+    pk = np.flatnonzero(is_pk)
+    side = np.zeros(power.size, dtype=bool)
+
+    def pair(c: int, d: int, half: int) -> tuple[float, float] | None:
+        lo, hi = c - d, c + d
+        if lo - half < 1 or hi + half + 1 > power.size:
+            return None
+        return float(np.max(power[lo - half:lo + half + 1])), float(np.max(power[hi - half:hi + half + 1]))
+
+    # bounded work on any spectrum (a hostile upload can make every other bin a peak): the strongest lines
+    # as carriers, and for each the nearest few peaks as the first pair
+    for c in pk[np.argsort(-power[pk], kind="stable")][:cfg.SPEED_SIDEBAND_MAX_CARRIERS]:
+        if side[c]:
+            continue
+        span = int(cfg.SPEED_SIDEBAND_MAX_REL * c)
+        near = pk[np.searchsorted(pk, c - span):np.searchsorted(pk, c + span, side="right")]
+        near = near[np.abs(near - c) >= cfg.SPEED_SIDEBAND_MIN_BINS]
+        for g in near[np.argsort(np.abs(near - c), kind="stable")][:cfg.SPEED_SIDEBAND_MAX_TRIES]:
+            if side[g]:
+                continue
+            d = int(abs(g - c))
+            for j in range(1, cfg.SPEED_SIDEBAND_MAX_ORDER + 1):
+                half = (j + 1) // 2                     # the spacing's rounding error grows with j
+                p = pair(c, j * d, half)
+                if p is None or power[c] < cfg.SPEED_SIDEBAND_MIN_DROP * max(p) or \
+                        not 1 / cfg.SPEED_SIDEBAND_MIRROR <= p[0] / p[1] <= cfg.SPEED_SIDEBAND_MIRROR:
+                    break
+                found = False
+                for b in (c - j * d, c + j * d):
+                    hit = is_pk[b - half:b + half + 1]
+                    side[b - half:b + half + 1] |= hit
+                    found |= bool(hit.any())
+                if not found:
+                    break
+    return side
+
+
+def _line_amplitude(power: np.ndarray, logp: np.ndarray, f: float, df: float, level: float,
+                    sidebands: np.ndarray | None = None) -> float:
     """Amplitude (√power) of a genuine spectral line at ``f``, else 0.
 
     Genuine: a local maximum of the spectrum within ±1 bin of ``f`` whose interpolated centre
     lies within half a bin of ``f`` and whose power reaches ``level``. The skirt of a strong
-    neighbouring line (e.g. oil whirl at 0.47X next to 0.5X) is not a line.
+    neighbouring line (e.g. oil whirl at 0.47X next to 0.5X) is not a line, nor is a modulation sideband
+    (``sidebands``, from :func:`_modulation_sidebands`).
     """
     k0 = int(round(f / df))
     if k0 < 2 or k0 >= power.size - 2:
         return 0.0
     k = k0 - 1 + int(np.argmax(power[k0 - 1:k0 + 2]))
     if not (power[k] >= power[k - 1] and power[k] > power[k + 1]) or power[k] < level:
+        return 0.0
+    if sidebands is not None and sidebands[k]:
         return 0.0
     den = logp[k - 1] - 2 * logp[k] + logp[k + 1]
     delta = 0.5 * (logp[k - 1] - logp[k + 1]) / den if den < 0 else 0.0
@@ -162,29 +222,48 @@ def _half_speed_whirl(spec: np.ndarray, df: float,
             "keyphasor_times_s")
 
 
-def _period_three(power: np.ndarray, logp: np.ndarray, df: float, f: float, level: float, f_hi: float) -> int:
-    """How strongly the harmonic comb of ``f`` reads as period-3 motion of a machine running at 3f.
+def _period_n(power: np.ndarray, logp: np.ndarray, df: float, f: float, level: float, f_hi: float,
+              sidebands: np.ndarray | None = None) -> tuple[int, int]:
+    """Whether the harmonic comb of ``f`` reads as period-n motion of a machine running at n·f: (n, strength).
 
     A machine running at ``f`` has a comb of 1X, 2X, 3X … lines that rarely peaks at 3X; in
-    period-3 motion at the running speed 3f (a 1/3X sub-harmonic with its 2/3X, 4/3X … from the
+    period-n motion at the running speed nf (a 1/nX sub-harmonic with its 2/nX, 3/nX … from the
     nonlinear bearings) every line is a harmonic of f as well, but the running speed's own 1X and
-    2X, at 3f and 6f, stand above their neighbours in the comb, below the sub-harmonic at f.
-    With the genuine lines of :func:`_line_amplitude` at ``level``: 0 when the line at 3f is not
-    larger than those at 2f and 4f, or holds less than ``SPEED_PERIOD3_MIN_REL`` or more than
-    ``SPEED_PERIOD3_MAX_REL`` of the line at f (a machine whose 3X is that large is running at f,
-    near a resonance at 3X), or when 3f lies above ``f_hi``; 2 when the line at 6f also stands above
-    those at 5f and 7f; else 1. (bench_robustness sets, seeds 815 and 816: the two period-3
-    recordings read at the 1/3X had 3f at 0.35 and 0.18 of f, the 6f peak on the first; four
-    recordings read right with a 3X comb peak had 3f at 0.59–2.9 of f. A 4X comb peak, by contrast,
-    is a flexible coupling's and common.)
+    2X, at nf and 2nf, stand above their neighbours in the comb, below the sub-harmonic at f.
+    With the genuine lines of :func:`_line_amplitude` at ``level``: strength 0 when the line at nf is
+    not larger than those at (n − 1)f and (n + 1)f, or holds less than ``SPEED_PERIOD3_MIN_REL`` or
+    more than ``SPEED_PERIOD3_MAX_REL`` of the line at f (a machine whose nX is that large is running
+    at f, near a resonance at nX), or when nf lies above ``f_hi``; 2 when the line at 2nf also stands
+    above those at (2n − 1)f and (2n + 1)f; else 1.
+
+    n = 3 is tried first and returned at either strength. Then n = 4 … ``SPEED_PERIOD_MAX_N``, only at
+    strength 2 and with every line f … nf present (period-n motion fills the comb with its
+    sub-harmonics k/nX): a flexible coupling's comb peaks at 4X and 8X as well, so these are reported
+    for a warning, never to change the speed (the caller's choice). Else (0, 0).
+
+    Measured: bench_robustness sets, seeds 815 and 816: the two period-3 recordings read at the 1/3X
+    had 3f at 0.35 and 0.18 of f, the 6f peak on the first; four recordings read right with a 3X comb
+    peak had 3f at 0.59–2.9 of f; 11 flexible couplings of 480 recordings have the 4f and 8f peaks.
+    bench_speed seed 15 at 192 revolutions: period-4 and period-8 motion read silently at the 1/4X and
+    1/8X (4f at 0.27 and 8f at 0.19 of f, both with the 2nf peak).
     """
-    if 3 * f > f_hi or 7 * f >= df * (power.size - 3):
-        return 0
-    a = [0.0] + [_line_amplitude(power, logp, m * f, df, level) for m in range(1, 8)]
-    if not (a[1] > 0 and cfg.SPEED_PERIOD3_MIN_REL * a[1] <= a[3] <= cfg.SPEED_PERIOD3_MAX_REL * a[1]
-            and a[3] > max(a[2], a[4])):
-        return 0
-    return 2 if a[6] > max(a[5], a[7]) else 1
+    a = [0.0] * (2 * cfg.SPEED_PERIOD_MAX_N + 2)
+    known = 0
+    for n in range(3, cfg.SPEED_PERIOD_MAX_N + 1):
+        if n * f > f_hi or (2 * n + 1) * f >= df * (power.size - 3):
+            break
+        for m in range(known + 1, 2 * n + 2):
+            a[m] = _line_amplitude(power, logp, m * f, df, level, sidebands)
+        known = 2 * n + 1
+        if not (a[1] > 0 and cfg.SPEED_PERIOD3_MIN_REL * a[1] <= a[n] <= cfg.SPEED_PERIOD3_MAX_REL * a[1]
+                and a[n] > max(a[n - 1], a[n + 1])):
+            continue
+        doubled = a[2 * n] > max(a[2 * n - 1], a[2 * n + 1])
+        if n == 3:
+            return 3, 2 if doubled else 1
+        if doubled and all(v > 0 for v in a[1:n + 1]):
+            return n, 2
+    return 0, 0
 
 
 def _hann_kernel(theta: np.ndarray, n: int) -> np.ndarray:
@@ -246,7 +325,8 @@ def _hidden_running_line(spec: np.ndarray, fs: float, n: int, df: float,
     return g, r2 / r1, float(ag / a0) if a0 > 0 else float("inf")
 
 
-def _local_peak_ratio(power: np.ndarray, f: float, df: float, floor: float, tol_bins: float) -> float:
+def _local_peak_ratio(power: np.ndarray, f: float, df: float, floor: float, tol_bins: float,
+                      sidebands: np.ndarray | None = None) -> float:
     """Power of the highest local maximum of ``power`` within ``tol_bins`` of ``f``, over ``floor``
     (0 when there is none)."""
     k0 = int(round(f / df))
@@ -254,7 +334,8 @@ def _local_peak_ratio(power: np.ndarray, f: float, df: float, floor: float, tol_
     lo, hi = max(k0 - r, 1), min(k0 + r, power.size - 2)
     best = 0.0
     for k in range(lo, hi + 1):
-        if abs(k - f / df) <= tol_bins and power[k] >= power[k - 1] and power[k] > power[k + 1]:
+        if (abs(k - f / df) <= tol_bins and power[k] >= power[k - 1] and power[k] > power[k + 1]
+                and not (sidebands is not None and sidebands[k])):
             best = max(best, float(power[k]) / floor)
     return best
 
@@ -266,7 +347,7 @@ _COMBINATIONS: tuple[tuple[int, tuple[int, ...]], ...] = ((1, (0, -1, 1)), (2, (
 
 def _combination_partners(power: np.ndarray, logp: np.ndarray, df: float, floor: float, f_w: float,
                           foreign_hz: list[float], f_lo: float, f_hi: float,
-                          f_top: float) -> list[tuple[float, float, int, float]]:
+                          f_top: float, sidebands: np.ndarray | None = None) -> list[tuple[float, float, int, float]]:
     """Candidate running speeds Ω when the dominant line family at ``f_w`` is a sub-synchronous whirl / whip.
 
     A whirl or whip line ω is not locked to the running speed Ω, but it mixes with it: the
@@ -296,6 +377,8 @@ def _combination_partners(power: np.ndarray, logp: np.ndarray, df: float, floor:
     k_top = min(int(f_top / df), power.size - 2)
     kk = np.arange(2, k_top)
     is_line = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= cfg.SPEED_PARTNER_LINE_SNR * floor)
+    if sidebands is not None:
+        is_line &= ~sidebands[kk]
     k_lines = kk[is_line]
     den = logp[k_lines - 1] - 2 * logp[k_lines] + logp[k_lines + 1]
     delta = np.where(den < 0, 0.5 * (logp[k_lines - 1] - logp[k_lines + 1]) / np.where(den < 0, den, -1.0), 0.0)
@@ -340,7 +423,8 @@ def _combination_partners(power: np.ndarray, logp: np.ndarray, df: float, floor:
     return scored
 
 
-def _weak_lines_above(power: np.ndarray, df: float, floor: float, f1: float, f_hi: float) -> list[float]:
+def _weak_lines_above(power: np.ndarray, df: float, floor: float, f1: float, f_hi: float,
+                      sidebands: np.ndarray | None = None) -> list[float]:
     """Lines (local maxima ``SPEED_PARTNER_LINE_SNR`` × the median spectrum) above f1 / ``SPEED_SUBSYNC_MAX_RATIO``
     and up to ``f_hi`` that are not within 1.5 bins of a harmonic of ``f1``: if ``f1`` were a whirl / whip,
     one of them could be the running speed's weak 1X line."""
@@ -349,7 +433,10 @@ def _weak_lines_above(power: np.ndarray, df: float, floor: float, f1: float, f_h
     kk = np.arange(max(k_lo, 2), k_hi + 1)
     if kk.size == 0:
         return []
-    is_line = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= cfg.SPEED_PARTNER_LINE_SNR * floor)
+    level = max(cfg.SPEED_PARTNER_LINE_SNR * floor, cfg.SPEED_WEAK_LINE_MIN_REL ** 2 * float(power.max()))
+    is_line = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= level)
+    if sidebands is not None:
+        is_line &= ~sidebands[kk]
     f = kk[is_line] * df
     m = np.rint(f / f1)
     return [float(v) for v in f[np.abs(f - m * f1) > 1.5 * df]]
@@ -360,7 +447,8 @@ def _on_lattice(f: float, om: float, w: float, df: float) -> bool:
     return any(abs(f - m * om - k * w) <= 1.5 * df for m in range(4) for k in range(-6, 7) if (m, k) != (0, 0))
 
 
-def _refine_partner(x: np.ndarray, fs: float, df: float, power: np.ndarray, floor: float, om: float, w: float) -> float:
+def _refine_partner(x: np.ndarray, fs: float, df: float, power: np.ndarray, floor: float, om: float, w: float,
+                    sidebands: np.ndarray | None = None) -> float:
     """Refine a running speed ``om`` found from whirl combination lines (see :func:`_combination_partners`).
 
     Each lattice line mΩ + kω (m = 1…3, |k| ≤ 4) at least ``SPEED_LINE_MIN_SNR`` above the noise and
@@ -374,7 +462,7 @@ def _refine_partner(x: np.ndarray, fs: float, df: float, power: np.ndarray, floo
             q = m * om + k * w
             if q <= 2 * df or q > 0.45 * fs or (k != 0 and abs(q - round(q / w) * w) < 2.5 * df):
                 continue
-            r = _local_peak_ratio(power, q, df, floor, cfg.SPEED_PARTNER_TOL_BINS)
+            r = _local_peak_ratio(power, q, df, floor, cfg.SPEED_PARTNER_TOL_BINS, sidebands)
             if r < cfg.SPEED_LINE_MIN_SNR:
                 continue
             fq = refine_line_hz(x, fs, q, iterations=2)
@@ -560,8 +648,9 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
                 f"record can resolve ({60 * f_lo:.0f}–{60 * f_hi:.0f} r/min at {fs:g} Hz); check the range or give speed_rpm")
     band = power[k_lo:k_hi + 1]
     floor = float(np.median(band))
+    sidebands = _modulation_sidebands(power, df, cfg.SPEED_PARTNER_LINE_SNR * floor)
     inner = band[1:-1]
-    is_peak = (inner >= band[:-2]) & (inner > band[2:])
+    is_peak = (inner >= band[:-2]) & (inner > band[2:]) & ~sidebands[k_lo + 1:k_hi]
     peak_idx = np.nonzero(is_peak)[0] + k_lo + 1
     if peak_idx.size == 0 or power[peak_idx].max() < cfg.SPEED_LINE_MIN_SNR * floor:
         raise ValueError(
@@ -579,7 +668,8 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
             a, b = max(int(np.floor(m * c_lo / df)), 1), min(int(np.ceil(m * c_hi / df)), power.size - 2)
             kk = np.arange(a, b + 1)
             if kk.size:
-                ok = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= cfg.SPEED_LINE_MIN_SNR * floor)
+                ok = ((power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & ~sidebands[kk]
+                      & (power[kk] >= cfg.SPEED_LINE_MIN_SNR * floor))
                 extra.extend(int(k) for k in kk[ok] if k not in peak_idx)
         seed_idx = np.concatenate([peak_idx, np.asarray(sorted(set(extra), key=lambda k: -power[k]), dtype=np.int64)])
     logp = np.log(np.maximum(power, np.finfo(float).tiny))
@@ -597,7 +687,7 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
                 continue
             if any(abs(f - c[0]) < 1.5 * df for c in candidates):
                 continue
-            weak = [_line_amplitude(power, logp, m * f, df, snr_level) for m in (1, 2, 3)]
+            weak = [_line_amplitude(power, logp, m * f, df, snr_level, sidebands) for m in (1, 2, 3)]
             if weak[0] <= 0.0:      # a running speed always shows its own 1X line
                 continue
             amps = [a if a * a >= present_level else 0.0 for a in weak]
@@ -649,7 +739,7 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
         # combination lines (with a speed range and no running speed in it, the search is the only way)
         whirl_like = (abs(peak_idx[0] * df - f_best) <= 1.5 * df
                       and not _circular_fraction_at(spec, f_best, df) >= cfg.SPEED_PARTNER_MAX_BACKWARD)  # NaN: no x/y pair
-        partners = (_combination_partners(power, logp, df, floor, f_best, seeds, c_lo, c_hi, 0.45 * fs)
+        partners = (_combination_partners(power, logp, df, floor, f_best, seeds, c_lo, c_hi, 0.45 * fs, sidebands)
                     if only_partner or whirl_like else [])
         if only_partner and not partners:
             raise no_line_in_range()
@@ -661,7 +751,7 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
             if abs(whip_hz - f_best) > 2 * df:
                 whip_hz = f_best
             om, score, n_lines, r1 = partners[0]
-            f_partner = _refine_partner(x, fs, df, power, floor, om, whip_hz)
+            f_partner = _refine_partner(x, fs, df, power, floor, om, whip_hz, sidebands)
             warnings.append(
                 f"the line family at {60 * whip_hz:.1f} cpm ({whip_hz / f_partner:.3f}X) is a sub-synchronous "
                 f"whirl / whip: {n_lines} lines at combinations mΩ + kω of it with the running speed Ω "
@@ -681,7 +771,7 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
     if whip_hz is not None:
         foreign = [g for g in foreign if not _on_lattice(g, f_best, whip_hz, df)]
     elif switched is None:
-        foreign += [g for g in _weak_lines_above(power, df, floor, f_best, c_hi) if g not in foreign]
+        foreign += [g for g in _weak_lines_above(power, df, floor, f_best, c_hi, sidebands) if g not in foreign]
     if foreign:
         warnings.append(
             f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but the lines at "
@@ -692,20 +782,23 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
         f = f_partner
     else:
         rivals = [c for c in candidates if c[0] != f_best and c[1] > 0]
-        period3 = _period_three(power, logp, df, f_best, snr_level, c_hi) if switched is None else 0
-        if period3 == 1:
+        period_n, strength = _period_n(power, logp, df, f_best, snr_level, c_hi, sidebands) if switched is None else (0, 0)
+        switch = period_n == 3 and strength == 2        # the only period read as the speed (see _period_n)
+        if strength and not switch:
             warnings.append(
-                f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but its 3X line stands above its 2X and 4X, "
-                f"as the running speed's 1X does in period-3 motion (then {60 * f_best:.1f} cpm is a 1/3X sub-harmonic); "
-                f"if the machine runs at {60 * 3 * f_best:.1f} r/min give speed_rpm or keyphasor_times_s")
-        if period3 == 2:
+                f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but its {period_n}X line stands above its "
+                f"{period_n - 1}X and {period_n + 1}X, as the running speed's 1X does in period-{period_n} motion (then "
+                f"{60 * f_best:.1f} cpm is a 1/{period_n}X sub-harmonic); if the machine runs at "
+                f"{60 * period_n * f_best:.1f} r/min give speed_rpm or keyphasor_times_s")
+        if switch:
             # never a sub-harmonic: the comb's 3X and 6X stand out, so f_best is a 1/3X
             warnings.append(
-                f"speed estimate ambiguous: {60 * 3 * f_best:.1f} r/min chosen over {60 * f_best:.1f} r/min: the lines at "
-                f"3 and 6 times {60 * f_best:.1f} cpm stand above their neighbours, the signature of period-3 motion (a "
-                f"1/3X sub-harmonic with its 2/3X, 4/3X …); if the machine runs at {60 * f_best:.1f} r/min give "
-                "speed_rpm or keyphasor_times_s")
-            f_best = 3 * f_best
+                f"speed estimate ambiguous: {60 * period_n * f_best:.1f} r/min chosen over {60 * f_best:.1f} r/min: the "
+                f"lines at {period_n} and {2 * period_n} times {60 * f_best:.1f} cpm stand above their neighbours, the "
+                f"signature of period-{period_n} motion (a 1/{period_n}X sub-harmonic with its 2/{period_n}X, "
+                f"{period_n + 1}/{period_n}X …); if the machine runs at {60 * f_best:.1f} r/min give speed_rpm or "
+                "keyphasor_times_s")
+            f_best = period_n * f_best
         elif rivals and rivals[0][1] == n_best and rivals[0][2] >= 0.8 * s_best:
             warnings.append(
                 f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * rivals[0][0]:.1f} r/min "
