@@ -758,10 +758,16 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
                 f"({60 * f_partner:.1f} r/min)")
             weak_1x = r1 < cfg.SPEED_PARTNER_CLEAR_SNR
             close = len(partners) > 1 and partners[1][1] >= cfg.SPEED_PARTNER_RIVAL_REL * score
-            if weak_1x or close:
+            # Ω ± ω spans the same lattice mΩ + kω as Ω: a runner-up one whirl frequency away with the stronger
+            # own 1X line may be the running speed whatever the scores say
+            shifted = [p for p in partners[1:] if abs(abs(p[0] - om) - whip_hz) <= 2 * cfg.SPEED_PARTNER_TOL_BINS * df
+                       and p[3] > r1]
+            if weak_1x or close or shifted:
                 why = (f"its own 1X line is {'not seen' if r1 == 0 else f'only {10 * np.log10(r1):.0f} dB above the noise'}"
                        if weak_1x else
-                       f"{60 * partners[1][0]:.1f} r/min explains the combination lines almost as well")
+                       f"{60 * partners[1][0]:.1f} r/min explains the combination lines almost as well" if close else
+                       f"{60 * shifted[0][0]:.1f} r/min, one whirl frequency away, spans the same combination lines and "
+                       "has the stronger 1X line")
                 warnings.append(
                     f"speed estimate ambiguous: {60 * f_partner:.1f} r/min chosen from the combination lines of a "
                     f"whirl / whip at {60 * whip_hz:.1f} cpm, but {why}; give speed_rpm or keyphasor_times_s")
