@@ -196,6 +196,8 @@ def measure(disp_m: np.ndarray, speed_rpm: float, cond: Condition, rng: np.rando
                                    speed_fluctuation=speed_fluctuation)
     draws = draw_measurement(settings, rng)
     w = probe_waveforms_um(disp_m, SAMPLES_PER_REV, speed_rpm, settings, draws, rng).astype(np.float64)
+    if not np.isfinite(w).all():        # NaN past the simulated record: a set simulated shorter than ``revs``
+        raise ValueError(f"the simulated run covers {disp_m.shape[0] / SAMPLES_PER_REV:.1f} revolutions; {revs} were asked")
     if cond.gain_mismatch > 0:
         w *= rng.uniform(1.0 - cond.gain_mismatch, 1.0 + cond.gain_mismatch, size=(w.shape[0], 1))
     return w
