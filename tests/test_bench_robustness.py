@@ -68,6 +68,17 @@ def test_runout_has_the_stated_amplitude():
     np.testing.assert_allclose(a1[:, 0::2], a1[:, 1::2], rtol=1e-3)          # both probes of a bearing
 
 
+def test_record_length_and_a_record_longer_than_the_run():
+    """``revs`` sets the record length (bench_speed --base-set --revs); more revolutions than the simulated run
+    holds is an error, not NaN waveforms (6400 rows at 128 samples per revolution: 50 revolutions)."""
+    cond = bench.Condition("t", snr_db=40.0)
+    w = bench.measure(_shaft(), SPEED_RPM, cond, np.random.default_rng(2), revs=24)
+    assert w.shape == (8, 1536) and np.isfinite(w).all()
+    assert bench.measure(_shaft(), SPEED_RPM, cond, np.random.default_rng(2)).shape == (8, 3072)   # REVS = 48
+    with pytest.raises(ValueError, match="covers 50.0 revolutions; 60 were asked"):
+        bench.measure(_shaft(), SPEED_RPM, cond, np.random.default_rng(2), revs=60)
+
+
 def test_gain_mismatch_within_ten_percent():
     d = _shaft()
     plain = bench.Condition("t", snr_db=np.inf)
