@@ -460,3 +460,26 @@ def test_a_wandering_speed_on_a_long_record_is_not_read_off_its_sidebands(y_lag_
                                          theta_fn=theta, noise_um=0.15, seed=5))
     assert fr.speed_rpm == pytest.approx(rpm, rel=1e-3), fr.warnings
     assert not any("whirl" in w or "not its harmonics" in w for w in fr.warnings), fr.warnings
+
+
+def test_a_whirl_partner_one_whirl_frequency_from_a_stronger_runner_up_is_flagged(monkeypatch):
+    """Ω + ω spans the same lattice mΩ + kω as Ω (Ω = (Ω + ω) − ω): the combination-line search can score the
+    wrong one of the two higher (robustness base set, seed 815, at 96 revolutions: 2563.5 r/min read as 3799.4,
+    the runner-up at the true speed scoring 14.6 against 19.5, its own 1X line 11 dB the stronger). The scores
+    of such a pair are replayed here on an oil-whirl record: the estimate must be declared ambiguous."""
+    from rotordiag.features import _speed
+
+    rpm, ratio = 2563.5, 0.43
+    om, w = rpm / 60, ratio * rpm / 60
+    monkeypatch.setattr(_speed, "_combination_partners",
+                        lambda *a, **k: [(om + w, 19.5, 5, 741.0), (om, 14.6, 4, 8533.0)])
+    fs = 2560.0
+
+    def whirl(t, b):                                # circular forward whirl with its 2nd harmonic
+        return (60 * np.cos(2 * np.pi * w * t) + 12 * np.cos(4 * np.pi * w * t + 0.5),
+                60 * np.sin(2 * np.pi * w * t) + 12 * np.sin(4 * np.pi * w * t + 0.5))
+
+    comps = {b: [(1, 0.5, 20.0 * b, 0.25, 110.0)] for b in (1, 2, 3, 4)}      # a lone weak 1X: no family to switch to
+    fr = extract_features(make_recording(components=comps, rpm=rpm, fs=fs, n=int(96 * 60 / rpm * fs), extra=whirl,
+                                         noise_um=0.02, seed=12))
+    assert any("speed estimate ambiguous" in x and "one whirl frequency away" in x for x in fr.warnings), fr.warnings
