@@ -20,7 +20,7 @@ from threadpoolctl import threadpool_limits
 from rotordiag.features import evidence
 
 from .registry import Registry
-from .status import INCONCLUSIVE, assess, consistent_estimate
+from .status import INCONCLUSIVE, ModelCall, RecordingChecks, assess, consistent_estimate
 
 if TYPE_CHECKING:
     from .compiled import CompiledModel
@@ -296,13 +296,14 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     delta, (lo, hi), agree = consistent_estimate(band, bands.edges, raw, (float(interval[0, 0]),
                                                                           float(interval[0, 1])))
     status, reasons = assess(
-        sanity=getattr(feature_result, "sanity", ()) or (), ood_score=ood_score, probabilities=proba,
-        class_delta_agree=agree, names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
-        never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
-        warnings=warnings, alarm=_alarm(model, proba, cls, X), misaligned_call=band > 0, envelope=findings,
-        call_index=cls, band_names=[str(c) for c in model.classes_],
-        delta_interval=(float(interval[0, 0]), float(interval[0, 1])), band_edges=bands.edges,
-        interval_level=1.0 - float(model.regressor_.alpha))
+        RecordingChecks(names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
+                        sanity=getattr(feature_result, "sanity", ()) or (), ood_score=ood_score,
+                        never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
+                        warnings=warnings, envelope=findings),
+        ModelCall(probabilities=proba, class_delta_agree=agree, call_index=cls,
+                  band_names=[str(c) for c in model.classes_], misaligned_call=band > 0,
+                  alarm=_alarm(model, proba, cls, X), delta_interval=(float(interval[0, 0]), float(interval[0, 1])),
+                  band_edges=bands.edges, interval_level=1.0 - float(model.regressor_.alpha)))
     shown: float | None = delta
     shown_iv: tuple[float | None, float | None] = (lo, hi)
     if status == INCONCLUSIVE:

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Reason", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
+__all__ = ["Reason", "RecordingChecks", "ModelCall", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY",
            "CONFIDENT_MAX_FAR_PROBABILITY",
            "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "coupling_centreline_known", "describe_feature", "far_band_probability",
@@ -257,47 +257,61 @@ def _interval_far_mask(interval: Sequence[float] | np.ndarray, call_index: int |
     return (bands >= lo_band) & (bands <= hi_band) & _far_bands(e.size + 1, call_index)
 
 
-def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float], class_delta_agree: bool,
-           names: Sequence[str], row: np.ndarray, feature_median: np.ndarray,
-           never_missing: Sequence[str], speed_source: str | None,
-           warnings: Iterable[str], alarm: tuple[float, float] | None = None,
-           misaligned_call: bool = False, envelope: Sequence[dict] = (),
-           call_index: int | None = None, band_names: Sequence[str] = (),
-           delta_interval: tuple[float, float] | None = None, band_edges: Sequence[float] = (),
-           interval_level: float = 0.9) -> tuple[str, list[Reason]]:
-    """The verdict's status and its reasons (worst first).
+@dataclass(frozen=True)
+class RecordingChecks:
+    """What a recording says before the models' call: its physics checks and how it sits against training.
 
-    Parameters
+    Attributes
     ----------
-    sanity : iterable of features.SanityFinding
-    ood_score : float
-    probabilities : sequence of float
-        Calibrated class probabilities.
-    class_delta_agree : bool
-        From :func:`consistent_estimate`.
     names, row, feature_median
         The model's feature names, this recording's vector and the training medians.
+    sanity : iterable of features.SanityFinding
+    ood_score : float
+        Distance to the training data over its usual distance (NaN: not scored).
     never_missing : sequence of str
         Features missing here that training always had.
     speed_source : str or None
         ``"keyphasor"``, ``"given"`` or ``"estimated"``.
     warnings : iterable of str
         The feature extractor's warnings (an ambiguous speed estimate is one).
-    alarm : (probability, threshold), optional
-        For a verdict of "aligned" from an ordinal classifier: P(misaligned, any band) and the
-        threshold it must reach to be reported (false-alarm control). Between 0.5 and the
-        threshold the verdict is uncertain, and says so.
-    misaligned_call : bool
-        The class is a misalignment severity (not the aligned band): it then needs the coupling
-        bearings' 2X (:data:`SIGNATURE_MIN_2X_1X`) to be confident; an aligned call needs their
-        shaft-centreline position per clearance (:func:`coupling_centreline_known`).
     envelope : sequence of dict
         ``MisalignmentModel.envelope_findings`` of this row: features outside the training range.
+    """
+
+    names: Sequence[str]
+    row: np.ndarray
+    feature_median: np.ndarray
+    sanity: Iterable
+    ood_score: float
+    never_missing: Sequence[str]
+    speed_source: str | None
+    warnings: Iterable[str]
+    envelope: Sequence[dict] = ()
+
+
+@dataclass(frozen=True)
+class ModelCall:
+    """The two models' call on a recording: the classifier's band and the Δ regressor's interval.
+
+    Attributes
+    ----------
+    probabilities : sequence of float
+        Calibrated class probabilities.
+    class_delta_agree : bool
+        From :func:`consistent_estimate`.
     call_index : int, optional
         The called band's index into ``probabilities`` (ordered bands): a confident verdict needs at most
         :data:`CONFIDENT_MAX_FAR_PROBABILITY` on the bands two or more away from it.
     band_names : sequence of str
-        The bands' names, for that reason's message.
+        The bands' names, for the reasons' messages.
+    misaligned_call : bool
+        The class is a misalignment severity (not the aligned band): it then needs the coupling
+        bearings' 2X (:data:`SIGNATURE_MIN_2X_1X`) to be confident; an aligned call needs their
+        shaft-centreline position per clearance (:func:`coupling_centreline_known`).
+    alarm : (probability, threshold), optional
+        For a verdict of "aligned" from an ordinal classifier: P(misaligned, any band) and the
+        threshold it must reach to be reported (false-alarm control). Between 0.5 and the
+        threshold the verdict is uncertain, and says so.
     delta_interval : (float, float), optional
         The Δ regressor's own interval (before it is widened to the class's band). With ``call_index`` and
         ``band_edges``: a confident verdict needs it within one band of the call (:func:`interval_far_bands`):
@@ -308,28 +322,67 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
     interval_level : float
         The interval's coverage, for that reason's message.
     """
+
+    probabilities: Sequence[float]
+    class_delta_agree: bool
+    call_index: int | None = None
+    band_names: Sequence[str] = ()
+    misaligned_call: bool = False
+    alarm: tuple[float, float] | None = None
+    delta_interval: tuple[float, float] | None = None
+    band_edges: Sequence[float] = ()
+    interval_level: float = 0.9
+
+
+def assess(checks: RecordingChecks, call: ModelCall) -> tuple[str, list[Reason]]:
+    """The verdict's status and its reasons (worst first): the recording's (:func:`_recording_reasons`), then
+    the call's (:func:`_call_reasons`); ``inconclusive`` when any reason is, ``uncertain`` when there is one,
+    else ``confident``."""
+    reasons = _recording_reasons(checks) + _call_reasons(call, checks)
+    if any(r.status == INCONCLUSIVE for r in reasons):
+        status = INCONCLUSIVE
+    elif reasons:
+        status = UNCERTAIN
+    else:
+        status = CONFIDENT
+    reasons.sort(key=lambda r: r.status != INCONCLUSIVE)
+    return status, reasons
+
+
+def _recording_reasons(c: RecordingChecks) -> list[Reason]:
+    """Sanity findings, OOD score, features outside the training range, vibration scale, an ambiguous
+    speed estimate, features the model always had."""
     reasons: list[Reason] = []
-    for f in sanity:
+    for f in c.sanity:
         reasons.append(Reason(f.code, INCONCLUSIVE if f.level == "fail" else UNCERTAIN, f.message))
-    if np.isfinite(ood_score) and ood_score > 1.0:
-        status = INCONCLUSIVE if ood_score > OOD_INCONCLUSIVE else UNCERTAIN
-        reasons.append(Reason("ood", status, f"the recording is unlike the training data (OOD score {ood_score:.2f}; "
+    if np.isfinite(c.ood_score) and c.ood_score > 1.0:
+        status = INCONCLUSIVE if c.ood_score > OOD_INCONCLUSIVE else UNCERTAIN
+        reasons.append(Reason("ood", status, f"the recording is unlike the training data (OOD score {c.ood_score:.2f}; "
                               f"> 1 unusual, > {OOD_INCONCLUSIVE:g} far outside): another machine design, "
                               "operating state or measurement set-up than the model knows"))
-    reasons += envelope_reasons(envelope)
-    reasons += _scale_reasons(names, row, feature_median)
-    if speed_source == "estimated":
-        for w in warnings:
+    reasons += envelope_reasons(c.envelope)
+    reasons += _scale_reasons(c.names, c.row, c.feature_median)
+    if c.speed_source == "estimated":
+        for w in c.warnings:
             if "speed estimate ambiguous" in w or "refinement did not converge" in w:
                 reasons.append(Reason("speed_ambiguous", UNCERTAIN, f"{w}"))
-    if never_missing:
+    if c.never_missing:
         reasons.append(Reason("features_missing", UNCERTAIN,
-                              f"{len(never_missing)} feature(s) the model always had are missing here "
-                              f"(e.g. {', '.join(list(never_missing)[:3])}): "
+                              f"{len(c.never_missing)} feature(s) the model always had are missing here "
+                              f"(e.g. {', '.join(list(c.never_missing)[:3])}): "
                               + ("record at least 32 revolutions for the motion type; "
-                                 if any(n.startswith("motion_") for n in never_missing) else "")
+                                 if any(n.startswith("motion_") for n in c.never_missing) else "")
                               + "give an x/y probe pair at each bearing the model was trained with "
                               "(the coupling bearings 2 and 3 at least)"))
+    return reasons
+
+
+def _call_reasons(m: ModelCall, c: RecordingChecks) -> list[Reason]:
+    """Low probability, probability or Δ interval on bands two or more from the call, below the alarm
+    threshold, a severity without the coupling 2X or "aligned" without the coupling centreline (these two
+    read the recording's features), class and Δ disagreeing."""
+    reasons: list[Reason] = []
+    probabilities, call_index, band_names = m.probabilities, m.call_index, m.band_names
     pmax = float(np.max(probabilities)) if len(probabilities) else np.nan
     if not pmax >= CONFIDENT_MIN_PROBABILITY:
         reasons.append(Reason("low_probability", UNCERTAIN,
@@ -346,22 +399,22 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
                                   f"than the {CONFIDENT_MAX_FAR_PROBABILITY:.0%} a confident verdict allows: recheck, "
                                   "or compare with this machine's baseline"))
     reached: list[int] = []
-    if call_index is not None and delta_interval is not None and len(band_edges):
-        lo, hi = float(delta_interval[0]), float(delta_interval[1])
-        reached = [int(k) for k in np.flatnonzero(_interval_far_mask((lo, hi), call_index, band_edges))]
+    if call_index is not None and m.delta_interval is not None and len(m.band_edges):
+        lo, hi = float(m.delta_interval[0]), float(m.delta_interval[1])
+        reached = [int(k) for k in np.flatnonzero(_interval_far_mask((lo, hi), call_index, m.band_edges))]
     if reached:
         which = " or ".join(str(band_names[k]) if len(band_names) > k else f"band {k}" for k in reached)
         reasons.append(Reason("far_band_interval", UNCERTAIN,
-                              f"the Δ estimate's {interval_level:.0%} interval ({lo:.3f}–{hi:.3f}) reaches {which} — "
+                              f"the Δ estimate's {m.interval_level:.0%} interval ({lo:.3f}–{hi:.3f}) reaches {which} — "
                               "two or more bands from the call: the Δ regressor does not rule out a gross error; "
                               "recheck, or compare with this machine's baseline"))
-    if alarm is not None and alarm[0] >= 0.5:
+    if m.alarm is not None and m.alarm[0] >= 0.5:
         reasons.append(Reason("below_alarm_threshold", UNCERTAIN,
-                              f"misalignment is more likely than not ({alarm[0]:.0%}) but below the {alarm[1]:.0%} "
+                              f"misalignment is more likely than not ({m.alarm[0]:.0%}) but below the {m.alarm[1]:.0%} "
                               "the model needs to report it (set to keep false alarms on healthy machines at 5 %): "
                               "called aligned — recheck, or compare with this machine's baseline"))
-    if misaligned_call:
-        ratio = coupling_2x_1x(names, row)
+    if m.misaligned_call:
+        ratio = coupling_2x_1x(c.names, c.row)
         if not ratio >= SIGNATURE_MIN_2X_1X:
             seen = "not measured" if not np.isfinite(ratio) else f"{ratio:.3f}"
             reasons.append(Reason("no_2x_signature", UNCERTAIN,
@@ -369,22 +422,15 @@ def assess(*, sanity: Iterable, ood_score: float, probabilities: Sequence[float]
                                   f"{SIGNATURE_MIN_2X_1X:g}): the classic signature is missing and nothing physical "
                                   "backs the model's call — compare with this machine's baseline, check the "
                                   "centreline, or re-record"))
-    elif not coupling_centreline_known(names, row):
+    elif not coupling_centreline_known(c.names, c.row):
         reasons.append(Reason("offset_not_assessed", UNCERTAIN,
                               "called aligned without the shaft-centreline position at the coupling bearings "
                               "(it needs the bearing clearance and DC probe readings referenced to the bearing "
                               "centre; a raw gap is not a position): a stationary shaft-line offset shows mainly "
                               "there and changes the vibration little, so it is not ruled out — give clearance_um "
                               "and centre-referenced DC readings, or compare with this machine's baseline"))
-    if not class_delta_agree:
+    if not m.class_delta_agree:
         reasons.append(Reason("class_delta_disagree", UNCERTAIN,
                               "the severity classifier and the Δ regressor disagree (the regressor's interval does "
                               "not reach the class's band); the Δ shown is clipped into the class's band"))
-    if any(r.status == INCONCLUSIVE for r in reasons):
-        status = INCONCLUSIVE
-    elif reasons:
-        status = UNCERTAIN
-    else:
-        status = CONFIDENT
-    reasons.sort(key=lambda r: r.status != INCONCLUSIVE)
-    return status, reasons
+    return reasons

@@ -1,10 +1,12 @@
 """Verdict status and the class/Δ consistency (models.status), and the shipped model on broken recordings."""
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
-from rotordiag.models.status import INCONCLUSIVE, UNCERTAIN, assess, consistent_estimate
+from rotordiag.models.status import INCONCLUSIVE, UNCERTAIN, ModelCall, RecordingChecks, assess, consistent_estimate
 
 EDGES = (0.05, 0.15, 0.35)
 
@@ -23,6 +25,13 @@ def test_disagreement_is_reported():
     assert consistent_estimate(1, EDGES, 0.041, (0.0, 0.06))[2] is True
 
 
+def _split_assess(**kw):
+    """assess() with its keyword arguments sorted into the recording's checks and the models' call."""
+    rec = {f.name for f in dataclasses.fields(RecordingChecks)}
+    return assess(RecordingChecks(**{k: v for k, v in kw.items() if k in rec}),
+                  ModelCall(**{k: v for k, v in kw.items() if k not in rec}))
+
+
 def _assess(**kw):
     """assess() on a plain aligned call; ``names``/``row`` given without the coupling-bearing centreline
     get one appended (measured: 0.3 c at bearing 2), so that only the rule under test speaks."""
@@ -34,7 +43,7 @@ def _assess(**kw):
         base["names"] = [*base["names"], "b2_centre_ecc_per_c"]
         base["row"] = np.append(base["row"], 0.3)
         base["feature_median"] = np.append(base["feature_median"], 0.3)
-    return assess(**base)
+    return _split_assess(**base)
 
 
 def test_status_rules():
@@ -77,18 +86,14 @@ def test_shipped_model_never_gives_a_severity_to_an_impossible_recording():
 
 
 def test_aligned_below_the_alarm_threshold_is_uncertain_and_says_why():
-    import numpy as np
-
-    from rotordiag.models.status import UNCERTAIN, assess
-
     common = dict(sanity=(), ood_score=0.2, probabilities=[0.9, 0.05, 0.03, 0.02], class_delta_agree=True,
                   names=["a", "b3_centre_ecc_per_c"], row=np.array([1.0, 0.4]), feature_median=np.array([1.0, 0.4]),
                   never_missing=[],
                   speed_source="given", warnings=[])
-    status, reasons = assess(**common, alarm=(0.72, 0.82))
+    status, reasons = _split_assess(**common, alarm=(0.72, 0.82))
     assert status == UNCERTAIN and [r.code for r in reasons] == ["below_alarm_threshold"]
     assert "72%" in reasons[0].message and "82%" in reasons[0].message
-    status, reasons = assess(**common, alarm=(0.3, 0.82))
+    status, reasons = _split_assess(**common, alarm=(0.3, 0.82))
     assert status == "confident" and reasons == []
 
 
