@@ -49,6 +49,11 @@ SPEED_CANDIDATE_PEAKS = 24
 SPEED_LINE_MIN_SNR = 10.0
 #: a harmonic counts as present when its amplitude is at least this fraction of the largest line
 SPEED_HARMONIC_MIN_REL = 0.01
+#: a candidate speed's m-th harmonic line may lie m times this many FFT bins from m × the candidate (its
+#: interpolated peak's error grows m-fold), at most ``SPEED_HARMONIC_MAX_TOL_BINS`` (bench_robustness base
+#: sets at 48 revolutions, seeds 815 / 816: 218 / 214 → 220 / 219 within 0.5 %; bench_speed seed 15 184 → 182)
+SPEED_HARMONIC_TOL_BINS = 0.5
+SPEED_HARMONIC_MAX_TOL_BINS = 1.0
 #: a best-ranked line family below this fraction of a higher family's frequency may be a
 #: sub-synchronous whirl / whip (features._speed._above_subsynchronous) …
 SPEED_SUBSYNC_MAX_RATIO = 0.55

@@ -109,11 +109,11 @@ def _modulation_sidebands(power: np.ndarray, df: float, level: float) -> np.ndar
 
 
 def _line_amplitude(power: np.ndarray, logp: np.ndarray, f: float, df: float, level: float,
-                    sidebands: np.ndarray | None = None) -> float:
+                    sidebands: np.ndarray | None = None, tol_bins: float = 0.5) -> float:
     """Amplitude (√power) of a genuine spectral line at ``f``, else 0.
 
     Genuine: a local maximum of the spectrum within ±1 bin of ``f`` whose interpolated centre
-    lies within half a bin of ``f`` and whose power reaches ``level``. The skirt of a strong
+    lies within ``tol_bins`` (half a bin) of ``f`` and whose power reaches ``level``. The skirt of a strong
     neighbouring line (e.g. oil whirl at 0.47X next to 0.5X) is not a line, nor is a modulation sideband
     (``sidebands``, from :func:`_modulation_sidebands`).
     """
@@ -127,7 +127,7 @@ def _line_amplitude(power: np.ndarray, logp: np.ndarray, f: float, df: float, le
         return 0.0
     den = logp[k - 1] - 2 * logp[k] + logp[k + 1]
     delta = 0.5 * (logp[k - 1] - logp[k + 1]) / den if den < 0 else 0.0
-    if abs(k + delta - f / df) > 0.5:
+    if abs(k + delta - f / df) > tol_bins:
         return 0.0
     return float(np.sqrt(power[k]))
 
@@ -687,7 +687,10 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
                 continue
             if any(abs(f - c[0]) < 1.5 * df for c in candidates):
                 continue
-            weak = [_line_amplitude(power, logp, m * f, df, snr_level, sidebands) for m in (1, 2, 3)]
+            # the m-th harmonic of an interpolated peak is m times as far off (a wandering speed broadens the peak)
+            weak = [_line_amplitude(power, logp, m * f, df, snr_level, sidebands,
+                                    min(cfg.SPEED_HARMONIC_TOL_BINS * m, cfg.SPEED_HARMONIC_MAX_TOL_BINS))
+                    for m in (1, 2, 3)]
             if weak[0] <= 0.0:      # a running speed always shows its own 1X line
                 continue
             amps = [a if a * a >= present_level else 0.0 for a in weak]
