@@ -52,6 +52,13 @@ def _hann_amplitude_at(power: np.ndarray, f: float, df: float) -> float:
     return float(np.sqrt(np.max(power[k - 1:k + 2])))
 
 
+def _lines_at(power: np.ndarray, kk: np.ndarray, level: float, sidebands: np.ndarray | None = None) -> np.ndarray:
+    """Which bins ``kk`` hold a spectral line: a local maximum (the right one of a tie) at or above ``level``
+    that is not a modulation sideband (``sidebands``, from :func:`_modulation_sidebands`)."""
+    ok = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= level)
+    return ok if sidebands is None else ok & ~sidebands[kk]
+
+
 def _modulation_sidebands(power: np.ndarray, df: float, level: float) -> np.ndarray:
     """Bins of the spectral peaks that are modulation sidebands of a stronger line: ``(power.size,)`` bool.
 
@@ -59,7 +66,8 @@ def _modulation_sidebands(power: np.ndarray, df: float, level: float) -> np.ndar
     order kΩ into a carrier with sidebands at kΩ ± j f_m, pairs of equal amplitude, growing with k; on
     a long record they are resolved, and a family of them (kΩ − f_m …) would pass for an independent
     running speed, or for a whirl's combination lines. A peak at g is a sideband of a line c within
-    ``SPEED_SIDEBAND_MAX_REL`` × c of it (and at least two bins away: the window's own main lobe) when c
+    ``SPEED_SIDEBAND_MAX_REL`` × c of it (and ``SPEED_SIDEBAND_MIN_BINS`` away: closer, a pair is not resolved
+    from the line's main lobe) when c
     stands ``SPEED_SIDEBAND_MIN_DROP`` times above the pair g, 2c − g and the pair's powers (each the
     largest within a bin: a twin beside a strong line may ride on its skirt, no peak of its own) lie
     within ``SPEED_SIDEBAND_MIRROR`` times of each other. The comb c ± j·d (d = |g − c|, j = 2, 3, …) is
@@ -70,7 +78,7 @@ def _modulation_sidebands(power: np.ndarray, df: float, level: float) -> np.ndar
     """
     kk = np.arange(2, power.size - 1)
     is_pk = np.zeros(power.size, dtype=bool)
-    is_pk[kk] = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= level)
+    is_pk[kk] = _lines_at(power, kk, level)
     pk = np.flatnonzero(is_pk)
     side = np.zeros(power.size, dtype=bool)
 
@@ -109,7 +117,7 @@ def _modulation_sidebands(power: np.ndarray, df: float, level: float) -> np.ndar
 
 
 def _line_amplitude(power: np.ndarray, logp: np.ndarray, f: float, df: float, level: float,
-                    sidebands: np.ndarray | None = None, tol_bins: float = 0.5) -> float:
+                    sidebands: np.ndarray, tol_bins: float = 0.5) -> float:
     """Amplitude (√power) of a genuine spectral line at ``f``, else 0.
 
     Genuine: a local maximum of the spectrum within ±1 bin of ``f`` whose interpolated centre
@@ -123,7 +131,7 @@ def _line_amplitude(power: np.ndarray, logp: np.ndarray, f: float, df: float, le
     k = k0 - 1 + int(np.argmax(power[k0 - 1:k0 + 2]))
     if not (power[k] >= power[k - 1] and power[k] > power[k + 1]) or power[k] < level:
         return 0.0
-    if sidebands is not None and sidebands[k]:
+    if sidebands[k]:
         return 0.0
     den = logp[k - 1] - 2 * logp[k] + logp[k + 1]
     delta = 0.5 * (logp[k - 1] - logp[k + 1]) / den if den < 0 else 0.0
@@ -223,7 +231,7 @@ def _half_speed_whirl(spec: np.ndarray, df: float,
 
 
 def _period_n(power: np.ndarray, logp: np.ndarray, df: float, f: float, level: float, f_hi: float,
-              sidebands: np.ndarray | None = None) -> tuple[int, int]:
+              sidebands: np.ndarray) -> tuple[int, int]:
     """Whether the harmonic comb of ``f`` reads as period-n motion of a machine running at n·f: (n, strength).
 
     A machine running at ``f`` has a comb of 1X, 2X, 3X … lines that rarely peaks at 3X; in
@@ -326,7 +334,7 @@ def _hidden_running_line(spec: np.ndarray, fs: float, n: int, df: float,
 
 
 def _local_peak_ratio(power: np.ndarray, f: float, df: float, floor: float, tol_bins: float,
-                      sidebands: np.ndarray | None = None) -> float:
+                      sidebands: np.ndarray) -> float:
     """Power of the highest local maximum of ``power`` within ``tol_bins`` of ``f``, over ``floor``
     (0 when there is none)."""
     k0 = int(round(f / df))
@@ -335,7 +343,7 @@ def _local_peak_ratio(power: np.ndarray, f: float, df: float, floor: float, tol_
     best = 0.0
     for k in range(lo, hi + 1):
         if (abs(k - f / df) <= tol_bins and power[k] >= power[k - 1] and power[k] > power[k + 1]
-                and not (sidebands is not None and sidebands[k])):
+                and not sidebands[k]):
             best = max(best, float(power[k]) / floor)
     return best
 
@@ -347,7 +355,7 @@ _COMBINATIONS: tuple[tuple[int, tuple[int, ...]], ...] = ((1, (0, -1, 1)), (2, (
 
 def _combination_partners(power: np.ndarray, logp: np.ndarray, df: float, floor: float, f_w: float,
                           foreign_hz: list[float], f_lo: float, f_hi: float,
-                          f_top: float, sidebands: np.ndarray | None = None) -> list[tuple[float, float, int, float]]:
+                          f_top: float, sidebands: np.ndarray) -> list[tuple[float, float, int, float]]:
     """Candidate running speeds Ω when the dominant line family at ``f_w`` is a sub-synchronous whirl / whip.
 
     A whirl or whip line ω is not locked to the running speed Ω, but it mixes with it: the
@@ -376,10 +384,7 @@ def _combination_partners(power: np.ndarray, logp: np.ndarray, df: float, floor:
     tol = cfg.SPEED_PARTNER_TOL_BINS
     k_top = min(int(f_top / df), power.size - 2)
     kk = np.arange(2, k_top)
-    is_line = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= cfg.SPEED_PARTNER_LINE_SNR * floor)
-    if sidebands is not None:
-        is_line &= ~sidebands[kk]
-    k_lines = kk[is_line]
+    k_lines = kk[_lines_at(power, kk, cfg.SPEED_PARTNER_LINE_SNR * floor, sidebands)]
     den = logp[k_lines - 1] - 2 * logp[k_lines] + logp[k_lines + 1]
     delta = np.where(den < 0, 0.5 * (logp[k_lines - 1] - logp[k_lines + 1]) / np.where(den < 0, den, -1.0), 0.0)
     f_lines = (k_lines + delta) * df
@@ -424,7 +429,7 @@ def _combination_partners(power: np.ndarray, logp: np.ndarray, df: float, floor:
 
 
 def _weak_lines_above(power: np.ndarray, df: float, floor: float, f1: float, f_hi: float,
-                      sidebands: np.ndarray | None = None) -> list[float]:
+                      sidebands: np.ndarray) -> list[float]:
     """Lines (local maxima ``SPEED_PARTNER_LINE_SNR`` × the median spectrum) above f1 / ``SPEED_SUBSYNC_MAX_RATIO``
     and up to ``f_hi`` that are not within 1.5 bins of a harmonic of ``f1``: if ``f1`` were a whirl / whip,
     one of them could be the running speed's weak 1X line."""
@@ -434,10 +439,7 @@ def _weak_lines_above(power: np.ndarray, df: float, floor: float, f1: float, f_h
     if kk.size == 0:
         return []
     level = max(cfg.SPEED_PARTNER_LINE_SNR * floor, cfg.SPEED_WEAK_LINE_MIN_REL ** 2 * float(power.max()))
-    is_line = (power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & (power[kk] >= level)
-    if sidebands is not None:
-        is_line &= ~sidebands[kk]
-    f = kk[is_line] * df
+    f = kk[_lines_at(power, kk, level, sidebands)] * df
     m = np.rint(f / f1)
     return [float(v) for v in f[np.abs(f - m * f1) > 1.5 * df]]
 
@@ -448,7 +450,7 @@ def _on_lattice(f: float, om: float, w: float, df: float) -> bool:
 
 
 def _refine_partner(x: np.ndarray, fs: float, df: float, power: np.ndarray, floor: float, om: float, w: float,
-                    sidebands: np.ndarray | None = None) -> float:
+                    sidebands: np.ndarray) -> float:
     """Refine a running speed ``om`` found from whirl combination lines (see :func:`_combination_partners`).
 
     Each lattice line mΩ + kω (m = 1…3, |k| ≤ 4) at least ``SPEED_LINE_MIN_SNR`` above the noise and
@@ -668,8 +670,7 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
             a, b = max(int(np.floor(m * c_lo / df)), 1), min(int(np.ceil(m * c_hi / df)), power.size - 2)
             kk = np.arange(a, b + 1)
             if kk.size:
-                ok = ((power[kk] >= power[kk - 1]) & (power[kk] > power[kk + 1]) & ~sidebands[kk]
-                      & (power[kk] >= cfg.SPEED_LINE_MIN_SNR * floor))
+                ok = _lines_at(power, kk, cfg.SPEED_LINE_MIN_SNR * floor, sidebands)
                 extra.extend(int(k) for k in kk[ok] if k not in peak_idx)
         seed_idx = np.concatenate([peak_idx, np.asarray(sorted(set(extra), key=lambda k: -power[k]), dtype=np.int64)])
     logp = np.log(np.maximum(power, np.finfo(float).tiny))
