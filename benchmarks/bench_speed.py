@@ -108,17 +108,18 @@ def _simulate(n: int, revs: int, seed: int, preset: str | None = None):
     return out
 
 
-def _robustness_set(seed: int, revs: int, cache_dir: Path):
-    """docs/robustness.md's base set under its "speed unknown" condition at ``revs`` revolutions:
-    (rpm, Δ, mechanism, SNR dB, probes µm) per simulated case, as :func:`_load`."""
+def _robustness_set(seed: int, revs: int):
+    """docs/robustness.md's base set under its "speed unknown" condition at ``revs`` revolutions (simulated
+    sets cached in ``bench_robustness.DEFAULT_CACHE``): (rpm, Δ, mechanism, SNR dB, probes µm) per simulated
+    case, as :func:`_load`, and the sample rate in Hz."""
     import bench_robustness as br
 
-    cases, disps = br.simulate_set("base", 48, seed, cache_dir, revs=revs)
+    cases, disps = br.simulate_set("base", 48, seed, br.DEFAULT_CACHE, revs=revs)
     cond = next(c for c in br.CONDITIONS if c.name == "speed unknown")
     k_cond = br.CONDITIONS.index(cond)
     return [(c["speed_rpm"], c["misalignment"], c["label_mechanism"], cond.snr_db,
              br.measure(d, c["speed_rpm"], cond, np.random.default_rng([seed, k_cond, i]), revs=revs))
-            for i, (c, d) in enumerate(zip(cases, disps)) if d is not None]
+            for i, (c, d) in enumerate(zip(cases, disps)) if d is not None], br.FS_HZ
 
 
 def _load(cache: Path, n: int, revs: int, seed: int, preset: str | None = None):
@@ -154,13 +155,9 @@ def main(argv=None) -> int:
 
     t0 = time.perf_counter()
     if args.base_set is not None:
-        import bench_robustness as br
-
-        fs = br.FS_HZ
-        recs = _robustness_set(args.base_set, args.revs, br.DEFAULT_CACHE)
+        recs, fs = _robustness_set(args.base_set, args.revs)
     else:
-        fs = FS
-        recs = _load(args.cache, args.n, args.revs, args.seed, args.preset)
+        recs, fs = _load(args.cache, args.n, args.revs, args.seed, args.preset), FS
     t_sim = time.perf_counter() - t0
     errs, flagged, whirl, rows, statuses, lines = [], [], [], [], [], []
     t1 = time.perf_counter()
