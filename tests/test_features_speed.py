@@ -483,3 +483,27 @@ def test_a_whirl_partner_one_whirl_frequency_from_a_stronger_runner_up_is_flagge
     fr = extract_features(make_recording(components=comps, rpm=rpm, fs=fs, n=int(96 * 60 / rpm * fs), extra=whirl,
                                          noise_um=0.02, seed=12))
     assert any("speed estimate ambiguous" in x and "one whirl frequency away" in x for x in fr.warnings), fr.warnings
+
+
+def test_a_whirls_mirror_line_with_more_lines_than_the_1x_family_is_not_the_running_speed():
+    """Oil whirl at 0.482X, the running speed's 1X and 2X (two lines), and the whirl's mirror line 2Ω − ω with a
+    weak comb of its own (three lines above a low noise floor on 192 revolutions): the family above the whirl with
+    the most lines was taken for the running speed, 1.52 times too fast (bench_robustness base set, seed 815,
+    case 62 at 192 revolutions). The 1X family carries ten times the amplitude: it is the running speed."""
+    rpm, ratio, fs = 2776.2, 0.482, 2560.0
+    om, w = rpm / 60, ratio * rpm / 60
+    mirror = 2 * om - w
+
+    def whirl(t, b):                                # circular forward whirl, its 2nd harmonic, the mirror comb
+        x = 60 * np.cos(2 * np.pi * w * t) + 6 * np.cos(4 * np.pi * w * t + 0.4)
+        y = 60 * np.sin(2 * np.pi * w * t) + 6 * np.sin(4 * np.pi * w * t + 0.4)
+        for k, a in enumerate((0.6, 0.25, 0.12), start=1):
+            x = x + a * np.cos(2 * np.pi * k * mirror * t + 0.3 * k)
+            y = y + 0.4 * a * np.sin(2 * np.pi * k * mirror * t + 0.3 * k)
+        return x, y
+
+    comps = {b: [(1, 5.0, 20.0 * b, 2.5, 110.0), (2, 1.5, 40.0, 0.9, 130.0)] for b in (1, 2, 3, 4)}
+    fr = extract_features(make_recording(components=comps, rpm=rpm, fs=fs, n=int(192 * 60 / rpm * fs), extra=whirl,
+                                         noise_um=0.02, seed=3))
+    assert fr.speed_rpm == pytest.approx(rpm, rel=1e-3), fr.warnings
+    assert any("speed estimate ambiguous" in x for x in fr.warnings), fr.warnings
