@@ -488,8 +488,10 @@ def test_a_whirl_partner_one_whirl_frequency_from_a_stronger_runner_up_is_flagge
 def test_a_whirls_mirror_line_with_more_lines_than_the_1x_family_is_not_the_running_speed():
     """Oil whirl at 0.482X, the running speed's 1X and 2X (two lines), and the whirl's mirror line 2Ω − ω with a
     weak comb of its own (three lines above a low noise floor on 192 revolutions): the family above the whirl with
-    the most lines was taken for the running speed, 1.52 times too fast (bench_robustness base set, seed 815,
-    case 62 at 192 revolutions). The 1X family carries ten times the amplitude: it is the running speed."""
+    the most lines was taken for the running speed (bench_robustness base set, seed 815, case 50 at 192
+    revolutions: the mirror line 2Ω − 2ω of the whirl's 2nd harmonic, three lines above the noise against the 1X
+    family's two, which carried 22 times their amplitude). Here the 1X family carries ten times the mirror comb's
+    amplitude: it is the running speed."""
     rpm, ratio, fs = 2776.2, 0.482, 2560.0
     om, w = rpm / 60, ratio * rpm / 60
     mirror = 2 * om - w
