@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -43,6 +44,50 @@ def _too_short(n_revs: float, rpm: float, fs: float, n: int, source: str) -> Val
         f"the record covers {n_revs:.2f} revolutions at {rpm:.1f} r/min ({source}); at least "
         f"{cfg.MIN_REVS} whole revolutions are needed for reliable 1X–3X estimates — record at least "
         f"{need_s:.3f} s ({int(np.ceil(need_s * fs))} samples at {fs:g} Hz; this one has {n})")
+
+
+class _Family(NamedTuple):
+    """A candidate running speed and its 1X, 2X, 3X lines (see :func:`_candidate_families`)."""
+
+    f_hz: float
+    n_present: int              # lines above the noise and at least SPEED_HARMONIC_MIN_REL of the largest line
+    amp_present: float          # their summed amplitude (√power)
+    n_above_noise: int          # lines above the noise (SPEED_LINE_MIN_SNR × the median spectrum)
+    amp_above_noise: float      # their summed amplitude
+
+
+@dataclass(frozen=True)
+class _Spectrum:
+    """The record's spectra and levels that every stage of the speed estimate reads (:func:`_spectrum`)."""
+
+    x: np.ndarray               # (channels, n): the record, each channel's mean removed
+    spec: np.ndarray            # (channels, bins): Hann spectra of ``x``
+    power: np.ndarray           # (bins,): their summed power
+    logp: np.ndarray            # log of ``power`` (peak interpolation)
+    fs: float                   # sample rate, Hz
+    df: float                   # bin width, Hz
+    f_lo: float                 # the search range, Hz (SPEED_SEARCH_RPM, and 3X below the Nyquist limit)
+    f_hi: float
+    c_lo: float                 # where the running speed may lie, Hz: the search range within a stated range
+    c_hi: float
+    floor: float                # median power of the search range
+    sidebands: np.ndarray       # (bins,) bool: modulation sidebands, no line for any line test
+    peak_idx: np.ndarray        # bins of the largest peaks in the search range, strongest first
+
+    @property
+    def snr_level(self) -> float:
+        """Power at which a line stands out of the noise."""
+        return cfg.SPEED_LINE_MIN_SNR * self.floor
+
+    @property
+    def p_max(self) -> float:
+        """Power of the largest peak in the search range."""
+        return float(self.power[self.peak_idx[0]])
+
+    @property
+    def f_top(self) -> float:
+        """Frequency of the largest peak in the search range, Hz (its bin)."""
+        return float(self.peak_idx[0]) * self.df
 
 
 def _hann_amplitude_at(power: np.ndarray, f: float, df: float) -> float:
@@ -156,7 +201,7 @@ def _non_harmonic_lines(power: np.ndarray, peak_idx: np.ndarray, df: float, f1: 
 
 
 def _above_subsynchronous(x: np.ndarray, spec: np.ndarray, fs: float, df: float,
-                          candidates: list[tuple[float, int, float, int, float]]) -> tuple[float, str | None]:
+                          candidates: list[_Family]) -> tuple[float, str | None]:
     """The running speed when the best-ranked line family is a sub-synchronous whirl or whip.
 
     Oil whirl and whip are self-excited: their line (0.4–0.5X, or locked near the first natural
@@ -178,8 +223,8 @@ def _above_subsynchronous(x: np.ndarray, spec: np.ndarray, fs: float, df: float,
     families whose own line beats in a nearly flat orbit (backward / forward above
     ``SPEED_RUNNING_MAX_BACKWARD``: a combination line of the whirl with the running speed).
     """
-    f_best = candidates[0][0]
-    higher = [c for c in candidates[1:] if f_best < cfg.SPEED_SUBSYNC_MAX_RATIO * c[0] and c[3] >= 2]
+    f_best = candidates[0].f_hz
+    higher = [c for c in candidates[1:] if f_best < cfg.SPEED_SUBSYNC_MAX_RATIO * c.f_hz and c.n_above_noise >= 2]
     if not higher:
         return f_best, None
     fb = refine_line_hz(x, fs, f_best, iterations=2)
@@ -187,31 +232,30 @@ def _above_subsynchronous(x: np.ndarray, spec: np.ndarray, fs: float, df: float,
         fb = f_best
     independent = []
     for c in higher:
-        fc = refine_line_hz(x, fs, c[0], iterations=2)
-        if abs(fc - c[0]) > 2 * df:
-            fc = c[0]
+        fc = refine_line_hz(x, fs, c.f_hz, iterations=2)
+        if abs(fc - c.f_hz) > 2 * df:
+            fc = c.f_hz
         r = fc / fb
         if (abs(r - round(r)) > cfg.SPEED_INTEGER_RATIO_TOL * r
-                and not _circular_fraction_at(spec, c[0], df) > cfg.SPEED_RUNNING_MAX_BACKWARD):
+                and not _circular_fraction_at(spec, c.f_hz, df) > cfg.SPEED_RUNNING_MAX_BACKWARD):
             independent.append(c)
     if not independent:
         return f_best, None
-    best = max(independent, key=lambda c: c[3] * c[4])
-    note = (f"a line family at {60 * f_best:.1f} cpm ({f_best / best[0]:.3f}X) is sub-synchronous and not harmonic "
+    best = max(independent, key=lambda c: c.n_above_noise * c.amp_above_noise)
+    note = (f"a line family at {60 * f_best:.1f} cpm ({f_best / best.f_hz:.3f}X) is sub-synchronous and not harmonic "
             f"with the running speed (oil whirl / whip?); the speed is taken from the family at "
-            f"{60 * best[0]:.1f} r/min")
-    return best[0], note
+            f"{60 * best.f_hz:.1f} r/min")
+    return best.f_hz, note
 
 
-def _doubles(candidates: list[tuple[float, int, float, int, float]], f: float, n_lines: int,
-             df: float) -> list[tuple[float, int, float, int, float]]:
+def _doubles(candidates: list[_Family], f: float, n_lines: int, df: float) -> list[_Family]:
     """The candidate families at twice ``f`` (within 1.5 bins) with at least ``n_lines`` lines present: each
     explains the record as well as the family at ``f`` (period-2 motion and a 2X-dominated machine look alike)."""
-    return [c for c in candidates if abs(c[0] - 2 * f) < 1.5 * df and c[1] >= n_lines]
+    return [c for c in candidates if abs(c.f_hz - 2 * f) < 1.5 * df and c.n_present >= n_lines]
 
 
 def _half_speed_whirl(spec: np.ndarray, df: float,
-                      candidates: list[tuple[float, int, float, int, float]]) -> str | None:
+                      candidates: list[_Family]) -> str | None:
     """Never a sub-harmonic: move the family at twice the best one's frequency to the front when the
     best one is a half-speed whirl or the 1/2X of period-2 motion.
 
@@ -222,7 +266,7 @@ def _half_speed_whirl(spec: np.ndarray, df: float,
     flexible coupling's may be the larger line) and f is kept. The choice is reported as
     ambiguous. Returns the warning, or None when ``candidates`` is left as it is.
     """
-    f0, n0 = candidates[0][0], candidates[0][1]
+    f0, n0 = candidates[0].f_hz, candidates[0].n_present
     double = _doubles(candidates, f0, n0, df)
     if not double:
         return None
@@ -231,7 +275,7 @@ def _half_speed_whirl(spec: np.ndarray, df: float,
         return None
     candidates.remove(double[0])
     candidates.insert(0, double[0])
-    return (f"speed estimate ambiguous: {60 * double[0][0]:.1f} r/min chosen; the line at {60 * f0:.1f} cpm, with "
+    return (f"speed estimate ambiguous: {60 * double[0].f_hz:.1f} r/min chosen; the line at {60 * f0:.1f} cpm, with "
             f"harmonics of its own, whirls in nearly circular orbits (backward / forward {circ:.3f}) and is read as "
             f"a half-speed whirl or sub-harmonic; if the machine runs at {60 * f0:.1f} r/min give speed_rpm or "
             "keyphasor_times_s")
@@ -595,6 +639,298 @@ def estimate_speed_hz(data: np.ndarray, fs: float,
     return _estimate_speed_hz(data, fs, speed_range_hz)
 
 
+@dataclass
+class _Choice:
+    """The running speed as the whirl stage (:func:`_whirl_stage`) leaves it."""
+
+    family: _Family             # the family read as the running speed (with ``f_partner``: the whirl's)
+    f_hz: float                 # the speed so far, Hz
+    f_first: float              # the best-ranked family's frequency before the stage (the whirl when switched)
+    switched: str | None = None  # the note when a family above a sub-synchronous one was taken
+    whip_hz: float | None = None  # the refined whirl / whip when the speed came from its combination lines
+    f_partner: float | None = None  # that speed, refined
+    warnings: list[str] = field(default_factory=list)
+
+
+def _spectrum(data: np.ndarray, fs: float, speed_range_hz: tuple[float, float] | None) -> _Spectrum:
+    """The spectra, the search range, the noise floor and the largest peaks of a record (the estimate's first
+    stage). Raises ``ValueError`` when the record cannot resolve the search range, the stated range lies outside
+    it, or no line stands out of the noise."""
+    n = data.shape[1]
+    n_fft = fast_length(n)
+    x = data - data.mean(axis=1)[:, None]
+    spec = np.fft.rfft(x * hann(n), n=n_fft, axis=-1)
+    power = np.sum(spec.real ** 2 + spec.imag ** 2, axis=0)
+    df = fs / n_fft
+    f_lo = max(cfg.SPEED_SEARCH_RPM[0] / 60.0, 3 * df)
+    f_hi = min(cfg.SPEED_SEARCH_RPM[1] / 60.0, fs / cfg.MIN_SAMPLES_PER_REV)
+    k_lo, k_hi = int(np.ceil(f_lo / df)), min(int(np.floor(f_hi / df)), power.size - 2)
+    if k_hi <= k_lo + 2:
+        raise ValueError(
+            f"cannot estimate the running speed: the record ({n} samples at {fs:g} Hz) is too short to resolve "
+            f"{cfg.SPEED_SEARCH_RPM[0]:g}–{cfg.SPEED_SEARCH_RPM[1]:g} r/min; give speed_rpm or keyphasor_times_s")
+    c_lo, c_hi = f_lo, f_hi
+    if speed_range_hz is not None:
+        c_lo, c_hi = max(f_lo, float(speed_range_hz[0])), min(f_hi, float(speed_range_hz[1]))
+        if c_lo > c_hi:
+            raise ValueError(
+                f"speed_range_rpm {60 * speed_range_hz[0]:g}–{60 * speed_range_hz[1]:g} r/min lies outside what this "
+                f"record can resolve ({60 * f_lo:.0f}–{60 * f_hi:.0f} r/min at {fs:g} Hz); check the range or give speed_rpm")
+    band = power[k_lo:k_hi + 1]
+    floor = float(np.median(band))
+    sidebands = _modulation_sidebands(power, df, cfg.SPEED_PARTNER_LINE_SNR * floor)
+    inner = band[1:-1]
+    is_peak = (inner >= band[:-2]) & (inner > band[2:]) & ~sidebands[k_lo + 1:k_hi]
+    peak_idx = np.nonzero(is_peak)[0] + k_lo + 1
+    if peak_idx.size == 0 or power[peak_idx].max() < cfg.SPEED_LINE_MIN_SNR * floor:
+        raise ValueError(
+            "cannot estimate the running speed: no spectral line stands out of the noise between "
+            f"{cfg.SPEED_SEARCH_RPM[0]:g} and {cfg.SPEED_SEARCH_RPM[1]:g} r/min; give speed_rpm or keyphasor_times_s")
+    peak_idx = peak_idx[power[peak_idx] >= cfg.SPEED_LINE_MIN_SNR * floor]
+    peak_idx = peak_idx[np.argsort(-power[peak_idx], kind="stable")[:cfg.SPEED_CANDIDATE_PEAKS]]
+    logp = np.log(np.maximum(power, np.finfo(float).tiny))
+    return _Spectrum(x, spec, power, logp, fs, df, f_lo, f_hi, c_lo, c_hi, floor, sidebands, peak_idx)
+
+
+def _seed_bins(s: _Spectrum, ranged: bool) -> np.ndarray:
+    """The peaks whose frequency (or a half or a third of it) may be the running speed: the largest peaks, and
+    with a stated range every line whose 1st, 2nd or 3rd sub-multiple lies in it (a weak 1X, or its 2X, 3X,
+    inside the range need not be among the largest peaks)."""
+    if not ranged:
+        return s.peak_idx
+    extra: list[int] = []
+    for m in (1, 2, 3):
+        a, b = max(int(np.floor(m * s.c_lo / s.df)), 1), min(int(np.ceil(m * s.c_hi / s.df)), s.power.size - 2)
+        kk = np.arange(a, b + 1)
+        if kk.size:
+            ok = _lines_at(s.power, kk, s.snr_level, s.sidebands)
+            extra.extend(int(k) for k in kk[ok] if k not in s.peak_idx)
+    return np.concatenate([s.peak_idx, np.asarray(sorted(set(extra), key=lambda k: -s.power[k]), dtype=np.int64)])
+
+
+def _candidate_families(s: _Spectrum, seed_idx: np.ndarray) -> list[_Family]:
+    """Each seed peak ``f_p`` (interpolated) and its sub-multiples ``f_p/2``, ``f_p/3`` in the search range, as a
+    :class:`_Family` when it has a 1X line of its own (a running speed always shows one), at most one family
+    within 1.5 bins. A line counts as present when it stands out of the noise and its amplitude is at least
+    ``SPEED_HARMONIC_MIN_REL`` of the largest line; the m-th harmonic of an interpolated peak is m times as far
+    off (a wandering speed broadens the peak): its window is m × ``SPEED_HARMONIC_TOL_BINS`` bins, at most
+    ``SPEED_HARMONIC_MAX_TOL_BINS``. Raises ``ValueError`` when there is none."""
+    present_level = max(s.snr_level, cfg.SPEED_HARMONIC_MIN_REL ** 2 * s.p_max)
+    logp, df = s.logp, s.df
+    families: list[_Family] = []
+    for k in seed_idx:
+        den = logp[k - 1] - 2 * logp[k] + logp[k + 1]
+        delta = 0.5 * (logp[k - 1] - logp[k + 1]) / den if den < 0 else 0.0
+        fp = (k + delta) * df
+        for d in (1, 2, 3):
+            f = fp / d
+            if not (s.f_lo <= f <= s.f_hi) or any(abs(f - c.f_hz) < 1.5 * df for c in families):
+                continue
+            weak = [_line_amplitude(s.power, logp, m * f, df, s.snr_level, s.sidebands,
+                                    min(cfg.SPEED_HARMONIC_TOL_BINS * m, cfg.SPEED_HARMONIC_MAX_TOL_BINS))
+                    for m in (1, 2, 3)]
+            if weak[0] <= 0.0:
+                continue
+            amps = [a if a * a >= present_level else 0.0 for a in weak]
+            families.append(_Family(f, int(sum(a > 0 for a in amps)), float(sum(amps)),
+                                    int(sum(a > 0 for a in weak)), float(sum(weak))))
+    if not families:
+        raise ValueError("cannot estimate the running speed: no candidate line in the search range; "
+                         "give speed_rpm or keyphasor_times_s")
+    return families
+
+
+def _ranked(s: _Spectrum, families: list[_Family], ranged: bool) -> tuple[list[_Family], bool]:
+    """The families ranked by lines present, then by their summed amplitude, and whether the running speed can
+    only come from a whirl's combination lines (``only_partner``: a stated range with no family in it; the best
+    family outside, a whirl / whip, is then kept to find them).
+
+    With a stated range only its families are ranked, and when the largest line lies below the range (a whirl /
+    whip) its harmonics are no running speeds. Never a sub-harmonic: a family at twice the best one's frequency
+    with as many lines present, whose own line is far the stronger (``SPEED_HALF_MAX_REL``), is moved to the front
+    (a faint line at half its frequency, with the lines between, is a sub-harmonic, not a running speed with a 2X
+    thirty times its 1X).
+    """
+    in_range = [c for c in families if s.c_lo <= c.f_hz <= s.c_hi]
+    if ranged and s.f_top < s.c_lo:
+        in_range = [c for c in in_range if abs(c.f_hz - round(c.f_hz / s.f_top) * s.f_top) > 1.5 * s.df]
+    only_partner = ranged and not in_range
+    if ranged and in_range:
+        families = in_range
+    families.sort(key=lambda c: (-c.n_present, -c.amp_present))
+    f0 = families[0].f_hz
+    double = [c for c in _doubles(families, f0, families[0].n_present, s.df)
+              if _hann_amplitude_at(s.power, f0, s.df) < cfg.SPEED_HALF_MAX_REL * _hann_amplitude_at(s.power, c.f_hz, s.df)]
+    if double:
+        families.remove(double[0])
+        families.insert(0, double[0])
+    return families, only_partner
+
+
+def _no_line_in_range(s: _Spectrum) -> ValueError:
+    return ValueError(
+        f"cannot estimate the running speed: no spectral line of a running speed (1X with its own line) lies "
+        f"within speed_range_rpm {60 * s.c_lo:.0f}–{60 * s.c_hi:.0f} r/min; check the range or give speed_rpm or "
+        "keyphasor_times_s")
+
+
+def _whirl_stage(s: _Spectrum, families: list[_Family], only_partner: bool) -> _Choice:
+    """The running speed when the best-ranked family may be a sub-synchronous whirl / whip.
+
+    In this order: a family above it that is no harmonic of it (:func:`_above_subsynchronous`); else, when the
+    best family's line is the largest and whirls in a nearly circular orbit (or a stated range holds no family),
+    the running speed whose combination lines with it explain the record (:func:`_combination_partners`; flagged
+    ambiguous when its own 1X is weak, a rival scores nearly as well, or a runner-up one whirl frequency away has
+    the stronger 1X); else a half-speed whirl read at twice its frequency (:func:`_half_speed_whirl`). Reorders
+    ``families`` in the last case. Raises ``ValueError`` when only a partner could give the speed and none does.
+    """
+    first = families[0]
+    if not only_partner:
+        f_sw, switched = _above_subsynchronous(s.x, s.spec, s.fs, s.df, families)
+        if switched is not None:
+            family = next(c for c in families if c.f_hz == f_sw)
+            return _Choice(family, f_sw, first.f_hz, switched=switched, warnings=[switched])
+    f_best, df = first.f_hz, s.df
+    # the whirl / whip a partner is sought for is the largest line and whirls in a nearly circular
+    # orbit; the running speed's elliptical 1X read as one finds spurious partners among its own
+    # combination lines (with a speed range and no running speed in it, the search is the only way)
+    whirl_like = (abs(s.peak_idx[0] * df - f_best) <= 1.5 * df
+                  and not _circular_fraction_at(s.spec, f_best, df) >= cfg.SPEED_PARTNER_MAX_BACKWARD)  # NaN: no x/y pair
+    partners = []
+    if only_partner or whirl_like:
+        seeds = _non_harmonic_lines(s.power, s.peak_idx, df, f_best, s.snr_level)
+        partners = _combination_partners(s.power, s.logp, df, s.floor, f_best, seeds, s.c_lo, s.c_hi, 0.45 * s.fs,
+                                         s.sidebands)
+    if only_partner and not partners:
+        raise _no_line_in_range(s)
+    if not partners:
+        half = _half_speed_whirl(s.spec, df, families)
+        return _Choice(families[0], families[0].f_hz, f_best, warnings=[] if half is None else [half])
+    whip_hz = refine_line_hz(s.x, s.fs, f_best, iterations=2)
+    if abs(whip_hz - f_best) > 2 * df:
+        whip_hz = f_best
+    om, score, n_lines, r1 = partners[0]
+    f_partner = _refine_partner(s.x, s.fs, df, s.power, s.floor, om, whip_hz, s.sidebands)
+    warnings = [
+        f"the line family at {60 * whip_hz:.1f} cpm ({whip_hz / f_partner:.3f}X) is a sub-synchronous "
+        f"whirl / whip: {n_lines} lines at combinations mΩ + kω of it with the running speed Ω "
+        f"({60 * f_partner:.1f} r/min)"]
+    weak_1x = r1 < cfg.SPEED_PARTNER_CLEAR_SNR
+    close = len(partners) > 1 and partners[1][1] >= cfg.SPEED_PARTNER_RIVAL_REL * score
+    # Ω ± ω spans the same lattice mΩ + kω as Ω: a runner-up one whirl frequency away with the stronger
+    # own 1X line may be the running speed whatever the scores say
+    shifted = [p for p in partners[1:] if abs(abs(p[0] - om) - whip_hz) <= 2 * cfg.SPEED_PARTNER_TOL_BINS * df
+               and p[3] > r1]
+    if weak_1x or close or shifted:
+        why = (f"its own 1X line is {'not seen' if r1 == 0 else f'only {10 * np.log10(r1):.0f} dB above the noise'}"
+               if weak_1x else
+               f"{60 * partners[1][0]:.1f} r/min explains the combination lines almost as well" if close else
+               f"{60 * shifted[0][0]:.1f} r/min, one whirl frequency away, spans the same combination lines and "
+               "has the stronger 1X line")
+        warnings.append(
+            f"speed estimate ambiguous: {60 * f_partner:.1f} r/min chosen from the combination lines of a "
+            f"whirl / whip at {60 * whip_hz:.1f} cpm, but {why}; give speed_rpm or keyphasor_times_s")
+    return _Choice(first, f_partner, f_best, whip_hz=whip_hz, f_partner=f_partner, warnings=warnings)
+
+
+def _foreign_lines_warning(s: _Spectrum, choice: _Choice) -> str | None:
+    """The warning when lines that are not harmonics of the chosen speed stand out: peaks above
+    ``SPEED_FOREIGN_MIN_SNR`` × the noise and ``SPEED_FOREIGN_MIN_REL`` of the largest line (less those on the
+    lattice of a whirl the speed came from), and, unless a family above a whirl was taken, the weak lines above
+    it that could be the running speed if the chosen one were a whirl (:func:`_weak_lines_above`)."""
+    f = choice.f_hz
+    foreign = _non_harmonic_lines(s.power, s.peak_idx, s.df, f, max(cfg.SPEED_FOREIGN_MIN_SNR * s.floor,
+                                                                    cfg.SPEED_FOREIGN_MIN_REL ** 2 * s.p_max))
+    if choice.whip_hz is not None:
+        foreign = [g for g in foreign if not _on_lattice(g, f, choice.whip_hz, s.df)]
+    elif choice.switched is None:
+        foreign += [g for g in _weak_lines_above(s.power, s.df, s.floor, f, s.c_hi, s.sidebands) if g not in foreign]
+    if not foreign:
+        return None
+    return (f"speed estimate ambiguous: {60 * f:.1f} r/min chosen, but the lines at "
+            f"{', '.join(f'{60 * g:.0f}' for g in foreign[:4])} cpm are not its harmonics (two independent "
+            "frequencies: oil whirl / whip or a sub-harmonic, with the running speed possibly elsewhere); "
+            "give speed_rpm or keyphasor_times_s")
+
+
+def _comb_stage(s: _Spectrum, families: list[_Family], choice: _Choice) -> tuple[float, list[str]]:
+    """The speed read off the chosen family's harmonic comb: period-n motion (:func:`_period_n`; period 3 switches
+    to three times the speed, period 4 … ``SPEED_PERIOD_MAX_N`` is flagged), a rival family with the same lines
+    present and ≥ 0.8 of the amplitude, or a larger family at twice the speed (period-2 motion and a 2X-dominated
+    machine look alike) — each a warning. Returns the speed and the warnings."""
+    f_best, df = choice.f_hz, s.df
+    warnings: list[str] = []
+    rivals = [c for c in families if c.f_hz != f_best and c.n_present > 0]
+    period_n, strength = (_period_n(s.power, s.logp, df, f_best, s.snr_level, s.c_hi, s.sidebands)
+                          if choice.switched is None else (0, 0))
+    switch = period_n == 3 and strength == 2        # the only period read as the speed (see _period_n)
+    if strength and not switch:
+        warnings.append(
+            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but its {period_n}X line stands above its "
+            f"{period_n - 1}X and {period_n + 1}X, as the running speed's 1X does in period-{period_n} motion (then "
+            f"{60 * f_best:.1f} cpm is a 1/{period_n}X sub-harmonic); if the machine runs at "
+            f"{60 * period_n * f_best:.1f} r/min give speed_rpm or keyphasor_times_s")
+    if switch:
+        # never a sub-harmonic: the comb's 3X and 6X stand out, so f_best is a 1/3X
+        warnings.append(
+            f"speed estimate ambiguous: {60 * period_n * f_best:.1f} r/min chosen over {60 * f_best:.1f} r/min: the "
+            f"lines at {period_n} and {2 * period_n} times {60 * f_best:.1f} cpm stand above their neighbours, the "
+            f"signature of period-{period_n} motion (a 1/{period_n}X sub-harmonic with its 2/{period_n}X, "
+            f"{period_n + 1}/{period_n}X …); if the machine runs at {60 * f_best:.1f} r/min give speed_rpm or "
+            "keyphasor_times_s")
+        f_best = period_n * f_best
+    elif rivals and rivals[0].n_present == choice.family.n_present and \
+            rivals[0].amp_present >= 0.8 * choice.family.amp_present:
+        warnings.append(
+            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * rivals[0].f_hz:.1f} r/min "
+            "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
+    elif double_rival := [c for c in _doubles(families, f_best, choice.family.n_present, df)
+                          if _hann_amplitude_at(s.power, c.f_hz, df) > _hann_amplitude_at(s.power, f_best, df)]:
+        # period-2 motion (a 1/2X with its 1.5X, 2.5X …) and a machine whose 2X is its largest line
+        # give the same spectrum: the larger line at twice the speed explains as many lines
+        warnings.append(
+            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but the larger line family at "
+            f"{60 * double_rival[0].f_hz:.1f} cpm explains as many lines: if that is the running speed, the "
+            f"{60 * f_best:.1f} cpm line is a 1/2X sub-harmonic (period-2 motion); give speed_rpm or "
+            "keyphasor_times_s")
+    return f_best, warnings
+
+
+def _refined_speed(s: _Spectrum, f_best: float, choice: _Choice) -> tuple[float, list[str]]:
+    """``f_best`` refined (:func:`refine_line_hz`) on the strongest of its 1X–3X lines below 0.45 × fs, in the
+    four channels that carry it most (after a switch above a whirl: not on a line the whirl's harmonics overlap).
+    Keeps the interpolated peak, with a warning, when the refinement wanders off by more than two bins."""
+    df, fs = s.df, s.fs
+    harmonics = [m for m in (1, 2, 3) if m * f_best < 0.45 * fs]
+    if choice.switched is not None:
+        # not on a line the whirl's own harmonics overlap (its 2nd harmonic sits next to a 1X, ...)
+        f_w = choice.f_first
+        harmonics = [m for m in harmonics if abs(m * f_best - round(m * f_best / f_w) * f_w) > 2.5 * df] or [1]
+    h = max(harmonics, key=lambda m: _hann_amplitude_at(s.power, m * f_best, df))
+    k_h = int(round(h * f_best / df))
+    strongest = np.argsort(-np.abs(s.spec[:, k_h]))[:4]       # the channels that carry the line
+    f = refine_line_hz(s.x[strongest], fs, h * f_best) / h
+    if abs(f - f_best) > 2 * df:
+        return f_best, [f"speed refinement did not converge; using the spectral peak {60 * f_best:.2f} r/min"]
+    return f, []
+
+
+def _whirling_1x_warning(s: _Spectrum, f: float) -> str | None:
+    """The warning when the chosen speed's 1X is the largest line and whirls in nearly circular orbits (backward /
+    forward below ``SPEED_WHIRL_MAX_BACKWARD``) while a running speed above it is still possible: a lone whip
+    family with no line of the running speed looks exactly like a machine running at the whip frequency."""
+    k_top = int(s.peak_idx[0])
+    if not (abs(k_top * s.df - f) <= 1.5 * s.df and s.c_hi >= f / cfg.SPEED_SUBSYNC_MAX_RATIO):
+        return None
+    circ = _circular_fraction(s.spec, k_top)
+    if not circ < cfg.SPEED_WHIRL_MAX_BACKWARD:
+        return None
+    return (f"speed estimate ambiguous: {60 * f:.1f} r/min chosen, but its 1X line, the largest, whirls in "
+            f"nearly circular orbits (backward / forward {circ:.3f}), the signature of oil whirl / whip; if the "
+            f"machine runs above {60 * f / cfg.SPEED_SUBSYNC_MAX_RATIO:.0f} r/min this is the whip and the running "
+            "speed's own line is hidden: give speed_rpm, speed_range_rpm or keyphasor_times_s")
+
+
 def _estimate_speed_hz(data: np.ndarray, fs: float,
                        speed_range_hz: tuple[float, float] | None = None) -> tuple[float, list[str]]:
     """Running speed (Hz) from the waveforms: the refined spectral line of 1X (see :func:`estimate_speed_hz`).
@@ -634,233 +970,38 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
     self-excited whirl or whip) is flagged ambiguous when a running speed above it (at least
     ``1 / SPEED_SUBSYNC_MAX_RATIO`` times faster) is still possible: a lone whip family with no
     line of the running speed looks exactly like a machine running at the whip frequency.
+
+    The stages, in order: :func:`_spectrum`, :func:`_seed_bins` and :func:`_candidate_families`,
+    :func:`_ranked`, :func:`_whirl_stage`, :func:`_foreign_lines_warning`, then (unless the speed came from a
+    whirl's combination lines) :func:`_comb_stage` and :func:`_refined_speed` and :func:`_hidden_1x`, and last
+    :func:`_whirling_1x_warning` and the non-synchronous largest line.
     """
-    n = data.shape[1]
-    n_fft = fast_length(n)
-    x = data - data.mean(axis=1)[:, None]
-    spec = np.fft.rfft(x * hann(n), n=n_fft, axis=-1)
-    power = np.sum(spec.real ** 2 + spec.imag ** 2, axis=0)
-    df = fs / n_fft
-    f_lo = max(cfg.SPEED_SEARCH_RPM[0] / 60.0, 3 * df)
-    f_hi = min(cfg.SPEED_SEARCH_RPM[1] / 60.0, fs / cfg.MIN_SAMPLES_PER_REV)
-    k_lo, k_hi = int(np.ceil(f_lo / df)), min(int(np.floor(f_hi / df)), power.size - 2)
-    if k_hi <= k_lo + 2:
-        raise ValueError(
-            f"cannot estimate the running speed: the record ({n} samples at {fs:g} Hz) is too short to resolve "
-            f"{cfg.SPEED_SEARCH_RPM[0]:g}–{cfg.SPEED_SEARCH_RPM[1]:g} r/min; give speed_rpm or keyphasor_times_s")
-    c_lo, c_hi = f_lo, f_hi                 # where the running speed may lie
-    if speed_range_hz is not None:
-        c_lo, c_hi = max(f_lo, float(speed_range_hz[0])), min(f_hi, float(speed_range_hz[1]))
-        if c_lo > c_hi:
-            raise ValueError(
-                f"speed_range_rpm {60 * speed_range_hz[0]:g}–{60 * speed_range_hz[1]:g} r/min lies outside what this "
-                f"record can resolve ({60 * f_lo:.0f}–{60 * f_hi:.0f} r/min at {fs:g} Hz); check the range or give speed_rpm")
-    band = power[k_lo:k_hi + 1]
-    floor = float(np.median(band))
-    sidebands = _modulation_sidebands(power, df, cfg.SPEED_PARTNER_LINE_SNR * floor)
-    inner = band[1:-1]
-    is_peak = (inner >= band[:-2]) & (inner > band[2:]) & ~sidebands[k_lo + 1:k_hi]
-    peak_idx = np.nonzero(is_peak)[0] + k_lo + 1
-    if peak_idx.size == 0 or power[peak_idx].max() < cfg.SPEED_LINE_MIN_SNR * floor:
-        raise ValueError(
-            "cannot estimate the running speed: no spectral line stands out of the noise between "
-            f"{cfg.SPEED_SEARCH_RPM[0]:g} and {cfg.SPEED_SEARCH_RPM[1]:g} r/min; give speed_rpm or keyphasor_times_s")
-    peak_idx = peak_idx[power[peak_idx] >= cfg.SPEED_LINE_MIN_SNR * floor]
-    order = np.argsort(-power[peak_idx], kind="stable")[:cfg.SPEED_CANDIDATE_PEAKS]
-    peak_idx = peak_idx[order]
-    pmax = power[peak_idx[0]]
-    seed_idx = peak_idx
-    if speed_range_hz is not None:
-        # a weak 1X (or its 2X, 3X) inside the given range need not be among the strongest peaks
-        extra: list[int] = []
-        for m in (1, 2, 3):
-            a, b = max(int(np.floor(m * c_lo / df)), 1), min(int(np.ceil(m * c_hi / df)), power.size - 2)
-            kk = np.arange(a, b + 1)
-            if kk.size:
-                ok = _lines_at(power, kk, cfg.SPEED_LINE_MIN_SNR * floor, sidebands)
-                extra.extend(int(k) for k in kk[ok] if k not in peak_idx)
-        seed_idx = np.concatenate([peak_idx, np.asarray(sorted(set(extra), key=lambda k: -power[k]), dtype=np.int64)])
-    logp = np.log(np.maximum(power, np.finfo(float).tiny))
-    snr_level = cfg.SPEED_LINE_MIN_SNR * floor
-    present_level = max(snr_level, cfg.SPEED_HARMONIC_MIN_REL ** 2 * pmax)
-    # (f, lines present, their summed amplitude, lines above the noise, their summed amplitude)
-    candidates: list[tuple[float, int, float, int, float]] = []
-    for k in seed_idx:
-        den = logp[k - 1] - 2 * logp[k] + logp[k + 1]
-        delta = 0.5 * (logp[k - 1] - logp[k + 1]) / den if den < 0 else 0.0
-        fp = (k + delta) * df
-        for d in (1, 2, 3):
-            f = fp / d
-            if not (f_lo <= f <= f_hi):
-                continue
-            if any(abs(f - c[0]) < 1.5 * df for c in candidates):
-                continue
-            # the m-th harmonic of an interpolated peak is m times as far off (a wandering speed broadens the peak)
-            weak = [_line_amplitude(power, logp, m * f, df, snr_level, sidebands,
-                                    min(cfg.SPEED_HARMONIC_TOL_BINS * m, cfg.SPEED_HARMONIC_MAX_TOL_BINS))
-                    for m in (1, 2, 3)]
-            if weak[0] <= 0.0:      # a running speed always shows its own 1X line
-                continue
-            amps = [a if a * a >= present_level else 0.0 for a in weak]
-            candidates.append((f, int(sum(a > 0 for a in amps)), float(sum(amps)),
-                               int(sum(a > 0 for a in weak)), float(sum(weak))))
-    if not candidates:
-        raise ValueError("cannot estimate the running speed: no candidate line in the search range; "
-                         "give speed_rpm or keyphasor_times_s")
-    # with a speed range: its candidates only; when none has a 1X line there, the best family outside
-    # (a whirl / whip) is kept so that the running speed can be found from its combination lines
-    in_range = [c for c in candidates if c_lo <= c[0] <= c_hi]
-    f_top = float(peak_idx[0]) * df
-    if speed_range_hz is not None and f_top < c_lo:
-        # the largest line lies below the range (a whirl / whip): its harmonics are not running speeds
-        in_range = [c for c in in_range if abs(c[0] - round(c[0] / f_top) * f_top) > 1.5 * df]
-    only_partner = speed_range_hz is not None and not in_range
-    if speed_range_hz is not None and in_range:
-        candidates = in_range
-
-    def no_line_in_range() -> ValueError:
-        return ValueError(
-            f"cannot estimate the running speed: no spectral line of a running speed (1X with its own line) lies "
-            f"within speed_range_rpm {60 * c_lo:.0f}–{60 * c_hi:.0f} r/min; check the range or give speed_rpm or "
-            "keyphasor_times_s")
-
-    candidates.sort(key=lambda c: (-c[1], -c[2]))
-    warnings: list[str] = []
-    # never a sub-harmonic: a family at twice the best one's frequency with as many lines present,
-    # whose own line is far the stronger, is the running speed (a faint line at half its frequency,
-    # with the lines between, is a sub-harmonic, not a running speed with a 2X thirty times its 1X)
-    f0 = candidates[0][0]
-    double = [c for c in _doubles(candidates, f0, candidates[0][1], df)
-              if _hann_amplitude_at(power, f0, df) < cfg.SPEED_HALF_MAX_REL * _hann_amplitude_at(power, c[0], df)]
-    if double:
-        candidates.remove(double[0])
-        candidates.insert(0, double[0])
-    f_best, n_best, s_best = candidates[0][:3]
-    f_whirl = f_best
-    f_best, switched = (f_best, None) if only_partner else _above_subsynchronous(x, spec, fs, df, candidates)
-    whip_hz: float | None = None
-    f_partner: float | None = None
-    if switched is not None:
-        warnings.append(switched)
-        n_best, s_best = next((c[1], c[2]) for c in candidates if c[0] == f_best)
+    s = _spectrum(data, fs, speed_range_hz)
+    ranged = speed_range_hz is not None
+    families, only_partner = _ranked(s, _candidate_families(s, _seed_bins(s, ranged)), ranged)
+    choice = _whirl_stage(s, families, only_partner)
+    warnings = choice.warnings
+    if (foreign := _foreign_lines_warning(s, choice)) is not None:
+        warnings.append(foreign)
+    if choice.f_partner is not None:
+        f = choice.f_partner
     else:
-        seeds = _non_harmonic_lines(power, peak_idx, df, f_best, snr_level)
-        # the whirl / whip a partner is sought for is the largest line and whirls in a nearly circular
-        # orbit; the running speed's elliptical 1X read as one finds spurious partners among its own
-        # combination lines (with a speed range and no running speed in it, the search is the only way)
-        whirl_like = (abs(peak_idx[0] * df - f_best) <= 1.5 * df
-                      and not _circular_fraction_at(spec, f_best, df) >= cfg.SPEED_PARTNER_MAX_BACKWARD)  # NaN: no x/y pair
-        partners = (_combination_partners(power, logp, df, floor, f_best, seeds, c_lo, c_hi, 0.45 * fs, sidebands)
-                    if only_partner or whirl_like else [])
-        if only_partner and not partners:
-            raise no_line_in_range()
-        if not partners and (half := _half_speed_whirl(spec, df, candidates)) is not None:
-            warnings.append(half)
-            f_best, n_best, s_best = candidates[0][:3]
-        elif partners:
-            whip_hz = refine_line_hz(x, fs, f_best, iterations=2)
-            if abs(whip_hz - f_best) > 2 * df:
-                whip_hz = f_best
-            om, score, n_lines, r1 = partners[0]
-            f_partner = _refine_partner(x, fs, df, power, floor, om, whip_hz, sidebands)
-            warnings.append(
-                f"the line family at {60 * whip_hz:.1f} cpm ({whip_hz / f_partner:.3f}X) is a sub-synchronous "
-                f"whirl / whip: {n_lines} lines at combinations mΩ + kω of it with the running speed Ω "
-                f"({60 * f_partner:.1f} r/min)")
-            weak_1x = r1 < cfg.SPEED_PARTNER_CLEAR_SNR
-            close = len(partners) > 1 and partners[1][1] >= cfg.SPEED_PARTNER_RIVAL_REL * score
-            # Ω ± ω spans the same lattice mΩ + kω as Ω: a runner-up one whirl frequency away with the stronger
-            # own 1X line may be the running speed whatever the scores say
-            shifted = [p for p in partners[1:] if abs(abs(p[0] - om) - whip_hz) <= 2 * cfg.SPEED_PARTNER_TOL_BINS * df
-                       and p[3] > r1]
-            if weak_1x or close or shifted:
-                why = (f"its own 1X line is {'not seen' if r1 == 0 else f'only {10 * np.log10(r1):.0f} dB above the noise'}"
-                       if weak_1x else
-                       f"{60 * partners[1][0]:.1f} r/min explains the combination lines almost as well" if close else
-                       f"{60 * shifted[0][0]:.1f} r/min, one whirl frequency away, spans the same combination lines and "
-                       "has the stronger 1X line")
-                warnings.append(
-                    f"speed estimate ambiguous: {60 * f_partner:.1f} r/min chosen from the combination lines of a "
-                    f"whirl / whip at {60 * whip_hz:.1f} cpm, but {why}; give speed_rpm or keyphasor_times_s")
-            f_best = f_partner
-    foreign = _non_harmonic_lines(power, peak_idx, df, f_best, max(cfg.SPEED_FOREIGN_MIN_SNR * floor,
-                                                                     cfg.SPEED_FOREIGN_MIN_REL ** 2 * pmax))
-    if whip_hz is not None:
-        foreign = [g for g in foreign if not _on_lattice(g, f_best, whip_hz, df)]
-    elif switched is None:
-        foreign += [g for g in _weak_lines_above(power, df, floor, f_best, c_hi, sidebands) if g not in foreign]
-    if foreign:
-        warnings.append(
-            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but the lines at "
-            f"{', '.join(f'{60 * f:.0f}' for f in foreign[:4])} cpm are not its harmonics (two independent "
-            "frequencies: oil whirl / whip or a sub-harmonic, with the running speed possibly elsewhere); "
-            "give speed_rpm or keyphasor_times_s")
-    if f_partner is not None:
-        f = f_partner
-    else:
-        rivals = [c for c in candidates if c[0] != f_best and c[1] > 0]
-        period_n, strength = _period_n(power, logp, df, f_best, snr_level, c_hi, sidebands) if switched is None else (0, 0)
-        switch = period_n == 3 and strength == 2        # the only period read as the speed (see _period_n)
-        if strength and not switch:
-            warnings.append(
-                f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but its {period_n}X line stands above its "
-                f"{period_n - 1}X and {period_n + 1}X, as the running speed's 1X does in period-{period_n} motion (then "
-                f"{60 * f_best:.1f} cpm is a 1/{period_n}X sub-harmonic); if the machine runs at "
-                f"{60 * period_n * f_best:.1f} r/min give speed_rpm or keyphasor_times_s")
-        if switch:
-            # never a sub-harmonic: the comb's 3X and 6X stand out, so f_best is a 1/3X
-            warnings.append(
-                f"speed estimate ambiguous: {60 * period_n * f_best:.1f} r/min chosen over {60 * f_best:.1f} r/min: the "
-                f"lines at {period_n} and {2 * period_n} times {60 * f_best:.1f} cpm stand above their neighbours, the "
-                f"signature of period-{period_n} motion (a 1/{period_n}X sub-harmonic with its 2/{period_n}X, "
-                f"{period_n + 1}/{period_n}X …); if the machine runs at {60 * f_best:.1f} r/min give speed_rpm or "
-                "keyphasor_times_s")
-            f_best = period_n * f_best
-        elif rivals and rivals[0][1] == n_best and rivals[0][2] >= 0.8 * s_best:
-            warnings.append(
-                f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * rivals[0][0]:.1f} r/min "
-                "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
-        elif double_rival := [c for c in _doubles(candidates, f_best, n_best, df)
-                              if _hann_amplitude_at(power, c[0], df) > _hann_amplitude_at(power, f_best, df)]:
-            # period-2 motion (a 1/2X with its 1.5X, 2.5X …) and a machine whose 2X is its largest line
-            # give the same spectrum: the larger line at twice the speed explains as many lines
-            warnings.append(
-                f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but the larger line family at "
-                f"{60 * double_rival[0][0]:.1f} cpm explains as many lines: if that is the running speed, the "
-                f"{60 * f_best:.1f} cpm line is a 1/2X sub-harmonic (period-2 motion); give speed_rpm or "
-                "keyphasor_times_s")
-        # refine on the strongest of the candidate's 1X..3X lines below 0.45 fs
-        harmonics = [m for m in (1, 2, 3) if m * f_best < 0.45 * fs]
-        if switched is not None:
-            # not on a line the whirl's own harmonics overlap (its 2nd harmonic sits next to a 1X, ...)
-            harmonics = [m for m in harmonics if abs(m * f_best - round(m * f_best / f_whirl) * f_whirl) > 2.5 * df] or [1]
-        h = max(harmonics, key=lambda m: _hann_amplitude_at(power, m * f_best, df))
-        k_h = int(round(h * f_best / df))
-        strongest = np.argsort(-np.abs(spec[:, k_h]))[:4]       # the channels that carry the line
-        f = refine_line_hz(x[strongest], fs, h * f_best) / h
-        if abs(f - f_best) > 2 * df:  # refinement wandered off: keep the interpolated peak
-            warnings.append(f"speed refinement did not converge; using the spectral peak {60 * f_best:.2f} r/min")
-            f = f_best
-    k_top = int(peak_idx[0])
-    if f_partner is None:
-        hidden = _hidden_1x(x, spec, fs, df, k_top, f, c_lo, c_hi)
+        f_best, comb_warnings = _comb_stage(s, families, choice)
+        f, refine_warnings = _refined_speed(s, f_best, choice)
+        warnings += comb_warnings + refine_warnings
+        hidden = _hidden_1x(s.x, s.spec, fs, s.df, int(s.peak_idx[0]), f, s.c_lo, s.c_hi)
         if hidden is not None:
             f, note = hidden
             warnings = [w for w in warnings if not w.startswith("speed estimate ambiguous")] + [note]
-    top_order = k_top * df / f
-    if (f_partner is None and switched is None and abs(k_top * df - f) <= 1.5 * df
-            and c_hi >= f / cfg.SPEED_SUBSYNC_MAX_RATIO
-            and not any(w.startswith("speed estimate ambiguous") for w in warnings)):
-        circ = _circular_fraction(spec, k_top)
-        if circ < cfg.SPEED_WHIRL_MAX_BACKWARD:
-            warnings.append(
-                f"speed estimate ambiguous: {60 * f:.1f} r/min chosen, but its 1X line, the largest, whirls in "
-                f"nearly circular orbits (backward / forward {circ:.3f}), the signature of oil whirl / whip; if the "
-                f"machine runs above {60 * f / cfg.SPEED_SUBSYNC_MAX_RATIO:.0f} r/min this is the whip and the running "
-                "speed's own line is hidden: give speed_rpm, speed_range_rpm or keyphasor_times_s")
+    if (choice.f_partner is None and choice.switched is None
+            and not any(w.startswith("speed estimate ambiguous") for w in warnings)
+            and (whirling := _whirling_1x_warning(s, f)) is not None):
+        warnings.append(whirling)
+    k_top = int(s.peak_idx[0])
+    top_order = k_top * s.df / f
     if abs(top_order - round(top_order)) > 0.05 or round(top_order) == 0:
         warnings.append(
-            f"the largest spectral line ({60 * k_top * df:.1f} cpm = {top_order:.2f}X) is not synchronous: "
+            f"the largest spectral line ({60 * k_top * s.df:.1f} cpm = {top_order:.2f}X) is not synchronous: "
             "non-synchronous vibration dominates; check the speed estimate or give speed_rpm / keyphasor_times_s")
     return f, warnings
 
