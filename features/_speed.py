@@ -931,6 +931,28 @@ def _whirling_1x_warning(s: _Spectrum, f: float) -> str | None:
             "speed's own line is hidden: give speed_rpm, speed_range_rpm or keyphasor_times_s")
 
 
+def _flat_comb_warning(s: _Spectrum, f: float) -> str | None:
+    """The warning when the comb of ``f`` is as flat as a sub-harmonic's: its 2X … ``SPEED_FLAT_COMB_ORDER`` X are
+    all genuine lines (:func:`_line_amplitude`), each at least ``SPEED_FLAT_COMB_MIN_REL`` of its 1X.
+
+    A running speed's harmonics come from the bearings' and the coupling's nonlinearity and fall off with the
+    order (a flexible coupling's 2X may exceed the 1X, but its 3X, 5X do not follow); in period-n motion the
+    1/nX sub-harmonic's comb k/nX holds the running speed's own 1X, 2X among comparable lines, and where no
+    line of it stands out of the comb (:func:`_period_n`) nothing else tells it from a machine running at 1/n
+    of the speed."""
+    order = cfg.SPEED_FLAT_COMB_ORDER
+    if order * f >= 0.45 * s.fs:
+        return None
+    a = [_line_amplitude(s.power, s.logp, m * f, s.df, s.snr_level, s.sidebands) for m in range(1, order + 1)]
+    weakest = min(a[1:])
+    if not (a[0] > 0 and weakest >= cfg.SPEED_FLAT_COMB_MIN_REL * a[0]):
+        return None
+    return (f"speed estimate ambiguous: {60 * f:.1f} r/min chosen, but its 2X–{order}X lines all lie within "
+            f"{-20 * np.log10(weakest / a[0]):.0f} dB of its 1X, a comb as flat as a 1/nX sub-harmonic's in period-n "
+            f"motion (a running speed's harmonics fall off faster); if the machine runs at a multiple of "
+            f"{60 * f:.1f} r/min give speed_rpm or keyphasor_times_s")
+
+
 def _estimate_speed_hz(data: np.ndarray, fs: float,
                        speed_range_hz: tuple[float, float] | None = None) -> tuple[float, list[str]]:
     """Running speed (Hz) from the waveforms: the refined spectral line of 1X (see :func:`estimate_speed_hz`).
@@ -974,7 +996,7 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
     The stages, in order: :func:`_spectrum`, :func:`_seed_bins` and :func:`_candidate_families`,
     :func:`_ranked`, :func:`_whirl_stage`, :func:`_foreign_lines_warning`, then (unless the speed came from a
     whirl's combination lines) :func:`_comb_stage` and :func:`_refined_speed` and :func:`_hidden_1x`, and last
-    :func:`_whirling_1x_warning` and the non-synchronous largest line.
+    :func:`_whirling_1x_warning` or :func:`_flat_comb_warning`, and the non-synchronous largest line.
     """
     s = _spectrum(data, fs, speed_range_hz)
     ranged = speed_range_hz is not None
@@ -993,10 +1015,10 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
         if hidden is not None:
             f, note = hidden
             warnings = [w for w in warnings if not w.startswith("speed estimate ambiguous")] + [note]
-    if (choice.f_partner is None and choice.switched is None
-            and not any(w.startswith("speed estimate ambiguous") for w in warnings)
-            and (whirling := _whirling_1x_warning(s, f)) is not None):
-        warnings.append(whirling)
+    if choice.f_partner is None and not any(w.startswith("speed estimate ambiguous") for w in warnings):
+        note = (_whirling_1x_warning(s, f) if choice.switched is None else None) or _flat_comb_warning(s, f)
+        if note is not None:
+            warnings.append(note)
     k_top = int(s.peak_idx[0])
     top_order = k_top * s.df / f
     if abs(top_order - round(top_order)) > 0.05 or round(top_order) == 0:
