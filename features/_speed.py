@@ -1016,9 +1016,9 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
             f, note = hidden
             warnings = [w for w in warnings if not w.startswith("speed estimate ambiguous")] + [note]
     if choice.f_partner is None and not any(w.startswith("speed estimate ambiguous") for w in warnings):
-        note = (_whirling_1x_warning(s, f) if choice.switched is None else None) or _flat_comb_warning(s, f)
-        if note is not None:
-            warnings.append(note)
+        last = (_whirling_1x_warning(s, f) if choice.switched is None else None) or _flat_comb_warning(s, f)
+        if last is not None:
+            warnings.append(last)
     k_top = int(s.peak_idx[0])
     top_order = k_top * s.df / f
     if abs(top_order - round(top_order)) > 0.05 or round(top_order) == 0:
