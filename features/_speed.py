@@ -821,12 +821,17 @@ def _whirl_stage(s: _Spectrum, families: list[_Family], only_partner: bool) -> _
     # own 1X line may be the running speed whatever the scores say
     shifted = [p for p in partners[1:] if abs(abs(p[0] - om) - whip_hz) <= 2 * cfg.SPEED_PARTNER_TOL_BINS * df
                and p[3] > r1]
-    if weak_1x or close or shifted:
+    # a lattice that leaves more of the record's lines unexplained than it explains (a score ≤ 0) is no evidence
+    # (held-out seed 817: a 1X on the skirt of the whirl's 2nd harmonic, read at 1.95 times the speed from two
+    # combination lines, score −5.7, without a word; the other 35 of 222 partner estimates at ≤ 0 were flagged)
+    unexplained = not score > 0
+    if weak_1x or close or shifted or unexplained:
         why = (f"its own 1X line is {'not seen' if r1 == 0 else f'only {10 * np.log10(r1):.0f} dB above the noise'}"
                if weak_1x else
                f"{60 * partners[1][0]:.1f} r/min explains the combination lines almost as well" if close else
                f"{60 * shifted[0][0]:.1f} r/min, one whirl frequency away, spans the same combination lines and "
-               "has the stronger 1X line")
+               "has the stronger 1X line" if shifted else
+               "its lattice leaves more of the spectrum's lines unexplained than it explains")
         warnings.append(
             f"speed estimate ambiguous: {60 * f_partner:.1f} r/min chosen from the combination lines of a "
             f"whirl / whip at {60 * whip_hz:.1f} cpm, but {why}; give speed_rpm or keyphasor_times_s")

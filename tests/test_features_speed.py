@@ -534,3 +534,26 @@ def test_a_whirls_mirror_line_with_more_lines_than_the_1x_family_is_not_the_runn
                                          noise_um=0.02, seed=3))
     assert fr.speed_rpm == pytest.approx(rpm, rel=1e-3), fr.warnings
     assert any("speed estimate ambiguous" in x for x in fr.warnings), fr.warnings
+
+
+def test_a_whirl_partner_whose_lattice_explains_less_than_it_leaves_is_flagged(monkeypatch):
+    """A combination-line lattice scoring ≤ 0 explains fewer of the record's lines than it leaves (bench_robustness
+    base set, seed 817, at 48 revolutions: 2376 r/min read as 4629.6 from two combination lines, score −5.7, its
+    own 1X 23 dB above the noise, without a word). Its scores are replayed here on an oil-whirl record: the
+    estimate must be declared ambiguous."""
+    from rotordiag.features import _speed
+
+    rpm, ratio = 2376.0, 0.4734
+    om, w = rpm / 60, ratio * rpm / 60
+    monkeypatch.setattr(_speed, "_combination_partners",
+                        lambda *a, **k: [(1.9485 * om, -5.7, 2, 214.0), (2.4177 * om, -13.7, 2, 56.0)])
+    fs = 2560.0
+
+    def whirl(t, b):                                # circular forward whirl with its 2nd harmonic
+        return (60 * np.cos(2 * np.pi * w * t) + 12 * np.cos(4 * np.pi * w * t + 0.5),
+                60 * np.sin(2 * np.pi * w * t) + 12 * np.sin(4 * np.pi * w * t + 0.5))
+
+    comps = {b: [(1, 0.5, 20.0 * b, 0.25, 110.0)] for b in (1, 2, 3, 4)}
+    fr = extract_features(make_recording(components=comps, rpm=rpm, fs=fs, n=int(48 * 60 / rpm * fs), extra=whirl,
+                                         noise_um=0.02, seed=12))
+    assert any("speed estimate ambiguous" in x and "unexplained" in x for x in fr.warnings), fr.warnings
