@@ -116,8 +116,8 @@ SPEED_PERIOD_MAX_N = 8
 #: a running speed's harmonics fall off, a 1/nX sub-harmonic's comb (its k/nX lines) stays flat: the estimate is
 #: flagged (features._speed._flat_comb_warning) when its 2X … this order are all lines of their own, each at least
 #: SPEED_FLAT_COMB_MIN_REL of its 1X (amplitude, −30 dB). bench_robustness base sets (seeds 815–817, 48–192
-#: revolutions) and bench_speed seeds 15 / 16, 2500 estimates: the weakest of 2X–6X lay at −14.5 … −32.2 dB on the
-#: 17 read at a 1/nX (one of them silent: period 7 at 1/7X, −16.7 dB) and at most −34.6 dB on every right estimate
+#: revolutions) and bench_speed seeds 15 / 16, 2500 estimates: the weakest of 2X–6X lay at −14.5 … −32.2 dB on 17
+#: wrong ones (14 read at a 1/nX; one silent: period 7 at 1/7X, −16.7 dB) and at most −34.6 dB on every right one
 SPEED_FLAT_COMB_ORDER = 6
 SPEED_FLAT_COMB_MIN_REL = 10 ** (-30 / 20)
 #: the running speed's 1X hidden in the main lobe of an oil whirl's 2nd harmonic (features._speed._hidden_running_line)
