@@ -55,7 +55,7 @@ SPEED_HARMONIC_MIN_REL = 0.01
 SPEED_HARMONIC_TOL_BINS = 0.5
 SPEED_HARMONIC_MAX_TOL_BINS = 1.0
 #: a best-ranked line family below this fraction of a higher family's frequency may be a
-#: sub-synchronous whirl / whip (features._speed._above_subsynchronous) …
+#: sub-synchronous whirl / whip (features._families._above_subsynchronous) …
 SPEED_SUBSYNC_MAX_RATIO = 0.55
 #: … when their refined frequency ratio r is further than this fraction of r from an integer
 #: (oil whirl / whip lines are not locked to the running speed)
@@ -71,9 +71,9 @@ SPEED_FOREIGN_MIN_SNR = 30.0
 #: … and its amplitude at least this fraction of the largest line
 SPEED_FOREIGN_MIN_REL = 0.002
 #: a weak line above a possible whirl / whip that could be the running speed's hidden 1X
-#: (features._speed._weak_lines_above) needs at least this amplitude relative to the largest line
+#: (features._families._weak_lines_above) needs at least this amplitude relative to the largest line
 SPEED_WEAK_LINE_MIN_REL = 5e-4
-#: a line of a whirl / whip's combination lattice mΩ + kω (features._speed._combination_partners)
+#: a line of a whirl / whip's combination lattice mΩ + kω (features._families._combination_partners)
 #: counts when it is a local maximum this many times above the median spectrum (8 channels of
 #: noise: probability < 1e-6 per bin; 2 channels: ~1e-3, and a candidate needs two such lines) …
 SPEED_PARTNER_LINE_SNR = 4.0
@@ -106,12 +106,12 @@ SPEED_HALF_WHIRL_MAX_BACKWARD = 0.15
 #: ... and regardless of its orbits when its line is below this fraction of the double family's
 #: (amplitude; bench_robustness sets: a flexible coupling's 2X reached 12× the 1X, 22 dB)
 SPEED_HALF_MAX_REL = 0.03
-#: the comb of a line family reads as period-3 motion (features._speed._period_n) only when its 3X
+#: the comb of a line family reads as period-3 motion (features._families._period_n) only when its 3X
 #: holds at least … at most this fraction of its 1X (amplitude; bench_robustness base sets, seeds 815 and
 #: 816: 0.35 and 0.18 on the two period-3 recordings, 0.59–2.9 where a 3X comb peak was a machine's own 3X)
 SPEED_PERIOD3_MIN_REL = 0.1
 SPEED_PERIOD3_MAX_REL = 0.5
-#: … tried for period-n motion up to this n (features._speed._period_n)
+#: … tried for period-n motion up to this n (features._families._period_n)
 SPEED_PERIOD_MAX_N = 8
 #: a running speed's harmonics fall off, a 1/nX sub-harmonic's comb (its k/nX lines) stays flat: the estimate is
 #: flagged (features._speed._flat_comb_warning) when its 2X … this order are all lines of their own, each at least
@@ -120,14 +120,14 @@ SPEED_PERIOD_MAX_N = 8
 #: wrong ones (14 read at a 1/nX; one silent: period 7 at 1/7X, −16.7 dB) and at most −34.6 dB on every right one
 SPEED_FLAT_COMB_ORDER = 6
 SPEED_FLAT_COMB_MIN_REL = 10 ** (-30 / 20)
-#: the running speed's 1X hidden in the main lobe of an oil whirl's 2nd harmonic (features._speed._hidden_running_line)
+#: the running speed's 1X hidden in the main lobe of an oil whirl's 2nd harmonic (features._families._hidden_running_line)
 #: is sought between these many record bins (fs / n) above that harmonic …
 SPEED_HIDDEN_MIN_BINS = 0.3
 SPEED_HIDDEN_MAX_BINS = 6.0
 #: … and accepted when the two-line fit leaves at most this fraction of the one-line fit's residual
 SPEED_HIDDEN_MAX_RESIDUAL = 0.2
 #: a peak within this fraction of a stronger line's frequency, with a mirror image across it, is a
-#: modulation sideband, not a line of its own (features._speed._modulation_sidebands) …
+#: modulation sideband, not a line of its own (features._lines._modulation_sidebands) …
 SPEED_SIDEBAND_MAX_REL = 0.03
 #: … and at least this many FFT bins from it (closer, a pair is not resolved from the line's main lobe) …
 SPEED_SIDEBAND_MIN_BINS = 3

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from . import _config as cfg
+from ._lines import refine_line_hz
 from ._names import FEATURE_NAMES
 from ._orbit import OrbitShape, orbit_arrays
 from ._orders import fit_orders, forward_reverse, max_sync_order
@@ -16,7 +17,7 @@ from ._poincare import classify, poincare_points
 from ._recording import Recording
 from ._sanity import check_recording
 from ._spectrum import line_noise_amplitude, noise_rms, residual_psd
-from ._speed import refine_line_hz, shaft_angle
+from ._speed import shaft_angle
 
 __all__ = ["BearingDetail", "FeatureResult", "extract_features"]
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from rotordiag.features import _kernels as K
+from rotordiag.features._lines import refine_line_hz
 from rotordiag.features._orbit import orbit_arrays, orbit_shapes
 from rotordiag.features._spectrum import hann, noise_rms, residual_psd
-from rotordiag.features._speed import refine_line_hz
 
 
 @pytest.mark.parametrize("shape", [(8, 2048), (8, 2049), (3, 7), (1, 1), (4, 100)])
