@@ -22,7 +22,7 @@ __all__: list[str] = []
 
 
 class _Family(NamedTuple):
-    """A candidate running speed and its 1X, 2X, 3X lines (see :func:`_candidate_families`)."""
+    """A candidate running speed and its 1X, 2X, 3X lines (built by ``_speed._candidate_families``)."""
 
     f_hz: float
     n_present: int              # lines above the noise and at least SPEED_HARMONIC_MIN_REL of the largest line

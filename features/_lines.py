@@ -190,7 +190,7 @@ def _circular_fraction(spec: np.ndarray, k: int) -> float:
     """How far from a circle the orbits are at FFT bin ``k``: the median over bearings of min(F, B) / max(F, B).
 
     ``spec`` holds the Hann spectra of the x, y rows of each bearing in turn (as
-    :func:`estimate_speed_hz` receives them); F and B are the magnitudes of the forward and backward
+    ``_speed.estimate_speed_hz`` receives them); F and B are the magnitudes of the forward and backward
     circular components (x ∓ iy) of the line. 0 for perfectly circular orbits in either direction,
     1 for straight lines; NaN without an x/y pair.
     """
