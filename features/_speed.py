@@ -263,8 +263,8 @@ def _whirl_stage(s: _Spectrum, families: list[_Family], only_partner: bool) -> _
     In this order: a family above it that is no harmonic of it (:func:`_above_subsynchronous`); else, when the
     best family's line is the largest and whirls in a nearly circular orbit (or a stated range holds no family),
     the running speed whose combination lines with it explain the record (:func:`_combination_partners`; flagged
-    ambiguous when its own 1X is weak, a rival scores nearly as well, or a runner-up one whirl frequency away has
-    the stronger 1X); else a half-speed whirl read at twice its frequency (:func:`_half_speed_whirl`). Reorders
+    ambiguous when its own 1X is weak, a rival scores nearly as well, a runner-up one whirl frequency away has
+    the stronger 1X, or its lattice scores ≤ 0); else a half-speed whirl read at twice its frequency (:func:`_half_speed_whirl`). Reorders
     ``families`` in the last case. Raises ``ValueError`` when only a partner could give the speed and none does.
     """
     first = families[0]
@@ -279,7 +279,7 @@ def _whirl_stage(s: _Spectrum, families: list[_Family], only_partner: bool) -> _
     # combination lines (with a speed range and no running speed in it, the search is the only way)
     whirl_like = (abs(s.peak_idx[0] * df - f_best) <= 1.5 * df
                   and not _circular_fraction_at(s.spec, f_best, df) >= cfg.SPEED_PARTNER_MAX_BACKWARD)  # NaN: no x/y pair
-    partners = []
+    partners: list[tuple[float, float, int, float]] = []
     if only_partner or whirl_like:
         seeds = _non_harmonic_lines(s.power, s.peak_idx, df, f_best, s.snr_level)
         partners = _combination_partners(s.power, s.logp, df, s.floor, f_best, seeds, s.c_lo, s.c_hi, 0.45 * s.fs,
