@@ -363,18 +363,21 @@ def summarize(bundle, outs: list[Outcome]) -> dict:
 
     names, edges = _bands(bundle)
     ran = [o for o in outs if o.status != "sim failed"]
-    truth = np.array(names, dtype=object)[_true_band(ran, edges)]
-    delta = np.array([o.delta for o in ran])
-    mech = np.array([o.mechanism for o in ran], dtype=object)
-    row: dict = {"n": len(ran), "sim_failed": len(outs) - len(ran)}
-    for who, pred, score in (("model", np.array([o.model_class for o in ran], dtype=object),
-                              np.array([o.delta_model for o in ran])),
-                             ("rule", np.array([o.rule_class for o in ran], dtype=object),
-                              np.array([o.ratio for o in ran]))):
+    # a refused recording (the service's 422: e.g. too few revolutions at the speed read from it) has no class,
+    # no Δ and no 2X/1X: the classification figures, for the model and the rule alike, are over the others
+    answered = [o for o in ran if o.status != "refused"]
+    truth = np.array(names, dtype=object)[_true_band(answered, edges)]
+    delta = np.array([o.delta for o in answered])
+    mech = np.array([o.mechanism for o in answered], dtype=object)
+    row: dict = {"n": len(ran), "sim_failed": len(outs) - len(ran), "refused": len(ran) - len(answered)}
+    for who, pred, score in (("model", np.array([o.model_class for o in answered], dtype=object),
+                              np.array([o.delta_model for o in answered])),
+                             ("rule", np.array([o.rule_class for o in answered], dtype=object),
+                              np.array([o.ratio for o in answered]))):
         r: dict = {}
         aligned = mech == "aligned"
         for m in sorted(set(mech) - {"aligned"}) + ["all"]:
-            sel = aligned | (mech == m) if m != "all" else np.ones(len(ran), bool)
+            sel = aligned | (mech == m) if m != "all" else np.ones(len(answered), bool)
             r[f"f1_{m}"] = classification_metrics(truth[sel], pred[sel], names)["macro_f1"] if sel.any() else None
         r["false_alarm"] = float(np.mean(pred[aligned] != names[0])) if aligned.any() else None
         r["spearman"] = regression_metrics(delta, np.nan_to_num(score, nan=0.0), score=score)["spearman"]
@@ -406,8 +409,8 @@ def f1_on_right_speed(bundle, unknown: list[Outcome], known: list[Outcome]) -> t
     from rotordiag.models.metrics import classification_metrics
 
     names, edges = _bands(bundle)
-    pairs = [(u, k) for u, k in zip(unknown, known) if u.status != "sim failed" and math.isfinite(u.speed_rpm_used)
-             and abs(u.speed_rpm_used / u.speed_rpm - 1.0) <= SPEED_TOLERANCE]
+    pairs = [(u, k) for u, k in zip(unknown, known) if u.status != "sim failed" and k.status != "refused"
+             and math.isfinite(u.speed_rpm_used) and abs(u.speed_rpm_used / u.speed_rpm - 1.0) <= SPEED_TOLERANCE]
     if not pairs:
         return None
     truth = [names[k] for k in _true_band([u for u, _ in pairs], edges)]
@@ -541,7 +544,8 @@ def table(rows: dict[str, dict], who: str) -> str:
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name, row in rows.items():
         r = row[who]
-        cells = [name, str(row["n"]) + (f" (+{row['sim_failed']} failed)" if row["sim_failed"] else "")]
+        cells = [name, str(row["n"]) + (f" (+{row['sim_failed']} failed)" if row["sim_failed"] else "")
+                 + (f" ({row['refused']} refused, not scored)" if row.get("refused") else "")]
         cells += [_f(r.get(f"f1_{c}")) for c in cols] + [_f(r["false_alarm"], "{:.0%}"), _f(r["spearman"])]
         if who == "model":
             s = row["status"]
