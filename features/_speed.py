@@ -566,11 +566,15 @@ def shaft_angle(rec, data: np.ndarray) -> ShaftAngle:
         warnings.extend(est_warn)
         source = "estimated"
     spr = fs / f1
-    if spr < cfg.MIN_SAMPLES_PER_REV:
-        raise _too_slow_sampling(spr, fs, f1)
     n_revs = int(np.floor(n / spr + 1e-9))
-    if n_revs < cfg.MIN_REVS:
-        raise _too_short(n / spr, 60 * f1, fs, n, "speed " + source)
+    if spr < cfg.MIN_SAMPLES_PER_REV or n_revs < cfg.MIN_REVS:
+        err = _too_slow_sampling(spr, fs, f1) if spr < cfg.MIN_SAMPLES_PER_REV else \
+            _too_short(n / spr, 60 * f1, fs, n, "speed " + source)
+        doubt = next((w for w in warnings if w.startswith("speed estimate ambiguous")), None)
+        if doubt is not None:
+            # the limit may be the estimate's fault (a 1/nX read as the speed): say so, not only "record longer"
+            raise ValueError(f"{err}. But the running speed was estimated and is in doubt — {doubt}") from None
+        raise err
     stop = min(n, int(np.ceil(n_revs * spr - 1e-9)))
     theta = (2 * np.pi * f1 / fs) * np.arange(stop)
     rev_times = np.arange(n_revs) / f1

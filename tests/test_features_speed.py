@@ -557,3 +557,16 @@ def test_a_whirl_partner_whose_lattice_explains_less_than_it_leaves_is_flagged(m
     fr = extract_features(make_recording(components=comps, rpm=rpm, fs=fs, n=int(48 * 60 / rpm * fs), extra=whirl,
                                          noise_um=0.02, seed=12))
     assert any("speed estimate ambiguous" in x and "unexplained" in x for x in fr.warnings), fr.warnings
+
+
+def test_a_record_too_short_at_a_doubtful_estimated_speed_says_the_speed_is_in_doubt():
+    """Period-7 motion on 48 revolutions read at the 1/7X leaves 6.9 revolutions (held-out seed 817, case 5): the
+    refusal asked only for a longer record. The estimate is flagged (a flat comb), so the refusal says that the speed
+    itself is in doubt and how to give it."""
+    rpm = 1908.5
+    rec = _period_three_recording(rpm, (10.0, 3.0, 1.0), {1: 56.0, 2: 40.0, 3: 25.0, 4: 11.0, 5: 10.0, 6: 12.6, 8: 6.0,
+                                                          9: 4.0, 10: 3.0, 11: 2.0, 12: 2.0, 13: 1.5},
+                                  n=int(48 * 60 / rpm * 2560), seed=5, period=7)
+    with pytest.raises(ValueError, match=r"revolutions are needed") as exc:
+        extract_features(rec)
+    assert "in doubt" in str(exc.value) and "give speed_rpm" in str(exc.value)
