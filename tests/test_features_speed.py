@@ -397,16 +397,21 @@ def test_a_flexible_couplings_4x_and_8x_comb_peaks_leave_the_speed_alone():
     assert fr.speed_rpm == pytest.approx(1750.0, rel=1e-5)
 
 
+def _period_seven_recording(rpm: float, *, revs: int):
+    """Period-7 motion like held-out seed 817's case 5 (a pin coupling): the 1/7X the largest line, its comb k/7X
+    falling slowly, the running speed's 1X (10 µm) below its 6/7X; ``revs`` revolutions at 2560 Hz."""
+    return _period_three_recording(rpm, (10.0, 3.0, 1.0), {1: 56.0, 2: 40.0, 3: 25.0, 4: 11.0, 5: 10.0, 6: 12.6, 8: 6.0,
+                                                           9: 4.0, 10: 3.0, 11: 2.0, 12: 2.0, 13: 1.5},
+                                   n=int(revs * 60 / rpm * 2560), seed=5, period=7)
+
+
 def test_a_flat_period_seven_comb_is_flagged_not_silent():
     """Period-7 motion (bench_robustness base set, seed 817, a pin coupling at 1908.5 r/min): the 1/7X is the largest
     line and its comb k/7X falls off so slowly that the running speed's 1X does not stand above its 6/7X. Read at
     the 1/7X without a word before; a running speed's own 2X–6X are never all within 30 dB of its 1X (2500
     simulated estimates: −34.6 dB at most), so the estimate is declared ambiguous."""
     rpm = 1908.5
-    rec = _period_three_recording(rpm, (10.0, 3.0, 1.0), {1: 56.0, 2: 40.0, 3: 25.0, 4: 11.0, 5: 10.0, 6: 12.6, 8: 6.0,
-                                                          9: 4.0, 10: 3.0, 11: 2.0, 12: 2.0, 13: 1.5},
-                                  n=int(96 * 60 / rpm * 2560), seed=5, period=7)
-    fr = extract_features(rec)
+    fr = extract_features(_period_seven_recording(rpm, revs=96))
     right = abs(fr.speed_rpm / rpm - 1) <= 5e-3
     assert right or any("speed estimate ambiguous" in w and "flat" in w for w in fr.warnings), fr.warnings
 
@@ -563,10 +568,6 @@ def test_a_record_too_short_at_a_doubtful_estimated_speed_says_the_speed_is_in_d
     """Period-7 motion on 48 revolutions read at the 1/7X leaves 6.9 revolutions (held-out seed 817, case 5): the
     refusal asked only for a longer record. The estimate is flagged (a flat comb), so the refusal says that the speed
     itself is in doubt and how to give it."""
-    rpm = 1908.5
-    rec = _period_three_recording(rpm, (10.0, 3.0, 1.0), {1: 56.0, 2: 40.0, 3: 25.0, 4: 11.0, 5: 10.0, 6: 12.6, 8: 6.0,
-                                                          9: 4.0, 10: 3.0, 11: 2.0, 12: 2.0, 13: 1.5},
-                                  n=int(48 * 60 / rpm * 2560), seed=5, period=7)
     with pytest.raises(ValueError, match=r"revolutions are needed") as exc:
-        extract_features(rec)
+        extract_features(_period_seven_recording(1908.5, revs=48))
     assert "in doubt" in str(exc.value) and "give speed_rpm" in str(exc.value)
