@@ -32,6 +32,9 @@ from ._spectrum import fast_length, hann
 
 __all__ = ["ShaftAngle", "shaft_angle", "estimate_speed_hz"]
 
+#: how every warning that puts the estimated speed in doubt begins (models/status.py reads it as `speed_ambiguous`)
+_AMBIGUOUS = "speed estimate ambiguous"
+
 
 @dataclass
 class ShaftAngle:
@@ -96,9 +99,14 @@ class _Spectrum:
         return float(self.power[self.peak_idx[0]])
 
     @property
+    def k_top(self) -> int:
+        """Bin of the largest peak in the search range."""
+        return int(self.peak_idx[0])
+
+    @property
     def f_top(self) -> float:
         """Frequency of the largest peak in the search range, Hz (its bin)."""
-        return float(self.peak_idx[0]) * self.df
+        return self.k_top * self.df
 
 
 def estimate_speed_hz(data: np.ndarray, fs: float,
@@ -277,7 +285,7 @@ def _whirl_stage(s: _Spectrum, families: list[_Family], only_partner: bool) -> _
     # the whirl / whip a partner is sought for is the largest line and whirls in a nearly circular
     # orbit; the running speed's elliptical 1X read as one finds spurious partners among its own
     # combination lines (with a speed range and no running speed in it, the search is the only way)
-    whirl_like = (abs(s.peak_idx[0] * df - f_best) <= 1.5 * df
+    whirl_like = (abs(s.f_top - f_best) <= 1.5 * df
                   and not _circular_fraction_at(s.spec, f_best, df) >= cfg.SPEED_PARTNER_MAX_BACKWARD)  # NaN: no x/y pair
     partners: list[tuple[float, float, int, float]] = []
     if only_partner or whirl_like:
@@ -407,7 +415,7 @@ def _whirling_1x_warning(s: _Spectrum, f: float) -> str | None:
     """The warning when the chosen speed's 1X is the largest line and whirls in nearly circular orbits (backward /
     forward below ``SPEED_WHIRL_MAX_BACKWARD``) while a running speed above it is still possible: a lone whip
     family with no line of the running speed looks exactly like a machine running at the whip frequency."""
-    k_top = int(s.peak_idx[0])
+    k_top = s.k_top
     if not (abs(k_top * s.df - f) <= 1.5 * s.df and s.c_hi >= f / cfg.SPEED_SUBSYNC_MAX_RATIO):
         return None
     circ = _circular_fraction(s.spec, k_top)
@@ -499,15 +507,15 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
         f_best, comb_warnings = _comb_stage(s, families, choice)
         f, refine_warnings = _refined_speed(s, f_best, choice)
         warnings += comb_warnings + refine_warnings
-        hidden = _hidden_1x(s.x, s.spec, fs, s.df, int(s.peak_idx[0]), f, s.c_lo, s.c_hi)
+        hidden = _hidden_1x(s.x, s.spec, fs, s.df, s.k_top, f, s.c_lo, s.c_hi)
         if hidden is not None:
             f, note = hidden
-            warnings = [w for w in warnings if not w.startswith("speed estimate ambiguous")] + [note]
-    if choice.f_partner is None and not any(w.startswith("speed estimate ambiguous") for w in warnings):
+            warnings = [w for w in warnings if not w.startswith(_AMBIGUOUS)] + [note]
+    if choice.f_partner is None and not any(w.startswith(_AMBIGUOUS) for w in warnings):
         last = (_whirling_1x_warning(s, f) if choice.switched is None else None) or _flat_comb_warning(s, f)
         if last is not None:
             warnings.append(last)
-    k_top = int(s.peak_idx[0])
+    k_top = s.k_top
     top_order = k_top * s.df / f
     if abs(top_order - round(top_order)) > 0.05 or round(top_order) == 0:
         warnings.append(
@@ -570,7 +578,7 @@ def shaft_angle(rec, data: np.ndarray) -> ShaftAngle:
     if spr < cfg.MIN_SAMPLES_PER_REV or n_revs < cfg.MIN_REVS:
         err = _too_slow_sampling(spr, fs, f1) if spr < cfg.MIN_SAMPLES_PER_REV else \
             _too_short(n / spr, 60 * f1, fs, n, "speed " + source)
-        doubt = next((w for w in warnings if w.startswith("speed estimate ambiguous")), None)
+        doubt = next((w for w in warnings if w.startswith(_AMBIGUOUS)), None)
         if doubt is not None:
             # the limit may be the estimate's fault (a 1/nX read as the speed): say so, not only "record longer"
             raise ValueError(f"{err}. But the running speed was estimated and is in doubt — {doubt}") from None
