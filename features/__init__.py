@@ -53,7 +53,15 @@ from ._change import (
     signature,
     speed_comparable,
 )
-from ._config import ALLOWED_UNITS, MIN_REVS, MIN_REVS_MOTION, WHIRL_BAND
+from ._config import (
+    ALLOWED_UNITS,
+    MIN_REVS,
+    MIN_REVS_MOTION,
+    SPEED_AMBIGUOUS,
+    SPEED_NOT_CONVERGED,
+    WHIRL_BAND,
+    speed_in_doubt,
+)
 from ._evidence import EvidenceItem, evidence
 from ._extract import BearingDetail, FeatureResult, extract_features
 from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
@@ -70,4 +78,5 @@ __all__ = [
     "MIN_REVS_MOTION", "WHIRL_BAND", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",
     "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
+    "SPEED_AMBIGUOUS", "SPEED_NOT_CONVERGED", "speed_in_doubt",
 ]

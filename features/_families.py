@@ -106,7 +106,7 @@ def _half_speed_whirl(spec: np.ndarray, df: float,
         return None
     candidates.remove(double[0])
     candidates.insert(0, double[0])
-    return (f"speed estimate ambiguous: {60 * double[0].f_hz:.1f} r/min chosen; the line at {60 * f0:.1f} cpm, with "
+    return (f"{cfg.SPEED_AMBIGUOUS}: {60 * double[0].f_hz:.1f} r/min chosen; the line at {60 * f0:.1f} cpm, with "
             f"harmonics of its own, whirls in nearly circular orbits (backward / forward {circ:.3f}) and is read as "
             f"a half-speed whirl or sub-harmonic; if the machine runs at {60 * f0:.1f} r/min give speed_rpm or "
             "keyphasor_times_s")
@@ -356,7 +356,7 @@ def _hidden_1x(x: np.ndarray, spec: np.ndarray, fs: float, df: float, k_top: int
     if found is None or not (c_lo <= found[0] <= c_hi):
         return None
     g, rel_res, rel_amp = found
-    return g, (f"speed estimate ambiguous: {60 * g:.1f} r/min chosen: the largest line, at {60 * f_w:.1f} cpm "
+    return g, (f"{cfg.SPEED_AMBIGUOUS}: {60 * g:.1f} r/min chosen: the largest line, at {60 * f_w:.1f} cpm "
                f"({f_w / g:.3f}X), whirls in nearly circular orbits (backward / forward {circ:.3f}), read as oil "
                f"whirl; the running speed's 1X ({rel_amp:.2f} × the whirl's 2nd harmonic) lies "
                f"{(g - 2 * f_w) * x.shape[1] / fs:.1f} record bins above that harmonic, inside its main lobe, and is "

@@ -32,9 +32,6 @@ from ._spectrum import fast_length, hann
 
 __all__ = ["ShaftAngle", "shaft_angle", "estimate_speed_hz"]
 
-#: how every warning that puts the estimated speed in doubt begins (models/status.py reads it as `speed_ambiguous`)
-_AMBIGUOUS = "speed estimate ambiguous"
-
 
 @dataclass
 class ShaftAngle:
@@ -324,7 +321,7 @@ def _whirl_stage(s: _Spectrum, families: list[_Family], only_partner: bool) -> _
                "has the stronger 1X line" if shifted else
                "its lattice leaves more of the spectrum's lines unexplained than it explains")
         warnings.append(
-            f"speed estimate ambiguous: {60 * f_partner:.1f} r/min chosen from the combination lines of a "
+            f"{cfg.SPEED_AMBIGUOUS}: {60 * f_partner:.1f} r/min chosen from the combination lines of a "
             f"whirl / whip at {60 * whip_hz:.1f} cpm, but {why}; give speed_rpm or keyphasor_times_s")
     return _Choice(first, f_partner, f_best, whip_hz=whip_hz, f_partner=f_partner, warnings=warnings)
 
@@ -343,7 +340,7 @@ def _foreign_lines_warning(s: _Spectrum, choice: _Choice) -> str | None:
         foreign += [g for g in _weak_lines_above(s.power, s.df, s.floor, f, s.c_hi, s.sidebands) if g not in foreign]
     if not foreign:
         return None
-    return (f"speed estimate ambiguous: {60 * f:.1f} r/min chosen, but the lines at "
+    return (f"{cfg.SPEED_AMBIGUOUS}: {60 * f:.1f} r/min chosen, but the lines at "
             f"{', '.join(f'{60 * g:.0f}' for g in foreign[:4])} cpm are not its harmonics (two independent "
             "frequencies: oil whirl / whip or a sub-harmonic, with the running speed possibly elsewhere); "
             "give speed_rpm or keyphasor_times_s")
@@ -362,14 +359,14 @@ def _comb_stage(s: _Spectrum, families: list[_Family], choice: _Choice) -> tuple
     switch = period_n == 3 and strength == 2        # the only period read as the speed (see _period_n)
     if strength and not switch:
         warnings.append(
-            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but its {period_n}X line stands above its "
+            f"{cfg.SPEED_AMBIGUOUS}: {60 * f_best:.1f} r/min chosen, but its {period_n}X line stands above its "
             f"{period_n - 1}X and {period_n + 1}X, as the running speed's 1X does in period-{period_n} motion (then "
             f"{60 * f_best:.1f} cpm is a 1/{period_n}X sub-harmonic); if the machine runs at "
             f"{60 * period_n * f_best:.1f} r/min give speed_rpm or keyphasor_times_s")
     if switch:
         # never a sub-harmonic: the comb's 3X and 6X stand out, so f_best is a 1/3X
         warnings.append(
-            f"speed estimate ambiguous: {60 * period_n * f_best:.1f} r/min chosen over {60 * f_best:.1f} r/min: the "
+            f"{cfg.SPEED_AMBIGUOUS}: {60 * period_n * f_best:.1f} r/min chosen over {60 * f_best:.1f} r/min: the "
             f"lines at {period_n} and {2 * period_n} times {60 * f_best:.1f} cpm stand above their neighbours, the "
             f"signature of period-{period_n} motion (a 1/{period_n}X sub-harmonic with its 2/{period_n}X, "
             f"{period_n + 1}/{period_n}X …); if the machine runs at {60 * f_best:.1f} r/min give speed_rpm or "
@@ -378,14 +375,14 @@ def _comb_stage(s: _Spectrum, families: list[_Family], choice: _Choice) -> tuple
     elif rivals and rivals[0].n_present == choice.family.n_present and \
             rivals[0].amp_present >= 0.8 * choice.family.amp_present:
         warnings.append(
-            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen over {60 * rivals[0].f_hz:.1f} r/min "
+            f"{cfg.SPEED_AMBIGUOUS}: {60 * f_best:.1f} r/min chosen over {60 * rivals[0].f_hz:.1f} r/min "
             "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
     elif double_rival := [c for c in _doubles(families, f_best, choice.family.n_present, df)
                           if _hann_amplitude_at(s.power, c.f_hz, df) > _hann_amplitude_at(s.power, f_best, df)]:
         # period-2 motion (a 1/2X with its 1.5X, 2.5X …) and a machine whose 2X is its largest line
         # give the same spectrum: the larger line at twice the speed explains as many lines
         warnings.append(
-            f"speed estimate ambiguous: {60 * f_best:.1f} r/min chosen, but the larger line family at "
+            f"{cfg.SPEED_AMBIGUOUS}: {60 * f_best:.1f} r/min chosen, but the larger line family at "
             f"{60 * double_rival[0].f_hz:.1f} cpm explains as many lines: if that is the running speed, the "
             f"{60 * f_best:.1f} cpm line is a 1/2X sub-harmonic (period-2 motion); give speed_rpm or "
             "keyphasor_times_s")
@@ -407,7 +404,7 @@ def _refined_speed(s: _Spectrum, f_best: float, choice: _Choice) -> tuple[float,
     strongest = np.argsort(-np.abs(s.spec[:, k_h]))[:4]       # the channels that carry the line
     f = refine_line_hz(s.x[strongest], fs, h * f_best) / h
     if abs(f - f_best) > 2 * df:
-        return f_best, [f"speed refinement did not converge; using the spectral peak {60 * f_best:.2f} r/min"]
+        return f_best, [f"{cfg.SPEED_NOT_CONVERGED}; using the spectral peak {60 * f_best:.2f} r/min"]
     return f, []
 
 
@@ -421,7 +418,7 @@ def _whirling_1x_warning(s: _Spectrum, f: float) -> str | None:
     circ = _circular_fraction(s.spec, k_top)
     if not circ < cfg.SPEED_WHIRL_MAX_BACKWARD:
         return None
-    return (f"speed estimate ambiguous: {60 * f:.1f} r/min chosen, but its 1X line, the largest, whirls in "
+    return (f"{cfg.SPEED_AMBIGUOUS}: {60 * f:.1f} r/min chosen, but its 1X line, the largest, whirls in "
             f"nearly circular orbits (backward / forward {circ:.3f}), the signature of oil whirl / whip; if the "
             f"machine runs above {60 * f / cfg.SPEED_SUBSYNC_MAX_RATIO:.0f} r/min this is the whip and the running "
             "speed's own line is hidden: give speed_rpm, speed_range_rpm or keyphasor_times_s")
@@ -443,7 +440,7 @@ def _flat_comb_warning(s: _Spectrum, f: float) -> str | None:
     weakest = min(a[1:])
     if not (a[0] > 0 and weakest >= cfg.SPEED_FLAT_COMB_MIN_REL * a[0]):
         return None
-    return (f"speed estimate ambiguous: {60 * f:.1f} r/min chosen, but its 2X–{order}X lines all lie within "
+    return (f"{cfg.SPEED_AMBIGUOUS}: {60 * f:.1f} r/min chosen, but its 2X–{order}X lines all lie within "
             f"{-20 * np.log10(weakest / a[0]):.0f} dB of its 1X, a comb as flat as a 1/nX sub-harmonic's in period-n "
             f"motion (a running speed's harmonics fall off faster); if the machine runs at a multiple of "
             f"{60 * f:.1f} r/min give speed_rpm or keyphasor_times_s")
@@ -510,8 +507,8 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
         hidden = _hidden_1x(s.x, s.spec, fs, s.df, s.k_top, f, s.c_lo, s.c_hi)
         if hidden is not None:
             f, note = hidden
-            warnings = [w for w in warnings if not w.startswith(_AMBIGUOUS)] + [note]
-    if choice.f_partner is None and not any(w.startswith(_AMBIGUOUS) for w in warnings):
+            warnings = [w for w in warnings if not w.startswith(cfg.SPEED_AMBIGUOUS)] + [note]
+    if choice.f_partner is None and not any(w.startswith(cfg.SPEED_AMBIGUOUS) for w in warnings):
         last = (_whirling_1x_warning(s, f) if choice.switched is None else None) or _flat_comb_warning(s, f)
         if last is not None:
             warnings.append(last)
@@ -578,7 +575,7 @@ def shaft_angle(rec, data: np.ndarray) -> ShaftAngle:
     if spr < cfg.MIN_SAMPLES_PER_REV or n_revs < cfg.MIN_REVS:
         err = _too_slow_sampling(spr, fs, f1) if spr < cfg.MIN_SAMPLES_PER_REV else \
             _too_short(n / spr, 60 * f1, fs, n, "speed " + source)
-        doubt = next((w for w in warnings if w.startswith(_AMBIGUOUS)), None)
+        doubt = next((w for w in warnings if w.startswith(cfg.SPEED_AMBIGUOUS)), None)
         if doubt is not None:
             # the limit may be the estimate's fault (a 1/nX read as the speed): say so, not only "record longer"
             raise ValueError(f"{err}. But the running speed was estimated and is in doubt — {doubt}") from None

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rotordiag.features import speed_in_doubt
+
 __all__ = ["Reason", "RecordingChecks", "ModelCall", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY",
            "CONFIDENT_MAX_FAR_PROBABILITY",
@@ -364,7 +366,7 @@ def _recording_reasons(c: RecordingChecks) -> list[Reason]:
     reasons += _scale_reasons(c.names, c.row, c.feature_median)
     if c.speed_source == "estimated":
         for w in c.warnings:
-            if "speed estimate ambiguous" in w or "refinement did not converge" in w:
+            if speed_in_doubt(w):
                 reasons.append(Reason("speed_ambiguous", UNCERTAIN, f"{w}"))
     if c.never_missing:
         reasons.append(Reason("features_missing", UNCERTAIN,

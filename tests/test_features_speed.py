@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rotordiag.features import extract_features
+from rotordiag.features import extract_features, speed_in_doubt
 
 from .test_features_synth import DEFAULT_COMPONENTS, keyphasor_times, make_recording
 
@@ -122,6 +122,7 @@ def test_whip_without_combination_lines_is_flagged_not_silent():
     fr = extract_features(_whip_recording(rpm, 20.5, one_x_um=0.08, comb_um=0.0, noise_um=0.3))
     ok = abs(fr.speed_rpm / rpm - 1) <= 5e-3
     assert ok or any("speed estimate ambiguous" in w for w in fr.warnings)
+    assert ok or any(speed_in_doubt(w) for w in fr.warnings)      # what models.status reads
 
 
 def test_half_order_subharmonic_is_not_taken_for_the_running_speed():

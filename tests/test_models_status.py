@@ -59,6 +59,21 @@ def test_status_rules():
     assert _assess(speed_source="given", warnings=[amb])[0] == "confident"
 
 
+def test_every_speed_doubt_the_extractor_words_makes_the_verdict_uncertain():
+    """The status reads a doubtful estimated speed through ``features.speed_in_doubt``, whose prefixes the
+    estimator's own warnings are built from (rewording one cannot make a doubtful speed confident)."""
+    from rotordiag.features import SPEED_AMBIGUOUS, SPEED_NOT_CONVERGED, speed_in_doubt
+
+    for w in (f"{SPEED_AMBIGUOUS}: 1200.0 r/min chosen over 2400.0 r/min",
+              f"{SPEED_NOT_CONVERGED}; using the spectral peak 1800.00 r/min",
+              f"bearing 2: {SPEED_AMBIGUOUS}: 1200.0 r/min chosen"):
+        assert speed_in_doubt(w)
+        status, reasons = _assess(speed_source="estimated", warnings=[w])
+        assert status == UNCERTAIN and [r.code for r in reasons] == ["speed_ambiguous"]
+    assert not speed_in_doubt("running speed varies by up to 0.4 % between revolutions")
+    assert _assess(speed_source="estimated", warnings=["only 20 revolutions: motion type not determined"])[0] == "confident"
+
+
 def test_shipped_model_never_gives_a_severity_to_an_impossible_recording():
     from pathlib import Path
 
