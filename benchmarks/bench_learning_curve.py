@@ -96,13 +96,13 @@ def eval_rows(names: list[str], n: int, cache: Path) -> dict[tuple[str, int, str
 
     out = {}
     for sim_set, seed, cond_name, _ in EVAL_SETS:
-        k_cond, cond = next((k, c) for k, c in enumerate(br.CONDITIONS) if c.name == cond_name)
+        cond = next(c for c in br.CONDITIONS if c.name == cond_name)
         cases, disps = br.simulate_set(sim_set, n, seed, cache)
         X, delta, mech = [], [], []
         for i, (c, d) in enumerate(zip(cases, disps)):
             if d is None:
                 continue
-            w = br.measure(d, c["speed_rpm"], cond, np.random.default_rng([seed, k_cond, i]))
+            w = br.measure(d, c["speed_rpm"], cond, br.measurement_rng(cond, seed, i))
             chans = [ProbeChannel(b, a, "um", w[2 * k + j]) for k, b in enumerate(cond.bearings)
                      for j, a in enumerate(br.ANGLES_DEG)]
             clearance_um = c["plant"]["clearance_m"] * 1e6 if cond.clearance_given else None

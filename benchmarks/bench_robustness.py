@@ -75,6 +75,10 @@ class Condition:
     bearings: tuple[int, ...] = (1, 2, 3, 4)
     gain_mismatch: float = 0.0
     what: str = ""
+    #: a condition that only withholds what the user would state (the speed, the clearance) measures the
+    #: recordings of this condition — the same noise draws — so that its row differs from that one by the
+    #: withheld number alone, not by another noise realisation (one flips borderline cases both ways)
+    same_recordings_as: str | None = None
 
 
 CONDITIONS: tuple[Condition, ...] = (
@@ -82,8 +86,10 @@ CONDITIONS: tuple[Condition, ...] = (
     Condition("runout", runout_1x_um=(0.0, 6.0), runout_2x_um=(0.0, 2.0),
               what="shaft runout per bearing: 1X U(0, 6) µm, 2X U(0, 2) µm, random phases"),
     Condition("SNR 15 dB", snr_db=15.0, what="white noise at 15 dB SNR"),
-    Condition("speed unknown", speed_given=False, what="no speed given (estimated from the waveforms)"),
-    Condition("clearance unknown", clearance_given=False, what="no bearing clearance given"),
+    Condition("speed unknown", speed_given=False, same_recordings_as="clean",
+              what="the clean recordings, no speed given (estimated from the waveforms)"),
+    Condition("clearance unknown", clearance_given=False, same_recordings_as="clean",
+              what="the clean recordings, no bearing clearance given"),
     Condition("coupling bearings only", bearings=(2, 3), what="probes at bearings 2 and 3 only"),
     Condition("gain mismatch ±10 %", gain_mismatch=0.10, what="each probe's gain × U(0.9, 1.1)"),
     Condition("rated-machine presets", sim_set="presets", what="simulator.shaftline presets at rated speed"),
@@ -268,9 +274,16 @@ def _over_cases(cases: list[dict], disps: list, diagnose_one) -> list[Outcome]:
     return outs
 
 
+def measurement_rng(cond: Condition, seed: int, case: int) -> np.random.Generator:
+    """The random draws (runout, noise, speed fluctuation, gains) of case ``case`` under ``cond``: its own per
+    condition, or those of ``cond.same_recordings_as`` (then the waveforms are that condition's, bit for bit)."""
+    own = next(k for k in CONDITIONS if k.name == cond.same_recordings_as) if cond.same_recordings_as else cond
+    return np.random.default_rng([seed, CONDITIONS.index(own), case])
+
+
 def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed: int) -> list[Outcome]:
     def one(i: int, c: dict, d, o: Outcome) -> Outcome:
-        w = measure(d, c["speed_rpm"], cond, np.random.default_rng([seed, CONDITIONS.index(cond), i]))
+        w = measure(d, c["speed_rpm"], cond, measurement_rng(cond, seed, i))
         clearance = c["plant"]["clearance_m"] * 1e6 if cond.clearance_given else None
         if not cond.speed_given:
             o.speed_line = running_speed_line(w, FS_HZ, c["speed_rpm"])
@@ -306,7 +319,7 @@ def run_mistake(bundle, name: str, cases: list[dict], disps: list, seed: int) ->
     clean = CONDITIONS[0]
 
     def one(i: int, c: dict, d, o: Outcome) -> Outcome:
-        w = measure(d, c["speed_rpm"], clean, np.random.default_rng([seed, 0, i]))
+        w = measure(d, c["speed_rpm"], clean, measurement_rng(clean, seed, i))
         return diagnose_waveforms(bundle, w, clean.bearings, FS_HZ, c["speed_rpm"],
                                   c["plant"]["clearance_m"] * 1e6 * clearance_factor, o, units=units)
 

@@ -116,9 +116,8 @@ def _robustness_set(seed: int, revs: int):
 
     cases, disps = br.simulate_set("base", 48, seed, br.DEFAULT_CACHE, revs=revs)
     cond = next(c for c in br.CONDITIONS if c.name == "speed unknown")
-    k_cond = br.CONDITIONS.index(cond)
     return [(c["speed_rpm"], c["misalignment"], c["label_mechanism"], cond.snr_db,
-             br.measure(d, c["speed_rpm"], cond, np.random.default_rng([seed, k_cond, i]), revs=revs))
+             br.measure(d, c["speed_rpm"], cond, br.measurement_rng(cond, seed, i), revs=revs))
             for i, (c, d) in enumerate(zip(cases, disps)) if d is not None], br.FS_HZ
 
 

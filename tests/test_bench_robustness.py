@@ -253,6 +253,22 @@ def test_confident_summary_counts_gross_errors_of_confident_verdicts_only():
 
 
 
+def test_conditions_that_withhold_a_number_measure_the_clean_recordings():
+    """"speed unknown" and "clearance unknown" differ from "clean" by what the user withholds alone: the same
+    measurement settings and the same random draws (noise, fluctuation), so the speed-unknown − speed-known gap
+    is not also the gap between two noise realisations; the other conditions keep draws of their own."""
+    clean = bench.CONDITIONS[0]
+    settings = ("sim_set", "snr_db", "runout_1x_um", "runout_2x_um", "bearings", "gain_mismatch")
+    for name in ("speed unknown", "clearance unknown"):
+        cond = next(c for c in bench.CONDITIONS if c.name == name)
+        assert [getattr(cond, k) for k in settings] == [getattr(clean, k) for k in settings]
+        assert cond.same_recordings_as == "clean"
+        assert (bench.measurement_rng(cond, 815, 7).random(5) == bench.measurement_rng(clean, 815, 7).random(5)).all()
+    gain = next(c for c in bench.CONDITIONS if c.name.startswith("gain mismatch"))
+    assert bench.measurement_rng(gain, 815, 7).random() != bench.measurement_rng(clean, 815, 7).random()
+    assert bench.measurement_rng(clean, 815, 7).random() != bench.measurement_rng(clean, 815, 8).random()
+
+
 def test_f1_on_right_speed_compares_the_same_recordings():
     from types import SimpleNamespace
 
