@@ -9,11 +9,15 @@ Recording(sample_rate_hz, channels, speed_rpm=None, keyphasor_times_s=None, clea
     An x/y probe pair per bearing present, sampled together; validated on construction.
     ``speed_range_rpm=(min, max)``: the operator's knowledge of the speed (nominal speed),
     restricting the estimate when neither speed nor keyphasor is given.
-extract_features(recording) -> FeatureResult
+extract_features(recording, *, speed_estimate_rpm=None, speed_notes=()) -> FeatureResult
     Running speed, order analysis (1X–3X amplitude/phase, ratios, forward/reverse),
     cross-coupling phase differences, orbit shape, sub-harmonic and non-synchronous
     energy, Poincaré dispersion and motion type. ``fr.names`` / ``fr.values`` /
     ``fr.as_dict()`` give the vector; ``fr.bearings`` the per-bearing details.
+speed_alternatives_rpm(recording, estimate_rpm) -> list of float
+    The other running speeds the spectrum allows besides an estimate (2X / 1/2X readings, the largest
+    peaks): for a caller that can judge them (``models.speed_choice``), re-extracted with
+    ``extract_features(recording, speed_estimate_rpm=...)``.
 check_recording(recording, feature_result) -> tuple of SanityFinding
     Physics sanity checks (flat / clipped / all-zero channels, orbit vs clearance and probe
     range, implausible DC gap, all-reverse whirl, no 1X above noise); ``extract_features``
@@ -69,6 +73,7 @@ from ._orbit import OrbitShape
 from ._recording import ProbeChannel, Recording, parse_speed_range
 from ._sanity import SanityFinding, check_recording
 from ._slow_roll import SLOW_ROLL_MAX_SPEED_FRACTION, SlowRollVectors, apply_slow_roll, slow_roll_vectors
+from ._speed_alternatives import speed_alternatives_rpm
 
 tune_malloc()
 
@@ -78,5 +83,5 @@ __all__ = [
     "MIN_REVS_MOTION", "WHIRL_BAND", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",
     "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
-    "SPEED_AMBIGUOUS", "SPEED_NOT_CONVERGED", "speed_in_doubt",
+    "SPEED_AMBIGUOUS", "SPEED_NOT_CONVERGED", "speed_in_doubt", "speed_alternatives_rpm",
 ]

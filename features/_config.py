@@ -61,6 +61,11 @@ SPEED_SEARCH_RPM: tuple[float, float] = (60.0, 12000.0)
 SPEED_CANDIDATE_PEAKS = 24
 #: a peak must stand this many times above the median spectrum to count as a line
 SPEED_LINE_MIN_SNR = 10.0
+#: ``speed_alternatives_rpm``: the largest peaks whose frequency (and half of it) are offered as other running
+#: speeds besides the estimate, and how far apart (relative) two offered speeds must be (the 0.5 % of issue 15,
+#: item 6: closer ones are the same reading)
+SPEED_ALTERNATIVE_PEAKS = 8
+SPEED_ALTERNATIVE_MIN_SEPARATION = 0.005
 #: a harmonic counts as present when its amplitude is at least this fraction of the largest line
 SPEED_HARMONIC_MIN_REL = 0.01
 #: a candidate speed's m-th harmonic line may lie m times this many FFT bins from m × the candidate (its

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import threading
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cache
 from typing import Any
@@ -260,7 +261,8 @@ class _BlasLimit:
 _blas_limit = _BlasLimit()
 
 
-def extract_features(recording: Recording) -> FeatureResult:
+def extract_features(recording: Recording, *, speed_estimate_rpm: float | None = None,
+                     speed_notes: Sequence[str] = ()) -> FeatureResult:
     """Features of one recording: order analysis, orbit shape, sub-harmonics, motion type.
 
     Parameters
@@ -268,6 +270,12 @@ def extract_features(recording: Recording) -> FeatureResult:
     recording : Recording
         x/y probe pairs of one or more bearings, sample rate, units, optional speed,
         keyphasor and clearance.
+    speed_estimate_rpm : float, optional
+        For a recording without keyphasor or ``speed_rpm``: a running speed estimated elsewhere, used
+        instead of this package's estimate (``speed_source`` stays ``"estimated"``) — a caller that chose
+        among :func:`speed_alternatives_rpm` (``models.speed_choice``). Ignored otherwise.
+    speed_notes : sequence of str
+        The warnings that go with ``speed_estimate_rpm`` (in place of the estimator's).
 
     Returns
     -------
@@ -282,19 +290,22 @@ def extract_features(recording: Recording) -> FeatureResult:
     """
     if not isinstance(recording, Recording):
         raise ValueError(f"extract_features expects a features.Recording, got {type(recording).__name__}")
+    estimate = None
+    if speed_estimate_rpm is not None:
+        if not (np.isfinite(speed_estimate_rpm) and speed_estimate_rpm > 0):
+            raise ValueError(f"speed_estimate_rpm: must be a positive number of r/min, got {speed_estimate_rpm!r}")
+        estimate = (float(speed_estimate_rpm), list(speed_notes))
     with _blas_limit:
-        return _extract(recording)
+        return _extract(recording, estimate)
 
 
-def _extract(recording: Recording) -> FeatureResult:
+def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = None) -> FeatureResult:
     rec = recording
     fs = rec.sample_rate_hz
     bearings = rec.bearings
-    data = np.empty((2 * len(bearings), rec.n_points))  # x, y of each bearing
-    for i, b in enumerate(bearings):
-        rec.xy_um(b, out=data[2 * i:2 * i + 2])
+    data = rec.xy_all_um()                          # x, y of each bearing
 
-    sa = shaft_angle(rec, data)
+    sa = shaft_angle(rec, data, estimate)
     warnings = list(sa.warnings)
     f1 = sa.speed_rpm / 60.0
     seg = data[:, sa.start:sa.stop]

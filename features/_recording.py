@@ -283,3 +283,11 @@ class Recording:
         np.multiply(p1, a21, out=out[1])
         out[1] += a22 * p2
         return out
+
+    def xy_all_um(self) -> np.ndarray:
+        """x and y displacement (µm) of every bearing present, shape (2 × n_bearings, n_points): rows x, y of
+        each bearing in :attr:`bearings` order (:meth:`xy_um`)."""
+        data = np.empty((2 * len(self.bearings), self.n_points))
+        for i, b in enumerate(self.bearings):
+            self.xy_um(b, out=data[2 * i:2 * i + 2])
+        return data

@@ -521,7 +521,7 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
     return f, warnings
 
 
-def shaft_angle(rec, data: np.ndarray) -> ShaftAngle:
+def shaft_angle(rec, data: np.ndarray, estimate: tuple[float, list[str]] | None = None) -> ShaftAngle:
     """Speed, analysed segment and shaft angle for a recording.
 
     Parameters
@@ -530,6 +530,10 @@ def shaft_angle(rec, data: np.ndarray) -> ShaftAngle:
     data : ndarray, shape (n_channels, n_points)
         x/y displacements in µm (used only to estimate the speed when neither a keyphasor
         nor ``speed_rpm`` is given).
+    estimate : (speed_rpm, warnings), optional
+        The speed estimated elsewhere (a caller that chose among :func:`speed_alternatives_rpm`), used
+        instead of :func:`estimate_speed_hz` with its warnings when neither a keyphasor nor ``speed_rpm``
+        is given.
     """
     fs = rec.sample_rate_hz
     n = data.shape[1]
@@ -566,8 +570,11 @@ def shaft_angle(rec, data: np.ndarray) -> ShaftAngle:
     if rec.speed_rpm is not None:
         f1, source = rec.speed_rpm / 60.0, "given"
     else:
-        rng = rec.speed_range_rpm
-        f1, est_warn = estimate_speed_hz(data, fs, None if rng is None else (rng[0] / 60.0, rng[1] / 60.0))
+        if estimate is not None:
+            f1, est_warn = estimate[0] / 60.0, list(estimate[1])
+        else:
+            rng = rec.speed_range_rpm
+            f1, est_warn = estimate_speed_hz(data, fs, None if rng is None else (rng[0] / 60.0, rng[1] / 60.0))
         warnings.extend(est_warn)
         source = "estimated"
     spr = fs / f1

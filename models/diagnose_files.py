@@ -140,9 +140,9 @@ def diagnose_one(bundle: Any, path: Path, options: ReadOptions,
 
     Returns the verdict, the reader's result and the recording's ``features.signature`` (what an asset
     baseline compares, ``models.change.compare``)."""
-    from rotordiag.features import apply_slow_roll, extract_features, signature
+    from rotordiag.features import apply_slow_roll, signature
 
-    from .predict import diagnose
+    from .speed_choice import diagnose_recording
 
     res = read_recording(path, options=options, limits=CLI_LIMITS)
     recording = res.recording
@@ -153,8 +153,8 @@ def diagnose_one(bundle: Any, path: Path, options: ReadOptions,
         res.notes.extend(slow_roll.notes)
     if callable(bundle):
         bundle = bundle()
-    fr = extract_features(recording)
-    return diagnose(bundle, fr, clearance_um=coupling_clearance_um(recording)), res, signature(fr)
+    verdict, fr = diagnose_recording(bundle, recording, clearance_um=coupling_clearance_um(recording))
+    return verdict, res, signature(fr)
 
 
 def verdict_row(path: Path, verdict: Any, res: ReadResult, output_units: str = "um") -> dict[str, Any]:

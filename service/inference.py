@@ -167,10 +167,27 @@ class ModelStore:
         ModelUnavailable
             No model to diagnose with.
         """
-        from rotordiag.features import extract_features, signature
-        from rotordiag.models.predict import diagnose
+        from rotordiag.features import signature
 
         bundle = self.load(version)
+        verdict, fr = self._verdict(bundle, recording)
+        out = _clean(verdict.to_dict())  # NaN/inf -> null: JSON has no non-finite numbers
+        out["model_version"] = out.get("model_version") or bundle.version
+        out["bearings"] = _bearings(fr)
+        out["key_features"] = {f["name"]: f["value"] for f in out.get("top_features", [])}
+        out["signature"] = signature(fr)   # for the asset baseline (service.baseline takes it out of the answer)
+        return out
+
+
+    @staticmethod
+    def _verdict(bundle: Any, recording: Any) -> tuple[Any, Any]:
+        """The verdict and the features it was computed from: ``features.extract_features``, then
+        ``models.predict.diagnose`` and ``models.speed_choice.choose_speed`` (a doubtful estimated speed
+        judged by the model)."""
+        from rotordiag.features import extract_features
+        from rotordiag.models.predict import diagnose
+        from rotordiag.models.speed_choice import choose_speed
+
         fr = extract_features(recording)
         overflowed = [k for k, v in fr.as_dict().items() if isinstance(v, float) and math.isinf(v)]
         if overflowed:
@@ -179,12 +196,21 @@ class ModelStore:
                              "thousand µm")
         clearance = getattr(recording, "clearance_um", None)
         clearance = float(clearance) if isinstance(clearance, (int, float)) else None
-        out = _clean(diagnose(bundle, fr, clearance_um=clearance).to_dict())  # NaN/inf -> null: JSON has no non-finite numbers
-        out["model_version"] = out.get("model_version") or bundle.version
-        out["bearings"] = _bearings(fr)
-        out["key_features"] = {f["name"]: f["value"] for f in out.get("top_features", [])}
-        out["signature"] = signature(fr)   # for the asset baseline (service.baseline takes it out of the answer)
-        return out
+        verdict = diagnose(bundle, fr, clearance_um=clearance)
+        verdict, fr, _ = choose_speed(bundle, recording, fr, verdict, clearance_um=clearance)
+        return verdict, fr
+
+    def plot_features(self, recording: Any) -> Any:
+        """The features the web page's pictures are drawn from: those of the verdict (:meth:`diagnose`, the
+        active model), so that the pictures mark the orders at the verdict's speed; the features package's
+        alone when no model can be loaded."""
+        from rotordiag.features import extract_features
+
+        try:
+            bundle = self.load(None)
+        except ModelUnavailable:
+            return extract_features(recording)
+        return self._verdict(bundle, recording)[1]
 
 
 def _check_usable(model: Any, version: str) -> None:

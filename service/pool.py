@@ -164,7 +164,11 @@ def _plot(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> tuple
     from .parsing import parse_body
     from .web.plotdata import plot_data
 
-    return _tagged(lambda: ("ok", plot_data(parse_body(kind, body, filename, query)[0])))
+    def run() -> tuple:
+        recording = parse_body(kind, body, filename, query)[0]
+        return ("ok", plot_data(recording, _store().plot_features(recording)))
+
+    return _tagged(run)
 
 
 _CALLS: dict[str, Callable[..., Any]] = {"work": _work, "check": _load_check, "record": _record,

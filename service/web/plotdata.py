@@ -122,12 +122,15 @@ def _filtered_orbit(cx: np.ndarray, cy: np.ndarray, orders: tuple[int, ...], n: 
     return {"x_um": _finite_list(x), "y_um": _finite_list(y)}
 
 
-def plot_data(recording: Recording) -> dict[str, Any]:
+def plot_data(recording: Recording, feature_result: Any = None) -> dict[str, Any]:
     """Everything the page draws for one recording.
 
     Parameters
     ----------
     recording : features.Recording
+    feature_result : features.FeatureResult, optional
+        The recording's features as the verdict used them (``ModelStore.plot_features``: its speed may be
+        one the model chose, ``models.speed_choice``); ``extract_features(recording)`` when not given.
 
     Returns
     -------
@@ -151,7 +154,7 @@ def plot_data(recording: Recording) -> dict[str, Any]:
         extract_features,
     )
 
-    fr = extract_features(recording)
+    fr = extract_features(recording) if feature_result is None else feature_result
     fs = float(recording.sample_rate_hz)
     f1 = fr.speed_rpm / 60.0
     edges = _rev_edges_s(recording, fr.n_revs, f1, fr.phase_reference)

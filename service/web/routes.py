@@ -92,9 +92,9 @@ def example_file(name: str) -> FileResponse:
                         headers={"X-Content-Type-Options": "nosniff", "Cache-Control": "no-cache"})
 
 
-def _plot_sync(recording: Any) -> dict[str, Any]:
+def _plot_sync(state: Any, recording: Any) -> dict[str, Any]:
     try:
-        return plot_data(recording)
+        return plot_data(recording, state.models.plot_features(recording))
     except ValueError as exc:  # the features package's messages for recordings it cannot analyse
         raise InputError(str(exc)) from None
 
@@ -113,4 +113,4 @@ async def plot(
     Needs the API key when /diagnose does (``ROTORDIAG_DIAGNOSE_REQUIRES_KEY``).
     """
     query = dict(asset_id=None, plant=None, sample_index=sample_index, **reader)
-    return await recording_answer(request, state, query, "plot", _plot_sync)
+    return await recording_answer(request, state, query, "plot", lambda recording: _plot_sync(state, recording))

@@ -1,0 +1,129 @@
+"""A doubtful estimated speed judged by the machine family the model knows (issue 15, item 6).
+
+Without a keyphasor or a given speed, the running speed is read from the spectrum
+(``features.extract_features``). In whirl, whip and period-n motion that reading can be wrong — a
+whirl partner, a 2X or a sub-harmonic read as the 1X — and the estimator then says it is in doubt
+(``features.speed_in_doubt``); the features computed at a wrong speed describe no machine the model
+was trained on, and the verdict is out of distribution (``Verdict.ood``).
+
+A vibration analyst in that place tries the other speeds the spectrum allows and keeps the one at
+which the machine makes sense. :func:`diagnose_recording` does the same with the model's own
+yardstick: when the estimate is in doubt **and** its verdict is out of distribution, each of
+``features.speed_alternatives_rpm`` is tried, and the verdict is given at the one whose recording is
+in distribution with the lowest OOD score, when that score is at least ``SPEED_CHOICE_MIN_OOD_GAIN``
+below the estimate's. The verdict stays ``uncertain`` (the ``speed_ambiguous`` reason: the speed rests
+on the model's judgement, not on the signal) and says which speed it used, which was estimated and why.
+Nothing changes for a recording whose estimated speed is not in doubt, or whose verdict at it is in
+distribution, or for a machine unlike the training data at every speed (all readings out of
+distribution: it keeps the estimate and its OOD verdict).
+
+Measured on docs/robustness.md's base sets (speed unknown, 48 revolutions): docs/features.md,
+"Eighth pass".
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+from rotordiag.features import (
+    SPEED_AMBIGUOUS,
+    FeatureResult,
+    Recording,
+    extract_features,
+    speed_alternatives_rpm,
+    speed_in_doubt,
+)
+
+from .predict import Verdict, diagnose
+
+__all__ = ["SPEED_CHOICE_MIN_OOD_GAIN", "SpeedChoice", "diagnose_recording", "choose_speed"]
+
+#: a reading replaces the estimate only when its OOD score is this much lower (and it is in distribution):
+#: a smaller gain is no evidence (chosen on the robustness base sets of seeds 815–818; docs/features.md)
+SPEED_CHOICE_MIN_OOD_GAIN = 0.15
+
+
+@dataclass(frozen=True)
+class SpeedChoice:
+    """What :func:`choose_speed` tried: the estimate and each other reading, r/min, with its OOD score
+    (``inf``: the features refused that speed) and whether it was out of distribution."""
+
+    estimate_rpm: float
+    estimate_ood_score: float
+    tried: tuple[tuple[float, float, bool], ...]
+    chosen_rpm: float | None
+
+
+def _worth_a_second_look(fr: FeatureResult, verdict: Verdict) -> bool:
+    return (fr.speed_source == "estimated" and bool(verdict.ood)
+            and any(speed_in_doubt(w) for w in fr.warnings))
+
+
+def choose_speed(bundle: Any, recording: Recording, fr: FeatureResult, verdict: Verdict, *,
+                 clearance_um: float | None = None, top_k: int = 5
+                 ) -> tuple[Verdict, FeatureResult, SpeedChoice | None]:
+    """The verdict at the reading of the speed the model finds in distribution (see the module docstring).
+
+    Parameters
+    ----------
+    bundle : models.predict.ModelBundle or fitted MisalignmentModel
+    recording : features.Recording
+    fr, verdict
+        ``extract_features(recording)`` and ``diagnose(bundle, fr, ...)``.
+    clearance_um, top_k
+        As :func:`models.predict.diagnose`.
+
+    Returns
+    -------
+    verdict, feature_result, choice
+        Unchanged, with ``choice`` None, when the estimate is not in doubt or its verdict is in
+        distribution; else the chosen reading's (``choice.chosen_rpm`` None when none was better).
+    """
+    if not _worth_a_second_look(fr, verdict):
+        return verdict, fr, None
+    tried: list[tuple[float, float, bool]] = []
+    best: tuple[float, FeatureResult, Verdict] | None = None
+    for rpm in speed_alternatives_rpm(recording, fr.speed_rpm):
+        try:
+            fr_c = extract_features(recording, speed_estimate_rpm=rpm)
+        except ValueError:              # too few revolutions or samples per revolution at that speed
+            tried.append((rpm, float("inf"), True))
+            continue
+        v_c = diagnose(bundle, fr_c, clearance_um=clearance_um, top_k=0)
+        tried.append((rpm, float(v_c.ood_score), bool(v_c.ood)))
+        if v_c.ood or not v_c.ood_score <= verdict.ood_score - SPEED_CHOICE_MIN_OOD_GAIN:
+            continue
+        if best is None or v_c.ood_score < best[2].ood_score:
+            best = (rpm, fr_c, v_c)
+    choice = SpeedChoice(float(fr.speed_rpm), float(verdict.ood_score), tuple(tried),
+                         None if best is None else best[0])
+    if best is None:
+        return verdict, fr, choice
+    rpm, fr_c, v_c = best
+    note = (f"{SPEED_AMBIGUOUS}: the verdict is given at {rpm:.1f} r/min, not at the estimate {fr.speed_rpm:.1f} r/min. "
+            f"At the estimate the recording was unlike the machines the model was trained on (OOD score "
+            f"{verdict.ood_score:.2f}); of the {len(tried)} other running speeds its spectrum allows, {rpm:.1f} r/min "
+            f"makes it like them (OOD score {v_c.ood_score:.2f}). The speed rests on that judgement, not on the "
+            "signal alone: confirm it (speed_rpm, speed_range_rpm or keyphasor_times_s)")
+    estimator = [f"at the estimate {fr.speed_rpm:.1f} r/min: {w}" for w in fr.warnings if speed_in_doubt(w)]
+    fr_c = replace(fr_c, warnings=(note, *estimator, *fr_c.warnings))
+    return diagnose(bundle, fr_c, clearance_um=clearance_um, top_k=top_k), fr_c, choice
+
+
+def diagnose_recording(bundle: Any, recording: Recording, *, clearance_um: float | None = None,
+                       top_k: int = 5) -> tuple[Verdict, FeatureResult]:
+    """Features and verdict of one recording, the speed judged by the model when the estimate is in doubt.
+
+    ``extract_features`` then ``diagnose``, then :func:`choose_speed`. Every caller that diagnoses a
+    recording (the service, ``rotordiag diagnose``, the benchmarks) goes through here, so that the
+    verdict, its speed and the features it was computed from are the same everywhere.
+
+    Raises
+    ------
+    ValueError
+        As ``extract_features`` and ``diagnose``, with a message for the user.
+    """
+    fr = extract_features(recording)
+    verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k)
+    verdict, fr, _ = choose_speed(bundle, recording, fr, verdict, clearance_um=clearance_um, top_k=top_k)
+    return verdict, fr
