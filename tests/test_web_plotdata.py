@@ -212,3 +212,30 @@ def test_spectrum_helpers_and_bin_reduction():
     amps[0, 1234], amps[1, 8765] = 5.0, 7.0
     fr, ar = _reduce_max(freq, amps, 4096)
     assert fr.size <= 4096 and 1234.0 in fr and 8765.0 in fr and ar.max(axis=1).tolist() == [5.0, 7.0]
+
+
+def test_pictures_are_drawn_at_the_verdicts_speed(client, monkeypatch):
+    """When the verdict's speed is not the features package's estimate (models.speed_choice chose another
+    reading of a doubtful estimate), the page's pictures mark the orders at the verdict's speed."""
+    import rotordiag.models.speed_choice as sc
+    from rotordiag.features import extract_features
+
+    from .test_features_speed import _whip_recording
+
+    rec = _whip_recording(3075.0, 20.5, one_x_um=0.08, comb_um=0.0, noise_um=0.3)
+    assert extract_features(rec).speed_rpm == pytest.approx(1230.0, rel=5e-3)
+    chosen = 3074.0
+
+    def choose(bundle, recording, fr, verdict, **kw):       # stands in for the model's judgement
+        fr2 = extract_features(recording, speed_estimate_rpm=chosen, speed_notes=["speed estimate ambiguous: test"])
+        return sc.diagnose(bundle, fr2, clearance_um=kw.get("clearance_um")), fr2, None
+
+    monkeypatch.setattr(sc, "choose_speed", choose)
+    body = {"sample_rate_hz": rec.sample_rate_hz,
+            "channels": [{"bearing": c.bearing, "angle_deg": c.angle_deg, "units": c.units, "data": c.data.tolist()}
+                         for c in rec.channels]}
+    verdict = client.post("/diagnose", json=body)
+    plots = client.post("/ui/plot-data", json=body)
+    assert verdict.status_code == 200 and plots.status_code == 200, (verdict.text[:300], plots.text[:300])
+    assert verdict.json()["speed_rpm"] == pytest.approx(chosen) and plots.json()["speed_rpm"] == pytest.approx(chosen)
+    assert plots.json()["speed_source"] == "estimated"
