@@ -6,6 +6,10 @@ models.predict
     ``load_bundle(registry_root, version=None) -> ModelBundle``;
     ``diagnose(bundle, feature_result, clearance_um=None) -> Verdict`` — the one verdict
     function, used by ``rotordiag diagnose`` and the service; ``format_verdict``.
+models.speed_choice
+    ``diagnose_recording(bundle, recording) -> (Verdict, FeatureResult)``: features, verdict, and a
+    doubtful estimated speed judged by the model (``choose_speed``) — what every caller that starts
+    from a recording uses.
 models.registry
     ``Registry(root)``: ``register``, ``load``, ``list``, ``activate``, ``rollback``,
     ``active_version``, ``card``; ``TRUSTED_TYPES`` (skops), ``RegistryError``.
