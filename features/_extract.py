@@ -275,7 +275,9 @@ def extract_features(recording: Recording, *, speed_estimate_rpm: float | None =
         instead of this package's estimate (``speed_source`` stays ``"estimated"``) — a caller that chose
         among :func:`speed_alternatives_rpm` (``models.speed_choice``). Ignored otherwise.
     speed_notes : sequence of str
-        The warnings that go with ``speed_estimate_rpm`` (in place of the estimator's).
+        The warnings that go with ``speed_estimate_rpm`` (in place of the estimator's). A speed from
+        elsewhere is never the signal's own reading: when no note puts it in doubt
+        (:func:`speed_in_doubt`), one that does is added, so a verdict at it is never ``confident``.
 
     Returns
     -------
@@ -294,7 +296,12 @@ def extract_features(recording: Recording, *, speed_estimate_rpm: float | None =
     if speed_estimate_rpm is not None:
         if not (np.isfinite(speed_estimate_rpm) and speed_estimate_rpm > 0):
             raise ValueError(f"speed_estimate_rpm: must be a positive number of r/min, got {speed_estimate_rpm!r}")
-        estimate = (float(speed_estimate_rpm), list(speed_notes))
+        notes = list(speed_notes)
+        if not any(cfg.speed_in_doubt(w) for w in notes):
+            notes.append(f"{cfg.SPEED_AMBIGUOUS}: {float(speed_estimate_rpm):.1f} r/min was estimated outside this "
+                         "package's reading of the spectrum (speed_estimate_rpm); confirm it with speed_rpm or "
+                         "keyphasor_times_s")
+        estimate = (float(speed_estimate_rpm), notes)
     with _blas_limit:
         return _extract(recording, estimate)
 

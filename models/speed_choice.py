@@ -22,7 +22,7 @@ Measured on docs/robustness.md's base sets (speed unknown, 48 revolutions): docs
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 from rotordiag.features import (
@@ -45,8 +45,9 @@ SPEED_CHOICE_MIN_OOD_GAIN = 0.15
 
 @dataclass(frozen=True)
 class SpeedChoice:
-    """What :func:`choose_speed` tried: the estimate and each other reading, r/min, with its OOD score
-    (``inf``: the features refused that speed) and whether it was out of distribution."""
+    """What :func:`choose_speed` tried: the estimate and its verdict's OOD score, each other reading (r/min)
+    with its OOD score (``inf``: the features refused that speed) and whether it was out of distribution, and
+    the reading chosen (None: the estimate was kept)."""
 
     estimate_rpm: float
     estimate_ood_score: float
@@ -106,7 +107,7 @@ def choose_speed(bundle: Any, recording: Recording, fr: FeatureResult, verdict: 
             f"makes it like them (OOD score {v_c.ood_score:.2f}). The speed rests on that judgement, not on the "
             "signal alone: confirm it (speed_rpm, speed_range_rpm or keyphasor_times_s)")
     estimator = [f"at the estimate {fr.speed_rpm:.1f} r/min: {w}" for w in fr.warnings if speed_in_doubt(w)]
-    fr_c = replace(fr_c, warnings=(note, *estimator, *fr_c.warnings))
+    fr_c = extract_features(recording, speed_estimate_rpm=rpm, speed_notes=[note, *estimator])
     return diagnose(bundle, fr_c, clearance_um=clearance_um, top_k=top_k), fr_c, choice
 
 

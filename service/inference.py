@@ -202,14 +202,18 @@ class ModelStore:
 
     def plot_features(self, recording: Any) -> Any:
         """The features the web page's pictures are drawn from: those of the verdict (:meth:`diagnose`, the
-        active model), so that the pictures mark the orders at the verdict's speed; the features package's
-        alone when no model can be loaded."""
-        from rotordiag.features import extract_features
+        active model), so that the pictures mark the orders at the verdict's speed. Only an estimated speed in
+        doubt can differ from the features package's own (``models.speed_choice``): for any other the model is
+        not run; nor when no model can be loaded."""
+        from rotordiag.features import extract_features, speed_in_doubt
 
+        fr = extract_features(recording)
+        if fr.speed_source != "estimated" or not any(speed_in_doubt(w) for w in fr.warnings):
+            return fr
         try:
             bundle = self.load(None)
         except ModelUnavailable:
-            return extract_features(recording)
+            return fr
         return self._verdict(bundle, recording)[1]
 
 

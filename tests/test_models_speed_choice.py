@@ -67,6 +67,10 @@ def test_features_at_a_speed_estimated_elsewhere(whip):
     fr = extract_features(rec, speed_estimate_rpm=TRUE_RPM, speed_notes=["a note"])
     assert fr.speed_rpm == TRUE_RPM and fr.speed_source == "estimated"
     assert fr.warnings[0] == "a note"
+    # a speed from elsewhere is never the signal's own reading: put in doubt unless a note already does
+    assert fr.warnings[1].startswith(SPEED_AMBIGUOUS) and "speed_estimate_rpm" in fr.warnings[1]
+    doubtful = extract_features(rec, speed_estimate_rpm=TRUE_RPM, speed_notes=[f"{SPEED_AMBIGUOUS}: chosen"])
+    assert sum(speed_in_doubt(w) for w in doubtful.warnings) == 1
     given = extract_features(replace(rec, speed_rpm=2999.0), speed_estimate_rpm=TRUE_RPM)
     assert given.speed_rpm == 2999.0 and given.speed_source == "given"          # a given speed wins
     with pytest.raises(ValueError, match="speed_estimate_rpm"):
