@@ -299,6 +299,24 @@ def test_inconclusive_verdict_shows_no_severity_only_reasons_and_evidence(server
     assert len(d.find_elements("css selector", "#verdict-evidence tbody tr")) == len(page["evidence"]) > 0
 
 
+def test_a_doubtful_estimated_speed_is_marked_in_doubt(server, browser, tmp_path):
+    """No speed given, an oil whip 60 times the 1X: the estimated speed is in doubt (``speed_ambiguous``), and the
+    page says so beside the speed, not only in the reasons; the pictures are drawn at the verdict's speed."""
+    from tests.test_features_speed import _whip_recording
+
+    rec = _whip_recording(3075.0, 20.5, one_x_um=0.08, comb_um=0.0, noise_um=0.3)
+    data = np.column_stack([c.data for c in rec.channels])          # b1@45, b1@135, …, b4@135 as _write_csv names
+    _open(browser, server)
+    _submit_file(browser, _write_csv(tmp_path / "whip.csv", data), sample_rate=str(rec.sample_rate_hz))
+    d = browser
+    page = d.execute_script("return window.rotordiag.state")
+    assert "speed_ambiguous" in [r["code"] for r in page["verdict"]["reasons"]] and page["verdict"]["status"] != "confident"
+    shown = d.find_element("id", "verdict-speed").text
+    assert shown.startswith(f"{page['verdict']['speed_rpm']:.1f} r/min") and "estimated" in shown and "in doubt" in shown
+    assert page["plots"]["speed_rpm"] == pytest.approx(page["verdict"]["speed_rpm"])
+    _screenshot(d, "speed_in_doubt")
+
+
 def test_csv_upload_shows_verdict_orbits_and_spectra(server, browser, recordings, tmp_path):
     data = recordings[0.2]
     _open(browser, server)

@@ -492,7 +492,10 @@
       $("verdict-offset").textContent = "— (give the clearance to get δ in µm)";
     }
     $("verdict-motion").textContent = v.motion_type || "not determined";
-    $("verdict-speed").textContent = v.speed_rpm ? `${fixed(v.speed_rpm, 1)} r/min (${fixed(v.speed_rpm / 60, 2)} Hz)` : "—";
+    // an estimated speed in doubt (the speed_ambiguous reason; perhaps a reading the model chose) is marked as such
+    const speedDoubt = (v.reasons || []).some((r) => r.code === "speed_ambiguous");
+    $("verdict-speed").textContent = v.speed_rpm ? `${fixed(v.speed_rpm, 1)} r/min (${fixed(v.speed_rpm / 60, 2)} Hz)` +
+      (v.speed_source ? `, ${v.speed_source}` : "") + (speedDoubt ? " — in doubt: see the reasons" : "") : "—";
     $("verdict-model").textContent = v.model_version;
     const ood = $("ood-warning");
     if (v.ood) {
