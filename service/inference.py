@@ -180,15 +180,16 @@ class ModelStore:
 
 
     @staticmethod
-    def _verdict(bundle: Any, recording: Any) -> tuple[Any, Any]:
-        """The verdict and the features it was computed from: ``features.extract_features``, then
-        ``models.predict.diagnose`` and ``models.speed_choice.choose_speed`` (a doubtful estimated speed
-        judged by the model)."""
+    def _verdict(bundle: Any, recording: Any, fr: Any = None) -> tuple[Any, Any]:
+        """The verdict and the features it was computed from: ``features.extract_features`` (unless ``fr``,
+        the recording's features, is given), then ``models.predict.diagnose`` and
+        ``models.speed_choice.choose_speed`` (a doubtful estimated speed judged by the model)."""
         from rotordiag.features import extract_features
         from rotordiag.models.predict import diagnose
         from rotordiag.models.speed_choice import choose_speed
 
-        fr = extract_features(recording)
+        if fr is None:
+            fr = extract_features(recording)
         overflowed = [k for k, v in fr.as_dict().items() if isinstance(v, float) and math.isinf(v)]
         if overflowed:
             raise ValueError(f"the waveforms are too large to analyse ({overflowed[0]} overflows); check the units: "
@@ -214,7 +215,7 @@ class ModelStore:
             bundle = self.load(None)
         except ModelUnavailable:
             return fr
-        return self._verdict(bundle, recording)[1]
+        return self._verdict(bundle, recording, fr)[1]
 
 
 def _check_usable(model: Any, version: str) -> None:
