@@ -11,12 +11,11 @@ centrelines' relative position, static, and their relative once-per-revolution m
   1X circle of radius ``≈ δ`` in ``r_2 − r_3``, no static part;
 * the paper's constraint (``pin``) keeps ``|r_2 − r_3| = δ`` at every instant: static while the link
   settles, rotating (1X or non-synchronous) once it races;
-* a flexible coupling (``flexible``) takes up part of the same stationary offset in its own compliance and
-  adds its 2X reaction: the separation is a rough share of δ (0.42–1.68 δ on 90 % of the robustness base
-  set's flexible cases, median 0.79 δ); its signature is the 2X at the coupling bearings.
+* a flexible coupling's 2X reaction moves both ends together: next to nothing here (its signature is
+  the 2X at the coupling bearings).
 
-On the simulated rotor, whose coupling-end journals are the coupling halves, each of the first three is
-δ exactly; on a real train the bearings sit a span away from the coupling, so the figures scale with
+On the simulated rotor, whose coupling-end journals are the coupling halves, each of these is δ
+exactly; on a real train the bearings sit a span away from the coupling, so the figures scale with
 the offset but are not equal to it. They are trees' inputs (the difference of two vectors is hard for
 trees to form from amplitudes and phase differences) and the evidence section's "shaft ends across the
 coupling".
