@@ -3,8 +3,7 @@ engineer reads, each with a one-line meaning.
 
 Per coupling bearing (2 and 3, else whatever is present): 1X and 2X vectors of each probe
 direction (µm pk-pk and phase lag), 2X/1X, orbit shape and the shaft-centreline position;
-across the coupling: the 1X and 2X phase differences and the shaft ends' relative position
-(static offset, 1X relative motion); first, when runout was compensated, the
+across the coupling: the 1X and 2X phase differences; first, when runout was compensated, the
 slow-roll vectors subtracted at each bearing. Nothing here uses the ML model.
 """
 from __future__ import annotations
@@ -187,34 +186,7 @@ def _coupling_items(fr) -> list[EvidenceItem]:
             else:
                 meaning = "in between: a mixed response; trend it"
             items.append(EvidenceItem(scope, f"{order}X phase difference {d}", f"{v:+.0f}°", meaning, float(v)))
-    return items + _shaft_ends_items(fr, scope, bi, bj)
-
-
-def _shaft_ends_items(fr, scope: str, bi: int, bj: int) -> list[EvidenceItem]:
-    """The shaft ends' relative position across the coupling (``features._coupling``): static and 1X."""
-    mi, mj = fr.bearings[bi].mean_um, fr.bearings[bj].mean_um
-    dc_um = float(np.hypot(mi[0] - mj[0], mi[1] - mj[1]))
-    dc = fr["cpl_dc_offset_per_c"]
-    if np.isfinite(dc):
-        static = EvidenceItem(
-            scope, "static offset across the coupling", f"{dc_um:.3g} µm = {dc:.3f} c (bearing {bi} minus {bj})",
-            "the shaft ends sit this far apart in their bearings: a stationary offset of the shaft lines (hot "
-            "misalignment) or the coupling's own offset held still; on a real train it scales with the offset at "
-            "the coupling (the bearings sit a span away). A probe gap referenced to the wrong zero shows here too",
-            float(dc))
-    else:
-        static = EvidenceItem(scope, "static offset across the coupling", "not measurable",
-                              "needs the clearance and DC gaps referenced to the bearing centres at both bearings",
-                              None)
-    rel = fr["cpl_1x_rel_fwd_um_pp"]
-    rel_c = fr["cpl_1x_rel_fwd_pp_per_c"]
-    text = f"{rel:.3g} µm pk-pk" + (f" = {rel_c:.3f} c" if np.isfinite(rel_c) else "")
-    moving = EvidenceItem(
-        scope, "1X relative motion across the coupling", text + " (forward circle of bearing " + f"{bi} minus {bj})",
-        "the shaft ends circle each other once per revolution: an eccentric coupling or an offset carried round by "
-        "a rigid coupling (a circle of about twice the offset, pk-pk); a runout difference between the two probe "
-        "tracks adds to it — give slow-roll vectors to remove runout", _num(rel))
-    return [static, moving]
+    return items
 
 
 def evidence(fr) -> list[EvidenceItem]:

@@ -10,7 +10,6 @@ from typing import Any
 import numpy as np
 
 from . import _config as cfg
-from ._coupling import COUPLING_BEARINGS, coupling_features
 from ._lines import refine_line_hz
 from ._names import FEATURE_NAMES
 from ._orbit import OrbitShape, orbit_arrays
@@ -454,14 +453,6 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
                     cj = 2 * bearings.index(bj) + (axis == "y")
                     values[_NAME_INDEX[f"dphase_{k}x_b{bi}_b{bj}_{axis}_deg"]] = _wrap_deg(
                         float(phase[ci, k - 1]) - float(phase[cj, k - 1]))
-
-    if all(b in details for b in COUPLING_BEARINGS):
-        rows = [bearings.index(b) for b in COUPLING_BEARINGS]
-        xy = [r for i in rows for r in (2 * i, 2 * i + 1)]
-        centre_valid = np.array([np.isfinite(details[b].features[f"b{b}_centre_x_per_c"]) for b in COUPLING_BEARINGS])
-        for name, value in coupling_features(cx_all[rows], cy_all[rows], mean[xy].reshape(2, 2), resid[xy],
-                                             noise[xy], c[rows], centre_valid).items():
-            values[_NAME_INDEX[name]] = value
 
     motion = None
     if sa.n_revs >= cfg.MIN_REVS_MOTION:

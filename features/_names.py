@@ -9,7 +9,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ._config import BEARINGS, PHASE_PAIRS, REPORTED_ORDERS
-from ._coupling import COUPLING_FEATURES
 
 __all__ = ["FeatureSpec", "FEATURE_SPECS", "FEATURE_NAMES", "feature_names", "markdown_table"]
 
@@ -99,7 +98,6 @@ def _build() -> tuple[FeatureSpec, ...]:
                 specs.append(FeatureSpec(
                     f"dphase_{k}x_b{i}_b{j}_{d}_deg", "deg",
                     f"{k}X phase lag of bearing {i} minus bearing {j}, {d} direction, wrapped to (−180, 180]"))
-    specs.extend(FeatureSpec(name, unit, what) for name, (unit, what) in COUPLING_FEATURES.items())
     return tuple(specs)
 
 
