@@ -232,6 +232,8 @@ class Outcome:
     #                                      estimate, or the reading models.speed_choice chose when it was in doubt)
     speed_rpm_estimated: float = math.nan  # the features package's own estimate (speed not given)
     speed_line: str = ""                 # speed not given: how the true 1X line shows (bench_speed.running_speed_line)
+    across_dc_per_c: float = math.nan    # the shaft ends across the coupling (:func:`across_coupling`): static offset
+    across_1x_per_c: float = math.nan    # … and the radius of their relative forward 1X circle, per clearance
 
 
 def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ...], fs_hz: float,
@@ -259,9 +261,25 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
     out.ood_score, out.outside = float(v.ood_score), [str(f["feature"]) for f in v.ood_findings]
     out.ood, out.delta_model = bool(v.ood), float(v.misalignment_model) if v.misalignment_model is not None else math.nan
     names = list(fr.names)
+    out.across_dc_per_c, out.across_1x_per_c = across_coupling(fr)
     out.ratio = float(ratio_column(np.asarray(fr.values, dtype=float)[None, :], names, RULE_PATTERNS)[0])
     out.rule_class = str(RuleOfThumb(bundle.model.bands_.names, RULE_CUTS).predict(np.array([out.ratio]))[0])
     return out
+
+
+def across_coupling(fr) -> tuple[float, float]:
+    """The coupling-end journals relative to each other, r_b2 − r_b3, per clearance: the static offset
+    |mean(r_b2) − mean(r_b3)| / c (NaN unless both means are journal positions, ``b?_centre_x_per_c``) and the
+    radius |F_1(b2) − F_1(b3)| / c of their relative forward 1X circle. Not a model feature (docs/models.md,
+    "What the simulator lets a feature read exactly"): the report's transfer check (:func:`transfer_section`)."""
+    if 2 not in fr.bearings or 3 not in fr.bearings:
+        return math.nan, math.nan
+    b2, b3 = fr.bearings[2], fr.bearings[3]
+    c = 0.5 * (b2.clearance_um + b3.clearance_um)
+    rel_1x = abs(complex(b2.forward_um[0]) - complex(b3.forward_um[0])) / c
+    centres = np.isfinite(fr["b2_centre_x_per_c"]) and np.isfinite(fr["b3_centre_x_per_c"])
+    dc = math.hypot(b2.mean_um[0] - b3.mean_um[0], b2.mean_um[1] - b3.mean_um[1]) / c if centres else math.nan
+    return float(dc), float(rel_1x)
 
 
 def _over_cases(cases: list[dict], disps: list, diagnose_one) -> list[Outcome]:
@@ -495,6 +513,45 @@ def f1_of_delta_error(mae: float, n: int, edges: tuple[float, ...], *, draws: in
     return float(np.median(f1)), float(np.percentile(f1, 10)), float(np.percentile(f1, 90))
 
 
+def transfer_section(clean: list[Outcome], ross: list[Outcome] | None) -> list[str]:
+    """The transfer check: what the simulated coupling lets a model read that a real train does not give
+    (:func:`across_coupling` on the clean recordings by mechanism, and on the ROSS machines)."""
+    def q(v: list[float]) -> str:
+        v = [x for x in v if np.isfinite(x)]
+        if not v:
+            return "–"
+        return f"{np.median(v):.3f} ({np.percentile(v, 10):.3f}–{np.percentile(v, 90):.3f})"
+
+    def err(sel: list[Outcome], attr: str) -> str:
+        e = [abs(getattr(o, attr) - o.delta) for o in sel if np.isfinite(getattr(o, attr))]
+        return f"{np.mean(e):.4f}" if e else "–"
+
+    out = ["## Transfer check: what the simulated coupling gives away",
+           "MODEL.md's lumped shaft line ties the two coupling-end journals (bearings 2 and 3): r3 = r4 + δ e_r for "
+           "`pin` and `rigid`, and a stationary offset moves the exciter's bearing centres by δ with r3 = r4. So in "
+           "the simulator the coupling-end journals *relative to each other* read the offset: the static offset "
+           "|mean(r_b2) − mean(r_b3)| / c for `offset` (and a settled `pin`), the radius of their relative forward "
+           "1X circle for `rigid`. On a real train the two journals sit a span apart, each at its own eccentricity "
+           "in its own bearing, so neither is zero on a healthy machine. Neither is a model feature "
+           "(docs/models.md, \"What the simulator lets a feature read exactly\"); the shipped model reconstructs "
+           "part of them from the per-bearing vectors and centre positions, which is how `rigid` and `offset` "
+           "reach their simulated F1 — the clean-rigid and far-rigid targets are targets on this identity. "
+           "Median (10–90 %) per clearance, and the mean |reading − Δ| of the mechanism it reads:", "",
+           "| set | n | static offset across the coupling / c | relative 1X radius / c | \\|static − Δ\\| (offset) "
+           "| \\|1X radius − Δ\\| (rigid) |", "|---|---|---|---|---|---|"]
+    groups = [(f"simulated clean: {m}", [o for o in clean if o.mechanism == m and o.status != "sim failed"])
+              for m in ("aligned", "pin", "rigid", "offset", "flexible")]
+    if ross:
+        groups += [("ROSS: healthy (Δ = 0)", [o for o in ross if o.delta == 0]),
+                   ("ROSS: misaligned (Δ 0.1–0.6)", [o for o in ross if o.delta > 0])]
+    for name, sel in groups:
+        out.append(f"| {name} | {len(sel)} | {q([o.across_dc_per_c for o in sel])} | "
+                   f"{q([o.across_1x_per_c for o in sel])} | "
+                   f"{err(sel, 'across_dc_per_c') if 'offset' in name else '–'} | "
+                   f"{err(sel, 'across_1x_per_c') if 'rigid' in name else '–'} |")
+    return out
+
+
 def delta_error_section(rows: dict[str, dict], n: int, edges: tuple[float, ...]) -> list[str]:
     """The report's section on what the F1 targets ask of the Δ estimate (MAE per mechanism and row,
     and :func:`f1_of_delta_error` on this design)."""
@@ -575,12 +632,18 @@ def table(rows: dict[str, dict], who: str) -> str:
     return "\n".join(lines)
 
 
+#: why the rigid targets stay open (the report's transfer check)
+RIGID_NOTE = ("; the feature that would meet it reads the simulated coupling journals relative to each other, which a "
+              "real train does not give (see the transfer check below)")
+
+
 def targets(rows: dict[str, dict], ross: dict | None) -> list[tuple[str, bool | None, str]]:
     out: list[tuple[str, bool | None, str]] = []
     clean = rows["clean"]["model"]
     for m, goal in (("rigid", 0.95), ("pin", 0.65)):
         v = clean.get(f"f1_{m}")
-        out.append((f"clean {m} macro-F1 ≥ {goal}", v is not None and v >= goal, _f(v)))
+        out.append((f"clean {m} macro-F1 ≥ {goal}", v is not None and v >= goal,
+                    _f(v) + (RIGID_NOTE if m == "rigid" and not (v is not None and v >= goal) else "")))
     bad = {k: r["model"]["false_alarm"] for k, r in rows.items()
            if r["model"]["false_alarm"] is not None and r["model"]["false_alarm"] > 0.10}
     out.append(("every condition's false-alarm rate ≤ 10 %", not bad,
@@ -611,7 +674,8 @@ def targets(rows: dict[str, dict], ross: dict | None) -> list[tuple[str, bool | 
                     f"{_f(sp['ood_right'], '{:.0%}')} of {sp['n_right']} (wrong speeds: "
                     f"{_f(sp['ood_wrong'], '{:.0%}')} of {sp['wrong']} flagged)"))
     v = rows["far plants (÷2…×2)"]["model"].get("f1_rigid")
-    out.append(("far plants rigid macro-F1 ≥ 0.90", v is not None and v >= 0.90, _f(v)))
+    out.append(("far plants rigid macro-F1 ≥ 0.90", v is not None and v >= 0.90,
+                _f(v) + (RIGID_NOTE if not (v is not None and v >= 0.90) else "")))
     if ross is None:
         out.append(("ROSS set targets", None, "not run (no cached set)"))
         return out
@@ -649,7 +713,8 @@ def _training_summary(bundle) -> str:
             f"{lo:.0f}–{hi:.0f} r/min, {td.get('n_plants', '?')} simulated plants (models/default/*.toml).")
 
 
-def report(rows, ross, args, wall_s, bundle=None, ood_rows: dict | None = None) -> str:
+def report(rows, ross, args, wall_s, bundle=None, ood_rows: dict | None = None,
+           clean_outs: list[Outcome] | None = None, ross_outs: list[Outcome] | None = None) -> str:
     conds = "\n".join(f"- **{c.name}** ({c.sim_set} set): {c.what}" for c in CONDITIONS)
     tg = "\n".join(f"| {name} | {'met' if ok else ('not met' if ok is False else '–')} | {val} |"
                    for name, ok, val in targets(rows, ross))
@@ -698,6 +763,8 @@ def report(rows, ross, args, wall_s, bundle=None, ood_rows: dict | None = None) 
     if bundle is not None:
         text += [""] + delta_error_section({k: v for k, v in rows.items() if k != "other machines (ROSS)"},
                                            args.n, tuple(_bands(bundle)[1]))
+    if clean_outs is not None:
+        text += [""] + transfer_section(clean_outs, ross_outs)
     if ood_rows:
         ood_quantile = bundle.model.ood_.threshold_quantile if bundle is not None else float("nan")
         text += ["", "## Out-of-distribution check (issue 15, item 7)",
@@ -755,9 +822,9 @@ def main(argv=None) -> int:
     rows["speed unknown"]["speed"]["f1_right"] = f1_on_right_speed(bundle, outs_of["speed unknown"], outs_of["clean"])
     for name in MISTAKES:
         ood_rows[f"mistake: {name}"] = ood_summary(run_mistake(bundle, name, *sets["base"], args.seed))
-    ross = None
+    ross = ross_outs = None
     if args.ross.exists():
-        outs = run_ross(bundle, args.ross)
+        outs = ross_outs = run_ross(bundle, args.ross)
         rows["other machines (ROSS)"] = summarize(bundle, outs)
         ood_rows[f"other machines: ROSS ({args.ross.name})"] = ood_summary(outs)
         ross = ross_targets(bundle, outs)
@@ -766,7 +833,7 @@ def main(argv=None) -> int:
     if args.ross_band.exists():
         ood_rows[f"other machines: ROSS ({args.ross_band.name})"] = ood_summary(run_ross(bundle, args.ross_band))
     wall = time.perf_counter() - t0
-    text = report(rows, ross, args, wall, bundle, ood_rows)
+    text = report(rows, ross, args, wall, bundle, ood_rows, outs_of["clean"], ross_outs)
     text += kept_block(args.out)
     args.out.write_text(text)
     print(text)

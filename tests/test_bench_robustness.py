@@ -382,3 +382,39 @@ def test_far_probability_and_confident_error_counts():
     interval = np.array([[0.0, 0.2], [0.0, 0.1], [0.3, 0.6], [0.05, 0.2]])
     assert status_bench.confident_errors(proba, call, truth, ood, far_limit=None, aligned_allowed=True, **kw,
                                          interval=interval, edges=[0.05, 0.15, 0.35]) == {"n": 2, "off2": 0, "right": 2}
+
+
+def test_across_coupling_reads_the_relative_position_and_1x_circle_of_the_coupling_journals():
+    """The transfer check's readings on a constructed recording: bearing 3 held 40 µm from bearing 2 and
+    circling it forward at 1X with a 30 µm radius (clearance 200 µm); NaN without bearing 3 or the clearance."""
+    from rotordiag.features import ProbeChannel, Recording, extract_features
+
+    fs, n, rpm = 2560.0, 4096, 2400.0
+    th = 2 * np.pi * rpm / 60.0 * np.arange(n) / fs
+    x2, y2 = 15.0 * np.cos(th) + 0.0, 9.0 * np.sin(th) - 60.0
+    xy = {2: (x2, y2), 3: (x2 - 30.0 * np.cos(th + 0.4) + 24.0, y2 - 30.0 * np.sin(th + 0.4) + 32.0)}
+
+    def rec(bearings, clearance):
+        chans = [ProbeChannel(b, a, "um", xy[b][0] * np.cos(np.deg2rad(a)) + xy[b][1] * np.sin(np.deg2rad(a)))
+                 for b in bearings for a in (45.0, 135.0)]
+        return extract_features(Recording(sample_rate_hz=fs, channels=chans, speed_rpm=rpm, clearance_um=clearance))
+
+    dc, rel = bench.across_coupling(rec((2, 3), 200.0))
+    assert dc == pytest.approx(40.0 / 200.0, rel=1e-6) and rel == pytest.approx(30.0 / 200.0, rel=1e-6)
+    assert all(np.isnan(bench.across_coupling(rec((2,), 200.0))))
+    dc_nc, rel_nc = bench.across_coupling(rec((2, 3), None))
+    assert np.isnan(dc_nc) and np.isnan(rel_nc)
+
+
+def test_transfer_section_compares_simulated_mechanisms_with_ross():
+    O = bench.Outcome
+    clean = [O(0.0, "aligned", status="ok", across_dc_per_c=0.0, across_1x_per_c=0.0),
+             O(0.3, "rigid", status="ok", across_dc_per_c=0.0, across_1x_per_c=0.31),
+             O(0.2, "offset", status="ok", across_dc_per_c=0.2, across_1x_per_c=0.0),
+             O(0.2, "offset", status="sim failed")]
+    ross = [O(0.0, "aligned", machine="m", across_dc_per_c=0.25, across_1x_per_c=0.05),
+            O(0.3, "flexible (ROSS)", machine="m", across_dc_per_c=0.26, across_1x_per_c=0.05)]
+    text = "\n".join(bench.transfer_section(clean, ross))
+    assert "| simulated clean: rigid | 1 | 0.000 (0.000–0.000) | 0.310 (0.310–0.310) | – | 0.0100 |" in text
+    assert "| simulated clean: offset | 1 | 0.200 (0.200–0.200) | 0.000 (0.000–0.000) | 0.0000 | – |" in text
+    assert "| ROSS: healthy (Δ = 0) | 1 | 0.250 (0.250–0.250) |" in text
