@@ -79,6 +79,10 @@ class Condition:
     #: recordings of this condition — the same noise draws — so that its row differs from that one by the
     #: withheld number alone, not by another noise realisation (one flips borderline cases both ways)
     same_recordings_as: str | None = None
+    #: bearing 3's probes read its journal this many clearances (uniform) away from the simulated position, in a
+    #: uniform random direction: the exciter's coupling-end journal at its own static position, or its gap
+    #: referenced to another zero (:func:`shift_journal_dc`)
+    journal3_dc_shift_c: tuple[float, float] = (0.0, 0.0)
 
 
 CONDITIONS: tuple[Condition, ...] = (
@@ -94,7 +98,14 @@ CONDITIONS: tuple[Condition, ...] = (
     Condition("gain mismatch ±10 %", gain_mismatch=0.10, what="each probe's gain × U(0.9, 1.1)"),
     Condition("rated-machine presets", sim_set="presets", what="simulator.shaftline presets at rated speed"),
     Condition("far plants (÷2…×2)", sim_set="far", what="every plant parameter × 2^U(−1, 1)"),
+    Condition("coupling journals apart", journal3_dc_shift_c=(0.1, 0.3),
+              what="bearing 3's probes read its journal U(0.1, 0.3) c away from the simulated position, in a random "
+                   "direction: a healthy train's exciter journal at its own eccentricity (the ROSS machines': "
+                   "0.24–0.30 c from the generator's), or a gap referenced to another zero; the simulator ties the "
+                   "coupling journals together, so training never saw it (not one of the issue's rows)"),
 )
+#: the rows issue 15 asks for (its targets are over these); the others are extra measurements
+ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name != "coupling journals apart")
 
 
 # ----------------------------------------------------------------------------- simulated sets
@@ -303,9 +314,25 @@ def measurement_rng(cond: Condition, seed: int, case: int) -> np.random.Generato
     return np.random.default_rng([seed, CONDITIONS.index(own), case])
 
 
+def shift_journal_dc(w: np.ndarray, bearings: tuple[int, ...], clearance_um: float, shift_c: tuple[float, float],
+                     rng: np.random.Generator, bearing: int = 3) -> None:
+    """Move ``bearing``'s static reading by U(shift_c) clearances in a uniform random direction (in place; the
+    probes at :data:`ANGLES_DEG` read the shift projected on their axes). Nothing when ``shift_c`` is (0, 0)
+    or the bearing is not recorded."""
+    if shift_c == (0.0, 0.0) or bearing not in bearings:
+        return
+    r = rng.uniform(*shift_c) * clearance_um
+    a = rng.uniform(0.0, 2.0 * np.pi)
+    k = bearings.index(bearing)
+    for j, angle in enumerate(ANGLES_DEG):
+        w[2 * k + j] += r * math.cos(a - math.radians(angle))
+
+
 def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed: int) -> list[Outcome]:
     def one(i: int, c: dict, d, o: Outcome) -> Outcome:
-        w = measure(d, c["speed_rpm"], cond, measurement_rng(cond, seed, i))
+        rng = measurement_rng(cond, seed, i)
+        w = measure(d, c["speed_rpm"], cond, rng)
+        shift_journal_dc(w, cond.bearings, c["plant"]["clearance_m"] * 1e6, cond.journal3_dc_shift_c, rng)
         clearance = c["plant"]["clearance_m"] * 1e6 if cond.clearance_given else None
         if not cond.speed_given:
             o.speed_line = running_speed_line(w, FS_HZ, c["speed_rpm"])
@@ -536,6 +563,10 @@ def transfer_section(clean: list[Outcome], ross: list[Outcome] | None) -> list[s
            "(docs/models.md, \"What the simulator lets a feature read exactly\"); the shipped model reconstructs "
            "part of them from the per-bearing vectors and centre positions, which is how `rigid` and `offset` "
            "reach their simulated F1 — the clean-rigid and far-rigid targets are targets on this identity. "
+           "The row \"coupling journals apart\" above measures what it costs on a healthy train whose journals sit "
+           "apart: the classifier calls most of them misaligned, and the verdict keeps them from being `confident` "
+           "only through the `static_offset_only` reason (a misalignment call that falls to aligned with the two "
+           "journals at one position; models.status.journals_at_one_position). "
            "Median (10–90 %) per clearance, and the mean |reading − Δ| of the mechanism it reads:", "",
            "| set | n | static offset across the coupling / c | relative 1X radius / c | \\|static − Δ\\| (offset) "
            "| \\|1X radius − Δ\\| (rigid) |", "|---|---|---|---|---|---|"]
@@ -644,10 +675,15 @@ def targets(rows: dict[str, dict], ross: dict | None) -> list[tuple[str, bool | 
         v = clean.get(f"f1_{m}")
         out.append((f"clean {m} macro-F1 ≥ {goal}", v is not None and v >= goal,
                     _f(v) + (RIGID_NOTE if m == "rigid" and not (v is not None and v >= goal) else "")))
-    bad = {k: r["model"]["false_alarm"] for k, r in rows.items()
+    issue_rows = {k: r for k, r in rows.items() if k in ISSUE_CONDITIONS or k == "other machines (ROSS)"}
+    bad = {k: r["model"]["false_alarm"] for k, r in issue_rows.items()
            if r["model"]["false_alarm"] is not None and r["model"]["false_alarm"] > 0.10}
-    out.append(("every condition's false-alarm rate ≤ 10 %", not bad,
-                "over: " + ", ".join(f"{k} {v:.0%}" for k, v in bad.items()) if bad else "all ≤ 10 %"))
+    extra = {k: r["model"]["false_alarm"] for k, r in rows.items() if k not in issue_rows}
+    out.append(("every condition's false-alarm rate ≤ 10 % (the issue's rows)", not bad,
+                ("over: " + ", ".join(f"{k} {v:.0%}" for k, v in bad.items()) if bad else "all ≤ 10 %") + (
+                    "; not one of the issue's rows: " + ", ".join(f"{k} {_f(v, '{:.0%}')}" for k, v in extra.items())
+                    + " (the classifier's class; the confident verdicts' table below counts what is shown)"
+                    if extra else "")))
     a, b = rows["speed unknown"]["model"]["f1_all"], clean["f1_all"]
     right = (rows["speed unknown"].get("speed") or {}).get("f1_right")
     out.append(("speed unknown within 0.02 of speed known (macro-F1, all mechanisms)",

@@ -20,7 +20,7 @@ from threadpoolctl import threadpool_limits
 from rotordiag.features import evidence
 
 from .registry import Registry
-from .status import INCONCLUSIVE, ModelCall, RecordingChecks, assess, consistent_estimate
+from .status import INCONCLUSIVE, ModelCall, RecordingChecks, assess, consistent_estimate, journals_at_one_position
 
 if TYPE_CHECKING:
     from .compiled import CompiledModel
@@ -241,6 +241,15 @@ def _alarm(model, proba: np.ndarray, cls: int, X: np.ndarray) -> tuple[float, fl
     return float(1.0 - proba[0]), float(thresholds[0])
 
 
+def _one_position_call(model, fast, names: Sequence[str], row: np.ndarray) -> int | None:
+    """The lowest band the classifier gives ``row`` with the coupling-end journals at one static position
+    (``models.status.journals_at_one_position``), or None when their centrelines are not measured."""
+    rows = journals_at_one_position(names, row)
+    if rows is None:
+        return None
+    return int(np.min(model.band_index(fast.predict_proba(rows), rows)))
+
+
 def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     if isinstance(bundle, ModelBundle):
         model, version = bundle.model, bundle.version
@@ -303,7 +312,8 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
         ModelCall(probabilities=proba, class_delta_agree=agree, call_index=cls,
                   band_names=[str(c) for c in model.classes_], misaligned_call=band > 0,
                   alarm=_alarm(model, proba, cls, X), delta_interval=(float(interval[0, 0]), float(interval[0, 1])),
-                  band_edges=bands.edges, interval_level=1.0 - float(model.regressor_.alpha)))
+                  band_edges=bands.edges, interval_level=1.0 - float(model.regressor_.alpha),
+                  one_position_call=_one_position_call(model, fast, names, row) if band > 0 else None))
     shown: float | None = delta
     shown_iv: tuple[float | None, float | None] = (lo, hi)
     if status == INCONCLUSIVE:

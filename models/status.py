@@ -16,7 +16,9 @@
   without the coupling bearings' 2X (2X/1X below ``SIGNATURE_MIN_2X_1X``: nothing physical
   backs the model's call), or "aligned" without the coupling bearings' shaft-centreline position
   per clearance (no clearance given, or no DC reading referenced to the bearing centre): a stationary
-  shaft-line offset shows mainly there, so "aligned" cannot rule it out.
+  shaft-line offset shows mainly there, so "aligned" cannot rule it out; or a misalignment call that the
+  classifier drops to "aligned" when the two coupling-end journals are put at one static position
+  (``static_offset_only``: the training simulator ties those journals together, a real train does not).
 - ``confident``: none of these.
 
 Class and Δ are consistent by construction (:func:`consistent_estimate`): the severity is
@@ -36,7 +38,8 @@ from rotordiag.features import speed_in_doubt
 __all__ = ["Reason", "RecordingChecks", "ModelCall", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY",
            "CONFIDENT_MAX_FAR_PROBABILITY",
-           "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "coupling_centreline_known", "describe_feature", "far_band_probability",
+           "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "coupling_centreline_known", "journals_at_one_position",
+           "CENTRELINE_FEATURES", "describe_feature", "far_band_probability",
            "interval_far_bands", "envelope_reasons"]
 
 CONFIDENT = "confident"
@@ -224,6 +227,31 @@ def coupling_centreline_known(names: Sequence[str], row: np.ndarray) -> bool:
     return any(n in wanted and np.isfinite(row[i]) for i, n in enumerate(names))
 
 
+#: the static-position features of a bearing that :func:`journals_at_one_position` copies across the coupling
+CENTRELINE_FEATURES = ("centre_x_per_c", "centre_y_per_c", "centre_ecc_per_c")
+
+
+def journals_at_one_position(names: Sequence[str], row: np.ndarray) -> np.ndarray | None:
+    """The recording with the coupling-end journals at one static position: two rows, bearing 3's centreline
+    features replaced by bearing 2's, and bearing 2's by bearing 3's (everything else unchanged).
+
+    The simulator that trained the model ties the two coupling-end journals together (MODEL.md: r3 = r4 on an
+    aligned train), so to the model any static offset between them is a shaft-line offset; on a real train each
+    journal sits by its own load, and a DC gap referenced to the wrong zero reads the same. The model's call on
+    these rows says whether the call rests on that offset (docs/robustness.md, transfer check). None when
+    either coupling bearing's centreline is not measured (no clearance, raw gaps, bearing absent)."""
+    index = {n: i for i, n in enumerate(names)}
+    found = {b: [index.get(f"b{b}_{q}") for q in CENTRELINE_FEATURES] for b in COUPLING_BEARINGS}
+    if any(j is None or not np.isfinite(row[j]) for js in found.values() for j in js):
+        return None
+    cols = {b: np.array(js, dtype=np.intp) for b, js in found.items()}
+    (b2, b3) = COUPLING_BEARINGS
+    out = np.repeat(np.asarray(row, dtype=float)[None, :], 2, axis=0)
+    out[0, cols[b3]] = row[cols[b2]]
+    out[1, cols[b2]] = row[cols[b3]]
+    return out
+
+
 def _far_bands(n_bands: int, call_index) -> np.ndarray:
     """Mask, shape (..., n_bands), of the bands two or more from the called one (``call_index``, shape (...))."""
     return np.abs(np.arange(n_bands) - np.asarray(call_index)[..., None]) >= 2
@@ -323,6 +351,10 @@ class ModelCall:
         The bands' inner edges.
     interval_level : float
         The interval's coverage, for that reason's message.
+    one_position_call : int, optional
+        The lowest band the classifier gives the recording with the coupling-end journals at one static position
+        (:func:`journals_at_one_position`); None when not measured. A misalignment call that falls to the aligned
+        band there rests on the static offset between the two journals: ``static_offset_only`` (uncertain).
     """
 
     probabilities: Sequence[float]
@@ -334,6 +366,7 @@ class ModelCall:
     delta_interval: tuple[float, float] | None = None
     band_edges: Sequence[float] = ()
     interval_level: float = 0.9
+    one_position_call: int | None = None
 
 
 def assess(checks: RecordingChecks, call: ModelCall) -> tuple[str, list[Reason]]:
@@ -424,6 +457,14 @@ def _call_reasons(m: ModelCall, c: RecordingChecks) -> list[Reason]:
                                   f"{SIGNATURE_MIN_2X_1X:g}): the classic signature is missing and nothing physical "
                                   "backs the model's call — compare with this machine's baseline, check the "
                                   "centreline, or re-record"))
+        if m.one_position_call == 0:
+            reasons.append(Reason("static_offset_only", UNCERTAIN,
+                                  "called misaligned on the static offset between the coupling-end journals: with the "
+                                  "two journals at one position in their bearings the model would call it aligned. A "
+                                  "healthy train's coupling-end journals also sit apart (each by its own load: a heavy "
+                                  "generator journal beside a light exciter one), and a DC gap referenced to the wrong "
+                                  "zero reads the same — compare with this machine's cold or baseline positions "
+                                  "before acting"))
     elif not coupling_centreline_known(c.names, c.row):
         reasons.append(Reason("offset_not_assessed", UNCERTAIN,
                               "called aligned without the shaft-centreline position at the coupling bearings "

@@ -418,3 +418,15 @@ def test_transfer_section_compares_simulated_mechanisms_with_ross():
     assert "| simulated clean: rigid | 1 | 0.000 (0.000–0.000) | 0.310 (0.310–0.310) | – | 0.0100 |" in text
     assert "| simulated clean: offset | 1 | 0.200 (0.200–0.200) | 0.000 (0.000–0.000) | 0.0000 | – |" in text
     assert "| ROSS: healthy (Δ = 0) | 1 | 0.250 (0.250–0.250) |" in text
+
+
+def test_shift_journal_dc_moves_bearing_3_by_the_drawn_distance_only():
+    w = np.zeros((8, 16))
+    bench.shift_journal_dc(w, (1, 2, 3, 4), 200.0, (0.1, 0.3), np.random.default_rng(5))
+    assert not w[[0, 1, 2, 3, 6, 7]].any() and np.ptp(w[4:6], axis=1).max() == 0.0
+    th = np.deg2rad(bench.ANGLES_DEG)                 # the two probes' readings → x, y of the journal
+    x, y = np.linalg.solve(np.array([[np.cos(th[0]), np.sin(th[0])], [np.cos(th[1]), np.sin(th[1])]]), w[4:6, 0])
+    assert 20.0 <= np.hypot(x, y) <= 60.0
+    w2 = np.zeros((4, 16))
+    bench.shift_journal_dc(w2, (1, 2), 200.0, (0.1, 0.3), np.random.default_rng(5))   # bearing 3 not recorded
+    assert not w2.any()

@@ -321,3 +321,67 @@ def test_shipped_verdict_checks_the_regressors_own_interval():
         assert ("far_band_interval" in codes[clearance]) == far, (clearance, v.misalignment_interval, codes[clearance])
     assert "far_band_interval" in codes[None]
     assert "far_band_interval" not in codes[350.0]
+
+
+def test_journals_at_one_position_copies_the_coupling_centrelines_across():
+    from rotordiag.models.status import journals_at_one_position
+
+    names = ["b1_centre_y_per_c", "b2_centre_x_per_c", "b2_centre_y_per_c", "b2_centre_ecc_per_c",
+             "b3_centre_x_per_c", "b3_centre_y_per_c", "b3_centre_ecc_per_c", "b2_x_2x_1x_ratio"]
+    row = np.array([-0.5, 0.1, -0.6, 0.608, 0.0, -0.2, 0.2, 0.7])
+    rows = journals_at_one_position(names, row)
+    assert rows.shape == (2, len(names))
+    np.testing.assert_array_equal(rows[0], [-0.5, 0.1, -0.6, 0.608, 0.1, -0.6, 0.608, 0.7])   # b3 := b2
+    np.testing.assert_array_equal(rows[1], [-0.5, 0.0, -0.2, 0.2, 0.0, -0.2, 0.2, 0.7])       # b2 := b3
+    assert journals_at_one_position(names, np.where(np.arange(8) == 5, np.nan, row)) is None   # a raw gap at b3
+    assert journals_at_one_position(names[:4], row[:4]) is None                                 # no bearing 3
+
+
+def test_a_misalignment_call_resting_on_the_static_offset_across_the_coupling_is_not_confident():
+    """docs/robustness.md, "coupling journals apart": the simulator that trained the model ties the coupling-end
+    journals together, so a healthy train whose exciter journal sits 0.2 c from the generator's was called
+    moderate, confident (15 of 48 upward, 27 of 48 sideways). A misalignment call that falls to aligned with the
+    journals at one position is uncertain and says what to compare with; one that stands, or an aligned call,
+    is not touched."""
+    names = ["b2_1x_major_um_pp", "b2_x_2x_1x_ratio", "b2_centre_ecc_per_c"]
+    kw = dict(names=names, row=np.array([30.0, 0.6, 0.4]), feature_median=np.array([30.0, 0.5, 0.3]),
+              misaligned_call=True, probabilities=[0.05, 0.05, 0.8, 0.1], call_index=2)
+    status, reasons = _assess(one_position_call=0, **kw)
+    assert status == UNCERTAIN and [r.code for r in reasons] == ["static_offset_only"]
+    assert "baseline positions" in reasons[0].message and "own load" in reasons[0].message
+    assert _assess(one_position_call=1, **kw) == ("confident", [])
+    assert _assess(one_position_call=None, **kw) == ("confident", [])
+    assert _assess(one_position_call=0) == ("confident", [])          # an aligned call: the rule does not apply
+
+
+def test_shipped_model_does_not_confidently_alarm_on_coupling_journals_apart():
+    """The healthy default plant with bearing 3's probes reading the exciter journal 0.25 c higher (its own,
+    lighter load) or 0.25 c aside: no confident misalignment verdict; the unshifted recording is untouched."""
+    from pathlib import Path
+
+    from rotordiag.features import ProbeChannel, Recording, extract_features
+    from rotordiag.models.predict import diagnose, load_bundle
+    from tests.service_util import simulated_channels
+
+    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
+    if not (root / "active").exists():
+        pytest.skip("no shipped registry in this checkout")
+    bundle = load_bundle(root)
+    fs, ch = simulated_channels(misalignment=0.0, record_revs=48)      # ≥ 32 revolutions: the motion type is there
+    clearance = 350.0                                                   # the default plant's
+    called = []
+    for dx, dy in ((0.0, 0.0), (0.0, 0.25), (0.25, 0.0), (-0.25, 0.0)):
+        shifted = [(b, a, d + (clearance * (dx * np.cos(np.deg2rad(a)) + dy * np.sin(np.deg2rad(a))) if b == 3 else 0.0))
+                   for b, a, d in ch]
+        rec = Recording(fs, [ProbeChannel(b, a, "um", d) for b, a, d in shifted], speed_rpm=1800.0,
+                        clearance_um=clearance)
+        v = diagnose(bundle, extract_features(rec))
+        codes = [r["code"] for r in v.reasons]
+        if (dx, dy) == (0.0, 0.0):
+            assert (v.model_severity, v.status) == ("aligned", "confident")
+            continue
+        assert not (v.status == "confident" and v.model_severity != "aligned"), (dx, dy, v.model_severity, codes)
+        if v.model_severity != "aligned":
+            called.append(codes)
+    assert len(called) >= 2 and all("static_offset_only" in codes for codes in called)
+    assert ["static_offset_only"] in called         # the one reason: without it that verdict would be confident
