@@ -17,7 +17,7 @@
   backs the model's call), or "aligned" without the coupling bearings' shaft-centreline position
   per clearance (no clearance given, or no DC reading referenced to the bearing centre): a stationary
   shaft-line offset shows mainly there, so "aligned" cannot rule it out; or a misalignment call that the
-  classifier drops to "aligned" when the two coupling-end journals are put at one static position
+  classifier lowers (to "aligned" above all) when the two coupling-end journals are put at one static position
   (``static_offset_only``: the training simulator ties those journals together, a real train does not).
 - ``confident``: none of these.
 
@@ -353,8 +353,9 @@ class ModelCall:
         The interval's coverage, for that reason's message.
     one_position_call : int, optional
         The lowest band the classifier gives the recording with the coupling-end journals at one static position
-        (:func:`journals_at_one_position`); None when not measured. A misalignment call that falls to the aligned
-        band there rests on the static offset between the two journals: ``static_offset_only`` (uncertain).
+        (:func:`journals_at_one_position`); None when not measured. A misalignment call that falls to a lower band
+        there (the aligned band above all) rests on the static offset between the two journals:
+        ``static_offset_only`` (uncertain).
     """
 
     probabilities: Sequence[float]
@@ -457,14 +458,18 @@ def _call_reasons(m: ModelCall, c: RecordingChecks) -> list[Reason]:
                                   f"{SIGNATURE_MIN_2X_1X:g}): the classic signature is missing and nothing physical "
                                   "backs the model's call — compare with this machine's baseline, check the "
                                   "centreline, or re-record"))
-        if m.one_position_call == 0:
+        if m.one_position_call is not None and call_index is not None and m.one_position_call < call_index:
+            lower = m.one_position_call
+            what = ("called misaligned on the static offset between the coupling-end journals: with the two journals "
+                    "at one position in their bearings the model would call it aligned" if lower == 0 else
+                    "the severity rests on the static offset between the coupling-end journals: with the two journals "
+                    "at one position in their bearings the model would call it "
+                    + (str(band_names[lower]) if len(band_names) > lower else f"band {lower}"))
             reasons.append(Reason("static_offset_only", UNCERTAIN,
-                                  "called misaligned on the static offset between the coupling-end journals: with the "
-                                  "two journals at one position in their bearings the model would call it aligned. A "
-                                  "healthy train's coupling-end journals also sit apart (each by its own load: a heavy "
-                                  "generator journal beside a light exciter one), and a DC gap referenced to the wrong "
-                                  "zero reads the same — compare with this machine's cold or baseline positions "
-                                  "before acting"))
+                                  what + ". A healthy train's coupling-end journals also sit apart (each by its own "
+                                  "load: a heavy generator journal beside a light exciter one), and a DC gap referenced "
+                                  "to the wrong zero reads the same — compare with this machine's cold or baseline "
+                                  "positions before acting"))
     elif not coupling_centreline_known(c.names, c.row):
         reasons.append(Reason("offset_not_assessed", UNCERTAIN,
                               "called aligned without the shaft-centreline position at the coupling bearings "

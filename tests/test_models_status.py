@@ -340,16 +340,19 @@ def test_journals_at_one_position_copies_the_coupling_centrelines_across():
 def test_a_misalignment_call_resting_on_the_static_offset_across_the_coupling_is_not_confident():
     """docs/robustness.md, "coupling journals apart": the simulator that trained the model ties the coupling-end
     journals together, so a healthy train whose exciter journal sits 0.2 c from the generator's was called
-    moderate, confident (15 of 48 upward, 27 of 48 sideways). A misalignment call that falls to aligned with the
-    journals at one position is uncertain and says what to compare with; one that stands, or an aligned call,
-    is not touched."""
+    moderate, confident (15 of 48 upward, 27 of 48 sideways). A misalignment call that falls to a lower band with
+    the journals at one position is uncertain and says what to compare with; one that stands, or an aligned
+    call, is not touched."""
     names = ["b2_1x_major_um_pp", "b2_x_2x_1x_ratio", "b2_centre_ecc_per_c"]
     kw = dict(names=names, row=np.array([30.0, 0.6, 0.4]), feature_median=np.array([30.0, 0.5, 0.3]),
               misaligned_call=True, probabilities=[0.05, 0.05, 0.8, 0.1], call_index=2)
     status, reasons = _assess(one_position_call=0, **kw)
     assert status == UNCERTAIN and [r.code for r in reasons] == ["static_offset_only"]
     assert "baseline positions" in reasons[0].message and "own load" in reasons[0].message
-    assert _assess(one_position_call=1, **kw) == ("confident", [])
+    status, reasons = _assess(one_position_call=1, band_names=["aligned", "slight", "moderate", "severe"], **kw)
+    assert status == UNCERTAIN and [r.code for r in reasons] == ["static_offset_only"]
+    assert "severity rests on" in reasons[0].message and "call it slight" in reasons[0].message
+    assert _assess(one_position_call=2, **kw) == ("confident", [])
     assert _assess(one_position_call=None, **kw) == ("confident", [])
     assert _assess(one_position_call=0) == ("confident", [])          # an aligned call: the rule does not apply
 
