@@ -16,7 +16,12 @@ simulate again, because they act on the measured signal as a whole:
   stored measurement draws: ``simulator.dataset.read.recorded_runout_um``) scaled by a factor
   ``U(0, 1)``, i.e. partly or wholly subtracted. The spec draws runout uniform in 0–6 µm (1X) and
   0–2 µm (2X) per bearing, so a well-kept shaft with almost none was rare in training; its
-  recordings sat at the edge of the OOD reference and were flagged.
+  recordings sat at the edge of the OOD reference and were flagged;
+- **coupling journals apart**: bearing 3's static reading moved by U(0, ``journals_apart_c``)
+  clearances in a uniform direction. The simulator ties the two coupling-end journals together
+  (MODEL.md: r3 = r4 on an aligned train), so in its data a static offset between bearings 2 and 3 is
+  always a shaft-line offset; on a real train each journal sits by its own load, and a gap referenced to
+  another zero reads the same (docs/robustness.md, transfer check).
 
 Each sample gets ``copies`` extra rows (the original row is kept unchanged); copies keep
 the sample's plant id, so held-out evaluation never splits a plant. Draws come from
@@ -33,7 +38,8 @@ import numpy as np
 
 __all__ = ["Augmentation", "Variant"]
 
-_KEYS = {"copies", "gain_mismatch", "bearing_sets", "speed_unknown", "runout_scaled", "seed"}
+_KEYS = {"copies", "gain_mismatch", "bearing_sets", "speed_unknown", "runout_scaled", "journals_apart",
+         "journals_apart_c", "seed"}
 
 
 @dataclass(frozen=True)
@@ -50,12 +56,15 @@ class Variant:
         Whether the extractor is given the nominal speed.
     runout_scale : float
         Factor on the recorded runout (1 = as recorded, 0 = removed).
+    journal3_shift_c : (float, float)
+        Static shift (x, y) of bearing 3's reading, in clearances.
     """
 
     gains: np.ndarray
     keep: np.ndarray
     speed_known: bool
     runout_scale: float = 1.0
+    journal3_shift_c: tuple[float, float] = (0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -75,6 +84,11 @@ class Augmentation:
         Share of copies extracted without the nominal speed.
     runout_scaled : float
         Share of copies whose recorded runout is scaled by a factor drawn uniform in [0, 1].
+    journals_apart : float
+        Share of copies whose bearing-3 static reading is moved by U(0, ``journals_apart_c``) clearances in a
+        uniform direction (needs the sample's clearance).
+    journals_apart_c : float
+        Largest such shift, in clearances.
     seed : int
     """
 
@@ -83,6 +97,8 @@ class Augmentation:
     bearing_sets: tuple[tuple[tuple[int, ...], float], ...] = ()
     speed_unknown: float = 0.0
     runout_scaled: float = 0.0
+    journals_apart: float = 0.0
+    journals_apart_c: float = 0.3
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -94,6 +110,10 @@ class Augmentation:
             raise ValueError(f"[augment] speed_unknown: a share in [0, 1], got {self.speed_unknown!r}")
         if not 0.0 <= self.runout_scaled <= 1.0:
             raise ValueError(f"[augment] runout_scaled: a share in [0, 1], got {self.runout_scaled!r}")
+        if not 0.0 <= self.journals_apart <= 1.0:
+            raise ValueError(f"[augment] journals_apart: a share in [0, 1], got {self.journals_apart!r}")
+        if not 0.0 <= self.journals_apart_c <= 1.0:
+            raise ValueError(f"[augment] journals_apart_c: clearances in [0, 1], got {self.journals_apart_c!r}")
         for bearings, w in self.bearing_sets:
             if not bearings or any(b not in (1, 2, 3, 4) for b in bearings) or len(set(bearings)) != len(bearings):
                 raise ValueError(f"[augment] bearing_sets: each set is distinct bearings 1–4, got {list(bearings)}")
@@ -120,12 +140,16 @@ class Augmentation:
             raise ValueError(f"[augment] seed: a non-negative integer, got {seed!r}")
         return cls(copies=copies, gain_mismatch=float(d.get("gain_mismatch", 0.0)), bearing_sets=tuple(sets),
                    speed_unknown=float(d.get("speed_unknown", 0.0)),
-                   runout_scaled=float(d.get("runout_scaled", 0.0)), seed=seed)
+                   runout_scaled=float(d.get("runout_scaled", 0.0)),
+                   journals_apart=float(d.get("journals_apart", 0.0)),
+                   journals_apart_c=float(d.get("journals_apart_c", 0.3)), seed=seed)
 
     def to_dict(self) -> dict:
         return {"copies": self.copies, "gain_mismatch": self.gain_mismatch,
                 "bearing_sets": [{"bearings": list(b), "weight": w} for b, w in self.bearing_sets],
-                "speed_unknown": self.speed_unknown, "runout_scaled": self.runout_scaled, "seed": self.seed}
+                "speed_unknown": self.speed_unknown, "runout_scaled": self.runout_scaled, "seed": self.seed,
+                **({"journals_apart": self.journals_apart, "journals_apart_c": self.journals_apart_c}
+                   if self.journals_apart > 0 else {})}
 
     @property
     def key(self) -> str:
@@ -149,5 +173,10 @@ class Augmentation:
             scale = 1.0
             if self.runout_scaled > 0 and rng.uniform() < self.runout_scaled:   # drawn after the others:
                 scale = float(rng.uniform())                                  # their draws stay as before
-            out.append(Variant(gains=gains, keep=keep, speed_known=speed_known, runout_scale=scale))
+            shift = (0.0, 0.0)
+            if self.journals_apart > 0 and rng.uniform() < self.journals_apart:     # after those: the same
+                r, a = rng.uniform(0.0, self.journals_apart_c), rng.uniform(0.0, 2.0 * np.pi)
+                shift = (float(r * np.cos(a)), float(r * np.sin(a)))
+            out.append(Variant(gains=gains, keep=keep, speed_known=speed_known, runout_scale=scale,
+                               journal3_shift_c=shift))
         return out

@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from rotordiag.core.units import factor_to_um
+
 from .augment import Augmentation, Variant
 from .table import FeatureTable
 
@@ -114,6 +116,11 @@ def _extract_rows(f, rows, progress: Callable | None, augment: Augmentation | No
                 w = data
                 if v.runout_scale != 1.0 and "measurement" in f:
                     w = data - (1.0 - v.runout_scale) * recorded_runout_um(f, int(i))
+                if v.journal3_shift_c != (0.0, 0.0) and clearance_m is not None:
+                    per_unit = float(clearance_m[i]) * 1e6 / factor_to_um(units)      # clearance in the file's units
+                    sx, sy = (per_unit * s for s in v.journal3_shift_c)
+                    w = w + np.array([[sx * np.cos(np.deg2rad(a)) + sy * np.sin(np.deg2rad(a)) if b == 3 else 0.0]
+                                      for b, a in zip(bearings, angles)])
                 rec = Recording(
                     sample_rate_hz=fs,
                     channels=[ProbeChannel(bearing=b, angle_deg=a, units=units, data=w[j] * v.gains[j])

@@ -200,6 +200,46 @@ def test_runout_scaled_training_copies_subtract_the_recorded_runout(small, monke
         Augmentation(runout_scaled=1.5)
 
 
+
+def test_journals_apart_copies_move_bearing_3s_static_reading_only(small, monkeypatch):
+    """[augment] journals_apart: a copy's bearing-3 channels read a static shift of ≤ journals_apart_c clearances
+    (projected on each probe's axis); the other channels, and the copy's other draws, are as without it."""
+    import rotordiag.features as feats
+    from rotordiag.models.augment import Augmentation
+    from rotordiag.models.dataset import _extract_rows
+
+    _, out, _ = small
+    seen = []
+
+    class Result:
+        values = np.zeros(len(feats.FEATURE_NAMES))
+
+    monkeypatch.setattr(feats, "extract_features", lambda rec: seen.append(rec) or Result)
+    aug = Augmentation(copies=8, journals_apart=0.5, journals_apart_c=0.3, seed=3)
+    with h5py.File(out, "r") as f:
+        bearings = [int(b) for b in f["channels"]["bearing"]]
+        angles = [float(a) for a in f["channels"]["angle_deg"]]
+        clearance_um = float(f["parameters/plant/clearance_m"][1]) * 1e6
+        _extract_rows(f, np.array([1]), None, aug)
+        w = f["waveforms"][1].astype(float)
+    variants = aug.variants(1, bearings)
+    shifts = [np.hypot(*v.journal3_shift_c) for v in variants]
+    assert any(s == 0.0 for s in shifts) and any(s > 0.0 for s in shifts) and max(shifts) <= 0.3
+    for rec, v in zip(seen, variants):
+        sx, sy = (clearance_um * s for s in v.journal3_shift_c)
+        kept = [j for j in range(len(bearings)) if v.keep[j]]
+        for ch, j in zip(rec.channels, kept):
+            move = sx * np.cos(np.deg2rad(angles[j])) + sy * np.sin(np.deg2rad(angles[j])) if bearings[j] == 3 else 0.0
+            np.testing.assert_allclose(ch.data, (w[j] + move) * v.gains[j], rtol=1e-6, atol=1e-6)
+    plain = Augmentation(copies=8, seed=3).variants(1, bearings)
+    for a, b in zip(plain, variants):
+        np.testing.assert_array_equal(a.gains, b.gains)
+        np.testing.assert_array_equal(a.keep, b.keep)
+        assert a.speed_known == b.speed_known and a.journal3_shift_c == (0.0, 0.0)
+    assert "journals_apart" not in Augmentation(copies=2).to_dict()      # the shipped key (feature caches) unchanged
+    with pytest.raises(ValueError, match="journals_apart"):
+        Augmentation(journals_apart=2.0)
+
 def test_contact_samples_are_kept_with_their_status(tmp_path):
     spec = write_spec(tmp_path / "spec.toml", n_samples=2)
     text = spec.read_text().replace("misalignment = {min = 0.0, max = 0.5}", "misalignment = 0.9") \
