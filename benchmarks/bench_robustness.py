@@ -565,8 +565,8 @@ def transfer_section(clean: list[Outcome], ross: list[Outcome] | None) -> list[s
            "reach their simulated F1 — the clean-rigid and far-rigid targets are targets on this identity. "
            "The row \"coupling journals apart\" above measures what it costs on a healthy train whose journals sit "
            "apart: the classifier calls most of them misaligned, and the verdict keeps them from being `confident` "
-           "only through the `static_offset_only` reason (a misalignment call that falls to aligned with the two "
-           "journals at one position; models.status.journals_at_one_position). "
+           "only through the `static_offset_only` reason (a misalignment call that falls to a lower band with the "
+           "two journals at one position; models.status.journals_at_one_position). "
            "Median (10–90 %) per clearance, and the mean |reading − Δ| of the mechanism it reads:", "",
            "| set | n | static offset across the coupling / c | relative 1X radius / c | \\|static − Δ\\| (offset) "
            "| \\|1X radius − Δ\\| (rigid) |", "|---|---|---|---|---|---|"]

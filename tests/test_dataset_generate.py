@@ -164,21 +164,29 @@ def test_recorded_runout_of_a_merged_file_uses_each_rows_source_spec(small, tmp_
             np.testing.assert_allclose(recorded_runout_um(m, k), recorded_runout_um(f, row), rtol=0, atol=1e-12)
 
 
-def test_runout_scaled_training_copies_subtract_the_recorded_runout(small, monkeypatch):
-    """[augment] runout_scaled: a copy's waveforms are the stored ones minus (1 − s) × the recorded runout,
-    s ~ U(0, 1); the other draws of a copy (gains, bearings, speed) are the same as without it."""
-    import rotordiag.features as feats
-    from rotordiag.models.augment import Augmentation
-    from rotordiag.models.dataset import _extract_rows
-    from rotordiag.simulator.dataset.read import recorded_runout_um
 
-    _, out, _ = small
-    seen = []
+def _capture_extractions(monkeypatch) -> list:
+    """Replace ``features.extract_features`` by a recorder: the returned list receives every Recording a table
+    build extracts (their features are zeros)."""
+    import rotordiag.features as feats
+
+    seen: list = []
 
     class Result:
         values = np.zeros(len(feats.FEATURE_NAMES))
 
     monkeypatch.setattr(feats, "extract_features", lambda rec: seen.append(rec) or Result)
+    return seen
+
+def test_runout_scaled_training_copies_subtract_the_recorded_runout(small, monkeypatch):
+    """[augment] runout_scaled: a copy's waveforms are the stored ones minus (1 − s) × the recorded runout,
+    s ~ U(0, 1); the other draws of a copy (gains, bearings, speed) are the same as without it."""
+    from rotordiag.models.augment import Augmentation
+    from rotordiag.models.dataset import _extract_rows
+    from rotordiag.simulator.dataset.read import recorded_runout_um
+
+    _, out, _ = small
+    seen = _capture_extractions(monkeypatch)
     aug = Augmentation(copies=6, gain_mismatch=0.1, runout_scaled=0.5, seed=1)
     with h5py.File(out, "r") as f:
         bearings = [int(b) for b in f["channels"]["bearing"]]
@@ -204,17 +212,11 @@ def test_runout_scaled_training_copies_subtract_the_recorded_runout(small, monke
 def test_journals_apart_copies_move_bearing_3s_static_reading_only(small, monkeypatch):
     """[augment] journals_apart: a copy's bearing-3 channels read a static shift of ≤ journals_apart_c clearances
     (projected on each probe's axis); the other channels, and the copy's other draws, are as without it."""
-    import rotordiag.features as feats
     from rotordiag.models.augment import Augmentation
     from rotordiag.models.dataset import _extract_rows
 
     _, out, _ = small
-    seen = []
-
-    class Result:
-        values = np.zeros(len(feats.FEATURE_NAMES))
-
-    monkeypatch.setattr(feats, "extract_features", lambda rec: seen.append(rec) or Result)
+    seen = _capture_extractions(monkeypatch)
     aug = Augmentation(copies=8, journals_apart=0.5, journals_apart_c=0.3, seed=3)
     with h5py.File(out, "r") as f:
         bearings = [int(b) for b in f["channels"]["bearing"]]
