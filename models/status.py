@@ -416,7 +416,8 @@ def _recording_reasons(c: RecordingChecks) -> list[Reason]:
 def _call_reasons(m: ModelCall, c: RecordingChecks) -> list[Reason]:
     """Low probability, probability or Δ interval on bands two or more from the call, below the alarm
     threshold, a severity without the coupling 2X or "aligned" without the coupling centreline (these two
-    read the recording's features), class and Δ disagreeing."""
+    read the recording's features), a severity resting on the static offset between the coupling journals
+    (``one_position_call``), class and Δ disagreeing."""
     reasons: list[Reason] = []
     probabilities, call_index, band_names = m.probabilities, m.call_index, m.band_names
     pmax = float(np.max(probabilities)) if len(probabilities) else np.nan
