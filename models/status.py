@@ -39,6 +39,7 @@ __all__ = ["Reason", "RecordingChecks", "ModelCall", "assess", "consistent_estim
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY",
            "CONFIDENT_MAX_FAR_PROBABILITY",
            "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "coupling_centreline_known", "journals_at_one_position",
+           "journals_apart_c",
            "CENTRELINE_FEATURES", "describe_feature", "far_band_probability",
            "interval_far_bands", "envelope_reasons"]
 
@@ -229,6 +230,17 @@ def coupling_centreline_known(names: Sequence[str], row: np.ndarray) -> bool:
 
 #: the static-position features of a bearing that :func:`journals_at_one_position` copies across the coupling
 CENTRELINE_FEATURES = ("centre_x_per_c", "centre_y_per_c", "centre_ecc_per_c")
+
+
+def journals_apart_c(names: Sequence[str], row: np.ndarray) -> tuple[float, float] | None:
+    """Bearing 3's static journal position minus bearing 2's (x, y), in clearances; None when either is not
+    measured."""
+    index = {n: i for i, n in enumerate(names)}
+    cols = [index.get(f"b{b}_centre_{d}_per_c") for b in COUPLING_BEARINGS[::-1] for d in "xy"]
+    if any(j is None or not np.isfinite(row[j]) for j in cols):
+        return None
+    x3, y3, x2, y2 = (float(row[j]) for j in cols if j is not None)
+    return x3 - x2, y3 - y2
 
 
 def journals_at_one_position(names: Sequence[str], row: np.ndarray) -> np.ndarray | None:
@@ -466,6 +478,10 @@ def _call_reasons(m: ModelCall, c: RecordingChecks) -> list[Reason]:
                     "the severity rests on the static offset between the coupling-end journals: with the two journals "
                     "at one position in their bearings the model would call it "
                     + (str(band_names[lower]) if len(band_names) > lower else f"band {lower}"))
+            apart = journals_apart_c(c.names, c.row)
+            if apart is not None:
+                what += (f" (bearing 3's journal sits {np.hypot(*apart):.2f} c from bearing 2's: "
+                         f"x {apart[0]:+.2f} c, y {apart[1]:+.2f} c)")
             reasons.append(Reason("static_offset_only", UNCERTAIN,
                                   what + ". A healthy train's coupling-end journals also sit apart (each by its own "
                                   "load: a heavy generator journal beside a light exciter one), and a DC gap referenced "

@@ -324,7 +324,7 @@ def test_shipped_verdict_checks_the_regressors_own_interval():
 
 
 def test_journals_at_one_position_copies_the_coupling_centrelines_across():
-    from rotordiag.models.status import journals_at_one_position
+    from rotordiag.models.status import journals_apart_c, journals_at_one_position
 
     names = ["b1_centre_y_per_c", "b2_centre_x_per_c", "b2_centre_y_per_c", "b2_centre_ecc_per_c",
              "b3_centre_x_per_c", "b3_centre_y_per_c", "b3_centre_ecc_per_c", "b2_x_2x_1x_ratio"]
@@ -335,6 +335,8 @@ def test_journals_at_one_position_copies_the_coupling_centrelines_across():
     np.testing.assert_array_equal(rows[1], [-0.5, 0.0, -0.2, 0.2, 0.0, -0.2, 0.2, 0.7])       # b2 := b3
     assert journals_at_one_position(names, np.where(np.arange(8) == 5, np.nan, row)) is None   # a raw gap at b3
     assert journals_at_one_position(names[:4], row[:4]) is None                                 # no bearing 3
+    assert journals_apart_c(names, row) == pytest.approx((-0.1, 0.4))                           # b3 − b2, x and y
+    assert journals_apart_c(names, np.where(np.arange(8) == 2, np.nan, row)) is None
 
 
 def test_a_misalignment_call_resting_on_the_static_offset_across_the_coupling_is_not_confident():
@@ -343,12 +345,15 @@ def test_a_misalignment_call_resting_on_the_static_offset_across_the_coupling_is
     moderate, confident (15 of 48 upward, 27 of 48 sideways). A misalignment call that falls to a lower band with
     the journals at one position is uncertain and says what to compare with; one that stands, or an aligned
     call, is not touched."""
-    names = ["b2_1x_major_um_pp", "b2_x_2x_1x_ratio", "b2_centre_ecc_per_c"]
-    kw = dict(names=names, row=np.array([30.0, 0.6, 0.4]), feature_median=np.array([30.0, 0.5, 0.3]),
+    names = ["b2_1x_major_um_pp", "b2_x_2x_1x_ratio", "b2_centre_ecc_per_c", "b2_centre_x_per_c", "b2_centre_y_per_c",
+             "b3_centre_x_per_c", "b3_centre_y_per_c"]
+    kw = dict(names=names, row=np.array([30.0, 0.6, 0.4, 0.1, -0.39, 0.25, -0.19]),
+              feature_median=np.array([30.0, 0.5, 0.3, 0.1, -0.4, 0.1, -0.4]),
               misaligned_call=True, probabilities=[0.05, 0.05, 0.8, 0.1], call_index=2)
     status, reasons = _assess(one_position_call=0, **kw)
     assert status == UNCERTAIN and [r.code for r in reasons] == ["static_offset_only"]
     assert "baseline positions" in reasons[0].message and "own load" in reasons[0].message
+    assert "sits 0.25 c from bearing 2's: x +0.15 c, y +0.20 c" in reasons[0].message       # (0.15, 0.20): 0.25 c
     status, reasons = _assess(one_position_call=1, band_names=["aligned", "slight", "moderate", "severe"], **kw)
     assert status == UNCERTAIN and [r.code for r in reasons] == ["static_offset_only"]
     assert "severity rests on" in reasons[0].message and "call it slight" in reasons[0].message
