@@ -283,14 +283,14 @@ def across_coupling(fr) -> tuple[float, float]:
     |mean(r_b2) − mean(r_b3)| / c (NaN unless both means are journal positions, ``b?_centre_x_per_c``) and the
     radius |F_1(b2) − F_1(b3)| / c of their relative forward 1X circle. Not a model feature (docs/models.md,
     "What the simulator lets a feature read exactly"): the report's transfer check (:func:`transfer_section`)."""
+    from rotordiag.models.status import journals_apart_c
+
     if 2 not in fr.bearings or 3 not in fr.bearings:
         return math.nan, math.nan
     b2, b3 = fr.bearings[2], fr.bearings[3]
-    c = 0.5 * (b2.clearance_um + b3.clearance_um)
-    rel_1x = abs(complex(b2.forward_um[0]) - complex(b3.forward_um[0])) / c
-    centres = np.isfinite(fr["b2_centre_x_per_c"]) and np.isfinite(fr["b3_centre_x_per_c"])
-    dc = math.hypot(b2.mean_um[0] - b3.mean_um[0], b2.mean_um[1] - b3.mean_um[1]) / c if centres else math.nan
-    return float(dc), float(rel_1x)
+    rel_1x = abs(complex(b2.forward_um[0]) - complex(b3.forward_um[0])) / (0.5 * (b2.clearance_um + b3.clearance_um))
+    apart = journals_apart_c(fr.names, np.asarray(fr.values, dtype=float))
+    return (math.hypot(*apart) if apart is not None else math.nan), float(rel_1x)
 
 
 def _over_cases(cases: list[dict], disps: list, diagnose_one) -> list[Outcome]:
