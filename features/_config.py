@@ -55,6 +55,7 @@ def speed_in_doubt(warning: str) -> bool:
     return SPEED_AMBIGUOUS in warning or SPEED_NOT_CONVERGED in warning
 
 
+
 #: speed search range without keyphasor / given speed (r/min)
 SPEED_SEARCH_RPM: tuple[float, float] = (60.0, 12000.0)
 #: how many spectral peaks are tried as (multiples of) the running speed
@@ -162,8 +163,21 @@ SPEED_SIDEBAND_MAX_TRIES = 8
 #: phase-difference refinement iterations of the estimated / given speed
 SPEED_REFINE_ITERATIONS = 3
 #: a given ``speed_rpm`` that differs from the signal's refined 1X line by more than this
-#: fraction gets a warning
+#: fraction gets a warning (and one locked to the signal's lines, ``_speed_lock``, further than this is said so)
 SPEED_MISMATCH_WARN = 1e-3
+#: a given ``speed_rpm`` is locked to the signal's synchronous lines within this fraction of it
+#: (``_speed_lock.locked_speed_hz``: grid frequency, rounding and drift put a stated speed 0.1–0.5 % off)
+SPEED_LOCK_MAX_REL = 0.01
+#: … on the largest of these orders' lines near their stated frequency …
+SPEED_LOCK_ORDERS: tuple[int, ...] = (1, 2, 3)
+#: … when the other orders' lines read the same speed within this fraction (else the stated speed is kept)
+SPEED_LOCK_AGREE_REL = 5e-4
+#: … and at least this many orders show such a line (one line alone may be a whirl harmonic next to 1X)
+SPEED_LOCK_MIN_LINES = 2
+#: … and it replaces the stated speed only when they differ by more than this: the refinement's own bias on a
+#: stated speed that is right (up to 2.4e-5 on 11-revolution records of 1X–3X lines, where the harmonics leak into
+#: each other's half-record windows); 5e-5 drifts by 0.01 revolution over 200
+SPEED_LOCK_MIN_REL = 5e-5
 #: keyphasor revolutions whose period differs from the mean by more than this get a warning
 SPEED_VARIATION_WARN = 0.01
 

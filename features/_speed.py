@@ -29,6 +29,7 @@ from ._lines import (
     refine_line_hz,
 )
 from ._spectrum import fast_length, hann
+from ._speed_lock import locked_speed_hz
 
 __all__ = ["ShaftAngle", "shaft_angle", "estimate_speed_hz"]
 
@@ -528,8 +529,8 @@ def shaft_angle(rec, data: np.ndarray, estimate: tuple[float, list[str]] | None 
     ----------
     rec : Recording
     data : ndarray, shape (n_channels, n_points)
-        x/y displacements in µm (used only to estimate the speed when neither a keyphasor
-        nor ``speed_rpm`` is given).
+        x/y displacements in µm (to estimate the speed when neither a keyphasor nor ``speed_rpm`` is
+        given, and to lock a given ``speed_rpm`` to the signal's synchronous lines, :mod:`._speed_lock`).
     estimate : (speed_rpm, warnings), optional
         The speed estimated elsewhere (a caller that chose among :func:`speed_alternatives_rpm`), used
         instead of :func:`estimate_speed_hz` with its warnings when neither a keyphasor nor ``speed_rpm``
@@ -569,6 +570,13 @@ def shaft_angle(rec, data: np.ndarray, estimate: tuple[float, list[str]] | None 
 
     if rec.speed_rpm is not None:
         f1, source = rec.speed_rpm / 60.0, "given"
+        f_lock = locked_speed_hz(data, fs, f1)
+        if f_lock is not None and abs(f_lock / f1 - 1.0) > cfg.SPEED_LOCK_MIN_REL:
+            if abs(f_lock / f1 - 1.0) > cfg.SPEED_MISMATCH_WARN:
+                warnings.append(f"speed_rpm {rec.speed_rpm:g} is {100 * (f1 / f_lock - 1):+.2f} % off the signal's "
+                                f"synchronous lines ({60 * f_lock:.2f} r/min): the orders are tracked at the signal's "
+                                "speed")
+            f1 = f_lock
     else:
         if estimate is not None:
             f1, est_warn = estimate[0] / 60.0, list(estimate[1])
