@@ -55,7 +55,6 @@ def speed_in_doubt(warning: str) -> bool:
     return SPEED_AMBIGUOUS in warning or SPEED_NOT_CONVERGED in warning
 
 
-
 #: speed search range without keyphasor / given speed (r/min)
 SPEED_SEARCH_RPM: tuple[float, float] = (60.0, 12000.0)
 #: how many spectral peaks are tried as (multiples of) the running speed

@@ -74,7 +74,9 @@ class RecordingIn(_Strict):
                                         examples=[4096.0])
     speed_rpm: FiniteFloat | None = Field(
         None, gt=0, le=100_000,
-        description="Running speed, r/min. Omit to estimate it from the signals (or from `keyphasor_times_s`).",
+        description="Running speed, r/min (the control system's reading or the nominal speed will do: the orders "
+                    "are locked to the signals' synchronous lines within ±1 % of it, and the speed used is in the "
+                    "answer). Omit to estimate it from the signals (or from `keyphasor_times_s`).",
         examples=[3000.0])
     keyphasor_times_s: list[FiniteFloat] | None = Field(
         None, max_length=MAX_KEYPHASOR_PULSES,
@@ -398,8 +400,8 @@ class DiagnoseResponse(BaseModel):
     ood_findings: list[OodFindingOut] = Field(default_factory=list, description="Features outside the range of "
                                               "the training data (largest excess first); each also in `reasons` "
                                               "(code `outside_training`). Any of them sets `ood`.")
-    speed_rpm: float | None = Field(None, description="Running speed used, r/min (given, from the keyphasor, "
-                                    "or estimated from the signals).")
+    speed_rpm: float | None = Field(None, description="Running speed used, r/min (given — locked to the signals' "
+                                    "synchronous lines within ±1 % —, from the keyphasor, or estimated from the signals).")
     model_version: str = Field(..., description="Registered model version that produced the verdict.")
     bands: dict[str, Any] = Field(..., description="The model's severity bands: `edges` (Δ) and `names`.")
     warnings: list[str] = Field(..., description="Anything that makes the verdict less certain.")

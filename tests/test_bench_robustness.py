@@ -269,6 +269,23 @@ def test_conditions_that_withhold_a_number_measure_the_clean_recordings():
     assert bench.measurement_rng(clean, 815, 7).random() != bench.measurement_rng(clean, 815, 8).random()
 
 
+def test_a_stated_speed_off_is_measured_on_the_same_recordings_and_stated_off(monkeypatch):
+    """The "speed stated 0.4 % off" rows: the same waveforms as their base row (bit for bit), the verdict asked at
+    the simulated speed × 1.004, and the long rows measured over their own record length; none is an issue row."""
+    for name, base in (("speed stated 0.4 % off", "clean"), ("192 revolutions, speed stated 0.4 % off", "192 revolutions")):
+        cond = next(c for c in bench.CONDITIONS if c.name == name)
+        ref = next(c for c in bench.CONDITIONS if c.name == base)
+        assert cond.same_recordings_as == base and cond.revs == ref.revs and cond.speed_stated_error == 0.004
+        assert name not in bench.ISSUE_CONDITIONS
+    long_ = next(c for c in bench.CONDITIONS if c.name == "192 revolutions, speed stated 0.4 % off")
+    seen = []
+    monkeypatch.setattr(bench, "diagnose_waveforms",
+                        lambda bundle, w, bearings, fs, speed, clearance, o: seen.append((w.shape, speed)) or o)
+    case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
+    bench.run_condition(None, long_, [case], [_shaft(200 * bench.SAMPLES_PER_REV)], 815)
+    assert seen == [((8, round(192 * 60 / SPEED_RPM * bench.FS_HZ)), pytest.approx(SPEED_RPM * 1.004, rel=1e-12))]
+
+
 def test_f1_on_right_speed_compares_the_same_recordings():
     from types import SimpleNamespace
 
