@@ -293,6 +293,34 @@ def test_model_envelope_findings_name_the_feature_and_the_training_range():
             t.X, t.misalignment, groups=t.plant_id)
 
 
+def test_the_speed_is_outside_the_training_range_only_beyond_its_tolerance():
+    """A running speed is known to ±1 % (a stated one locked to the signal, an estimate): 0.5 % above the fastest
+    training recording is inside the envelope, 2 % above is a finding (and OOD)."""
+    from rotordiag.models.estimators import ENVELOPE_REL_TOLERANCE, FeatureEnvelope, MisalignmentModel
+
+    from .models_synthetic import make_table
+
+    t = make_table(n_plants=60, per_plant=8, seed=3)                 # its rows have no speed: one is added
+    X = np.column_stack([t.X, np.random.default_rng(0).uniform(1200, 3600, len(t.X))])
+    names = [*t.feature_names, "speed_rpm"]
+    j = len(names) - 1
+    small = {"classifier": SeverityClassifier(max_iter=20, cv=3),
+             "regressor": ConformalIntervalRegressor(max_iter=20, lower_bound=0.0)}
+    m = MisalignmentModel(feature_names=names, envelope_features=["speed_rpm"], envelope=FeatureEnvelope(quantile=0.99),
+                          **small)
+    m.fit(X, t.misalignment, groups=t.plant_id)
+    assert ENVELOPE_REL_TOLERANCE["speed_rpm"] == 0.01
+    top = float(np.nanmax(X[:, j]))
+    row = X[:1].copy()
+    row[0, j] = top * 1.005
+    assert m.envelope_findings(row) == [[]] and not m.ood_flags(row)[0]
+    row[0, j] = top * 1.02
+    (found,) = m.envelope_findings(row)
+    assert [f["feature"] for f in found] == ["speed_rpm"] and found[0]["side"] == "above" and m.ood_flags(row)[0]
+    row[0, j] = float(np.nanmin(X[:, j])) * 0.98
+    assert [f["side"] for f in m.envelope_findings(row)[0]] == ["below"]
+
+
 def test_derived_attitude_features_follow_the_centreline():
     from rotordiag.core.journal import attitude_angle_deg, short_bearing_attitude_deg
     from rotordiag.models.estimators import MisalignmentModel
