@@ -1062,6 +1062,7 @@ class MisalignmentModel(BaseEstimator):
         """(values, envelope input, excess in spreads) of the envelope columns; a column of
         :data:`ENVELOPE_REL_TOLERANCE` has no excess within its relative tolerance of the training range."""
         env = self.envelope_
+        assert env is not None, "no envelope fitted"
         V = self.envelope_values(X)
         Z = self.envelope_input(X)
         exc = env.excess(Z)
