@@ -37,6 +37,16 @@ def hann(n: int) -> np.ndarray:
     return w
 
 
+def hann_spectra(data: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(channels less their means, their Hann-windowed spectra at :func:`fast_length`, the channels' powers
+    summed) of a multichannel record (n_channels, n_points): what the running-speed estimate and the lock of a
+    given speed (``_speed``, ``_speed_lock``) search for lines."""
+    n = data.shape[1]
+    x = data - data.mean(axis=1)[:, None]
+    spec = np.fft.rfft(x * hann(n), n=fast_length(n), axis=-1)
+    return x, spec, np.sum(spec.real ** 2 + spec.imag ** 2, axis=0)
+
+
 def residual_psd(residual: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
     """One-sided mean-square spectrum per bin of each row (zero-padded to a fast FFT length).
 

@@ -28,7 +28,7 @@ from ._lines import (
     _non_harmonic_lines,
     refine_line_hz,
 )
-from ._spectrum import fast_length, hann
+from ._spectrum import fast_length, hann_spectra
 from ._speed_lock import locked_speed_hz
 
 __all__ = ["ShaftAngle", "shaft_angle", "estimate_speed_hz"]
@@ -147,9 +147,7 @@ def _spectrum(data: np.ndarray, fs: float, speed_range_hz: tuple[float, float] |
     it, or no line stands out of the noise."""
     n = data.shape[1]
     n_fft = fast_length(n)
-    x = data - data.mean(axis=1)[:, None]
-    spec = np.fft.rfft(x * hann(n), n=n_fft, axis=-1)
-    power = np.sum(spec.real ** 2 + spec.imag ** 2, axis=0)
+    x, spec, power = hann_spectra(data)
     df = fs / n_fft
     f_lo = max(cfg.SPEED_SEARCH_RPM[0] / 60.0, 3 * df)
     f_hi = min(cfg.SPEED_SEARCH_RPM[1] / 60.0, fs / cfg.MIN_SAMPLES_PER_REV)

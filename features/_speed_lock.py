@@ -14,7 +14,7 @@ import numpy as np
 
 from . import _config as cfg
 from ._lines import refine_line_hz
-from ._spectrum import fast_length, hann
+from ._spectrum import fast_length, hann_spectra
 
 __all__ = ["locked_speed_hz"]
 
@@ -39,7 +39,8 @@ def locked_speed_hz(data: np.ndarray, fs: float, f_stated: float,
     For each order h of :data:`~._config.SPEED_LOCK_ORDERS` the highest spectral peak (Hann window, channels'
     powers summed) within h·f_stated·(1 ± ``max_rel``) ± one bin that stands :data:`~._config.SPEED_LINE_MIN_SNR`
     times above the median spectrum (0.25–3.5 × f_stated) is refined (:func:`._lines.refine_line_hz`) and divided by
-    h. The strongest such line gives the speed when every other one agrees with it within
+    h. The strongest such line gives the speed when at least :data:`~._config.SPEED_LOCK_MIN_LINES` orders show one
+    and every other one agrees with it within
     :data:`~._config.SPEED_LOCK_AGREE_REL` (a line that does not — an oil whirl's 2nd harmonic inside the 1X's
     main lobe, say — is not synchronous, and the stated speed is kept) and it lies within ``max_rel`` of the
     stated speed.
@@ -64,11 +65,8 @@ def locked_speed_hz(data: np.ndarray, fs: float, f_stated: float,
     n = data.shape[1]
     if n < 16 or not f_stated > 0:
         return None
-    n_fft = fast_length(n)
-    x = data - data.mean(axis=1, keepdims=True)
-    spec = np.fft.rfft(x * hann(n), n=n_fft, axis=-1)
-    power = np.sum(spec.real ** 2 + spec.imag ** 2, axis=0)
-    df = fs / n_fft
+    x, _, power = hann_spectra(data)
+    df = fs / fast_length(n)
     band = power[max(int(0.25 * f_stated / df), 1):min(int(np.ceil(3.5 * f_stated / df)), power.size - 1) + 1]
     if band.size < 8:
         return None
