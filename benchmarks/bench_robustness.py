@@ -646,6 +646,8 @@ def ross_targets(bundle, outs: list[Outcome]) -> dict:
     return {
         "misaligned_aligned_confident": sum(o.model_class == "aligned" and o.status == "confident" for o in mis),
         "misaligned_called_aligned_any_status": sum(o.model_class == "aligned" for o in mis),
+        # the class shown (an inconclusive verdict shows none: models.status, signature_above_call)
+        "misaligned_shown_aligned": sum(o.severity == "aligned" for o in mis),
         "n_misaligned": len(mis),
         "healthy_moderate_severe_shown": sum(o.severity in ("moderate", "severe") for o in healthy),
         "healthy_moderate_severe_class": sum(o.model_class in ("moderate", "severe") for o in healthy),
@@ -734,7 +736,9 @@ def targets(rows: dict[str, dict], ross: dict | None) -> list[tuple[str, bool | 
         return out
     k = ross["misaligned_aligned_confident"]
     out.append(("ROSS: no misaligned case called aligned with confident status", k == 0,
-                f"{k} of {ross['n_misaligned']} (aligned at any status: {ross['misaligned_called_aligned_any_status']})"))
+                f"{k} of {ross['n_misaligned']} (classed aligned at any status: "
+                f"{ross['misaligned_called_aligned_any_status']}; shown as aligned, not inconclusive: "
+                f"{ross.get('misaligned_shown_aligned', '–')})"))
     k = ross["healthy_moderate_severe_shown"]
     out.append(("ROSS: no healthy machine called moderate or severe", k == 0,
                 f"{k} of {ross['n_healthy']} shown (class, before status: {ross['healthy_moderate_severe_class']})"))

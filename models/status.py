@@ -3,7 +3,11 @@
 - ``inconclusive``: a physics sanity check failed (``features.check_recording``), the
   recording is far outside the training data (OOD score above ``OOD_INCONCLUSIVE``), or
   the vibration at the coupling bearings is ``SCALE_INCONCLUSIVE`` times away from the
-  training data's typical level. No severity is given.
+  training data's typical level, or — on a recording outside the training family (OOD score above 1, or a
+  feature outside the training range) — the classic coupling 2X/1X reading (the rule of thumb's bands) lies
+  ``SIGNATURE_BANDS_ABOVE_CALL`` or more bands above the model's call (``signature_above_call``: outside its
+  family the model is not trusted against the physics; a misaligned machine of another design called
+  "aligned"). No severity is given.
 - ``uncertain``: a sanity warning, OOD score above 1, a feature outside the training range
   (``outside_training``: which feature, its value and the training range, in plain words;
   inconclusive when ``SCALE_INCONCLUSIVE`` times beyond it), vibration ``SCALE_UNCERTAIN`` times
@@ -35,11 +39,13 @@ import numpy as np
 
 from rotordiag.features import speed_in_doubt
 
+from .baselines import DEFAULT_RULE_CUTS
+
 __all__ = ["Reason", "RecordingChecks", "ModelCall", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY",
            "CONFIDENT_MAX_FAR_PROBABILITY",
            "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "coupling_centreline_known", "journals_at_one_position",
-           "journals_apart_c",
+           "journals_apart_c", "SIGNATURE_BANDS_ABOVE_CALL", "signature_band",
            "CENTRELINE_FEATURES", "describe_feature", "far_band_probability",
            "interval_far_bands", "envelope_reasons"]
 
@@ -66,6 +72,10 @@ COUPLING_BEARINGS = (2, 3)
 #: 0.00; 2 of 2 with the shipped model) and 5 of 69 confident rigid-coupling cases (a rigid coupling moves 1X);
 #: none of pin, offset or flexible
 SIGNATURE_MIN_2X_1X = 0.05
+#: outside its training family (OOD score above 1 or a feature outside the training range) the model's call is not
+#: trusted against the classic 2X/1X reading (the rule of thumb's bands, models.baselines.DEFAULT_RULE_CUTS) when that
+#: reads this many bands or more above the call: the verdict is then inconclusive (``signature_above_call``)
+SIGNATURE_BANDS_ABOVE_CALL = 2
 
 
 @dataclass(frozen=True)
@@ -216,6 +226,15 @@ def coupling_2x_1x(names: Sequence[str], row: np.ndarray) -> float:
             if any(n in (f"b{b}_x_2x_1x_ratio", f"b{b}_y_2x_1x_ratio") for b in COUPLING_BEARINGS)]
     vals = [v for v in vals if np.isfinite(v)]
     return max(vals) if vals else float("nan")
+
+
+def signature_band(ratio: float, n_bands: int) -> int | None:
+    """The band the classic 2X/1X rule of thumb reads from the coupling bearings' largest 2X/1X (``ratio``): the
+    number of :data:`models.baselines.DEFAULT_RULE_CUTS` (0.5 / 1 / 2) at or below it. None when the ratio is not
+    measured or the model's bands are not the rule's four."""
+    if not np.isfinite(ratio) or n_bands != len(DEFAULT_RULE_CUTS) + 1:
+        return None
+    return int(np.searchsorted(np.asarray(DEFAULT_RULE_CUTS), ratio, side="right"))
 
 
 def coupling_centreline_known(names: Sequence[str], row: np.ndarray) -> bool:
@@ -462,8 +481,21 @@ def _call_reasons(m: ModelCall, c: RecordingChecks) -> list[Reason]:
                               f"misalignment is more likely than not ({m.alarm[0]:.0%}) but below the {m.alarm[1]:.0%} "
                               "the model needs to report it (set to keep false alarms on healthy machines at 5 %): "
                               "called aligned — recheck, or compare with this machine's baseline"))
+    ratio = coupling_2x_1x(c.names, c.row)
+    outside = (np.isfinite(c.ood_score) and c.ood_score > 1.0) or bool(c.envelope)
+    rule = signature_band(ratio, len(probabilities))
+    if outside and call_index is not None and rule is not None and rule - call_index >= SIGNATURE_BANDS_ABOVE_CALL:
+        called = str(band_names[call_index]) if len(band_names) > call_index else f"band {call_index}"
+        read = str(band_names[rule]) if len(band_names) > rule else f"band {rule}"
+        reasons.append(Reason(
+            "signature_above_call", INCONCLUSIVE,
+            f"the model calls it {called}, but the coupling bearings' 2X/1X is {ratio:.2f}: the classic misalignment "
+            f"signature reads {read} (2X/1X ≥ {DEFAULT_RULE_CUTS[rule - 1]:g}), two or more bands above the call, and the "
+            "recording lies outside the machines the model was trained on, where its call is not to be trusted "
+            "against the physics — no severity is given. Check the alignment (or compare with this machine's "
+            "baseline); a strong 2X has other causes too: a two-pole rotor's asymmetry under gravity, a shaft "
+            "crack, looseness, or runout (give the slow-roll vectors)"))
     if m.misaligned_call:
-        ratio = coupling_2x_1x(c.names, c.row)
         if not ratio >= SIGNATURE_MIN_2X_1X:
             seen = "not measured" if not np.isfinite(ratio) else f"{ratio:.3f}"
             reasons.append(Reason("no_2x_signature", UNCERTAIN,

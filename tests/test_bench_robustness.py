@@ -143,6 +143,28 @@ def test_ross_loader_reads_the_cached_set():
         assert np.all(np.diff(two_x) > 0)
 
 
+def test_shipped_model_shows_no_ross_misalignment_with_a_clear_coupling_2x_as_aligned():
+    """The independent-code machines lie outside the training family (every recording is OOD). The shipped
+    model classed 9 of their 15 misaligned cases "aligned" (shown: uncertain, aligned), 7 of them with a
+    coupling 2X/1X of 1.26–4.26, two or more of the rule of thumb's bands above. Outside its family the call
+    is not trusted against that signature: those verdicts are inconclusive (no severity shown,
+    ``signature_above_call``); a healthy ROSS machine (no 2X) never gets that reason."""
+    from rotordiag.models.predict import load_bundle
+
+    root = BENCH.parent / "models" / "default_registry"
+    if not (root / "active").exists():
+        pytest.skip("no shipped registry in this checkout")
+    outs = bench.run_ross(load_bundle(root), rv.DEFAULT_PATH)
+    assert len(outs) == 24 and all(o.ood for o in outs)
+    strong = [o for o in outs if o.delta > 0 and o.ratio >= 1.0]
+    assert len(strong) >= 10
+    for o in strong:
+        assert o.severity != "aligned", (o.machine, o.delta, o.ratio, o.status, o.reasons)
+        if o.model_class == "aligned":
+            assert o.status == "inconclusive" and o.severity == "inconclusive" and "signature_above_call" in o.reasons
+    assert not any("signature_above_call" in o.reasons for o in outs if o.delta == 0)
+
+
 def test_ross_loader_missing_file_says_how_to_regenerate(tmp_path):
     with pytest.raises(FileNotFoundError, match="ross_validation.py"):
         rv.load_ross_set(tmp_path / "none.npz")

@@ -393,3 +393,46 @@ def test_shipped_model_does_not_confidently_alarm_on_coupling_journals_apart():
             called.append(codes)
     assert len(called) >= 2 and all("static_offset_only" in codes for codes in called)
     assert ["static_offset_only"] in called         # the one reason: without it that verdict would be confident
+
+
+def test_outside_the_family_a_call_two_bands_below_the_coupling_2x_is_inconclusive():
+    """The ROSS machines (another design; every recording out of distribution) with a parallel misalignment of
+    Δ 0.2–0.6 and a coupling 2X/1X of 1.4–4.3 were called "aligned" (shown as uncertain, aligned): outside its
+    family the model is not trusted against the classic signature, and a call two or more of the rule of thumb's
+    bands below it gives no severity. Inside the family the model's call stands (a two-pole generator's gravity
+    2X reaches 2X/1X 2–5 on healthy machines it was trained on)."""
+    names = ["b2_1x_major_um_pp", "b2_x_2x_1x_ratio", "b3_y_2x_1x_ratio", "b1_x_2x_1x_ratio"]
+    med = np.array([30.0, 0.1, 0.1, 0.1])
+
+    def run(ratios, *, ood_score=1.5, call_index=0, probabilities=(0.9, 0.05, 0.03, 0.02), envelope=()):
+        return _assess(names=names, row=np.array([30.0, *ratios]), feature_median=med, ood_score=ood_score,
+                       call_index=call_index, probabilities=list(probabilities), envelope=envelope,
+                       band_names=["aligned", "slight", "moderate", "severe"], misaligned_call=call_index > 0)
+
+    status, reasons = run([0.4, 3.2, 0.0])
+    assert status == INCONCLUSIVE and "signature_above_call" in [r.code for r in reasons]
+    msg = next(r.message for r in reasons if r.code == "signature_above_call")
+    assert "3.20" in msg and "aligned" in msg and "severe" in msg and "no severity" in msg
+    assert "signature_above_call" not in [r.code for r in run([0.4, 3.2, 0.0], ood_score=0.3)[1]]   # in family
+    assert "signature_above_call" not in [r.code for r in run([0.4, 0.7, 0.0])[1]]      # slight: one band above
+    assert "signature_above_call" in [r.code for r in run([1.0, 0.0, 0.0])[1]]          # moderate: two above
+    assert "signature_above_call" not in [r.code for r in run([0.1, 0.2, 9.0])[1]]      # bearing 1 does not count
+    assert "signature_above_call" not in [r.code for r in run([0.1, 3.2, 0.0], call_index=2)[1]]   # one above
+    assert "signature_above_call" in [r.code for r in run([0.1, 3.2, 0.0], call_index=1)[1]]
+    assert "signature_above_call" not in [r.code for r in run([np.nan, np.nan, 0.0])[1]]   # not measured
+    # three bands: not the rule of thumb's four, no reading
+    assert "signature_above_call" not in [r.code for r in run([3.2, 3.2, 0.0], probabilities=(0.9, 0.05, 0.05))[1]]
+    # out of distribution by one feature outside the training range alone
+    finding = {"feature": "b2_1x_major_um_pp", "value": 400.0, "train_min": 1.0, "train_max": 200.0,
+               "side": "above", "factor": 2.0}
+    status, reasons = run([0.4, 3.2, 0.0], ood_score=0.3, envelope=[finding])
+    assert status == INCONCLUSIVE and "signature_above_call" in [r.code for r in reasons]
+
+
+def test_signature_band_reads_the_rule_of_thumb_cuts():
+    from rotordiag.models.baselines import DEFAULT_RULE_CUTS
+    from rotordiag.models.status import signature_band
+
+    assert DEFAULT_RULE_CUTS == (0.5, 1.0, 2.0)
+    assert [signature_band(r, 4) for r in (0.0, 0.49, 0.5, 0.99, 1.0, 1.99, 2.0, 70.0)] == [0, 0, 1, 1, 2, 2, 3, 3]
+    assert signature_band(np.nan, 4) is None and signature_band(1.0, 3) is None
