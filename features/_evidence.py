@@ -52,13 +52,19 @@ def _num(v: float) -> float | None:
     return float(v) if np.isfinite(v) else None
 
 
+def _whole_degrees(angle_deg: float) -> float:
+    """``angle_deg`` in [0, 360) such that printing it to whole degrees never shows 360° (−0.0009° is 0°)."""
+    d = float(angle_deg) % 360.0
+    return 0.0 if d >= 359.5 else d
+
+
 def _vector(det, direction: str, order: int) -> tuple[str, float]:
     c = (det.x_coeffs_um if direction == "x" else det.y_coeffs_um)[order - 1]
     amp = 2.0 * abs(c)
     ph = det.phase_deg(direction, order)
     if not np.isfinite(ph):
         return f"{amp:.3g} µm pk-pk, phase not measurable (in the noise)", amp
-    return f"{amp:.3g} µm pk-pk ∠ {ph:.0f}°", amp
+    return f"{amp:.3g} µm pk-pk ∠ {_whole_degrees(ph):.0f}°", amp
 
 
 def _ratio_meaning(r: float) -> str:
@@ -111,7 +117,7 @@ def _centreline(det) -> EvidenceItem:
                             "not a position inside the bearing: the DC part is the probes' gap; reference the "
                             "gaps to the bearing centre (cold gap) to read the centreline", None)
     # attitude angle: from the load line (gravity, −y) to the line of centres, in the rotation direction (+θ)
-    attitude = float(np.degrees(np.arctan2(my, mx) - np.arctan2(-1.0, 0.0)) % 360.0)
+    attitude = _whole_degrees(np.degrees(np.arctan2(my, mx) - np.arctan2(-1.0, 0.0)))
     if ecc < 0.3:
         meaning = "journal lightly loaded (near the centre): an unloaded bearing, often the result of misalignment " \
                   "shifting the load to the neighbouring bearing"

@@ -220,3 +220,12 @@ def test_noise_allowance_grows_with_the_record_and_the_noise():
     assert 2 * 2 * 4.0 < a < 2 * 2 * 5.0                                   # k ≈ 4.4 for 1e-3 over 1000 samples
     assert noise_peak_to_peak_um((1.0, 2.0), 100_000) > a
     assert noise_peak_to_peak_um((2.0, 4.0), 1000) == pytest.approx(2 * a)
+
+
+def test_evidence_angles_never_print_as_360_degrees():
+    """A journal straight below the centre sits on the load line: attitude angle 0°, also when rounding puts it at
+    −0.0009° (the ROSS machines' linear bearings printed "attitude angle 360°")."""
+    from rotordiag.features._evidence import _whole_degrees
+
+    assert [f"{_whole_degrees(a):.0f}" for a in (-0.0009, 359.6, 359.4, 0.0, 360.0, 720.2, -90.0)] == \
+        ["0", "0", "359", "0", "0", "0", "270"]
