@@ -88,6 +88,14 @@ class Condition:
     #: the stated ``speed_rpm`` is the simulated speed × (1 + this): a nominal or control-system reading (3000 r/min
     #: on a 49.8 Hz grid is 0.4 % high); the simulated speed stays the truth the verdict's speed is judged by
     speed_stated_error: float = 0.0
+    #: the DC part as a field recording gives it: ``"gap"`` = every probe reads its raw gap (:data:`RAW_GAP_UM` added:
+    #: DC-coupled, not referenced to the bearing centre), ``"removed"`` = each channel's mean removed (AC-coupled
+    #: export); ``""`` = the simulated journal positions (centre-referenced DC)
+    dc: str = ""
+
+
+#: the raw probe gap of the "raw gap" row, µm (−8 V at 7.87 V/mm is about 1000 µm)
+RAW_GAP_UM = 1000.0
 
 
 CONDITIONS: tuple[Condition, ...] = (
@@ -118,10 +126,16 @@ CONDITIONS: tuple[Condition, ...] = (
               same_recordings_as="192 revolutions",
               what="those recordings with `speed_rpm` stated 0.4 % high: unlocked, the 2X would turn 1.5 times over "
                    "the record (not one of the issue's rows)"),
+    Condition("DC: raw probe gaps", dc="gap", same_recordings_as="clean",
+              what=f"the clean recordings with {RAW_GAP_UM:g} µm added to every channel: DC-coupled probes reading their gap, "
+                   "not referenced to the bearing centre, clearance stated — no centreline (not one of the issue's rows)"),
+    Condition("DC: means removed", dc="removed", same_recordings_as="clean",
+              what="the clean recordings with each channel's mean removed (an AC-coupled export), clearance stated — no "
+                   "centreline (not one of the issue's rows)"),
 )
 #: extra measurements, beside the rows issue 15 asks for (its targets are over :data:`ISSUE_CONDITIONS`)
 EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 revolutions",
-                    "192 revolutions, speed stated 0.4 % off")
+                    "192 revolutions, speed stated 0.4 % off", "DC: raw probe gaps", "DC: means removed")
 ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name not in EXTRA_CONDITIONS)
 
 
@@ -350,6 +364,10 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
         rng = measurement_rng(cond, seed, i)
         w = measure(d, c["speed_rpm"], cond, rng, revs=cond.revs)
         shift_journal_dc(w, cond.bearings, c["plant"]["clearance_m"] * 1e6, cond.journal3_dc_shift_c, rng)
+        if cond.dc == "gap":
+            w += RAW_GAP_UM
+        elif cond.dc == "removed":
+            w -= w.mean(axis=1, keepdims=True)
         clearance = c["plant"]["clearance_m"] * 1e6 if cond.clearance_given else None
         if not cond.speed_given:
             o.speed_line = running_speed_line(w, FS_HZ, c["speed_rpm"])
@@ -809,7 +827,10 @@ def report(rows, ross, args, wall_s, bundle=None, ood_rows: dict | None = None,
         _training_summary(bundle) + " How to read the ROSS rows: the model was trained on this project's "
         "simulator only; on the independent-code machines compare its F1 with the rule of thumb's, and read the "
         "status shares: the ROSS targets about `aligned`+`confident` can be met by the sanity, scale, OOD and "
-        "missing-feature checks making a verdict `uncertain` — the honest-verdict layer, not the classifier.",
+        "missing-feature checks making a verdict `uncertain` — the honest-verdict layer, not the classifier. "
+        "Outside the training family a call two or more of the rule of thumb's bands below the coupling 2X/1X is "
+        "`inconclusive` (`signature_above_call`, models.status): such a verdict shows no severity, so a "
+        "misalignment the classifier calls aligned is not shown as aligned.",
     ]
     text += ["", "## Confident verdicts: how often are they wrong?",
              "A confidently wrong verdict is the worst answer the product can give. Per condition, the `confident` "

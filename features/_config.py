@@ -210,3 +210,6 @@ BLAS_THREADS: int | None = 1
 #: a shaft-centreline position (evidence, ``b?_centre_*_per_c`` features) is used only when the mean
 #: reading lies within this many clearances of the probes' zero (else the DC part is a raw gap)
 CENTRELINE_MAX_ECC = 1.5
+#: every channel's mean within this fraction of the largest channel peak-to-peak: the means were removed before the
+#: file was written (AC-coupled export, or a V recording read without its gap voltage) — the DC part is no position
+DC_REMOVED_MAX_REL = 1e-5

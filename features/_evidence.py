@@ -107,6 +107,11 @@ def _centreline(det) -> EvidenceItem:
     mx, my = det.mean_um
     r = float(np.hypot(mx, my))
     c = det.clearance_um
+    if getattr(det, "dc_removed", False):
+        return EvidenceItem(scope, "shaft centreline", "not measured: the channels carry no DC position",
+                            "AC-coupled acquisition or the means removed: a stationary shaft-line offset shows mainly "
+                            "in the centreline and is not assessed; give DC readings referenced to the bearing "
+                            "centre (or V with the gap voltage)", None)
     if not (np.isfinite(c) and c > 0):
         return EvidenceItem(scope, "shaft centreline", f"mean x {mx:.4g} µm, y {my:.4g} µm (clearance unknown)",
                             "a position relative to the bearing centre only if the gaps are referenced to it; "

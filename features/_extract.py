@@ -58,7 +58,10 @@ class BearingDetail:
         Forward / reverse components: ``x + jy = Σ F_k e^{jkθ} + R_k e^{-jkθ}``.
     mean_um : tuple of float
         Mean x, y over the analysed segment (the shaft centre position only if the probes
-        are DC-coupled and gap-referenced; not used as a feature).
+        are DC-coupled and gap-referenced).
+    dc_removed : bool
+        The recording carries no DC position (``Recording.dc_removed``, or every channel averaging
+        to zero): ``mean_um`` is no shaft position and the centreline features are missing.
     noise_rms_um : tuple of float
         Broadband noise estimate of x and y (median of the residual spectrum).
     poincare_um : ndarray, shape (n_revs, 2)
@@ -96,6 +99,7 @@ class BearingDetail:
     line_noise_um: np.ndarray | None = field(default=None, repr=False)
     phase_valid: np.ndarray | None = field(default=None, repr=False)
     slow_roll_um_pp: tuple[Any, Any] | None = field(default=None, repr=False)
+    dc_removed: bool = False
 
     def phase_deg(self, direction: str, order: int) -> float:
         """Phase lag (deg, [0, 360)) of ``order`` in direction ``"x"`` or ``"y"``."""
@@ -180,6 +184,14 @@ def _subsync_peak_orders(pb: np.ndarray, lo: int, hi: int, total_ms: np.ndarray,
             delta = 0.5 * (lp[0] - lp[2]) / den if den < 0 else 0.0
             out[i] = float(orders[k] + delta * bin_orders)
     return out
+
+
+def _means_removed(data: np.ndarray) -> bool:
+    """Whether every row of ``data`` (x/y of each bearing, µm) averages to zero within ``DC_REMOVED_MAX_REL`` of the
+    largest peak-to-peak: its DC part was removed before it reached us (a real journal never sits at the exact
+    centre of every bearing)."""
+    scale = float(np.max(np.ptp(data, axis=1)))
+    return bool(scale > 0 and np.all(np.abs(data.mean(axis=1)) <= cfg.DC_REMOVED_MAX_REL * scale))
 
 
 def _centreline_per_c(mean_x_um: np.ndarray, mean_y_um: np.ndarray, clearance_um: np.ndarray
@@ -314,6 +326,12 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
 
     sa = shaft_angle(rec, data, estimate)
     warnings = list(sa.warnings)
+    dc_removed = rec.dc_removed or _means_removed(data)
+    if dc_removed:
+        warnings.append("the channels carry no DC position (" + (
+            "dc_removed" if rec.dc_removed else "every channel averages to zero: the means were removed, or the "
+            "acquisition is AC-coupled") + "): no shaft-centreline position, so a stationary shaft-line offset "
+            "is not assessed; give DC readings referenced to the bearing centre for it")
     f1 = sa.speed_rpm / 60.0
     seg = data[:, sa.start:sa.stop]
     n_seg = seg.shape[1]
@@ -421,7 +439,8 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
         cols.append(_subsync_peak_orders(pb_all, sub_lo, sub_hi, total_ms, orders_axis, float(orders_axis[1])))
         cols.append(_ratios(res_ms[0::2] + res_ms[1::2], total_ms))
         cols += [poincare_rms, poincare_rms / c, _ratios(poincare_rms, np.sqrt(total_ms))]
-        cols += list(_centreline_per_c(mean[0::2], mean[1::2], c))
+        centreline = _centreline_per_c(mean[0::2], mean[1::2], c)
+        cols += [np.full_like(v, nan) for v in centreline] if dc_removed else list(centreline)
     table = np.column_stack(cols)                                      # (n_bearings, features per bearing)
 
     details: dict[int, BearingDetail] = {}
@@ -439,7 +458,7 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
             bearing=b, probe_angles_deg=(chans[0].angle_deg, chans[1].angle_deg), clearance_um=float(c[i]),
             orders=orders, x_coeffs_um=cx.copy(), y_coeffs_um=cy.copy(),
             probe_coeffs_um=probe, forward_um=fw_all[i].copy(), reverse_um=rv_all[i].copy(),
-            mean_um=(float(mean[ix]), float(mean[iy])), noise_rms_um=(float(noise[ix]), float(noise[iy])),
+            mean_um=(float(mean[ix]), float(mean[iy])), dc_removed=dc_removed, noise_rms_um=(float(noise[ix]), float(noise[iy])),
             poincare_um=pts_all[:, ix:iy + 1], orbit12=orb.shape(i), features=dict(zip(names, row.tolist())),
             line_noise_um=line_noise[ix:iy + 1].copy(), phase_valid=phase_ok[ix:iy + 1].copy(),
             slow_roll_um_pp=None if chans[0].slow_roll_um_pp is None and chans[1].slow_roll_um_pp is None

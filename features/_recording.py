@@ -165,6 +165,11 @@ class Recording:
         speed: a grid-synchronous generator runs at 1500/1800/3000/3600 r/min): when the speed is
         estimated from the signal, only candidates in [min, max] are considered. A given
         ``speed_rpm`` must lie inside it; a keyphasor's speed is not restricted.
+    dc_removed : bool, default False
+        The channels carry no DC part that is a shaft position: AC-coupled acquisition, or each
+        channel's mean removed (the reader sets it for a V recording without its gap voltage). The
+        shaft-centreline features are then missing. Channels whose means are all zero (within
+        ``DC_REMOVED_MAX_REL`` of the largest peak-to-peak) are read so without it.
     """
 
     sample_rate_hz: float
@@ -173,11 +178,15 @@ class Recording:
     keyphasor_times_s: np.ndarray | None = None
     clearance_um: float | Mapping[int, float] | None = None
     speed_range_rpm: tuple[float, float] | None = None
+    dc_removed: bool = False
 
     def __post_init__(self) -> None:
         fs = _finite_positive(self.sample_rate_hz, "Recording.sample_rate_hz",
                               "give the sampling rate in Hz")
         object.__setattr__(self, "sample_rate_hz", fs)
+        if not isinstance(self.dc_removed, (bool, np.bool_)):
+            raise ValueError(f"Recording.dc_removed must be true or false, got {self.dc_removed!r}")
+        object.__setattr__(self, "dc_removed", bool(self.dc_removed))
         chans = tuple(self.channels) if not isinstance(self.channels, ProbeChannel) else (self.channels,)
         if not chans:
             raise ValueError("Recording.channels is empty; give an x/y probe pair for at least one bearing")

@@ -149,6 +149,9 @@ class ReadOptions:
         The end the probe angles are measured from.
     sample_index : int, optional
         Row of a dataset HDF5 file (required when it holds more than one).
+    dc_removed : bool, optional
+        The channels' DC part is no shaft position (AC-coupled acquisition): no centreline
+        features (``Recording.dc_removed``). Set for ``units="V"`` without ``gap_voltage_v``.
     """
 
     sample_rate_hz: float | None = None
@@ -166,6 +169,7 @@ class ReadOptions:
     rotation: Literal["ccw", "cw"] = "ccw"
     viewed_from: Literal["driver", "non-driver"] = "driver"
     sample_index: int | None = None
+    dc_removed: bool | None = None
 
 
 @dataclass
@@ -709,6 +713,10 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
     if units not in INPUT_UNITS:
         raise ValueError(f"units {units!r} not understood: use one of {list(INPUT_UNITS)} "
                          "(V needs the probe sensitivity in V/mm, e.g. 7.87)")
+    dc_removed = opts.dc_removed if opts.dc_removed is not None else info.get("dc_removed", False)
+    if not isinstance(dc_removed, (bool, np.bool_)):
+        raise ValueError(f"dc_removed: true or false, got {dc_removed!r}")
+    dc_removed = bool(dc_removed)
     if units == "V":
         if opts.sensitivity_v_per_mm is None:
             raise ValueError("units V: give the probe sensitivity in V/mm (e.g. 7.87 for 200 mV/mil) and the "
@@ -716,7 +724,9 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
         arr = np.stack([volts_to_um(row, opts.sensitivity_v_per_mm, opts.gap_voltage_v) for row in arr])
         units = "um"
         if opts.gap_voltage_v is None:
-            notes.append("no gap voltage given: each channel's mean voltage is taken as the gap voltage")
+            dc_removed = True
+            notes.append("no gap voltage given: each channel's mean voltage is taken as the gap voltage, so the "
+                         "DC part is no shaft position (no centreline)")
     slow = info.get("slow_roll") or [None] * len(layout)
     channels = [ProbeChannel(bearing=b, angle_deg=a, units=units, data=arr[i], slow_roll_um_pp=slow[i])
                 for i, (b, a) in enumerate(layout)]
@@ -736,7 +746,8 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
     rec = Recording(sample_rate_hz=float(fs), channels=channels, speed_rpm=speed,
                     keyphasor_times_s=None if kp is None else np.asarray(kp, dtype=np.float64),
                     clearance_um=clearance,
-                    speed_range_rpm=None if speed_range is None else parse_speed_range(speed_range))
+                    speed_range_rpm=None if speed_range is None else parse_speed_range(speed_range),
+                    dc_removed=dc_removed)
     return ReadResult(recording=rec, format=fmt, notes=notes, truth=info.get("truth"))
 
 
@@ -794,7 +805,7 @@ def recording_from_dict(obj: Any, options: ReadOptions | None = None, limits: Re
             raise ValueError(f"JSON: channels[{k}].slow_roll must be a list of {{order, amp_um_pp, phase_deg}}") from None
     if any(v is not None for v in slow):
         info["slow_roll"] = slow
-    for key in ("sample_rate_hz", "speed_rpm", "clearance_um", "speed_range_rpm"):
+    for key in ("sample_rate_hz", "speed_rpm", "clearance_um", "speed_range_rpm", "dc_removed"):
         if obj.get(key) is not None:
             info[key] = obj[key]
     if isinstance(info.get("clearance_um"), Mapping):

@@ -149,6 +149,7 @@ def register(app: typer.Typer) -> None:
         clearance_um: Optional[float] = typer.Option(None, "--clearance-um", help="Radial bearing clearance, µm (gives the offset in µm)."),
         speed_range_rpm: Optional[str] = typer.Option(None, "--speed-range-rpm", help="MIN,MAX r/min: the running speed's range when it is not known exactly (the machine's nominal speed, e.g. 2900,3100): the speed estimate is sought only there."),
         sample: Optional[int] = typer.Option(None, "--sample", help="Row of a rotordiag dataset HDF5 file."),
+        dc_removed: bool = typer.Option(False, "--dc-removed", help="The channels' DC part is no shaft position (AC-coupled acquisition): the shaft centreline is not read (zero-mean channels and --units V without --gap-voltage-v are read so anyway)."),
         as_json: bool = typer.Option(False, "--json", help="Print the verdict(s) as JSON."),
         out: Optional[Path] = typer.Option(None, "--out", help="Write one table of verdicts, one row per file: .csv or .json."),
         output_units: str = typer.Option("um", "--output-units", help="Units of the offset and amplitudes in the output: um | mil."),
@@ -185,7 +186,7 @@ def register(app: typer.Typer) -> None:
                 "gap_voltage_v": gap_voltage_v, "channels": channels, "keyphasor_channel": keyphasor_channel,
                 "keyphasor_edge": keyphasor_edge, "keyphasor_threshold_v": keyphasor_threshold,
                 "rotation": rotation, "viewed_from": viewed_from, "speed_rpm": speed_rpm,
-                "clearance_um": clearance_um, "sample_index": sample,
+                "clearance_um": clearance_um, "sample_index": sample, "dc_removed": dc_removed or None,
                 "speed_range_rpm": None if speed_range_rpm is None else parse_speed_range(speed_range_rpm,
                                                                                           "--speed-range-rpm"),
             }

@@ -22,7 +22,7 @@ DEFAULT_PAIR_ANGLES_DEG = (45.0, 135.0)
 #: the query parameters that become reader options (``service.api.routes.diagnose``)
 OPTION_QUERY_KEYS = ("sample_rate_hz", "speed_rpm", "speed_range_rpm", "clearance_um", "units", "sensitivity_v_per_mm",
                      "gap_voltage_v", "rotation", "viewed_from", "keyphasor_channel", "keyphasor_edge",
-                     "keyphasor_threshold_v")
+                     "keyphasor_threshold_v", "dc_removed")
 
 
 def service_limits() -> Any:

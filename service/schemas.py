@@ -91,6 +91,10 @@ class RecordingIn(_Strict):
         None, gt=0, le=100_000,
         description="Radial bearing clearance c, micrometres; when given, amplitudes are also reported divided by c "
         "and the offset δ = Δ·c is reported in micrometres.", examples=[350.0])
+    dc_removed: bool = Field(
+        False, description="The channels' DC part is no shaft position (AC-coupled acquisition): the shaft "
+        "centreline is not read, and a stationary shaft-line offset is not assessed. Channels that all average to "
+        "zero are read so anyway.")
     asset_id: AssetId | None = Field(
         None, description="Identifier of the machine train; when given the diagnosis is stored for GET /assets/{id}/history.",
         examples=["unit-3-gen-exc"])

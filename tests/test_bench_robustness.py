@@ -308,6 +308,24 @@ def test_a_stated_speed_off_is_measured_on_the_same_recordings_and_stated_off(mo
     assert seen == [((8, round(192 * 60 / SPEED_RPM * bench.FS_HZ)), pytest.approx(SPEED_RPM * 1.004, rel=1e-12))]
 
 
+def test_the_dc_rows_are_the_clean_recordings_with_a_raw_gap_or_without_their_means(monkeypatch):
+    """The "DC" rows: the clean row's waveforms (same draws) with every channel offset by the raw gap, or with each
+    channel's mean removed; the clearance stays stated; neither is an issue row."""
+    seen: dict[str, np.ndarray] = {}
+    case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
+    for name in ("clean", "DC: raw probe gaps", "DC: means removed"):
+        cond = next(c for c in bench.CONDITIONS if c.name == name)
+        assert name == "clean" or (name not in bench.ISSUE_CONDITIONS and cond.same_recordings_as == "clean")
+        monkeypatch.setattr(bench, "diagnose_waveforms", lambda bundle, w, bearings, fs, speed, clearance, o, n=name:
+                            seen.setdefault(n, (w.copy(), clearance)) and o)
+        bench.run_condition(None, cond, [case], [_shaft(60 * bench.SAMPLES_PER_REV)], 815)
+    (w0, c0), (wg, cg), (wr, cr) = seen["clean"], seen["DC: raw probe gaps"], seen["DC: means removed"]
+    assert c0 == cg == cr == pytest.approx(300.0)
+    np.testing.assert_allclose(wg, w0 + bench.RAW_GAP_UM, atol=1e-9)
+    np.testing.assert_allclose(wr, w0 - w0.mean(axis=1, keepdims=True), atol=1e-12)
+    assert np.abs(wr.mean(axis=1)).max() < 1e-12
+
+
 def test_f1_on_right_speed_compares_the_same_recordings():
     from types import SimpleNamespace
 

@@ -223,3 +223,24 @@ def test_spelled_out_header_names_with_units(example):
                          options=ReadOptions(sample_rate_hz=2560)).recording
     assert rec.channels[0].units == "mil"
     np.testing.assert_allclose(rec.xy_um(3), example.xy_um(3), atol=1e-4)
+
+
+def test_volts_without_the_gap_voltage_carry_no_centreline(example):
+    """Each channel's mean voltage taken as its gap removes the DC part: the recording says so, and the centreline
+    features are missing rather than a journal read at the bearing centre."""
+    from rotordiag.features import extract_features
+
+    s, gap = 7.87, -10.0
+    volts = np.stack([gap + s * c.data * 1e-3 for c in example.channels])
+    buf = io.BytesIO()
+    np.save(buf, volts)
+    with_gap = read_recording(buf.getvalue(), filename="v.npy", options=ReadOptions(
+        sample_rate_hz=2560, units="V", sensitivity_v_per_mm=s, gap_voltage_v=gap, clearance_um=350.0))
+    without = read_recording(buf.getvalue(), filename="v.npy", options=ReadOptions(
+        sample_rate_hz=2560, units="V", sensitivity_v_per_mm=s, clearance_um=350.0))
+    assert not with_gap.recording.dc_removed and without.recording.dc_removed
+    assert any("no shaft position" in n for n in without.notes)
+    fr_gap, fr = extract_features(with_gap.recording), extract_features(without.recording)
+    for b in (1, 2, 3, 4):
+        assert np.isfinite(fr_gap[f"b{b}_centre_ecc_per_c"]) and np.isnan(fr[f"b{b}_centre_ecc_per_c"])
+        assert fr[f"b{b}_1x_major_pp_per_c"] == pytest.approx(fr_gap[f"b{b}_1x_major_pp_per_c"], rel=1e-9)

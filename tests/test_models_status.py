@@ -436,3 +436,38 @@ def test_signature_band_reads_the_rule_of_thumb_cuts():
     assert DEFAULT_RULE_CUTS == (0.5, 1.0, 2.0)
     assert [signature_band(r, 4) for r in (0.0, 0.49, 0.5, 0.99, 1.0, 1.99, 2.0, 70.0)] == [0, 0, 1, 1, 2, 2, 3, 3]
     assert signature_band(np.nan, 4) is None and signature_band(1.0, 3) is None
+
+
+def test_a_stated_clearance_without_the_centreline_is_answered_by_the_pair_that_never_used_it():
+    """A raw probe gap (DC > 1.5 c) or channels without DC leave the centreline missing although the clearance is
+    stated. The clearance-stated pair always had the centreline in training, and on the robustness base set it
+    called 71 % of aligned machines misaligned on such recordings; the no-clearance pair answers them."""
+    from pathlib import Path
+
+    from rotordiag.features import ProbeChannel, Recording, extract_features
+    from rotordiag.models.predict import diagnose, feature_vector, load_bundle
+    from tests.service_util import simulated_channels
+
+    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
+    if not (root / "active").exists():
+        pytest.skip("no shipped registry in this checkout")
+    bundle = load_bundle(root)
+    model = bundle.model
+    fs, ch = simulated_channels(misalignment=0.0)
+    for shift in (lambda d: d + 1000.0, lambda d: d - d.mean()):
+        rec = Recording(fs, [ProbeChannel(b, a, "um", shift(d)) for b, a, d in ch], speed_rpm=1800.0,
+                        clearance_um=350.0)
+        feats = extract_features(rec)
+        row = feature_vector(model.feature_names_, feats)[0][None, :]
+        assert np.isfinite(feats["b2_1x_major_pp_per_c"]) and np.isnan(feats["b2_centre_ecc_per_c"])
+        assert not model.clearance_stated(row)[0]
+        v = diagnose(bundle, feats)
+        expected = model.classifier_no_clearance_.predict_proba(row)[0, model.band_order(model.classifier_no_clearance_)]
+        np.testing.assert_allclose(list(v.probabilities.values()), expected, atol=1e-9)
+        assert "offset_not_assessed" in [r["code"] for r in v.reasons] or v.model_severity != "aligned"
+    # one bearing without its centreline is enough; a row with the centreline everywhere keeps the stated pair
+    rec = Recording(fs, [ProbeChannel(b, a, "um", d) for b, a, d in ch], speed_rpm=1800.0, clearance_um=350.0)
+    row = feature_vector(model.feature_names_, extract_features(rec))[0][None, :]
+    assert model.clearance_stated(row)[0]
+    row[0, list(model.feature_names_).index("b4_centre_ecc_per_c")] = np.nan
+    assert not model.clearance_stated(row)[0]

@@ -384,3 +384,40 @@ def test_speed_range_hint_json_and_query(client, rec):
     r = client.post("/diagnose", params={**q, "speed_range_rpm": "1900,1700"}, content=_npy(data),
                     headers={"content-type": "application/octet-stream"})
     assert r.status_code == 422 and "speed_range_rpm" in r.json()["detail"]
+
+
+def test_dc_removed_through_json_binary_and_the_cli(client, rec, registry_src, tmp_path):
+    """An AC-coupled recording says so (`dc_removed`) through every door: the centreline is not read, and the same
+    recording gives the same verdict through the JSON body, the binary query and `rotordiag diagnose --dc-removed`."""
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app as cli_app
+
+    fs, channels = rec
+    data = np.array([d for _, _, d in channels])
+    j = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0,
+                                                    dc_removed=True))
+    assert j.status_code == 200, j.text
+    j = j.json()
+    cl = [e for e in j["evidence"] if e["name"] == "shaft centreline"]
+    assert cl and all(e["value"] == "not measured: the channels carry no DC position" for e in cl)
+    assert any("no DC position (dc_removed)" in w for w in j["warnings"])
+    b = client.post("/diagnose", params=_binary_query(channels, clearance_um=350.0, dc_removed="true"),
+                    content=_npy(data), headers={"content-type": "application/octet-stream"})
+    assert b.status_code == 200, b.text
+    assert b.json()["probabilities"] == pytest.approx(j["probabilities"], rel=1e-9, abs=1e-12)
+    plain = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0)).json()
+    assert all(e["value"] != "not measured: the channels carry no DC position"
+               for e in plain["evidence"] if e["name"] == "shaft centreline")
+    bad = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, dc_removed="maybe"))
+    assert bad.status_code == 422 and "dc_removed" in bad.text
+    npy = tmp_path / "rec.npy"
+    np.save(npy, data)
+    (tmp_path / "rec.json").write_text(json.dumps({"sample_rate_hz": fs, "speed_rpm": 1800.0, "clearance_um": 350.0,
+                                                   "channels": ",".join(f"{bb}@{a:g}" for bb, a, _ in channels)}))
+    out = CliRunner().invoke(cli_app, ["diagnose", str(npy), "--dc-removed", "--json",
+                                       "--registry", str(registry_src)])
+    assert out.exit_code == 0, out.output
+    cli = json.loads(out.output)
+    cli = cli[0] if isinstance(cli, list) else cli
+    assert cli["probabilities"] == pytest.approx(j["probabilities"], rel=1e-9, abs=1e-12)

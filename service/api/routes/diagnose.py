@@ -60,6 +60,9 @@ def reader_query(
         "Edge of the keyphasor pulse: falling (a notch) or rising (a projection, TTL)."))] = "falling",
     keyphasor_threshold_v: Annotated[float | None, Query(allow_inf_nan=False, description=(
         "Keyphasor threshold in the channel's units (default: halfway between its 1st and 99th percentile)."))] = None,
+    dc_removed: Annotated[bool | None, Query(description=(
+        "The channels' DC part is no shaft position (AC-coupled acquisition): the shaft centreline is not read. "
+        "Channels that all average to zero, and `units=V` without `gap_voltage_v`, are read so anyway."))] = None,
 ) -> dict[str, Any]:
     """Query parameters that describe an uploaded recording (its layout and the reader's options,
     ``features.reader.ReadOptions``), shared by every route that takes one."""
@@ -68,7 +71,7 @@ def reader_query(
                 bearings=bearings, angles_deg=angles_deg, keyphasor_times_s=keyphasor_times_s,
                 sensitivity_v_per_mm=sensitivity_v_per_mm, gap_voltage_v=gap_voltage_v, rotation=rotation,
                 viewed_from=viewed_from, keyphasor_channel=keyphasor_channel, keyphasor_edge=keyphasor_edge,
-                keyphasor_threshold_v=keyphasor_threshold_v)
+                keyphasor_threshold_v=keyphasor_threshold_v, dc_removed=dc_removed)
 
 
 ReaderQueryDep = Annotated[dict, Depends(reader_query)]
