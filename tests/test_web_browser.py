@@ -631,3 +631,23 @@ def test_speed_range_field(server, browser, recordings, tmp_path):
     _submit_file(browser, path, sample_rate=str(FS_HZ), expect="error")
     text = browser.find_element("id", "form-error").text
     assert "the nominal speed range (r/min)" in text and "speed_range_rpm" not in text, text
+
+
+def test_dc_removed_checkbox(server, browser, recordings, tmp_path):
+    """An AC-coupled upload ticked as such: the centreline evidence says it was not measured and the verdict's
+    warnings say why; unticked, the same file's DC part is read as the shaft position."""
+    path = _write_npy(tmp_path / "ac.npy", recordings[0.05])
+    _open(browser, server)
+    box = browser.find_element("id", "dc-removed")
+    assert not box.is_selected() and browser.find_element("css selector", "label[for=dc-removed]").is_displayed()
+    _submit_file(browser, path, sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
+    plain = browser.execute_script("return window.rotordiag.state.verdict")
+    box.click()
+    _submit_file(browser, path, sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
+    ticked = browser.execute_script("return window.rotordiag.state.verdict")
+    centre = [e["value"] for e in ticked["evidence"] if e["name"] == "shaft centreline"]
+    assert centre and all(v == "not measured: the channels carry no DC position" for v in centre)
+    assert all(e["value"] != "not measured: the channels carry no DC position"
+               for e in plain["evidence"] if e["name"] == "shaft centreline")
+    assert "not measured: the channels carry no DC position" in browser.find_element("tag name", "body").text
+    _screenshot(browser, "dc_removed")

@@ -38,6 +38,7 @@
     speed_range_rpm: "the nominal speed range (r/min)",
     keyphasor_times_s: "keyphasor pulse times", units: "the units of the waveforms", bearings: "the bearing of each channel",
     angles_deg: "the probe angle of each channel", asset_id: "the asset id", sample_index: "the sample index",
+    dc_removed: "“DC part is no shaft position”",
     sensitivity_v_per_mm: "the probe sensitivity (V/mm)", gap_voltage_v: "the gap voltage (V)",
   };
   // whole messages an engineer meets first, said as what to do in this form
@@ -563,6 +564,7 @@
       if (!("speed_range_rpm" in body) && formValue("speed-range") !== null) {
         body.speed_range_rpm = formValue("speed-range").split(/[,;\s]+/).filter((x) => x).map(Number);
       }
+      if (!("dc_removed" in body) && $("dc-removed").checked) body.dc_removed = true;
       if (!("asset_id" in body) && formValue("asset")) body.asset_id = formValue("asset");
       const json = JSON.stringify(body);
       const opts = () => ({ method: "POST", headers: { "Content-Type": "application/json" }, body: json });
@@ -584,6 +586,7 @@
       if (formValue(id) !== null) q.set(key, formValue(id));
     }
     if (formValue("sample-index") !== null && formValue("sample-index") !== "0") q.set("sample_index", formValue("sample-index"));
+    if ($("dc-removed").checked) q.set("dc_removed", "true");
     const qp = new URLSearchParams(q);
     const asset = formValue("asset");
     if (asset) q.set("asset_id", asset);
