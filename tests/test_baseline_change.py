@@ -84,6 +84,18 @@ def test_centreline_shift_per_bearing_in_um_and_clearance():
     assert res.values["b3_dc_shift_per_c"] == pytest.approx(0.25, abs=0.005)
 
 
+def test_a_recording_without_a_dc_position_has_no_centreline_shift():
+    """Channels whose means were removed (``dc_removed``) give no centreline to compare: the shift against a DC
+    baseline is missing, not the baseline's distance from the bearing centre; the vectors still compare."""
+    ac = _recording(seed=4)
+    ac = Recording(sample_rate_hz=ac.sample_rate_hz, channels=ac.channels, keyphasor_times_s=ac.keyphasor_times_s,
+                   clearance_um=200.0, dc_removed=True)
+    sig = json.loads(json.dumps(signature(extract_features(ac))))
+    res = change_features(_sig(), sig)
+    assert math.isnan(res.values["b3_dc_shift_um"]) and math.isnan(res.values["b3_dc_shift_per_c"])
+    assert res.values["b3_1x_change_um_pp"] < 1.0
+
+
 def test_a_phase_in_the_noise_leaves_the_vector_change_missing():
     """2X far below the noise in the baseline: its phase is missing, so is the vector change; the amplitude
     change (a lower bound) carries the per-bearing 2X change."""
