@@ -62,10 +62,15 @@ def _too_slow_sampling(spr: float, fs: float, f1: float) -> ValueError:
 
 def _too_short(n_revs: float, rpm: float, fs: float, n: int, source: str) -> ValueError:
     need_s = cfg.MIN_REVS * 60.0 / rpm
+    # a speed typed in Hz (rev/s) reads 60 times too slow: say so when 60 times it is a plausible running speed
+    # that the record covers
+    hz = (f"; if {rpm:g} is the speed in Hz (revolutions per second), give speed_rpm = {60 * rpm:g}"
+          if source == "speed given" and n_revs * 60 >= cfg.MIN_REVS
+          and cfg.SPEED_SEARCH_RPM[0] <= 60 * rpm <= cfg.SPEED_SEARCH_RPM[1] else "")
     return ValueError(
         f"the record covers {n_revs:.2f} revolutions at {rpm:.1f} r/min ({source}); at least "
         f"{cfg.MIN_REVS} whole revolutions are needed for reliable 1X–3X estimates — record at least "
-        f"{need_s:.3f} s ({int(np.ceil(need_s * fs))} samples at {fs:g} Hz; this one has {n})")
+        f"{need_s:.3f} s ({int(np.ceil(need_s * fs))} samples at {fs:g} Hz; this one has {n}){hz}")
 
 
 @dataclass(frozen=True)

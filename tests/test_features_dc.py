@@ -54,3 +54,4 @@ def test_dc_removed_must_be_a_bool(sim):
     fs, ch = sim
     with pytest.raises(ValueError, match="dc_removed"):
         _rec(ch, fs, dc_removed="yes")
+

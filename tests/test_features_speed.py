@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rotordiag.features import extract_features, speed_in_doubt
+from rotordiag.features import ProbeChannel, Recording, extract_features, speed_in_doubt
 
 from .test_features_synth import DEFAULT_COMPONENTS, keyphasor_times, make_recording
 
@@ -574,3 +574,17 @@ def test_a_record_too_short_at_a_doubtful_estimated_speed_says_the_speed_is_in_d
     with pytest.raises(ValueError, match=r"revolutions are needed") as exc:
         extract_features(_period_seven_recording(1908.5, revs=48))
     assert "in doubt" in str(exc.value) and "give speed_rpm" in str(exc.value)
+
+
+def test_a_speed_typed_in_hz_is_pointed_out():
+    """1800 r/min typed as 30 (Hz) leaves 0.4 revolutions in the record: the refusal says what 30 would be in r/min."""
+    from tests.service_util import simulated_channels
+
+    fs, ch = simulated_channels(misalignment=0.0)
+    rec = Recording(fs, [ProbeChannel(b, a, "um", d) for b, a, d in ch], speed_rpm=30.0)
+    with pytest.raises(ValueError, match=r"if 30 is the speed in Hz .*give speed_rpm = 1800"):
+        extract_features(rec)
+    short = Recording(fs, [ProbeChannel(b, a, "um", d[: int(fs * 60 / 1800 * 4)]) for b, a, d in ch], speed_rpm=1800.0)
+    with pytest.raises(ValueError, match="whole revolutions") as err:       # a short record: no such hint
+        extract_features(short)
+    assert "in Hz" not in str(err.value)
