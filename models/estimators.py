@@ -887,9 +887,11 @@ class MisalignmentModel(BaseEstimator):
             return np.ones(X.shape[0], dtype=bool)
         stated = np.isfinite(X[:, cols]).any(axis=1)
         index = {n: j for j, n in enumerate(getattr(self, "feature_names_", ()))}
-        for b in range(1, 10):
-            ja, jc = index.get(f"b{b}_1x_major_pp_per_c"), index.get(f"b{b}_centre_ecc_per_c")
-            if ja is not None and jc is not None and cols[ja] and cols[jc]:
+        for name, ja in index.items():
+            if not name.endswith("_1x_major_pp_per_c"):
+                continue
+            jc = index.get(name.replace("_1x_major_pp_per_c", "_centre_ecc_per_c"))
+            if jc is not None and cols[ja] and cols[jc]:
                 stated &= ~(np.isfinite(X[:, ja]) & ~np.isfinite(X[:, jc]))
         return stated
 
