@@ -80,8 +80,8 @@ def signature(fr: Any) -> dict[str, Any]:
         bearings.append({
             "bearing": int(b), "clearance_um": _opt(_f(det.clearance_um)),
             # a recording without a DC position (dc_removed) has no centreline to compare: its shift is missing
-            "mean_x_um": _opt(math.nan if getattr(det, "dc_removed", False) else _f(det.mean_um[0])),
-            "mean_y_um": _opt(math.nan if getattr(det, "dc_removed", False) else _f(det.mean_um[1])),
+            "mean_x_um": _opt(math.nan if det.dc_removed else _f(det.mean_um[0])),
+            "mean_y_um": _opt(math.nan if det.dc_removed else _f(det.mean_um[1])),
             "vectors": vectors,
             "orbit": {"ellipticity": _opt(_f(f.get(f"b{b}_orbit12_ellipticity"))),
                       "ratio_2x_1x": _opt(_f(f.get(f"b{b}_2x_1x_major_ratio")))},

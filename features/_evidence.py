@@ -107,7 +107,7 @@ def _centreline(det) -> EvidenceItem:
     mx, my = det.mean_um
     r = float(np.hypot(mx, my))
     c = det.clearance_um
-    if getattr(det, "dc_removed", False):
+    if det.dc_removed:
         return EvidenceItem(scope, "shaft centreline", "not measured: the channels carry no DC position",
                             "AC-coupled acquisition or the means removed: a stationary shaft-line offset shows mainly "
                             "in the centreline and is not assessed; give DC readings referenced to the bearing "
