@@ -713,10 +713,7 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
     if units not in INPUT_UNITS:
         raise ValueError(f"units {units!r} not understood: use one of {list(INPUT_UNITS)} "
                          "(V needs the probe sensitivity in V/mm, e.g. 7.87)")
-    dc_removed = opts.dc_removed if opts.dc_removed is not None else info.get("dc_removed", False)
-    if not isinstance(dc_removed, (bool, np.bool_)):
-        raise ValueError(f"dc_removed: true or false, got {dc_removed!r}")
-    dc_removed = bool(dc_removed)
+    dc_removed = opts.dc_removed if opts.dc_removed is not None else info.get("dc_removed", False)  # Recording checks it
     if units == "V":
         if opts.sensitivity_v_per_mm is None:
             raise ValueError("units V: give the probe sensitivity in V/mm (e.g. 7.87 for 200 mV/mil) and the "

@@ -39,7 +39,7 @@ import numpy as np
 
 from rotordiag.features import speed_in_doubt
 
-from .baselines import DEFAULT_RULE_CUTS
+from .baselines import DEFAULT_RULE_CUTS, RuleOfThumb
 
 __all__ = ["Reason", "RecordingChecks", "ModelCall", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY",
@@ -234,7 +234,7 @@ def signature_band(ratio: float, n_bands: int) -> int | None:
     measured or the model's bands are not the rule's four."""
     if not np.isfinite(ratio) or n_bands != len(DEFAULT_RULE_CUTS) + 1:
         return None
-    return int(np.searchsorted(np.asarray(DEFAULT_RULE_CUTS), ratio, side="right"))
+    return int(RuleOfThumb([str(k) for k in range(n_bands)]).predict(np.array([ratio]))[0])
 
 
 def coupling_centreline_known(names: Sequence[str], row: np.ndarray) -> bool:
