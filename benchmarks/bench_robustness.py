@@ -92,6 +92,9 @@ class Condition:
     #: DC-coupled, not referenced to the bearing centre), ``"removed"`` = each channel's mean removed (AC-coupled
     #: export); ``""`` = the simulated journal positions (centre-referenced DC)
     dc: str = ""
+    #: (bearing, probe index) whose signal is inverted: a probe wired or configured with the wrong polarity (or the
+    #: x/y order swapped), which turns that bearing's 1X backward (``features`` sanity ``reverse_whirl``)
+    inverted_probe: tuple[int, int] | None = None
 
 
 #: the raw probe gap of the "raw gap" row, µm (−8 V at 7.87 V/mm is about 1000 µm)
@@ -132,10 +135,15 @@ CONDITIONS: tuple[Condition, ...] = (
     Condition("DC: means removed", dc="removed", same_recordings_as="clean",
               what="the clean recordings with each channel's mean removed (an AC-coupled export), clearance stated — no "
                    "centreline (not one of the issue's rows)"),
+    Condition("bearing 2's x probe inverted", inverted_probe=(2, 0), same_recordings_as="clean",
+              what="the clean recordings with bearing 2's 45° probe inverted (wrong polarity, or the x/y order "
+                   "swapped): its 1X whirls backward; the verdict leaves bearing 2 out (models.bearing_sets) "
+                   "(not one of the issue's rows)"),
 )
 #: extra measurements, beside the rows issue 15 asks for (its targets are over :data:`ISSUE_CONDITIONS`)
 EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 revolutions",
-                    "192 revolutions, speed stated 0.4 % off", "DC: raw probe gaps", "DC: means removed")
+                    "192 revolutions, speed stated 0.4 % off", "DC: raw probe gaps", "DC: means removed",
+                    "bearing 2's x probe inverted")
 ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name not in EXTRA_CONDITIONS)
 
 
@@ -368,6 +376,9 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
             w += RAW_GAP_UM
         elif cond.dc == "removed":
             w -= w.mean(axis=1, keepdims=True)
+        if cond.inverted_probe is not None and cond.inverted_probe[0] in cond.bearings:
+            b, j = cond.inverted_probe
+            w[2 * cond.bearings.index(b) + j] *= -1.0
         clearance = c["plant"]["clearance_m"] * 1e6 if cond.clearance_given else None
         if not cond.speed_given:
             o.speed_line = running_speed_line(w, FS_HZ, c["speed_rpm"])

@@ -19,6 +19,7 @@ from threadpoolctl import threadpool_limits
 
 from rotordiag.features import evidence
 
+from .bearing_sets import bearing_plan, leave_out_bearings
 from .registry import Registry
 from .status import INCONCLUSIVE, ModelCall, RecordingChecks, assess, consistent_estimate, journals_at_one_position
 
@@ -268,6 +269,15 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
             f"{len(missing)} model feature(s) not produced by the feature extractor "
             f"(treated as missing): {missing[:5]}{' …' if len(missing) > 5 else ''}"
         )
+    # the probe set the model reads (models.bearing_sets): the other bearings' features left out
+    sanity = getattr(feature_result, "sanity", ()) or ()
+    plan = (bearing_plan(bundle, feature_result.bearings,
+                         suspect=[f.bearing for f in sanity if f.code == "reverse_whirl" and f.bearing is not None])
+            if getattr(feature_result, "bearings", None) else None)
+    if plan is not None:
+        if plan.answering is not None and plan.left_out:
+            row = leave_out_bearings(names, row, plan.answering)
+        warnings += plan.warnings()
     never_missing = (~np.isfinite(row)) & (model.feature_nan_rate_ == 0)
     never_missing_names = [n for n, m in zip(names, never_missing) if m and n not in missing]
     if never_missing_names:
@@ -306,9 +316,9 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
                                                                           float(interval[0, 1])))
     status, reasons = assess(
         RecordingChecks(names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
-                        sanity=getattr(feature_result, "sanity", ()) or (), ood_score=ood_score,
+                        sanity=sanity, ood_score=ood_score,
                         never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
-                        warnings=warnings, envelope=findings),
+                        warnings=warnings, envelope=findings, extra=plan.reasons() if plan is not None else ()),
         ModelCall(probabilities=proba, class_delta_agree=agree, call_index=cls,
                   band_names=[str(c) for c in model.classes_], misaligned_call=band > 0,
                   alarm=_alarm(model, proba, cls, X), delta_interval=(float(interval[0, 0]), float(interval[0, 1])),

@@ -7,7 +7,9 @@
   feature outside the training range) — the classic coupling 2X/1X reading (the rule of thumb's bands) lies
   ``SIGNATURE_BANDS_ABOVE_CALL`` or more bands above the model's call (``signature_above_call``: outside its
   family the model is not trusted against the physics; a misaligned machine of another design called
-  "aligned"). No severity is given.
+  "aligned"), or the probes' bearings hold none of the model's training probe sets, or only one it tells
+  misalignment poorly from on held-out plants (``bearing_set_untrained``, ``bearing_set_uninformative``:
+  :mod:`models.bearing_sets`). No severity is given.
 - ``uncertain``: a sanity warning, OOD score above 1, a feature outside the training range
   (``outside_training``: which feature, its value and the training range, in plain words;
   inconclusive when ``SCALE_INCONCLUSIVE`` times beyond it), vibration ``SCALE_UNCERTAIN`` times
@@ -337,6 +339,9 @@ class RecordingChecks:
         The feature extractor's warnings (an ambiguous speed estimate is one).
     envelope : sequence of dict
         ``MisalignmentModel.envelope_findings`` of this row: features outside the training range.
+    extra : sequence of Reason
+        Reasons found before the model ran (``models.bearing_sets``: a probe set the model was not trained on,
+        or one it tells little from).
     """
 
     names: Sequence[str]
@@ -348,6 +353,7 @@ class RecordingChecks:
     speed_source: str | None
     warnings: Iterable[str]
     envelope: Sequence[dict] = ()
+    extra: Sequence[Reason] = ()
 
 
 @dataclass(frozen=True)
@@ -419,7 +425,7 @@ def assess(checks: RecordingChecks, call: ModelCall) -> tuple[str, list[Reason]]
 def _recording_reasons(c: RecordingChecks) -> list[Reason]:
     """Sanity findings, OOD score, features outside the training range, vibration scale, an ambiguous
     speed estimate, features the model always had."""
-    reasons: list[Reason] = []
+    reasons: list[Reason] = list(c.extra)
     for f in c.sanity:
         reasons.append(Reason(f.code, INCONCLUSIVE if f.level == "fail" else UNCERTAIN, f.message))
     if np.isfinite(c.ood_score) and c.ood_score > 1.0:

@@ -326,6 +326,21 @@ def test_the_dc_rows_are_the_clean_recordings_with_a_raw_gap_or_without_their_me
     assert np.abs(wr.mean(axis=1)).max() < 1e-12
 
 
+def test_the_inverted_probe_row_is_the_clean_recordings_with_one_channel_negated(monkeypatch):
+    """Bearing 2's first probe (channel 2 of 1,1,2,2,3,3,4,4) negated, everything else the clean row's."""
+    seen: dict[str, np.ndarray] = {}
+    case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
+    for name in ("clean", "bearing 2's x probe inverted"):
+        cond = next(c for c in bench.CONDITIONS if c.name == name)
+        assert name == "clean" or (name not in bench.ISSUE_CONDITIONS and cond.same_recordings_as == "clean")
+        monkeypatch.setattr(bench, "diagnose_waveforms", lambda bundle, w, bearings, fs, speed, clearance, o, n=name:
+                            seen.setdefault(n, w.copy()) is not None and o)
+        bench.run_condition(None, cond, [case], [_shaft(60 * bench.SAMPLES_PER_REV)], 815)
+    w0, wi = seen["clean"], seen["bearing 2's x probe inverted"]
+    np.testing.assert_array_equal(wi[2], -w0[2])
+    np.testing.assert_array_equal(np.delete(wi, 2, axis=0), np.delete(w0, 2, axis=0))
+
+
 def test_f1_on_right_speed_compares_the_same_recordings():
     from types import SimpleNamespace
 
