@@ -164,6 +164,8 @@ SPEED_REFINE_ITERATIONS = 3
 #: a given ``speed_rpm`` that differs from the signal's refined 1X line by more than this
 #: fraction gets a warning (and one locked to the signal's lines, ``_speed_lock``, further than this is said so)
 SPEED_MISMATCH_WARN = 1e-3
+#: … when the other synchronous lines confirm the reading within this fraction of it (``_extract._given_speed_mismatch``)
+SPEED_CHECK_LOCK_REL = 0.002
 #: a given ``speed_rpm`` is locked to the signal's synchronous lines within this fraction of it
 #: (``_speed_lock.locked_speed_hz``: grid frequency, rounding and drift put a stated speed 0.1–0.5 % off)
 SPEED_LOCK_MAX_REL = 0.01
