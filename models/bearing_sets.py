@@ -36,7 +36,7 @@ import numpy as np
 from .status import INCONCLUSIVE, UNCERTAIN, Reason
 
 __all__ = ["CAPABILITY_PATH", "MAX_FALSE_ALARM", "MAX_FALSE_ALARM_ANY", "MIN_MACRO_F1", "BearingPlan", "answering_set", "bearing_plan",
-           "set_key", "trained_sets", "load_capability", "leave_out_bearings"]
+           "set_key", "trained_sets", "load_capability", "leave_out_bearings", "probe_sets"]
 
 #: held-out figures of the shipped model per probe set (``benchmarks/bench_bearing_sets.py --write``)
 CAPABILITY_PATH = Path(__file__).resolve().parent / "default" / "bearing_sets.json"
@@ -213,4 +213,23 @@ def leave_out_bearings(names: Sequence[str], row: np.ndarray, keep: Iterable[int
         pair = _PAIR.search(name)
         if (m and int(m.group(1)) not in keep_set) or (pair and not {int(pair.group(1)), int(pair.group(2))} <= keep_set):
             out[j] = np.nan
+    return out
+
+
+def probe_sets(card: Mapping[str, Any] | None) -> list[dict] | None:
+    """What a model's card says about the probe sets it reads, for ``GET /models``: each training set with its
+    held-out figures (when measured for this model) and what a recording with exactly those probes gets —
+    ``"reads"``, ``"never confident"`` (``bearing_set_weak``), ``"no severity"`` (``bearing_set_uninformative``)
+    or ``"not measured"``; None when the card lists no training probe sets."""
+    trained = trained_sets(card)
+    if trained is None:
+        return None
+    table = load_capability(card) or {}
+    out = []
+    for s, _ in trained:
+        f = table.get(set_key(s))
+        verdict = ("not measured" if f is None else "reads" if _passes(f) else
+                   "never confident" if _informative(f) else "no severity")
+        out.append({"bearings": list(s), "verdict": verdict,
+                    **({"macro_f1": f["macro_f1"], "false_alarm": f["false_alarm"], "n": f["n"]} if f else {})})
     return out

@@ -74,12 +74,14 @@ class ModelStore:
 
     def versions(self) -> list[dict[str, Any]]:
         """Cards of every registered version, oldest first, with an ``active`` flag."""
+        from rotordiag.models.bearing_sets import probe_sets
         from rotordiag.models.registry import RegistryError
 
         out = []
         for v in self.registry.versions():
             try:
                 card = dict(self.registry.card(v))
+                card["probe_sets"] = probe_sets(card)
             except RegistryError as exc:
                 card = {"error": str(exc)}
             card["version"] = v

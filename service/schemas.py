@@ -445,6 +445,11 @@ class ModelCard(BaseModel):
 
     version: str = Field(..., description="Version name (directory in the registry).")
     active: bool = Field(..., description="True for the version /diagnose uses by default.")
+    probe_sets: list[dict[str, Any]] | None = Field(
+        None, description="The bearing sets the model was trained on (`bearings`), with its held-out `macro_f1` and "
+        "`false_alarm` on each when measured for this model, and what a recording with those probes gets (`verdict`: "
+        "`reads`, `never confident`, `no severity` or `not measured`); a recording is read through the largest of "
+        "them it has (docs/models.md). Null when the card does not list them.")
 
 
 class ModelList(BaseModel):

@@ -187,3 +187,15 @@ def test_shipped_model_leaves_out_a_bearing_with_an_inverted_probe():
     codes = [r["code"] for r in v.reasons]
     assert "reverse_whirl" in codes and "bearing_set_weak" in codes and v.status == "uncertain"
     assert any("bearing 2: the 1X whirls backward" in w for w in v.warnings)
+
+
+def test_probe_sets_lists_each_training_set_with_its_figures_and_verdict(tmp_path, monkeypatch):
+    p = tmp_path / "t.json"
+    p.write_text(json.dumps({"model": {"version": CARD["version"], "created": CARD["created"]}, "figures": TABLE}))
+    monkeypatch.setattr(bs, "CAPABILITY_PATH", p)
+    monkeypatch.setattr(bs.load_capability, "__defaults__", (p,))
+    out = {bs.set_key(x["bearings"]): x for x in bs.probe_sets(CARD)}
+    assert [out[k]["verdict"] for k in ("1-2-3-4", "2", "3")] == ["reads", "no severity", "never confident"]
+    assert out["2"]["false_alarm"] == 0.94 and out["2"]["n"] == 480
+    assert {x["verdict"] for x in bs.probe_sets({**CARD, "created": "other"})} == {"not measured"}
+    assert bs.probe_sets({}) is None

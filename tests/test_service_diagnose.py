@@ -299,6 +299,30 @@ def test_models_list_and_activate(client):
     assert r.status_code == 404 and "v0999" in r.json()["detail"]
 
 
+def test_models_list_says_which_probe_sets_the_model_reads(client):
+    cards = client.get("/models").json()["versions"]
+    card = next(v for v in cards if v["active"])
+    if card.get("train_config", {}).get("augment", {}).get("bearing_sets") is None:
+        pytest.skip("the tiny registry lists no training probe sets")
+    sets = {"-".join(map(str, p["bearings"])): p for p in card["probe_sets"]}
+    assert sets["2-3"]["verdict"] == "reads" and sets["2"]["verdict"] == "no severity"
+    assert sets["3"]["verdict"] == "never confident" and 0.0 <= sets["3"]["false_alarm"] <= 1.0
+
+
+def test_probes_at_the_outboard_bearings_alone_give_no_severity_and_say_what_to_add(client, rec):
+    """models.bearing_sets: no probe set of the model's training lies within bearings 1 and 4 (200, not 4xx: the
+    recording is valid; the verdict says why it cannot judge it)."""
+    fs, channels = rec
+    outboard = [(b, a, d) for b, a, d in channels if b in (1, 4)]
+    r = client.post("/diagnose", json=diagnose_json(fs, outboard, speed_rpm=1800.0, clearance_um=350.0))
+    assert r.status_code == 200, r.text
+    v = r.json()
+    if "bearing_set_untrained" not in [x["code"] for x in v["reasons"]]:
+        pytest.skip("the tiny registry lists no training probe sets")
+    assert v["status"] == "inconclusive" and v["severity"] == "inconclusive" and v["misalignment"] is None
+    assert "add an x/y probe pair at a coupling bearing" in v["reasons"][0]["message"]
+
+
 def _weird_recordings():
     rng = np.random.default_rng(3)
     n = 4096
