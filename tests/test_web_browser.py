@@ -651,3 +651,29 @@ def test_dc_removed_checkbox(server, browser, recordings, tmp_path):
                for e in plain["evidence"] if e["name"] == "shaft centreline")
     assert "not measured: the channels carry no DC position" in browser.find_element("tag name", "body").text
     _screenshot(browser, "dc_removed")
+
+
+def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_path):
+    """rotordiag.models.bearing_sets on the page: probes at 1, 3, 4 are read from bearing 3 (a warning says so, the evidence
+    keeps every bearing, never confident); probes at 1 and 4 alone give no severity and say what to add."""
+    data = recordings[0.2]
+    d = browser
+    for keep, name in (((1, 3, 4), "probes_134"), ((1, 4), "probes_14")):
+        cols = [2 * (b - 1) + j for b in keep for j in (0, 1)]
+        path = tmp_path / f"{name}.csv"
+        header = ",".join(f"b{b}_{a:g}deg_um" for b in keep for a in (45, 135))
+        np.savetxt(path, data[:, cols], delimiter=",", header=header, comments="", fmt="%.6f")
+        _open(d, server)
+        _submit_file(d, path, sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
+        page = d.execute_script("return window.rotordiag.state.verdict")
+        codes = [r["code"] for r in page["reasons"]]
+        if not any(c.startswith("bearing_set") for c in codes):
+            pytest.skip("the tiny registry lists no training probe sets")
+        reasons = " ".join(e.text for e in d.find_elements("css selector", "#verdict-reasons li"))
+        if keep == (1, 4):
+            assert page["status"] == "inconclusive" and not d.find_element("id", "verdict-severity-row").is_displayed()
+            assert "bearings 1 and 4" in reasons and "coupling bearing" in reasons
+        else:
+            assert page["status"] == "uncertain" and "bearing_set_weak" in codes
+            assert any("bearings 1 and 4 not read by the model" in w for w in page["warnings"])
+        _screenshot(d, name)
