@@ -800,7 +800,8 @@ def _training_summary(bundle) -> str:
 
 
 def report(rows, ross, args, wall_s, bundle=None, ood_rows: dict | None = None,
-           clean_outs: list[Outcome] | None = None, ross_outs: list[Outcome] | None = None) -> str:
+           clean_outs: list[Outcome] | None = None, ross_outs: list[Outcome] | None = None,
+           mistake_rows: dict[str, dict] | None = None) -> str:
     conds = "\n".join(f"- **{c.name}** ({c.sim_set} set): {c.what}" for c in CONDITIONS)
     tg = "\n".join(f"| {name} | {'met' if ok else ('not met' if ok is False else '–')} | {val} |"
                    for name, ok, val in targets(rows, ross))
@@ -847,8 +848,9 @@ def report(rows, ross, args, wall_s, bundle=None, ood_rows: dict | None = None,
              "A confidently wrong verdict is the worst answer the product can give. Per condition, the `confident` "
              "verdicts' shown severity against the true band (Δ): the share in the right band, within one band, and "
              "the counts two or more bands off — above all a moderate or severe misalignment shown as aligned, or an "
-             "aligned machine shown as moderate or severe.",
-             "", confident_table(rows)]
+             "aligned machine shown as moderate or severe. The mistakes' rows are the `clean` recordings with a "
+             "user's mistake (the OOD section below).",
+             "", confident_table({**rows, **(mistake_rows or {})})]
     if bundle is not None:
         text += [""] + delta_error_section({k: v for k, v in rows.items() if k != "other machines (ROSS)"},
                                            args.n, tuple(_bands(bundle)[1]))
@@ -911,8 +913,13 @@ def main(argv=None) -> int:
         ood_rows[f"in family: {cond.name}"] = ood_summary(outs)
         print(f"  {cond.name}: {time.perf_counter() - t1:.0f} s", file=sys.stderr)
     rows["speed unknown"]["speed"]["f1_right"] = f1_on_right_speed(bundle, outs_of["speed unknown"], outs_of["clean"])
+    mistake_rows: dict[str, dict] = {}
+    names, edges = _bands(bundle)
     for name in MISTAKES:
-        ood_rows[f"mistake: {name}"] = ood_summary(run_mistake(bundle, name, *sets[("base", REVS)], args.seed))
+        outs = run_mistake(bundle, name, *sets[("base", REVS)], args.seed)
+        ood_rows[f"mistake: {name}"] = ood_summary(outs)
+        ran = [o for o in outs if o.status != "sim failed"]
+        mistake_rows[f"mistake: {name}"] = {"n": len(ran), "confident": confident_summary(ran, names, edges)}
     ross = ross_outs = None
     if args.ross.exists():
         outs = ross_outs = run_ross(bundle, args.ross)
@@ -924,7 +931,7 @@ def main(argv=None) -> int:
     if args.ross_band.exists():
         ood_rows[f"other machines: ROSS ({args.ross_band.name})"] = ood_summary(run_ross(bundle, args.ross_band))
     wall = time.perf_counter() - t0
-    text = report(rows, ross, args, wall, bundle, ood_rows, outs_of["clean"], ross_outs)
+    text = report(rows, ross, args, wall, bundle, ood_rows, outs_of["clean"], ross_outs, mistake_rows)
     text += kept_block(args.out)
     args.out.write_text(text)
     print(text)

@@ -340,9 +340,10 @@ class ReasonOut(BaseModel):
     code: str = Field(..., description="Stable identifier, e.g. `orbit_exceeds_clearance`, `flat_channel`, "
                       "`clipped_channel`, `reverse_whirl_all`, `ood`, `outside_training`, `scale`, `speed_ambiguous`, `low_probability`, "
                       "`far_band_probability`, `far_band_interval`, `below_alarm_threshold`, `no_2x_signature`, `offset_not_assessed`, `static_offset_only`, "
-                      "`signature_above_call`, `class_delta_disagree`, `bearing_set_untrained`, `bearing_set_uninformative` "
-                      "(the probes' bearings: none of the model's training probe sets among them, or the one it reads tells "
-                      "misalignment poorly on held-out plants).")
+                      "`signature_above_call`, `class_delta_disagree`, `journals_near_centre` (every journal within 0.15 c of "
+                      "its bearing centre: check the units, probe sensitivity and clearance), `bearing_set_untrained`, "
+                      "`bearing_set_uninformative`, `bearing_set_weak` (the probes' bearings: none of the model's training "
+                      "probe sets among them, or the one it reads tells misalignment poorly on held-out plants).")
     status: Literal["uncertain", "inconclusive"] = Field(..., description="What this reason alone makes of the verdict.")
     message: str = Field(..., description="What was found and what to check.")
 
