@@ -11,6 +11,18 @@ from rotordiag.models.status import INCONCLUSIVE, UNCERTAIN, ModelCall, Recordin
 EDGES = (0.05, 0.15, 0.35)
 
 
+def _shipped_bundle():
+    """The shipped default model (skips when this checkout has no registry)."""
+    from pathlib import Path
+
+    from rotordiag.models.predict import load_bundle
+
+    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
+    if not (root / "active").exists():
+        pytest.skip("no shipped registry in this checkout")
+    return load_bundle(root)
+
+
 @pytest.mark.parametrize("band, point, expect", [(1, 0.041, 0.05), (0, 0.2, np.nextafter(0.05, 0)),
                                                  (2, 0.2, 0.2), (3, 0.1, 0.35), (3, 0.9, 0.9)])
 def test_delta_is_clipped_into_the_class_band(band, point, expect):
@@ -75,16 +87,12 @@ def test_every_speed_doubt_the_extractor_words_makes_the_verdict_uncertain():
 
 
 def test_shipped_model_never_gives_a_severity_to_an_impossible_recording():
-    from pathlib import Path
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, format_verdict, load_bundle
+    from rotordiag.models.predict import diagnose, format_verdict
     from tests.service_util import simulated_channels
 
-    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
-    if not (root / "active").exists():
-        pytest.skip("no shipped registry in this checkout")
-    bundle = load_bundle(root)
+    bundle = _shipped_bundle()
     fs, ch = simulated_channels(misalignment=0.2)
     for units, clearance in (("mil", 350.0), ("mm", None)):
         rec = Recording(fs, [ProbeChannel(b, a, units, d) for b, a, d in ch], speed_rpm=1800.0, clearance_um=clearance)
@@ -156,16 +164,12 @@ def test_an_aligned_call_without_the_coupling_centreline_is_not_confident():
 def test_shipped_model_does_not_rule_out_an_offset_without_the_clearance():
     """The healthy default plant: with the clearance the centreline is measured and "aligned" stands on it;
     without it the same recording is called aligned but not confidently, and the reason says what to give."""
-    from pathlib import Path
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, feature_vector, load_bundle
+    from rotordiag.models.predict import diagnose, feature_vector
     from tests.service_util import simulated_channels
 
-    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
-    if not (root / "active").exists():
-        pytest.skip("no shipped registry in this checkout")
-    bundle = load_bundle(root)
+    bundle = _shipped_bundle()
     fs, ch = simulated_channels(misalignment=0.0)
     verdicts = {}
     rows = {}
@@ -266,16 +270,12 @@ def test_shipped_model_flags_one_bearing_scaled_down_and_names_it():
     envelope flags it and the reasons name bearing 3; the unscaled recording is not flagged. (×1/100 is
     not flagged, and should not be: the default plant's 134 µm at bearing 3 becomes 1.3 µm, inside the
     training range of 0.04–1280 µm — plants of the family vibrate that little there.)"""
-    from pathlib import Path
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.predict import diagnose
     from tests.service_util import simulated_channels
 
-    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
-    if not (root / "active").exists():
-        pytest.skip("no shipped registry in this checkout")
-    bundle = load_bundle(root)
+    bundle = _shipped_bundle()
     if getattr(bundle.model, "envelope_", None) is None:
         pytest.skip("shipped model has no feature envelope")
     fs, ch = simulated_channels(misalignment=0.2)
@@ -298,18 +298,14 @@ def test_shipped_verdict_checks_the_regressors_own_interval():
     """The wiring: the verdict's status sees the Δ regressor's interval. The shipped example `aligned.csv`
     without its clearance gets a 90 % interval up to about 0.43 on an aligned call (moderate and severe two
     bands away), with 350 µm one that ends in slight (docs/recordings.md)."""
-    from pathlib import Path
 
     from rotordiag.features import extract_features
     from rotordiag.features.examples import example_path
     from rotordiag.features.reader import ReadOptions, read_recording
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.predict import diagnose
     from rotordiag.models.status import interval_far_bands
 
-    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
-    if not (root / "active").exists():
-        pytest.skip("no shipped registry in this checkout")
-    bundle = load_bundle(root)
+    bundle = _shipped_bundle()
     edges = bundle.model.bands_.edges
     codes = {}
     for clearance in (None, 350.0):
@@ -365,16 +361,12 @@ def test_a_misalignment_call_resting_on_the_static_offset_across_the_coupling_is
 def test_shipped_model_does_not_confidently_alarm_on_coupling_journals_apart():
     """The healthy default plant with bearing 3's probes reading the exciter journal 0.25 c higher (its own,
     lighter load) or 0.25 c aside: no confident misalignment verdict; the unshifted recording is untouched."""
-    from pathlib import Path
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.predict import diagnose
     from tests.service_util import simulated_channels
 
-    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
-    if not (root / "active").exists():
-        pytest.skip("no shipped registry in this checkout")
-    bundle = load_bundle(root)
+    bundle = _shipped_bundle()
     fs, ch = simulated_channels(misalignment=0.0, record_revs=48)      # ≥ 32 revolutions: the motion type is there
     clearance = 350.0                                                   # the default plant's
     called = []
@@ -442,16 +434,12 @@ def test_a_stated_clearance_without_the_centreline_is_answered_by_the_pair_that_
     """A raw probe gap (DC > 1.5 c) or channels without DC leave the centreline missing although the clearance is
     stated. The clearance-stated pair always had the centreline in training, and on the robustness base set it
     called 71 % of aligned machines misaligned on such recordings; the no-clearance pair answers them."""
-    from pathlib import Path
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, feature_vector, load_bundle
+    from rotordiag.models.predict import diagnose, feature_vector
     from tests.service_util import simulated_channels
 
-    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
-    if not (root / "active").exists():
-        pytest.skip("no shipped registry in this checkout")
-    bundle = load_bundle(root)
+    bundle = _shipped_bundle()
     model = bundle.model
     fs, ch = simulated_channels(misalignment=0.0)
     for shift in (lambda d: d + 1000.0, lambda d: d - d.mean()):
@@ -494,16 +482,12 @@ def test_every_journal_near_its_bearing_centre_is_not_confident():
 
 
 def test_shipped_model_is_not_confident_on_numbers_ten_times_too_small():
-    from pathlib import Path
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.predict import diagnose
     from tests.service_util import simulated_channels
 
-    root = Path(__file__).resolve().parent.parent / "models" / "default_registry"
-    if not (root / "active").exists():
-        pytest.skip("no shipped registry in this checkout")
-    bundle = load_bundle(root)
+    bundle = _shipped_bundle()
     fs, ch = simulated_channels(misalignment=0.3)
     codes = {}
     for scale in (1.0, 0.1):
