@@ -274,7 +274,8 @@ class _BlasLimit:
 _blas_limit = _BlasLimit()
 
 
-def _given_speed_mismatch(seg: np.ndarray, fs: float, f1: float, coeffs: np.ndarray) -> tuple[int, float] | None:
+def _given_speed_mismatch(seg: np.ndarray, mean: np.ndarray, fs: float, f1: float,
+                          coeffs: np.ndarray) -> tuple[int, float] | None:
     """The order and the running speed (Hz) the signal's synchronous lines read when they disagree with a given
     speed ``f1`` by more than ``SPEED_MISMATCH_WARN``, else None.
 
@@ -291,7 +292,7 @@ def _given_speed_mismatch(seg: np.ndarray, fs: float, f1: float, coeffs: np.ndar
     if not power[h - 1] > 0:
         return None
     strongest = np.argsort(-mag2[:, h - 1])[:2]
-    f_sig = refine_line_hz(seg[strongest], fs, h * f1, iterations=1) / h
+    f_sig = refine_line_hz(seg[strongest] - mean[strongest, None], fs, h * f1, iterations=1) / h
     if not abs(f_sig / f1 - 1.0) > cfg.SPEED_MISMATCH_WARN:
         return None
     f_lock = locked_speed_hz(seg, fs, f_sig, max_rel=cfg.SPEED_CHECK_LOCK_REL)
@@ -396,7 +397,7 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
     ms = np.einsum("ij,ij->i", seg, seg) / n_seg - 2 * mean * seg.mean(axis=1) + mean ** 2
     res_ms = np.einsum("ij,ij->i", resid, resid) / n_seg
     if sa.source == "given":
-        mismatch = _given_speed_mismatch(seg - mean[:, None], fs, f1, coeffs)
+        mismatch = _given_speed_mismatch(seg, mean, fs, f1, coeffs)
         if mismatch is not None:
             h, f_sig = mismatch
             warnings.append(

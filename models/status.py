@@ -138,14 +138,14 @@ def _near_centre_reasons(names: Sequence[str], row: np.ndarray) -> list[Reason]:
     cols = [index.get(f"b{b}_centre_ecc_per_c") for b in (1, 2, 3, 4)]
     if any(j is None for j in cols):
         return []
-    ecc = np.array([row[j] for j in cols if j is not None], dtype=float)
+    ecc = np.array([row[j] for j in cols if j is not None], dtype=float)       # all four found (above)
     if not np.isfinite(ecc).all() or ecc.max() >= NEAR_CENTRE_MAX_ECC:
         return []
     return [Reason("journals_near_centre", UNCERTAIN,
                    f"every journal sits within {ecc.max():.3f} c of its bearing centre (eccentricities "
                    f"{', '.join(f'{e:.3f}' for e in ecc)} at bearings 1–4): the rotor's weight holds at least one "
-                   f"journal further off-centre than {NEAR_CENTRE_MAX_ECC:g} c in nearly every machine (in 7 of 719 "
-                   "held-out plants it did not), so the sizes per clearance are suspect — check the units and the "
+                   f"journal further off-centre than {NEAR_CENTRE_MAX_ECC:g} c in nearly every machine (in 22 of 719 "
+                   "held-out plants of the training family it did not), so the sizes per clearance are suspect — check the units and the "
                    "probe sensitivity (numbers 10× too small read like this), the clearance (radial, in µm) and that "
                    "the DC readings are referenced to the bearing centre")]
 
@@ -450,8 +450,9 @@ def assess(checks: RecordingChecks, call: ModelCall) -> tuple[str, list[Reason]]
 
 
 def _recording_reasons(c: RecordingChecks) -> list[Reason]:
-    """Sanity findings, OOD score, features outside the training range, vibration scale, an ambiguous
-    speed estimate, features the model always had."""
+    """The probe set's reasons (``extra``), sanity findings, OOD score, features outside the training range,
+    vibration scale, every journal near its bearing centre, an ambiguous speed estimate, features the model
+    always had."""
     reasons: list[Reason] = list(c.extra)
     for f in c.sanity:
         reasons.append(Reason(f.code, INCONCLUSIVE if f.level == "fail" else UNCERTAIN, f.message))
