@@ -17,6 +17,7 @@ misalignment severity (``uncertain`` or ``confident``), next to the classifier's
 from __future__ import annotations
 
 import argparse
+import hashlib
 import itertools
 import json
 import sys
@@ -84,7 +85,7 @@ def main(argv=None) -> int:
     if trained is None:
         raise SystemExit("the shipped model's card lists no training probe sets")
     seeds = [int(s) for s in args.calibrate.split(",") if s.strip()]
-    sets = [cw for s in seeds for cw in [clean_waveforms(args.n, s, args.cache)]]
+    sets = [clean_waveforms(args.n, s, args.cache) for s in seeds]
     cases = [c for cs, _ in sets for c in cs]
     waves = [w for _, ws in sets for w in ws]
     table = {}
@@ -100,7 +101,7 @@ def main(argv=None) -> int:
                 else "reads")
         print(f"| {key} | {f['n']} | {f['macro_f1']:.2f} | {f['false_alarm']:.1%} | {gate} |")
     if args.write:
-        sha = __import__("hashlib").sha256((registry / bundle.version / "model.skops").read_bytes()).hexdigest()
+        sha = hashlib.sha256((registry / str(bundle.version) / "model.skops").read_bytes()).hexdigest()
         out = {"model": {"version": bundle.card.get("version"), "created": bundle.card.get("created"), "sha256": sha},
                "gate": {"max_false_alarm": bs.MAX_FALSE_ALARM, "max_false_alarm_any": bs.MAX_FALSE_ALARM_ANY,
                         "min_macro_f1": bs.MIN_MACRO_F1},

@@ -147,7 +147,7 @@ class BearingPlan:
             return []
         f = self.figures
         fig = (f" (on held-out plants from {set_key(self.answering)}: macro-F1 {f['macro_f1']:.2f}, "
-               f"false alarms {f['false_alarm']:.0%})" if f else "")
+               f"false alarms {f['false_alarm']:.1%})" if f else "")
         doubt = (f" ({_said(self.suspect)}: the 1X whirls backward, more often a probe-order or polarity mistake "
                  "than the machine)" if self.suspect else "")
         return [f"{_said(self.left_out)} not read by the model{doubt}: it was trained on the probe sets "
@@ -174,7 +174,7 @@ class BearingPlan:
         if _informative(f):
             return [Reason("bearing_set_weak", UNCERTAIN,
                            f"the model reads {_said(self.answering)}, and from {set_key(self.answering)} it called "
-                           f"{f['false_alarm']:.0%} of the aligned machines of held-out plants misaligned (macro-F1 "
+                           f"{f['false_alarm']:.1%} of the aligned machines of held-out plants misaligned (macro-F1 "
                            f"{f['macro_f1']:.2f}; a confident verdict needs ≤ {MAX_FALSE_ALARM:.0%}): probes at one of "
                            f"the sets {', '.join(good) if good else 'the model was trained on'} give a firmer one")]
         via = (f" (the largest of its training sets within {_said(self.present)}"
@@ -183,7 +183,7 @@ class BearingPlan:
         return [Reason("bearing_set_uninformative", INCONCLUSIVE,
                        f"the model reads {_said(self.answering)}{via}, and from {set_key(self.answering)} alone it "
                        f"tells misalignment poorly: on held-out plants macro-F1 {f['macro_f1']:.2f} with "
-                       f"{f['false_alarm']:.0%} of the aligned machines called misaligned (a verdict needs ≥ "
+                       f"{f['false_alarm']:.1%} of the aligned machines called misaligned (a verdict needs ≥ "
                        f"{MIN_MACRO_F1:g} and ≤ {MAX_FALSE_ALARM_ANY:.0%}); add probes so that the recording has one "
                        f"of the sets {', '.join(good) if good else 'the model was trained on'}")]
 

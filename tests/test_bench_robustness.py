@@ -502,3 +502,20 @@ def test_shift_journal_dc_moves_bearing_3_by_the_drawn_distance_only():
     w2 = np.zeros((4, 16))
     bench.shift_journal_dc(w2, (1, 2), 200.0, (0.1, 0.3), np.random.default_rng(5))   # bearing 3 not recorded
     assert not w2.any()
+
+
+bbs = _load("bench_bearing_sets")
+
+
+def test_bench_bearing_sets_passes_each_probe_sets_own_channels(monkeypatch):
+    """run_set hands diagnose_waveforms the x/y channels of the probe set's bearings, in order, and those
+    bearings; figures counts the aligned machines shown misaligned (not inconclusive) separately from the class."""
+    seen = []
+    monkeypatch.setattr(bbs.br, "diagnose_waveforms",
+                        lambda bundle, w, bearings, fs, speed, clearance, o: seen.append((w.copy(), bearings)) or o)
+    w = np.arange(8)[:, None] * np.ones((8, 5))                 # channel k holds the number k
+    case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
+    outs = bbs.run_set(None, [case, case], [w, None], (1, 3, 4))
+    assert len(seen) == 1 and seen[0][1] == (1, 3, 4)
+    np.testing.assert_array_equal(seen[0][0][:, 0], [0, 1, 4, 5, 6, 7])
+    assert outs[1].status == "sim failed"

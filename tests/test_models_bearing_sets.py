@@ -66,7 +66,7 @@ def test_no_training_set_within_the_probes_is_inconclusive_and_says_what_to_add(
 def test_a_set_that_misses_the_gate_is_inconclusive_and_names_the_sets_that_pass():
     (r,) = _plan((1, 2, 4), TABLE).reasons()
     assert r.code == "bearing_set_uninformative" and r.status == INCONCLUSIVE
-    assert "macro-F1 0.16" in r.message and "94%" in r.message and "within bearings 1, 2 and 4" in r.message
+    assert "macro-F1 0.16" in r.message and "94.0%" in r.message and "within bearings 1, 2 and 4" in r.message
     assert "1-2-3-4, 2-3, 1-2-3, 2-3-4" in r.message and ", 3" not in r.message      # 3 alone is only weak
     assert _plan((1, 2, 4), TABLE).warnings() == []                         # the reason says it all
 
@@ -76,14 +76,14 @@ def test_a_usable_subset_is_read_with_a_note():
     plan = _plan((1, 3, 4), good)
     assert plan.reasons() == [] and plan.left_out == (1, 4)
     (w,) = plan.warnings()
-    assert w.startswith("bearings 1 and 4 not read by the model") and "macro-F1 0.71, false alarms 8%" in w
+    assert w.startswith("bearings 1 and 4 not read by the model") and "macro-F1 0.71, false alarms 8.0%" in w
     assert _plan((1, 2, 3, 4), TABLE).warnings() == [] and _plan((2, 3), TABLE).reasons() == []
 
 
 def test_a_set_with_too_many_false_alarms_is_never_confident():
     plan = _plan((1, 3, 4), TABLE)
     (r,) = plan.reasons()
-    assert r.code == "bearing_set_weak" and r.status == "uncertain" and "10%" in r.message
+    assert r.code == "bearing_set_weak" and r.status == "uncertain" and "10.4%" in r.message
     assert len(plan.warnings()) == 1                                        # the note stays
 
 
@@ -161,7 +161,7 @@ def test_a_bearing_whose_1x_alone_whirls_backward_is_not_read():
                           suspect=(2,))
     assert plan.answering == (3,) and plan.left_out == (1, 2, 4)
     (r,) = plan.reasons()
-    assert r.code == "bearing_set_weak" and r.status == "uncertain" and "10%" in r.message
+    assert r.code == "bearing_set_weak" and r.status == "uncertain" and "10.4%" in r.message
     (w,) = plan.warnings()
     assert "bearing 2: the 1X whirls backward" in w and "without it is 3" in w
     plan3 = bs.BearingPlan((1, 2, 3, 4), bs.answering_set((1, 2, 4), TRAINED), tuple(s for s, _ in TRAINED), TABLE,
