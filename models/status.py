@@ -27,7 +27,9 @@
   (``static_offset_only``: the training simulator ties those journals together, a real train does not); or every
   journal of a four-bearing recording within ``NEAR_CENTRE_MAX_ECC`` of its bearing centre
   (``journals_near_centre``: numbers too small for the clearance, a units or sensitivity slip or a clearance stated
-  too large); or a probe set the model tells misalignment from with more than 10 % false alarms
+  too large); or every journal's attitude angle more than ``FRAME_OFFSET_DEG`` off a plain short bearing's, on one
+  side (``centreline_frame_turned``: probes not at the angles given, or bearings unlike plain cylindrical ones);
+  or a probe set the model tells misalignment from with more than 10 % false alarms
   (``bearing_set_weak``, :mod:`models.bearing_sets`).
 - ``confident``: none of these.
 
@@ -43,12 +45,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, short_bearing_attitude_deg
 from rotordiag.features import speed_in_doubt
 
 from .baselines import DEFAULT_RULE_CUTS, RuleOfThumb
 
 __all__ = ["Reason", "RecordingChecks", "ModelCall", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY", "NEAR_CENTRE_MAX_ECC",
+           "FRAME_OFFSET_DEG",
            "CONFIDENT_MAX_FAR_PROBABILITY",
            "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "coupling_centreline_known", "journals_at_one_position",
            "journals_apart_c", "SIGNATURE_BANDS_ABOVE_CALL", "signature_band",
@@ -65,6 +69,10 @@ OOD_INCONCLUSIVE = 3.0
 #: centre → uncertain (``journals_near_centre``: a units or sensitivity slip that shrinks the numbers; on the
 #: clean base set ×0.1 made 43 of 240 verdicts confident, 12 of them two bands off, every one so)
 NEAR_CENTRE_MAX_ECC = 0.15
+#: the journals' attitude angles all this many degrees beyond (or short of) a plain short bearing's → uncertain
+#: (``centreline_frame_turned``: probes declared at 0°/90° that sit at 45°/135° made 40 of 240 verdicts confident on the
+#: clean base set, 8 of them two bands off, 4 of those healthy machines shown severe)
+FRAME_OFFSET_DEG = 30.0
 #: coupling-bearing 1X orbit major axis this many times above / below the training median → uncertain …
 SCALE_UNCERTAIN = 20.0
 #: … and this many times → inconclusive (trees cannot extrapolate: a tree model is blind there)
@@ -148,6 +156,39 @@ def _near_centre_reasons(names: Sequence[str], row: np.ndarray) -> list[Reason]:
                    "held-out plants of the training family it did not), so the sizes per clearance are suspect — check the units and the "
                    "probe sensitivity (numbers 10× too small read like this), the clearance (radial, in µm) and that "
                    "the DC readings are referenced to the bearing centre")]
+
+
+def _probe_frame_reasons(names: Sequence[str], row: np.ndarray) -> list[Reason]:
+    """``centreline_frame_turned`` when at two or more bearings the journal sits off the load line (attitude angle)
+    by more than :data:`FRAME_OFFSET_DEG` beyond a plain short journal bearing's at the same eccentricity, every one
+    on the same side: the probes' frame as given is turned (wrong ``angle_deg``), or the bearings are no plain
+    cylindrical ones (the ROSS set's linear bearings, tilting pads: the journal near the load line)."""
+    index = {n: i for i, n in enumerate(names)}
+    bearings, xye = [], []
+    for b in range(1, 10):
+        cols = [index.get(f"b{b}_centre_{k}_per_c") for k in ("x", "y", "ecc")]
+        if all(j is not None for j in cols):
+            v = np.array([row[j] for j in cols if j is not None], dtype=float)
+            if np.isfinite(v).all() and v[2] >= ATTITUDE_MIN_ECC:
+                bearings.append(b)
+                xye.append(v)
+    if len(bearings) < 2:
+        return []
+    x, y, e = np.array(xye).T
+    phis = attitude_angle_deg(x, y)
+    offsets = phis - short_bearing_attitude_deg(e)
+    found = list(zip(bearings, phis.tolist(), offsets.tolist()))
+    if not (np.all(offsets < -FRAME_OFFSET_DEG) or np.all(offsets > FRAME_OFFSET_DEG)):
+        return []
+    where = ", ".join(f"bearing {b} {phi:.0f}° ({off:+.0f}°)" for b, phi, off in found)
+    return [Reason("centreline_frame_turned", UNCERTAIN,
+                   f"at every bearing the shaft centreline sits {np.mean(offsets):+.0f}° off the attitude angle a plain "
+                   f"oil-film journal bearing takes at its eccentricity ({where}; the angle from the load line, "
+                   "toward rotation). Either the whole picture is turned, as when the probes do not sit at the angles "
+                   "given — check angle_deg (from horizontal +x toward vertical-up +y; 45/135 is the default for 8 "
+                   "channels), the rotation direction and the viewing end — or the bearings are not plain cylindrical "
+                   "ones (tilting-pad bearings hold the journal near the load line), unlike every machine the model "
+                   "was trained on")]
 
 
 def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray) -> list[Reason]:
@@ -464,6 +505,7 @@ def _recording_reasons(c: RecordingChecks) -> list[Reason]:
     reasons += envelope_reasons(c.envelope)
     reasons += _scale_reasons(c.names, c.row, c.feature_median)
     reasons += _near_centre_reasons(c.names, c.row)
+    reasons += _probe_frame_reasons(c.names, c.row)
     if c.speed_source == "estimated":
         for w in c.warnings:
             if speed_in_doubt(w):

@@ -496,3 +496,31 @@ def test_shipped_model_is_not_confident_on_numbers_ten_times_too_small():
         codes[scale] = (v.status, [r["code"] for r in v.reasons])
     assert "journals_near_centre" not in codes[1.0][1]
     assert "journals_near_centre" in codes[0.1][1] and codes[0.1][0] != "confident"
+
+
+def test_journals_all_turned_off_a_plain_bearings_attitude_are_not_confident():
+    """Probes declared at 0°/90° that sit at 45°/135° turn every centreline by 45°: the attitude angles all fall
+    30° or more short of a plain short bearing's (on the clean base set 40 of 240 verdicts had been confident, 8
+    two bands off). One bearing off, or offsets on both sides, is no turned frame."""
+    from rotordiag.core.journal import short_bearing_attitude_deg
+    from rotordiag.models.status import FRAME_OFFSET_DEG
+
+    def centre(ecc, offset_deg):
+        phi = np.radians(short_bearing_attitude_deg(ecc) + offset_deg)
+        return ecc * np.sin(phi), -ecc * np.cos(phi), ecc
+
+    def run(*offsets):
+        names, row = ["b2_1x_major_um_pp"], [30.0]
+        for b, off in zip((1, 2, 3, 4), offsets):
+            names += [f"b{b}_centre_x_per_c", f"b{b}_centre_y_per_c", f"b{b}_centre_ecc_per_c"]
+            row += list(centre(0.5, off))
+        return _assess(names=names, row=np.array(row), feature_median=np.full(len(row), 30.0))
+
+    status, reasons = run(-45, -44, -50, -40)
+    assert status == UNCERTAIN and "centreline_frame_turned" in [r.code for r in reasons]
+    msg = next(r.message for r in reasons if r.code == "centreline_frame_turned")
+    assert "check angle_deg" in msg and "tilting-pad" in msg and "bearing 4" in msg
+    assert "centreline_frame_turned" in [r.code for r in run(+40, +45, +50, +35)[1]]
+    assert "centreline_frame_turned" not in [r.code for r in run(-45, -44, -50, -FRAME_OFFSET_DEG + 1)[1]]
+    assert "centreline_frame_turned" not in [r.code for r in run(-45, +44, -50, -40)[1]]
+    assert "centreline_frame_turned" not in [r.code for r in run(0, 5, -10, 3)[1]]
