@@ -274,6 +274,15 @@ def test_page_loads_with_models_health_and_labelled_controls(server, browser):
           return !(byFor || e.closest('label') || e.getAttribute('aria-label'));
         }).map((e) => e.id || e.name);""")
     assert unlabelled == []
+    # the train and probe-angle figure beside the bearing and angle fields (numbering from the other end and
+    # wrong angles are mistakes the checks do not always catch)
+    fig = browser.find_element("id", "train-figure")
+    assert fig.is_displayed() and fig.size["width"] > 200
+    labels = browser.execute_script(
+        "return [...document.querySelectorAll('#train-figure svg text')].map((t) => t.textContent)")
+    assert {"1", "2", "3", "4", "generator", "exciter", "coupling"} <= set(labels)
+    assert "generator far end" in fig.text and "exciter far end" in fig.text
+    _screenshot(browser, "form-train-figure")
     # nothing is loaded from anywhere but this server
     origins = browser.execute_script(
         "return performance.getEntriesByType('resource').map((r) => new URL(r.name).origin)")
