@@ -95,6 +95,8 @@ class Condition:
     #: (bearing, probe index) whose signal is inverted: a probe wired or configured with the wrong polarity (or the
     #: x/y order swapped), which turns that bearing's 1X backward (``features`` sanity ``reverse_whirl``)
     inverted_probe: tuple[int, int] | None = None
+    #: the user numbers the bearings from the exciter end: bearing b is sent as 5 − b (models.numbering)
+    numbered_from_exciter: bool = False
 
 
 #: the raw probe gap of the "raw gap" row, µm (−8 V at 7.87 V/mm is about 1000 µm)
@@ -139,11 +141,15 @@ CONDITIONS: tuple[Condition, ...] = (
               what="the clean recordings with bearing 2's 45° probe inverted (wrong polarity, or the x/y order "
                    "swapped): its 1X whirls backward; the verdict leaves bearing 2 out (models.bearing_sets) "
                    "(not one of the issue's rows)"),
+    Condition("bearings numbered 4-3-2-1", numbered_from_exciter=True, same_recordings_as="clean",
+              what="the clean recordings with the bearings numbered from the exciter end (bearing b sent as 5 − b); "
+                   "models.numbering doubts the numbering when the other one is markedly more like the training "
+                   "family (not one of the issue's rows)"),
 )
 #: extra measurements, beside the rows issue 15 asks for (its targets are over :data:`ISSUE_CONDITIONS`)
 EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 revolutions",
                     "192 revolutions, speed stated 0.4 % off", "DC: raw probe gaps", "DC: means removed",
-                    "bearing 2's x probe inverted")
+                    "bearing 2's x probe inverted", "bearings numbered 4-3-2-1")
 ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name not in EXTRA_CONDITIONS)
 
 
@@ -292,8 +298,7 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
     is what the channels are declared in (the numbers are µm: ``"mil"`` is the µm-read-as-mils mistake)."""
     from rotordiag.features import ProbeChannel, Recording, extract_features
     from rotordiag.models.baselines import RuleOfThumb, ratio_column
-    from rotordiag.models.predict import diagnose
-    from rotordiag.models.speed_choice import choose_speed
+    from rotordiag.models.speed_choice import diagnose_recording
 
     chans = [ProbeChannel(b, a, units, waveforms_um[2 * k + j]) for k, b in enumerate(bearings)
              for j, a in enumerate(ANGLES_DEG)]
@@ -301,7 +306,7 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
         rec = Recording(sample_rate_hz=fs_hz, channels=chans, speed_rpm=speed_rpm, clearance_um=clearance_um)
         fr = extract_features(rec)
         out.speed_rpm_estimated = float(fr.speed_rpm)
-        v, fr, _ = choose_speed(bundle, rec, fr, diagnose(bundle, fr))   # as models.speed_choice.diagnose_recording
+        v, fr = diagnose_recording(bundle, rec, fr=fr)                     # as the service and the CLI
     except ValueError as exc:
         out.notes.append(str(exc))
         return out
@@ -383,7 +388,8 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
         if not cond.speed_given:
             o.speed_line = running_speed_line(w, FS_HZ, c["speed_rpm"])
         stated = c["speed_rpm"] * (1.0 + cond.speed_stated_error) if cond.speed_given else None
-        return diagnose_waveforms(bundle, w, cond.bearings, FS_HZ, stated, clearance, o)
+        bearings = tuple(5 - b for b in cond.bearings) if cond.numbered_from_exciter else cond.bearings
+        return diagnose_waveforms(bundle, w, bearings, FS_HZ, stated, clearance, o)
 
     return _over_cases(cases, disps, one)
 

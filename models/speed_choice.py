@@ -34,6 +34,7 @@ from rotordiag.features import (
     speed_in_doubt,
 )
 
+from .numbering import check_numbering
 from .predict import Verdict, diagnose
 
 __all__ = ["SPEED_CHOICE_MIN_OOD_GAIN", "SpeedChoice", "diagnose_recording", "choose_speed"]
@@ -112,19 +113,21 @@ def choose_speed(bundle: Any, recording: Recording, fr: FeatureResult, verdict: 
 
 
 def diagnose_recording(bundle: Any, recording: Recording, *, clearance_um: float | None = None,
-                       top_k: int = 5) -> tuple[Verdict, FeatureResult]:
+                       top_k: int = 5, fr: FeatureResult | None = None) -> tuple[Verdict, FeatureResult]:
     """Features and verdict of one recording, the speed judged by the model when the estimate is in doubt.
 
-    ``extract_features`` then ``diagnose``, then :func:`choose_speed`. Every caller that diagnoses a
-    recording (the service, ``rotordiag diagnose``, the benchmarks) goes through here, so that the
-    verdict, its speed and the features it was computed from are the same everywhere.
+    ``extract_features`` (unless ``fr``, the recording's features, is given) then ``diagnose``, then
+    :func:`choose_speed`, then ``models.numbering.check_numbering`` (bearings numbered from the other end).
+    Every caller that diagnoses a recording (the service, ``rotordiag diagnose``, the benchmarks) goes through
+    here, so that the verdict, its speed and the features it was computed from are the same everywhere.
 
     Raises
     ------
     ValueError
         As ``extract_features`` and ``diagnose``, with a message for the user.
     """
-    fr = extract_features(recording)
+    if fr is None:
+        fr = extract_features(recording)
     verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k)
     verdict, fr, _ = choose_speed(bundle, recording, fr, verdict, clearance_um=clearance_um, top_k=top_k)
-    return verdict, fr
+    return check_numbering(bundle, recording, fr, verdict, clearance_um=clearance_um), fr

@@ -184,11 +184,10 @@ class ModelStore:
     @staticmethod
     def _verdict(bundle: Any, recording: Any, fr: Any = None) -> tuple[Any, Any]:
         """The verdict and the features it was computed from: ``features.extract_features`` (unless ``fr``,
-        the recording's features, is given), then ``models.predict.diagnose`` and
-        ``models.speed_choice.choose_speed`` (a doubtful estimated speed judged by the model)."""
+        the recording's features, is given), then ``models.speed_choice.diagnose_recording`` (the verdict, a
+        doubtful estimated speed and the bearings' numbering judged by the model)."""
         from rotordiag.features import extract_features
-        from rotordiag.models.predict import diagnose
-        from rotordiag.models.speed_choice import choose_speed
+        from rotordiag.models.speed_choice import diagnose_recording
 
         if fr is None:
             fr = extract_features(recording)
@@ -199,9 +198,7 @@ class ModelStore:
                              "thousand µm")
         clearance = getattr(recording, "clearance_um", None)
         clearance = float(clearance) if isinstance(clearance, (int, float)) else None
-        verdict = diagnose(bundle, fr, clearance_um=clearance)
-        verdict, fr, _ = choose_speed(bundle, recording, fr, verdict, clearance_um=clearance)
-        return verdict, fr
+        return diagnose_recording(bundle, recording, clearance_um=clearance, fr=fr)
 
     def plot_features(self, recording: Any) -> Any:
         """The features the web page's pictures are drawn from: those of the verdict (:meth:`diagnose`, the

@@ -343,7 +343,8 @@ class ReasonOut(BaseModel):
                       "`signature_above_call`, `class_delta_disagree`, `journals_near_centre` (every journal within 0.15 c of "
                       "its bearing centre: check the units, probe sensitivity and clearance), `centreline_frame_turned` (every "
                       "journal's attitude angle 30° or more off a plain bearing's on one side: check the probe angles, or "
-                      "bearings unlike plain cylindrical ones), `bearing_set_untrained`, "
+                      "bearings unlike plain cylindrical ones), `bearing_numbering` (the recording is markedly more like the "
+                      "training machines with its bearings numbered 4-3-2-1), `bearing_set_untrained`, "
                       "`bearing_set_uninformative`, `bearing_set_weak` (the probes' bearings: none of the model's training "
                       "probe sets among them, or the one it reads tells misalignment poorly on held-out plants).")
     status: Literal["uncertain", "inconclusive"] = Field(..., description="What this reason alone makes of the verdict.")

@@ -519,3 +519,16 @@ def test_bench_bearing_sets_passes_each_probe_sets_own_channels(monkeypatch):
     assert len(seen) == 1 and seen[0][1] == (1, 3, 4)
     np.testing.assert_array_equal(seen[0][0][:, 0], [0, 1, 4, 5, 6, 7])
     assert outs[1].status == "sim failed"
+
+
+def test_the_renumbered_row_sends_bearing_b_as_5_minus_b(monkeypatch):
+    seen = {}
+    case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
+    for name in ("clean", "bearings numbered 4-3-2-1"):
+        cond = next(c for c in bench.CONDITIONS if c.name == name)
+        assert name == "clean" or (name not in bench.ISSUE_CONDITIONS and cond.same_recordings_as == "clean")
+        monkeypatch.setattr(bench, "diagnose_waveforms", lambda bundle, w, bearings, fs, speed, clearance, o, n=name:
+                            seen.setdefault(n, (w.copy(), bearings)) is not None and o)
+        bench.run_condition(None, cond, [case], [_shaft(60 * bench.SAMPLES_PER_REV)], 815)
+    np.testing.assert_array_equal(seen["clean"][0], seen["bearings numbered 4-3-2-1"][0])
+    assert seen["clean"][1] == (1, 2, 3, 4) and seen["bearings numbered 4-3-2-1"][1] == (4, 3, 2, 1)
