@@ -7,9 +7,9 @@ models.predict
     ``diagnose(bundle, feature_result, clearance_um=None) -> Verdict`` — the one verdict
     function, used by ``rotordiag diagnose`` and the service; ``format_verdict``.
 models.speed_choice
-    ``diagnose_recording(bundle, recording) -> (Verdict, FeatureResult)``: features, verdict, a
-    doubtful estimated speed judged by the model (``choose_speed``) and the bearings' numbering
-    (``models.numbering``) — what every caller that starts from a recording uses.
+    ``diagnose_recording(bundle, recording) -> (Verdict, FeatureResult)``: features, verdict, and a
+    doubtful estimated speed judged by the model (``choose_speed``) — what every caller that starts
+    from a recording uses.
 models.bearing_sets, models.numbering
     Which probe set a verdict reads; bearings numbered from the other end.
 models.registry

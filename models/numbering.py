@@ -7,63 +7,72 @@ docs/robustness.md's clean base set (seed 815) 41 of 240 such verdicts were `con
 family: its OOD score was lower for all 240 mirrored recordings (median ratio 0.72), and for 1 of the 240 correctly
 numbered ones (ratio ≥ 0.96, median 1.39).
 
-:func:`check_numbering` therefore diagnoses a four-bearing recording once more with every bearing ``b`` numbered
-``5 − b``; when that reading's OOD score is below :data:`NUMBERING_OOD_RATIO` times the recording's own, the
-verdict gets the ``bearing_numbering`` reason (uncertain: never confident), which says what to check. The
-verdict itself stays the one of the numbering given: the model does not renumber the user's bearings.
-Swapping only the coupling bearings 2 and 3 is not judged: the OOD score hardly moves (median ratio 1.04 on the
-correct numbering) and nothing else tells the two apart.
+So ``models.predict.diagnose`` scores a four-bearing recording that is in distribution once more with its features
+renumbered (:func:`mirrored_row`: bearing ``b``'s features read as bearing ``5 − b``'s, the phase differences
+across bearings turned round); when that OOD score is at or below :data:`NUMBERING_OOD_RATIO` times the
+recording's own, :func:`numbering_reason` gives ``bearing_numbering`` (uncertain: never confident), which says what
+to check. The verdict itself stays the one of the numbering given: the model does not renumber the user's
+bearings. Renumbering the feature row, not the recording, costs one more pass of the OOD scorer and the classifier
+(re-extracting the renumbered recording took a third of the service's binary throughput). Swapping only the coupling
+bearings 2 and 3 is not judged: the OOD score hardly moves (median ratio 1.04 on the correct numbering).
 """
 from __future__ import annotations
 
-import dataclasses
-from collections.abc import Mapping
-from typing import Any
+import re
+from collections.abc import Sequence
 
-from rotordiag.features import FeatureResult, Recording, extract_features
+import numpy as np
 
-from .predict import Verdict, diagnose
-from .status import CONFIDENT, UNCERTAIN, Reason
+from .status import UNCERTAIN, Reason
 
-__all__ = ["NUMBERING_OOD_RATIO", "mirrored", "check_numbering"]
+__all__ = ["NUMBERING_OOD_RATIO", "mirrored_row", "numbering_reason", "has_every_bearing"]
 
 #: the other numbering's OOD score at or below this fraction of the recording's own → ``bearing_numbering``
 #: (correctly numbered clean base-set recordings, seed 815: the ratio's lowest value 0.963, 1st percentile 1.04)
 NUMBERING_OOD_RATIO = 0.95
-_FULL = (1, 2, 3, 4)
+_BEARINGS = (1, 2, 3, 4)
+_PER_BEARING = re.compile(r"^b([1-4])_(.+)$")
+_PAIR = re.compile(r"^(dphase_\dx)_b([1-4])_b([1-4])_(.+)$")
 
 
-def mirrored(recording: Recording) -> Recording:
-    """The recording with every bearing ``b`` numbered ``5 − b`` (its clearances per bearing with them)."""
-    clearance = recording.clearance_um
-    if isinstance(clearance, Mapping):
-        clearance = {5 - int(b): c for b, c in clearance.items()}
-    return dataclasses.replace(
-        recording, clearance_um=clearance,
-        channels=[dataclasses.replace(c, bearing=5 - c.bearing) for c in recording.channels])
+def _wrap_deg(d: np.ndarray) -> np.ndarray:
+    """Degrees into (−180, 180], as ``features`` reports phase differences."""
+    d = np.mod(d, 360.0)
+    return np.where(d > 180.0, d - 360.0, d)
 
 
-def check_numbering(bundle: Any, recording: Recording, fr: FeatureResult, verdict: Verdict, *,
-                    clearance_um: float | None = None) -> Verdict:
-    """``verdict`` with the ``bearing_numbering`` reason when the recording numbered 4-3-2-1 is markedly more like
-    the training family (module docstring); unchanged otherwise, for recordings without all four bearings, and for
-    one already out of distribution (never confident, and the comparison says nothing about another design: it
-    fired on 5 of the 24 ROSS recordings)."""
-    if tuple(sorted(fr.bearings)) != _FULL or verdict.ood or not verdict.ood_score > 0:
-        return verdict
-    try:
-        other = diagnose(bundle, extract_features(mirrored(recording), speed_estimate_rpm=fr.speed_rpm
-                                                  if fr.speed_source == "estimated" else None),
-                         clearance_um=clearance_um, top_k=0)
-    except ValueError:
-        return verdict
-    if not other.ood_score <= NUMBERING_OOD_RATIO * verdict.ood_score:
-        return verdict
-    reason = Reason("bearing_numbering", UNCERTAIN,
-                    f"numbered the other way round (bearing b read as 5 − b) the recording is more like the machines "
-                    f"the model knows (OOD score {other.ood_score:.2f} against {verdict.ood_score:.2f} as given; "
-                    f"called {other.model_severity} instead of {verdict.model_severity}): check the numbering — "
-                    "bearing 1 is the generator's far end (the turbine side), 2 its coupling end, 3 the exciter's "
-                    "coupling end and 4 its far end")
-    status = UNCERTAIN if verdict.status == CONFIDENT else verdict.status
-    return dataclasses.replace(verdict, status=status, reasons=[*verdict.reasons, reason.to_dict()])
+def has_every_bearing(names: Sequence[str], row: np.ndarray) -> bool:
+    """Whether the row carries the 1X of all four bearings (``b{n}_1x_major_um_pp``)."""
+    index = {n: i for i, n in enumerate(names)}
+    cols = [index.get(f"b{b}_1x_major_um_pp") for b in _BEARINGS]
+    return all(j is not None and np.isfinite(row[j]) for j in cols)
+
+
+def mirrored_row(names: Sequence[str], row: np.ndarray) -> np.ndarray:
+    """The feature row of the same recording with every bearing ``b`` numbered ``5 − b``.
+
+    Each per-bearing feature depends on that bearing's probes alone, so ``b{n}_…`` takes ``b{5−n}_…``'s value;
+    a phase difference ``dphase_kx_bi_bj`` = wrap(φ_i − φ_j) becomes wrap(φ_{5−i} − φ_{5−j}), i.e. the wrapped
+    negative of ``dphase_kx_b{5−j}_b{5−i}``; the speed and the motion type do not depend on the numbering."""
+    index = {n: i for i, n in enumerate(names)}
+    out = np.array(row, dtype=float, copy=True)
+    for j, name in enumerate(names):
+        if m := _PER_BEARING.match(name):
+            k = index.get(f"b{5 - int(m.group(1))}_{m.group(2)}")
+            out[j] = row[k] if k is not None else np.nan
+        elif m := _PAIR.match(name):
+            k = index.get(f"{m.group(1)}_b{5 - int(m.group(3))}_b{5 - int(m.group(2))}_{m.group(4)}")
+            out[j] = float(_wrap_deg(-np.asarray(row[k]))) if k is not None else np.nan
+    return out
+
+
+def numbering_reason(ood_score: float, other_ood_score: float, call: str, other_call: str) -> Reason | None:
+    """``bearing_numbering`` when the renumbered row's OOD score is at or below :data:`NUMBERING_OOD_RATIO` of the
+    row's own, else None."""
+    if not (ood_score > 0 and other_ood_score <= NUMBERING_OOD_RATIO * ood_score):
+        return None
+    return Reason("bearing_numbering", UNCERTAIN,
+                  f"numbered the other way round (bearing b read as 5 − b) the recording is more like the machines the "
+                  f"model knows (OOD score {other_ood_score:.2f} against {ood_score:.2f} as given; called {other_call} "
+                  f"instead of {call}): check the numbering — bearing 1 is the generator's far end (the turbine side), "
+                  "2 its coupling end, 3 the exciter's coupling end and 4 its far end")

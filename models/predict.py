@@ -20,6 +20,7 @@ from threadpoolctl import threadpool_limits
 from rotordiag.features import evidence
 
 from .bearing_sets import bearing_plan, leave_out_bearings
+from .numbering import has_every_bearing, mirrored_row, numbering_reason
 from .registry import Registry
 from .status import INCONCLUSIVE, ModelCall, RecordingChecks, assess, consistent_estimate, journals_at_one_position
 
@@ -293,6 +294,14 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     ood_score = float(fast.ood_ratio(X)[0])
     findings = model.envelope_findings(X)[0] if hasattr(model, "envelope_findings") else []
     ood = ood_score > 1.0 or bool(findings)
+    extra = plan.reasons() if plan is not None else []
+    if not ood and has_every_bearing(names, row):
+        # the same recording numbered from the other end (models.numbering): one more OOD and class pass
+        X_other = mirrored_row(names, row)[None, :]
+        other_cls = int(model.band_index(fast.predict_proba(X_other), X_other)[0])
+        reason = numbering_reason(ood_score, float(fast.ood_ratio(X_other)[0]), str(model.classes_[cls]),
+                                  str(model.classes_[other_cls]))
+        extra += [reason] if reason is not None else []
     if ood_score > 1.0:
         warnings.append(
             f"signal unlike the training data (OOD score {ood_score:.2f} > 1): "
@@ -318,7 +327,7 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
         RecordingChecks(names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
                         sanity=sanity, ood_score=ood_score,
                         never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
-                        warnings=warnings, envelope=findings, extra=plan.reasons() if plan is not None else ()),
+                        warnings=warnings, envelope=findings, extra=extra),
         ModelCall(probabilities=proba, class_delta_agree=agree, call_index=cls,
                   band_names=[str(c) for c in model.classes_], misaligned_call=band > 0,
                   alarm=_alarm(model, proba, cls, X), delta_interval=(float(interval[0, 0]), float(interval[0, 1])),

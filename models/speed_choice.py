@@ -34,7 +34,6 @@ from rotordiag.features import (
     speed_in_doubt,
 )
 
-from .numbering import check_numbering
 from .predict import Verdict, diagnose
 
 __all__ = ["SPEED_CHOICE_MIN_OOD_GAIN", "SpeedChoice", "diagnose_recording", "choose_speed"]
@@ -117,7 +116,7 @@ def diagnose_recording(bundle: Any, recording: Recording, *, clearance_um: float
     """Features and verdict of one recording, the speed judged by the model when the estimate is in doubt.
 
     ``extract_features`` (unless ``fr``, the recording's features, is given) then ``diagnose``, then
-    :func:`choose_speed`, then ``models.numbering.check_numbering`` (bearings numbered from the other end).
+    :func:`choose_speed`.
     Every caller that diagnoses a recording (the service, ``rotordiag diagnose``, the benchmarks) goes through
     here, so that the verdict, its speed and the features it was computed from are the same everywhere.
 
@@ -130,4 +129,4 @@ def diagnose_recording(bundle: Any, recording: Recording, *, clearance_um: float
         fr = extract_features(recording)
     verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k)
     verdict, fr, _ = choose_speed(bundle, recording, fr, verdict, clearance_um=clearance_um, top_k=top_k)
-    return check_numbering(bundle, recording, fr, verdict, clearance_um=clearance_um), fr
+    return verdict, fr

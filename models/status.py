@@ -408,8 +408,8 @@ class RecordingChecks:
     envelope : sequence of dict
         ``MisalignmentModel.envelope_findings`` of this row: features outside the training range.
     extra : sequence of Reason
-        Reasons found before the model ran (``models.bearing_sets``: a probe set the model was not trained on,
-        or one it tells little from).
+        Reasons found outside this module: ``models.bearing_sets`` (a probe set the model was not trained on, or
+        one it tells little from) and ``models.numbering`` (bearings numbered from the other end).
     """
 
     names: Sequence[str]

@@ -1,80 +1,65 @@
 """Bearings numbered from the other end (models.numbering)."""
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from rotordiag.features import ProbeChannel, Recording
-from rotordiag.models.numbering import mirrored
+from rotordiag.features import ProbeChannel, Recording, extract_features
+from rotordiag.models.numbering import NUMBERING_OOD_RATIO, has_every_bearing, mirrored_row, numbering_reason
 
 REGISTRY = Path(__file__).resolve().parent.parent / "models" / "default_registry"
 
 
-def test_mirrored_numbers_each_bearing_from_the_other_end_with_its_clearance():
-    t = np.arange(512) / 512.0
-    chans = [ProbeChannel(b, a, "um", np.sin(2 * np.pi * (b + a / 90) * t), slow_roll_um_pp={1: (1.0, 0.0)})
-             for b in (1, 2, 3, 4) for a in (45.0, 135.0)]
-    rec = Recording(512.0, chans, keyphasor_times_s=np.arange(0.0, 1.0, 1 / 30), speed_rpm=1800.0,
-                    clearance_um={1: 300.0, 2: 310.0, 3: 120.0, 4: 110.0})
-    m = mirrored(rec)
-    assert [c.bearing for c in m.channels] == [4, 4, 3, 3, 2, 2, 1, 1]
-    assert [c.angle_deg for c in m.channels] == [c.angle_deg for c in rec.channels]
-    assert all(a.data is b.data and a.slow_roll_um_pp == b.slow_roll_um_pp for a, b in zip(m.channels, rec.channels))
-    assert m.clearance_um == {4: 300.0, 3: 310.0, 2: 120.0, 1: 110.0}
-    assert mirrored(m).channels == rec.channels and m.speed_rpm == rec.speed_rpm
+def _renumbered(rec: Recording) -> Recording:
+    """The recording itself with every bearing b numbered 5 − b (the reference mirrored_row must match)."""
+    return dataclasses.replace(rec, channels=[dataclasses.replace(c, bearing=5 - c.bearing) for c in rec.channels])
 
 
-def test_shipped_model_doubts_a_train_numbered_from_the_exciter_end():
-    """The simulated default plant numbered 4-3-2-1 is more like the training family read the other way round: the
-    verdict is never confident and says what to check; numbered right, no such reason."""
-    from rotordiag.models.predict import load_bundle
-    from rotordiag.models.speed_choice import diagnose_recording
+@pytest.fixture(scope="module")
+def recording():
     from tests.service_util import simulated_channels
+
+    fs, ch = simulated_channels(misalignment=0.3)
+    return Recording(fs, [ProbeChannel(b, a, "um", d) for b, a, d in ch], speed_rpm=1800.0, clearance_um=350.0)
+
+
+def test_the_renumbered_row_is_the_renumbered_recordings_features(recording):
+    """mirrored_row on the features equals the features of the recording renumbered 4-3-2-1 (every feature, the
+    phase differences across bearings included; the motion type and speed are the same computation)."""
+    fr, fr_m = extract_features(recording), extract_features(_renumbered(recording))
+    names = list(fr.names)
+    got, want = mirrored_row(names, np.asarray(fr.values, dtype=float)), np.asarray(fr_m.values, dtype=float)
+    assert np.array_equal(np.isnan(got), np.isnan(want))
+    ok = np.isfinite(want)
+    np.testing.assert_allclose(got[ok], want[ok], rtol=1e-9, atol=1e-9)
+    assert any(n.startswith("dphase_") and np.isfinite(v) for n, v in zip(names, want))
+    assert has_every_bearing(names, want)
+    three = np.asarray(want, dtype=float).copy()
+    three[names.index("b4_1x_major_um_pp")] = np.nan
+    assert not has_every_bearing(names, three)
+
+
+def test_the_numbering_is_doubted_only_when_the_other_one_is_markedly_more_like_the_family():
+    r = numbering_reason(0.6, NUMBERING_OOD_RATIO * 0.6, "moderate", "aligned")
+    assert r is not None and r.code == "bearing_numbering" and r.status == "uncertain"
+    assert "bearing 1 is the generator's far end" in r.message and "called aligned instead of moderate" in r.message
+    assert numbering_reason(0.6, 0.58, "moderate", "aligned") is None
+    assert numbering_reason(0.0, 0.0, "aligned", "aligned") is None
+
+
+def test_shipped_model_doubts_a_train_numbered_from_the_exciter_end(recording):
+    """The simulated default plant numbered 4-3-2-1: never confident — out of distribution already, or doubted for
+    its numbering; numbered right, no such reason."""
+    from rotordiag.models.predict import diagnose, load_bundle
 
     if not (REGISTRY / "active").exists():
         pytest.skip("no shipped registry in this checkout")
     bundle = load_bundle(REGISTRY)
-    fs, ch = simulated_channels(misalignment=0.3)
-    rec = Recording(fs, [ProbeChannel(b, a, "um", d) for b, a, d in ch], speed_rpm=1800.0, clearance_um=350.0)
-    right, _ = diagnose_recording(bundle, rec)
+    right = diagnose(bundle, extract_features(recording))
     assert "bearing_numbering" not in [r["code"] for r in right.reasons]
-    wrong, _ = diagnose_recording(bundle, mirrored(rec))
-    # out of distribution already (never confident), or doubted for its numbering
+    wrong = diagnose(bundle, extract_features(_renumbered(recording)))
     assert wrong.status != "confident"
     assert wrong.ood or "bearing_numbering" in [r["code"] for r in wrong.reasons]
-
-
-def _verdict(*, ood, ood_score, status="confident"):
-    from rotordiag.models.predict import Verdict
-
-    return Verdict(severity="moderate", probabilities={"moderate": 0.9}, misalignment=0.2,
-                   misalignment_interval=(0.15, 0.3), interval_level=0.9, offset_um=None, offset_interval_um=None,
-                   motion_type=None, top_features=[], ood=ood, ood_score=ood_score, speed_rpm=1800.0,
-                   model_version=None, bands={}, status=status, model_severity="moderate")
-
-
-def test_the_numbering_is_doubted_when_the_other_one_is_markedly_more_like_the_family(monkeypatch):
-    """check_numbering's rule with stand-in verdicts: the mirrored reading's OOD score at or below 0.95 of the
-    recording's own adds the reason (a confident verdict becomes uncertain); above it, or for an out-of-distribution
-    verdict or fewer than four bearings, the verdict is returned as it is."""
-    from types import SimpleNamespace
-
-    from rotordiag.models import numbering
-
-    rec = Recording(512.0, [ProbeChannel(b, a, "um", np.sin(np.arange(512) * (0.1 + b))) for b in (1, 2, 3, 4)
-                            for a in (45.0, 135.0)], speed_rpm=1800.0)
-    fr = SimpleNamespace(bearings={1: 0, 2: 0, 3: 0, 4: 0}, speed_rpm=1800.0, speed_source="given")
-    for other_score, expect in ((0.57, True), (0.58, False)):
-        monkeypatch.setattr(numbering, "extract_features", lambda r, speed_estimate_rpm=None: r)
-        monkeypatch.setattr(numbering, "diagnose", lambda bundle, r, clearance_um=None, top_k=5, s=other_score:
-                            SimpleNamespace(ood_score=s, model_severity="aligned"))
-        v = _verdict(ood=False, ood_score=0.6)
-        out = numbering.check_numbering(None, rec, fr, v)                 # type: ignore[arg-type]
-        assert ([r["code"] for r in out.reasons] == ["bearing_numbering"]) is expect
-        assert out.status == ("uncertain" if expect else "confident")
-    v_ood = _verdict(ood=True, ood_score=1.6, status="uncertain")
-    assert numbering.check_numbering(None, rec, fr, v_ood) is v_ood       # type: ignore[arg-type]
-    three = SimpleNamespace(bearings={1: 0, 2: 0, 3: 0}, speed_rpm=1800.0, speed_source="given")
-    assert numbering.check_numbering(None, rec, three, v) is v             # type: ignore[arg-type]
