@@ -252,6 +252,18 @@ def _one_position_call(model, fast, names: Sequence[str], row: np.ndarray) -> in
     return int(np.min(model.band_index(fast.predict_proba(rows), rows)))
 
 
+def _numbering_reasons(model, fast, names, row: np.ndarray, ood_score: float, cls: int) -> list:
+    """``bearing_numbering`` (models.numbering) for a four-bearing row that is markedly more like the training family
+    numbered from the other end: one more OOD and class pass, on the renumbered row."""
+    if not has_every_bearing(names, row):
+        return []
+    X_other = mirrored_row(names, row)[None, :]
+    other_cls = int(model.band_index(fast.predict_proba(X_other), X_other)[0])
+    reason = numbering_reason(ood_score, float(fast.ood_ratio(X_other)[0]), str(model.classes_[cls]),
+                              str(model.classes_[other_cls]))
+    return [reason] if reason is not None else []
+
+
 def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     if isinstance(bundle, ModelBundle):
         model, version = bundle.model, bundle.version
@@ -295,13 +307,8 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     findings = model.envelope_findings(X)[0] if hasattr(model, "envelope_findings") else []
     ood = ood_score > 1.0 or bool(findings)
     extra = plan.reasons() if plan is not None else []
-    if not ood and has_every_bearing(names, row):
-        # the same recording numbered from the other end (models.numbering): one more OOD and class pass
-        X_other = mirrored_row(names, row)[None, :]
-        other_cls = int(model.band_index(fast.predict_proba(X_other), X_other)[0])
-        reason = numbering_reason(ood_score, float(fast.ood_ratio(X_other)[0]), str(model.classes_[cls]),
-                                  str(model.classes_[other_cls]))
-        extra += [reason] if reason is not None else []
+    if not ood:
+        extra += _numbering_reasons(model, fast, names, row, ood_score, cls)
     if ood_score > 1.0:
         warnings.append(
             f"signal unlike the training data (OOD score {ood_score:.2f} > 1): "
