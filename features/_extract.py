@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from rotordiag.core.conventions import wrap_deg
+
 from . import _config as cfg
 from ._lines import refine_line_hz
 from ._names import FEATURE_NAMES
@@ -229,11 +231,6 @@ def _subtract_slow_roll(rec: Recording, bearings: tuple[int, ...], coeffs: np.nd
             p1, p2 = s1.get(k, 0j), s2.get(k, 0j)
             coeffs[2 * i, k - 1] -= (np.sin(th2) * p1 - np.sin(th1) * p2) / det
             coeffs[2 * i + 1, k - 1] -= (-np.cos(th2) * p1 + np.cos(th1) * p2) / det
-
-
-def _wrap_deg(d: float) -> float:
-    d = d % 360.0
-    return d - 360.0 if d > 180.0 else d
 
 
 class _BlasLimit:
@@ -505,8 +502,8 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
                 for axis in ("x", "y"):
                     ci = 2 * bearings.index(bi) + (axis == "y")
                     cj = 2 * bearings.index(bj) + (axis == "y")
-                    values[_NAME_INDEX[f"dphase_{k}x_b{bi}_b{bj}_{axis}_deg"]] = _wrap_deg(
-                        float(phase[ci, k - 1]) - float(phase[cj, k - 1]))
+                    values[_NAME_INDEX[f"dphase_{k}x_b{bi}_b{bj}_{axis}_deg"]] = float(wrap_deg(
+                        float(phase[ci, k - 1]) - float(phase[cj, k - 1])))
 
     motion = None
     if sa.n_revs >= cfg.MIN_REVS_MOTION:

@@ -23,6 +23,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from rotordiag.core.conventions import wrap_deg
+
 from .status import UNCERTAIN, Reason
 
 __all__ = ["NUMBERING_OOD_RATIO", "mirrored_row", "numbering_reason", "has_every_bearing"]
@@ -33,12 +35,6 @@ NUMBERING_OOD_RATIO = 0.95
 _BEARINGS = (1, 2, 3, 4)
 _PER_BEARING = re.compile(r"^b([1-4])_(.+)$")
 _PAIR = re.compile(r"^(dphase_\dx)_b([1-4])_b([1-4])_(.+)$")
-
-
-def _wrap_deg(d: np.ndarray) -> np.ndarray:
-    """Degrees into (−180, 180], as ``features`` reports phase differences."""
-    d = np.mod(d, 360.0)
-    return np.where(d > 180.0, d - 360.0, d)
 
 
 def has_every_bearing(names: Sequence[str], row: np.ndarray) -> bool:
@@ -62,7 +58,7 @@ def mirrored_row(names: Sequence[str], row: np.ndarray) -> np.ndarray:
             out[j] = row[k] if k is not None else np.nan
         elif m := _PAIR.match(name):
             k = index.get(f"{m.group(1)}_b{5 - int(m.group(3))}_b{5 - int(m.group(2))}_{m.group(4)}")
-            out[j] = float(_wrap_deg(-np.asarray(row[k]))) if k is not None else np.nan
+            out[j] = float(wrap_deg(-row[k])) if k is not None else np.nan
     return out
 
 

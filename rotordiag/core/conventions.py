@@ -27,3 +27,9 @@ def project_on_probe(x: np.ndarray, y: np.ndarray, angle_deg: float) -> np.ndarr
     """
     a = np.deg2rad(float(angle_deg))
     return np.asarray(x) * np.cos(a) + np.asarray(y) * np.sin(a)
+
+
+def wrap_deg(d: float | np.ndarray) -> np.ndarray:
+    """An angle difference in degrees wrapped into (−180, 180], as phase differences are reported."""
+    d = np.mod(np.asarray(d, dtype=float), 360.0)
+    return np.where(d > 180.0, d - 360.0, d)
