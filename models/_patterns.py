@@ -2,11 +2,15 @@
 from __future__ import annotations
 
 import fnmatch
+import re
 from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["name_mask", "pattern_value", "require_matches"]
+__all__ = ["name_mask", "pattern_value", "require_matches", "bearing_feature"]
+
+_PER_BEARING = re.compile(r"^b(\d+)_(.+)$")
+_BEARING_PAIR = re.compile(r"^(.+)_b(\d+)_b(\d+)_(.+)$")
 
 
 def _matches(name: str, patterns: Sequence[str]) -> bool:
@@ -28,3 +32,14 @@ def require_matches(key: str, patterns: Sequence[str], names: Sequence[str], hin
     unmatched = [p for p in patterns if not any(fnmatch.fnmatchcase(n, p) for n in names)]
     if unmatched:
         raise ValueError(f"{key}: pattern(s) {unmatched} match no feature name{hint}")
+
+
+def bearing_feature(name: str) -> tuple[str, tuple[int, ...], str] | None:
+    """The bearings a feature reads, with the name around them: ``("", (2,), "1x_major_um_pp")`` for
+    ``b2_1x_major_um_pp``, ``("dphase_1x", (2, 3), "x_deg")`` for ``dphase_1x_b2_b3_x_deg`` (a phase difference
+    between two bearings); None for a feature of no bearing (the speed, the motion type)."""
+    if m := _PER_BEARING.match(name):
+        return "", (int(m.group(1)),), m.group(2)
+    if m := _BEARING_PAIR.match(name):
+        return m.group(1), (int(m.group(2)), int(m.group(3))), m.group(4)
+    return None

@@ -24,7 +24,6 @@ configuration, or bundles without a card, read every bearing, as before.
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -33,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from ._patterns import bearing_feature
 from .status import INCONCLUSIVE, UNCERTAIN, Reason
 
 __all__ = ["CAPABILITY_PATH", "MAX_FALSE_ALARM", "MAX_FALSE_ALARM_ANY", "MIN_MACRO_F1", "BearingPlan", "answering_set", "bearing_plan",
@@ -48,13 +48,15 @@ MAX_FALSE_ALARM_ANY = 0.25
 #: … or below this held-out macro-F1 over the severity bands
 MIN_MACRO_F1 = 0.5
 
-_BEARING = re.compile(r"^b(\d+)_")
-_PAIR = re.compile(r"_b(\d+)_b(\d+)_")
 
 
 def set_key(bearings: Iterable[int]) -> str:
     """The table's key of a probe set: ``"1-2-3-4"``."""
     return "-".join(str(b) for b in sorted(bearings))
+
+
+#: why a bearing with a backward 1X at it alone is not read
+_BACKWARD = "the 1X whirls backward there, more often a probe-order or polarity mistake than the machine"
 
 
 def _said(bearings: Sequence[int]) -> str:
@@ -148,8 +150,7 @@ class BearingPlan:
         f = self.figures
         fig = (f" (on held-out plants from {set_key(self.answering)}: macro-F1 {f['macro_f1']:.2f}, "
                f"false alarms {f['false_alarm']:.1%})" if f else "")
-        doubt = (f" ({_said(self.suspect)}: the 1X whirls backward, more often a probe-order or polarity mistake "
-                 "than the machine)" if self.suspect else "")
+        doubt = f" ({_said(self.suspect)}: {_BACKWARD})" if self.suspect else ""
         return [f"{_said(self.left_out)} not read by the model{doubt}: it was trained on the probe sets "
                 f"{self._sets()}, and the largest of them this recording has{' without it' if self.suspect else ''} "
                 f"is {set_key(self.answering)}{fig}; the evidence still shows every bearing"]
@@ -159,8 +160,7 @@ class BearingPlan:
         (uncertain), else none."""
         if self.answering is None:
             usable = tuple(b for b in self.present if b not in self.suspect)
-            doubt = (f" ({_said(self.suspect)} left out: the 1X whirls backward there, more often a probe-order or "
-                     "polarity mistake than the machine)" if self.suspect else "")
+            doubt = f" ({_said(self.suspect)} left out: {_BACKWARD})" if self.suspect else ""
             return [Reason("bearing_set_untrained", INCONCLUSIVE,
                            f"the probes the model can read are at {_said(usable) if usable else 'no bearing'}{doubt}; "
                            "the model was trained on the probe sets "
@@ -178,7 +178,7 @@ class BearingPlan:
                            f"{f['macro_f1']:.2f}; a confident verdict needs ≤ {MAX_FALSE_ALARM:.0%}): probes at one of "
                            f"the sets {', '.join(good) if good else 'the model was trained on'} give a firmer one")]
         via = (f" (the largest of its training sets within {_said(self.present)}"
-               + (f", {_said(self.suspect)} left out: the 1X whirls backward there" if self.suspect else "") + ")"
+               + (f", {_said(self.suspect)} left out: {_BACKWARD}" if self.suspect else "") + ")"
                if self.left_out else "")
         return [Reason("bearing_set_uninformative", INCONCLUSIVE,
                        f"the model reads {_said(self.answering)}{via}, and from {set_key(self.answering)} alone it "
@@ -206,12 +206,11 @@ def bearing_plan(bundle: Any, present: Iterable[int], suspect: Iterable[int] = (
 def leave_out_bearings(names: Sequence[str], row: np.ndarray, keep: Iterable[int]) -> np.ndarray:
     """``row`` with every feature of a bearing not in ``keep`` missing (``b{n}_…``, and the phase differences
     ``…_b{m}_b{n}_…`` that involve one), as in a recording without those probes."""
-    keep_set = set(int(b) for b in keep)
+    keep_set = {int(b) for b in keep}
     out = np.array(row, dtype=float, copy=True)
     for j, name in enumerate(names):
-        m = _BEARING.match(name)
-        pair = _PAIR.search(name)
-        if (m and int(m.group(1)) not in keep_set) or (pair and not {int(pair.group(1)), int(pair.group(2))} <= keep_set):
+        parsed = bearing_feature(name)
+        if parsed is not None and not set(parsed[1]) <= keep_set:
             out[j] = np.nan
     return out
 

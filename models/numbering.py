@@ -18,13 +18,13 @@ bearings 2 and 3 is not judged: the OOD score hardly moves (median ratio 1.04 on
 """
 from __future__ import annotations
 
-import re
 from collections.abc import Sequence
 
 import numpy as np
 
 from rotordiag.core.conventions import wrap_deg
 
+from ._patterns import bearing_feature
 from .status import UNCERTAIN, Reason
 
 __all__ = ["NUMBERING_OOD_RATIO", "mirrored_row", "numbering_reason", "has_every_bearing"]
@@ -33,8 +33,6 @@ __all__ = ["NUMBERING_OOD_RATIO", "mirrored_row", "numbering_reason", "has_every
 #: (correctly numbered clean base-set recordings, seed 815: the ratio's lowest value 0.963, 1st percentile 1.04)
 NUMBERING_OOD_RATIO = 0.95
 _BEARINGS = (1, 2, 3, 4)
-_PER_BEARING = re.compile(r"^b([1-4])_(.+)$")
-_PAIR = re.compile(r"^(dphase_\dx)_b([1-4])_b([1-4])_(.+)$")
 
 
 def has_every_bearing(names: Sequence[str], row: np.ndarray) -> bool:
@@ -53,11 +51,15 @@ def mirrored_row(names: Sequence[str], row: np.ndarray) -> np.ndarray:
     index = {n: i for i, n in enumerate(names)}
     out = np.array(row, dtype=float, copy=True)
     for j, name in enumerate(names):
-        if m := _PER_BEARING.match(name):
-            k = index.get(f"b{5 - int(m.group(1))}_{m.group(2)}")
+        parsed = bearing_feature(name)
+        if parsed is None:
+            continue
+        prefix, bearings, suffix = parsed
+        if len(bearings) == 1:
+            k = index.get(f"b{5 - bearings[0]}_{suffix}")
             out[j] = row[k] if k is not None else np.nan
-        elif m := _PAIR.match(name):
-            k = index.get(f"{m.group(1)}_b{5 - int(m.group(3))}_b{5 - int(m.group(2))}_{m.group(4)}")
+        else:
+            k = index.get(f"{prefix}_b{5 - bearings[1]}_b{5 - bearings[0]}_{suffix}")
             out[j] = float(wrap_deg(-row[k])) if k is not None else np.nan
     return out
 
