@@ -97,6 +97,9 @@ class Condition:
     inverted_probe: tuple[int, int] | None = None
     #: the user numbers the bearings from the exciter end: bearing b is sent as 5 − b (models.numbering)
     numbered_from_exciter: bool = False
+    #: (order, µm 0-pk): mains pickup at that order of the running speed added to every channel in one phase (drawn
+    #: after the measurement's draws): a ground loop on a grid-synchronous generator (features._common_mode)
+    pickup: tuple[int, float] | None = None
 
 
 #: the raw probe gap of the "raw gap" row, µm (−8 V at 7.87 V/mm is about 1000 µm)
@@ -145,11 +148,16 @@ CONDITIONS: tuple[Condition, ...] = (
               what="the clean recordings with the bearings numbered from the exciter end (bearing b sent as 5 − b); "
                    "models.numbering doubts the numbering when the other one is markedly more like the training "
                    "family (not one of the issue's rows)"),
+    Condition("mains pickup at 2X, 10 µm", pickup=(2, 10.0), same_recordings_as="clean",
+              what="the clean recordings with a 10 µm (0-pk) signal at twice the running frequency added to every "
+                   "channel in one phase: mains pickup (a ground loop) on a grid-synchronous 2-pole generator, "
+                   "100/120 Hz; the sanity check common_mode_2x and the common_mode doubt (models.common_mode) "
+                   "(not one of the issue's rows)"),
 )
 #: extra measurements, beside the rows issue 15 asks for (its targets are over :data:`ISSUE_CONDITIONS`)
 EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 revolutions",
                     "192 revolutions, speed stated 0.4 % off", "DC: raw probe gaps", "DC: means removed",
-                    "bearing 2's x probe inverted", "bearings numbered 4-3-2-1")
+                    "bearing 2's x probe inverted", "bearings numbered 4-3-2-1", "mains pickup at 2X, 10 µm")
 ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name not in EXTRA_CONDITIONS)
 
 
@@ -384,6 +392,10 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
         if cond.inverted_probe is not None and cond.inverted_probe[0] in cond.bearings:
             b, j = cond.inverted_probe
             w[2 * cond.bearings.index(b) + j] *= -1.0
+        if cond.pickup is not None:
+            order, amp_um = cond.pickup
+            t_s = np.arange(w.shape[1]) / FS_HZ
+            w += amp_um * np.cos(2.0 * np.pi * order * c["speed_rpm"] / 60.0 * t_s + rng.uniform(0.0, 2.0 * np.pi))
         clearance = c["plant"]["clearance_m"] * 1e6 if cond.clearance_given else None
         if not cond.speed_given:
             o.speed_line = running_speed_line(w, FS_HZ, c["speed_rpm"])

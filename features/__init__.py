@@ -20,8 +20,12 @@ speed_alternatives_rpm(recording, estimate_rpm) -> list of float
     ``extract_features(recording, speed_estimate_rpm=...)``.
 check_recording(recording, feature_result) -> tuple of SanityFinding
     Physics sanity checks (flat / clipped / all-zero channels, orbit vs clearance and probe
-    range, implausible DC gap, all-reverse whirl, no 1X above noise); ``extract_features``
-    runs them and puts the findings in ``FeatureResult.sanity``.
+    range, implausible DC gap, all-reverse whirl, no 1X above noise, a 1X / 2X common to every
+    probe); ``extract_features`` runs them and puts the findings in ``FeatureResult.sanity``.
+common_mode(feature_result, order) -> CommonMode or None
+    The signal common to every probe at 1X / 2X and its share of the order's power (electrical
+    pickup at a grid-synchronous machine's 1X / 2X reads the same at every probe; no orbit does);
+    ``without_common_mode(recording, feature_result, found)`` removes it, to read the recording again.
 slow_roll_vectors(slow_roll_recording) -> SlowRollVectors
     Per-probe 1X/2X runout vectors of a slow-roll recording (keyphasor-referenced; an order in
     the noise is absent).
@@ -57,6 +61,7 @@ from ._change import (
     signature,
     speed_comparable,
 )
+from ._common_mode import CommonMode, common_mode, common_mode_share, without_common_mode
 from ._config import (
     ALLOWED_UNITS,
     MIN_REVS,
@@ -84,4 +89,5 @@ __all__ = [
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",
     "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
     "SPEED_AMBIGUOUS", "SPEED_NOT_CONVERGED", "speed_in_doubt", "speed_alternatives_rpm",
+    "CommonMode", "common_mode", "common_mode_share", "without_common_mode",
 ]

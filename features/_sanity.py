@@ -7,7 +7,7 @@ check. ``level`` says what the finding does to a verdict:
   clipped channels, an orbit larger than the bearing's diametral clearance, a DC position no
   proximity probe can read, reverse 1X whirl at every bearing). A verdict is ``inconclusive``.
 - ``"warn"``: plausible but suspicious (reverse 1X whirl at one bearing, no synchronous
-  vibration above the noise at one bearing). A
+  vibration above the noise at one bearing, a 1X or 2X that is one signal common to every probe). A
   verdict is at best ``uncertain``.
 
 A DC position outside the clearance circle is not a finding: DC-coupled probes read their
@@ -23,9 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._common_mode import COMMON_MODE_MIN_PROBES, common_mode
 from ._recording import Recording
 
-__all__ = ["SanityFinding", "check_recording", "FAIL", "WARN",
+__all__ = ["SanityFinding", "check_recording", "FAIL", "WARN", "COMMON_MODE_MIN_SHARE",
            "PROBE_RANGE_UM", "MAX_DC_UM", "ORBIT_CLEARANCE_MARGIN", "CLIP_MIN_FRACTION"]
 
 FAIL = "fail"
@@ -54,6 +55,16 @@ SYNC_MIN_SNR = 3.0
 #: a sub-synchronous share of the vibration power (``b{n}_subsync_frac``) above this at a bearing reads as oil
 #: whirl / whip dominating it
 WHIRL_DOMINANT_FRACTION = 0.5
+#: the orders whose common mode is judged (:func:`_common_mode_checks`): the 1X and 2X vectors the misalignment
+#: evidence rests on (a generator rotor's 3X can be nearly common to bearings 1–3 of a healthy machine)
+COMMON_MODE_ORDERS = (1, 2)
+#: the share of an order's power across the probes that one signal common to all explains
+#: (``features._common_mode.common_mode_share``) from which the order is no shaft motion, by the number of probes
+#: judged (at least ``COMMON_MODE_MIN_PROBES``, on both sides of the coupling). ``benchmarks/bench_common_mode.py``
+#: on held-out simulated plants (base sets of seeds 815–817, far and presets sets; clean, runout, SNR 15 dB, gain
+#: mismatch; 19 000 six- and 3 500–3 900 eight-probe readings per order): the largest share over 8 probes was
+#: 0.59 at 1X and 0.66 at 2X, over 6 probes 0.92 at 1X (99.9 %: 0.61) and 0.73 at 2X
+COMMON_MODE_MIN_SHARE: dict[int, float] = {COMMON_MODE_MIN_PROBES: 0.95, 8: 0.85}
 
 
 @dataclass(frozen=True)
@@ -65,7 +76,7 @@ class SanityFinding:
     code : str
         Stable identifier (``flat_channel``, ``zero_channel``, ``clipped_channel``,
         ``orbit_exceeds_clearance``, ``orbit_exceeds_probe_range``, ``dc_implausible``,
-        ``reverse_whirl_all``, ``reverse_whirl``, ``no_sync_signal``).
+        ``reverse_whirl_all``, ``reverse_whirl``, ``no_sync_signal``, ``common_mode_1x``, ``common_mode_2x``).
     level : str
         ``"fail"`` or ``"warn"``.
     message : str
@@ -222,6 +233,30 @@ def _signal_checks(fr) -> list[SanityFinding]:
             for b in weak]
 
 
+def _common_mode_checks(fr) -> list[SanityFinding]:
+    """A 1X or 2X that reads the same amplitude and phase at every probe is no shaft motion (:mod:`._common_mode`):
+    a warning when its share reaches :data:`COMMON_MODE_MIN_SHARE`. Whether the verdict depends on it is for the
+    caller that can read the recording again without it (``models.common_mode``: inconclusive when it does)."""
+    out: list[SanityFinding] = []
+    for k in COMMON_MODE_ORDERS:
+        cm = common_mode(fr, k)
+        if cm is None or not cm.share >= COMMON_MODE_MIN_SHARE[max(m for m in COMMON_MODE_MIN_SHARE
+                                                                   if m <= cm.n_probes)]:
+            continue
+        source = ("mains pickup at the running frequency (50/60 Hz on a 2-pole generator)" if k == 1 else
+                  "mains pickup at twice the running frequency (100/120 Hz on a 2-pole generator, 50/60 Hz on a "
+                  "4-pole one)")
+        out.append(SanityFinding(
+            f"common_mode_{k}x", WARN,
+            f"the {k}X is one signal common to every probe ({cm.amp_um_pp:.3g} µm pk-pk at {cm.phase_lag_deg:.0f}° on "
+            f"all {cm.n_probes} probes of bearings {', '.join(map(str, cm.bearings))}; {100 * cm.share:.1f} % of the "
+            f"{k}X power): a shaft's {k}X orbit differs between probe directions and from bearing to bearing, so this "
+            f"is no shaft motion but electrical — {source}: a ground loop or a shared supply — or the probe mountings "
+            "vibrating together. Check the probe cabling and grounding (a probe at a fixed target reads the pickup "
+            "alone) and re-record"))
+    return out
+
+
 def check_recording(rec: Recording, fr) -> tuple[SanityFinding, ...]:
     """Physics sanity checks of a recording and its extracted features.
 
@@ -241,5 +276,5 @@ def check_recording(rec: Recording, fr) -> tuple[SanityFinding, ...]:
     if not bad_channel:   # a dead or clipped channel already explains odd whirl and missing 1X
         found += _signal_checks(fr)
         if not any(f.code == "no_sync_signal" and f.level == FAIL for f in found):
-            found += _whirl_checks(fr)
+            found += _common_mode_checks(fr) + _whirl_checks(fr)
     return tuple(sorted(found, key=lambda f: f.level != FAIL))

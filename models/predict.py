@@ -22,7 +22,15 @@ from rotordiag.features import evidence
 from .bearing_sets import bearing_plan, leave_out_bearings
 from .numbering import has_every_bearing, mirrored_row, numbering_reason
 from .registry import Registry
-from .status import INCONCLUSIVE, ModelCall, RecordingChecks, assess, consistent_estimate, journals_at_one_position
+from .status import (
+    INCONCLUSIVE,
+    ModelCall,
+    Reason,
+    RecordingChecks,
+    assess,
+    consistent_estimate,
+    journals_at_one_position,
+)
 
 if TYPE_CHECKING:
     from .compiled import CompiledModel
@@ -196,6 +204,7 @@ def diagnose(
     *,
     clearance_um: float | None = None,
     top_k: int = 5,
+    extra_reasons: Sequence[Reason] = (),
 ) -> Verdict:
     """Diagnose one recording from its features.
 
@@ -210,6 +219,9 @@ def diagnose(
         feature result's ``clearance_um`` when it has one.
     top_k : int
         Number of contributing features reported.
+    extra_reasons : sequence of models.status.Reason
+        Reasons found outside the feature row, by a caller that has the recording
+        (``models.common_mode``); they count in the status like the others.
 
     Returns
     -------
@@ -225,9 +237,9 @@ def diagnose(
     """
     model = bundle.model if isinstance(bundle, ModelBundle) else bundle
     if fast_predictor(model) is not model:
-        return _diagnose(bundle, feature_result, clearance_um=clearance_um, top_k=top_k)
+        return _diagnose(bundle, feature_result, clearance_um=clearance_um, top_k=top_k, extra_reasons=extra_reasons)
     with threadpool_limits(limits=1, user_api="openmp"):
-        return _diagnose(bundle, feature_result, clearance_um=clearance_um, top_k=top_k)
+        return _diagnose(bundle, feature_result, clearance_um=clearance_um, top_k=top_k, extra_reasons=extra_reasons)
 
 
 def _alarm(model, proba: np.ndarray, cls: int, X: np.ndarray) -> tuple[float, float] | None:
@@ -264,7 +276,7 @@ def _numbering_reasons(model, fast, names, row: np.ndarray, ood_score: float, cl
     return [reason] if reason is not None else []
 
 
-def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
+def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Sequence[Reason] = ()) -> Verdict:
     if isinstance(bundle, ModelBundle):
         model, version = bundle.model, bundle.version
     else:
@@ -306,7 +318,7 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k) -> Verdict:
     ood_score = float(fast.ood_ratio(X)[0])
     findings = model.envelope_findings(X)[0] if hasattr(model, "envelope_findings") else []
     ood = ood_score > 1.0 or bool(findings)
-    extra = plan.reasons() if plan is not None else []
+    extra = (plan.reasons() if plan is not None else []) + list(extra_reasons)
     if not ood:
         extra += _numbering_reasons(model, fast, names, row, ood_score, cls)
     if ood_score > 1.0:

@@ -34,6 +34,7 @@ from rotordiag.features import (
     speed_in_doubt,
 )
 
+from .common_mode import common_mode_reason
 from .predict import Verdict, diagnose
 
 __all__ = ["SPEED_CHOICE_MIN_OOD_GAIN", "SpeedChoice", "diagnose_recording", "choose_speed"]
@@ -116,7 +117,8 @@ def diagnose_recording(bundle: Any, recording: Recording, *, clearance_um: float
     """Features and verdict of one recording, the speed judged by the model when the estimate is in doubt.
 
     ``extract_features`` (unless ``fr``, the recording's features, is given) then ``diagnose``, then
-    :func:`choose_speed`.
+    :func:`choose_speed`, then the common-mode doubt (``models.common_mode``: the verdict read again without a
+    1X / 2X common to every probe).
     Every caller that diagnoses a recording (the service, ``rotordiag diagnose``, the benchmarks) goes through
     here, so that the verdict, its speed and the features it was computed from are the same everywhere.
 
@@ -129,4 +131,7 @@ def diagnose_recording(bundle: Any, recording: Recording, *, clearance_um: float
         fr = extract_features(recording)
     verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k)
     verdict, fr, _ = choose_speed(bundle, recording, fr, verdict, clearance_um=clearance_um, top_k=top_k)
+    doubt = common_mode_reason(bundle, recording, fr, verdict, clearance_um=clearance_um)
+    if doubt is not None:
+        verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k, extra_reasons=[doubt])
     return verdict, fr

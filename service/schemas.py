@@ -346,7 +346,10 @@ class ReasonOut(BaseModel):
                       "bearings unlike plain cylindrical ones), `bearing_numbering` (the recording is markedly more like the "
                       "training machines with its bearings numbered 4-3-2-1), `bearing_set_untrained`, "
                       "`bearing_set_uninformative`, `bearing_set_weak` (the probes' bearings: none of the model's training "
-                      "probe sets among them, or the one it reads tells misalignment poorly on held-out plants).")
+                      "probe sets among them, or the one it reads tells misalignment poorly on held-out plants), "
+                      "`common_mode_1x`, `common_mode_2x` (the 1X / 2X is one signal common to every probe: mains pickup or "
+                      "the probe mountings, no shaft motion), `common_mode` (without the part of the 1X / 2X common to every "
+                      "probe the class differs: check the probe cabling and grounding).")
     status: Literal["uncertain", "inconclusive"] = Field(..., description="What this reason alone makes of the verdict.")
     message: str = Field(..., description="What was found and what to check.")
 
