@@ -100,6 +100,10 @@ class Condition:
     #: (order, µm 0-pk): mains pickup at that order of the running speed added to every channel in one phase (drawn
     #: after the measurement's draws): a ground loop on a grid-synchronous generator (features._common_mode)
     pickup: tuple[int, float] | None = None
+    #: a keyphasor is sent, faulty: ``"missing"`` = every 5th pulse missing (a worn notch, the trigger level
+    #: marginal), ``"second edge"`` = an extra pulse 0.37 revolution after each one; the recordings are measured at a
+    #: steady speed (no fluctuation) so that the pulses are exact otherwise
+    keyphasor_fault: str = ""
 
 
 #: the raw probe gap of the "raw gap" row, µm (−8 V at 7.87 V/mm is about 1000 µm)
@@ -148,6 +152,14 @@ CONDITIONS: tuple[Condition, ...] = (
               what="the clean recordings with the bearings numbered from the exciter end (bearing b sent as 5 − b); "
                    "models.numbering doubts the numbering when the other one is markedly more like the training "
                    "family (not one of the issue's rows)"),
+    Condition("keyphasor, every 5th pulse missing", keyphasor_fault="missing",
+              what="the base set's machines at a steady speed with a keyphasor whose every 5th pulse is missing: the "
+                   "features do not track orders by a faulty pulse train (features._keyphasor) (not one of the "
+                   "issue's rows)"),
+    Condition("keyphasor, a second edge every revolution", keyphasor_fault="second edge",
+              same_recordings_as="keyphasor, every 5th pulse missing",
+              what="those recordings with an extra pulse 0.37 revolution after each one: no sound interval gives the "
+                   "period, the speed comes from the signal (not one of the issue's rows)"),
     Condition("mains pickup at 2X, 10 µm", pickup=(2, 10.0), same_recordings_as="clean",
               what="the clean recordings with a 10 µm (0-pk) signal at twice the running frequency added to every "
                    "channel in one phase: mains pickup (a ground loop) on a grid-synchronous 2-pole generator, "
@@ -157,7 +169,8 @@ CONDITIONS: tuple[Condition, ...] = (
 #: extra measurements, beside the rows issue 15 asks for (its targets are over :data:`ISSUE_CONDITIONS`)
 EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 revolutions",
                     "192 revolutions, speed stated 0.4 % off", "DC: raw probe gaps", "DC: means removed",
-                    "bearing 2's x probe inverted", "bearings numbered 4-3-2-1", "mains pickup at 2X, 10 µm")
+                    "bearing 2's x probe inverted", "bearings numbered 4-3-2-1", "keyphasor, every 5th pulse missing",
+                    "keyphasor, a second edge every revolution", "mains pickup at 2X, 10 µm")
 ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name not in EXTRA_CONDITIONS)
 
 
@@ -301,7 +314,8 @@ class Outcome:
 
 
 def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ...], fs_hz: float,
-                       speed_rpm: float | None, clearance_um: float | None, out: Outcome, units: str = "um") -> Outcome:
+                       speed_rpm: float | None, clearance_um: float | None, out: Outcome, units: str = "um",
+                       keyphasor_times_s: np.ndarray | None = None) -> Outcome:
     """Run features + the shipped model + the rule of thumb on one recording (fills ``out``); ``units``
     is what the channels are declared in (the numbers are µm: ``"mil"`` is the µm-read-as-mils mistake)."""
     from rotordiag.features import ProbeChannel, Recording, extract_features
@@ -311,7 +325,8 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
     chans = [ProbeChannel(b, a, units, waveforms_um[2 * k + j]) for k, b in enumerate(bearings)
              for j, a in enumerate(ANGLES_DEG)]
     try:
-        rec = Recording(sample_rate_hz=fs_hz, channels=chans, speed_rpm=speed_rpm, clearance_um=clearance_um)
+        rec = Recording(sample_rate_hz=fs_hz, channels=chans, speed_rpm=speed_rpm, clearance_um=clearance_um,
+                        keyphasor_times_s=keyphasor_times_s)
         fr = extract_features(rec)
         out.speed_rpm_estimated = float(fr.speed_rpm)
         v, fr = diagnose_recording(bundle, rec, fr=fr)                     # as the service and the CLI
@@ -383,7 +398,8 @@ def shift_journal_dc(w: np.ndarray, bearings: tuple[int, ...], clearance_um: flo
 def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed: int) -> list[Outcome]:
     def one(i: int, c: dict, d, o: Outcome) -> Outcome:
         rng = measurement_rng(cond, seed, i)
-        w = measure(d, c["speed_rpm"], cond, rng, revs=cond.revs)
+        steady = bool(cond.keyphasor_fault)
+        w = measure(d, c["speed_rpm"], cond, rng, revs=cond.revs, **({"speed_fluctuation": 0.0} if steady else {}))
         shift_journal_dc(w, cond.bearings, c["plant"]["clearance_m"] * 1e6, cond.journal3_dc_shift_c, rng)
         if cond.dc == "gap":
             w += RAW_GAP_UM
@@ -401,7 +417,16 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
             o.speed_line = running_speed_line(w, FS_HZ, c["speed_rpm"])
         stated = c["speed_rpm"] * (1.0 + cond.speed_stated_error) if cond.speed_given else None
         bearings = tuple(5 - b for b in cond.bearings) if cond.numbered_from_exciter else cond.bearings
-        return diagnose_waveforms(bundle, w, bearings, FS_HZ, stated, clearance, o)
+        keyphasor = None
+        if steady:                          # pulses once per revolution from an arbitrary angle, some missing
+            period_s = 60.0 / c["speed_rpm"]
+            pulses = np.arange(rng.uniform(0.0, period_s), w.shape[1] / FS_HZ, period_s)
+            keyphasor = (np.delete(pulses, np.arange(4, pulses.size, 5)) if cond.keyphasor_fault == "missing" else
+                         np.sort(np.concatenate([pulses, pulses + 0.37 * period_s])))
+            keyphasor = keyphasor[keyphasor < w.shape[1] / FS_HZ]
+            stated = None
+        return diagnose_waveforms(bundle, w, bearings, FS_HZ, stated, clearance, o,
+                                  **({} if keyphasor is None else {"keyphasor_times_s": keyphasor}))
 
     return _over_cases(cases, disps, one)
 

@@ -362,6 +362,10 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
     data = rec.xy_all_um()                          # x, y of each bearing
 
     sa = shaft_angle(rec, data, estimate)
+    if sa.source != "keyphasor" and any(c.slow_roll_um_pp for c in rec.channels):
+        # the slow-roll vectors are keyphasor-referenced; orders referenced to the first sample cannot take them
+        raise ValueError(f"slow-roll compensation needs the keyphasor's phase reference, and {sa.warnings[0]}. Fix the "
+                         "keyphasor signal, or send the recording without the slow-roll vectors / recording")
     warnings = list(sa.warnings)
     dc_removed = rec.dc_removed or _means_removed(data)
     if dc_removed:

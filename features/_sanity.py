@@ -7,7 +7,8 @@ check. ``level`` says what the finding does to a verdict:
   clipped channels, an orbit larger than the bearing's diametral clearance, a DC position no
   proximity probe can read, reverse 1X whirl at every bearing). A verdict is ``inconclusive``.
 - ``"warn"``: plausible but suspicious (reverse 1X whirl at one bearing, no synchronous
-  vibration above the noise at one bearing, a 1X or 2X that is one signal common to every probe). A
+  vibration above the noise at one bearing, a 1X or 2X that is one signal common to every probe, a keyphasor
+  pulse train with missing or extra pulses). A
   verdict is at best ``uncertain``.
 
 A DC position outside the clearance circle is not a finding: DC-coupled probes read their
@@ -24,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._common_mode import COMMON_MODE_MIN_PROBES, common_mode
+from ._keyphasor import keyphasor_fault, pulses_in_record
 from ._recording import Recording
 
 __all__ = ["SanityFinding", "check_recording", "FAIL", "WARN", "COMMON_MODE_MIN_SHARE",
@@ -76,7 +78,8 @@ class SanityFinding:
     code : str
         Stable identifier (``flat_channel``, ``zero_channel``, ``clipped_channel``,
         ``orbit_exceeds_clearance``, ``orbit_exceeds_probe_range``, ``dc_implausible``,
-        ``reverse_whirl_all``, ``reverse_whirl``, ``no_sync_signal``, ``common_mode_1x``, ``common_mode_2x``).
+        ``reverse_whirl_all``, ``reverse_whirl``, ``no_sync_signal``, ``common_mode_1x``, ``common_mode_2x``,
+        ``keyphasor_faulty``).
     level : str
         ``"fail"`` or ``"warn"``.
     message : str
@@ -257,6 +260,20 @@ def _common_mode_checks(fr) -> list[SanityFinding]:
     return out
 
 
+def _keyphasor_checks(rec: Recording) -> list[SanityFinding]:
+    if rec.keyphasor_times_s is None:
+        return []
+    fault = keyphasor_fault(pulses_in_record(rec.keyphasor_times_s, rec.n_points, rec.sample_rate_hz))
+    if fault is None:
+        return []
+    return [SanityFinding(
+        "keyphasor_faulty", WARN,
+        f"{fault.describe()}: the pulse train has missing or extra pulses, so the orders were not tracked by it but "
+        "at a steady speed, with phases relative to the first sample. Check the keyphasor probe's gap and trigger "
+        "level and the notch (worn, dirty, a second edge), or send the record without keyphasor_times_s and with "
+        "speed_rpm")]
+
+
 def check_recording(rec: Recording, fr) -> tuple[SanityFinding, ...]:
     """Physics sanity checks of a recording and its extracted features.
 
@@ -272,7 +289,7 @@ def check_recording(rec: Recording, fr) -> tuple[SanityFinding, ...]:
         Empty when every check passes; ``fail`` findings first.
     """
     bad_channel = _channel_checks(rec)
-    found = bad_channel + _amplitude_checks(rec, fr)
+    found = bad_channel + _amplitude_checks(rec, fr) + _keyphasor_checks(rec)
     if not bad_channel:   # a dead or clipped channel already explains odd whirl and missing 1X
         found += _signal_checks(fr)
         if not any(f.code == "no_sync_signal" and f.level == FAIL for f in found):

@@ -124,6 +124,9 @@ def slow_roll_vectors(slow_roll: Recording) -> SlowRollVectors:
     bad = [f for f in fr.sanity if f.level == FAIL and f.code not in _IRRELEVANT_AT_SLOW_ROLL]
     if bad:
         raise ValueError("slow-roll recording: " + "; ".join(f.message for f in bad))
+    if fr.phase_reference != "keyphasor":       # a faulty pulse train (features._keyphasor): no reference
+        raise ValueError(f"slow-roll recording: {fr.warnings[0]}. Its vectors need the keyphasor's phase reference: "
+                         "fix the keyphasor signal and record the slow roll again")
     rel_floor = cfg.PHASE_MIN_REL_AMPLITUDE * max(
         float(np.max(np.abs(np.concatenate([d.x_coeffs_um, d.y_coeffs_um])))) for d in fr.bearings.values())
     vectors: dict[tuple[int, float], dict[int, tuple[float, float]]] = {}

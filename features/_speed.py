@@ -1,7 +1,7 @@
 """Running speed and shaft angle: keyphasor, given speed, or estimated from the signal."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -18,6 +18,7 @@ from ._families import (
     _refine_partner,
     _weak_lines_above,
 )
+from ._keyphasor import keyphasor_fault, pulses_in_record
 from ._lines import (
     _circular_fraction,
     _circular_fraction_at,
@@ -544,12 +545,25 @@ def shaft_angle(rec, data: np.ndarray, estimate: tuple[float, list[str]] | None 
     warnings: list[str] = []
     if rec.keyphasor_times_s is not None:
         t_end = (n - 1) / fs
-        kp_all = rec.keyphasor_times_s
-        kp = kp_all[(kp_all >= 0) & (kp_all <= t_end)]
+        kp = pulses_in_record(rec.keyphasor_times_s, n, fs)
         if kp.size < 2:
             raise ValueError(
                 f"keyphasor_times_s: {kp.size} pulse(s) fall inside the record (0 to {t_end:.4g} s); the pulse times "
                 "must be on the samples' clock (first sample at t = 0)")
+        fault = keyphasor_fault(kp)
+        if fault is not None:
+            # the pulses cannot be tracked: the orders are tracked at a steady speed instead — the one stated, else
+            # the sound intervals' period (locked to the signal's synchronous lines), else the signal's own estimate —
+            # with phases relative to the first sample
+            rpm_steady = rec.speed_rpm if rec.speed_rpm is not None else \
+                None if fault.period_s is None else 60.0 / fault.period_s
+            bare = [replace(c, slow_roll_um_pp=None) for c in rec.channels]   # keyphasor-referenced: not here
+            steady = shaft_angle(replace(rec, channels=bare, keyphasor_times_s=None, speed_rpm=rpm_steady), data)
+            source = ("speed_rpm" if rec.speed_rpm is not None else "estimated from the signal" if rpm_steady is None
+                      else "the sound pulse intervals' period, locked to the signal")
+            note = (f"keyphasor_times_s not used: {fault.describe()}. The orders are tracked at a steady "
+                    f"{steady.speed_rpm:.1f} r/min ({source}), phases relative to the first sample")
+            return replace(steady, warnings=[note, *steady.warnings])
         periods = np.diff(kp)
         n_revs = int(kp.size - 1)
         rpm = 60.0 * n_revs / float(kp[-1] - kp[0])

@@ -347,6 +347,7 @@ class ReasonOut(BaseModel):
                       "training machines with its bearings numbered 4-3-2-1), `bearing_set_untrained`, "
                       "`bearing_set_uninformative`, `bearing_set_weak` (the probes' bearings: none of the model's training "
                       "probe sets among them, or the one it reads tells misalignment poorly on held-out plants), "
+                      "`keyphasor_faulty` (missing or extra keyphasor pulses: the orders were tracked at a steady speed), "
                       "`common_mode_1x`, `common_mode_2x` (the 1X / 2X is one signal common to every probe: mains pickup or "
                       "the probe mountings, no shaft motion), `common_mode` (without the part of the 1X / 2X common to every "
                       "probe the class differs: check the probe cabling and grounding).")

@@ -532,3 +532,39 @@ def test_the_renumbered_row_sends_bearing_b_as_5_minus_b(monkeypatch):
         bench.run_condition(None, cond, [case], [_shaft(60 * bench.SAMPLES_PER_REV)], 815)
     np.testing.assert_array_equal(seen["clean"][0], seen["bearings numbered 4-3-2-1"][0])
     assert seen["clean"][1] == (1, 2, 3, 4) and seen["bearings numbered 4-3-2-1"][1] == (4, 3, 2, 1)
+
+
+def test_the_pickup_row_is_the_clean_recordings_with_one_common_2x(monkeypatch):
+    """Every channel of the clean recordings plus the same 10 µm (0-pk) sinusoid at twice the running frequency."""
+    seen: dict[str, np.ndarray] = {}
+    case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
+    for name in ("clean", "mains pickup at 2X, 10 µm"):
+        cond = next(c for c in bench.CONDITIONS if c.name == name)
+        assert name == "clean" or (name not in bench.ISSUE_CONDITIONS and cond.same_recordings_as == "clean")
+        monkeypatch.setattr(bench, "diagnose_waveforms", lambda bundle, w, bearings, fs, speed, clearance, o, n=name:
+                            seen.setdefault(n, w.copy()) is not None and o)
+        bench.run_condition(None, cond, [case], [_shaft(60 * bench.SAMPLES_PER_REV)], 815)
+    d = seen["mains pickup at 2X, 10 µm"] - seen["clean"]
+    np.testing.assert_allclose(d, np.broadcast_to(d[0], d.shape), atol=1e-9)      # one signal on every channel
+    t = np.arange(d.shape[1]) / bench.FS_HZ
+    z = 2.0 * np.mean(d[0] * np.exp(-2j * np.pi * 2 * SPEED_RPM / 60.0 * t))
+    assert abs(z) == pytest.approx(10.0, rel=0.02)
+
+
+@pytest.mark.parametrize("row, per_rev", [("keyphasor, every 5th pulse missing", 0.8),
+                                          ("keyphasor, a second edge every revolution", 2.0)])
+def test_the_keyphasor_rows_send_a_faulty_pulse_train(monkeypatch, row, per_rev):
+    sent: dict = {}
+    case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
+    cond = next(c for c in bench.CONDITIONS if c.name == row)
+    assert row not in bench.ISSUE_CONDITIONS
+
+    def fake(bundle, w, bearings, fs, speed, clearance, o, keyphasor_times_s=None):
+        sent.update(w=w, speed=speed, kp=keyphasor_times_s)
+        return o
+
+    monkeypatch.setattr(bench, "diagnose_waveforms", fake)
+    bench.run_condition(None, cond, [case], [_shaft(60 * bench.SAMPLES_PER_REV)], 815)
+    kp, dur = sent["kp"], sent["w"].shape[1] / bench.FS_HZ
+    assert sent["speed"] is None and kp is not None and np.all(np.diff(kp) > 0) and kp[-1] < dur
+    assert kp.size / (dur * SPEED_RPM / 60.0) == pytest.approx(per_rev, abs=0.05)
