@@ -443,12 +443,15 @@ def run_ross(bundle, path: Path) -> list[Outcome]:
 
 
 #: Measurement mistakes on the ``clean`` condition's recordings (issue 15, item 7: the OOD check must flag them):
-#: name → (declared units, factor on the stated clearance)
+#: name → (declared units, factor on the stated clearance); on the base set unless :data:`MISTAKE_SETS` says otherwise
 MISTAKES: dict[str, tuple[str, float]] = {
     "µm declared as mils": ("mil", 1.0),
     "clearance stated ×5": ("um", 5.0),
     "clearance stated ÷5": ("um", 0.2),
+    "clearance stated ×2 (the diametral one)": ("um", 2.0),
+    "clearance stated ×2, far plants": ("um", 2.0),
 }
+MISTAKE_SETS: dict[str, str] = {"clearance stated ×2, far plants": "far"}
 
 
 def run_mistake(bundle, name: str, cases: list[dict], disps: list, seed: int) -> list[Outcome]:
@@ -959,7 +962,7 @@ def main(argv=None) -> int:
     mistake_rows: dict[str, dict] = {}
     names, edges = _bands(bundle)
     for name in MISTAKES:
-        outs = run_mistake(bundle, name, *sets[("base", REVS)], args.seed)
+        outs = run_mistake(bundle, name, *sets[(MISTAKE_SETS.get(name, "base"), REVS)], args.seed)
         ood_rows[f"mistake: {name}"] = ood_summary(outs)
         ran = [o for o in outs if o.status != "sim failed"]
         mistake_rows[f"mistake: {name}"] = {"n": len(ran), "confident": confident_summary(ran, names, edges)}

@@ -276,7 +276,23 @@ def _numbering_reasons(model, fast, names, row: np.ndarray, ood_score: float, cl
     return [reason] if reason is not None else []
 
 
-def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Sequence[Reason] = ()) -> Verdict:
+@dataclass(frozen=True)
+class _ModelRow:
+    """A feature result as the model reads it: its row over the model's features, the bearings it answers from."""
+
+    model: Any
+    version: str | None
+    names: Sequence[str]
+    row: np.ndarray
+    missing: list[str]
+    warnings: list[str]
+    plan: Any
+    sanity: tuple
+
+
+def _model_row(bundle, feature_result) -> _ModelRow:
+    """The model's feature row of ``feature_result``, with the bearings outside the answering probe set left out
+    (models.bearing_sets), and the warnings that go with it."""
     if isinstance(bundle, ModelBundle):
         model, version = bundle.model, bundle.version
     else:
@@ -295,7 +311,7 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
             f"(treated as missing): {missing[:5]}{' …' if len(missing) > 5 else ''}"
         )
     # the probe set the model reads (models.bearing_sets): the other bearings' features left out
-    sanity = getattr(feature_result, "sanity", ()) or ()
+    sanity = tuple(getattr(feature_result, "sanity", ()) or ())
     plan = (bearing_plan(bundle, feature_result.bearings,
                          suspect=[f.bearing for f in sanity if f.code == "reverse_whirl" and f.bearing is not None])
             if getattr(feature_result, "bearings", None) else None)
@@ -303,6 +319,31 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
         if plan.answering is not None and plan.left_out:
             row = leave_out_bearings(names, row, plan.answering)
         warnings += plan.warnings()
+    return _ModelRow(model, version, names, row, missing, warnings, plan, sanity)
+
+
+def ood_score_and_class(bundle: ModelBundle | Any, feature_result) -> tuple[float, str]:
+    """The kNN OOD score and the classifier's class of a feature result, as :func:`diagnose` computes them, and
+    nothing else: for a second reading of a recording (``models.clearance_check``) at a fraction of a verdict's cost.
+    """
+    m = _model_row(bundle, feature_result)
+    X = m.row[None, :]
+    fast = fast_predictor(m.model)
+
+    def score() -> tuple[float, str]:
+        cls = int(m.model.band_index(fast.predict_proba(X), X)[0])
+        return float(fast.ood_ratio(X)[0]), str(m.model.classes_[cls])
+
+    if fast is not m.model:                 # compiled trees: no thread pool (as diagnose)
+        return score()
+    with threadpool_limits(limits=1, user_api="openmp"):
+        return score()
+
+
+def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Sequence[Reason] = ()) -> Verdict:
+    m = _model_row(bundle, feature_result)
+    model, version, names, row, missing = m.model, m.version, m.names, m.row, m.missing
+    warnings, plan, sanity = m.warnings, m.plan, m.sanity
     never_missing = (~np.isfinite(row)) & (model.feature_nan_rate_ == 0)
     never_missing_names = [n for n, m in zip(names, never_missing) if m and n not in missing]
     if never_missing_names:

@@ -34,6 +34,7 @@ from rotordiag.features import (
     speed_in_doubt,
 )
 
+from .clearance_check import clearance_reason
 from .common_mode import common_mode_reason
 from .predict import Verdict, diagnose
 
@@ -118,7 +119,8 @@ def diagnose_recording(bundle: Any, recording: Recording, *, clearance_um: float
 
     ``extract_features`` (unless ``fr``, the recording's features, is given) then ``diagnose``, then
     :func:`choose_speed`, then the common-mode doubt (``models.common_mode``: the verdict read again without a
-    1X / 2X common to every probe).
+    1X / 2X common to every probe) and the clearance doubt (``models.clearance_check``: a confident verdict read
+    again at half the stated clearance).
     Every caller that diagnoses a recording (the service, ``rotordiag diagnose``, the benchmarks) goes through
     here, so that the verdict, its speed and the features it was computed from are the same everywhere.
 
@@ -131,7 +133,8 @@ def diagnose_recording(bundle: Any, recording: Recording, *, clearance_um: float
         fr = extract_features(recording)
     verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k)
     verdict, fr, _ = choose_speed(bundle, recording, fr, verdict, clearance_um=clearance_um, top_k=top_k)
-    doubt = common_mode_reason(bundle, recording, fr, verdict, clearance_um=clearance_um)
-    if doubt is not None:
-        verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k, extra_reasons=[doubt])
+    doubts = [r for r in (common_mode_reason(bundle, recording, fr, verdict, clearance_um=clearance_um),
+                          clearance_reason(bundle, recording, fr, verdict)) if r is not None]
+    if doubts:
+        verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k, extra_reasons=doubts)
     return verdict, fr

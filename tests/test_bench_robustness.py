@@ -228,7 +228,9 @@ def test_ood_summary_counts_which_check_flagged():
     assert r["n"] == 4 and r["ood"] == 0.75 and r["knn"] == 0.5 and r["envelope"] == 0.5
     assert r["status"]["uncertain"] == 0.5 and r["top"] == [("b4_attitude_offset_deg", 2)]
     assert "b4_attitude_offset_deg (2)" in bench.ood_table({"x": r})
-    assert set(bench.MISTAKES) == {"µm declared as mils", "clearance stated ×5", "clearance stated ÷5"}
+    assert set(bench.MISTAKES) == {"µm declared as mils", "clearance stated ×5", "clearance stated ÷5",
+                                   "clearance stated ×2 (the diametral one)", "clearance stated ×2, far plants"}
+    assert set(bench.MISTAKE_SETS) <= set(bench.MISTAKES)
 
 
 def test_running_speed_line_classes():
