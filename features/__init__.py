@@ -26,8 +26,8 @@ common_mode(feature_result, order) -> CommonMode or None
     The signal common to every probe at 1X / 2X and its share of the order's power (electrical
     pickup at a grid-synchronous machine's 1X / 2X reads the same at every probe; no orbit does);
     ``without_common_mode(recording, feature_result, found)`` removes it, to read the recording again.
-with_clearance_scaled(feature_result, factor) -> FeatureResult
-    The features as extracted with every stated clearance × ``factor`` (a row transform; exact).
+with_scale(feature_result, length_factor=1, clearance_factor=1) -> FeatureResult
+    The features as extracted with the numbers and the stated clearances scaled (a row transform; exact).
 slow_roll_vectors(slow_roll_recording) -> SlowRollVectors
     Per-probe 1X/2X runout vectors of a slow-roll recording (keyphasor-referenced; an order in
     the noise is absent).
@@ -63,7 +63,7 @@ from ._change import (
     signature,
     speed_comparable,
 )
-from ._clearance_scale import with_clearance_scaled
+from ._scale import with_scale
 from ._common_mode import CommonMode, common_mode, common_mode_share, without_common_mode
 from ._config import (
     ALLOWED_UNITS,
@@ -92,5 +92,5 @@ __all__ = [
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",
     "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
     "SPEED_AMBIGUOUS", "SPEED_NOT_CONVERGED", "speed_in_doubt", "speed_alternatives_rpm",
-    "CommonMode", "common_mode", "common_mode_share", "without_common_mode", "with_clearance_scaled",
+    "CommonMode", "common_mode", "common_mode_share", "without_common_mode", "with_scale",
 ]

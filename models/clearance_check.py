@@ -13,7 +13,7 @@ stated clearance's for 42 of 53, 32 of 45 and 26 of 35 slips — all 4 two bands
 1 of 91 and 2 of 86 recordings whose clearance was right.
 
 So :func:`clearance_reason` reads a ``confident`` verdict's recording once more with half the stated clearance (every
-bearing's, when given per bearing: ``features.with_clearance_scaled``, the feature row at that clearance — exact,
+bearing's, when given per bearing: ``features.with_scale``, the feature row at that clearance — exact,
 no second extraction); when its OOD score is at or below :data:`DIAMETRAL_OOD_RATIO` times the
 recording's own, the verdict gets ``clearance_diametral`` (uncertain), which says what to check. The verdict itself
 stays the one at the clearance given. A verdict that is not confident is not read again: the reason could only
@@ -26,7 +26,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from rotordiag.features import FeatureResult, Recording, with_clearance_scaled
+from rotordiag.features import FeatureResult, Recording, with_scale
 
 from .status import CONFIDENT, UNCERTAIN, Reason
 
@@ -57,7 +57,7 @@ def clearance_reason(bundle: Any, recording: Recording, fr: FeatureResult, verdi
     if getattr(verdict, "status", None) != CONFIDENT or recording.clearance_um is None:
         return None
     try:
-        ood_half, class_half = ood_score_and_class(bundle, with_clearance_scaled(fr, 0.5))
+        ood_half, class_half = ood_score_and_class(bundle, with_scale(fr, clearance_factor=0.5))
     except ValueError:
         return None
     ratio = ood_half / verdict.ood_score if verdict.ood_score > 0 else float("inf")

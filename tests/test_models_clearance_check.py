@@ -40,11 +40,11 @@ def test_shipped_model_doubts_a_confident_verdict_at_the_diametral_clearance(del
 
 @pytest.mark.parametrize("clearance", [CLEARANCE_UM, {1: 300.0, 2: 350.0, 3: 140.0, 4: 400.0}])
 def test_the_scaled_row_is_the_features_at_that_clearance(clearance):
-    """features.with_clearance_scaled(fr, 0.5) equals a second extraction at half the clearance, every feature
+    """features.with_scale(fr, clearance_factor=0.5) equals a second extraction at half the clearance, every feature
     (bearing 3 at 140 µm: its centreline, at an eccentricity of 1.24, is beyond CENTRELINE_MAX_ECC at 70 µm)."""
     import numpy as np
 
-    from rotordiag.features import extract_features, with_clearance_scaled
+    from rotordiag.features import extract_features, with_scale
     from tests.service_util import simulated_channels
 
     fs, ch = simulated_channels(misalignment=0.3, record_revs=48)
@@ -52,7 +52,7 @@ def test_the_scaled_row_is_the_features_at_that_clearance(clearance):
     fr = extract_features(Recording(fs, chans, speed_rpm=1800.0, clearance_um=clearance))
     half = clearance / 2 if not isinstance(clearance, dict) else {b: c / 2 for b, c in clearance.items()}
     again = extract_features(Recording(fs, chans, speed_rpm=1800.0, clearance_um=half))
-    scaled = with_clearance_scaled(fr, 0.5)
+    scaled = with_scale(fr, clearance_factor=0.5)
     np.testing.assert_allclose(scaled.values, again.values, rtol=1e-12, atol=0, equal_nan=True)
     if isinstance(clearance, dict):
         assert np.isfinite(fr["b3_centre_ecc_per_c"]) and np.isnan(again["b3_centre_ecc_per_c"])
@@ -74,3 +74,26 @@ def test_the_second_reading_scores_as_the_verdict_does():
                                         clearance_um=CLEARANCE_UM))
         v = diagnose(bundle, fr)
         assert ood_score_and_class(bundle, fr) == (pytest.approx(v.ood_score, rel=1e-12), v.model_severity)
+
+
+def test_the_scaled_row_is_the_features_of_scaled_numbers():
+    """features.with_scale(fr, length_factor=2) equals a second extraction of the channels × 2 (with 0.2 µm of
+    noise scaled along: the phase-noise gate and every ratio are scale-free), and both at once compose."""
+    import numpy as np
+
+    from rotordiag.features import extract_features, with_scale
+    from tests.service_util import simulated_channels
+
+    fs, ch = simulated_channels(misalignment=0.3, record_revs=48)
+    rng = np.random.default_rng(3)
+    noisy = [(b, a, d + rng.normal(0.0, 0.2, d.size)) for b, a, d in ch]
+    fr = extract_features(Recording(fs, [ProbeChannel(b, a, "um", d) for b, a, d in noisy], speed_rpm=1800.0,
+                                    clearance_um=CLEARANCE_UM))
+    doubled = extract_features(Recording(fs, [ProbeChannel(b, a, "um", 2.0 * d) for b, a, d in noisy],
+                                         speed_rpm=1800.0, clearance_um=CLEARANCE_UM))
+    np.testing.assert_allclose(with_scale(fr, length_factor=2.0).values, doubled.values, rtol=1e-9, atol=1e-9,
+                               equal_nan=True)
+    both = extract_features(Recording(fs, [ProbeChannel(b, a, "um", 2.0 * d) for b, a, d in noisy],
+                                      speed_rpm=1800.0, clearance_um=CLEARANCE_UM / 2))
+    np.testing.assert_allclose(with_scale(fr, length_factor=2.0, clearance_factor=0.5).values, both.values,
+                               rtol=1e-9, atol=1e-9, equal_nan=True)
