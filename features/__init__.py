@@ -63,7 +63,6 @@ from ._change import (
     signature,
     speed_comparable,
 )
-from ._scale import with_scale
 from ._common_mode import CommonMode, common_mode, common_mode_share, without_common_mode
 from ._config import (
     ALLOWED_UNITS,
@@ -80,6 +79,7 @@ from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
 from ._orbit import OrbitShape
 from ._recording import ProbeChannel, Recording, parse_speed_range
 from ._sanity import SanityFinding, check_recording
+from ._scale import with_scale
 from ._slow_roll import SLOW_ROLL_MAX_SPEED_FRACTION, SlowRollVectors, apply_slow_roll, slow_roll_vectors
 from ._speed_alternatives import speed_alternatives_rpm
 
