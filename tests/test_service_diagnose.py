@@ -445,3 +445,27 @@ def test_dc_removed_through_json_binary_and_the_cli(client, rec, registry_src, t
     cli = json.loads(out.output)
     cli = cli[0] if isinstance(cli, list) else cli
     assert cli["probabilities"] == pytest.approx(j["probabilities"], rel=1e-9, abs=1e-12)
+
+
+# --- field faults the verdict says, over HTTP ----------------------------------------------------------
+
+def test_mains_pickup_and_a_faulty_keyphasor_are_said_over_http(client, rec):
+    """A 12 µm 2X on every channel of the healthy plant (a ground loop on a grid-synchronous generator) and a
+    keyphasor with every 5th pulse missing: 200 with the reasons and messages of features._common_mode /
+    features._keyphasor, never confident."""
+    fs, healthy = simulated_channels(misalignment=0.0, speed_rpm=1800.0, sample_rate_hz=2048.0, record_revs=40)
+    t = np.arange(len(healthy[0][2])) / fs
+    hum = 12.0 * np.cos(2 * np.pi * 2 * 1800.0 / 60.0 * t)
+    r = _post_channels(client, [(b, a, d + hum) for b, a, d in healthy], fs, speed_rpm=1800.0, clearance_um=350.0)
+    assert r.status_code == 200, r.text
+    v = r.json()
+    codes = [x["code"] for x in v["reasons"]]
+    assert "common_mode_2x" in codes and v["status"] != "confident"
+    fs, channels = rec
+    pulses = np.arange(0.004, (len(channels[0][2]) - 1) / fs, 60.0 / 1800.0)
+    kp = np.delete(pulses, np.arange(4, pulses.size, 5))
+    r = _post_channels(client, channels, fs, keyphasor_times_s=[float(x) for x in kp], clearance_um=350.0)
+    assert r.status_code == 200, r.text
+    v = r.json()
+    assert "keyphasor_faulty" in [x["code"] for x in v["reasons"]] and v["status"] != "confident"
+    assert any(w.startswith("keyphasor_times_s not used") for w in v["warnings"])
