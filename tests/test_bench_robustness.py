@@ -310,18 +310,25 @@ def test_a_stated_speed_off_is_measured_on_the_same_recordings_and_stated_off(mo
     assert seen == [((8, round(192 * 60 / SPEED_RPM * bench.FS_HZ)), pytest.approx(SPEED_RPM * 1.004, rel=1e-12))]
 
 
-def test_the_dc_rows_are_the_clean_recordings_with_a_raw_gap_or_without_their_means(monkeypatch):
-    """The "DC" rows: the clean row's waveforms (same draws) with every channel offset by the raw gap, or with each
-    channel's mean removed; the clearance stays stated; neither is an issue row."""
-    seen: dict[str, np.ndarray] = {}
+def _sent_for_clean_and(monkeypatch, *rows: str) -> dict[str, tuple[np.ndarray, tuple[int, ...], float | None]]:
+    """What each of ``rows`` (each measured on the clean row's recordings) and the clean row send to the verdict for
+    one aligned case: (waveforms, bearings, clearance) per row name."""
+    seen: dict[str, tuple[np.ndarray, tuple[int, ...], float | None]] = {}
     case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
-    for name in ("clean", "DC: raw probe gaps", "DC: means removed"):
+    for name in ("clean", *rows):
         cond = next(c for c in bench.CONDITIONS if c.name == name)
         assert name == "clean" or (name not in bench.ISSUE_CONDITIONS and cond.same_recordings_as == "clean")
         monkeypatch.setattr(bench, "diagnose_waveforms", lambda bundle, w, bearings, fs, speed, clearance, o, n=name:
-                            seen.setdefault(n, (w.copy(), clearance)) and o)
+                            seen.setdefault(n, (w.copy(), bearings, clearance)) is not None and o)
         bench.run_condition(None, cond, [case], [_shaft(60 * bench.SAMPLES_PER_REV)], 815)
-    (w0, c0), (wg, cg), (wr, cr) = seen["clean"], seen["DC: raw probe gaps"], seen["DC: means removed"]
+    return seen
+
+
+def test_the_dc_rows_are_the_clean_recordings_with_a_raw_gap_or_without_their_means(monkeypatch):
+    """The "DC" rows: the clean row's waveforms (same draws) with every channel offset by the raw gap, or with each
+    channel's mean removed; the clearance stays stated; neither is an issue row."""
+    seen = _sent_for_clean_and(monkeypatch, "DC: raw probe gaps", "DC: means removed")
+    (w0, _, c0), (wg, _, cg), (wr, _, cr) = seen["clean"], seen["DC: raw probe gaps"], seen["DC: means removed"]
     assert c0 == cg == cr == pytest.approx(300.0)
     np.testing.assert_allclose(wg, w0 + bench.RAW_GAP_UM, atol=1e-9)
     np.testing.assert_allclose(wr, w0 - w0.mean(axis=1, keepdims=True), atol=1e-12)
@@ -330,15 +337,8 @@ def test_the_dc_rows_are_the_clean_recordings_with_a_raw_gap_or_without_their_me
 
 def test_the_inverted_probe_row_is_the_clean_recordings_with_one_channel_negated(monkeypatch):
     """Bearing 2's first probe (channel 2 of 1,1,2,2,3,3,4,4) negated, everything else the clean row's."""
-    seen: dict[str, np.ndarray] = {}
-    case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
-    for name in ("clean", "bearing 2's x probe inverted"):
-        cond = next(c for c in bench.CONDITIONS if c.name == name)
-        assert name == "clean" or (name not in bench.ISSUE_CONDITIONS and cond.same_recordings_as == "clean")
-        monkeypatch.setattr(bench, "diagnose_waveforms", lambda bundle, w, bearings, fs, speed, clearance, o, n=name:
-                            seen.setdefault(n, w.copy()) is not None and o)
-        bench.run_condition(None, cond, [case], [_shaft(60 * bench.SAMPLES_PER_REV)], 815)
-    w0, wi = seen["clean"], seen["bearing 2's x probe inverted"]
+    seen = _sent_for_clean_and(monkeypatch, "bearing 2's x probe inverted")
+    w0, wi = seen["clean"][0], seen["bearing 2's x probe inverted"][0]
     np.testing.assert_array_equal(wi[2], -w0[2])
     np.testing.assert_array_equal(np.delete(wi, 2, axis=0), np.delete(w0, 2, axis=0))
 
@@ -524,29 +524,15 @@ def test_bench_bearing_sets_passes_each_probe_sets_own_channels(monkeypatch):
 
 
 def test_the_renumbered_row_sends_bearing_b_as_5_minus_b(monkeypatch):
-    seen = {}
-    case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
-    for name in ("clean", "bearings numbered 4-3-2-1"):
-        cond = next(c for c in bench.CONDITIONS if c.name == name)
-        assert name == "clean" or (name not in bench.ISSUE_CONDITIONS and cond.same_recordings_as == "clean")
-        monkeypatch.setattr(bench, "diagnose_waveforms", lambda bundle, w, bearings, fs, speed, clearance, o, n=name:
-                            seen.setdefault(n, (w.copy(), bearings)) is not None and o)
-        bench.run_condition(None, cond, [case], [_shaft(60 * bench.SAMPLES_PER_REV)], 815)
+    seen = _sent_for_clean_and(monkeypatch, "bearings numbered 4-3-2-1")
     np.testing.assert_array_equal(seen["clean"][0], seen["bearings numbered 4-3-2-1"][0])
     assert seen["clean"][1] == (1, 2, 3, 4) and seen["bearings numbered 4-3-2-1"][1] == (4, 3, 2, 1)
 
 
 def test_the_pickup_row_is_the_clean_recordings_with_one_common_2x(monkeypatch):
     """Every channel of the clean recordings plus the same 10 µm (0-pk) sinusoid at twice the running frequency."""
-    seen: dict[str, np.ndarray] = {}
-    case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
-    for name in ("clean", "mains pickup at 2X, 10 µm"):
-        cond = next(c for c in bench.CONDITIONS if c.name == name)
-        assert name == "clean" or (name not in bench.ISSUE_CONDITIONS and cond.same_recordings_as == "clean")
-        monkeypatch.setattr(bench, "diagnose_waveforms", lambda bundle, w, bearings, fs, speed, clearance, o, n=name:
-                            seen.setdefault(n, w.copy()) is not None and o)
-        bench.run_condition(None, cond, [case], [_shaft(60 * bench.SAMPLES_PER_REV)], 815)
-    d = seen["mains pickup at 2X, 10 µm"] - seen["clean"]
+    seen = _sent_for_clean_and(monkeypatch, "mains pickup at 2X, 10 µm")
+    d = seen["mains pickup at 2X, 10 µm"][0] - seen["clean"][0]
     np.testing.assert_allclose(d, np.broadcast_to(d[0], d.shape), atol=1e-9)      # one signal on every channel
     t = np.arange(d.shape[1]) / bench.FS_HZ
     z = 2.0 * np.mean(d[0] * np.exp(-2j * np.pi * 2 * SPEED_RPM / 60.0 * t))
