@@ -221,7 +221,7 @@ def diagnose(
         Number of contributing features reported.
     extra_reasons : sequence of models.status.Reason
         Reasons found outside the feature row, by a caller that has the recording
-        (``models.common_mode``); they count in the status like the others.
+        (``models.common_mode``, ``models.clearance_check``); they count in the status like the others.
 
     Returns
     -------
@@ -341,9 +341,9 @@ def ood_score_and_class(bundle: ModelBundle | Any, feature_result) -> tuple[floa
 
 
 def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Sequence[Reason] = ()) -> Verdict:
-    m = _model_row(bundle, feature_result)
-    model, version, names, row, missing = m.model, m.version, m.names, m.row, m.missing
-    warnings, plan, sanity = m.warnings, m.plan, m.sanity
+    read = _model_row(bundle, feature_result)
+    model, version, names, row, missing = read.model, read.version, read.names, read.row, read.missing
+    warnings, plan, sanity = read.warnings, read.plan, read.sanity
     never_missing = (~np.isfinite(row)) & (model.feature_nan_rate_ == 0)
     never_missing_names = [n for n, m in zip(names, never_missing) if m and n not in missing]
     if never_missing_names:
