@@ -18,9 +18,9 @@ no second extraction); when its OOD score is at or below :data:`DIAMETRAL_OOD_RA
 recording's own, the verdict gets ``clearance_diametral`` (uncertain), which says what to check. The verdict itself
 stays the one at the clearance given. A verdict that is not confident is not read again: the reason could only
 repeat that it is not to be acted on alone. The mistakes' rows now: 11 and 13 confident, none two bands off. In
-family it costs 11 of about 2 900 confident verdicts of docs/robustness.md (coupling bearings only 108 → 102,
-presets 84 → 82, the two 192-revolution rows 1 each); one more pass of the OOD scorer and the classifier per
-confident verdict with a clearance.
+family it costs 11 of the 1 281 confident verdicts of docs/robustness.md's 17 simulated rows (coupling bearings only
+108 → 102, presets 84 → 82, the two 192-revolution rows 1 each); one more pass of the OOD scorer and the classifier
+per confident verdict with a clearance.
 """
 from __future__ import annotations
 
