@@ -63,7 +63,13 @@ from ._change import (
     signature,
     speed_comparable,
 )
-from ._common_mode import CommonMode, common_mode, common_mode_share, without_common_mode
+from ._common_mode import (
+    COMMON_MODE_NOTABLE_SHARE,
+    CommonMode,
+    common_mode,
+    common_mode_share,
+    without_common_mode,
+)
 from ._config import (
     ALLOWED_UNITS,
     MIN_REVS,
@@ -92,5 +98,5 @@ __all__ = [
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",
     "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
     "SPEED_AMBIGUOUS", "SPEED_NOT_CONVERGED", "speed_in_doubt", "speed_alternatives_rpm",
-    "CommonMode", "common_mode", "common_mode_share", "without_common_mode", "with_scale",
+    "CommonMode", "common_mode", "common_mode_share", "without_common_mode", "with_scale", "COMMON_MODE_NOTABLE_SHARE",
 ]

@@ -4,7 +4,8 @@ engineer reads, each with a one-line meaning.
 Per coupling bearing (2 and 3, else whatever is present): 1X and 2X vectors of each probe
 direction (µm pk-pk and phase lag), 2X/1X, orbit shape and the shaft-centreline position;
 across the coupling: the 1X and 2X phase differences; first, when runout was compensated, the
-slow-roll vectors subtracted at each bearing. Nothing here uses the ML model.
+slow-roll vectors subtracted at each bearing, and a 1X / 2X largely common to every probe (mains pickup).
+Nothing here uses the ML model.
 """
 from __future__ import annotations
 
@@ -12,7 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._common_mode import COMMON_MODE_NOTABLE_SHARE, common_mode
 from ._config import CENTRELINE_MAX_ECC, PHASE_PAIRS
+from ._sanity import common_mode_dominates
 
 __all__ = ["EvidenceItem", "evidence"]
 
@@ -200,6 +203,25 @@ def _coupling_items(fr) -> list[EvidenceItem]:
     return items
 
 
+def _common_mode_items(fr) -> list[EvidenceItem]:
+    """The 1X / 2X common to every probe, where it is a notable share of the order (``features._common_mode``)."""
+    items = []
+    for order in (1, 2):
+        cm = common_mode(fr, order)
+        if cm is None or not cm.share >= COMMON_MODE_NOTABLE_SHARE:
+            continue
+        dominant = common_mode_dominates(cm)
+        meaning = (f"the {order}X is one signal at every probe: electrical pickup (mains on a grid-synchronous "
+                   "generator) or the probe mountings vibrating together, not shaft motion" if dominant else
+                   f"a large part of the {order}X is one signal at every probe, which no shaft orbit is: pickup or "
+                   "mounting vibration is likely; check the probe cabling and grounding")
+        items.append(EvidenceItem(
+            "all probes", f"{order}X common to every probe",
+            f"{100 * cm.share:.0f} % of the {order}X power: {cm.amp_um_pp:.3g} µm pk-pk ∠ "
+            f"{_whole_degrees(cm.phase_lag_deg):.0f}° at all {cm.n_probes} probes", meaning, float(cm.share)))
+    return items
+
+
 def evidence(fr) -> list[EvidenceItem]:
     """The model-independent evidence of a feature result (coupling bearings first).
 
@@ -210,13 +232,15 @@ def evidence(fr) -> list[EvidenceItem]:
     Returns
     -------
     list of EvidenceItem
-        The slow-roll vectors subtracted at each bearing (when runout was compensated), the
+        The slow-roll vectors subtracted at each bearing (when runout was compensated), a 1X / 2X
+        largely common to every probe (pickup: when its share reaches ``COMMON_MODE_NOTABLE_SHARE``), the
         across-the-coupling phase differences, then each coupling bearing present (2, 3); when
         neither coupling bearing is present, every bearing present.
     """
     present = sorted(fr.bearings)
     chosen = [b for b in present if b in COUPLING] or present
     items = [it for b in present if (it := _slow_roll_item(fr.bearings[b])) is not None]
+    items += _common_mode_items(fr)
     items += _coupling_items(fr)
     for b in chosen:
         items += _bearing_items(fr.bearings[b])

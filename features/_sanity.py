@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._common_mode import COMMON_MODE_MIN_PROBES, common_mode
+from ._common_mode import COMMON_MODE_MIN_PROBES, CommonMode, common_mode
 from ._keyphasor import keyphasor_fault, pulses_in_record
 from ._recording import Recording
 
@@ -236,6 +236,11 @@ def _signal_checks(fr) -> list[SanityFinding]:
             for b in weak]
 
 
+def common_mode_dominates(cm: CommonMode) -> bool:
+    """Whether the common signal is the order (its share reaches :data:`COMMON_MODE_MIN_SHARE` for its probes)."""
+    return cm.share >= COMMON_MODE_MIN_SHARE[max(m for m in COMMON_MODE_MIN_SHARE if m <= cm.n_probes)]
+
+
 def _common_mode_checks(fr) -> list[SanityFinding]:
     """A 1X or 2X that reads the same amplitude and phase at every probe is no shaft motion (:mod:`._common_mode`):
     a warning when its share reaches :data:`COMMON_MODE_MIN_SHARE`. Whether the verdict depends on it is for the
@@ -243,8 +248,7 @@ def _common_mode_checks(fr) -> list[SanityFinding]:
     out: list[SanityFinding] = []
     for k in COMMON_MODE_ORDERS:
         cm = common_mode(fr, k)
-        if cm is None or not cm.share >= COMMON_MODE_MIN_SHARE[max(m for m in COMMON_MODE_MIN_SHARE
-                                                                   if m <= cm.n_probes)]:
+        if cm is None or not common_mode_dominates(cm):
             continue
         source = ("mains pickup at the running frequency (50/60 Hz on a 2-pole generator)" if k == 1 else
                   "mains pickup at twice the running frequency (100/120 Hz on a 2-pole generator, 50/60 Hz on a "

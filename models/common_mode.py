@@ -25,17 +25,22 @@ from __future__ import annotations
 
 from typing import Any
 
-from rotordiag.features import FeatureResult, Recording, common_mode, extract_features, without_common_mode
+from rotordiag.features import (
+    COMMON_MODE_NOTABLE_SHARE,
+    FeatureResult,
+    Recording,
+    common_mode,
+    extract_features,
+    without_common_mode,
+)
 
 from .status import INCONCLUSIVE, UNCERTAIN, Reason
 
 __all__ = ["COMMON_MODE_DOUBT_SHARE", "common_mode_reason"]
 
-#: a 1X or 2X whose common share (``features.common_mode``) reaches this is read again without its common part.
-#: ``benchmarks/bench_common_mode.py`` on held-out simulated plants: 99.9 % of the shares were below 0.56–0.61 over
-#: 8 probes and 0.61–0.67 over 6, so about one in-family recording in 1000 is read twice; it is doubted only when the
-#: class changes
-COMMON_MODE_DOUBT_SHARE = 0.6
+#: a 1X or 2X whose common share (``features.common_mode``) reaches this is read again without its common part
+#: (``features.COMMON_MODE_NOTABLE_SHARE``: about one in-family recording in 1000); doubted only when the class changes
+COMMON_MODE_DOUBT_SHARE = COMMON_MODE_NOTABLE_SHARE
 _ORDERS = (1, 2)
 
 

@@ -132,3 +132,17 @@ def test_a_synthetic_train_with_a_common_2x():
     assert common_mode(fr, 2).share == pytest.approx(1.0, abs=1e-6)
     assert _codes(fr).get("common_mode_2x") == "warn"
     assert "common_mode_1x" not in _codes(fr)
+
+
+def test_the_evidence_shows_a_notable_common_part_and_only_then():
+    from rotordiag.features import evidence
+
+    def items(fr):
+        return [e for e in evidence(fr) if e.scope == "all probes"]
+
+    assert items(extract_features(_recording())) == []
+    weak = items(extract_features(_recording(pickup_um=6.0, phase_rad=0.75 * np.pi)))     # share 0.71
+    assert [e.name for e in weak] == ["2X common to every probe"] and "likely" in weak[0].meaning
+    assert weak[0].number == pytest.approx(0.71, abs=0.01)
+    strong = items(extract_features(_recording(pickup_um=12.0)))                          # share 0.96
+    assert "not shaft motion" in strong[0].meaning and strong[0].value.startswith("96 % of the 2X power")

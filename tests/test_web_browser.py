@@ -686,3 +686,22 @@ def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_
             assert page["status"] == "uncertain" and "bearing_set_weak" in codes
             assert any("bearings 1 and 4 not read by the model" in w for w in page["warnings"])
         _screenshot(d, name)
+
+
+def test_mains_pickup_is_shown_as_evidence_not_as_a_severity(server, browser, recordings, tmp_path):
+    """A 12 µm 2X on every channel (mains pickup on a grid-synchronous generator): the page shows the reasons that
+    name it and, in the evidence, the part of the 2X common to every probe; never a confident verdict."""
+    data = recordings[0.05]
+    t = np.arange(data.shape[0]) / FS_HZ
+    hum = 12.0 * np.cos(2 * np.pi * 2 * SPEED_RPM / 60.0 * t)[:, None]
+    _open(browser, server)
+    _submit_file(browser, _write_csv(tmp_path / "pickup.csv", data + hum), sample_rate=str(FS_HZ),
+                 clearance=str(CLEARANCE_UM))
+    d = browser
+    page = d.execute_script("return window.rotordiag.state.verdict")
+    assert page["status"] != "confident" and "common_mode_2x" in [r["code"] for r in page["reasons"]]
+    rows = [r.text for r in d.find_elements("css selector", "#verdict-evidence tbody tr")]
+    assert any("2X common to every probe" in r for r in rows)
+    reasons = " ".join(e.text for e in d.find_elements("css selector", "#verdict-reasons li"))
+    assert "grounding" in reasons
+    _screenshot(d, "mains-pickup")
