@@ -104,6 +104,9 @@ class Condition:
     #: marginal), ``"second edge"`` = an extra pulse 0.37 revolution after each one; the recordings are measured at a
     #: steady speed (no fluctuation) so that the pulses are exact otherwise
     keyphasor_fault: str = ""
+    #: µm added to one sample of one channel (both drawn after the measurement's draws): a glitch — electrical noise,
+    #: a loose connector, a scratch
+    spike_um: float = 0.0
 
 
 #: the raw probe gap of the "raw gap" row, µm (−8 V at 7.87 V/mm is about 1000 µm)
@@ -160,6 +163,10 @@ CONDITIONS: tuple[Condition, ...] = (
               same_recordings_as="keyphasor, every 5th pulse missing",
               what="those recordings with an extra pulse 0.37 revolution after each one: no sound interval gives the "
                    "period, the speed comes from the signal (not one of the issue's rows)"),
+    Condition("one 500 µm spike", spike_um=500.0, same_recordings_as="clean",
+              what="the clean recordings with 500 µm added to one sample of one channel: a glitch that makes some "
+                   "orbits larger than the clearance; the sanity check says spike, not units (not one of the "
+                   "issue's rows)"),
     Condition("mains pickup at 2X, 10 µm", pickup=(2, 10.0), same_recordings_as="clean",
               what="the clean recordings with a 10 µm (0-pk) signal at twice the running frequency added to every "
                    "channel in one phase: mains pickup (a ground loop) on a grid-synchronous 2-pole generator, "
@@ -170,7 +177,7 @@ CONDITIONS: tuple[Condition, ...] = (
 EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 revolutions",
                     "192 revolutions, speed stated 0.4 % off", "DC: raw probe gaps", "DC: means removed",
                     "bearing 2's x probe inverted", "bearings numbered 4-3-2-1", "keyphasor, every 5th pulse missing",
-                    "keyphasor, a second edge every revolution", "mains pickup at 2X, 10 µm")
+                    "keyphasor, a second edge every revolution", "one 500 µm spike", "mains pickup at 2X, 10 µm")
 ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name not in EXTRA_CONDITIONS)
 
 
@@ -408,6 +415,8 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
         if cond.inverted_probe is not None and cond.inverted_probe[0] in cond.bearings:
             b, j = cond.inverted_probe
             w[2 * cond.bearings.index(b) + j] *= -1.0
+        if cond.spike_um:
+            w[rng.integers(0, w.shape[0]), rng.integers(0, w.shape[1])] += cond.spike_um
         if cond.pickup is not None:
             order, amp_um = cond.pickup
             t_s = np.arange(w.shape[1]) / FS_HZ

@@ -8,7 +8,7 @@ check. ``level`` says what the finding does to a verdict:
   proximity probe can read, reverse 1X whirl at every bearing). A verdict is ``inconclusive``.
 - ``"warn"``: plausible but suspicious (reverse 1X whirl at one bearing, no synchronous
   vibration above the noise at one bearing, a 1X or 2X that is one signal common to every probe, a keyphasor
-  pulse train with missing or extra pulses). A
+  pulse train with missing or extra pulses, an orbit beyond the clearance only through a few isolated samples). A
   verdict is at best ``uncertain``.
 
 A DC position outside the clearance circle is not a finding: DC-coupled probes read their
@@ -57,6 +57,11 @@ SYNC_MIN_SNR = 3.0
 #: a sub-synchronous share of the vibration power (``b{n}_subsync_frac``) above this at a bearing reads as oil
 #: whirl / whip dominating it
 WHIRL_DOMINANT_FRACTION = 0.5
+#: a sample further than this fraction of its channel's 1–99 % range from the median of its five neighbours is a
+#: spike (:func:`spike_samples`) …
+SPIKE_MIN_REL = 0.35
+#: … when such samples are at most this fraction of the record
+SPIKE_MAX_FRACTION = 0.005
 #: the orders whose common mode is judged (:func:`_common_mode_checks`): the 1X and 2X vectors the misalignment
 #: evidence rests on (a generator rotor's 3X can be nearly common to bearings 1–3 of a healthy machine)
 COMMON_MODE_ORDERS = (1, 2)
@@ -79,7 +84,7 @@ class SanityFinding:
         Stable identifier (``flat_channel``, ``zero_channel``, ``clipped_channel``,
         ``orbit_exceeds_clearance``, ``orbit_exceeds_probe_range``, ``dc_implausible``,
         ``reverse_whirl_all``, ``reverse_whirl``, ``no_sync_signal``, ``common_mode_1x``, ``common_mode_2x``,
-        ``keyphasor_faulty``).
+        ``keyphasor_faulty``, ``spike``).
     level : str
         ``"fail"`` or ``"warn"``.
     message : str
@@ -144,6 +149,42 @@ def noise_peak_to_peak_um(noise_rms_um: Iterable[float], n_samples: int,
     return 2.0 * float(-ndtri(false_alarm / (2.0 * n_samples))) * sigma
 
 
+def spike_samples(signal: np.ndarray) -> np.ndarray:
+    """Indices of isolated samples far off their neighbours (a glitch: electrical noise, a scratch, a dropout).
+
+    A sample counts when it lies more than ``SPIKE_MIN_REL`` of the signal's 1–99 % range from the median of the
+    five samples around it; a sampled sine never does (at 8 samples per revolution, the fewest the features accept,
+    a peak lies 0.15 of the range from its neighbours' median). At most ``SPIKE_MAX_FRACTION`` of the record: more is
+    no glitch."""
+    from scipy.ndimage import median_filter
+
+    x = np.asarray(signal, dtype=float)
+    lo, hi = np.percentile(x, [1.0, 99.0])
+    off = np.abs(x - median_filter(x, size=5, mode="nearest")) > SPIKE_MIN_REL * (hi - lo)
+    idx = np.flatnonzero(off)
+    return idx if idx.size <= SPIKE_MAX_FRACTION * x.size else np.empty(0, dtype=np.int64)
+
+
+def _spike_finding(rec: Recording, b: int, ptp: float, limit: float) -> SanityFinding | None:
+    """``spike`` when the orbit is beyond ``limit`` only because of isolated samples, else None."""
+    x, y = rec.xy_um(b)
+    bad = np.union1d(spike_samples(x), spike_samples(y))
+    if bad.size == 0:
+        return None
+    keep = np.ones(x.size, dtype=bool)
+    keep[bad] = False
+    rest = max(float(np.ptp(x[keep])), float(np.ptp(y[keep])))
+    if rest > limit:
+        return None
+    t = ", ".join(f"{i / rec.sample_rate_hz:.4g}" for i in bad[:5]) + (" …" if bad.size > 5 else "")
+    return SanityFinding(
+        "spike", WARN,
+        f"bearing {b}: {bad.size} isolated sample(s) (at t = {t} s) stand far off the rest of the record and make "
+        f"the motion {ptp:.4g} µm pk-pk; without them it is {rest:.4g} µm pk-pk, inside the clearance. A glitch — "
+        "electrical noise, a loose connector, a scratch or a dropout — not shaft motion: check the probe's cable "
+        "and connector, or cut those samples out", b)
+
+
 def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
     out: list[SanityFinding] = []
     for b, det in sorted(fr.bearings.items()):
@@ -154,7 +195,11 @@ def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
         units_txt = "/".join(units)
         beyond = bool(np.isfinite(c) and c > 0 and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c)
         noise_pp = noise_peak_to_peak_um(det.noise_rms_um, x.size) if beyond else 0.0
-        if beyond and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c + noise_pp:
+        spike = (_spike_finding(rec, b, ptp, ORBIT_CLEARANCE_MARGIN * 2 * c + noise_pp)
+                 if beyond and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c + noise_pp else None)
+        if spike is not None:
+            out.append(spike)
+        elif beyond and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c + noise_pp:
             allowance = (f" (allowing {noise_pp:.3g} µm pk-pk for the probes' noise)"
                          if noise_pp > 0.01 * 2 * c else "")
             out.append(SanityFinding(

@@ -348,6 +348,7 @@ class ReasonOut(BaseModel):
                       "`bearing_set_uninformative`, `bearing_set_weak` (the probes' bearings: none of the model's training "
                       "probe sets among them, or the one it reads tells misalignment poorly on held-out plants), "
                       "`keyphasor_faulty` (missing or extra keyphasor pulses: the orders were tracked at a steady speed), "
+                      "`spike` (a few isolated samples make the orbit larger than the clearance: a glitch), "
                       "`clearance_diametral` (half the stated clearance makes the recording at least as like the training "
                       "machines: check that clearance_um is the radial clearance), "
                       "`common_mode_1x`, `common_mode_2x` (the 1X / 2X is one signal common to every probe: mains pickup or "

@@ -229,3 +229,26 @@ def test_evidence_angles_never_print_as_360_degrees():
 
     assert [f"{_whole_degrees(a):.0f}" for a in (-0.0009, 359.6, 359.4, 0.0, 360.0, 720.2, -90.0)] == \
         ["0", "0", "359", "0", "0", "0", "270"]
+
+
+def test_a_single_spike_is_a_glitch_not_a_units_mistake(sim):
+    """One 5000 µm sample on one probe (a connector glitch) makes the orbit larger than the clearance: the check says spike (what to check:
+    the cable, the connector) and warns; the same numbers ×25.4 everywhere remain a units mistake that fails."""
+    fs, ch = sim
+    spiked = [(b, a, d.copy()) for b, a, d in ch]
+    spiked[2][2][777] += 5000.0
+    codes = _codes(extract_features(_rec(spiked, fs)))
+    assert ("spike", "warn") in codes and not any(c == "orbit_exceeds_clearance" for c, _ in codes)
+    msg = next(f.message for f in extract_features(_rec(spiked, fs)).sanity if f.code == "spike")
+    assert "bearing 2" in msg and "1 isolated sample" in msg and "connector" in msg
+    assert ("orbit_exceeds_clearance", "fail") in _codes(extract_features(_rec(ch, fs, units="mil")))
+
+
+def test_a_sampled_sine_has_no_spikes():
+    from rotordiag.features._sanity import spike_samples
+
+    for samples_per_rev in (8, 13, 64):
+        assert spike_samples(np.cos(2 * np.pi * np.arange(2000) / samples_per_rev)).size == 0
+    x = np.cos(2 * np.pi * np.arange(2000) / 13)
+    x[[100, 1500]] += 3.0
+    assert spike_samples(x).tolist() == [100, 1500]
