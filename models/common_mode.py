@@ -44,8 +44,7 @@ COMMON_MODE_DOUBT_SHARE = COMMON_MODE_NOTABLE_SHARE
 _ORDERS = (1, 2)
 
 
-def common_mode_reason(bundle: Any, recording: Recording, fr: FeatureResult, verdict: Any, *,
-                       clearance_um: float | None = None) -> Reason | None:
+def common_mode_reason(bundle: Any, recording: Recording, fr: FeatureResult, verdict: Any) -> Reason | None:
     """``common_mode`` when the verdict's class changes with the common 1X / 2X removed, else None.
 
     Parameters
@@ -56,11 +55,9 @@ def common_mode_reason(bundle: Any, recording: Recording, fr: FeatureResult, ver
     fr : features.FeatureResult
         Its features (the speed the verdict was given at).
     verdict : models.Verdict
-        Its verdict; an inconclusive one (e.g. the sanity check ``common_mode_2x``) is not read again.
-    clearance_um : float, optional
-        As :func:`models.predict.diagnose`.
+        Its verdict; an inconclusive one is not read again.
     """
-    from .predict import diagnose
+    from .predict import ood_score_and_class
 
     found = [cm for k in _ORDERS if (cm := common_mode(fr, k)) is not None and cm.share >= COMMON_MODE_DOUBT_SHARE]
     if not found or verdict.status == INCONCLUSIVE or verdict.model_severity is None:
@@ -69,7 +66,7 @@ def common_mode_reason(bundle: Any, recording: Recording, fr: FeatureResult, ver
         clean = without_common_mode(recording, fr, found)
         fr_clean = extract_features(clean, speed_estimate_rpm=fr.speed_rpm if fr.speed_source == "estimated" else None,
                                     speed_notes=list(fr.warnings))
-        other = diagnose(bundle, fr_clean, clearance_um=clearance_um, top_k=1).model_severity
+        _, other = ood_score_and_class(bundle, fr_clean)
     except ValueError:
         return None
     if other == verdict.model_severity:

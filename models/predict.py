@@ -324,7 +324,8 @@ def _model_row(bundle, feature_result) -> _ModelRow:
 
 def ood_score_and_class(bundle: ModelBundle | Any, feature_result) -> tuple[float, str]:
     """The kNN OOD score and the classifier's class of a feature result, as :func:`diagnose` computes them, and
-    nothing else: for a second reading of a recording (``models.clearance_check``) at a fraction of a verdict's cost.
+    nothing else: for a second reading of a recording (``models.clearance_check``, ``models.common_mode``) at a
+    fraction of a verdict's cost.
     """
     m = _model_row(bundle, feature_result)
     X = m.row[None, :]

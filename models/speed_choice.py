@@ -133,7 +133,7 @@ def diagnose_recording(bundle: Any, recording: Recording, *, clearance_um: float
         fr = extract_features(recording)
     verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k)
     verdict, fr, _ = choose_speed(bundle, recording, fr, verdict, clearance_um=clearance_um, top_k=top_k)
-    doubts = [r for r in (common_mode_reason(bundle, recording, fr, verdict, clearance_um=clearance_um),
+    doubts = [r for r in (common_mode_reason(bundle, recording, fr, verdict),
                           clearance_reason(bundle, recording, fr, verdict)) if r is not None]
     if doubts:
         verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k, extra_reasons=doubts)
