@@ -79,11 +79,10 @@ def keyphasor_fault(pulse_times_s: np.ndarray) -> KeyphasorFault | None:
     n = periods.size
     if n < 3:
         return None
-    ratios = np.empty(n)
-    for i in range(n):
-        lo, hi = max(0, i - _HALF_WINDOW), min(n, i + _HALF_WINDOW + 1)
-        around = np.concatenate([periods[lo:i], periods[i + 1:hi]])
-        ratios[i] = periods[i] / float(np.median(around))
+    pad = np.full(_HALF_WINDOW, np.nan)
+    windows = np.lib.stride_tricks.sliding_window_view(np.concatenate([pad, periods, pad]), 2 * _HALF_WINDOW + 1)
+    around = np.delete(windows, _HALF_WINDOW, axis=1)            # each interval's neighbours, itself left out
+    ratios = periods / np.nanmedian(around, axis=1)
     off = np.abs(ratios - 1.0) > KEYPHASOR_JUMP_MAX
     if not off.any():
         return None
