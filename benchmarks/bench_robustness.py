@@ -427,7 +427,7 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
         stated = c["speed_rpm"] * (1.0 + cond.speed_stated_error) if cond.speed_given else None
         bearings = tuple(5 - b for b in cond.bearings) if cond.numbered_from_exciter else cond.bearings
         keyphasor = None
-        if steady:                          # pulses once per revolution from an arbitrary angle, some missing
+        if steady:                          # pulses once per revolution from an arbitrary angle, made faulty
             period_s = 60.0 / c["speed_rpm"]
             pulses = np.arange(rng.uniform(0.0, period_s), w.shape[1] / FS_HZ, period_s)
             keyphasor = (np.delete(pulses, np.arange(4, pulses.size, 5)) if cond.keyphasor_fault == "missing" else

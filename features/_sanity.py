@@ -165,9 +165,10 @@ def spike_samples(signal: np.ndarray) -> np.ndarray:
     return idx if idx.size <= SPIKE_MAX_FRACTION * x.size else np.empty(0, dtype=np.int64)
 
 
-def _spike_finding(rec: Recording, b: int, ptp: float, limit: float) -> SanityFinding | None:
-    """``spike`` when the orbit is beyond ``limit`` only because of isolated samples, else None."""
-    x, y = rec.xy_um(b)
+def _spike_finding(rec: Recording, b: int, x: np.ndarray, y: np.ndarray, limit: float) -> SanityFinding | None:
+    """``spike`` when bearing ``b``'s orbit (``x``, ``y`` in µm) is beyond ``limit`` only because of isolated
+    samples, else None."""
+    ptp = max(float(np.ptp(x)), float(np.ptp(y)))
     bad = np.union1d(spike_samples(x), spike_samples(y))
     if bad.size == 0:
         return None
@@ -195,11 +196,11 @@ def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
         units_txt = "/".join(units)
         beyond = bool(np.isfinite(c) and c > 0 and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c)
         noise_pp = noise_peak_to_peak_um(det.noise_rms_um, x.size) if beyond else 0.0
-        spike = (_spike_finding(rec, b, ptp, ORBIT_CLEARANCE_MARGIN * 2 * c + noise_pp)
-                 if beyond and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c + noise_pp else None)
+        limit = ORBIT_CLEARANCE_MARGIN * 2 * c + noise_pp
+        spike = _spike_finding(rec, b, x, y, limit) if beyond and ptp > limit else None
         if spike is not None:
             out.append(spike)
-        elif beyond and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c + noise_pp:
+        elif beyond and ptp > limit:
             allowance = (f" (allowing {noise_pp:.3g} µm pk-pk for the probes' noise)"
                          if noise_pp > 0.01 * 2 * c else "")
             out.append(SanityFinding(
