@@ -41,6 +41,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -107,6 +108,12 @@ class Condition:
     #: µm added to one sample of one channel (both drawn after the measurement's draws): a glitch — electrical noise,
     #: a loose connector, a scratch
     spike_um: float = 0.0
+    #: ms (uniform): bearings 3 and 4 taken this much later than 1 and 2 — a second acquisition (a four-channel
+    #: analyser's second take, or another monitoring system) sent as one recording (drawn after the measurement's
+    #: draws; the record cut to the common length)
+    second_take_ms: tuple[float, float] = (0.0, 0.0)
+    #: ``Recording.acquisitions`` as the user states it (``""``: not stated — every channel taken as sampled together)
+    acquisitions: str = ""
 
 
 #: the raw probe gap of the "raw gap" row, µm (−8 V at 7.87 V/mm is about 1000 µm)
@@ -172,12 +179,21 @@ CONDITIONS: tuple[Condition, ...] = (
                    "channel in one phase: mains pickup (a ground loop) on a grid-synchronous 2-pole generator, "
                    "100/120 Hz; the sanity check common_mode_2x and the common_mode doubt (models.common_mode) "
                    "(not one of the issue's rows)"),
+    Condition("bearings 3–4 in a second take, not stated", second_take_ms=(2.0, 20.0), same_recordings_as="clean",
+              what="the clean recordings with bearings 3 and 4 taken U(2, 20) ms after 1 and 2 (a second acquisition) "
+                   "and sent as one recording: the phase across the coupling is the delay's; no check can tell "
+                   "(not one of the issue's rows)"),
+    Condition("bearings 3–4 in a second take, stated", second_take_ms=(2.0, 20.0), acquisitions="1,2;3,4",
+              same_recordings_as="clean",
+              what="the same recordings with `acquisitions` = 1,2;3,4: the phases between the takes are not "
+                   "measured and the verdict says so (models.acquisitions) (not one of the issue's rows)"),
 )
 #: extra measurements, beside the rows issue 15 asks for (its targets are over :data:`ISSUE_CONDITIONS`)
 EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 revolutions",
                     "192 revolutions, speed stated 0.4 % off", "DC: raw probe gaps", "DC: means removed",
                     "bearing 2's x probe inverted", "bearings numbered 4-3-2-1", "keyphasor, every 5th pulse missing",
-                    "keyphasor, a second edge every revolution", "one 500 µm spike", "mains pickup at 2X, 10 µm")
+                    "keyphasor, a second edge every revolution", "one 500 µm spike", "mains pickup at 2X, 10 µm",
+                    "bearings 3–4 in a second take, not stated", "bearings 3–4 in a second take, stated")
 ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name not in EXTRA_CONDITIONS)
 
 
@@ -322,9 +338,10 @@ class Outcome:
 
 def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ...], fs_hz: float,
                        speed_rpm: float | None, clearance_um: float | None, out: Outcome, units: str = "um",
-                       keyphasor_times_s: np.ndarray | None = None) -> Outcome:
+                       keyphasor_times_s: np.ndarray | None = None, acquisitions: str | None = None) -> Outcome:
     """Run features + the shipped model + the rule of thumb on one recording (fills ``out``); ``units``
-    is what the channels are declared in (the numbers are µm: ``"mil"`` is the µm-read-as-mils mistake)."""
+    is what the channels are declared in (the numbers are µm: ``"mil"`` is the µm-read-as-mils mistake);
+    ``acquisitions`` as ``Recording.acquisitions``."""
     from rotordiag.features import ProbeChannel, Recording, extract_features
     from rotordiag.models.baselines import RuleOfThumb, ratio_column
     from rotordiag.models.speed_choice import diagnose_recording
@@ -333,7 +350,7 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
              for j, a in enumerate(ANGLES_DEG)]
     try:
         rec = Recording(sample_rate_hz=fs_hz, channels=chans, speed_rpm=speed_rpm, clearance_um=clearance_um,
-                        keyphasor_times_s=keyphasor_times_s)
+                        keyphasor_times_s=keyphasor_times_s, acquisitions=acquisitions)
         fr = extract_features(rec)
         out.speed_rpm_estimated = float(fr.speed_rpm)
         v, fr = diagnose_recording(bundle, rec, fr=fr)                     # as the service and the CLI
@@ -421,6 +438,11 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
             order, amp_um = cond.pickup
             t_s = np.arange(w.shape[1]) / FS_HZ
             w += amp_um * np.cos(2.0 * np.pi * order * c["speed_rpm"] / 60.0 * t_s + rng.uniform(0.0, 2.0 * np.pi))
+        if cond.second_take_ms[1] > 0:
+            late = int(round(rng.uniform(*cond.second_take_ms) * 1e-3 * FS_HZ))
+            rows = [2 * k + j for k, b in enumerate(cond.bearings) if b in (3, 4) for j in (0, 1)]
+            w[rows, :-late] = w[rows, late:]
+            w = w[:, :-late]
         clearance = c["plant"]["clearance_m"] * 1e6 if cond.clearance_given else None
         if not cond.speed_given:
             o.speed_line = running_speed_line(w, FS_HZ, c["speed_rpm"])
@@ -434,8 +456,10 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
                          np.sort(np.concatenate([pulses, pulses + 0.37 * period_s])))
             keyphasor = keyphasor[keyphasor < w.shape[1] / FS_HZ]
             stated = None
-        return diagnose_waveforms(bundle, w, bearings, FS_HZ, stated, clearance, o,
-                                  **({} if keyphasor is None else {"keyphasor_times_s": keyphasor}))
+        told: dict[str, Any] = {} if keyphasor is None else {"keyphasor_times_s": keyphasor}
+        if cond.acquisitions:
+            told["acquisitions"] = cond.acquisitions
+        return diagnose_waveforms(bundle, w, bearings, FS_HZ, stated, clearance, o, **told)
 
     return _over_cases(cases, disps, one)
 

@@ -5,10 +5,13 @@ Public API
 ProbeChannel(bearing, angle_deg, units, data)
     One proximity probe (bearing 1–4, mounting angle from horizontal +x toward +y, units
     "um" / "mm" / "m" / "mil").
-Recording(sample_rate_hz, channels, speed_rpm=None, keyphasor_times_s=None, clearance_um=None, speed_range_rpm=None)
+Recording(sample_rate_hz, channels, speed_rpm=None, keyphasor_times_s=None, clearance_um=None, speed_range_rpm=None,
+          dc_removed=False, acquisitions=None)
     An x/y probe pair per bearing present, sampled together; validated on construction.
     ``speed_range_rpm=(min, max)``: the operator's knowledge of the speed (nominal speed),
-    restricting the estimate when neither speed nor keyphasor is given.
+    restricting the estimate when neither speed nor keyphasor is given. ``acquisitions="1,2;3,4"``:
+    the bearings were recorded in separate takes; the phase differences between takes are then not measured
+    (``split_pairs(acquisitions, pairs)`` names those pairs, ``format_acquisitions`` writes the groups back).
 extract_features(recording, *, speed_estimate_rpm=None, speed_notes=()) -> FeatureResult
     Running speed, order analysis (1X–3X amplitude/phase, ratios, forward/reverse),
     cross-coupling phase differences, orbit shape, sub-harmonic and non-synchronous
@@ -52,6 +55,7 @@ Importing the package raises glibc's malloc mmap/trim thresholds (see ``features
 ``ROTORDIAG_MALLOC_TUNING=0`` disables it) and each extraction runs with one BLAS thread
 (``features._config.BLAS_THREADS``): both measured to matter more than the arithmetic.
 """
+from ._acquisitions import format_acquisitions, parse_acquisitions, split_pairs
 from ._alloc import tune_malloc
 from ._change import (
     CHANGE_QUANTITIES,
@@ -99,4 +103,5 @@ __all__ = [
     "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
     "SPEED_AMBIGUOUS", "SPEED_NOT_CONVERGED", "speed_in_doubt", "speed_alternatives_rpm",
     "CommonMode", "common_mode", "common_mode_share", "without_common_mode", "with_scale", "COMMON_MODE_NOTABLE_SHARE",
+    "parse_acquisitions", "format_acquisitions", "split_pairs",
 ]

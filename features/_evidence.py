@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._acquisitions import split_pairs
 from ._common_mode import COMMON_MODE_NOTABLE_SHARE, common_mode
 from ._config import CENTRELINE_MAX_ECC, PHASE_PAIRS
 from ._sanity import common_mode_dominates
@@ -182,6 +183,12 @@ def _coupling_items(fr) -> list[EvidenceItem]:
         return [EvidenceItem(scope, "phase across the coupling", f"not measurable (needs bearings {bi} and {bj})",
                              "the phase difference across the coupling is the most direct misalignment signature",
                              None)]
+    if split_pairs(getattr(fr, "acquisitions", ()), [COUPLING]):
+        return [EvidenceItem(scope, "phase across the coupling",
+                             f"not measured (bearings {bi} and {bj} recorded in separate acquisitions)",
+                             "the phase difference across the coupling is the most direct misalignment signature; "
+                             "between takes whose start times are not related it would be the delay between them — "
+                             f"record bearings {bi} and {bj} together for it", None)]
     items = []
     for order in (1, 2):
         for d in ("x", "y"):

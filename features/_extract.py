@@ -12,6 +12,7 @@ import numpy as np
 from rotordiag.core.conventions import wrap_deg
 
 from . import _config as cfg
+from ._acquisitions import format_acquisitions, split_pairs
 from ._lines import refine_line_hz
 from ._names import FEATURE_NAMES
 from ._orbit import OrbitShape, orbit_arrays
@@ -149,6 +150,8 @@ class FeatureResult:
     motion_type: Any
     warnings: tuple[str, ...]
     sanity: tuple = ()
+    #: groups of bearings sampled together (``Recording.acquisitions``); ``()``: every channel sampled together
+    acquisitions: tuple[tuple[int, ...], ...] = ()
 
     def as_dict(self) -> dict[str, float]:
         """``{name: value}`` in schema order."""
@@ -500,9 +503,16 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
             slow_roll_um_pp=None if chans[0].slow_roll_um_pp is None and chans[1].slow_roll_um_pp is None
             else (chans[0].slow_roll_um_pp, chans[1].slow_roll_um_pp))
 
+    split = split_pairs(rec.acquisition_groups, cfg.PHASE_PAIRS)
+    if split:
+        warnings.append(
+            f"bearings recorded in separate acquisitions ({format_acquisitions(rec.acquisition_groups)}): the phase "
+            "differences between " + ", ".join(f"bearings {i} and {j}" for i, j in split)
+            + " are not measured (the takes' start times are not related); record the bearings either side of the "
+            "coupling together for the phase across it")
     for k in (1, 2):
         for bi, bj in cfg.PHASE_PAIRS:
-            if bi in details and bj in details:
+            if bi in details and bj in details and (bi, bj) not in split:
                 for axis in ("x", "y"):
                     ci = 2 * bearings.index(bi) + (axis == "y")
                     cj = 2 * bearings.index(bj) + (axis == "y")
@@ -526,5 +536,5 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
     result = FeatureResult(
         names=FEATURE_NAMES, values=values, bearings=details, speed_rpm=float(sa.speed_rpm),
         speed_source=sa.source, phase_reference="keyphasor" if sa.source == "keyphasor" else "first sample",
-        n_revs=sa.n_revs, motion_type=motion, warnings=tuple(warnings))
+        n_revs=sa.n_revs, motion_type=motion, warnings=tuple(warnings), acquisitions=rec.acquisition_groups)
     return replace(result, sanity=check_recording(rec, result))

@@ -3,9 +3,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
+from ._acquisitions import format_acquisitions, parse_acquisitions
 from ._config import ALLOWED_UNITS, BEARINGS, UNITS_TO_UM
 
 __all__ = ["ProbeChannel", "Recording", "parse_speed_range"]
@@ -170,6 +172,12 @@ class Recording:
         channel's mean removed (the reader sets it for a V recording without its gap voltage). The
         shaft-centreline features are then missing. Channels whose means are all zero (within
         ``DC_REMOVED_MAX_REL`` of the largest peak-to-peak) are read so without it.
+    acquisitions : str or sequence of sequences of int, optional
+        Groups of bearings sampled together when the channels come from separate acquisitions (takes), e.g.
+        ``"1,2;3,4"`` or ``[[1, 2], [3, 4]]``: the phase differences between bearings of different groups are
+        then not measured (``features._acquisitions``). Bearings listed but not recorded are ignored; every
+        recorded bearing must be in a group. None (default), or one group: all channels sampled together.
+        With more than one group, no ``keyphasor_times_s``: one pulse train cannot reference two takes.
     """
 
     sample_rate_hz: float
@@ -179,6 +187,7 @@ class Recording:
     clearance_um: float | Mapping[int, float] | None = None
     speed_range_rpm: tuple[float, float] | None = None
     dc_removed: bool = False
+    acquisitions: Sequence[Sequence[int]] | str | None = None
 
     def __post_init__(self) -> None:
         fs = _finite_positive(self.sample_rate_hz, "Recording.sample_rate_hz",
@@ -211,6 +220,8 @@ class Recording:
                                  "(nearly) parallel; the pair must be at least 30° from parallel "
                                  "(typically 90° apart) to resolve x and y")
         object.__setattr__(self, "channels", chans)
+        acquisitions = self._acquisitions(sorted(by_bearing))
+        object.__setattr__(self, "acquisitions", acquisitions)
         if self.speed_rpm is not None:
             object.__setattr__(self, "speed_rpm", _finite_positive(
                 self.speed_rpm, "Recording.speed_rpm", "give the running speed in r/min or leave it None"))
@@ -233,6 +244,12 @@ class Recording:
             if np.any(np.diff(kp) <= 0):
                 raise ValueError("Recording.keyphasor_times_s must be strictly increasing (one pulse per revolution)")
             object.__setattr__(self, "keyphasor_times_s", kp)
+            if acquisitions is not None:
+                raise ValueError(
+                    f"Recording.keyphasor_times_s with bearings in {len(acquisitions)} acquisitions "
+                    f"({format_acquisitions(acquisitions)}): one pulse train cannot reference takes whose start times are not "
+                    "related. Send each acquisition as its own recording with its keyphasor, or leave the keyphasor out "
+                    "(the speed is then given or estimated)")
         if any(c.slow_roll_um_pp for c in chans) and self.keyphasor_times_s is None:
             raise ValueError("slow_roll_um_pp: slow-roll vectors are phase-referenced to the keyphasor; give "
                              "keyphasor_times_s with them (without a keyphasor the phase of the orders is arbitrary "
@@ -249,6 +266,23 @@ class Recording:
             else:
                 object.__setattr__(self, "clearance_um", _finite_positive(
                     cl, "Recording.clearance_um", "radial bearing clearance in µm, or None"))
+
+    def _acquisitions(self, bearings: list[int]) -> tuple[tuple[int, ...], ...] | None:
+        if self.acquisitions is None:
+            return None
+        groups = parse_acquisitions(self.acquisitions, "Recording.acquisitions")
+        kept = tuple(g for g in (tuple(b for b in grp if b in bearings) for grp in groups) if g)
+        missing = sorted(set(bearings) - {b for g in kept for b in g})
+        if missing:
+            raise ValueError(f"Recording.acquisitions {format_acquisitions(groups)!r}: bearing {missing[0]} is recorded "
+                             "but in no acquisition; add it to the group it was sampled with (or leave acquisitions out "
+                             "when every channel was sampled together)")
+        return kept if len(kept) > 1 else None
+
+    @property
+    def acquisition_groups(self) -> tuple[tuple[int, ...], ...]:
+        """The validated :attr:`acquisitions`: groups of bearings sampled together, ``()`` when every channel was."""
+        return cast("tuple[tuple[int, ...], ...]", self.acquisitions or ())
 
     @property
     def n_points(self) -> int:

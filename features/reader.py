@@ -152,6 +152,9 @@ class ReadOptions:
     dc_removed : bool, optional
         The channels' DC part is no shaft position (AC-coupled acquisition): no centreline
         features (``Recording.dc_removed``). Set for ``units="V"`` without ``gap_voltage_v``.
+    acquisitions : str or sequence of sequences of int, optional
+        Groups of bearings sampled together when the channels come from separate acquisitions, e.g.
+        ``"1,2;3,4"`` (``Recording.acquisitions``).
     """
 
     sample_rate_hz: float | None = None
@@ -170,6 +173,7 @@ class ReadOptions:
     viewed_from: Literal["driver", "non-driver"] = "driver"
     sample_index: int | None = None
     dc_removed: bool | None = None
+    acquisitions: str | Sequence[Sequence[int]] | None = None
 
 
 @dataclass
@@ -744,7 +748,8 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
                     keyphasor_times_s=None if kp is None else np.asarray(kp, dtype=np.float64),
                     clearance_um=clearance,
                     speed_range_rpm=None if speed_range is None else parse_speed_range(speed_range),
-                    dc_removed=dc_removed)
+                    dc_removed=dc_removed,
+                    acquisitions=opts.acquisitions if opts.acquisitions is not None else info.get("acquisitions"))
     return ReadResult(recording=rec, format=fmt, notes=notes, truth=info.get("truth"))
 
 
@@ -802,7 +807,7 @@ def recording_from_dict(obj: Any, options: ReadOptions | None = None, limits: Re
             raise ValueError(f"JSON: channels[{k}].slow_roll must be a list of {{order, amp_um_pp, phase_deg}}") from None
     if any(v is not None for v in slow):
         info["slow_roll"] = slow
-    for key in ("sample_rate_hz", "speed_rpm", "clearance_um", "speed_range_rpm", "dc_removed"):
+    for key in ("sample_rate_hz", "speed_rpm", "clearance_um", "speed_range_rpm", "dc_removed", "acquisitions"):
         if obj.get(key) is not None:
             info[key] = obj[key]
     if isinstance(info.get("clearance_um"), Mapping):

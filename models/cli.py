@@ -150,6 +150,7 @@ def register(app: typer.Typer) -> None:
         speed_range_rpm: Optional[str] = typer.Option(None, "--speed-range-rpm", help="MIN,MAX r/min: the running speed's range when it is not known exactly (the machine's nominal speed, e.g. 2900,3100): the speed estimate is sought only there."),
         sample: Optional[int] = typer.Option(None, "--sample", help="Row of a rotordiag dataset HDF5 file."),
         dc_removed: bool = typer.Option(False, "--dc-removed", help="The channels' DC part is no shaft position (AC-coupled acquisition): the shaft centreline is not read (zero-mean channels and --units V without --gap-voltage-v are read so anyway)."),
+        acquisitions: Optional[str] = typer.Option(None, "--acquisitions", help="Groups of bearings sampled together when the channels come from separate acquisitions (takes), e.g. '1,2;3,4': the phase differences between takes are not measured, and with bearings 2 and 3 in different takes the verdict is never confident."),
         as_json: bool = typer.Option(False, "--json", help="Print the verdict(s) as JSON."),
         out: Optional[Path] = typer.Option(None, "--out", help="Write one table of verdicts, one row per file: .csv or .json."),
         output_units: str = typer.Option("um", "--output-units", help="Units of the offset and amplitudes in the output: um | mil."),
@@ -187,13 +188,14 @@ def register(app: typer.Typer) -> None:
                 "keyphasor_edge": keyphasor_edge, "keyphasor_threshold_v": keyphasor_threshold,
                 "rotation": rotation, "viewed_from": viewed_from, "speed_rpm": speed_rpm,
                 "clearance_um": clearance_um, "sample_index": sample, "dc_removed": dc_removed or None,
+                "acquisitions": acquisitions,
                 "speed_range_rpm": None if speed_range_rpm is None else parse_speed_range(speed_range_rpm,
                                                                                           "--speed-range-rpm"),
             }
             base, rule = load_baseline_file(baseline) if baseline is not None else (None, None)
             runout = None
             if slow_roll is not None:
-                slow_given = {**given, "speed_rpm": None, "sample_index": None, "speed_range_rpm": None,
+                slow_given = {**given, "speed_rpm": None, "sample_index": None, "speed_range_rpm": None, "acquisitions": None,
                               "sample_rate_hz": slow_roll_sample_rate_hz or sample_rate_hz}
                 runout = slow_roll_from_file(slow_roll, load_options(slow_roll, None, slow_given))
         except ValueError as exc:

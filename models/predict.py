@@ -19,6 +19,7 @@ from threadpoolctl import threadpool_limits
 
 from rotordiag.features import evidence
 
+from .acquisitions import acquisitions_reason
 from .bearing_sets import bearing_plan, leave_out_bearings
 from .numbering import has_every_bearing, mirrored_row, numbering_reason
 from .registry import Registry
@@ -361,6 +362,9 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
     findings = model.envelope_findings(X)[0] if hasattr(model, "envelope_findings") else []
     ood = ood_score > 1.0 or bool(findings)
     extra = (plan.reasons() if plan is not None else []) + list(extra_reasons)
+    split = acquisitions_reason(feature_result)
+    if split is not None:
+        extra.append(split)
     if not ood:
         extra += _numbering_reasons(model, fast, names, row, ood_score, cls)
     if ood_score > 1.0:

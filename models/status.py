@@ -30,7 +30,8 @@
   too large); or every journal's attitude angle more than ``FRAME_OFFSET_DEG`` off a plain short bearing's, on one
   side (``centreline_frame_turned``: probes not at the angles given, or bearings unlike plain cylindrical ones);
   or a probe set the model tells misalignment from with more than 10 % false alarms
-  (``bearing_set_weak``, :mod:`models.bearing_sets`).
+  (``bearing_set_weak``, :mod:`models.bearing_sets`); or bearings 2 and 3 recorded in separate acquisitions
+  (``separate_acquisitions``, :mod:`models.acquisitions`: no phase across the coupling).
 - ``confident``: none of these.
 
 Class and Δ are consistent by construction (:func:`consistent_estimate`): the severity is

@@ -22,7 +22,7 @@ DEFAULT_PAIR_ANGLES_DEG = (45.0, 135.0)
 #: the query parameters that become reader options (``service.api.routes.diagnose``)
 OPTION_QUERY_KEYS = ("sample_rate_hz", "speed_rpm", "speed_range_rpm", "clearance_um", "units", "sensitivity_v_per_mm",
                      "gap_voltage_v", "rotation", "viewed_from", "keyphasor_channel", "keyphasor_edge",
-                     "keyphasor_threshold_v", "dc_removed")
+                     "keyphasor_threshold_v", "dc_removed", "acquisitions")
 
 
 def service_limits() -> Any:
@@ -135,7 +135,7 @@ def _slow_roll_recording(slow_roll: tuple[bytes, str], query: dict[str, Any]) ->
                          "or leave the part out")
     # the main file's keyphasor times and speed are not the slow roll's; its sample rate is unless given
     q = {k: v for k, v in query.items() if k not in ("speed_rpm", "speed_range_rpm", "sample_index", "keyphasor_times_s",
-                                                     *SLOW_ROLL_QUERY_KEYS)}
+                                                     "acquisitions", *SLOW_ROLL_QUERY_KEYS)}
     for own, shared in SLOW_ROLL_QUERY_KEYS.items():
         if query.get(own) is not None:
             q[shared] = query[own]

@@ -95,6 +95,15 @@ class RecordingIn(_Strict):
         False, description="The channels' DC part is no shaft position (AC-coupled acquisition): the shaft "
         "centreline is not read, and a stationary shaft-line offset is not assessed. Channels that all average to "
         "zero are read so anyway.")
+    acquisitions: (Annotated[str, StringConstraints(max_length=32)]
+                   | Annotated[list[Annotated[list[Annotated[int, Field(ge=1, le=4)]], Field(min_length=1, max_length=4)]],
+                               Field(min_length=1, max_length=4)]
+                   | None) = Field(
+        None, description="Groups of bearings sampled together, when the channels come from separate acquisitions "
+        "(takes), e.g. `\"1,2;3,4\"` or `[[1, 2], [3, 4]]`: the phase differences between bearings of different "
+        "takes are then not measured, and with bearings 2 and 3 in different takes the verdict is never confident "
+        "(`separate_acquisitions`). Leave it out when every channel was sampled together. No `keyphasor_times_s` "
+        "with more than one group.", examples=["1,2;3,4"])
     asset_id: AssetId | None = Field(
         None, description="Identifier of the machine train; when given the diagnosis is stored for GET /assets/{id}/history.",
         examples=["unit-3-gen-exc"])
@@ -348,6 +357,8 @@ class ReasonOut(BaseModel):
                       "`bearing_set_uninformative`, `bearing_set_weak` (the probes' bearings: none of the model's training "
                       "probe sets among them, or the one it reads tells misalignment poorly on held-out plants), "
                       "`keyphasor_faulty` (missing or extra keyphasor pulses: the orders were tracked at a steady speed), "
+                      "`separate_acquisitions` (bearings 2 and 3 recorded in separate takes: no phase across the "
+                      "coupling), "
                       "`spike` (a few isolated samples make the orbit larger than the clearance: a glitch), "
                       "`clearance_diametral` (half the stated clearance makes the recording at least as like the training "
                       "machines: check that clearance_um is the radial clearance), "

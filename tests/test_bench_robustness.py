@@ -310,16 +310,23 @@ def test_a_stated_speed_off_is_measured_on_the_same_recordings_and_stated_off(mo
     assert seen == [((8, round(192 * 60 / SPEED_RPM * bench.FS_HZ)), pytest.approx(SPEED_RPM * 1.004, rel=1e-12))]
 
 
-def _sent_for_clean_and(monkeypatch, *rows: str) -> dict[str, tuple[np.ndarray, tuple[int, ...], float | None]]:
+def _sent_for_clean_and(monkeypatch, *rows: str, told: dict | None = None
+                        ) -> dict[str, tuple[np.ndarray, tuple[int, ...], float | None]]:
     """What each of ``rows`` (each measured on the clean row's recordings) and the clean row send to the verdict for
-    one aligned case: (waveforms, bearings, clearance) per row name."""
+    one aligned case: (waveforms, bearings, clearance) per row name; the keyword arguments into ``told``."""
     seen: dict[str, tuple[np.ndarray, tuple[int, ...], float | None]] = {}
+    told = {} if told is None else told
     case = {"speed_rpm": SPEED_RPM, "plant": {"clearance_m": 3e-4}, "misalignment": 0.0, "label_mechanism": "aligned"}
     for name in ("clean", *rows):
         cond = next(c for c in bench.CONDITIONS if c.name == name)
         assert name == "clean" or (name not in bench.ISSUE_CONDITIONS and cond.same_recordings_as == "clean")
-        monkeypatch.setattr(bench, "diagnose_waveforms", lambda bundle, w, bearings, fs, speed, clearance, o, n=name:
-                            seen.setdefault(n, (w.copy(), bearings, clearance)) is not None and o)
+
+        def sent(bundle, w, bearings, fs, speed, clearance, o, n=name, **kw):
+            seen.setdefault(n, (w.copy(), bearings, clearance))
+            told.setdefault(n, kw)
+            return o
+
+        monkeypatch.setattr(bench, "diagnose_waveforms", sent)
         bench.run_condition(None, cond, [case], [_shaft(60 * bench.SAMPLES_PER_REV)], 815)
     return seen
 
@@ -539,6 +546,21 @@ def test_the_pickup_row_is_the_clean_recordings_with_one_common_2x(monkeypatch):
     assert abs(z) == pytest.approx(10.0, rel=0.02)
 
 
+def test_the_second_take_rows_delay_bearings_3_and_4(monkeypatch):
+    """Bearings 3 and 4 of the clean recordings read 2–20 ms later (the record cut to the common length), bearings 1
+    and 2 as they are; the same waveforms in both rows, the stated one with ``acquisitions`` = 1,2;3,4."""
+    told: dict = {}
+    rows = ("bearings 3–4 in a second take, not stated", "bearings 3–4 in a second take, stated")
+    seen = _sent_for_clean_and(monkeypatch, *rows, told=told)
+    w0, (w1, b1, _), (w2, b2, _) = seen["clean"][0], seen[rows[0]], seen[rows[1]]
+    np.testing.assert_array_equal(w1, w2)
+    assert b1 == b2 == (1, 2, 3, 4) and told[rows[0]] == {} and told[rows[1]] == {"acquisitions": "1,2;3,4"}
+    late = w0.shape[1] - w1.shape[1]
+    assert 2e-3 * bench.FS_HZ - 1 <= late <= 20e-3 * bench.FS_HZ + 1
+    np.testing.assert_array_equal(w1[:4], w0[:4, :-late])
+    np.testing.assert_array_equal(w1[4:], w0[4:, late:])
+
+
 @pytest.mark.parametrize("row, per_rev", [("keyphasor, every 5th pulse missing", 0.8),
                                           ("keyphasor, a second edge every revolution", 2.0)])
 def test_the_keyphasor_rows_send_a_faulty_pulse_train(monkeypatch, row, per_rev):
@@ -547,7 +569,7 @@ def test_the_keyphasor_rows_send_a_faulty_pulse_train(monkeypatch, row, per_rev)
     cond = next(c for c in bench.CONDITIONS if c.name == row)
     assert row not in bench.ISSUE_CONDITIONS
 
-    def fake(bundle, w, bearings, fs, speed, clearance, o, keyphasor_times_s=None):
+    def fake(bundle, w, bearings, fs, speed, clearance, o, keyphasor_times_s=None, **kw):
         sent.update(w=w, speed=speed, kp=keyphasor_times_s)
         return o
 

@@ -469,3 +469,51 @@ def test_mains_pickup_and_a_faulty_keyphasor_are_said_over_http(client, rec):
     v = r.json()
     assert "keyphasor_faulty" in [x["code"] for x in v["reasons"]] and v["status"] != "confident"
     assert any(w.startswith("keyphasor_times_s not used") for w in v["warnings"])
+
+
+def test_acquisitions_through_json_binary_and_the_cli(client, rec, registry_src, tmp_path):
+    """Bearings recorded in two takes (`acquisitions`) through every door: the phase across the coupling is not
+    measured, the verdict says why (`separate_acquisitions`, never confident), the same through the JSON body (string
+    or list form), the binary query and `rotordiag diagnose --acquisitions`; a bad grouping or a keyphasor with two
+    takes is a 422 that says what to give."""
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app as cli_app
+
+    fs, channels = rec
+    data = np.array([d for _, _, d in channels])
+    j = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0,
+                                                    acquisitions="1,2;3,4"))
+    assert j.status_code == 200, j.text
+    j = j.json()
+    assert j["status"] != "confident" and "separate_acquisitions" in [r["code"] for r in j["reasons"]]
+    assert any(e["value"].startswith("not measured (bearings 2 and 3 recorded in separate acquisitions)")
+               for e in j["evidence"])
+    listed = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0,
+                                                         acquisitions=[[1, 2], [3, 4]])).json()
+    assert listed["probabilities"] == pytest.approx(j["probabilities"], rel=1e-9, abs=1e-12)
+    b = client.post("/diagnose", params=_binary_query(channels, clearance_um=350.0, acquisitions="1,2;3,4"),
+                    content=_npy(data), headers={"content-type": "application/octet-stream"})
+    assert b.status_code == 200, b.text
+    assert b.json()["probabilities"] == pytest.approx(j["probabilities"], rel=1e-9, abs=1e-12)
+    assert "separate_acquisitions" in [r["code"] for r in b.json()["reasons"]]
+    for bad, words in (("1,2;2,3", "bearing 2 is in more than one acquisition"),
+                       ("1,2", "bearing 3 is recorded but in no acquisition")):
+        r = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, acquisitions=bad))
+        assert r.status_code == 422 and words in r.json()["detail"], r.text
+    r = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, acquisitions=[[1, 2], [3, 9]]))
+    assert r.status_code == 422 and "acquisitions" in r.text
+    r = client.post("/diagnose", json=diagnose_json(fs, channels, acquisitions="1,2;3,4",
+                                                    keyphasor_times_s=list(np.arange(0.0, 1.0, 1 / 30.0))))
+    assert r.status_code == 422 and "one pulse train cannot reference takes" in r.json()["detail"], r.text
+    npy = tmp_path / "rec.npy"
+    np.save(npy, data)
+    (tmp_path / "rec.json").write_text(json.dumps({"sample_rate_hz": fs, "speed_rpm": 1800.0, "clearance_um": 350.0,
+                                                   "channels": ",".join(f"{bb}@{a:g}" for bb, a, _ in channels)}))
+    out = CliRunner().invoke(cli_app, ["diagnose", str(npy), "--acquisitions", "1,2;3,4", "--json",
+                                       "--registry", str(registry_src)])
+    assert out.exit_code == 0, out.output
+    cli = json.loads(out.output)
+    cli = cli[0] if isinstance(cli, list) else cli
+    assert cli["probabilities"] == pytest.approx(j["probabilities"], rel=1e-9, abs=1e-12)
+    assert "separate_acquisitions" in [r["code"] for r in cli["reasons"]]

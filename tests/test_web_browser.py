@@ -662,6 +662,30 @@ def test_dc_removed_checkbox(server, browser, recordings, tmp_path):
     _screenshot(browser, "dc_removed")
 
 
+def test_acquisitions_field(server, browser, recordings, tmp_path):
+    """Bearings 1-2 and 3-4 stated as separate takes: the coupling's phase evidence says it was not measured, the
+    verdict is not confident and says why; a grouping that leaves a bearing out is a form error in plain words."""
+    path = _write_npy(tmp_path / "takes.npy", recordings[0.2])
+    _open(browser, server)
+    field = browser.find_element("id", "acquisitions")
+    assert browser.find_element("css selector", "label[for=acquisitions]").is_displayed()
+    field.clear()
+    field.send_keys("1,2;3,4")
+    _submit_file(browser, path, sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
+    v = browser.execute_script("return window.rotordiag.state.verdict")
+    assert v["status"] != "confident" and "separate_acquisitions" in [r["code"] for r in v["reasons"]]
+    body = browser.find_element("tag name", "body").text
+    assert "not measured (bearings 2 and 3 recorded in separate acquisitions)" in body
+    assert "record bearings 2 and 3 in one acquisition" in body
+    _screenshot(browser, "acquisitions")
+    field.clear()
+    field.send_keys("1,2;3")
+    _submit_file(browser, path, sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM), expect="error")
+    text = browser.find_element("id", "form-error").text
+    assert "bearing 4 is recorded but in no acquisition" in text, text
+    field.clear()
+
+
 def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_path):
     """rotordiag.models.bearing_sets on the page: probes at 1, 3, 4 are read from bearing 3 (a warning says so, the evidence
     keeps every bearing, never confident); probes at 1 and 4 alone give no severity and say what to add."""

@@ -103,6 +103,10 @@ AnglesQuery = Annotated[str | None, Query(max_length=256,
 SpeedRangeQuery = Annotated[str | None, Query(max_length=64, description=(
     "Binary/multipart only: the running speed's range `min,max` in r/min (e.g. `2900,3100` for a 3000 r/min "
     "generator) when it is not known exactly: the speed estimate is sought only there."))]
+AcquisitionsQuery = Annotated[str | None, Query(max_length=32, description=(
+    "Binary/multipart only: groups of bearings sampled together when the channels come from separate acquisitions "
+    "(takes), e.g. `1,2;3,4`: the phase differences between takes are not measured, and with bearings 2 and 3 in "
+    "different takes the verdict is never confident. Leave it out when every channel was sampled together."))]
 KeyphasorQuery = Annotated[str | None, Query(max_length=200_000,
                                              description="Binary/multipart only: keyphasor pulse times, s, "
                                              "comma-separated.")]

@@ -17,6 +17,7 @@ from ...inference import ModelUnavailable
 from ...parsing import checked, parse_batch, parse_body, recording_from_model
 from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
 from ..deps import (
+    AcquisitionsQuery,
     AnglesQuery,
     BearingsQuery,
     ClearanceQuery,
@@ -63,6 +64,7 @@ def reader_query(
     dc_removed: Annotated[bool | None, Query(description=(
         "The channels' DC part is no shaft position (AC-coupled acquisition): the shaft centreline is not read. "
         "Channels that all average to zero, and `units=V` without `gap_voltage_v`, are read so anyway."))] = None,
+    acquisitions: AcquisitionsQuery = None,
 ) -> dict[str, Any]:
     """Query parameters that describe an uploaded recording (its layout and the reader's options,
     ``features.reader.ReadOptions``), shared by every route that takes one."""
@@ -71,7 +73,7 @@ def reader_query(
                 bearings=bearings, angles_deg=angles_deg, keyphasor_times_s=keyphasor_times_s,
                 sensitivity_v_per_mm=sensitivity_v_per_mm, gap_voltage_v=gap_voltage_v, rotation=rotation,
                 viewed_from=viewed_from, keyphasor_channel=keyphasor_channel, keyphasor_edge=keyphasor_edge,
-                keyphasor_threshold_v=keyphasor_threshold_v, dc_removed=dc_removed)
+                keyphasor_threshold_v=keyphasor_threshold_v, dc_removed=dc_removed, acquisitions=acquisitions)
 
 
 ReaderQueryDep = Annotated[dict, Depends(reader_query)]
