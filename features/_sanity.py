@@ -50,6 +50,9 @@ ORBIT_NOISE_FALSE_ALARM = 1e-3
 CLIP_MIN_FRACTION = 0.02
 #: … provided that is this many times what a quantised sine would give (sampling resolution)
 CLIP_EXCESS = 3.0
+#: a clipped-looking channel whose samples at the extreme lie this much in one unbroken stretch is a dropout (the
+#: acquisition holding one value: a loose connector, lost samples), not clipping, which recurs every revolution
+DROPOUT_MIN_SHARE = 0.9
 #: 1X whirl index (F − R)/(F + R) below this counts as clearly reverse
 REVERSE_WHIRL_INDEX = -0.2
 #: a 1X zero-to-peak amplitude below this multiple of its noise-equivalent amplitude is "in the noise"
@@ -84,7 +87,7 @@ class SanityFinding:
         Stable identifier (``flat_channel``, ``zero_channel``, ``clipped_channel``,
         ``orbit_exceeds_clearance``, ``orbit_exceeds_probe_range``, ``dc_implausible``,
         ``reverse_whirl_all``, ``reverse_whirl``, ``no_sync_signal``, ``common_mode_1x``, ``common_mode_2x``,
-        ``keyphasor_faulty``, ``spike``).
+        ``keyphasor_faulty``, ``spike``, ``dropout``).
     level : str
         ``"fail"`` or ``"warn"``.
     message : str
@@ -128,11 +131,32 @@ def _channel_checks(rec: Recording) -> list[SanityFinding]:
             expected = float(np.arccos(max(-1.0, 1.0 - 2.0 * q / ptp)) / np.pi)
             if frac > CLIP_EXCESS * expected:
                 at = "maximum" if np.mean(d >= hi - tol) >= np.mean(d <= lo + tol) else "minimum"
+                stretch = _one_stretch(d >= hi - tol if at == "maximum" else d <= lo + tol)
+                if stretch is not None:
+                    fs = rec.sample_rate_hz
+                    out.append(SanityFinding(
+                        "dropout", FAIL, f"{where}: the signal holds {hi if at == 'maximum' else lo:.6g} µm for "
+                        f"{1e3 * (stretch[1] - stretch[0]) / fs:.0f} ms in one stretch ({stretch[0] / fs:.3f}–"
+                        f"{stretch[1] / fs:.3f} s) — a dropout (a loose connector or cable, the acquisition losing "
+                        "samples), not motion; check the connection and send a record without it (cut it out, or "
+                        "record again)", ch.bearing))
+                    continue
                 out.append(SanityFinding(
                     "clipped_channel", FAIL, f"{where}: {100 * frac:.1f} % of the samples sit at the channel's {at} "
                     f"({hi if at == 'maximum' else lo:.6g} µm) — the signal is clipped (probe outside its linear "
                     "range, driver or ADC saturated); check the probe gap voltage and the input range", ch.bearing))
     return out
+
+
+def _one_stretch(at_extreme: np.ndarray) -> tuple[int, int] | None:
+    """(start, stop) sample of the longest unbroken run of ``at_extreme`` when it holds at least
+    :data:`DROPOUT_MIN_SHARE` of its true samples, else None."""
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], at_extreme.view(np.int8), [0]))))
+    starts, stops = edges[::2], edges[1::2]
+    k = int(np.argmax(stops - starts))
+    if stops[k] - starts[k] < DROPOUT_MIN_SHARE * int(np.count_nonzero(at_extreme)):
+        return None
+    return int(starts[k]), int(stops[k])
 
 
 def noise_peak_to_peak_um(noise_rms_um: Iterable[float], n_samples: int,

@@ -347,7 +347,7 @@ class ReasonOut(BaseModel):
     """Why a verdict is not `confident`."""
 
     code: str = Field(..., description="Stable identifier, e.g. `orbit_exceeds_clearance`, `flat_channel`, "
-                      "`clipped_channel`, `reverse_whirl_all`, `ood`, `outside_training`, `scale`, `speed_ambiguous`, `low_probability`, "
+                      "`clipped_channel`, `dropout` (one channel holding one value for a stretch), `reverse_whirl_all`, `ood`, `outside_training`, `scale`, `speed_ambiguous`, `low_probability`, "
                       "`far_band_probability`, `far_band_interval`, `below_alarm_threshold`, `no_2x_signature`, `offset_not_assessed`, `static_offset_only`, "
                       "`signature_above_call`, `class_delta_disagree`, `journals_near_centre` (every journal within 0.15 c of "
                       "its bearing centre: check the units, probe sensitivity and clearance), `centreline_frame_turned` (every "

@@ -76,6 +76,22 @@ def test_clipped_channel_but_not_a_quantised_one(sim):
     assert extract_features(_rec(quantised, fs)).sanity == ()
 
 
+@pytest.mark.parametrize("level", ["max", "min"])
+def test_a_dropout_is_not_called_clipping(sim, level):
+    """One channel holding one value beyond its swing for 60 ms in one stretch (a loose connector): `dropout`,
+    with where and how long, and not `clipped_channel`; clipping recurs every revolution and stays clipping."""
+    fs, ch = sim
+    b, a, d = ch[2]                                       # bearing 2, 45°
+    held = d.max() + 5.0 if level == "max" else d.min() - 5.0
+    start, n = len(d) // 3, int(round(0.06 * fs))
+    dropped = [(bb, aa, np.concatenate([dd[:start], np.full(n, held), dd[start + n:]]) if (bb, aa) == (b, a) else dd)
+               for bb, aa, dd in ch]
+    found = [f for f in extract_features(_rec(dropped, fs)).sanity if f.level == "fail"]
+    assert [(f.code, f.bearing) for f in found] == [("dropout", b)]
+    assert "60 ms in one stretch" in found[0].message and f"{start / fs:.3f}–" in found[0].message
+    assert "loose connector" in found[0].message
+
+
 def test_swapped_probe_order_gives_reverse_whirl_everywhere(sim):
     fs, ch = sim
     # the probe at 135° recorded as the one at 45° and vice versa: the orbit is mirrored
