@@ -98,6 +98,8 @@ class Condition:
     inverted_probe: tuple[int, int] | None = None
     #: the user numbers the bearings from the exciter end: bearing b is sent as 5 − b (models.numbering)
     numbered_from_exciter: bool = False
+    #: the probes of bearings 2 and 3 sent as each other's (a cable mix-up at the coupling)
+    coupling_bearings_swapped: bool = False
     #: (order, µm 0-pk): mains pickup at that order of the running speed added to every channel in one phase (drawn
     #: after the measurement's draws): a ground loop on a grid-synchronous generator (features._common_mode)
     pickup: tuple[int, float] | None = None
@@ -179,6 +181,10 @@ CONDITIONS: tuple[Condition, ...] = (
                    "channel in one phase: mains pickup (a ground loop) on a grid-synchronous 2-pole generator, "
                    "100/120 Hz; the sanity check common_mode_2x and the common_mode doubt (models.common_mode) "
                    "(not one of the issue's rows)"),
+    Condition("bearings 2 and 3 swapped", coupling_bearings_swapped=True, same_recordings_as="clean",
+              what="the clean recordings with bearing 2's probes sent as bearing 3's and 3's as 2's (cables mixed up at "
+                   "the coupling); no check tells it: a known limit (docs/models.md, stop 39) (not one of the issue's "
+                   "rows)"),
     Condition("bearings 3–4 in a second take, not stated", second_take_ms=(2.0, 20.0), same_recordings_as="clean",
               what="the clean recordings with bearings 3 and 4 taken U(2, 20) ms after 1 and 2 (a second acquisition) "
                    "and sent as one recording: the phase across the coupling is the delay's; no check can tell "
@@ -193,7 +199,8 @@ EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 re
                     "192 revolutions, speed stated 0.4 % off", "DC: raw probe gaps", "DC: means removed",
                     "bearing 2's x probe inverted", "bearings numbered 4-3-2-1", "keyphasor, every 5th pulse missing",
                     "keyphasor, a second edge every revolution", "one 500 µm spike", "mains pickup at 2X, 10 µm",
-                    "bearings 3–4 in a second take, not stated", "bearings 3–4 in a second take, stated")
+                    "bearings 2 and 3 swapped", "bearings 3–4 in a second take, not stated",
+                    "bearings 3–4 in a second take, stated")
 ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name not in EXTRA_CONDITIONS)
 
 
@@ -448,6 +455,8 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
             o.speed_line = running_speed_line(w, FS_HZ, c["speed_rpm"])
         stated = c["speed_rpm"] * (1.0 + cond.speed_stated_error) if cond.speed_given else None
         bearings = tuple(5 - b for b in cond.bearings) if cond.numbered_from_exciter else cond.bearings
+        if cond.coupling_bearings_swapped:
+            bearings = tuple({2: 3, 3: 2}.get(b, b) for b in bearings)
         keyphasor = None
         if steady:                          # pulses once per revolution from an arbitrary angle, made faulty
             period_s = 60.0 / c["speed_rpm"]

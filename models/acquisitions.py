@@ -12,23 +12,21 @@ from __future__ import annotations
 
 from typing import Any
 
+from rotordiag.core.conventions import COUPLING_BEARINGS
 from rotordiag.features import format_acquisitions, split_pairs
 
 from .status import UNCERTAIN, Reason
 
-__all__ = ["COUPLING_PAIR", "acquisitions_reason"]
-
-#: the bearings either side of the coupling
-COUPLING_PAIR = (2, 3)
+__all__ = ["acquisitions_reason"]
 
 
 def acquisitions_reason(feature_result: Any) -> Reason | None:
     """``separate_acquisitions`` (uncertain) when bearings 2 and 3 are both recorded, in separate acquisitions
     (``feature_result.acquisitions``); else None."""
     acquisitions = getattr(feature_result, "acquisitions", ())
-    if not split_pairs(acquisitions, [COUPLING_PAIR]):
+    if not split_pairs(acquisitions, [COUPLING_BEARINGS]):
         return None
-    i, j = COUPLING_PAIR
+    i, j = COUPLING_BEARINGS
     return Reason("separate_acquisitions", UNCERTAIN,
                   f"bearings {i} and {j} were recorded in separate acquisitions ({format_acquisitions(acquisitions)}): "
                   "the phase across the coupling is not measured, and the model tells aligned from slight partly by "

@@ -546,6 +546,13 @@ def test_the_pickup_row_is_the_clean_recordings_with_one_common_2x(monkeypatch):
     assert abs(z) == pytest.approx(10.0, rel=0.02)
 
 
+def test_the_swapped_row_sends_bearing_2_as_3_and_3_as_2(monkeypatch):
+    seen = _sent_for_clean_and(monkeypatch, "bearings 2 and 3 swapped")
+    (w0, b0, _), (ws, bs, _) = seen["clean"], seen["bearings 2 and 3 swapped"]
+    np.testing.assert_array_equal(ws, w0)
+    assert b0 == (1, 2, 3, 4) and bs == (1, 3, 2, 4)
+
+
 def test_the_second_take_rows_delay_bearings_3_and_4(monkeypatch):
     """Bearings 3 and 4 of the clean recordings read 2–20 ms later (the record cut to the common length), bearings 1
     and 2 as they are; the same waveforms in both rows, the stated one with ``acquisitions`` = 1,2;3,4."""
