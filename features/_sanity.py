@@ -27,6 +27,7 @@ import numpy as np
 from ._common_mode import COMMON_MODE_MIN_PROBES, CommonMode, common_mode
 from ._keyphasor import keyphasor_fault, pulses_in_record
 from ._recording import Recording
+from ._speed import estimate_speed_hz
 
 __all__ = ["SanityFinding", "check_recording", "FAIL", "WARN", "COMMON_MODE_MIN_SHARE",
            "PROBE_RANGE_UM", "MAX_DC_UM", "ORBIT_CLEARANCE_MARGIN", "CLIP_MIN_FRACTION"]
@@ -53,6 +54,9 @@ CLIP_EXCESS = 3.0
 #: a clipped-looking channel whose samples at the extreme lie this much in one unbroken stretch is a dropout (the
 #: acquisition holding one value: a loose connector, lost samples), not clipping, which recurs every revolution
 DROPOUT_MIN_SHARE = 0.9
+#: with no 1X at the given speed, a running-speed line read from the signal this far from it (relative) is named
+#: in the message, with the sample rate that would put it at the given speed
+SPEED_MISMATCH_MIN_REL = 0.02
 #: 1X whirl index (F − R)/(F + R) below this counts as clearly reverse
 REVERSE_WHIRL_INDEX = -0.2
 #: a 1X zero-to-peak amplitude below this multiple of its noise-equivalent amplitude is "in the noise"
@@ -277,7 +281,7 @@ def _whirl_checks(fr) -> list[SanityFinding]:
     return out
 
 
-def _signal_checks(fr) -> list[SanityFinding]:
+def _signal_checks(rec: Recording, fr) -> list[SanityFinding]:
     weak = []
     for b, det in sorted(fr.bearings.items()):
         noise = det.line_noise_um
@@ -289,21 +293,45 @@ def _signal_checks(fr) -> list[SanityFinding]:
     if weak and len(weak) == len(fr.bearings):
         values = dict(zip(fr.names, fr.values))
         whirl = [b for b in weak if float(values.get(f"b{b}_subsync_frac", np.nan)) > WHIRL_DOMINANT_FRACTION]
+        mismatch = _speed_mismatch(rec, fr)
         if whirl:
             order = float(values.get(f"b{whirl[0]}_subsync_peak_order", np.nan))
             at = f" near {order:.2f}X" if np.isfinite(order) else ""
+            whirl_text = ("oil whirl or whip, a fault to act on in itself (load, oil temperature, bearing clearance)")
             return [SanityFinding("no_sync_signal", FAIL,
                                   f"no 1X vibration stands out of the noise at any bearing, and sub-synchronous "
-                                  f"vibration{at} dominates at bearing(s) {', '.join(map(str, whirl))} — oil whirl or "
-                                  "whip, a fault to act on in itself (load, oil temperature, bearing clearance); "
-                                  "misalignment cannot be judged from this recording. Re-record with less noise "
-                                  "or a keyphasor, or once the machine runs stably")]
+                                  f"vibration{at} dominates at bearing(s) {', '.join(map(str, whirl))} — "
+                                  + (f"{whirl_text}; misalignment cannot be judged from this recording. Re-record "
+                                     "with less noise or a keyphasor, or once the machine runs stably"
+                                     if mismatch is None else
+                                     f"{mismatch}; or it is {whirl_text}. Misalignment cannot be judged from this "
+                                     "recording"))]
         return [SanityFinding("no_sync_signal", FAIL,
                               "no 1X vibration stands out of the noise at any bearing — the recording carries no "
                               "synchronous signal to diagnose (probes not reading the shaft, wrong speed, or a "
-                              "machine at rest); check the probes and speed_rpm / the keyphasor")]
+                              "machine at rest); " + ("check the probes and speed_rpm / the keyphasor"
+                                                      if mismatch is None else mismatch))]
     return [SanityFinding("no_sync_signal", WARN, f"bearing {b}: no 1X vibration above the noise floor", b)
             for b in weak]
+
+
+def _speed_mismatch(rec: Recording, fr) -> str | None:
+    """With a given speed: the running speed the signal shows when it is more than :data:`SPEED_MISMATCH_MIN_REL`
+    away from it, as a sentence — a wrong ``speed_rpm``, or a sample rate stated k times the true one (every line then
+    reads k times its frequency), told apart by the rate that would fit; else None."""
+    if fr.speed_source != "given":
+        return None
+    fs = rec.sample_rate_hz
+    try:
+        f_hz, _ = estimate_speed_hz(rec.xy_all_um(), fs)
+    except ValueError:
+        return None
+    ratio = 60.0 * f_hz / fr.speed_rpm
+    if not abs(ratio - 1.0) > SPEED_MISMATCH_MIN_REL:
+        return None
+    return (f"the signal's running-speed line reads {60.0 * f_hz:.0f} r/min, {ratio:.3g} × the given "
+            f"{fr.speed_rpm:.0f} r/min: either speed_rpm is wrong, or the sample rate is — if {fr.speed_rpm:.0f} r/min "
+            f"is right, the channels were sampled at {fs / ratio:.6g} Hz, not the {fs:g} Hz given")
 
 
 def common_mode_dominates(cm: CommonMode) -> bool:
@@ -365,7 +393,7 @@ def check_recording(rec: Recording, fr) -> tuple[SanityFinding, ...]:
     bad_channel = _channel_checks(rec)
     found = bad_channel + _amplitude_checks(rec, fr) + _keyphasor_checks(rec)
     if not bad_channel:   # a dead or clipped channel already explains odd whirl and missing 1X
-        found += _signal_checks(fr)
+        found += _signal_checks(rec, fr)
         if not any(f.code == "no_sync_signal" and f.level == FAIL for f in found):
             found += _common_mode_checks(fr) + _whirl_checks(fr)
     return tuple(sorted(found, key=lambda f: f.level != FAIL))

@@ -92,6 +92,23 @@ def test_a_dropout_is_not_called_clipping(sim, level):
     assert "loose connector" in found[0].message
 
 
+@pytest.mark.parametrize("fs_factor, speed_rpm, reads, rate", [(1.25, 1800.0, "reads 2250 r/min", "at 2048 Hz, not the 2560 Hz"),
+                                                              (0.8, 1800.0, "reads 1440 r/min", "at 2048 Hz, not the 1638.4 Hz"),
+                                                              (1.0, 3000.0, "reads 1800 r/min", "3413.33 Hz, not the 2048 Hz")])
+def test_no_1x_at_the_given_speed_names_the_signals_speed_and_the_rate_that_fits(fs_factor, speed_rpm, reads, rate):
+    """A sample rate stated 1.25× or 0.8× the true one (2048 Hz), or a 1800 r/min machine stated at 3000 r/min: no 1X at
+    the given speed; the message names the running speed the signal shows and the sample rate that would put it at the
+    given speed — and, where a line below 1X dominates, still names oil whirl as the other explanation."""
+    fs, ch = simulated_channels(misalignment=0.2, record_revs=48)
+    assert fs == 2048.0
+    fr = extract_features(_rec(ch, fs * fs_factor, speed_rpm=speed_rpm))
+    msg = next(f.message for f in fr.sanity if f.code == "no_sync_signal" and f.level == "fail")
+    assert reads in msg and rate in msg and "either speed_rpm is wrong, or the sample rate is" in msg
+    assert ("oil whirl" in msg) == (fs_factor * 1800.0 / speed_rpm < 0.95)
+    # at the right rate and speed: no such finding
+    assert "no_sync_signal" not in {f.code for f in extract_features(_rec(ch, fs, speed_rpm=1800.0)).sanity}
+
+
 def test_swapped_probe_order_gives_reverse_whirl_everywhere(sim):
     fs, ch = sim
     # the probe at 135° recorded as the one at 45° and vice versa: the orbit is mirrored
