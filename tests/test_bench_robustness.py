@@ -585,3 +585,37 @@ def test_the_keyphasor_rows_send_a_faulty_pulse_train(monkeypatch, row, per_rev)
     kp, dur = sent["kp"], sent["w"].shape[1] / bench.FS_HZ
     assert sent["speed"] is None and kp is not None and np.all(np.diff(kp) > 0) and kp[-1] < dur
     assert kp.size / (dur * SPEED_RPM / 60.0) == pytest.approx(per_rev, abs=0.05)
+
+
+def test_f1_intervals_bracket_the_figure_and_pair_the_recordings():
+    """The targets' bootstrap intervals: a perfect row's is (1, 1); the difference of a row from itself is (0, 0);
+    a mixed row's interval holds its macro-F1, is reproducible, and narrows with more cases; Wilson's holds k/n."""
+    from types import SimpleNamespace
+
+    bands = SimpleNamespace(names=["aligned", "slight", "moderate", "severe"], edges=[0.05, 0.15, 0.35])
+    bundle = SimpleNamespace(model=SimpleNamespace(bands_=bands))
+    deltas = {"aligned": 0.0, "slight": 0.1, "moderate": 0.25, "severe": 0.5}
+
+    def outs(n: int, wrong_every: int = 0) -> list:
+        out = []
+        for i in range(n):
+            for mech, band in (("aligned", "aligned"), ("rigid", "slight"), ("rigid", "moderate"), ("rigid", "severe")):
+                o = bench.Outcome(deltas[band], mech, status="confident")
+                o.model_class = "slight" if wrong_every and i % wrong_every == 0 and band != "slight" else band
+                out.append(o)
+        return out
+
+    perfect = outs(12)
+    assert bench._macro_f1(bundle, perfect, "rigid") == 1.0
+    assert bench.f1_interval(bundle, perfect, "rigid", draws=50) == (1.0, 1.0)
+    mixed = outs(12, wrong_every=4)
+    assert bench.f1_interval(bundle, mixed, "all", minus=mixed, draws=50) == (0.0, 0.0)
+    f1 = bench._macro_f1(bundle, mixed, "rigid")
+    lo, hi = bench.f1_interval(bundle, mixed, "rigid", draws=400)
+    assert lo < f1 < hi and hi - lo > 0.05
+    assert bench.f1_interval(bundle, mixed, "rigid", draws=400) == (lo, hi)
+    lo4, hi4 = bench.f1_interval(bundle, outs(48, wrong_every=4), "rigid", draws=400)
+    assert hi4 - lo4 < hi - lo
+    w_lo, w_hi = bench._wilson(225, 240)
+    assert w_lo < 225 / 240 < w_hi < 0.99
+    assert "90 % Wilson interval" in bench._interval_text((w_lo, w_hi), "{:.1%}", "Wilson interval")
