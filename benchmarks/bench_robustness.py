@@ -351,7 +351,7 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
     ``acquisitions`` as ``Recording.acquisitions``."""
     from rotordiag.features import ProbeChannel, Recording, extract_features
     from rotordiag.models.baselines import RuleOfThumb, ratio_column
-    from rotordiag.models.speed_choice import diagnose_recording
+    from rotordiag.models.diagnosis import diagnose_recording
 
     chans = [ProbeChannel(b, a, units, waveforms_um[2 * k + j]) for k, b in enumerate(bearings)
              for j, a in enumerate(ANGLES_DEG)]

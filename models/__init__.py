@@ -6,12 +6,14 @@ models.predict
     ``load_bundle(registry_root, version=None) -> ModelBundle``;
     ``diagnose(bundle, feature_result, clearance_um=None) -> Verdict`` — the one verdict
     function, used by ``rotordiag diagnose`` and the service; ``format_verdict``.
-models.speed_choice
-    ``diagnose_recording(bundle, recording) -> (Verdict, FeatureResult)``: features, verdict, and a
-    doubtful estimated speed judged by the model (``choose_speed``) — what every caller that starts
-    from a recording uses.
-models.bearing_sets, models.numbering
-    Which probe set a verdict reads; bearings numbered from the other end.
+models.diagnosis
+    ``diagnose_recording(bundle, recording) -> (Verdict, FeatureResult)``: features, verdict, a
+    doubtful estimated speed judged by the model (``models.speed_choice.choose_speed``) and the doubts
+    that read the recording again (``models.common_mode``, ``models.clearance_check``) — what every
+    caller that starts from a recording uses.
+models.bearing_sets, models.numbering, models.acquisitions
+    Which probe set a verdict reads; bearings numbered from the other end; the coupling's bearings
+    recorded in separate takes.
 models.registry
     ``Registry(root)``: ``register``, ``load``, ``list``, ``activate``, ``rollback``,
     ``active_version``, ``card``; ``TRUSTED_TYPES`` (skops), ``RegistryError``.

@@ -142,7 +142,7 @@ def diagnose_one(bundle: Any, path: Path, options: ReadOptions,
     baseline compares, ``models.change.compare``)."""
     from rotordiag.features import apply_slow_roll, signature
 
-    from .speed_choice import diagnose_recording
+    from .diagnosis import diagnose_recording
 
     res = read_recording(path, options=options, limits=CLI_LIMITS)
     recording = res.recording

@@ -7,8 +7,8 @@ whirl partner, a 2X or a sub-harmonic read as the 1X — and the estimator then 
 was trained on, and the verdict is out of distribution (``Verdict.ood``).
 
 A vibration analyst in that place tries the other speeds the spectrum allows and keeps the one at
-which the machine makes sense. :func:`diagnose_recording` does the same with the model's own
-yardstick: when the estimate is in doubt **and** its verdict is out of distribution, each of
+which the machine makes sense. :func:`choose_speed` (called by ``models.diagnosis.diagnose_recording``) does
+the same with the model's own yardstick: when the estimate is in doubt **and** its verdict is out of distribution, each of
 ``features.speed_alternatives_rpm`` is tried, and the verdict is given at the one whose recording is
 in distribution with the lowest OOD score, when that score is at least ``SPEED_CHOICE_MIN_OOD_GAIN``
 below the estimate's. The verdict stays ``uncertain`` (the ``speed_ambiguous`` reason: the speed rests
@@ -34,11 +34,9 @@ from rotordiag.features import (
     speed_in_doubt,
 )
 
-from .clearance_check import clearance_reason
-from .common_mode import common_mode_reason
 from .predict import Verdict, diagnose
 
-__all__ = ["SPEED_CHOICE_MIN_OOD_GAIN", "SpeedChoice", "diagnose_recording", "choose_speed"]
+__all__ = ["SPEED_CHOICE_MIN_OOD_GAIN", "SpeedChoice", "choose_speed"]
 
 #: a reading replaces the estimate only when its OOD score is this much lower (and it is in distribution):
 #: a smaller gain is no evidence (chosen on the robustness base sets of seeds 815–818; docs/features.md)
@@ -111,30 +109,3 @@ def choose_speed(bundle: Any, recording: Recording, fr: FeatureResult, verdict: 
     estimator = [f"at the estimate {fr.speed_rpm:.1f} r/min: {w}" for w in fr.warnings if speed_in_doubt(w)]
     fr_c = extract_features(recording, speed_estimate_rpm=rpm, speed_notes=[note, *estimator])
     return diagnose(bundle, fr_c, clearance_um=clearance_um, top_k=top_k), fr_c, choice
-
-
-def diagnose_recording(bundle: Any, recording: Recording, *, clearance_um: float | None = None,
-                       top_k: int = 5, fr: FeatureResult | None = None) -> tuple[Verdict, FeatureResult]:
-    """Features and verdict of one recording, the speed judged by the model when the estimate is in doubt.
-
-    ``extract_features`` (unless ``fr``, the recording's features, is given) then ``diagnose``, then
-    :func:`choose_speed`, then the common-mode doubt (``models.common_mode``: the verdict read again without a
-    1X / 2X common to every probe) and the clearance doubt (``models.clearance_check``: a confident verdict read
-    again at half the stated clearance).
-    Every caller that diagnoses a recording (the service, ``rotordiag diagnose``, the benchmarks) goes through
-    here, so that the verdict, its speed and the features it was computed from are the same everywhere.
-
-    Raises
-    ------
-    ValueError
-        As ``extract_features`` and ``diagnose``, with a message for the user.
-    """
-    if fr is None:
-        fr = extract_features(recording)
-    verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k)
-    verdict, fr, _ = choose_speed(bundle, recording, fr, verdict, clearance_um=clearance_um, top_k=top_k)
-    doubts = [r for r in (common_mode_reason(bundle, recording, fr, verdict),
-                          clearance_reason(bundle, recording, fr, verdict)) if r is not None]
-    if doubts:
-        verdict = diagnose(bundle, fr, clearance_um=clearance_um, top_k=top_k, extra_reasons=doubts)
-    return verdict, fr

@@ -184,10 +184,10 @@ class ModelStore:
     @staticmethod
     def _verdict(bundle: Any, recording: Any, fr: Any = None) -> tuple[Any, Any]:
         """The verdict and the features it was computed from: ``features.extract_features`` (unless ``fr``,
-        the recording's features, is given), then ``models.speed_choice.diagnose_recording`` (the verdict and a
+        the recording's features, is given), then ``models.diagnosis.diagnose_recording`` (the verdict and a
         doubtful estimated speed judged by the model)."""
         from rotordiag.features import extract_features
-        from rotordiag.models.speed_choice import diagnose_recording
+        from rotordiag.models.diagnosis import diagnose_recording
 
         if fr is None:
             fr = extract_features(recording)

@@ -93,8 +93,8 @@ def test_shipped_model_doubts_a_call_that_rests_on_pickup():
     slight by the classifier; read without the common signal it is aligned, so the verdict is uncertain and says
     why. At 12 µm (share 0.96: the 2X is the pickup) the class, moderate, depends on it: inconclusive. Without
     pickup there is no such reason."""
+    from rotordiag.models.diagnosis import diagnose_recording
     from rotordiag.models.predict import load_bundle
-    from rotordiag.models.speed_choice import diagnose_recording
 
     if not (REGISTRY / "active").exists():
         pytest.skip("no shipped registry in this checkout")

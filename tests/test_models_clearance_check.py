@@ -16,8 +16,8 @@ def test_shipped_model_doubts_a_confident_verdict_at_the_diametral_clearance(del
     """The default plant (slight and moderate misalignment) is a confident verdict at its radial clearance and has
     no such reason; stated at twice it (the diametral clearance), half of that is at least as like the training
     family, so the verdict is uncertain and says to check which clearance was given."""
+    from rotordiag.models.diagnosis import diagnose_recording
     from rotordiag.models.predict import load_bundle
-    from rotordiag.models.speed_choice import diagnose_recording
     from tests.service_util import simulated_channels
 
     if not (REGISTRY / "active").exists():

@@ -217,6 +217,7 @@ def test_spectrum_helpers_and_bin_reduction():
 def test_pictures_are_drawn_at_the_verdicts_speed(client, monkeypatch):
     """When the verdict's speed is not the features package's estimate (models.speed_choice chose another
     reading of a doubtful estimate), the page's pictures mark the orders at the verdict's speed."""
+    import rotordiag.models.diagnosis as dg
     import rotordiag.models.speed_choice as sc
     from rotordiag.features import extract_features
 
@@ -230,7 +231,7 @@ def test_pictures_are_drawn_at_the_verdicts_speed(client, monkeypatch):
         fr2 = extract_features(recording, speed_estimate_rpm=chosen, speed_notes=["speed estimate ambiguous: test"])
         return sc.diagnose(bundle, fr2, clearance_um=kw.get("clearance_um")), fr2, None
 
-    monkeypatch.setattr(sc, "choose_speed", choose)
+    monkeypatch.setattr(dg, "choose_speed", choose)
     body = {"sample_rate_hz": rec.sample_rate_hz,
             "channels": [{"bearing": c.bearing, "angle_deg": c.angle_deg, "units": c.units, "data": c.data.tolist()}
                          for c in rec.channels]}
