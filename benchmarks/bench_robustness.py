@@ -103,6 +103,9 @@ class Condition:
     #: (order, µm 0-pk): mains pickup at that order of the running speed added to every channel in one phase (drawn
     #: after the measurement's draws): a ground loop on a grid-synchronous generator (features._common_mode)
     pickup: tuple[int, float] | None = None
+    #: the pickup with its own phase on each channel (drawn the same way): a ground loop through cables routed apart,
+    #: which no common-mode check sees (models.reverse_2x)
+    pickup_per_channel: bool = False
     #: a keyphasor is sent, faulty: ``"missing"`` = every 5th pulse missing (a worn notch, the trigger level
     #: marginal), ``"second edge"`` = an extra pulse 0.37 revolution after each one; the recordings are measured at a
     #: steady speed (no fluctuation) so that the pulses are exact otherwise
@@ -181,6 +184,12 @@ CONDITIONS: tuple[Condition, ...] = (
                    "channel in one phase: mains pickup (a ground loop) on a grid-synchronous 2-pole generator, "
                    "100/120 Hz; the sanity check common_mode_2x and the common_mode doubt (models.common_mode) "
                    "(not one of the issue's rows)"),
+    Condition("mains pickup at 2X, 10 µm, a phase per cable", pickup=(2, 10.0), pickup_per_channel=True,
+              same_recordings_as="clean",
+              what="the clean recordings with a 10 µm (0-pk) signal at twice the running frequency added to each "
+                   "channel with a phase of its own: pickup through cables routed apart, which no common-mode check "
+                   "sees; a misalignment call whose coupling 2X whirls backward is doubted (models.reverse_2x) "
+                   "(not one of the issue's rows)"),
     Condition("bearings 2 and 3 swapped", coupling_bearings_swapped=True, same_recordings_as="clean",
               what="the clean recordings with bearing 2's probes sent as bearing 3's and 3's as 2's (cables mixed up at "
                    "the coupling); no check tells it: a known limit (docs/models.md, stop 39) (not one of the issue's "
@@ -199,7 +208,8 @@ EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 re
                     "192 revolutions, speed stated 0.4 % off", "DC: raw probe gaps", "DC: means removed",
                     "bearing 2's x probe inverted", "bearings numbered 4-3-2-1", "keyphasor, every 5th pulse missing",
                     "keyphasor, a second edge every revolution", "one 500 µm spike", "mains pickup at 2X, 10 µm",
-                    "bearings 2 and 3 swapped", "bearings 3–4 in a second take, not stated",
+                    "mains pickup at 2X, 10 µm, a phase per cable", "bearings 2 and 3 swapped",
+                    "bearings 3–4 in a second take, not stated",
                     "bearings 3–4 in a second take, stated")
 ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name not in EXTRA_CONDITIONS)
 
@@ -444,7 +454,8 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
         if cond.pickup is not None:
             order, amp_um = cond.pickup
             t_s = np.arange(w.shape[1]) / FS_HZ
-            w += amp_um * np.cos(2.0 * np.pi * order * c["speed_rpm"] / 60.0 * t_s + rng.uniform(0.0, 2.0 * np.pi))
+            phase = rng.uniform(0.0, 2.0 * np.pi, size=(w.shape[0], 1) if cond.pickup_per_channel else None)
+            w += amp_um * np.cos(2.0 * np.pi * order * c["speed_rpm"] / 60.0 * t_s + phase)
         if cond.second_take_ms[1] > 0:
             late = int(round(rng.uniform(*cond.second_take_ms) * 1e-3 * FS_HZ))
             rows = [2 * k + j for k, b in enumerate(cond.bearings) if b in (3, 4) for j in (0, 1)]

@@ -23,6 +23,7 @@ from .acquisitions import acquisitions_reason
 from .bearing_sets import bearing_plan, leave_out_bearings
 from .numbering import has_every_bearing, mirrored_row, numbering_reason
 from .registry import Registry
+from .reverse_2x import reverse_2x_reason
 from .status import (
     INCONCLUSIVE,
     ModelCall,
@@ -365,6 +366,9 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
     split = acquisitions_reason(feature_result)
     if split is not None:
         extra.append(split)
+    backward = reverse_2x_reason(names, row, str(model.classes_[cls]) != str(model.bands_.names[0]))
+    if backward is not None:
+        extra.append(backward)
     if not ood:
         extra += _numbering_reasons(model, fast, names, row, ood_score, cls)
     if ood_score > 1.0:

@@ -31,7 +31,8 @@
   side (``centreline_frame_turned``: probes not at the angles given, or bearings unlike plain cylindrical ones);
   or a probe set the model tells misalignment from with more than 10 % false alarms
   (``bearing_set_weak``, :mod:`models.bearing_sets`); or bearings 2 and 3 recorded in separate acquisitions
-  (``separate_acquisitions``, :mod:`models.acquisitions`: no phase across the coupling).
+  (``separate_acquisitions``, :mod:`models.acquisitions`: no phase across the coupling); or a misalignment call
+  on a coupling 2X that whirls backward (``reverse_2x``, :mod:`models.reverse_2x`).
 - ``confident``: none of these.
 
 Class and Δ are consistent by construction (:func:`consistent_estimate`): the severity is

@@ -359,6 +359,7 @@ class ReasonOut(BaseModel):
                       "`keyphasor_faulty` (missing or extra keyphasor pulses: the orders were tracked at a steady speed), "
                       "`separate_acquisitions` (bearings 2 and 3 recorded in separate takes: no phase across the "
                       "coupling), "
+                      "`reverse_2x` (a misalignment call on a coupling 2X that whirls backward: pickup or wiring), "
                       "`spike` (a few isolated samples make the orbit larger than the clearance: a glitch), "
                       "`clearance_diametral` (half the stated clearance makes the recording at least as like the training "
                       "machines: check that clearance_um is the radial clearance), "

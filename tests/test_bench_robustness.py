@@ -568,6 +568,17 @@ def test_the_second_take_rows_delay_bearings_3_and_4(monkeypatch):
     np.testing.assert_array_equal(w1[4:], w0[4:, late:])
 
 
+def test_the_per_cable_pickup_row_has_one_amplitude_and_a_phase_per_channel(monkeypatch):
+    """Every channel of the clean recordings plus a 10 µm (0-pk) sinusoid at twice the running frequency, each with a
+    phase of its own (not all one: that is the common-mode row)."""
+    seen = _sent_for_clean_and(monkeypatch, "mains pickup at 2X, 10 µm, a phase per cable")
+    d = seen["mains pickup at 2X, 10 µm, a phase per cable"][0] - seen["clean"][0]
+    t = np.arange(d.shape[1]) / bench.FS_HZ
+    z = 2.0 * np.mean(d * np.exp(-2j * np.pi * 2 * SPEED_RPM / 60.0 * t)[None, :], axis=1)
+    np.testing.assert_allclose(np.abs(z), 10.0, rtol=0.02)
+    assert np.ptp(np.angle(z * np.conj(z[0]))) > 1.0
+
+
 @pytest.mark.parametrize("row, per_rev", [("keyphasor, every 5th pulse missing", 0.8),
                                           ("keyphasor, a second edge every revolution", 2.0)])
 def test_the_keyphasor_rows_send_a_faulty_pulse_train(monkeypatch, row, per_rev):

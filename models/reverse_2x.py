@@ -1,0 +1,75 @@
+"""A misalignment call whose coupling 2X whirls backward: never confident.
+
+In the machines the model was trained on, a coupling's 2X, and a two-pole rotor's (its asymmetric stiffness under
+gravity), whirls forward: on the held-out plants of docs/robustness.md (clean base, far and preset sets, seed 815)
+the reverse/forward ratio of the 2X orbit at the coupling bearings (``b{n}_2x_rev_fwd_ratio``) has its 99th
+percentile at 1.6–1.9. That is the family's regularity, not a law: a preloaded, flattened orbit can whirl backward,
+and 6 of the 15 misaligned cases of the independent ROSS machines (two of the three designs) are called misaligned
+on a coupling 2X that whirls backward.
+A 2X that is not shaft motion follows no rule at all: electrical pickup with its own phase on each probe cable (a
+ground loop through cables routed apart; pickup in one phase on every probe is ``models.common_mode``'s) makes each
+bearing's 2X orbit an arbitrary ellipse, reverse as often as forward, and the model reads a strong 2X as
+misalignment. At 10 µm such pickup on the clean base set gave 8 healthy machines shown moderate or severe with
+`confident` status.
+
+So a misalignment call whose coupling bearing with a sizeable 2X (at least half the larger coupling bearing's)
+whirls backward with reverse ≥ :data:`REVERSE_2X_MIN_RATIO` × forward is ``uncertain`` (``reverse_2x``): a doubt
+with what to check, never a finding. docs/robustness.md, row "mains pickup at 2X, 10 µm, a phase per cable":
+confident 55 → 35, two bands off 8 → 4. In family it costs 2 of the 592 confident verdicts of the clean, runout,
+SNR 15 dB, coupling-bearings-only, far and preset rows (one runout, one far plant); the ROSS cases it names were
+uncertain already.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from rotordiag.core.conventions import COUPLING_BEARINGS
+
+from .status import UNCERTAIN, Reason
+
+__all__ = ["REVERSE_2X_MIN_RATIO", "REVERSE_2X_MIN_SHARE", "coupling_reverse_2x", "reverse_2x_reason"]
+
+#: a coupling bearing's 2X reverse/forward ratio from which a misalignment call is doubted (held-out plants' 99th
+#: percentile 1.6–1.9)
+REVERSE_2X_MIN_RATIO = 2.0
+#: a coupling bearing's 2X is judged when its orbit's major axis is at least this share of the larger one's (a 2X
+#: near the noise has a direction of chance)
+REVERSE_2X_MIN_SHARE = 0.5
+
+
+def coupling_reverse_2x(names: Sequence[str], row: np.ndarray) -> tuple[int, float] | None:
+    """The coupling bearing whose sizeable 2X whirls backward the most and its reverse/forward ratio, when that
+    ratio is at least :data:`REVERSE_2X_MIN_RATIO`; else None (also when the 2X is not measured)."""
+    index = {n: i for i, n in enumerate(names)}
+    major: dict[int, float] = {}
+    ratio: dict[int, float] = {}
+    for b in COUPLING_BEARINGS:
+        i, j = index.get(f"b{b}_2x_major_um_pp"), index.get(f"b{b}_2x_rev_fwd_ratio")
+        if i is None or j is None or not (np.isfinite(row[i]) and np.isfinite(row[j])):
+            continue
+        major[b], ratio[b] = float(row[i]), float(row[j])
+    if not major or not max(major.values()) > 0:
+        return None
+    judged = [b for b in major if major[b] >= REVERSE_2X_MIN_SHARE * max(major.values())]
+    b = max(judged, key=lambda k: ratio[k])
+    return (b, ratio[b]) if ratio[b] >= REVERSE_2X_MIN_RATIO else None
+
+
+def reverse_2x_reason(names: Sequence[str], row: np.ndarray, misaligned_call: bool) -> Reason | None:
+    """``reverse_2x`` (uncertain) for a misalignment call whose coupling 2X whirls backward
+    (:func:`coupling_reverse_2x`); else None."""
+    if not misaligned_call:
+        return None
+    found = coupling_reverse_2x(names, row)
+    if found is None:
+        return None
+    b, r = found
+    return Reason("reverse_2x", UNCERTAIN,
+                  f"called misaligned on a 2X that whirls backward at bearing {b} (reverse {r:.1f} × forward): in the "
+                  "machines the model was trained on a coupling's or a two-pole rotor's 2X whirls forward. A 2X with "
+                  "its own phase on each probe cable (electrical pickup through a ground loop) or a probe wiring "
+                  "problem reads so; a strongly preloaded (flattened) orbit can too. Check the probe cabling and "
+                  "grounding (a record with the unit off the grid shows pickup that stays), or compare with this "
+                  "machine's baseline")
