@@ -97,7 +97,8 @@ def _build() -> tuple[FeatureSpec, ...]:
             for d in ("x", "y"):
                 specs.append(FeatureSpec(
                     f"dphase_{k}x_b{i}_b{j}_{d}_deg", "deg",
-                    f"{k}X phase lag of bearing {i} minus bearing {j}, {d} direction, wrapped to (−180, 180]"))
+                    f"{k}X phase lag of bearing {i} minus bearing {j}, {d} direction, wrapped to (−180, 180]; NaN "
+                    "when either phase is in the noise, or the two bearings were recorded in separate acquisitions"))
     return tuple(specs)
 
 

@@ -126,6 +126,9 @@ def test_schema_documented_with_units():
     for name in FEATURE_NAMES:
         generic = re.sub(r"^b[1-4]_", "b1_", name)
         assert f"`{generic}`" in doc, f"{name} is not documented in docs/features.md"
+    from rotordiag.features._names import markdown_table
+
+    assert markdown_table() in doc, "docs/features.md's schema table differs from features._names.markdown_table()"
 
 
 def test_as_dict_and_getitem():
