@@ -564,16 +564,29 @@ def _true_band(outs: list[Outcome], edges: np.ndarray) -> np.ndarray:
     return np.searchsorted(edges, np.array([o.delta for o in outs], dtype=float), side="right").astype(int)
 
 
+def _macro_f1(bundle, outs: list[Outcome], mechanism: str, who: str = "model") -> float | None:
+    """Macro-F1 of the model's class (``who="model"``) or the rule of thumb's (``"rule"``) over ``mechanism``'s cases
+    and the aligned ones (``"all"``: every case); None when there are none."""
+    from rotordiag.models.metrics import classification_metrics
+
+    names, edges = _bands(bundle)
+    sel = [o for o in outs if o.mechanism in (mechanism, "aligned") or mechanism == "all"]
+    if not sel:
+        return None
+    truth = [names[k] for k in _true_band(sel, edges)]
+    pred = [o.model_class if who == "model" else o.rule_class for o in sel]
+    return float(classification_metrics(truth, pred, names)["macro_f1"])
+
+
 def summarize(bundle, outs: list[Outcome]) -> dict:
     """The row's figures for the model (``model``) and the rule (``rule``)."""
-    from rotordiag.models.metrics import classification_metrics, regression_metrics
+    from rotordiag.models.metrics import regression_metrics
 
     names, edges = _bands(bundle)
     ran = [o for o in outs if o.status != "sim failed"]
     # a refused recording (the service's 422: e.g. too few revolutions at the speed read from it) has no class,
     # no Δ and no 2X/1X: the classification figures, for the model and the rule alike, are over the others
     answered = [o for o in ran if o.status != "refused"]
-    truth = np.array(names, dtype=object)[_true_band(answered, edges)]
     delta = np.array([o.delta for o in answered])
     mech = np.array([o.mechanism for o in answered], dtype=object)
     row: dict = {"n": len(ran), "sim_failed": len(outs) - len(ran), "refused": len(ran) - len(answered)}
@@ -584,8 +597,7 @@ def summarize(bundle, outs: list[Outcome]) -> dict:
         r: dict = {}
         aligned = mech == "aligned"
         for m in sorted(set(mech) - {"aligned"}) + ["all"]:
-            sel = aligned | (mech == m) if m != "all" else np.ones(len(answered), bool)
-            r[f"f1_{m}"] = classification_metrics(truth[sel], pred[sel], names)["macro_f1"] if sel.any() else None
+            r[f"f1_{m}"] = _macro_f1(bundle, answered, m, who)
         r["false_alarm"] = float(np.mean(pred[aligned] != names[0])) if aligned.any() else None
         r["spearman"] = regression_metrics(delta, np.nan_to_num(score, nan=0.0), score=score)["spearman"]
         if who == "model":                  # the Δ estimate's error on each mechanism's misaligned cases
@@ -617,17 +629,6 @@ def summarize(bundle, outs: list[Outcome]) -> dict:
 BOOTSTRAP_DRAWS, BOOTSTRAP_LEVEL = 1000, 0.90
 
 
-def _macro_f1(bundle, outs: list[Outcome], mechanism: str) -> float:
-    """The model's macro-F1 over ``mechanism``'s cases and the aligned ones (``"all"``: every case), as
-    :func:`summarize` computes it."""
-    from rotordiag.models.metrics import classification_metrics
-
-    names, edges = _bands(bundle)
-    sel = [o for o in outs if o.mechanism in (mechanism, "aligned") or mechanism == "all"]
-    truth = [names[k] for k in _true_band(sel, edges)]
-    return float(classification_metrics(truth, [o.model_class for o in sel], names)["macro_f1"])
-
-
 def f1_interval(bundle, outs: list[Outcome], mechanism: str, minus: list[Outcome] | None = None, *,
                 draws: int = BOOTSTRAP_DRAWS, level: float = BOOTSTRAP_LEVEL, seed: int = 0) -> tuple[float, float]:
     """Bootstrap interval of the model's macro-F1 on ``outs`` (:func:`_macro_f1`), or of its difference from the
@@ -646,9 +647,9 @@ def f1_interval(bundle, outs: list[Outcome], mechanism: str, minus: list[Outcome
     for _ in range(draws):
         idx = [int(j) for g in strata.values() for j in rng.choice(g, size=len(g), replace=True)]
         v = _macro_f1(bundle, [outs[j] for j in idx], mechanism)
-        if minus is not None:
-            v -= _macro_f1(bundle, [minus[j] for j in idx], mechanism)
-        stats.append(v)
+        w = 0.0 if minus is None else _macro_f1(bundle, [minus[j] for j in idx], mechanism)
+        if v is not None and w is not None:
+            stats.append(v - w)
     lo, hi = np.quantile(stats, [(1.0 - level) / 2.0, (1.0 + level) / 2.0])
     return float(lo), float(hi)
 
@@ -656,16 +657,12 @@ def f1_interval(bundle, outs: list[Outcome], mechanism: str, minus: list[Outcome
 def f1_on_right_speed(bundle, unknown: list[Outcome], known: list[Outcome]) -> tuple[float, float, int] | None:
     """Macro-F1 (all mechanisms) with the speed estimated and with it given, on the same recordings: those whose
     estimate is within :data:`SPEED_TOLERANCE` (``unknown`` and ``known`` are the same cases, in order)."""
-    from rotordiag.models.metrics import classification_metrics
-
-    names, edges = _bands(bundle)
     pairs = [(u, k) for u, k in zip(unknown, known) if u.status != "sim failed" and k.status != "refused"
              and math.isfinite(u.speed_rpm_used) and abs(u.speed_rpm_used / u.speed_rpm - 1.0) <= SPEED_TOLERANCE]
-    if not pairs:
+    f1_unknown, f1_known = _macro_f1(bundle, [u for u, _ in pairs], "all"), _macro_f1(bundle, [k for _, k in pairs], "all")
+    if f1_unknown is None or f1_known is None:
         return None
-    truth = [names[k] for k in _true_band([u for u, _ in pairs], edges)]
-    return (classification_metrics(truth, [u.model_class for u, _ in pairs], names)["macro_f1"],
-            classification_metrics(truth, [k.model_class for _, k in pairs], names)["macro_f1"], len(pairs))
+    return f1_unknown, f1_known, len(pairs)
 
 
 def confident_summary(outs: list[Outcome], names: list[str], edges: np.ndarray) -> dict:
