@@ -19,7 +19,7 @@ from threadpoolctl import threadpool_limits
 
 from rotordiag.features import evidence
 
-from .acquisitions import acquisitions_reason
+from .acquisitions import acquisitions_reason, coupling_phase_rows, coupling_split
 from .bearing_sets import bearing_plan, leave_out_bearings
 from .numbering import has_every_bearing, mirrored_row, numbering_reason
 from .registry import Registry
@@ -363,9 +363,11 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
     findings = model.envelope_findings(X)[0] if hasattr(model, "envelope_findings") else []
     ood = ood_score > 1.0 or bool(findings)
     extra = (plan.reasons() if plan is not None else []) + list(extra_reasons)
-    split = acquisitions_reason(feature_result)
-    if split is not None:
-        extra.append(split)
+    if coupling_split(feature_result):
+        X_phase = coupling_phase_rows(names, row)
+        readings = None if X_phase is None else \
+            [str(model.classes_[k]) for k in model.band_index(fast.predict_proba(X_phase), X_phase)]
+        extra.append(acquisitions_reason(feature_result, readings))
     backward = reverse_2x_reason(names, row, str(model.classes_[cls]) != str(model.bands_.names[0]))
     if backward is not None:
         extra.append(backward)

@@ -62,3 +62,31 @@ def test_other_pairs_split_leave_the_verdict(bundle):
             assert v.status == plain.status and v.severity == plain.severity
             assert v.probabilities == pytest.approx(plain.probabilities, abs=0.01)
             assert np.isfinite(fr["dphase_1x_b2_b3_x_deg"])
+
+
+def test_the_reason_reads_the_recording_at_both_coupling_phases(bundle):
+    """With the coupling's phase not measured, the reason gives the model's class with the shaft ends in phase (0°)
+    and in anti-phase (180°) across the coupling — the healthy plant reads aligned in phase, the severely misaligned
+    one the same either way — and those readings are the classifier's own on rows with that phase put in."""
+    from rotordiag.models.acquisitions import COUPLING_PHASES_DEG, coupling_phase_rows
+    from rotordiag.models.diagnosis import diagnose_recording
+    from rotordiag.models.predict import _model_row, fast_predictor
+
+    late = int(round(0.005 * 2048.0))
+    messages = {}
+    for misalignment in (0.0, 0.5):
+        v, fr = diagnose_recording(bundle, _recording(misalignment, late, acquisitions="1,2;3,4"))
+        msg = next(r["message"] for r in v.reasons if r["code"] == "separate_acquisitions")
+        m = _model_row(bundle, fr)
+        rows = coupling_phase_rows(m.names, m.row)
+        assert rows is not None and rows.shape == (len(COUPLING_PHASES_DEG), len(m.names))
+        cols = [i for i, n in enumerate(m.names) if "dphase_" in n and "_b2_b3_" in n]
+        assert np.isnan(m.row[cols]).all() and (rows[0, cols] == 0.0).all() and (rows[1, cols] == 180.0).all()
+        fast = fast_predictor(m.model)
+        called = [str(m.model.classes_[k]) for k in m.model.band_index(fast.predict_proba(rows), rows)]
+        assert f"in phase across the coupling (0°, a healthy rigid coupling) the model calls it {called[0]};" in msg
+        assert f"in anti-phase (180°, the classic misalignment sign), {called[1]}" in msg
+        messages[misalignment] = (called, msg)
+    assert messages[0.0][0][0] == "aligned"
+    severe_called, severe_msg = messages[0.5]
+    assert severe_called[0] == severe_called[1] != "aligned" and "does not hinge on that phase" in severe_msg
