@@ -119,6 +119,9 @@ class Condition:
     second_take_ms: tuple[float, float] = (0.0, 0.0)
     #: ``Recording.acquisitions`` as the user states it (``""``: not stated — every channel taken as sampled together)
     acquisitions: str = ""
+    #: each acquisition sent with its own keyphasor pulse train, on its take's clock (a steady speed, as for
+    #: ``keyphasor_fault``)
+    keyphasor_per_take: bool = False
 
 
 #: the raw probe gap of the "raw gap" row, µm (−8 V at 7.87 V/mm is about 1000 µm)
@@ -202,6 +205,12 @@ CONDITIONS: tuple[Condition, ...] = (
               same_recordings_as="clean",
               what="the same recordings with `acquisitions` = 1,2;3,4: the phases between the takes are not "
                    "measured and the verdict says so (models.acquisitions) (not one of the issue's rows)"),
+    Condition("bearings 3–4 in a second take, a keyphasor per take", second_take_ms=(2.0, 20.0),
+              acquisitions="1,2;3,4", keyphasor_per_take=True,
+              what="the base set's machines at a steady speed, bearings 3 and 4 taken U(2, 20) ms after 1 and 2, each "
+                   "take with its keyphasor (a portable analyser's takes with a tachometer reference): the phases of "
+                   "both takes refer to the same mark, so the phase across the coupling is measured (features._takes) "
+                   "(not one of the issue's rows)"),
 )
 #: extra measurements, beside the rows issue 15 asks for (its targets are over :data:`ISSUE_CONDITIONS`)
 EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 revolutions",
@@ -210,7 +219,7 @@ EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 re
                     "keyphasor, a second edge every revolution", "one 500 µm spike", "mains pickup at 2X, 10 µm",
                     "mains pickup at 2X, 10 µm, a phase per cable", "bearings 2 and 3 swapped",
                     "bearings 3–4 in a second take, not stated",
-                    "bearings 3–4 in a second take, stated")
+                    "bearings 3–4 in a second take, stated", "bearings 3–4 in a second take, a keyphasor per take")
 ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name not in EXTRA_CONDITIONS)
 
 
@@ -355,7 +364,7 @@ class Outcome:
 
 def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ...], fs_hz: float,
                        speed_rpm: float | None, clearance_um: float | None, out: Outcome, units: str = "um",
-                       keyphasor_times_s: np.ndarray | None = None, acquisitions: str | None = None) -> Outcome:
+                       keyphasor_times_s: Any = None, acquisitions: str | None = None) -> Outcome:
     """Run features + the shipped model + the rule of thumb on one recording (fills ``out``); ``units``
     is what the channels are declared in (the numbers are µm: ``"mil"`` is the µm-read-as-mils mistake);
     ``acquisitions`` as ``Recording.acquisitions``."""
@@ -439,7 +448,7 @@ def shift_journal_dc(w: np.ndarray, bearings: tuple[int, ...], clearance_um: flo
 def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed: int) -> list[Outcome]:
     def one(i: int, c: dict, d, o: Outcome) -> Outcome:
         rng = measurement_rng(cond, seed, i)
-        steady = bool(cond.keyphasor_fault)
+        steady = bool(cond.keyphasor_fault) or cond.keyphasor_per_take
         w = measure(d, c["speed_rpm"], cond, rng, revs=cond.revs, **({"speed_fluctuation": 0.0} if steady else {}))
         shift_journal_dc(w, cond.bearings, c["plant"]["clearance_m"] * 1e6, cond.journal3_dc_shift_c, rng)
         if cond.dc == "gap":
@@ -456,6 +465,7 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
             t_s = np.arange(w.shape[1]) / FS_HZ
             phase = rng.uniform(0.0, 2.0 * np.pi, size=(w.shape[0], 1) if cond.pickup_per_channel else None)
             w += amp_um * np.cos(2.0 * np.pi * order * c["speed_rpm"] / 60.0 * t_s + phase)
+        late = 0
         if cond.second_take_ms[1] > 0:
             late = int(round(rng.uniform(*cond.second_take_ms) * 1e-3 * FS_HZ))
             rows = [2 * k + j for k, b in enumerate(cond.bearings) if b in (3, 4) for j in (0, 1)]
@@ -468,13 +478,18 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
         bearings = tuple(5 - b for b in cond.bearings) if cond.numbered_from_exciter else cond.bearings
         if cond.coupling_bearings_swapped:
             bearings = tuple({2: 3, 3: 2}.get(b, b) for b in bearings)
-        keyphasor = None
-        if steady:                          # pulses once per revolution from an arbitrary angle, made faulty
+        keyphasor: Any = None
+        if steady:                          # pulses once per revolution from an arbitrary angle (made faulty)
             period_s = 60.0 / c["speed_rpm"]
-            pulses = np.arange(rng.uniform(0.0, period_s), w.shape[1] / FS_HZ, period_s)
-            keyphasor = (np.delete(pulses, np.arange(4, pulses.size, 5)) if cond.keyphasor_fault == "missing" else
-                         np.sort(np.concatenate([pulses, pulses + 0.37 * period_s])))
-            keyphasor = keyphasor[keyphasor < w.shape[1] / FS_HZ]
+            t_end = w.shape[1] / FS_HZ
+            pulses = np.arange(rng.uniform(0.0, period_s), t_end + late / FS_HZ, period_s)
+            if cond.keyphasor_per_take:     # the second take's clock starts `late` samples later
+                second = pulses - late / FS_HZ
+                keyphasor = [pulses[pulses < t_end], second[(second >= 0.0) & (second < t_end)]]
+            else:
+                keyphasor = (np.delete(pulses, np.arange(4, pulses.size, 5)) if cond.keyphasor_fault == "missing"
+                             else np.sort(np.concatenate([pulses, pulses + 0.37 * period_s])))
+                keyphasor = keyphasor[keyphasor < t_end]
             stated = None
         told: dict[str, Any] = {} if keyphasor is None else {"keyphasor_times_s": keyphasor}
         if cond.acquisitions:

@@ -55,7 +55,7 @@ Importing the package raises glibc's malloc mmap/trim thresholds (see ``features
 ``ROTORDIAG_MALLOC_TUNING=0`` disables it) and each extraction runs with one BLAS thread
 (``features._config.BLAS_THREADS``): both measured to matter more than the arithmetic.
 """
-from ._acquisitions import format_acquisitions, parse_acquisitions, split_pairs
+from ._acquisitions import format_acquisitions, parse_acquisitions, parse_keyphasor_takes, split_pairs
 from ._alloc import tune_malloc
 from ._change import (
     CHANGE_QUANTITIES,
@@ -103,5 +103,5 @@ __all__ = [
     "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
     "SPEED_AMBIGUOUS", "SPEED_NOT_CONVERGED", "speed_in_doubt", "speed_alternatives_rpm",
     "CommonMode", "common_mode", "common_mode_share", "without_common_mode", "with_scale", "COMMON_MODE_NOTABLE_SHARE",
-    "parse_acquisitions", "format_acquisitions", "split_pairs",
+    "parse_acquisitions", "parse_keyphasor_takes", "format_acquisitions", "split_pairs",
 ]

@@ -19,7 +19,7 @@ import numpy as np
 
 from ._config import BEARINGS
 
-__all__ = ["parse_acquisitions", "format_acquisitions", "split_pairs"]
+__all__ = ["parse_acquisitions", "acquisitions_in_order", "format_acquisitions", "split_pairs", "parse_keyphasor_takes"]
 
 _HINT = ("give the groups of bearings sampled together, e.g. \"1,2;3,4\" (bearings 1 and 2 in one take, 3 and 4 in "
          "another), or [[1, 2], [3, 4]]")
@@ -37,14 +37,13 @@ def _bearing(value: object, name: str) -> int:
     return b
 
 
-def parse_acquisitions(value: object, name: str = "acquisitions") -> tuple[tuple[int, ...], ...]:
-    """Groups of bearings sampled together, from ``"1,2;3,4"`` or ``[[1, 2], [3, 4]]``: each group sorted, the
-    groups ordered by their first bearing.
+def acquisitions_in_order(value: object, name: str = "acquisitions") -> tuple[tuple[int, ...], ...]:
+    """Groups of bearings sampled together, each sorted, in the order given (:func:`parse_acquisitions` orders them).
 
     Raises
     ------
     ValueError
-        Naming ``name``: not groups of bearing numbers, an empty group, or a bearing in two groups.
+        As :func:`parse_acquisitions`.
     """
     if isinstance(value, str):
         value = [g.split(",") for g in value.split(";") if g.strip()]
@@ -65,7 +64,59 @@ def parse_acquisitions(value: object, name: str = "acquisitions") -> tuple[tuple
         groups.append(tuple(sorted(group)))
     if not groups:
         raise ValueError(f"{name} is empty; {_HINT}")
-    return tuple(sorted(groups))
+    return tuple(groups)
+
+
+def parse_acquisitions(value: object, name: str = "acquisitions") -> tuple[tuple[int, ...], ...]:
+    """Groups of bearings sampled together, from ``"1,2;3,4"`` or ``[[1, 2], [3, 4]]``: each group sorted, the
+    groups ordered by their first bearing.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``: not groups of bearing numbers, an empty group, or a bearing in two groups.
+    """
+    return tuple(sorted(acquisitions_in_order(value, name)))
+
+
+def _pulse_train(value: object, name: str) -> np.ndarray:
+    try:
+        kp = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a 1-D array of pulse times in s") from None
+    if kp.ndim != 1 or kp.size < 2:
+        raise ValueError(f"{name} must be a 1-D array of at least 2 pulse times (s), got shape {kp.shape}")
+    if not np.all(np.isfinite(kp)):
+        raise ValueError(f"{name} contains NaN/inf; give pulse times in s")
+    if np.any(np.diff(kp) <= 0):
+        raise ValueError(f"{name} must be strictly increasing (one pulse per revolution)")
+    return kp
+
+
+def parse_keyphasor_takes(value: object, name: str = "keyphasor_times_s") -> np.ndarray | tuple[np.ndarray, ...]:
+    """Keyphasor pulse times: one train (a 1-D array, or ``"t0,t1,…"``), or one train per acquisition (a sequence
+    of 1-D sequences, or ``"t0,t1,…;t0,t1,…"``), each on its own take's clock (first sample at t = 0) and in the
+    order the acquisitions are listed.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` (and the take): not numbers, fewer than 2 pulses, NaN/inf, not strictly increasing.
+    """
+    if isinstance(value, str):
+        parts = [p for p in value.split(";") if p.strip()]
+        try:
+            trains: list[object] = [[float(t) for t in p.split(",") if t.strip()] for p in parts]
+        except ValueError:
+            raise ValueError(f"{name} must be pulse times in s separated by commas, one acquisition's from the "
+                             "next by semicolons") from None
+        value = trains[0] if len(trains) == 1 else trains
+    if isinstance(value, np.ndarray) and value.ndim == 2:
+        value = list(value)
+    if isinstance(value, (Sequence, np.ndarray)) and not isinstance(value, (str, bytes)) and len(value) > 0 \
+            and all(isinstance(v, (Sequence, np.ndarray)) and not isinstance(v, (str, bytes)) for v in value):
+        return tuple(_pulse_train(v, f"{name}[{i}]") for i, v in enumerate(value))
+    return _pulse_train(value, name)
 
 
 def format_acquisitions(acquisitions: Sequence[Sequence[int]] | None) -> str:

@@ -355,10 +355,17 @@ def extract_features(recording: Recording, *, speed_estimate_rpm: float | None =
                          "keyphasor_times_s")
         estimate = (float(speed_estimate_rpm), notes)
     with _blas_limit:
-        return _extract(recording, estimate)
+        if recording.keyphasor_takes is not None:
+            from ._takes import extract_by_take
+            result = extract_by_take(recording, _extract)
+        else:
+            result = _extract(recording, estimate)
+        return replace(result, sanity=check_recording(recording, result))
 
 
 def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = None) -> FeatureResult:
+    """The features of a recording sampled together (or whose takes share no phase reference), before the
+    sanity checks."""
     rec = recording
     fs = rec.sample_rate_hz
     bearings = rec.bearings
@@ -503,21 +510,7 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
             slow_roll_um_pp=None if chans[0].slow_roll_um_pp is None and chans[1].slow_roll_um_pp is None
             else (chans[0].slow_roll_um_pp, chans[1].slow_roll_um_pp))
 
-    split = split_pairs(rec.acquisition_groups, cfg.PHASE_PAIRS)
-    if split:
-        warnings.append(
-            f"bearings recorded in separate acquisitions ({format_acquisitions(rec.acquisition_groups)}): the phase "
-            "differences between " + ", ".join(f"bearings {i} and {j}" for i, j in split)
-            + " are not measured (the takes' start times are not related); record the bearings either side of the "
-            "coupling together for the phase across it")
-    for k in (1, 2):
-        for bi, bj in cfg.PHASE_PAIRS:
-            if bi in details and bj in details and (bi, bj) not in split:
-                for axis in ("x", "y"):
-                    ci = 2 * bearings.index(bi) + (axis == "y")
-                    cj = 2 * bearings.index(bj) + (axis == "y")
-                    values[_NAME_INDEX[f"dphase_{k}x_b{bi}_b{bj}_{axis}_deg"]] = float(wrap_deg(
-                        float(phase[ci, k - 1]) - float(phase[cj, k - 1])))
+    warnings += phase_differences(values, details, rec.acquisition_groups)
 
     motion = None
     if sa.n_revs >= cfg.MIN_REVS_MOTION:
@@ -537,4 +530,25 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
         names=FEATURE_NAMES, values=values, bearings=details, speed_rpm=float(sa.speed_rpm),
         speed_source=sa.source, phase_reference="keyphasor" if sa.source == "keyphasor" else "first sample",
         n_revs=sa.n_revs, motion_type=motion, warnings=tuple(warnings), acquisitions=rec.acquisition_groups)
-    return replace(result, sanity=check_recording(rec, result))
+    return result
+
+
+def phase_differences(values: np.ndarray, details: dict[int, BearingDetail],
+                      acquisitions: Sequence[Sequence[int]]) -> list[str]:
+    """Write the ``dphase_*`` features of the bearings in ``details`` into ``values`` (in place): each order's
+    phase lag of one bearing minus the other's, missing where either phase is in the noise
+    (:meth:`BearingDetail.phase_deg`) or the two bearings lie in different ``acquisitions`` (groups whose
+    phases are not related). Returns the warning that names those pairs (none when there are none)."""
+    split = split_pairs(acquisitions, cfg.PHASE_PAIRS)
+    for k in (1, 2):
+        for bi, bj in cfg.PHASE_PAIRS:
+            if bi in details and bj in details and (bi, bj) not in split:
+                for axis in ("x", "y"):
+                    values[_NAME_INDEX[f"dphase_{k}x_b{bi}_b{bj}_{axis}_deg"]] = float(wrap_deg(
+                        details[bi].phase_deg(axis, k) - details[bj].phase_deg(axis, k)))
+    if not split:
+        return []
+    return [f"bearings recorded in separate acquisitions ({format_acquisitions(acquisitions)}): the phase "
+            "differences between " + ", ".join(f"bearings {i} and {j}" for i, j in split)
+            + " are not measured (the takes' start times are not related); record the bearings either side of the "
+            "coupling together for the phase across it, or give a keyphasor per acquisition"]

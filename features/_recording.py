@@ -7,7 +7,7 @@ from typing import cast
 
 import numpy as np
 
-from ._acquisitions import format_acquisitions, parse_acquisitions
+from ._acquisitions import acquisitions_in_order, format_acquisitions, parse_acquisitions, parse_keyphasor_takes
 from ._config import ALLOWED_UNITS, BEARINGS, UNITS_TO_UM
 
 __all__ = ["ProbeChannel", "Recording", "parse_speed_range"]
@@ -157,9 +157,12 @@ class Recording:
     speed_rpm : float, optional
         Running speed. Used when no keyphasor is given; otherwise the speed is estimated
         from the signal.
-    keyphasor_times_s : array_like, optional
+    keyphasor_times_s : array_like or sequence of array_like, optional
         Once-per-revolution pulse times (s, same clock as the samples: the first sample is
-        at t = 0). Gives the speed revolution by revolution and the phase reference.
+        at t = 0). Gives the speed revolution by revolution and the phase reference. With
+        ``acquisitions``, one train per acquisition (in the order listed, each on its own take's clock): every
+        take's orders are then referenced to the same notch, so the phases across takes are measured
+        (``features._takes``).
     clearance_um : float or mapping {bearing: float}, optional
         Radial bearing clearance; enables the ``*_per_c`` features.
     speed_range_rpm : (float, float), optional
@@ -177,13 +180,14 @@ class Recording:
         ``"1,2;3,4"`` or ``[[1, 2], [3, 4]]``: the phase differences between bearings of different groups are
         then not measured (``features._acquisitions``). Bearings listed but not recorded are ignored; every
         recorded bearing must be in a group. None (default), or one group: all channels sampled together.
-        With more than one group, no ``keyphasor_times_s``: one pulse train cannot reference two takes.
+        With more than one group, ``keyphasor_times_s`` takes one pulse train per acquisition: one train cannot
+        reference two takes.
     """
 
     sample_rate_hz: float
     channels: Sequence[ProbeChannel]
     speed_rpm: float | None = None
-    keyphasor_times_s: np.ndarray | None = None
+    keyphasor_times_s: np.ndarray | tuple[np.ndarray, ...] | None = None
     clearance_um: float | Mapping[int, float] | None = None
     speed_range_rpm: tuple[float, float] | None = None
     dc_removed: bool = False
@@ -220,6 +224,7 @@ class Recording:
                                  "(nearly) parallel; the pair must be at least 30° from parallel "
                                  "(typically 90° apart) to resolve x and y")
         object.__setattr__(self, "channels", chans)
+        raw_acquisitions = self.acquisitions
         acquisitions = self._acquisitions(sorted(by_bearing))
         object.__setattr__(self, "acquisitions", acquisitions)
         if self.speed_rpm is not None:
@@ -232,24 +237,19 @@ class Recording:
                 raise ValueError(f"Recording.speed_rpm {self.speed_rpm:g} lies outside speed_range_rpm "
                                  f"{rng[0]:g}–{rng[1]:g} r/min; correct one of them (or leave the range out)")
         if self.keyphasor_times_s is not None:
-            try:
-                kp = np.asarray(self.keyphasor_times_s, dtype=np.float64)
-            except (TypeError, ValueError):
-                raise ValueError("Recording.keyphasor_times_s must be a 1-D array of pulse times in s") from None
-            if kp.ndim != 1 or kp.size < 2:
-                raise ValueError(f"Recording.keyphasor_times_s must be a 1-D array of at least 2 pulse times (s), "
-                                 f"got shape {kp.shape}")
-            if not np.all(np.isfinite(kp)):
-                raise ValueError("Recording.keyphasor_times_s contains NaN/inf; give pulse times in s")
-            if np.any(np.diff(kp) <= 0):
-                raise ValueError("Recording.keyphasor_times_s must be strictly increasing (one pulse per revolution)")
-            object.__setattr__(self, "keyphasor_times_s", kp)
-            if acquisitions is not None:
+            kp = parse_keyphasor_takes(self.keyphasor_times_s, "Recording.keyphasor_times_s")
+            if isinstance(kp, tuple):
+                kp = self._keyphasor_by_take(kp, raw_acquisitions, sorted(by_bearing))
+            elif acquisitions is not None:
                 raise ValueError(
                     f"Recording.keyphasor_times_s with bearings in {len(acquisitions)} acquisitions "
                     f"({format_acquisitions(acquisitions)}): one pulse train cannot reference takes whose start times are not "
-                    "related. Send each acquisition as its own recording with its keyphasor, or leave the keyphasor out "
-                    "(the speed is then given or estimated)")
+                    "related. Give one pulse train per acquisition (each on its take's clock, in the order the "
+                    "acquisitions are listed), or leave the keyphasor out (the speed is then given or estimated)")
+            object.__setattr__(self, "keyphasor_times_s", kp)
+            if isinstance(kp, tuple) and any(c.slow_roll_um_pp for c in chans):
+                raise ValueError("slow_roll_um_pp with one keyphasor per acquisition is not supported; send each "
+                                 "acquisition as its own recording with its slow-roll vectors")
         if any(c.slow_roll_um_pp for c in chans) and self.keyphasor_times_s is None:
             raise ValueError("slow_roll_um_pp: slow-roll vectors are phase-referenced to the keyphasor; give "
                              "keyphasor_times_s with them (without a keyphasor the phase of the orders is arbitrary "
@@ -278,6 +278,29 @@ class Recording:
                              "but in no acquisition; add it to the group it was sampled with (or leave acquisitions out "
                              "when every channel was sampled together)")
         return kept if len(kept) > 1 else None
+
+    @staticmethod
+    def _keyphasor_by_take(trains: tuple[np.ndarray, ...], raw_acquisitions: object,
+                           bearings: list[int]) -> np.ndarray | tuple[np.ndarray, ...]:
+        """Pulse trains given one per acquisition (in the order listed) → one per recorded group, in
+        :attr:`acquisition_groups` order (a single array when one group is recorded)."""
+        if raw_acquisitions is None:
+            raise ValueError(f"Recording.keyphasor_times_s: {len(trains)} pulse train(s), one per acquisition, but no "
+                             "acquisitions; they go with Recording.acquisitions (e.g. \"1,2;3,4\"), and channels "
+                             "sampled together take one train: a 1-D array of pulse times")
+        groups = acquisitions_in_order(raw_acquisitions, "Recording.acquisitions")
+        if len(groups) != len(trains):
+            raise ValueError(f"Recording.keyphasor_times_s: {len(trains)} pulse trains for {len(groups)} acquisitions "
+                             f"({format_acquisitions(groups)}); give one per acquisition, in the order they are listed")
+        kept = [(g, k) for g, k in sorted(zip(groups, trains), key=lambda p: p[0]) if set(g) & set(bearings)]
+        return kept[0][1] if len(kept) == 1 else tuple(k for _, k in kept)
+
+    @property
+    def keyphasor_takes(self) -> tuple[np.ndarray, ...] | None:
+        """One keyphasor pulse train per acquisition (:attr:`acquisition_groups` order, each on its take's clock)
+        when given so; None for one train or none."""
+        kp = self.keyphasor_times_s
+        return kp if isinstance(kp, tuple) else None
 
     @property
     def acquisition_groups(self) -> tuple[tuple[int, ...], ...]:

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -365,15 +366,21 @@ def _common_mode_checks(fr) -> list[SanityFinding]:
 def _keyphasor_checks(rec: Recording) -> list[SanityFinding]:
     if rec.keyphasor_times_s is None:
         return []
-    fault = keyphasor_fault(pulses_in_record(rec.keyphasor_times_s, rec.n_points, rec.sample_rate_hz))
-    if fault is None:
-        return []
-    return [SanityFinding(
-        "keyphasor_faulty", WARN,
-        f"{fault.describe()}: the pulse train has missing or extra pulses, so the orders were not tracked by it but "
-        "at a steady speed, with phases relative to the first sample. Check the keyphasor probe's gap and trigger "
-        "level and the notch (worn, dirty, a second edge), or send the record without keyphasor_times_s and with "
-        "speed_rpm")]
+    takes = rec.keyphasor_takes
+    trains = takes if takes is not None else (cast(np.ndarray, rec.keyphasor_times_s),)
+    where = [f"the take of bearings {', '.join(map(str, g))}: " for g in rec.acquisition_groups] if takes else [""]
+    out = []
+    for train, prefix in zip(trains, where):
+        fault = keyphasor_fault(pulses_in_record(train, rec.n_points, rec.sample_rate_hz))
+        if fault is None:
+            continue
+        out.append(SanityFinding(
+            "keyphasor_faulty", WARN,
+            f"{prefix}{fault.describe()}: the pulse train has missing or extra pulses, so the orders were not tracked "
+            "by it but at a steady speed, with phases relative to the first sample. Check the keyphasor probe's gap "
+            "and trigger level and the notch (worn, dirty, a second edge), or send the record without "
+            "keyphasor_times_s and with speed_rpm"))
+    return out
 
 
 def check_recording(rec: Recording, fr) -> tuple[SanityFinding, ...]:

@@ -210,6 +210,9 @@ def apply_slow_roll(recording: Recording, slow_roll: Recording | SlowRollVectors
         raise ValueError(f"apply_slow_roll expects a features.Recording, got {type(recording).__name__}")
     if recording.keyphasor_times_s is None:
         raise ValueError(_NO_KEYPHASOR.format(which="running"))
+    if isinstance(recording.keyphasor_times_s, tuple):
+        raise ValueError("a slow-roll recording with one keyphasor per acquisition is not supported; send each "
+                         "acquisition as its own recording with the slow-roll recording")
     if any(c.slow_roll_um_pp is not None for c in recording.channels):
         raise ValueError("the running recording already carries slow-roll vectors per probe; give either those "
                          "or a slow-roll recording, not both")

@@ -71,6 +71,7 @@ import numpy as np
 
 from rotordiag.core.units import INPUT_UNITS, UNITS_TO_UM, volts_to_um
 
+from ._acquisitions import parse_keyphasor_takes
 from ._recording import ProbeChannel, Recording, parse_speed_range
 from .safe_io import check_hdf5, load_npy_bounded, loads_json_finite
 from .sandbox import call_isolated
@@ -137,8 +138,9 @@ class ReadOptions:
     keyphasor_threshold_v : float, optional
         Threshold of the pulse detection, in the channel's own units.
     keyphasor_edge : {"falling", "rising"}
-    keyphasor_times_s : sequence of float, optional
-        Pulse times (s from the first sample); wins over a keyphasor channel.
+    keyphasor_times_s : sequence of float, or of sequences of float, optional
+        Pulse times (s from the first sample); wins over a keyphasor channel. With ``acquisitions``, one sequence
+        per acquisition, on its take's clock (``Recording.keyphasor_times_s``).
     speed_rpm, clearance_um : float, optional
     speed_range_rpm : (float, float) or str, optional
         The running speed's range (min, max) r/min, or ``"min,max"``, when the speed is not
@@ -165,7 +167,7 @@ class ReadOptions:
     keyphasor_channel: str | int | None = None
     keyphasor_threshold_v: float | None = None
     keyphasor_edge: Literal["falling", "rising"] = "falling"
-    keyphasor_times_s: Sequence[float] | None = None
+    keyphasor_times_s: Sequence[float] | Sequence[Sequence[float]] | None = None
     speed_rpm: float | None = None
     clearance_um: float | Mapping[int, float] | None = None
     speed_range_rpm: str | Sequence[float] | None = None
@@ -737,15 +739,18 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
         kp = keyphasor_times_from_pulses(info["keyphasor_signal"], float(fs), threshold=opts.keyphasor_threshold_v,
                                          edge=opts.keyphasor_edge)
         notes.append(f"{len(kp)} keyphasor pulses from the keyphasor channel ({opts.keyphasor_edge} edge)")
-    if kp is not None and len(kp) > limits.max_keyphasor_pulses:
-        raise ValueError(f"{len(kp)} keyphasor pulses; at most {limits.max_keyphasor_pulses} are accepted")
+    if kp is not None:
+        kp = parse_keyphasor_takes(kp, "keyphasor_times_s")
+        n_pulses = sum(t.size for t in kp) if isinstance(kp, tuple) else kp.size
+        if n_pulses > limits.max_keyphasor_pulses:
+            raise ValueError(f"{n_pulses} keyphasor pulses; at most {limits.max_keyphasor_pulses} are accepted")
     speed = opts.speed_rpm if opts.speed_rpm is not None else info.get("speed_rpm")
     clearance = opts.clearance_um if opts.clearance_um is not None else info.get("clearance_um")
     if isinstance(clearance, Mapping):
         clearance = {int(k): float(v) for k, v in clearance.items()}
     speed_range = opts.speed_range_rpm if opts.speed_range_rpm is not None else info.get("speed_range_rpm")
     rec = Recording(sample_rate_hz=float(fs), channels=channels, speed_rpm=speed,
-                    keyphasor_times_s=None if kp is None else np.asarray(kp, dtype=np.float64),
+                    keyphasor_times_s=kp,
                     clearance_um=clearance,
                     speed_range_rpm=None if speed_range is None else parse_speed_range(speed_range),
                     dc_removed=dc_removed,

@@ -77,11 +77,13 @@ def options_from_query(query: dict[str, Any]) -> Any:
         if len(angles) != len(bearings):
             raise InputError(f"angles_deg: {len(angles)} values for {len(bearings)} bearings; give one angle per row")
         opts["channels"] = list(zip(bearings, angles))
-    kp = _parse_list(q.get("keyphasor_times_s"), "keyphasor_times_s", float)
-    if kp is not None:
-        if len(kp) > MAX_KEYPHASOR_PULSES:
+    text = q.get("keyphasor_times_s")
+    parts = [_parse_list(part, "keyphasor_times_s", float) for part in text.split(";")] if text else []
+    trains: list[list[float]] = [t for t in parts if t is not None]
+    if trains:
+        if sum(len(t) for t in trains) > MAX_KEYPHASOR_PULSES:
             raise InputError(f"keyphasor_times_s: at most {MAX_KEYPHASOR_PULSES} pulses")
-        opts["keyphasor_times_s"] = kp
+        opts["keyphasor_times_s"] = trains[0] if len(trains) == 1 else trains
     if "sample_index" in q:
         opts["sample_index"] = int(q["sample_index"])
     try:

@@ -78,9 +78,15 @@ class RecordingIn(_Strict):
                     "are locked to the signals' synchronous lines within ±1 % of it, and the speed used is in the "
                     "answer). Omit to estimate it from the signals (or from `keyphasor_times_s`).",
         examples=[3000.0])
-    keyphasor_times_s: list[FiniteFloat] | None = Field(
-        None, max_length=MAX_KEYPHASOR_PULSES,
-        description="Once-per-revolution keyphasor pulse times, seconds from the first sample, increasing.")
+    keyphasor_times_s: (Annotated[list[FiniteFloat], Field(max_length=MAX_KEYPHASOR_PULSES)]
+                        | Annotated[list[Annotated[list[FiniteFloat], Field(max_length=MAX_KEYPHASOR_PULSES)]],
+                                    Field(min_length=1, max_length=4)]
+                        | None) = Field(
+        None,
+        description="Once-per-revolution keyphasor pulse times, seconds from the first sample, increasing. With "
+        "`acquisitions`, one list per acquisition (in the order listed, each on its take's clock): the phases of "
+        "every take are then referenced to the same keyphasor mark and the phase differences across the takes are "
+        f"measured. At most {MAX_KEYPHASOR_PULSES} pulses in all.")
     speed_range_rpm: list[FiniteFloat] | None = Field(
         None, min_length=2, max_length=2,
         description="[min, max] of the running speed, r/min, when it is not known exactly (the machine's nominal "
@@ -102,8 +108,8 @@ class RecordingIn(_Strict):
         None, description="Groups of bearings sampled together, when the channels come from separate acquisitions "
         "(takes), e.g. `\"1,2;3,4\"` or `[[1, 2], [3, 4]]`: the phase differences between bearings of different "
         "takes are then not measured, and with bearings 2 and 3 in different takes the verdict is never confident "
-        "(`separate_acquisitions`). Leave it out when every channel was sampled together. No `keyphasor_times_s` "
-        "with more than one group.", examples=["1,2;3,4"])
+        "(`separate_acquisitions`) — unless each take carries its keyphasor (`keyphasor_times_s`, one list per "
+        "acquisition). Leave it out when every channel was sampled together.", examples=["1,2;3,4"])
     asset_id: AssetId | None = Field(
         None, description="Identifier of the machine train; when given the diagnosis is stored for GET /assets/{id}/history.",
         examples=["unit-3-gen-exc"])

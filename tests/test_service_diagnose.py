@@ -471,6 +471,59 @@ def test_mains_pickup_and_a_faulty_keyphasor_are_said_over_http(client, rec):
     assert any(w.startswith("keyphasor_times_s not used") for w in v["warnings"])
 
 
+def test_a_keyphasor_per_take_through_json_binary_and_the_cli(client, rec, registry_src, tmp_path):
+    """Bearings 3 and 4 in a second take 7 ms after 1 and 2, each take with its keyphasor (one pulse train per
+    acquisition): the phase across the coupling is measured, so the verdict is the one of the same bearings sampled
+    together with one keyphasor — no `separate_acquisitions` — through the JSON body, the binary query ("…;…") and a
+    sidecar for `rotordiag diagnose`."""
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app as cli_app
+
+    fs, channels = rec
+    data = np.array([d for _, _, d in channels])
+    late = int(round(0.007 * fs))
+    second = data.copy()
+    second[4:, :-late] = data[4:, late:]
+    second, together = second[:, :-late], data[:, :-late]
+    period = 60.0 / 1800.0
+    t_end = (together.shape[1] - 1) / fs
+    first_kp = np.arange(0.2 * period, t_end, period)
+    second_kp = first_kp[first_kp >= late / fs] - late / fs
+    as_given = [(b, a, d) for (b, a, _), d in zip(channels, together)]
+    one = client.post("/diagnose", json=diagnose_json(fs, as_given, clearance_um=350.0,
+                                                      keyphasor_times_s=first_kp.tolist()))
+    assert one.status_code == 200, one.text
+    taken = [(b, a, d) for (b, a, _), d in zip(channels, second)]
+    j = client.post("/diagnose", json=diagnose_json(fs, taken, clearance_um=350.0, acquisitions="1,2;3,4",
+                                                    keyphasor_times_s=[first_kp.tolist(), second_kp.tolist()]))
+    assert j.status_code == 200, j.text
+    j = j.json()
+    assert "separate_acquisitions" not in [r["code"] for r in j["reasons"]]
+    assert j["probabilities"] == pytest.approx(one.json()["probabilities"], rel=1e-3, abs=1e-6)
+    assert any("each with its keyphasor" in w for w in j["warnings"])
+    text = ";".join(",".join(f"{t:.9f}" for t in kp) for kp in (first_kp, second_kp))
+    q = _binary_query(channels, clearance_um=350.0, acquisitions="1,2;3,4", keyphasor_times_s=text)
+    del q["speed_rpm"]
+    b = client.post("/diagnose", params=q, content=_npy(second), headers={"content-type": "application/octet-stream"})
+    assert b.status_code == 200, b.text
+    assert b.json()["probabilities"] == pytest.approx(j["probabilities"], rel=1e-6, abs=1e-9)
+    r = client.post("/diagnose", json=diagnose_json(fs, taken, acquisitions="1,2;3,4",
+                                                    keyphasor_times_s=[first_kp.tolist()] * 3))
+    assert r.status_code == 422 and "3 pulse trains for 2 acquisitions" in r.json()["detail"], r.text
+    npy = tmp_path / "takes.npy"
+    np.save(npy, second)
+    (tmp_path / "takes.json").write_text(json.dumps({
+        "sample_rate_hz": fs, "clearance_um": 350.0, "acquisitions": "1,2;3,4",
+        "keyphasor_times_s": [first_kp.tolist(), second_kp.tolist()],
+        "channels": ",".join(f"{bb}@{a:g}" for bb, a, _ in channels)}))
+    out = CliRunner().invoke(cli_app, ["diagnose", str(npy), "--json", "--registry", str(registry_src)])
+    assert out.exit_code == 0, out.output
+    cli = json.loads(out.output)
+    cli = cli[0] if isinstance(cli, list) else cli
+    assert "separate_acquisitions" not in [r["code"] for r in cli["reasons"]]
+
+
 def test_acquisitions_through_json_binary_and_the_cli(client, rec, registry_src, tmp_path):
     """Bearings recorded in two takes (`acquisitions`) through every door: the phase across the coupling is not
     measured, the verdict says why (`separate_acquisitions`, never confident), the same through the JSON body (string

@@ -149,6 +149,28 @@ def test_units_and_keyphasor_phase_reference(client):
     assert (f1x["x_um"][0], f1x["y_um"][0]) == (pytest.approx(0.0, abs=2e-2), pytest.approx(R1, rel=2e-3))
 
 
+def test_a_keyphasor_per_take(client):
+    """Bearings 2 and 3 in two takes, the second 0.3 revolution later on its own clock, each with its keyphasor:
+    each bearing's pictures are cut and phased by its take's pulses, so both filtered 1X orbits start at the mark."""
+    late = int(round(0.3 / F1 * FS))
+    second = np.vstack([np.cos(np.deg2rad(a)) * x + np.sin(np.deg2rad(a)) * y for a in (45.0, 135.0)
+                        for x, y in [_xy((np.arange(N) + late) / FS)]])
+    first_kp = (np.arange(0, 31) + 0.25) / F1
+    second_kp = first_kp[first_kp >= late / FS] - late / FS
+    body = {"sample_rate_hz": FS, "keyphasor_times_s": [first_kp.tolist(), second_kp.tolist()],
+            "acquisitions": "2;3",
+            "channels": [{"bearing": b, "angle_deg": a, "units": "um", "data": p.tolist()}
+                         for b, probes in ((2, _probes()), (3, second)) for a, p in zip((45.0, 135.0), probes)]}
+    r = client.post("/ui/plot-data", json=body)
+    assert r.status_code == 200, r.text
+    d = r.json()
+    assert d["phase_reference"] == "keyphasor" and [b["bearing"] for b in d["bearings"]] == [2, 3]
+    for b in d["bearings"]:
+        f1x = b["orbit"]["filtered"]["1x"]
+        assert (f1x["x_um"][0], f1x["y_um"][0]) == (pytest.approx(0.0, abs=2e-2), pytest.approx(R1, rel=2e-3))
+        assert len(b["orbit"]["raw_x_um"]) == 8 * 64
+
+
 def test_hdf5_and_npy_uploads(client):
     import h5py
 

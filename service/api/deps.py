@@ -109,4 +109,5 @@ AcquisitionsQuery = Annotated[str | None, Query(max_length=32, description=(
     "different takes the verdict is never confident. Leave it out when every channel was sampled together."))]
 KeyphasorQuery = Annotated[str | None, Query(max_length=200_000,
                                              description="Binary/multipart only: keyphasor pulse times, s, "
-                                             "comma-separated.")]
+                                             "comma-separated; with `acquisitions`, one list per acquisition "
+                                             "separated by semicolons (each on its take's clock).")]

@@ -36,12 +36,16 @@ def _finite_list(a: np.ndarray) -> list[float | None]:
     return [float(v) if np.isfinite(v) else None for v in np.asarray(a, dtype=float).ravel()]
 
 
-def _rev_edges_s(recording: Any, n_revs: int, f1_hz: float, phase_reference: str) -> np.ndarray:
-    """Times (s) of θ = 2πm for m = 0..n_revs: the analysed revolutions' edges, as in the features package
-    (the keyphasor pulses inside the record, else θ = 0 at the first sample)."""
+def _rev_edges_s(recording: Any, bearing: int, n_revs: int, f1_hz: float, phase_reference: str) -> np.ndarray:
+    """Times (s) of θ = 2πm for m = 0..n_revs at ``bearing``: the analysed revolutions' edges, as in the features
+    package (the keyphasor pulses inside the record — the bearing's take's with one keyphasor per acquisition —,
+    else θ = 0 at the first sample)."""
     if phase_reference == "keyphasor":
         t_end = (recording.n_points - 1) / recording.sample_rate_hz
-        kp = np.asarray(recording.keyphasor_times_s, dtype=float)
+        takes = recording.keyphasor_takes
+        train = recording.keyphasor_times_s if takes is None else \
+            next(kp for g, kp in zip(recording.acquisition_groups, takes) if bearing in g)
+        kp = np.asarray(train, dtype=float)
         return kp[(kp >= 0) & (kp <= t_end)][: n_revs + 1]
     return np.arange(n_revs + 1) / f1_hz
 
@@ -157,18 +161,18 @@ def plot_data(recording: Recording, feature_result: Any = None) -> dict[str, Any
     fr = extract_features(recording) if feature_result is None else feature_result
     fs = float(recording.sample_rate_hz)
     f1 = fr.speed_rpm / 60.0
-    edges = _rev_edges_s(recording, fr.n_revs, f1, fr.phase_reference)
     n = recording.n_points
-    # the analysed segment (whole revolutions), as features.extract_features takes it
-    i0 = int(np.ceil(edges[0] * fs - 1e-9))
-    i1 = min(n, int(np.ceil(edges[-1] * fs - 1e-9)))
     k = min(ORBIT_REVS, fr.n_revs)
-    w0 = int(np.ceil(edges[-1 - k] * fs - 1e-9))
-    stride = max(1, int(np.ceil((i1 - w0) / MAX_RAW_POINTS)))
     f_max = min(SPECTRUM_MAX_ORDER * f1, fs / 2)
 
     out_bearings = []
     for b, det in sorted(fr.bearings.items()):
+        # the analysed segment (whole revolutions), as features.extract_features takes it
+        edges = _rev_edges_s(recording, b, fr.n_revs, f1, fr.phase_reference)
+        i0 = int(np.ceil(edges[0] * fs - 1e-9))
+        i1 = min(n, int(np.ceil(edges[-1] * fs - 1e-9)))
+        w0 = int(np.ceil(edges[-1 - k] * fs - 1e-9))
+        stride = max(1, int(np.ceil((i1 - w0) / MAX_RAW_POINTS)))
         x, y = recording.xy_um(b)
         mx, my = det.mean_um
         marks = det.poincare_um[-k:] - np.array([mx, my])
