@@ -11,7 +11,9 @@ Recording(sample_rate_hz, channels, speed_rpm=None, keyphasor_times_s=None, clea
     ``speed_range_rpm=(min, max)``: the operator's knowledge of the speed (nominal speed),
     restricting the estimate when neither speed nor keyphasor is given. ``acquisitions="1,2;3,4"``:
     the bearings were recorded in separate takes; the phase differences between takes are then not measured
-    (``split_pairs(acquisitions, pairs)`` names those pairs, ``format_acquisitions`` writes the groups back).
+    (``split_pairs(acquisitions, pairs)`` names those pairs, ``format_acquisitions`` writes the groups back) —
+    unless ``keyphasor_times_s`` gives one pulse train per take (``parse_keyphasor_takes`` reads
+    ``"t0,t1;t0,t1"``): every take is then referenced to the same mark (``features._takes``).
 extract_features(recording, *, speed_estimate_rpm=None, speed_notes=()) -> FeatureResult
     Running speed, order analysis (1X–3X amplitude/phase, ratios, forward/reverse),
     cross-coupling phase differences, orbit shape, sub-harmonic and non-synchronous

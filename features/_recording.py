@@ -146,7 +146,7 @@ class ProbeChannel:
 
 @dataclass(frozen=True)
 class Recording:
-    """Probe waveforms of one or more bearings, recorded together.
+    """Probe waveforms of one or more bearings, sampled together (or in the takes ``acquisitions`` states).
 
     Parameters
     ----------

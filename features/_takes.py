@@ -58,7 +58,8 @@ def extract_by_take(rec: Recording, extract_one: Callable[[Recording], FeatureRe
         A take's own refusal (too few revolutions, pulses off the record …), naming the take.
     """
     groups, trains = rec.acquisition_groups, rec.keyphasor_takes
-    assert trains is not None and len(groups) == len(trains)
+    if trains is None or len(trains) != len(groups):
+        raise ValueError("extract_by_take needs one keyphasor pulse train per acquisition (Recording.keyphasor_takes)")
     results: list[FeatureResult] = []
     for group, train in zip(groups, trains):
         take = Recording(sample_rate_hz=rec.sample_rate_hz, channels=[c for c in rec.channels if c.bearing in group],
@@ -77,8 +78,7 @@ def extract_by_take(rec: Recording, extract_one: Callable[[Recording], FeatureRe
             _, index = _bearing_schema(b)
             values[index] = fr.values[index]
         details.update(fr.bearings)
-        warnings += [f"the take of {_take_label(group)}: {w}" for w in fr.warnings
-                     if not w.startswith("bearings recorded in separate acquisitions")]
+        warnings += [f"the take of {_take_label(group)}: {w}" for w in fr.warnings]
 
     revs = np.array([fr.n_revs for fr in results], dtype=float)
     speeds = np.array([fr.speed_rpm for fr in results])
