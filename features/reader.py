@@ -77,7 +77,7 @@ from .safe_io import check_hdf5, load_npy_bounded, loads_json_finite
 from .sandbox import call_isolated
 
 __all__ = ["ReadOptions", "ReadLimits", "ReadResult", "read_recording", "recording_from_dict", "parse_layout",
-           "keyphasor_times_from_pulses", "sample_rate_from_times", "DEFAULT_LAYOUT", "FORMATS", "TIME_TOLERANCE"]
+           "keyphasor_times_from_pulses", "keyphasor_channels", "sample_rate_from_times", "DEFAULT_LAYOUT", "FORMATS", "TIME_TOLERANCE"]
 
 #: layout assumed for an 8-channel file that does not say its own (the dataset default)
 DEFAULT_LAYOUT: tuple[tuple[int, float], ...] = tuple((b, a) for b in (1, 2, 3, 4) for a in (45.0, 135.0))
@@ -134,7 +134,8 @@ class ReadOptions:
     channels : str, sequence or mapping, optional
         Layout in file order, or column name → ``"b<bearing>@<angle>"`` (see module docstring).
     keyphasor_channel : str or int, optional
-        Column name or index (file order) of a raw keyphasor pulse channel.
+        Column name or index (file order) of a raw keyphasor pulse channel; with ``acquisitions``, one per
+        acquisition separated by semicolons (``"kp_a;kp_b"``), in the order the acquisitions are listed.
     keyphasor_threshold_v : float, optional
         Threshold of the pulse detection, in the channel's own units.
     keyphasor_edge : {"falling", "rising"}
@@ -281,6 +282,17 @@ def sample_rate_from_times(times_s: np.ndarray, tolerance: float = TIME_TOLERANC
     return 1.0 / dt
 
 
+def keyphasor_channels(spec: str | int | None) -> list[str | int]:
+    """The keyphasor channel(s) named by ``ReadOptions.keyphasor_channel``: a column name or an index, or one per
+    acquisition separated by semicolons (``"kp_a;kp_b"``, ``"8;9"``), in the order the acquisitions are listed."""
+    if spec is None:
+        return []
+    if isinstance(spec, int):
+        return [spec]
+    parts = [p.strip() for p in str(spec).split(";") if p.strip()]
+    return [int(p) if p.isdigit() else p for p in parts]
+
+
 def keyphasor_times_from_pulses(signal: np.ndarray, sample_rate_hz: float, *, threshold: float | None = None,
                                 edge: str = "falling") -> np.ndarray:
     """Once-per-revolution pulse times (s) from a raw keyphasor channel.
@@ -411,22 +423,23 @@ def _named_columns(header: list[str] | None, table: np.ndarray, opts: ReadOption
                 info["sample_rate_from_time"] = sample_rate_from_times(table[:, j] * _TIME_COLUMNS[n])
                 keep.remove(j)
                 break
-    kp_col = opts.keyphasor_channel
-    kp_j = None
-    if isinstance(kp_col, str):
-        if kp_col.strip().lower() not in lowered:
-            raise ValueError(f"keyphasor channel {kp_col!r} is not a column of {what} (columns: {names})")
-        kp_j = lowered.index(kp_col.strip().lower())
-    elif isinstance(kp_col, int):
-        if not 0 <= kp_col < table.shape[1]:
-            raise ValueError(f"keyphasor channel {kp_col} is outside the file's columns 0..{table.shape[1] - 1}")
-        kp_j = kp_col
-    elif header is not None:
-        kp_j = next((j for j, n in enumerate(lowered) if n in _KP_COLUMNS), None)
-    if kp_j is not None:
-        info["keyphasor_signal"] = table[:, kp_j]
-        if kp_j in keep:
-            keep.remove(kp_j)
+    kp_js: list[int] = []
+    for kp_col in keyphasor_channels(opts.keyphasor_channel):
+        if isinstance(kp_col, str):
+            if kp_col.lower() not in lowered:
+                raise ValueError(f"keyphasor channel {kp_col!r} is not a column of {what} (columns: {names})")
+            kp_js.append(lowered.index(kp_col.lower()))
+        else:
+            if not 0 <= kp_col < table.shape[1]:
+                raise ValueError(f"keyphasor channel {kp_col} is outside the file's columns 0..{table.shape[1] - 1}")
+            kp_js.append(kp_col)
+    if opts.keyphasor_channel is None and header is not None:
+        kp_js = [j for j in (next((j for j, n in enumerate(lowered) if n in _KP_COLUMNS), None),) if j is not None]
+    if kp_js:
+        info["keyphasor_signal"] = table[:, kp_js[0]] if len(kp_js) == 1 else [table[:, j] for j in kp_js]
+        for j in kp_js:
+            if j in keep:
+                keep.remove(j)
     mapping = opts.channels if isinstance(opts.channels, Mapping) else None
     if mapping is not None:
         cols, layout = [], []
@@ -736,9 +749,16 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
 
     kp: Any = opts.keyphasor_times_s
     if kp is None and "keyphasor_signal" in info:
-        kp = keyphasor_times_from_pulses(info["keyphasor_signal"], float(fs), threshold=opts.keyphasor_threshold_v,
-                                         edge=opts.keyphasor_edge)
-        notes.append(f"{len(kp)} keyphasor pulses from the keyphasor channel ({opts.keyphasor_edge} edge)")
+        signals = info["keyphasor_signal"]
+        if isinstance(signals, list):      # one keyphasor channel per acquisition
+            kp = [keyphasor_times_from_pulses(s, float(fs), threshold=opts.keyphasor_threshold_v,
+                                              edge=opts.keyphasor_edge) for s in signals]
+            notes.append(f"{', '.join(str(len(k)) for k in kp)} keyphasor pulses from the {len(kp)} keyphasor "
+                         f"channels, one per acquisition ({opts.keyphasor_edge} edge)")
+        else:
+            kp = keyphasor_times_from_pulses(signals, float(fs), threshold=opts.keyphasor_threshold_v,
+                                             edge=opts.keyphasor_edge)
+            notes.append(f"{len(kp)} keyphasor pulses from the keyphasor channel ({opts.keyphasor_edge} edge)")
     if kp is not None:
         kp = parse_keyphasor_takes(kp, "keyphasor_times_s")
         n_pulses = sum(t.size for t in kp) if isinstance(kp, tuple) else kp.size
@@ -885,12 +905,16 @@ def read_recording(source: str | Path | bytes, *, filename: str = "", options: R
 
     else:
         arr, info = None, {}
-    if arr is not None and isinstance(opts.keyphasor_channel, int):
-        if not 0 <= opts.keyphasor_channel < arr.shape[0]:
-            raise ValueError(f"keyphasor channel {opts.keyphasor_channel} is outside the file's channels "
-                             f"0..{arr.shape[0] - 1}")
-        info["keyphasor_signal"] = arr[opts.keyphasor_channel]
-        arr = np.delete(arr, opts.keyphasor_channel, axis=0)
+    rows = keyphasor_channels(opts.keyphasor_channel)
+    if arr is not None and rows:
+        if not all(isinstance(k, int) for k in rows):
+            raise ValueError(f"keyphasor channel {opts.keyphasor_channel!r}: a {fmt.upper()} file's channels have no "
+                             "names; give the keyphasor channel's index (row, from 0)")
+        bad = [k for k in rows if not 0 <= int(k) < arr.shape[0]]
+        if bad:
+            raise ValueError(f"keyphasor channel {bad[0]} is outside the file's channels 0..{arr.shape[0] - 1}")
+        info["keyphasor_signal"] = arr[rows[0]] if len(rows) == 1 else [arr[k] for k in rows]
+        arr = np.delete(arr, rows, axis=0)
     if arr is None:  # named channels: the keyphasor is picked by name or index there
         arr, info = (_read_uff if fmt == "uff" else _read_csv)(data or b"", opts, limits, notes)
     if info.get("units") is not None and str(info["units"]).strip() not in (*UNITS_TO_UM, "V"):

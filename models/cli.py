@@ -140,7 +140,7 @@ def register(app: typer.Typer) -> None:
         sensitivity_v_per_mm: Optional[float] = typer.Option(None, "--sensitivity-v-per-mm", help="Probe scale factor for --units V, V/mm (7.87 = 200 mV/mil)."),
         gap_voltage_v: Optional[float] = typer.Option(None, "--gap-voltage-v", help="DC gap voltage for --units V, V (default: each channel's mean)."),
         channels: Optional[str] = typer.Option(None, "--channels", help="Probe layout in file order, BEARING@ANGLE: '1@45,1@135,2@45,2@135'; or for a CSV 'COLUMN=b2@45;COLUMN=b2@135'."),
-        keyphasor_channel: Optional[str] = typer.Option(None, "--keyphasor-channel", help="Raw keyphasor pulse channel: CSV column name, or index in file order (default: a CSV column named kp/keyphasor)."),
+        keyphasor_channel: Optional[str] = typer.Option(None, "--keyphasor-channel", help="Raw keyphasor pulse channel: CSV column name, or index in file order (default: a CSV column named kp/keyphasor); with --acquisitions, one per acquisition separated by semicolons (kp_a;kp_b)."),
         keyphasor_edge: str = typer.Option("falling", "--keyphasor-edge", help="falling (a notch) | rising (a projection, TTL)."),
         keyphasor_threshold: Optional[float] = typer.Option(None, "--keyphasor-threshold", help="Pulse threshold in the channel's units (default: halfway between its 1st and 99th percentile)."),
         rotation: str = typer.Option("ccw", "--rotation", help="Shaft rotation seen from the driver end: ccw | cw."),

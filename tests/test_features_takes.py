@@ -143,3 +143,46 @@ def test_the_least_regular_motion_of_the_takes_is_reported():
         assert takes[name] == together[name]
     assert any(w.startswith("the takes show different motion types (bearings 1, 2: period-1, bearings 3, 4: ")
                for w in takes.warnings)
+
+
+def _pulse_channel(pulses: np.ndarray) -> np.ndarray:
+    """A keyphasor probe's output: −8 V, dropping to −12 V for 1 ms at each pulse (a notch)."""
+    t = np.arange(N) / FS_HZ
+    v = np.full(N, -8.0)
+    for p in pulses:
+        v[(t >= p) & (t < p + 0.001)] = -12.0
+    return v
+
+
+def test_a_raw_keyphasor_channel_per_take_from_csv_and_npy():
+    from rotordiag.features.reader import ReadOptions, read_recording
+
+    delay = 0.0073
+    chans = _channels(delay)
+    kp1, kp2 = _pulse_channel(_pulses()), _pulse_channel(_pulses(delay))
+    layout = ",".join(f"{c.bearing}@{c.angle_deg:g}" for c in chans)
+    header = "time_s," + ",".join(f"b{c.bearing}_{c.angle_deg:g}" for c in chans) + ",kp_a,kp_b"
+    rows = np.column_stack([np.arange(N) / FS_HZ, *[c.data for c in chans], kp1, kp2])
+    csv = (header + "\n" + "\n".join(",".join(f"{v:.9g}" for v in r) for r in rows)).encode()
+    mapping = {f"b{c.bearing}_{c.angle_deg:g}": f"b{c.bearing}@{c.angle_deg:g}" for c in chans}
+    want = extract_features(Recording(FS_HZ, chans, keyphasor_times_s=[_pulses(), _pulses(delay)],
+                                      acquisitions="1,2;3,4"))
+    res = read_recording(csv, filename="takes.csv", options=ReadOptions(
+        channels=mapping, keyphasor_channel="KP_A; kp_b", acquisitions="1,2;3,4"))
+    assert res.recording.keyphasor_takes is not None and any("one per acquisition" in n for n in res.notes)
+    got = extract_features(res.recording)
+    # pulse times from the falling edge, interpolated between samples: within a sample of the exact ones
+    gap = (np.array(_across(got)) - np.array(_across(want)) + 180.0) % 360.0 - 180.0
+    assert np.all(np.abs(gap) < 0.5)
+    arr = np.vstack([*[c.data for c in chans], kp1, kp2])
+    buf = __import__("io").BytesIO()
+    np.save(buf, arr)
+    res = read_recording(buf.getvalue(), filename="takes.npy", options=ReadOptions(
+        sample_rate_hz=FS_HZ, channels=layout, keyphasor_channel="8;9", acquisitions="1,2;3,4"))
+    assert np.allclose(_across(extract_features(res.recording)), _across(got), atol=1e-9)
+    with pytest.raises(ValueError, match="have no names; give the keyphasor channel's index"):
+        read_recording(buf.getvalue(), filename="takes.npy", options=ReadOptions(
+            sample_rate_hz=FS_HZ, channels=layout, keyphasor_channel="kp_a;kp_b", acquisitions="1,2;3,4"))
+    with pytest.raises(ValueError, match="keyphasor channel 'kp_c' is not a column"):
+        read_recording(csv, filename="takes.csv", options=ReadOptions(
+            channels=mapping, keyphasor_channel="kp_a;kp_c", acquisitions="1,2;3,4"))

@@ -686,6 +686,41 @@ def test_acquisitions_field(server, browser, recordings, tmp_path):
     field.clear()
 
 
+def test_a_keyphasor_channel_per_take(server, browser, recordings, tmp_path):
+    """Bearings 1-2 and 3-4 in two takes, the second 7 ms later, each with its keyphasor channel (rows 8 and 9 of
+    an NPY file): with both stated on the page the phase across the coupling is measured — no
+    `separate_acquisitions`, and the evidence gives the phase — and the orbits are drawn from each take's pulses."""
+    data = recordings[0.2].T.astype(float)                  # (8, n) probes
+    late = int(round(0.007 * FS_HZ))
+    takes = data.copy()
+    takes[4:, :-late] = data[4:, late:]
+    takes = takes[:, :-late]
+    n = takes.shape[1]
+    period = 60.0 / SPEED_RPM
+    t = np.arange(n) / FS_HZ
+    kp = np.zeros((2, n))
+    for row, shift in ((0, 0.0), (1, late / FS_HZ)):
+        phase = ((t + shift - 0.3 * period) / period) % 1.0
+        kp[row] = np.where(phase < 0.05, -12.0, -8.0)          # a notch 5 % of a revolution wide
+    path = tmp_path / "takes_kp.npy"
+    np.save(path, np.vstack([takes, kp]).astype(np.float32))
+    _open(browser, server)
+    assert browser.find_element("css selector", "label[for=keyphasor-channel]").is_displayed()
+    browser.find_element("id", "acquisitions").send_keys("1,2;3,4")
+    browser.find_element("id", "keyphasor-channel").send_keys("8;9")
+    _submit_file(browser, path, sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
+    v = browser.execute_script("return window.rotordiag.state.verdict")
+    assert "separate_acquisitions" not in [r["code"] for r in v["reasons"]], v["reasons"]
+    assert v["speed_source"] == "keyphasor" and any("each with its keyphasor" in w for w in v["warnings"])
+    body = browser.find_element("tag name", "body").text
+    assert "not measured (bearings 2 and 3 recorded in separate acquisitions)" not in body
+    plot = browser.execute_script("return window.rotordiag.state.plots")
+    assert plot["phase_reference"] == "keyphasor" and len(plot["bearings"]) == 4
+    _screenshot(browser, "keyphasor_per_take")
+    browser.find_element("id", "keyphasor-channel").clear()
+    browser.find_element("id", "acquisitions").clear()
+
+
 def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_path):
     """rotordiag.models.bearing_sets on the page: probes at 1, 3, 4 are read from bearing 3 (a warning says so, the evidence
     keeps every bearing, never confident); probes at 1 and 4 alone give no severity and say what to add."""

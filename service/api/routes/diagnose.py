@@ -56,7 +56,8 @@ def reader_query(
     viewed_from: Annotated[Literal["driver", "non-driver"], Query(description=(
         "End of the machine the probe angles are measured from."))] = "driver",
     keyphasor_channel: Annotated[str | None, Query(max_length=64, description=(
-        "Raw keyphasor pulse channel: CSV column name or row index (default: a CSV column named kp/keyphasor)."))] = None,
+        "Raw keyphasor pulse channel: CSV column name or row index (default: a CSV column named kp/keyphasor); with "
+        "`acquisitions`, one per acquisition separated by semicolons (`kp_a;kp_b`)."))] = None,
     keyphasor_edge: Annotated[Literal["falling", "rising"], Query(description=(
         "Edge of the keyphasor pulse: falling (a notch) or rising (a projection, TTL)."))] = "falling",
     keyphasor_threshold_v: Annotated[float | None, Query(allow_inf_nan=False, description=(

@@ -39,6 +39,7 @@
     keyphasor_times_s: "keyphasor pulse times", units: "the units of the waveforms", bearings: "the bearing of each channel",
     angles_deg: "the probe angle of each channel", asset_id: "the asset id", sample_index: "the sample index",
     dc_removed: "“DC part is no shaft position”", acquisitions: "the bearings sampled together",
+    keyphasor_channel: "the keyphasor channel(s)",
     sensitivity_v_per_mm: "the probe sensitivity (V/mm)", gap_voltage_v: "the gap voltage (V)",
   };
   // whole messages an engineer meets first, said as what to do in this form
@@ -583,7 +584,7 @@
     if (!file) throw new Error("Choose a waveform file (CSV, NPY, HDF5 or UFF), or switch the source to an example or “Paste JSON”.");
     for (const [key, id] of Object.entries(numeric)) if (formValue(id) !== null) q.set(key, formValue(id));
     for (const [key, id] of [["units", "units"], ["bearings", "bearings"], ["angles_deg", "angles"],
-      ["speed_range_rpm", "speed-range"], ["acquisitions", "acquisitions"]]) {
+      ["speed_range_rpm", "speed-range"], ["acquisitions", "acquisitions"], ["keyphasor_channel", "keyphasor-channel"]]) {
       if (formValue(id) !== null) q.set(key, formValue(id));
     }
     if (formValue("sample-index") !== null && formValue("sample-index") !== "0") q.set("sample_index", formValue("sample-index"));
