@@ -910,11 +910,12 @@ def read_recording(source: str | Path | bytes, *, filename: str = "", options: R
         if not all(isinstance(k, int) for k in rows):
             raise ValueError(f"keyphasor channel {opts.keyphasor_channel!r}: a {fmt.upper()} file's channels have no "
                              "names; give the keyphasor channel's index (row, from 0)")
-        bad = [k for k in rows if not 0 <= int(k) < arr.shape[0]]
+        index = [int(k) for k in rows]
+        bad = [k for k in index if not 0 <= k < arr.shape[0]]
         if bad:
             raise ValueError(f"keyphasor channel {bad[0]} is outside the file's channels 0..{arr.shape[0] - 1}")
-        info["keyphasor_signal"] = arr[rows[0]] if len(rows) == 1 else [arr[k] for k in rows]
-        arr = np.delete(arr, rows, axis=0)
+        info["keyphasor_signal"] = arr[index[0]] if len(index) == 1 else [arr[k] for k in index]
+        arr = np.delete(arr, index, axis=0)
     if arr is None:  # named channels: the keyphasor is picked by name or index there
         arr, info = (_read_uff if fmt == "uff" else _read_csv)(data or b"", opts, limits, notes)
     if info.get("units") is not None and str(info["units"]).strip() not in (*UNITS_TO_UM, "V"):
