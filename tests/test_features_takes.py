@@ -186,3 +186,15 @@ def test_a_raw_keyphasor_channel_per_take_from_csv_and_npy():
     with pytest.raises(ValueError, match="keyphasor channel 'kp_c' is not a column"):
         read_recording(csv, filename="takes.csv", options=ReadOptions(
             channels=mapping, keyphasor_channel="kp_a;kp_c", acquisitions="1,2;3,4"))
+
+
+def test_pulse_limit_counts_every_take():
+    from rotordiag.features.reader import ReadLimits, recording_from_dict
+
+    body = {"sample_rate_hz": FS_HZ, "acquisitions": "1,2;3,4",
+            "keyphasor_times_s": [_pulses()[:8].tolist(), _pulses(0.002)[:8].tolist()],
+            "channels": [{"bearing": c.bearing, "angle_deg": c.angle_deg, "units": "um", "data": c.data.tolist()}
+                         for c in _channels(0.002)]}
+    assert recording_from_dict(body, limits=ReadLimits(max_keyphasor_pulses=16)).recording.keyphasor_takes
+    with pytest.raises(ValueError, match="16 keyphasor pulses; at most 15 are accepted"):
+        recording_from_dict(body, limits=ReadLimits(max_keyphasor_pulses=15))
