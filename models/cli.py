@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Optional
 
@@ -151,6 +153,7 @@ def register(app: typer.Typer) -> None:
         sample: Optional[int] = typer.Option(None, "--sample", help="Row of a rotordiag dataset HDF5 file."),
         dc_removed: bool = typer.Option(False, "--dc-removed", help="The channels' DC part is no shaft position (AC-coupled acquisition): the shaft centreline is not read (zero-mean channels and --units V without --gap-voltage-v are read so anyway)."),
         acquisitions: Optional[str] = typer.Option(None, "--acquisitions", help="Groups of bearings sampled together when the channels come from separate acquisitions (takes), e.g. '1,2;3,4': the phase differences between takes are not measured, and with bearings 2 and 3 in different takes the verdict is never confident."),
+        takes: bool = typer.Option(False, "--takes", help="The files are the takes of one recording (a portable analyser's, bearing pair by bearing pair, each with its keyphasor or tachometer): merged into one recording with each file's bearings as one acquisition and its keyphasor as that take's, so the phase across the coupling is measured (features.take_files). Each file is read with the options above and its own sidecar."),
         as_json: bool = typer.Option(False, "--json", help="Print the verdict(s) as JSON."),
         out: Optional[Path] = typer.Option(None, "--out", help="Write one table of verdicts, one row per file: .csv or .json."),
         output_units: str = typer.Option("um", "--output-units", help="Units of the offset and amplitudes in the output: um | mil."),
@@ -170,6 +173,7 @@ def register(app: typer.Typer) -> None:
         from .diagnose_files import (
             collect_files,
             diagnose_one,
+            diagnose_takes,
             load_options,
             slow_roll_from_file,
             verdict_json,
@@ -210,14 +214,19 @@ def register(app: typer.Typer) -> None:
         rows: list[dict] = []
         full: list[dict] = []
         n_bad = 0
-        for path in paths:
+        def one(p: Path) -> tuple:
+            return diagnose_one(bundle, p, load_options(p, sidecar, given), runout)
+
+        jobs: list[tuple[Path, Callable[[], tuple]]] = (
+            [(Path("+".join(str(p) for p in paths)), partial(diagnose_takes, bundle, paths, sidecar, given, runout))]
+            if takes else [(p, partial(one, p)) for p in paths])
+        for path, run in jobs:
             try:
-                opts = load_options(path, sidecar, given)
-                verdict, res, sig = diagnose_one(bundle, path, opts, runout)
+                verdict, res, sig = run()
             except RegistryError as exc:
                 _fail(str(exc))
             except ValueError as exc:
-                if len(paths) == 1:
+                if len(jobs) == 1:
                     _fail(f"{path}: {exc}")
                 n_bad += 1
                 typer.secho(f"error: {path}: {exc}", fg=typer.colors.RED, err=True)
@@ -232,7 +241,7 @@ def register(app: typer.Typer) -> None:
                                  "baseline_exceeded": " ".join(section["exceeded"])})
                 full[-1]["baseline"] = section
             if out is None and not as_json:
-                if len(paths) > 1:
+                if len(jobs) > 1:
                     typer.echo(f"== {path}")
                 typer.echo(format_verdict(verdict, output_units))
                 if section is not None:

@@ -14,7 +14,7 @@ from typing import Any
 from rotordiag.core.units import um_to
 from rotordiag.features.reader import FORMATS, ReadLimits, ReadOptions, ReadResult, parse_layout, read_recording
 
-__all__ = ["collect_files", "load_options", "diagnose_one", "verdict_row", "verdict_json", "write_table", "CLI_LIMITS",
+__all__ = ["collect_files", "load_options", "diagnose_one", "diagnose_takes", "diagnose_read", "verdict_row", "verdict_json", "write_table", "CLI_LIMITS",
            "coupling_clearance_um", "slow_roll_from_file"]
 
 #: a local file is the user's own: a dataset file may be large (its samples are read one at a time)
@@ -140,11 +140,33 @@ def diagnose_one(bundle: Any, path: Path, options: ReadOptions,
 
     Returns the verdict, the reader's result and the recording's ``features.signature`` (what an asset
     baseline compares, ``models.change.compare``)."""
+    return diagnose_read(bundle, read_recording(path, options=options, limits=CLI_LIMITS), slow_roll)
+
+
+def diagnose_takes(bundle: Any, paths: Sequence[Path], sidecar: Path | None, given: Mapping[str, Any],
+                   slow_roll: Any = None) -> tuple[Any, ReadResult, dict[str, Any]]:
+    """Read ``paths`` as the takes of one recording (each with :func:`load_options`: its own sidecar), merge them
+    (``features.take_files.merge_takes``: each file one acquisition, its keyphasor that take's) and diagnose the
+    merged recording as :func:`diagnose_one`. ValueError names the file."""
+    from rotordiag.features.take_files import merge_takes
+
+    if given.get("acquisitions") is not None:
+        raise ValueError("--takes: each file is one acquisition; leave --acquisitions out")
+    results = []
+    for path in paths:
+        try:
+            results.append(read_recording(path, options=load_options(path, sidecar, given), limits=CLI_LIMITS))
+        except ValueError as exc:
+            raise ValueError(f"{path}: {exc}") from None
+    return diagnose_read(bundle, merge_takes(results, [p.name for p in paths]), slow_roll)
+
+
+def diagnose_read(bundle: Any, res: ReadResult, slow_roll: Any = None) -> tuple[Any, ReadResult, dict[str, Any]]:
+    """Diagnose a recording already read (:func:`diagnose_one` without the reading)."""
     from rotordiag.features import apply_slow_roll, signature
 
     from .diagnosis import diagnose_recording
 
-    res = read_recording(path, options=options, limits=CLI_LIMITS)
     recording = res.recording
     if slow_roll is not None:
         recording = apply_slow_roll(recording, slow_roll)[0]

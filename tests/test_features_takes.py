@@ -198,3 +198,32 @@ def test_pulse_limit_counts_every_take():
     assert recording_from_dict(body, limits=ReadLimits(max_keyphasor_pulses=16)).recording.keyphasor_takes
     with pytest.raises(ValueError, match="16 keyphasor pulses; at most 15 are accepted"):
         recording_from_dict(body, limits=ReadLimits(max_keyphasor_pulses=15))
+
+
+def test_merge_takes_cuts_to_the_shortest_and_refuses_mismatches():
+    from rotordiag.features.reader import ReadResult
+    from rotordiag.features.take_files import merge_takes
+
+    delay = 0.0061
+    chans = _channels(delay)
+    first = Recording(FS_HZ, chans[:4], keyphasor_times_s=_pulses(), clearance_um=300.0)
+    longer = [ProbeChannel(c.bearing, c.angle_deg, c.units, np.concatenate([c.data, c.data[:100]])) for c in chans[4:]]
+    second = Recording(FS_HZ, longer, keyphasor_times_s=_pulses(delay), clearance_um={3: 300.0, 4: 320.0})
+    res = merge_takes([ReadResult(first, "csv", ["a note"]), ReadResult(second, "npy")], ["a.csv", "b.npy"])
+    rec = res.recording
+    assert rec.acquisition_groups == ((1, 2), (3, 4)) and rec.n_points == N and rec.keyphasor_takes is not None
+    assert rec.clearance_for(1) == 300.0 and rec.clearance_for(4) == 320.0 and res.format == "csv+npy"
+    assert "a.csv: a note" in res.notes and "cut to the shortest take's 4096 samples" in res.notes[0]
+    want = extract_features(Recording(FS_HZ, chans, keyphasor_times_s=[_pulses(), _pulses(delay)],
+                                      acquisitions="1,2;3,4"))
+    assert np.allclose(_across(extract_features(rec)), _across(want), atol=1e-9)
+    other_rate = Recording(FS_HZ * 1.01, chans[4:], keyphasor_times_s=_pulses(delay))
+    with pytest.raises(ValueError, match=r"different sample rates \(Hz\): a.csv: 2048, b.npy: 2068.48"):
+        merge_takes([ReadResult(first, "csv"), ReadResult(other_rate, "npy")], ["a.csv", "b.npy"])
+    fast = Recording(FS_HZ, chans[4:], speed_rpm=3100.0)
+    slow = Recording(FS_HZ, chans[:4], speed_rpm=3000.0)
+    with pytest.raises(ValueError, match="different running speeds"):
+        merge_takes([ReadResult(slow, "csv"), ReadResult(fast, "csv")], ["a", "b"])
+    split = Recording(FS_HZ, chans, speed_rpm=3000.0, acquisitions="1,2;3,4")
+    with pytest.raises(ValueError, match="a: is itself recorded in separate acquisitions"):
+        merge_takes([ReadResult(split, "csv"), ReadResult(fast, "csv")], ["a", "b"])

@@ -524,6 +524,56 @@ def test_a_keyphasor_per_take_through_json_binary_and_the_cli(client, rec, regis
     assert "separate_acquisitions" not in [r["code"] for r in cli["reasons"]]
 
 
+def test_takes_as_separate_files_through_the_cli(rec, registry_src, tmp_path):
+    """`rotordiag diagnose a.csv b.csv --takes`: two files, bearings 1-2 and 3-4, each with its keyphasor column,
+    read as one recording with a keyphasor per take — the same verdict as one file holding both takes with a
+    keyphasor column each (`--acquisitions 1,2;3,4 --keyphasor-channel kp_a;kp_b`); a take without a keyphasor,
+    a bearing in both files or different sample rates are refused naming the files."""
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app as cli_app
+
+    fs, channels = rec
+    data = np.array([d for _, _, d in channels])
+    late = int(round(0.007 * fs))
+    second = np.empty_like(data[4:, :-late])
+    second[:] = data[4:, late:]
+    first = data[:4, :-late]
+    n = first.shape[1]
+    t = np.arange(n) / fs
+    period = 60.0 / 1800.0
+    kp_a = np.where(((t - 0.3 * period) / period) % 1.0 < 0.05, -12.0, -8.0)
+    kp_b = np.where(((t + late / fs - 0.3 * period) / period) % 1.0 < 0.05, -12.0, -8.0)
+    names = [f"b{b}_{a:g}deg_um" for b, a, _ in channels]
+
+    def write(path, cols, col_names):
+        np.savetxt(path, np.column_stack([t, *cols]), delimiter=",", header=",".join(["time_s", *col_names]),
+                   comments="", fmt="%.9g")
+        return path
+
+    a = write(tmp_path / "take_a.csv", [*first, kp_a], [*names[:4], "kp"])
+    b = write(tmp_path / "take_b.csv", [*second, kp_b], [*names[4:], "kp"])
+    both = write(tmp_path / "both.csv", [*first, *second, kp_a, kp_b], [*names, "kp_a", "kp_b"])
+    common = ["--json", "--registry", str(registry_src), "--clearance-um", "350"]
+    out = CliRunner().invoke(cli_app, ["diagnose", str(a), str(b), "--takes", *common])
+    assert out.exit_code == 0, out.output
+    takes = json.loads(out.output)
+    ref = CliRunner().invoke(cli_app, ["diagnose", str(both), "--acquisitions", "1,2;3,4", "--keyphasor-channel",
+                                       "kp_a;kp_b", *common])
+    assert ref.exit_code == 0, ref.output
+    ref = json.loads(ref.output)
+    assert "separate_acquisitions" not in [r["code"] for r in takes["reasons"]]
+    assert takes["probabilities"] == pytest.approx(ref["probabilities"], rel=1e-9, abs=1e-12)
+    assert takes["speed_source"] == "keyphasor"
+    bare = write(tmp_path / "take_b_bare.csv", list(second), names[4:])
+    for files, words in (([a, bare], "a keyphasor in some takes only (take_a.csv: yes, take_b_bare.csv: no)"),
+                         ([a, a], "bearing 1 is in two takes"), ([a], "give two or more files")):
+        r = CliRunner().invoke(cli_app, ["diagnose", *map(str, files), "--takes", *common])
+        assert r.exit_code != 0 and words in r.output, r.output
+    r = CliRunner().invoke(cli_app, ["diagnose", str(a), str(b), "--takes", "--acquisitions", "1,2;3,4", *common])
+    assert r.exit_code != 0 and "leave --acquisitions out" in r.output, r.output
+
+
 def test_acquisitions_through_json_binary_and_the_cli(client, rec, registry_src, tmp_path):
     """Bearings recorded in two takes (`acquisitions`) through every door: the phase across the coupling is not
     measured, the verdict says why (`separate_acquisitions`, never confident), the same through the JSON body (string
