@@ -534,11 +534,15 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
 
 
 def phase_differences(values: np.ndarray, details: dict[int, BearingDetail],
-                      acquisitions: Sequence[Sequence[int]]) -> list[str]:
+                      acquisitions: Sequence[Sequence[int]],
+                      why: str = "the takes' start times are not related; record the bearings either side of the "
+                                 "coupling together for the phase across it, or give a keyphasor per acquisition"
+                      ) -> list[str]:
     """Write the ``dphase_*`` features of the bearings in ``details`` into ``values`` (in place): each order's
     phase lag of one bearing minus the other's, missing where either phase is in the noise
     (:meth:`BearingDetail.phase_deg`) or the two bearings lie in different ``acquisitions`` (groups whose
-    phases are not related). Returns the warning that names those pairs (none when there are none)."""
+    phases are not related). Returns the warning that names those pairs, with ``why`` (none when there are
+    none)."""
     split = split_pairs(acquisitions, cfg.PHASE_PAIRS)
     for k in (1, 2):
         for bi, bj in cfg.PHASE_PAIRS:
@@ -550,5 +554,4 @@ def phase_differences(values: np.ndarray, details: dict[int, BearingDetail],
         return []
     return [f"bearings recorded in separate acquisitions ({format_acquisitions(acquisitions)}): the phase "
             "differences between " + ", ".join(f"bearings {i} and {j}" for i, j in split)
-            + " are not measured (the takes' start times are not related); record the bearings either side of the "
-            "coupling together for the phase across it, or give a keyphasor per acquisition"]
+            + f" are not measured ({why})"]

@@ -111,7 +111,8 @@ def test_a_faulty_train_leaves_that_take_unreferenced():
     assert np.isfinite(fr["dphase_1x_b1_b2_x_deg"]) and np.isfinite(fr["dphase_1x_b3_b4_x_deg"])
     found = [s for s in fr.sanity if s.code == "keyphasor_faulty"]
     assert len(found) == 1 and found[0].message.startswith("the take of bearings 3, 4: ")
-    assert any("are not measured" in w for w in fr.warnings)
+    assert any("are not measured (the keyphasor of the take of bearings 3, 4 could not be used" in w
+               for w in fr.warnings)
 
 
 def test_takes_at_different_speeds_are_said():
