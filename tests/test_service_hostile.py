@@ -269,6 +269,33 @@ def test_messages_are_in_the_users_terms(plain, case):
         assert "file" in r.text or "units" in r.text or "record" in r.text, r.text
 
 
+@pytest.mark.parametrize("case", ["9k one-pulse takes", "32 keyphasor channels", "5 trains in JSON",
+                                  "nested trains, no acquisitions"])
+def test_keyphasor_per_take_inputs_are_bounded(plain, rec, case):
+    """One keyphasor per take (features._takes) through the query, the channel option and JSON: whatever the count
+    of takes, a 4xx that says what to give — never a 500, nothing allocated per take beyond the pulses sent."""
+    fs, channels = rec
+    data = np.array([d for _, _, d in channels])
+    if case == "9k one-pulse takes":
+        r = plain.post("/diagnose", content=_npy(data), headers={"Content-Type": "application/octet-stream"},
+                       params={"sample_rate_hz": fs, "acquisitions": "1,2;3,4",
+                               "keyphasor_times_s": ";".join(["0.1"] * 9_000)})
+        needle = "at least 2 pulse times"
+    elif case == "32 keyphasor channels":
+        r = plain.post("/diagnose", content=_npy(np.vstack([data, data[:1]])),
+                       headers={"Content-Type": "application/octet-stream"},
+                       params={"sample_rate_hz": fs, "acquisitions": "1,2;3,4",
+                               "keyphasor_channel": ";".join(["8"] * 32)})
+        needle = "keyphasor"
+    else:
+        trains = [[0.0, 1 / 30.0, 2 / 30.0]] * (5 if case == "5 trains in JSON" else 2)
+        extra = {"acquisitions": "1,2;3,4"} if case == "5 trains in JSON" else {}
+        r = plain.post("/diagnose", json=diagnose_json(fs, channels, keyphasor_times_s=trains, **extra))
+        needle = "keyphasor_times_s"
+    assert 400 <= r.status_code < 500, r.text
+    assert needle in r.text, r.text
+
+
 @pytest.mark.parametrize("case", ["data false", "since 0.5", "activate 0", "bearing string"])
 def test_no_loose_coercion(plain, rec, case):
     fs, channels = rec
