@@ -71,7 +71,7 @@ import numpy as np
 
 from rotordiag.core.units import INPUT_UNITS, UNITS_TO_UM, volts_to_um
 
-from ._acquisitions import parse_keyphasor_takes
+from ._acquisitions import acquisitions_in_order, parse_keyphasor_takes
 from ._recording import ProbeChannel, Recording, parse_speed_range
 from .safe_io import check_hdf5, load_npy_bounded, loads_json_finite
 from .sandbox import call_isolated
@@ -751,6 +751,12 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
     if kp is None and "keyphasor_signal" in info:
         signals = info["keyphasor_signal"]
         if isinstance(signals, list):      # one keyphasor channel per acquisition
+            stated = opts.acquisitions if opts.acquisitions is not None else info.get("acquisitions")
+            n_takes = len(acquisitions_in_order(stated)) if stated is not None else 1
+            if len(signals) != n_takes:
+                raise ValueError(f"{len(signals)} keyphasor channels ({opts.keyphasor_channel}) for {n_takes} "
+                                 "acquisition(s): give one keyphasor channel per acquisition, in the order the "
+                                 "acquisitions are listed, with acquisitions")
             kp = [keyphasor_times_from_pulses(s, float(fs), threshold=opts.keyphasor_threshold_v,
                                               edge=opts.keyphasor_edge) for s in signals]
             notes.append(f"{', '.join(str(len(k)) for k in kp)} keyphasor pulses from the {len(kp)} keyphasor "

@@ -184,6 +184,8 @@ def test_a_raw_keyphasor_channel_per_take_from_csv_and_npy():
     with pytest.raises(ValueError, match="have no names; give the keyphasor channel's index"):
         read_recording(buf.getvalue(), filename="takes.npy", options=ReadOptions(
             sample_rate_hz=FS_HZ, channels=layout, keyphasor_channel="kp_a;kp_b", acquisitions="1,2;3,4"))
+    with pytest.raises(ValueError, match="2 keyphasor channels .kp_a;kp_b. for 1 acquisition"):
+        read_recording(csv, filename="takes.csv", options=ReadOptions(channels=mapping, keyphasor_channel="kp_a;kp_b"))
     with pytest.raises(ValueError, match="keyphasor channel 'kp_c' is not a column"):
         read_recording(csv, filename="takes.csv", options=ReadOptions(
             channels=mapping, keyphasor_channel="kp_a;kp_c", acquisitions="1,2;3,4"))

@@ -286,7 +286,7 @@ def test_keyphasor_per_take_inputs_are_bounded(plain, rec, case):
                        headers={"Content-Type": "application/octet-stream"},
                        params={"sample_rate_hz": fs, "acquisitions": "1,2;3,4",
                                "keyphasor_channel": ";".join(["8"] * 32)})
-        needle = "keyphasor"
+        needle = "32 keyphasor channels"
     else:
         trains = [[0.0, 1 / 30.0, 2 / 30.0]] * (5 if case == "5 trains in JSON" else 2)
         extra = {"acquisitions": "1,2;3,4"} if case == "5 trains in JSON" else {}
