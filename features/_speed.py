@@ -32,7 +32,11 @@ from ._lines import (
 from ._spectrum import fast_length, hann_spectra
 from ._speed_lock import locked_speed_hz
 
-__all__ = ["ShaftAngle", "shaft_angle", "estimate_speed_hz"]
+__all__ = ["ShaftAngle", "shaft_angle", "estimate_speed_hz", "KEYPHASOR_INTERVALS"]
+
+#: ``speed_source`` of a faulty keyphasor's speed: the median of its sound pulse intervals (locked to the signal's
+#: lines), with the orders tracked at that steady speed and phases from the first sample — not a speed the user gave
+KEYPHASOR_INTERVALS = "keyphasor intervals"
 
 
 @dataclass
@@ -44,7 +48,7 @@ class ShaftAngle:
     """
 
     speed_rpm: float
-    source: str                 # "keyphasor" | "given" | "estimated"
+    source: str                 # "keyphasor" | "given" | "estimated" | KEYPHASOR_INTERVALS
     start: int
     stop: int
     theta_rad: np.ndarray
@@ -563,7 +567,9 @@ def shaft_angle(rec, data: np.ndarray, estimate: tuple[float, list[str]] | None 
                       else "the sound pulse intervals' period, locked to the signal")
             note = (f"keyphasor_times_s not used: {fault.describe()}. The orders are tracked at a steady "
                     f"{steady.speed_rpm:.1f} r/min ({source}), phases relative to the first sample")
-            return replace(steady, warnings=[note, *steady.warnings])
+            # a speed read from the sound pulse intervals was not given by the user: say where it came from
+            label = KEYPHASOR_INTERVALS if rec.speed_rpm is None and rpm_steady is not None else steady.source
+            return replace(steady, source=label, warnings=[note, *steady.warnings])
         periods = np.diff(kp)
         n_revs = int(kp.size - 1)
         rpm = 60.0 * n_revs / float(kp[-1] - kp[0])

@@ -407,7 +407,9 @@ class DiagnoseResponse(BaseModel):
                                        "(for audit; do not act on it then).")
     misalignment_model: float | None = Field(None, description="The Δ regressor's own estimate; `misalignment` is it "
                                              "clipped into the band of `severity`, so class and Δ always agree.")
-    speed_source: str | None = Field(None, description="`keyphasor`, `given` or `estimated`.")
+    speed_source: str | None = Field(None, description="`keyphasor`, `given`, `estimated`, or `keyphasor intervals` "
+                                     "(a faulty keyphasor's sound pulse intervals: the orders tracked at that steady "
+                                     "speed, phases from the first sample).")
     probabilities: dict[str, float] = Field(..., description="Calibrated probability of each severity class (sum 1).")
     misalignment: float | None = Field(..., description="Estimated misalignment Δ = δ/c (offset over radial "
                                        "clearance, non-dimensional), inside the band of `severity`; null when "
