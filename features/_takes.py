@@ -108,10 +108,11 @@ def extract_by_take(rec: Recording, extract_one: Callable[[Recording], FeatureRe
         warnings.append(f"bearings recorded in separate acquisitions ({format_acquisitions(groups)}), each with its "
                         "keyphasor: every order's phase is referenced to the keyphasor mark, so the phase differences "
                         "across the takes are measured — provided the machine ran at the same speed and load in each")
-    faulty = [g for g, fr in zip(groups, results) if fr.phase_reference != "keyphasor"]
+    faulty = " and of the take of ".join(_take_label(g) for g, fr in zip(groups, results)
+                                         if fr.phase_reference != "keyphasor")
     warnings += phase_differences(values, details, unrelated, why=(
-        "the keyphasor of the take of " + " and of the take of ".join(_take_label(g) for g in faulty)
-        + " could not be used, so that take's phases are not referenced to the mark; see keyphasor_faulty"))
+        f"the keyphasor of the take of {faulty} could not be used, so that take's phases are not referenced to the "
+        "mark; see keyphasor_faulty"))
     return FeatureResult(
         names=FEATURE_NAMES, values=values, bearings=details, speed_rpm=speed,
         speed_source="keyphasor" if referenced else results[0].speed_source,

@@ -750,21 +750,20 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
     kp: Any = opts.keyphasor_times_s
     if kp is None and "keyphasor_signal" in info:
         signals = info["keyphasor_signal"]
-        if isinstance(signals, list):      # one keyphasor channel per acquisition
+        many = isinstance(signals, list)     # one keyphasor channel per acquisition
+        if many:
             stated = opts.acquisitions if opts.acquisitions is not None else info.get("acquisitions")
             n_takes = len(acquisitions_in_order(stated)) if stated is not None else 1
             if len(signals) != n_takes:
                 raise ValueError(f"{len(signals)} keyphasor channels ({opts.keyphasor_channel}) for {n_takes} "
                                  "acquisition(s): give one keyphasor channel per acquisition, in the order the "
                                  "acquisitions are listed, with acquisitions")
-            kp = [keyphasor_times_from_pulses(s, float(fs), threshold=opts.keyphasor_threshold_v,
-                                              edge=opts.keyphasor_edge) for s in signals]
-            notes.append(f"{', '.join(str(len(k)) for k in kp)} keyphasor pulses from the {len(kp)} keyphasor "
-                         f"channels, one per acquisition ({opts.keyphasor_edge} edge)")
-        else:
-            kp = keyphasor_times_from_pulses(signals, float(fs), threshold=opts.keyphasor_threshold_v,
-                                             edge=opts.keyphasor_edge)
-            notes.append(f"{len(kp)} keyphasor pulses from the keyphasor channel ({opts.keyphasor_edge} edge)")
+        trains = [keyphasor_times_from_pulses(s, float(fs), threshold=opts.keyphasor_threshold_v,
+                                              edge=opts.keyphasor_edge) for s in (signals if many else [signals])]
+        kp = trains if many else trains[0]
+        notes.append(f"{', '.join(str(len(k)) for k in trains)} keyphasor pulses from the "
+                     + (f"{len(trains)} keyphasor channels, one per acquisition" if many else "keyphasor channel")
+                     + f" ({opts.keyphasor_edge} edge)")
     if kp is not None:
         kp = parse_keyphasor_takes(kp, "keyphasor_times_s")
         n_pulses = sum(t.size for t in kp) if isinstance(kp, tuple) else kp.size

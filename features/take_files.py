@@ -82,7 +82,7 @@ def merge_takes(results: Sequence[ReadResult], labels: Sequence[str]) -> ReadRes
                 raise ValueError(f"bearing {b} is in two takes ({seen[b]} and {lab}); each take must record other "
                                  "bearings")
             seen[b] = lab
-    fs = _one_value([r.sample_rate_hz for r in recs], SAMPLE_RATE_RTOL, "sample rates (Hz)", labels)
+    _one_value([r.sample_rate_hz for r in recs], SAMPLE_RATE_RTOL, "sample rates (Hz)", labels)
     speed = _one_value([r.speed_rpm for r in recs], SPEED_RTOL, "running speeds (r/min)", labels)
     with_kp = [r.keyphasor_times_s is not None for r in recs]
     if any(with_kp) and not all(with_kp):
@@ -103,7 +103,7 @@ def merge_takes(results: Sequence[ReadResult], labels: Sequence[str]) -> ReadRes
     channels = [ProbeChannel(c.bearing, c.angle_deg, c.units, c.data[:n], slow_roll_um_pp=c.slow_roll_um_pp)
                 for rec in recs for c in rec.channels]
     trains = tuple(np.asarray(r.keyphasor_times_s) for r in recs) if all(with_kp) else None
-    merged = Recording(sample_rate_hz=float(fs or recs[0].sample_rate_hz), channels=channels, speed_rpm=speed,
+    merged = Recording(sample_rate_hz=recs[0].sample_rate_hz, channels=channels, speed_rpm=speed,
                        keyphasor_times_s=trains, clearance_um=_clearances(recs),
                        speed_range_rpm=ranges.pop() if ranges else None,
                        dc_removed=any(r.dc_removed for r in recs),
