@@ -25,6 +25,11 @@ OPTION_QUERY_KEYS = ("sample_rate_hz", "speed_rpm", "speed_range_rpm", "clearanc
                      "keyphasor_threshold_v", "dc_removed", "acquisitions")
 
 
+#: a request body as the routes read it: the bytes, or for a multipart upload of several take files each file's
+#: bytes and name (``kind`` = "takes")
+Body = bytes | tuple[tuple[bytes, str], ...]
+
+
 def service_limits() -> Any:
     """What one upload may make the reader allocate (one recording: the request schema's bounds)."""
     from rotordiag.features.reader import ReadLimits
@@ -129,8 +134,6 @@ SLOW_ROLL_QUERY_KEYS = {"slow_roll_sample_rate_hz": "sample_rate_hz", "slow_roll
 def _slow_roll_recording(slow_roll: tuple[bytes, str], query: dict[str, Any]) -> Any:
     """The slow-roll upload read like the main one: same reader, limits and sandbox; its own sample rate and
     keyphasor times when given (``slow_roll_sample_rate_hz``, ``slow_roll_keyphasor_times_s``), no speed."""
-    from rotordiag.features.reader import read_recording
-
     data, name = slow_roll
     if not data:
         raise InputError(f"slow_roll_file {name!r} is empty: send the slow-roll recording (CSV/NPY/HDF5/UFF/JSON) "
@@ -145,24 +148,103 @@ def _slow_roll_recording(slow_roll: tuple[bytes, str], query: dict[str, Any]) ->
         opts = options_from_query(q)
     except InputError as exc:
         raise InputError(f"slow_roll_file: {exc}") from None
+    return _read_file(data, name, opts, "slow_roll_file").recording
+
+
+def _read_file(data: bytes, name: str, opts: Any, what: str | None = None) -> Any:
+    """One uploaded file through the reader (``ReadResult``); its refusal as a 422, prefixed with ``what`` and the
+    file's name (``None``: the request's one recording, the reader's message as it is)."""
+    from rotordiag.features.reader import read_recording
+
     try:
-        return read_recording(data, filename=name, options=opts, limits=service_limits()).recording
+        return read_recording(data, filename=name, options=opts, limits=service_limits())
     except ValueError as exc:
         if "unknown file type" in str(exc):
-            raise InputError(f"slow_roll_file {name!r}: unknown file type; send .csv, .npy, .h5, .hdf5, .uff, .unv "
-                             "or .json", "unsupported_type") from None
-        raise InputError(f"slow_roll_file {name!r}: {exc}") from None
+            raise InputError(f"{what or 'multipart upload'} {name!r}: unknown file type; send .csv, .npy, .h5, .hdf5, "
+                             ".uff, .unv or .json", "unsupported_type") from None
+        if what is None:
+            raise _read_error(exc) from None
+        raise InputError(f"{what} {name!r}: {exc}") from None
 
 
-def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any],
+#: the most take files one multipart upload may carry (each holds bearings of its own, of bearings 1-4)
+MAX_TAKE_FILES = 4
+#: query parameters that describe each take file of a multipart upload on its own: one value per file, separated
+#: by ';' in the order the files are sent. ``angles_deg`` and ``keyphasor_channel`` may be one value for every file;
+#: ``bearings`` and ``keyphasor_times_s`` never (a bearing is in one take only; each take has its own clock).
+PER_TAKE_QUERY_KEYS = ("bearings", "angles_deg", "keyphasor_channel", "keyphasor_times_s")
+_ONE_FOR_ALL = ("angles_deg", "keyphasor_channel")
+
+
+def take_queries(query: dict[str, Any], labels: list[str]) -> list[dict[str, Any]]:
+    """Each take file's query parameters: the shared ones, and its own part of every ``PER_TAKE_QUERY_KEYS`` value.
+
+    Raises
+    ------
+    InputError
+        ``acquisitions`` given (each file is one), or a per-take value with a count of parts other than the files'.
+    """
+    n = len(labels)
+    if (query.get("acquisitions") or "").strip():
+        raise InputError(f"acquisitions: the {n} files in part 'file' are the takes, each its own acquisition; leave "
+                         "acquisitions out (or send one file holding every take, with acquisitions)")
+    out = [dict(query) for _ in labels]
+    for key in PER_TAKE_QUERY_KEYS:
+        text = query.get(key)
+        if text is None or not str(text).strip():
+            continue
+        parts = [part.strip() for part in str(text).split(";")]
+        if len(parts) == 1 and key in _ONE_FOR_ALL:
+            continue
+        if len(parts) != n:
+            raise InputError(f"{key}: {len(parts)} value(s) for {n} take files ({', '.join(labels)}); give one per "
+                             "file, separated by ';' in the order the files are sent"
+                             + (" (a bearing is in one take only)" if key == "bearings" else "")
+                             + (" (each take's pulses on its own clock)" if key == "keyphasor_times_s" else ""))
+        for q, part in zip(out, parts):
+            q[key] = part or None
+    return out
+
+
+def _parse_takes(files: tuple[tuple[bytes, str], ...], query: dict[str, Any]) -> Any:
+    """The takes of one recording, uploaded as separate files, read one by one and merged
+    (``features.take_files.merge_takes``: each file one acquisition, its keyphasor that take's)."""
+    from rotordiag.features.take_files import merge_takes
+
+    names = [name or f"take {i + 1}" for i, (_, name) in enumerate(files)]
+    labels = names if len(set(names)) == len(names) else [f"take {i + 1} ({n})" for i, n in enumerate(names)]
+    if len(files) > MAX_TAKE_FILES:
+        raise InputError(f"{len(files)} files in part 'file': at most {MAX_TAKE_FILES} takes (bearings 1-4)")
+    results = []
+    for (data, name), label, q in zip(files, labels, take_queries(query, labels)):
+        if not data:
+            raise InputError(f"take file {label!r} is empty: send the take's recording (CSV/NPY/HDF5/UFF/JSON)")
+        try:
+            opts = options_from_query(q)
+        except InputError as exc:
+            raise InputError(f"take file {label!r}: {exc}") from None
+        results.append(_read_file(data, name, opts, "take file"))
+    try:
+        merged = merge_takes(results, labels)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    if len(merged.recording.channels) > MAX_CHANNELS:
+        raise InputError(f"the takes hold {len(merged.recording.channels)} probe channels together; at most "
+                         f"{MAX_CHANNELS} (two per bearing)")
+    return merged
+
+
+def parse_body(kind: str, body: Body, filename: str, query: dict[str, Any],
                slow_roll: tuple[bytes, str] | None = None) -> tuple[Any, str | None, str | None]:
     """Recording, asset_id, plant from a request body.
 
     Parameters
     ----------
-    kind : {"json", "npy", "upload"}
+    kind : {"json", "npy", "upload", "takes"}
         How the body came (``service.api.routes.diagnose._read_body``).
-    body : bytes
+    body : bytes, or for ``takes`` a tuple of (bytes, file name)
+        ``takes``: the files of a multipart upload with several parts ``file``, the takes of one recording
+        (a portable analyser's, bearing pair by bearing pair), merged by :func:`_parse_takes`.
     filename : str
         The uploaded file's name (``upload`` only).
     query : dict
@@ -177,8 +259,12 @@ def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any],
     InputError, RequestInvalid
         Domain exceptions with a message that says what to fix (4xx in the API layer).
     """
-    from rotordiag.features.reader import read_recording
-
+    if isinstance(body, tuple):                 # kind "takes"
+        if slow_roll is not None:
+            raise InputError("a slow-roll file with several take files is not taken: send the takes as one file with "
+                             "acquisitions and a keyphasor per take, or use `rotordiag diagnose --takes --slow-roll`")
+        res = _parse_takes(body, query)
+        return res.recording, query.get("asset_id") or res.asset_id, query.get("plant") or res.plant
     if slow_roll is not None and kind != "upload":
         raise InputError("a slow-roll recording comes as a second file (part 'slow_roll_file') of a multipart "
                          "upload; with a JSON body give the slow-roll vectors per channel (channels[].slow_roll)")
@@ -191,16 +277,10 @@ def parse_body(kind: str, body: bytes, filename: str, query: dict[str, Any],
     if kind == "npy" and not body.startswith(b"\x93NUMPY"):
         raise InputError("body is not an NPY file (it must start with the \\x93NUMPY magic); "
                          "write it with numpy.save, or send JSON with Content-Type application/json")
-    opts = options_from_query(query)
-    try:
-        res = read_recording(body, filename=filename if kind == "upload" else "body.npy", options=opts,
-                             limits=service_limits())
-    except ValueError as exc:
-        msg = str(exc)
-        if "unknown file type" in msg:
-            raise InputError(f"multipart upload {filename!r}: unknown file type; send .csv, .npy, .h5, .hdf5, .uff, .unv "
-                             "or .json", "unsupported_type") from None
-        raise _read_error(exc) from None
+    if ";" in (query.get("bearings") or ""):
+        raise InputError("bearings: ';' separates the take files of a multipart upload with several files in part "
+                         "'file'; this request has one recording: give one bearing per row, comma-separated")
+    res = _read_file(body, filename if kind == "upload" else "body.npy", options_from_query(query))
     asset_id = query.get("asset_id") or res.asset_id
     plant = query.get("plant") or res.plant
     recording = res.recording

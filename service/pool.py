@@ -14,7 +14,8 @@ Transport: one Unix socket pair per worker, driven by the server's event loop
 the GIL back and forth — with two requests in flight per worker so that a worker
 never waits for the server between requests. Messages are length-prefixed pickles of the server's own data (the
 body bytes it read, plain query values, the verdict dict); nothing a client sent is
-ever unpickled — the body travels as opaque bytes and is parsed by
+ever unpickled — the body travels as opaque bytes (a multipart upload of several take files: each
+file's bytes and name) and is parsed by
 :func:`service.parsing.parse_body`.
 
 Limits: each worker lowers its own ``RLIMIT_AS`` after loading the model to its size then
@@ -51,6 +52,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from .inference import ModelStore
+    from .parsing import Body
 
 log = logging.getLogger("rotordiag.service")
 
@@ -126,7 +128,7 @@ def _tagged(fn: Callable[[], tuple]) -> tuple:
         return ("input", "invalid", str(exc))
 
 
-def _work(kind: str, body: bytes, filename: str, query: dict[str, Any], slow_roll: tuple[bytes, str] | None,
+def _work(kind: str, body: Body, filename: str, query: dict[str, Any], slow_roll: tuple[bytes, str] | None,
           version: str | None) -> tuple:
     """Parse and diagnose one request in the worker: ``("ok", verdict, asset_id, plant)`` or an error
     tuple (:func:`_tagged`). ``slow_roll``: an uploaded slow-roll recording and its file name, parsed
@@ -159,7 +161,7 @@ def _batch_parse(body: bytes) -> tuple:
     return _tagged(lambda: ("ok", [r.model_dump() for r in parse_batch(body).records]))
 
 
-def _plot(kind: str, body: bytes, filename: str, query: dict[str, Any]) -> tuple:
+def _plot(kind: str, body: Body, filename: str, query: dict[str, Any]) -> tuple:
     """Parse a recording and compute the web page's plot arrays: ``("ok", data)`` or an error tuple."""
     from .parsing import parse_body
     from .web.plotdata import plot_data
@@ -510,7 +512,7 @@ class DiagnosisPool:
         raise WorkerCrashed("the diagnosis worker stopped unexpectedly twice on this request; "
                             "if the recording is very large, send a shorter one")
 
-    async def run(self, kind: str, body: bytes, filename: str, query: dict[str, Any],
+    async def run(self, kind: str, body: Body, filename: str, query: dict[str, Any],
                   version: str | None, slow_roll: tuple[bytes, str] | None = None) -> tuple:
         """:func:`_work` in a worker process (returns its tagged tuple)."""
         return await self._call("work", (kind, body, filename, query, slow_roll, version))

@@ -524,15 +524,9 @@ def test_a_keyphasor_per_take_through_json_binary_and_the_cli(client, rec, regis
     assert "separate_acquisitions" not in [r["code"] for r in cli["reasons"]]
 
 
-def test_takes_as_separate_files_through_the_cli(rec, registry_src, tmp_path):
-    """`rotordiag diagnose a.csv b.csv --takes`: two files, bearings 1-2 and 3-4, each with its keyphasor column,
-    read as one recording with a keyphasor per take — the same verdict as one file holding both takes with a
-    keyphasor column each (`--acquisitions 1,2;3,4 --keyphasor-channel kp_a;kp_b`); a take without a keyphasor,
-    a bearing in both files or different sample rates are refused naming the files."""
-    from typer.testing import CliRunner
-
-    from rotordiag.cli import app as cli_app
-
+def _two_takes(rec):
+    """Bearings 1-2 and, 7 ms later, 3-4 of ``rec`` as two takes: (time, first take's rows, second's, a keyphasor
+    channel for each, the samples between the takes, channel names ``b<k>_<angle>deg_um``)."""
     fs, channels = rec
     data = np.array([d for _, _, d in channels])
     late = int(round(0.007 * fs))
@@ -544,12 +538,28 @@ def test_takes_as_separate_files_through_the_cli(rec, registry_src, tmp_path):
     period = 60.0 / 1800.0
     kp_a = np.where(((t - 0.3 * period) / period) % 1.0 < 0.05, -12.0, -8.0)
     kp_b = np.where(((t + late / fs - 0.3 * period) / period) % 1.0 < 0.05, -12.0, -8.0)
-    names = [f"b{b}_{a:g}deg_um" for b, a, _ in channels]
+    return t, first, second, kp_a, kp_b, late, [f"b{b}_{a:g}deg_um" for b, a, _ in channels]
+
+
+def _write_csv(path, t, cols, col_names):
+    np.savetxt(path, np.column_stack([t, *cols]), delimiter=",", header=",".join(["time_s", *col_names]),
+               comments="", fmt="%.9g")
+    return path
+
+
+def test_takes_as_separate_files_through_the_cli(rec, registry_src, tmp_path):
+    """`rotordiag diagnose a.csv b.csv --takes`: two files, bearings 1-2 and 3-4, each with its keyphasor column,
+    read as one recording with a keyphasor per take — the same verdict as one file holding both takes with a
+    keyphasor column each (`--acquisitions 1,2;3,4 --keyphasor-channel kp_a;kp_b`); a take without a keyphasor,
+    a bearing in both files or different sample rates are refused naming the files."""
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app as cli_app
+
+    t, first, second, kp_a, kp_b, _, names = _two_takes(rec)
 
     def write(path, cols, col_names):
-        np.savetxt(path, np.column_stack([t, *cols]), delimiter=",", header=",".join(["time_s", *col_names]),
-                   comments="", fmt="%.9g")
-        return path
+        return _write_csv(path, t, cols, col_names)
 
     a = write(tmp_path / "take_a.csv", [*first, kp_a], [*names[:4], "kp"])
     b = write(tmp_path / "take_b.csv", [*second, kp_b], [*names[4:], "kp"])
@@ -572,6 +582,68 @@ def test_takes_as_separate_files_through_the_cli(rec, registry_src, tmp_path):
         assert r.exit_code != 0 and words in r.output, r.output
     r = CliRunner().invoke(cli_app, ["diagnose", str(a), str(b), "--takes", "--acquisitions", "1,2;3,4", *common])
     assert r.exit_code != 0 and "leave --acquisitions out" in r.output, r.output
+
+
+def test_takes_as_separate_files_over_http(client, rec, registry_src, tmp_path):
+    """A multipart upload with two parts `file`, the takes of one recording (bearings 1-2 and 3-4, each CSV with its
+    keyphasor column): the verdict of `rotordiag diagnose a.csv b.csv --takes`; the same takes as NPY files with
+    `bearings` and `keyphasor_times_s` given per file (`;`); the plot data of the page cut per take; and the mistakes
+    a user can make with several files answered 422 naming what to fix."""
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app as cli_app
+
+    fs, channels = rec
+    t, first, second, kp_a, kp_b, late, names = _two_takes(rec)
+    a = _write_csv(tmp_path / "take_a.csv", t, [*first, kp_a], [*names[:4], "kp"]).read_bytes()
+    b = _write_csv(tmp_path / "take_b.csv", t, [*second, kp_b], [*names[4:], "kp"]).read_bytes()
+    files = [("file", ("take_a.csv", a)), ("file", ("take_b.csv", b))]
+    r = client.post("/diagnose", params={"clearance_um": 350.0}, files=files)
+    assert r.status_code == 200, r.text
+    http = r.json()
+    cli = CliRunner().invoke(cli_app, ["diagnose", str(tmp_path / "take_a.csv"), str(tmp_path / "take_b.csv"),
+                                       "--takes", "--json", "--registry", str(registry_src), "--clearance-um", "350"])
+    assert cli.exit_code == 0, cli.output
+    cli = json.loads(cli.output)
+    assert http["probabilities"] == pytest.approx(cli["probabilities"], rel=1e-9, abs=1e-12)
+    assert http["speed_source"] == "keyphasor" and "separate_acquisitions" not in [x["code"] for x in http["reasons"]]
+    assert any("each with its keyphasor" in w for w in http["warnings"])
+    # NPY takes: no names, so the layout and the keyphasor's pulses per file, in the order the files are sent
+    period = 60.0 / 1800.0
+    t_end = (first.shape[1] - 1) / fs
+    pulses_a = np.arange(0.3 * period, t_end, period)
+    pulses_b = pulses_a[pulses_a >= late / fs] - late / fs
+    kp = ";".join(",".join(f"{x:.9f}" for x in p) for p in (pulses_a, pulses_b))
+    npy = [("file", ("a.npy", _npy(first))), ("file", ("b.npy", _npy(second)))]
+    q = {"sample_rate_hz": fs, "clearance_um": 350.0, "bearings": "1,1,2,2;3,3,4,4",
+         "angles_deg": ",".join(f"{ang:g}" for _, ang, _ in channels[:4]), "keyphasor_times_s": kp}
+    r = client.post("/diagnose", params=q, files=npy)
+    assert r.status_code == 200, r.text
+    one = client.post("/diagnose", params={**q, "bearings": q["bearings"].replace(";", ","), "acquisitions": "1,2;3,4",
+                                           "angles_deg": None}, files={"file": ("ab.npy", _npy(np.vstack([first, second])))})
+    assert one.status_code == 200, one.text          # the same takes in one file, stated as two acquisitions
+    assert r.json()["probabilities"] == pytest.approx(one.json()["probabilities"], rel=1e-9, abs=1e-12)
+    assert r.json()["severity"] == http["severity"]   # (the CSVs' keyphasor edges fall on samples: a few degrees off)
+    p = client.post("/ui/plot-data", params={"clearance_um": 350.0}, files=files)
+    assert p.status_code == 200, p.text
+    assert sorted(b["bearing"] for b in p.json()["bearings"]) == [1, 2, 3, 4]
+    # mistakes, each a 422 that says what to fix
+    bare = _write_csv(tmp_path / "bare.csv", t, list(second), names[4:]).read_bytes()
+    for params, parts, words in (
+            ({}, [files[0], ("file", ("bare.csv", bare))], "a keyphasor in some takes only"),
+            ({}, [files[0], files[0]], "take 1 (take_a.csv)"),
+            ({"acquisitions": "1,2;3,4"}, files, "leave acquisitions out"),
+            ({**q, "bearings": "1,1,2,2,3,3,4,4"}, npy, "bearings: 1 value(s) for 2 take files"),
+            ({**q, "keyphasor_times_s": kp.split(";")[0]}, npy, "each take's pulses on its own clock"),
+            ({}, [files[0], ("file", ("empty.csv", b""))], "take file 'empty.csv' is empty"),
+            ({}, [files[0], ("file", ("b.xlsx", b"PK"))], "take file 'b.xlsx': unknown file type"),
+            ({}, [*files, ("slow_roll_file", ("slow.csv", a))], "a slow-roll file with several take files")):
+        r = client.post("/diagnose", params=params, files=parts)
+        assert r.status_code in (415, 422) and words in r.json()["detail"], (words, r.text)
+    r = client.post("/diagnose", params=q, files=[*npy, *npy, npy[0]])
+    assert r.status_code in (400, 413, 422), r.text
+    r = client.post("/diagnose", params={"bearings": "1,1;2,2"}, files=[files[0]])
+    assert r.status_code == 422 and "';' separates the take files" in r.json()["detail"], r.text
 
 
 def test_acquisitions_through_json_binary_and_the_cli(client, rec, registry_src, tmp_path):

@@ -130,6 +130,42 @@ def test_hostile_files_are_refused_and_the_service_stays_up(request, files, mode
         assert pool.pids() == pids              # no worker died on it
 
 
+@pytest.mark.parametrize("mode", ["workers", "in-process"])
+@pytest.mark.parametrize("endpoint", ["/diagnose", "/ui/plot-data"])
+@pytest.mark.parametrize("name", ["external storage", "virtual dataset", "gzip bomb", "huge-shape npy"])
+def test_a_hostile_file_as_a_second_take_is_refused_naming_it(request, files, rec, mode, endpoint, name):
+    """Takes uploaded as separate files (several parts `file`): every one goes through the same reader, limits and
+    worker as a single upload — a hostile second take behind a good first is a 4xx that names it, no worker dies."""
+    client = request.getfixturevalue("pooled" if mode == "workers" else "plain")
+    pool = client.app.state.rd.pool
+    pids = pool.pids() if pool is not None else None
+    fs, channels = rec
+    good = _npy(np.array([d for b, _, d in channels if b in (1, 2)]))
+    filename, data = files[name]
+    r = client.post(endpoint, files=[("file", ("take_a.npy", good)), ("file", (filename, data))],
+                    params={"sample_rate_hz": fs, "bearings": "1,1,2,2;"})
+    assert 400 <= r.status_code < 500, (r.status_code, r.text)
+    detail = _strict_json(r.text)["detail"]
+    assert "hunter2" not in r.text and "ROTORDIAG_API_KEY" not in r.text
+    assert f"take file {filename!r}" in detail, detail
+    assert client.get("/health").status_code == 200
+    if pool is not None:
+        assert pool.pids() == pids
+
+
+@pytest.mark.parametrize("parts", [5, 40])
+def test_more_take_files_than_bearings_are_refused(pooled, rec, parts):
+    """At most four takes (bearings 1-4; a fifth part only as /diagnose's slow_roll_file): five parts `file` are a 422
+    that says so, forty are refused by the form parser before any file is read (400)."""
+    fs, channels = rec
+    one = _npy(np.array([d for _, _, d in channels[:2]]))
+    r = pooled.post("/diagnose", files=[("file", (f"t{i}.npy", one)) for i in range(parts)],
+                    params={"sample_rate_hz": fs})
+    assert r.status_code == (422 if parts == 5 else 400), r.text
+    assert ("at most 4 takes" if parts == 5 else "takes as separate files (at most 4") in r.json()["detail"], r.text
+    assert pooled.get("/health").status_code == 200
+
+
 def test_the_same_hostile_npy_as_a_binary_body(pooled, files):
     r = pooled.post("/diagnose", content=files["huge-shape npy"][1], params={"sample_rate_hz": 2048.0},
                     headers={"Content-Type": "application/octet-stream"})

@@ -209,8 +209,9 @@ def _screenshot(driver, name: str) -> Path:
     return path
 
 
-def _submit_file(driver, path: Path, *, asset: str = "", sample_rate: str = "", clearance: str = "",
+def _submit_file(driver, path: Path | list[Path], *, asset: str = "", sample_rate: str = "", clearance: str = "",
                  expect: str = "done"):
+    """Submit ``path`` (a list: several files chosen at once, the takes of one recording) with these fields."""
     d = driver
     d.find_element("css selector", "input[name=source][value=file]").click()
     for field, value in (("sample-rate", sample_rate), ("clearance", clearance), ("asset", asset)):
@@ -218,7 +219,9 @@ def _submit_file(driver, path: Path, *, asset: str = "", sample_rate: str = "", 
         el.clear()
         if value:
             el.send_keys(value)
-    d.find_element("id", "file").send_keys(str(path))
+    chooser = d.find_element("id", "file")
+    chooser.clear()                          # the input takes several files: chromedriver would add to the last ones
+    chooser.send_keys("\n".join(str(p) for p in (path if isinstance(path, list) else [path])))
     d.execute_script("document.body.dataset.state = 'submitted'")
     d.find_element("id", "diagnose-btn").click()
     state = _wait(d, lambda dr: dr.execute_script(
@@ -719,6 +722,37 @@ def test_a_keyphasor_channel_per_take(server, browser, recordings, tmp_path):
     _screenshot(browser, "keyphasor_per_take")
     browser.find_element("id", "keyphasor-channel").clear()
     browser.find_element("id", "acquisitions").clear()
+
+
+def test_takes_saved_as_separate_files(server, browser, recordings, tmp_path):
+    """A portable analyser's two takes as two CSV files (bearings 1-2, then 3-4 7 ms later), each with its `kp`
+    column, chosen together on the page: one recording with a keyphasor per take — the phase across the coupling is
+    measured (no `separate_acquisitions`), the orbits of all four bearings drawn; a bearing in both files is refused
+    naming it."""
+    data = recordings[0.2].T.astype(float)
+    late = int(round(0.007 * FS_HZ))
+    first, second = data[:4, :-late], data[4:, late:]
+    n = first.shape[1]
+    period = 60.0 / SPEED_RPM
+    t = np.arange(n) / FS_HZ
+    paths = []
+    for name, rows, bearings, shift in (("take_a.csv", first, (1, 2), 0.0), ("take_b.csv", second, (3, 4), late / FS_HZ)):
+        kp = np.where(((t + shift - 0.3 * period) / period) % 1.0 < 0.05, -12.0, -8.0)
+        header = ",".join([*(f"b{b}@{a}" for b in bearings for a in (45, 135)), "kp"])
+        np.savetxt(tmp_path / name, np.column_stack([*rows, kp]), delimiter=",", header=header, comments="",
+                   fmt="%.6f")
+        paths.append(tmp_path / name)
+    _open(browser, server)
+    _submit_file(browser, paths, sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
+    v = browser.execute_script("return window.rotordiag.state.verdict")
+    assert "separate_acquisitions" not in [r["code"] for r in v["reasons"]], v["reasons"]
+    assert v["speed_source"] == "keyphasor" and any("each with its keyphasor" in w for w in v["warnings"])
+    plot = browser.execute_script("return window.rotordiag.state.plots")
+    assert plot["phase_reference"] == "keyphasor" and sorted(b["bearing"] for b in plot["bearings"]) == [1, 2, 3, 4]
+    _screenshot(browser, "take_files")
+    _submit_file(browser, [paths[0], paths[0]], sample_rate=str(FS_HZ), expect="error")
+    text = browser.find_element("id", "form-error").text
+    assert "bearing 1 is in two takes" in text, text
 
 
 def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_path):

@@ -93,7 +93,7 @@ UnitsQuery = Annotated[str | None, Query(min_length=1, max_length=16,
                                          description="Binary/multipart only: units of the array (`um`, `mm`, `m`, "
                                          "`mil`, or `V` with `sensitivity_v_per_mm`); "
                                          "default `um` (or the HDF5 file's `units` attribute).")]
-BearingsQuery = Annotated[str | None, Query(max_length=64, pattern=r"^[0-9, ]*$",
+BearingsQuery = Annotated[str | None, Query(max_length=64, pattern=r"^[0-9, ;]*$",
                                             description="Binary/multipart only: bearing (1-4) of each row, "
                                             "comma-separated; default 1,1,2,2,3,3,4,4 for 8 rows.")]
 AnglesQuery = Annotated[str | None, Query(max_length=256,

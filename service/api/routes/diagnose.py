@@ -14,7 +14,7 @@ from rotordiag.models.output_units import verdict_in_units
 
 from ...baseline import record_verdict
 from ...inference import ModelUnavailable
-from ...parsing import checked, parse_batch, parse_body, recording_from_model
+from ...parsing import MAX_TAKE_FILES, Body, checked, parse_batch, parse_body, recording_from_model
 from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
 from ..deps import (
     AcquisitionsQuery,
@@ -95,16 +95,22 @@ _BINARY_BODY = {
         "required": True,
         "description": "A recording as JSON (`DiagnoseRequest`), as an NPY array of shape (n_channels, n_points) "
         "(`application/octet-stream`; metadata in the query parameters), or as a multipart upload of one "
-        "CSV / NPY / HDF5 file in the part `file` (metadata in the query parameters; HDF5 may carry "
-        "`sample_rate_hz`, `units` attributes and a `channels/bearing`, `channels/angle_deg` table).",
+        "CSV / NPY / HDF5 / UFF file in the part `file` (metadata in the query parameters; HDF5 may carry "
+        "`sample_rate_hz`, `units` attributes and a `channels/bearing`, `channels/angle_deg` table). Takes saved "
+        "as separate files (a portable analyser's, bearing pair by bearing pair, each with its keyphasor): up to "
+        f"{MAX_TAKE_FILES} parts `file`, merged into one recording, each file one acquisition and its keyphasor "
+        "that take's; `bearings`, `angles_deg`, `keyphasor_channel` and `keyphasor_times_s` then take one value per "
+        "file separated by `;` (docs/service.md).",
         "content": {
             "application/json": {"schema": {"$ref": "#/components/schemas/DiagnoseRequest"}},
             "application/octet-stream": {"schema": {"type": "string", "format": "binary",
                                                     "description": "numpy.save output, (n_channels, n_points)"}},
             "multipart/form-data": {"schema": {
                 "type": "object", "required": ["file"],
-                "properties": {"file": {"type": "string", "format": "binary",
-                                        "description": "CSV (one probe per column), .npy or .h5/.hdf5 file"},
+                "properties": {"file": {"type": "array", "items": {"type": "string", "format": "binary"},
+                                        "minItems": 1, "maxItems": MAX_TAKE_FILES,
+                                        "description": "CSV (one probe per column), .npy, .h5/.hdf5, .uff or .json "
+                                        "file; several: the takes of one recording, each its own acquisition"},
                                "slow_roll_file": {
                                    "type": "string", "format": "binary",
                                    "description": "Optional (POST /diagnose only): a recording of the same probes "
@@ -122,9 +128,10 @@ def _media_type(request: Request) -> str:
     return request.headers.get("content-type", "").split(";")[0].strip().lower()
 
 
-async def _read_body(request: Request, slow_roll: bool = False) -> tuple[str, bytes, str, tuple[bytes, str] | None]:
-    """``(kind, bytes, file name, slow roll)`` of the body: kind is ``json``, ``npy`` or ``upload``; 415 for
-    anything else. ``slow roll`` is the multipart part ``slow_roll_file`` as ``(bytes, file name)`` (only
+async def _read_body(request: Request, slow_roll: bool = False) -> tuple[str, Body, str, tuple[bytes, str] | None]:
+    """``(kind, body, file name, slow roll)`` of the body: kind is ``json``, ``npy`` or ``upload`` (body: the bytes),
+    or ``takes`` (several parts ``file``, the takes of one recording; body: each file's ``(bytes, file name)``); 415
+    for anything else. ``slow roll`` is the multipart part ``slow_roll_file`` as ``(bytes, file name)`` (only
     where ``slow_roll`` is allowed; else a second file is refused), or None.
 
     Only the I/O happens here, on the event loop; parsing runs off the loop (``service.parsing.parse_body``).
@@ -135,11 +142,13 @@ async def _read_body(request: Request, slow_roll: bool = False) -> tuple[str, by
     if media in NPY_TYPES:
         return "npy", await request.body(), "", None
     if media == "multipart/form-data":
-        form = await _read_form(request, max_files=2 if slow_roll else 1)
+        form = await _read_form(request, max_files=MAX_TAKE_FILES + (1 if slow_roll else 0))
         try:
-            upload = form.get("file")
-            if upload is None or isinstance(upload, str):
-                raise InputError("multipart upload: put the waveform file in a part named 'file' (with a filename)")
+            uploads = form.getlist("file")
+            if not uploads or any(isinstance(u, str) for u in uploads):
+                raise InputError("multipart upload: put the waveform file in a part named 'file' (with a filename); "
+                                 "takes recorded as separate files: one part 'file' each")
+            upload = uploads[0]
             second = None
             if slow_roll and "slow_roll_file" in form:
                 part = form.get("slow_roll_file")
@@ -147,6 +156,9 @@ async def _read_body(request: Request, slow_roll: bool = False) -> tuple[str, by
                     raise InputError("multipart upload: 'slow_roll_file' must be a file part (with a filename) "
                                      "holding the slow-roll recording", "malformed")
                 second = (await part.read(), part.filename or "")
+            if len(uploads) > 1:
+                takes = tuple([(await u.read(), u.filename or "") for u in uploads])   # type: ignore[union-attr]
+                return "takes", takes, ", ".join(name for _, name in takes), second
             return "upload", await upload.read(), upload.filename or "", second
         finally:
             await form.close()
@@ -172,6 +184,11 @@ async def _read_form(request: Request, max_files: int = 1) -> Any:
             raise InputError("multipart upload: the part is not a file (its filename is missing or empty); send "
                              "the waveform file in a part named 'file' with a file name ending .csv, .npy, .h5, "
                              ".hdf5 or .json", "malformed") from None
+        if "too many files" in msg.lower():
+            raise InputError(f"multipart upload: {msg.rstrip('.')}: send the recording in one part 'file', or its "
+                             f"takes as separate files (at most {MAX_TAKE_FILES}, one part 'file' each)"
+                             + (" and a part 'slow_roll_file'" if max_files > MAX_TAKE_FILES else ""),
+                             "malformed") from None
         raise InputError(f"multipart upload cannot be read: {msg}", "malformed") from None
 
 

@@ -573,15 +573,16 @@
       return { diagnose: [`/diagnose?output_units=${$("length-units").value}`, opts()], plot: ["/ui/plot-data", opts()],
         asset: body.asset_id || null };
     }
-    let file = $("file").files[0];
+    let files = Array.from($("file").files);
     const q = new URLSearchParams();
     if (source === "example") {
       const ex = state.examples.find((e) => e.name === $("example").value);
       if (!ex || !ex.blob) throw new Error("The example recordings could not be loaded from the service; reload the page.");
-      file = new File([ex.blob], ex.name);
+      files = [new File([ex.blob], ex.name)];
       for (const [key, value] of Object.entries(ex.query || {})) q.set(key, String(value));
     }
-    if (!file) throw new Error("Choose a waveform file (CSV, NPY, HDF5 or UFF), or switch the source to an example or “Paste JSON”.");
+    if (!files.length) throw new Error("Choose a waveform file (CSV, NPY, HDF5 or UFF), or switch the source to an example or “Paste JSON”.");
+    if (files.length > 4) throw new Error(`${files.length} files chosen: choose one recording, or the files of its takes (at most 4, one per bearing or bearing pair).`);
     for (const [key, id] of Object.entries(numeric)) if (formValue(id) !== null) q.set(key, formValue(id));
     for (const [key, id] of [["units", "units"], ["bearings", "bearings"], ["angles_deg", "angles"],
       ["speed_range_rpm", "speed-range"], ["acquisitions", "acquisitions"], ["keyphasor_channel", "keyphasor-channel"]]) {
@@ -593,7 +594,7 @@
     const asset = formValue("asset");
     if (asset) q.set("asset_id", asset);
     q.set("output_units", $("length-units").value);
-    const opts = () => { const fd = new FormData(); fd.append("file", file, file.name); return { method: "POST", body: fd }; };
+    const opts = () => { const fd = new FormData(); for (const f of files) fd.append("file", f, f.name); return { method: "POST", body: fd }; };
     return { diagnose: [`/diagnose?${q}`, opts()], plot: [`/ui/plot-data?${qp}`, opts()], asset };
   }
 
