@@ -122,6 +122,10 @@ class Condition:
     #: each acquisition sent with its own keyphasor pulse train, on its take's clock (a steady speed, as for
     #: ``keyphasor_fault``)
     keyphasor_per_take: bool = False
+    #: with the speed not given, ``speed_range_rpm`` stated as the machine's nominal speed ± this fraction, the
+    #: nominal speed drawn within ± half of it around the true one (after the measurement's draws): what a plant
+    #: engineer knows without a tachometer (a grid-synchronous generator's 1500/1800/3000/3600 r/min)
+    speed_range_stated: float = 0.0
 
 
 #: the raw probe gap of the "raw gap" row, µm (−8 V at 7.87 V/mm is about 1000 µm)
@@ -211,6 +215,12 @@ CONDITIONS: tuple[Condition, ...] = (
                    "take with its keyphasor (a portable analyser's takes with a tachometer reference): the phases of "
                    "both takes refer to the same mark, so the phase across the coupling is measured (features._takes) "
                    "(not one of the issue's rows)"),
+    # appended, not inserted: a condition's index seeds its own measurement draws (measurement_rng)
+    Condition("speed unknown, nominal range ±5 % stated", speed_given=False, speed_range_stated=0.05,
+              same_recordings_as="clean",
+              what="the clean recordings, no speed given, `speed_range_rpm` = a nominal speed within ±2.5 % of the "
+                   "true one, ±5 %: the estimate is sought there when the free one lies outside (not one of the "
+                   "issue's rows)"),
 )
 #: extra measurements, beside the rows issue 15 asks for (its targets are over :data:`ISSUE_CONDITIONS`)
 EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 revolutions",
@@ -219,7 +229,8 @@ EXTRA_CONDITIONS = ("coupling journals apart", "speed stated 0.4 % off", "192 re
                     "keyphasor, a second edge every revolution", "one 500 µm spike", "mains pickup at 2X, 10 µm",
                     "mains pickup at 2X, 10 µm, a phase per cable", "bearings 2 and 3 swapped",
                     "bearings 3–4 in a second take, not stated",
-                    "bearings 3–4 in a second take, stated", "bearings 3–4 in a second take, a keyphasor per take")
+                    "bearings 3–4 in a second take, stated", "bearings 3–4 in a second take, a keyphasor per take",
+                    "speed unknown, nominal range ±5 % stated")
 ISSUE_CONDITIONS = tuple(c.name for c in CONDITIONS if c.name not in EXTRA_CONDITIONS)
 
 
@@ -278,6 +289,21 @@ def design(sim_set: str, n: int, seed: int) -> list[dict]:
     return cases
 
 
+def simulate_case(c: dict, revs: int = REVS) -> np.ndarray | None:
+    """One case of :func:`design`: its journal displacements in m (``SimulationResult.journal_displacements_m``) over
+    ``revs`` + 3 revolutions after 400 of transient, or None when the run did not finish ``ok``. Raises ``ValueError`` when the simulator refuses
+    the plant."""
+    from rotordiag.simulator import Plant, simulate
+
+    res = simulate(Plant.from_dict(c["plant"]), c["speed_rpm"], c["misalignment"], c["unbalance"],
+                   mechanism=c["mechanism"], transient_revs=400, record_revs=revs + 3,
+                   samples_per_rev=SAMPLES_PER_REV, unbalance_phase_rad=c["unbalance_phase_rad"],
+                   exciter_unbalance=c["exciter_unbalance"],
+                   exciter_unbalance_phase_rad=c["exciter_unbalance_phase_rad"],
+                   offset_angle_rad=c["offset_angle_rad"], coupling_phase_rad=c["coupling_phase_rad"])
+    return res.journal_displacements_m.astype(np.float32) if res.status == "ok" else None
+
+
 def simulate_set(sim_set: str, n: int, seed: int, cache: Path,
                  revs: int = REVS) -> tuple[list[dict], list[np.ndarray | None]]:
     """The cases and their journal displacements (n, 4, 2) in m (None where the run failed); cached.
@@ -287,23 +313,14 @@ def simulate_set(sim_set: str, n: int, seed: int, cache: Path,
     if path.exists():
         z = np.load(path, allow_pickle=False)
         return cases, [z[f"d{i}"] if f"d{i}" in z.files else None for i in range(len(cases))]
-    from rotordiag.simulator import Plant, simulate
-
     out: list[np.ndarray | None] = []
     t0 = time.perf_counter()
     for i, c in enumerate(cases):
         try:
-            res = simulate(Plant.from_dict(c["plant"]), c["speed_rpm"], c["misalignment"], c["unbalance"],
-                           mechanism=c["mechanism"], transient_revs=400, record_revs=revs + 3,
-                           samples_per_rev=SAMPLES_PER_REV, unbalance_phase_rad=c["unbalance_phase_rad"],
-                           exciter_unbalance=c["exciter_unbalance"],
-                           exciter_unbalance_phase_rad=c["exciter_unbalance_phase_rad"],
-                           offset_angle_rad=c["offset_angle_rad"], coupling_phase_rad=c["coupling_phase_rad"])
-            ok = res.status == "ok"
+            out.append(simulate_case(c, revs))
         except ValueError as exc:              # a far plant the simulator refuses
             print(f"  {sim_set} case {i}: refused by the simulator: {exc}", file=sys.stderr)
-            ok = False
-        out.append(res.journal_displacements_m.astype(np.float32) if ok else None)
+            out.append(None)
         if (i + 1) % 20 == 0:
             print(f"  {sim_set}: simulated {i + 1}/{len(cases)} ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
     cache.mkdir(parents=True, exist_ok=True)
@@ -364,10 +381,11 @@ class Outcome:
 
 def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ...], fs_hz: float,
                        speed_rpm: float | None, clearance_um: float | None, out: Outcome, units: str = "um",
-                       keyphasor_times_s: Any = None, acquisitions: str | None = None) -> Outcome:
+                       keyphasor_times_s: Any = None, acquisitions: str | None = None,
+                       speed_range_rpm: tuple[float, float] | None = None) -> Outcome:
     """Run features + the shipped model + the rule of thumb on one recording (fills ``out``); ``units``
     is what the channels are declared in (the numbers are µm: ``"mil"`` is the µm-read-as-mils mistake);
-    ``acquisitions`` as ``Recording.acquisitions``."""
+    ``acquisitions`` and ``speed_range_rpm`` as ``Recording``'s."""
     from rotordiag.features import ProbeChannel, Recording, extract_features
     from rotordiag.models.baselines import RuleOfThumb, ratio_column
     from rotordiag.models.diagnosis import diagnose_recording
@@ -376,7 +394,8 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
              for j, a in enumerate(ANGLES_DEG)]
     try:
         rec = Recording(sample_rate_hz=fs_hz, channels=chans, speed_rpm=speed_rpm, clearance_um=clearance_um,
-                        keyphasor_times_s=keyphasor_times_s, acquisitions=acquisitions)
+                        keyphasor_times_s=keyphasor_times_s, acquisitions=acquisitions,
+                        speed_range_rpm=speed_range_rpm)
         fr = extract_features(rec)
         out.speed_rpm_estimated = float(fr.speed_rpm)
         v, fr = diagnose_recording(bundle, rec, fr=fr)                     # as the service and the CLI
@@ -492,6 +511,10 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
                 keyphasor = keyphasor[keyphasor < t_end]
             stated = None
         told: dict[str, Any] = {} if keyphasor is None else {"keyphasor_times_s": keyphasor}
+        if cond.speed_range_stated and stated is None and keyphasor is None:
+            h = cond.speed_range_stated
+            nominal = c["speed_rpm"] * (1.0 + rng.uniform(-h / 2, h / 2))
+            told["speed_range_rpm"] = (nominal * (1.0 - h), nominal * (1.0 + h))
         if cond.acquisitions:
             told["acquisitions"] = cond.acquisitions
         return diagnose_waveforms(bundle, w, bearings, FS_HZ, stated, clearance, o, **told)
@@ -924,6 +947,14 @@ def targets(rows: dict[str, dict], ross: dict | None) -> list[tuple[str, bool | 
                     n_sep > 0 and ok_sep >= 0.99 * n_sep,
                     f"{ok_sep / max(n_sep, 1):.1%} of {n_sep}; " + ", ".join(
                         f"{c}: {k} of {n}" for c, (n, k) in sp["by_line"].items() if c != "separate")))
+        ranged = rows.get("speed unknown, nominal range ±5 % stated")
+        rs = (ranged or {}).get("speed") or {}
+        if rs.get("n"):
+            refused = ranged.get("refused", 0)
+            out.append((f"speed unknown, nominal range ±5 % stated: the verdict's speed within {SPEED_TOLERANCE:.1%} "
+                        "(not one of the issue's targets)", None,
+                        f"{rs['within']:.1%} of {rs['n']} diagnosed; {refused} refused (no running speed's line "
+                        f"told apart in the range); {rs['wrong_confident']} of {rs['wrong']} wrong speeds `confident`"))
         out.append(("speed unknown: no recording diagnosed at a wrong speed gets a `confident` verdict",
                     sp["wrong_confident"] == 0, f"{sp['wrong_confident']} of {sp['wrong']} wrong speeds"))
         out.append(("speed unknown: in-family OOD ≤ 5 % on the recordings diagnosed at the right speed",

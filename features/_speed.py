@@ -265,10 +265,16 @@ def _ranked(s: _Spectrum, families: list[_Family], ranged: bool) -> tuple[list[_
 
 
 def _no_line_in_range(s: _Spectrum) -> ValueError:
+    merged = ""
+    if s.f_top < s.c_lo and s.c_lo <= 2.0 * s.f_top <= s.c_hi:
+        revs = s.x.shape[1] / s.fs * s.c_lo
+        merged = (f"; the range holds the 2nd harmonic of the largest line, a whirl at {60 * s.f_top:.0f} cpm, and no "
+                  f"running speed's 1X could be told apart from it on these {revs:.0f} revolutions — record longer (a "
+                  "record of N revolutions tells apart lines about 2/N of the running speed apart) or")
     return ValueError(
         f"cannot estimate the running speed: no spectral line of a running speed (1X with its own line) lies "
-        f"within speed_range_rpm {60 * s.c_lo:.0f}–{60 * s.c_hi:.0f} r/min; check the range or give speed_rpm or "
-        "keyphasor_times_s")
+        f"within speed_range_rpm {60 * s.c_lo:.0f}–{60 * s.c_hi:.0f} r/min{merged or '; check the range or'} give "
+        "speed_rpm or keyphasor_times_s")
 
 
 def _whirl_stage(s: _Spectrum, families: list[_Family], only_partner: bool) -> _Choice:
@@ -299,7 +305,12 @@ def _whirl_stage(s: _Spectrum, families: list[_Family], only_partner: bool) -> _
         partners = _combination_partners(s.power, s.logp, df, s.floor, f_best, seeds, s.c_lo, s.c_hi, 0.45 * s.fs,
                                          s.sidebands)
     if only_partner and not partners:
-        raise _no_line_in_range(s)
+        # a stated range whose one line lies at twice the whirl's frequency (excluded by _ranked as its 2nd
+        # harmonic): the running speed's 1X may sit beside that harmonic, inside its main lobe
+        hidden = _hidden_1x(s.x, s.spec, s.fs, df, s.k_top, s.f_top, s.c_lo, s.c_hi)
+        if hidden is None:
+            raise _no_line_in_range(s)
+        return _Choice(first, hidden[0], f_best, f_partner=hidden[0], warnings=[hidden[1]])
     if not partners:
         half = _half_speed_whirl(s.spec, df, families)
         return _Choice(families[0], families[0].f_hz, f_best, warnings=[] if half is None else [half])
