@@ -167,3 +167,31 @@ def shipped_or_tiny_registry(tmp_root=None):
         for old in stale:                    # keep the three newest builds
             shutil.rmtree(old, ignore_errors=True)
     return root
+
+
+def two_takes(rec):
+    """Bearings 1-2 and, 7 ms later, 3-4 of ``rec`` as two takes: (time, first take's rows, second's, a keyphasor
+    channel for each, the samples between the takes, channel names ``b<k>_<angle>deg_um``)."""
+    import numpy as np
+
+    fs, channels = rec
+    data = np.array([d for _, _, d in channels])
+    late = int(round(0.007 * fs))
+    second = np.empty_like(data[4:, :-late])
+    second[:] = data[4:, late:]
+    first = data[:4, :-late]
+    n = first.shape[1]
+    t = np.arange(n) / fs
+    period = 60.0 / 1800.0
+    kp_a = np.where(((t - 0.3 * period) / period) % 1.0 < 0.05, -12.0, -8.0)
+    kp_b = np.where(((t + late / fs - 0.3 * period) / period) % 1.0 < 0.05, -12.0, -8.0)
+    return t, first, second, kp_a, kp_b, late, [f"b{b}_{a:g}deg_um" for b, a, _ in channels]
+
+
+def write_takes_csv(path, t, cols, col_names):
+    """A take as CSV: a ``time_s`` column, then ``cols`` named ``col_names``; returns ``path``."""
+    import numpy as np
+
+    np.savetxt(path, np.column_stack([t, *cols]), delimiter=",", header=",".join(["time_s", *col_names]),
+               comments="", fmt="%.9g")
+    return path

@@ -10,7 +10,15 @@ import pytest
 from fastapi.testclient import TestClient
 
 from rotordiag.service.main import create_app
-from tests.service_util import auth, diagnose_json, make_settings, shipped_or_tiny_registry, simulated_channels
+from tests.service_util import (
+    auth,
+    diagnose_json,
+    make_settings,
+    shipped_or_tiny_registry,
+    simulated_channels,
+    two_takes,
+    write_takes_csv,
+)
 
 
 @pytest.fixture(scope="module")
@@ -524,29 +532,6 @@ def test_a_keyphasor_per_take_through_json_binary_and_the_cli(client, rec, regis
     assert "separate_acquisitions" not in [r["code"] for r in cli["reasons"]]
 
 
-def _two_takes(rec):
-    """Bearings 1-2 and, 7 ms later, 3-4 of ``rec`` as two takes: (time, first take's rows, second's, a keyphasor
-    channel for each, the samples between the takes, channel names ``b<k>_<angle>deg_um``)."""
-    fs, channels = rec
-    data = np.array([d for _, _, d in channels])
-    late = int(round(0.007 * fs))
-    second = np.empty_like(data[4:, :-late])
-    second[:] = data[4:, late:]
-    first = data[:4, :-late]
-    n = first.shape[1]
-    t = np.arange(n) / fs
-    period = 60.0 / 1800.0
-    kp_a = np.where(((t - 0.3 * period) / period) % 1.0 < 0.05, -12.0, -8.0)
-    kp_b = np.where(((t + late / fs - 0.3 * period) / period) % 1.0 < 0.05, -12.0, -8.0)
-    return t, first, second, kp_a, kp_b, late, [f"b{b}_{a:g}deg_um" for b, a, _ in channels]
-
-
-def _write_csv(path, t, cols, col_names):
-    np.savetxt(path, np.column_stack([t, *cols]), delimiter=",", header=",".join(["time_s", *col_names]),
-               comments="", fmt="%.9g")
-    return path
-
-
 def test_takes_as_separate_files_through_the_cli(rec, registry_src, tmp_path):
     """`rotordiag diagnose a.csv b.csv --takes`: two files, bearings 1-2 and 3-4, each with its keyphasor column,
     read as one recording with a keyphasor per take — the same verdict as one file holding both takes with a
@@ -556,10 +541,10 @@ def test_takes_as_separate_files_through_the_cli(rec, registry_src, tmp_path):
 
     from rotordiag.cli import app as cli_app
 
-    t, first, second, kp_a, kp_b, _, names = _two_takes(rec)
+    t, first, second, kp_a, kp_b, _, names = two_takes(rec)
 
     def write(path, cols, col_names):
-        return _write_csv(path, t, cols, col_names)
+        return write_takes_csv(path, t, cols, col_names)
 
     a = write(tmp_path / "take_a.csv", [*first, kp_a], [*names[:4], "kp"])
     b = write(tmp_path / "take_b.csv", [*second, kp_b], [*names[4:], "kp"])
@@ -594,9 +579,9 @@ def test_takes_as_separate_files_over_http(client, rec, registry_src, tmp_path):
     from rotordiag.cli import app as cli_app
 
     fs, channels = rec
-    t, first, second, kp_a, kp_b, late, names = _two_takes(rec)
-    a = _write_csv(tmp_path / "take_a.csv", t, [*first, kp_a], [*names[:4], "kp"]).read_bytes()
-    b = _write_csv(tmp_path / "take_b.csv", t, [*second, kp_b], [*names[4:], "kp"]).read_bytes()
+    t, first, second, kp_a, kp_b, late, names = two_takes(rec)
+    a = write_takes_csv(tmp_path / "take_a.csv", t, [*first, kp_a], [*names[:4], "kp"]).read_bytes()
+    b = write_takes_csv(tmp_path / "take_b.csv", t, [*second, kp_b], [*names[4:], "kp"]).read_bytes()
     files = [("file", ("take_a.csv", a)), ("file", ("take_b.csv", b))]
     r = client.post("/diagnose", params={"clearance_um": 350.0}, files=files)
     assert r.status_code == 200, r.text
@@ -628,7 +613,7 @@ def test_takes_as_separate_files_over_http(client, rec, registry_src, tmp_path):
     assert p.status_code == 200, p.text
     assert sorted(b["bearing"] for b in p.json()["bearings"]) == [1, 2, 3, 4]
     # mistakes, each a 422 that says what to fix
-    bare = _write_csv(tmp_path / "bare.csv", t, list(second), names[4:]).read_bytes()
+    bare = write_takes_csv(tmp_path / "bare.csv", t, list(second), names[4:]).read_bytes()
     for params, parts, words in (
             ({}, [files[0], ("file", ("bare.csv", bare))], "a keyphasor in some takes only"),
             ({}, [files[0], files[0]], "take 1 (take_a.csv)"),

@@ -18,7 +18,16 @@ import pytest
 from fastapi.testclient import TestClient
 
 from rotordiag.service.main import create_app
-from tests.service_util import API_KEY, auth, diagnose_json, make_settings, shipped_or_tiny_registry, simulated_channels
+from tests.service_util import (
+    API_KEY,
+    auth,
+    diagnose_json,
+    make_settings,
+    shipped_or_tiny_registry,
+    simulated_channels,
+    two_takes,
+    write_takes_csv,
+)
 
 MB = 1 << 20
 SECRET = b"ROTORDIAG_API_KEY=hunter2-secret\n"
@@ -151,6 +160,18 @@ def test_a_hostile_file_as_a_second_take_is_refused_naming_it(request, files, re
     assert client.get("/health").status_code == 200
     if pool is not None:
         assert pool.pids() == pids
+
+
+def test_takes_through_the_workers_give_the_in_process_verdict(pooled, plain, rec, tmp_path):
+    """Two take files (bearings 1-2, 3-4, a `kp` column each) travel to a worker as their bytes and names and are
+    merged there: the same verdict as parsed in-process."""
+    t, first, second, kp_a, kp_b, _, names = two_takes(rec)
+    files = [("file", (name, write_takes_csv(tmp_path / name, t, [*rows, kp], [*cols, "kp"]).read_bytes()))
+             for name, rows, kp, cols in (("take_a.csv", first, kp_a, names[:4]), ("take_b.csv", second, kp_b, names[4:]))]
+    answers = [c.post("/diagnose", params={"clearance_um": 350.0}, files=files) for c in (pooled, plain)]
+    assert [a.status_code for a in answers] == [200, 200], answers[0].text
+    assert answers[0].json()["probabilities"] == pytest.approx(answers[1].json()["probabilities"], rel=1e-12)
+    assert answers[0].json()["speed_source"] == "keyphasor"
 
 
 @pytest.mark.parametrize("parts", [5, 40])
