@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.service_util import probe_signals_um
+from tests.service_util import probe_signals_um, two_takes, write_takes_csv
 
 ROOT = Path(__file__).resolve().parent.parent
 ARTIFACTS = ROOT / "test-artifacts" / "web"
@@ -729,19 +729,11 @@ def test_takes_saved_as_separate_files(server, browser, recordings, tmp_path):
     column, chosen together on the page: one recording with a keyphasor per take — the phase across the coupling is
     measured (no `separate_acquisitions`), the orbits of all four bearings drawn; a bearing in both files is refused
     naming it."""
-    data = recordings[0.2].T.astype(float)
-    late = int(round(0.007 * FS_HZ))
-    first, second = data[:4, :-late], data[4:, late:]
-    n = first.shape[1]
-    period = 60.0 / SPEED_RPM
-    t = np.arange(n) / FS_HZ
-    paths = []
-    for name, rows, bearings, shift in (("take_a.csv", first, (1, 2), 0.0), ("take_b.csv", second, (3, 4), late / FS_HZ)):
-        kp = np.where(((t + shift - 0.3 * period) / period) % 1.0 < 0.05, -12.0, -8.0)
-        header = ",".join([*(f"b{b}@{a}" for b in bearings for a in (45, 135)), "kp"])
-        np.savetxt(tmp_path / name, np.column_stack([*rows, kp]), delimiter=",", header=header, comments="",
-                   fmt="%.6f")
-        paths.append(tmp_path / name)
+    data = recordings[0.2]
+    rec = (FS_HZ, [(b, a, data[:, 2 * (b - 1) + j]) for b in (1, 2, 3, 4) for j, a in enumerate((45.0, 135.0))])
+    t, first, second, kp_a, kp_b, _, names = two_takes(rec)            # (two_takes' keyphasor: 1800 r/min)
+    paths = [write_takes_csv(tmp_path / "take_a.csv", t, [*first, kp_a], [*names[:4], "kp"]),
+             write_takes_csv(tmp_path / "take_b.csv", t, [*second, kp_b], [*names[4:], "kp"])]
     _open(browser, server)
     _submit_file(browser, paths, sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
     v = browser.execute_script("return window.rotordiag.state.verdict")

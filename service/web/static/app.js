@@ -582,7 +582,6 @@
       for (const [key, value] of Object.entries(ex.query || {})) q.set(key, String(value));
     }
     if (!files.length) throw new Error("Choose a waveform file (CSV, NPY, HDF5 or UFF), or switch the source to an example or “Paste JSON”.");
-    if (files.length > 4) throw new Error(`${files.length} files chosen: choose one recording, or the files of its takes (at most 4, one per bearing or bearing pair).`);
     for (const [key, id] of Object.entries(numeric)) if (formValue(id) !== null) q.set(key, formValue(id));
     for (const [key, id] of [["units", "units"], ["bearings", "bearings"], ["angles_deg", "angles"],
       ["speed_range_rpm", "speed-range"], ["acquisitions", "acquisitions"], ["keyphasor_channel", "keyphasor-channel"]]) {
