@@ -290,9 +290,9 @@ def design(sim_set: str, n: int, seed: int) -> list[dict]:
 
 
 def simulate_case(c: dict, revs: int = REVS) -> np.ndarray | None:
-    """One case of :func:`design`: its journal displacements in m (``SimulationResult.journal_displacements_m``) over
-    ``revs`` + 3 revolutions after 400 of transient, or None when the run did not finish ``ok``. Raises ``ValueError`` when the simulator refuses
-    the plant."""
+    """One case of :func:`design`: its journal displacements in m (``SimulationResult.journal_displacements_m``)
+    over ``revs`` + 3 revolutions after 400 of transient, or None when the run did not finish ``ok``. Raises
+    ``ValueError`` when the simulator refuses the plant."""
     from rotordiag.simulator import Plant, simulate
 
     res = simulate(Plant.from_dict(c["plant"]), c["speed_rpm"], c["misalignment"], c["unbalance"],
