@@ -264,23 +264,23 @@ def parse_body(kind: str, body: Body, filename: str, query: dict[str, Any],
             raise InputError("a slow-roll file with several take files is not taken: send the takes as one file with "
                              "acquisitions and a keyphasor per take, or use `rotordiag diagnose --takes --slow-roll`")
         res = _parse_takes(body, query)
-        return res.recording, query.get("asset_id") or res.asset_id, query.get("plant") or res.plant
-    if slow_roll is not None and kind != "upload":
-        raise InputError("a slow-roll recording comes as a second file (part 'slow_roll_file') of a multipart "
-                         "upload; with a JSON body give the slow-roll vectors per channel (channels[].slow_roll)")
-    if kind == "json":
-        req = _validated_json(DiagnoseRequest, body)
-        return checked(recording_from_model, req), req.asset_id, req.plant
-    if not body:
-        raise InputError("empty body: send an NPY file (numpy.save) with an (n_channels, n_points) array, "
-                         "or a CSV/HDF5/JSON file as a multipart upload")
-    if kind == "npy" and not body.startswith(b"\x93NUMPY"):
-        raise InputError("body is not an NPY file (it must start with the \\x93NUMPY magic); "
-                         "write it with numpy.save, or send JSON with Content-Type application/json")
-    if ";" in (query.get("bearings") or ""):
-        raise InputError("bearings: ';' separates the take files of a multipart upload with several files in part "
-                         "'file'; this request has one recording: give one bearing per row, comma-separated")
-    res = _read_file(body, filename if kind == "upload" else "body.npy", options_from_query(query))
+    else:
+        if slow_roll is not None and kind != "upload":
+            raise InputError("a slow-roll recording comes as a second file (part 'slow_roll_file') of a multipart "
+                             "upload; with a JSON body give the slow-roll vectors per channel (channels[].slow_roll)")
+        if kind == "json":
+            req = _validated_json(DiagnoseRequest, body)
+            return checked(recording_from_model, req), req.asset_id, req.plant
+        if not body:
+            raise InputError("empty body: send an NPY file (numpy.save) with an (n_channels, n_points) array, "
+                             "or a CSV/HDF5/JSON file as a multipart upload")
+        if kind == "npy" and not body.startswith(b"\x93NUMPY"):
+            raise InputError("body is not an NPY file (it must start with the \\x93NUMPY magic); "
+                             "write it with numpy.save, or send JSON with Content-Type application/json")
+        if ";" in (query.get("bearings") or ""):
+            raise InputError("bearings: ';' separates the take files of a multipart upload with several files in "
+                             "part 'file'; this request has one recording: give one bearing per row, comma-separated")
+        res = _read_file(body, filename if kind == "upload" else "body.npy", options_from_query(query))
     asset_id = query.get("asset_id") or res.asset_id
     plant = query.get("plant") or res.plant
     recording = res.recording
