@@ -120,16 +120,45 @@ def test_two_lobe_force_against_reynolds_quadrature():
 
 
 # ----------------------------------------------------------------- tilting pad
-def test_tilting_pad_static_force_against_moment_balance_about_the_pivot():
-    b = ALL[2]
+def _check_tilting_pad_against_reference(b, points, n_scan):
     R = D / 2
     cp = C / (1 - b.preload)
     arc = math.radians(b.pad_arc_deg)
     piv = b.pivot_angles_rad()
     arcs = [(t - b.pivot_offset * arc, t + (1 - b.pivot_offset) * arc) for t in piv]
-    for x, y in [(0.0, -0.3 * C), (0.1 * C, -0.5 * C), (-0.2 * C, 0.1 * C)]:
-        want = ref.tilting_pad_static_force(R, L, MU, C, cp, piv, arcs, x, y, W_RAD_S)
+    for x, y in points:
+        want = ref.tilting_pad_static_force(R, L, MU, C, cp, piv, arcs, x, y, W_RAD_S, n_scan=n_scan)
         np.testing.assert_allclose(b.force_n(x, y, 0.0, 0.0, W_RAD_S), want, rtol=1e-7, atol=1e-7 * np.abs(want).max())
+
+
+def test_tilting_pad_static_force_against_moment_balance_about_the_pivot():
+    _check_tilting_pad_against_reference(ALL[2], [(0.1 * C, -0.5 * C)], n_scan=40)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("b", ALL[2:4], ids=["4pad_lbp", "5pad_lop_offset"])
+def test_tilting_pad_static_force_against_moment_balance_many_positions(b):
+    _check_tilting_pad_against_reference(b, [(0.0, -0.3 * C), (0.1 * C, -0.5 * C), (-0.2 * C, 0.1 * C),
+                                             (0.3 * C, 0.2 * C)], n_scan=400)
+
+
+def test_tilting_pad_reduced_coefficients():
+    """Lund's pad assembly: each pad's reduced impedance is radial (no stiffness or damping along its
+    tangent), so the sum is symmetric, and with the load between symmetric pads it has no
+    cross-coupling; at ω → 0 it is the stiffness of the compiled (quasi-static) force."""
+    b = ALL[2]
+    r = b.equilibrium(0.0, -ocvirk_load(0.5), W_RAD_S)
+    for Kp, Cp, t in b.pad_coefficients(*r, W_RAD_S):
+        Zp = Kp + 1j * W_RAD_S * Cp
+        Zr = Zp - np.outer(Zp @ t, t @ Zp) / (t @ Zp @ t)
+        assert np.abs(Zr @ t).max() < 1e-9 * np.abs(Zp).max() and np.abs(t @ Zr).max() < 1e-9 * np.abs(Zp).max()
+    K, Cm = b.reduced_coefficients(*r, W_RAD_S)
+    assert abs(K[0, 1]) < 1e-8 * K[1, 1] and abs(K[1, 0]) < 1e-8 * K[1, 1]
+    assert abs(Cm[0, 1]) < 1e-8 * Cm[1, 1] and abs(Cm[1, 0]) < 1e-8 * Cm[1, 1]
+    assert K[0, 0] > 0 and K[1, 1] > 0 and Cm[0, 0] > 0 and Cm[1, 1] > 0
+    K0, _ = b.reduced_coefficients(*r, W_RAD_S, whirl_rad_s=1e-7 * W_RAD_S)
+    Kq, _ = b.coefficients(*r, W_RAD_S)
+    np.testing.assert_allclose(K0, Kq, rtol=1e-6, atol=1e-6 * Kq[1, 1])
 
 
 @pytest.mark.parametrize("b", ALL[2:4], ids=["4pad_lbp", "5pad_lop"])

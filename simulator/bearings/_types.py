@@ -317,6 +317,51 @@ class TiltingPadBearing(_Bearing):
     def _force(self, params, x, y, vx, vy, w):  # type: ignore[no-untyped-def]
         return F.tilting_pad_force(params, x, y, vx, vy, w)
 
+    def pad_coefficients(self, x_m: float, y_m: float, speed_rad_s: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """Per pad, at the journal at rest at (x, y): the pad's film K_p, C_p (2×2, the pad held at
+        its equilibrium tilt; central differences as :meth:`coefficients`) and its tangent t."""
+        _, p = self.kernel()
+        x, y, w = float(x_m), float(y_m), float(speed_rad_s)
+        hr = FD_STEP * self.clearance_m
+        hv = FD_STEP * self.clearance_m * max(abs(w), 1.0)
+        out = []
+        for k in range(self.pads):
+            fx, fy, u = F.pad_force(p, k, x, y, 0.0, 0.0, w)
+            if not (math.isfinite(fx) and math.isfinite(fy)):
+                raise ValueError(f"the journal at ({x_m:.4g}, {y_m:.4g}) m is outside the film of pad {k}")
+            Kp = np.empty((2, 2))
+            Cp = np.empty((2, 2))
+            for j in range(2):
+                e = np.eye(2)[j]
+                fp = np.array(F.pad_fixed_force(p, k, u, x + hr * e[0], y + hr * e[1], 0.0, 0.0, w))
+                fm = np.array(F.pad_fixed_force(p, k, u, x - hr * e[0], y - hr * e[1], 0.0, 0.0, w))
+                Kp[:, j] = -(fp - fm) / (2.0 * hr)
+                fp = np.array(F.pad_fixed_force(p, k, u, x, y, hv * e[0], hv * e[1], w))
+                fm = np.array(F.pad_fixed_force(p, k, u, x, y, -hv * e[0], -hv * e[1], w))
+                Cp[:, j] = -(fp - fm) / (2.0 * hv)
+            o = F.HEADER + F.PAD_STRIDE * k
+            out.append((Kp, Cp, p[o + 5:o + 7].copy()))
+        return out
+
+    def reduced_coefficients(self, x_m: float, y_m: float, speed_rad_s: float,
+                             whirl_rad_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """K and C reduced at the whirl frequency ω (synchronous, ω = Ω, by default) by Lund's pad
+        assembly method: each massless pad moves with the film (its tilt a degree of freedom), so
+        with Z_p = K_p + iωC_p its reduced impedance is Z_p − Z_p t tᵀ Z_p / (tᵀ Z_p t), a purely
+        radial term; K = Re ΣZ, C = Im ΣZ / ω. These are the coefficients tilting-pad tables quote.
+        :meth:`coefficients` linearises the compiled force instead (pad at rest in tilt): its K is
+        this K at ω → 0, its damping differs (see docs/bearings.md)."""
+        w = float(speed_rad_s)
+        om = w if whirl_rad_s is None else float(whirl_rad_s)
+        if om <= 0.0:
+            raise ValueError(f"whirl_rad_s must be > 0 (got {om!r}); at ω → 0 use coefficients()")
+        Z = np.zeros((2, 2), dtype=complex)
+        for Kp, Cp, t in self.pad_coefficients(x_m, y_m, w):
+            Zp = Kp + 1j * om * Cp
+            den = t @ Zp @ t
+            Z += Zp - np.outer(Zp @ t, t @ Zp) / den if den != 0 else Zp
+        return Z.real.copy(), Z.imag / om
+
 
 def _matrices(value: Any, name: str, n: int | None) -> tuple:
     arr = np.asarray(value, dtype=float)
