@@ -46,6 +46,10 @@ N_GAUSS = 16
 _GX, _GW = np.polynomial.legendre.leggauss(N_GAUSS)
 GAUSS_X = np.ascontiguousarray(_GX)
 GAUSS_W = np.ascontiguousarray(_GW)
+N_HALF = N_GAUSS // 2
+#: the positive nodes and their weights (the rule is symmetric)
+GAUSS_XP = np.ascontiguousarray(_GX[N_HALF:])
+GAUSS_WP = np.ascontiguousarray(_GW[N_HALF:])
 #: Tilting-pad moment balance: Newton stops when the step in u (pad-centre shift / c_f) is below this.
 #: Quadrature pieces are at most PIECE_FACTOR·acosh(1/ε) long (ε the journal eccentricity in the film).
 PIECE_FACTOR = 1.5
@@ -53,6 +57,8 @@ PAD_TOL = 1e-14
 PAD_MAX_ITER = 80
 #: Tilting pads: the first trial puts the journal this fraction of the film's half-width towards the trailing edge.
 PAD_GUESS = 0.35
+#: A Newton step in u below this is applied to the force linearly instead of by a new film evaluation.
+PAD_LAST_STEP = 1e-7
 
 
 @njit(**NUMBA_OPTIONS)
@@ -85,24 +91,30 @@ def _pieces(lo, hi, X, Y, deriv, dXu, dYu, dau, dbu, a, b):
     s1 = 0.0
     s2 = 0.0
     s3 = 0.0
+    hw = 0.5 * w
     for k in range(m):
         c0 = lo + (k + 0.5) * w
-        for j in range(N_GAUSS):
-            th = c0 + 0.5 * w * GAUSS_X[j]
-            ct = math.cos(th)
-            st = math.sin(th)
-            H = 1.0 - X * ct - Y * st
-            g = a * st - b * ct
-            ih3 = 1.0 / (H * H * H)
-            q = 0.5 * w * GAUSS_W[j] * 2.0
-            s0 += q * g * ct * ih3
-            s1 += q * g * st * ih3
-            if deriv:
-                dH = -(dXu * ct + dYu * st)
-                dg = dau * st - dbu * ct
-                d = (dg - 3.0 * g * dH / H) * ih3
-                s2 += q * d * ct
-                s3 += q * d * st
+        cc = math.cos(c0)
+        sc = math.sin(c0)
+        for j in range(N_HALF):
+            # the node pair c0 ± hw·x_j shares cos(hw x_j), sin(hw x_j)
+            ch = math.cos(hw * GAUSS_XP[j])
+            sh = math.sin(hw * GAUSS_XP[j])
+            q = hw * GAUSS_WP[j] * 2.0
+            for sgn in (1.0, -1.0):
+                ct = cc * ch - sgn * sc * sh
+                st = sc * ch + sgn * cc * sh
+                H = 1.0 - X * ct - Y * st
+                g = a * st - b * ct
+                ih3 = 1.0 / (H * H * H)
+                s0 += q * g * ct * ih3
+                s1 += q * g * st * ih3
+                if deriv:
+                    dH = -(dXu * ct + dYu * st)
+                    dg = dau * st - dbu * ct
+                    d = (dg - 3.0 * g * dH / H) * ih3
+                    s2 += q * d * ct
+                    s3 += q * d * st
     return s0, s1, s2, s3
 
 
@@ -161,12 +173,12 @@ def lobed_force(p, x, y, vx, vy, omega):
 @njit(**NUMBA_OPTIONS)
 def _pad_ft(X0, Y0, Xd, Yd, omega, u, th1, th2, tx, ty):
     """Pad film force (non-dimensional) with the pad centre shifted by u, its component along t and
-    that component's u-derivative."""
+    that component's u-derivative, and the force's u-derivative."""
     X = X0 - u * tx
     Y = Y0 - u * ty
     gx, gy, dgx, dgy = arc_force(X, Y, omega * X - 2.0 * Yd, omega * Y + 2.0 * Xd, th1, th2, True,
                                  -tx, -ty, -omega * tx, -omega * ty)
-    return gx, gy, gx * tx + gy * ty, dgx * tx + dgy * ty
+    return gx, gy, gx * tx + gy * ty, dgx * tx + dgy * ty, dgx, dgy
 
 
 @njit(**NUMBA_OPTIONS)
@@ -206,7 +218,7 @@ def pad_force(p, k, x, y, vx, vy, omega):
     # start with the journal displaced PAD_GUESS towards the trailing edge (the loaded roots of
     # short-bearing pads lie at 0.2–0.45 c_f for pivot offsets 0.5–0.6 and all loads)
     u = u0 - PAD_GUESS * half if dry_is_high else u0 + PAD_GUESS * half
-    gx, gy, ft, dft = _pad_ft(X0, Y0, Xd, Yd, omega, u, th1, th2, tx, ty)
+    gx, gy, ft, dft, dgx, dgy = _pad_ft(X0, Y0, Xd, Yd, omega, u, th1, th2, tx, ty)
     lo = umin
     hi = umax
     have_lo = False
@@ -241,8 +253,14 @@ def pad_force(p, k, x, y, vx, vy, omega):
                 d *= 2.0
         if abs(un - u) <= PAD_TOL * (1.0 + abs(u)):
             break
+        if abs(un - u) <= PAD_LAST_STEP and lo <= un <= hi and dft > 0.0:
+            # the last Newton step is tiny: move the force along it (error ~ step², at round-off)
+            gx += dgx * (un - u)
+            gy += dgy * (un - u)
+            u = un
+            break
         u = un
-        gx, gy, ft, dft = _pad_ft(X0, Y0, Xd, Yd, omega, u, th1, th2, tx, ty)
+        gx, gy, ft, dft, dgx, dgy = _pad_ft(X0, Y0, Xd, Yd, omega, u, th1, th2, tx, ty)
     return s * gx, s * gy, u
 
 
@@ -254,7 +272,7 @@ def pad_fixed_force(p, k, u, x, y, vx, vy, omega):
     cf = p[o + 2]
     X0 = (x - p[o]) / cf
     Y0 = (y - p[o + 1]) / cf
-    gx, gy, _, _ = _pad_ft(X0, Y0, vx / cf, vy / cf, omega, u, p[o + 3], p[o + 4], p[o + 5], p[o + 6])
+    gx, gy, _, _, _, _ = _pad_ft(X0, Y0, vx / cf, vy / cf, omega, u, p[o + 3], p[o + 4], p[o + 5], p[o + 6])
     s = p[3] * p[0] * p[1] ** 3 / (4.0 * cf * cf)
     return s * gx, s * gy
 
