@@ -275,3 +275,46 @@ def test_equilibrium_refuses_loads_no_film_carries():
         PLAIN.equilibrium(0.0, -1e4, 0.0)
     with pytest.raises(ValueError, match="cannot carry"):
         PLAIN.equilibrium(0.0, -1e3 * ocvirk_load(0.9), W_RAD_S)
+
+
+def test_pad_states_reproduce_the_synchronous_pad_assembly_coefficients():
+    """Massless pads as states, integrated (RK4, 400 steps a period) under a small prescribed
+    elliptical synchronous orbit: the force's first harmonic is −(K + iΩC)·r with Lund's reduced K, C
+    (an independent check of the reduction), not the quasi-static coefficients."""
+    b = ALL[2]
+    x0, y0 = b.equilibrium(0.0, -1e5, W_RAD_S)
+    u = b.pad_tilts(x0, y0, W_RAD_S)
+    fx0, fy0, du = b.force_with_pad_states(x0, y0, 0.0, 0.0, W_RAD_S, u)
+    assert (fx0, fy0) == pytest.approx(b.force_n(x0, y0, 0.0, 0.0, W_RAD_S), rel=1e-12, abs=1e-6)
+    assert np.abs(du).max() < 1e-9 * W_RAD_S                       # at rest: the pads stay
+    amp, om = 1e-3 * C, W_RAD_S
+
+    def rates(t, u):
+        c, s = math.cos(om * t), math.sin(om * t)
+        fx, fy, du = b.force_with_pad_states(x0 + amp * c, y0 + 0.5 * amp * s, -amp * om * s, 0.5 * amp * om * c,
+                                             W_RAD_S, u)
+        return du, fx, fy
+
+    n = 400
+    h = 2 * math.pi / om / n
+    t = 0.0
+    rec = []
+    for cycle in range(8):
+        for _ in range(n):
+            k1, fx, fy = rates(t, u)
+            if cycle == 7:
+                rec.append((t, fx - fx0, fy - fy0))
+            k2 = rates(t + h / 2, u + h / 2 * k1)[0]
+            k3 = rates(t + h / 2, u + h / 2 * k2)[0]
+            k4 = rates(t + h, u + h * k3)[0]
+            u = u + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            t += h
+    rec = np.array(rec)
+    e = np.exp(-1j * om * rec[:, 0])
+    first = 2 / n * np.array([np.sum(rec[:, 1] * e), np.sum(rec[:, 2] * e)])
+    r = np.array([amp, -0.5j * amp])
+    K, Cm = b.reduced_coefficients(x0, y0, W_RAD_S)
+    want = -(K + 1j * om * Cm) @ r
+    np.testing.assert_allclose(first, want, rtol=1e-4, atol=1e-4 * np.abs(want).max())
+    Kq, Cq = b.coefficients(x0, y0, W_RAD_S)
+    assert np.abs(first - (-(Kq + 1j * om * Cq) @ r)).max() > 0.1 * np.abs(want).max()

@@ -278,6 +278,96 @@ def pad_fixed_force(p, k, u, x, y, vx, vy, omega):
 
 
 @njit(**NUMBA_OPTIONS)
+def pad_rate(p, k, u, x, y, vx, vy, omega):
+    """Force (N) of pad ``k`` whose tilt is a state (centre shift u, in c_f) and the tilt rate du/dt
+    (1/s) that keeps the massless pad in moment equilibrium, F·t = 0 with the pad's own motion in the
+    squeeze term: the pad-dynamics alternative to :func:`pad_force` for trains that carry pad states.
+
+    F_t rises with du/dt (the pad's squeeze film damps it); the rate is found by Newton's method
+    with the analytic derivative inside a bracket grown from 0. A pad whose film runs dry on one side
+    of the bracket is taken to lift off at the rate where it just runs dry; a dry pad keeps its tilt.
+    """
+    o = HEADER + PAD_STRIDE * k
+    cf = p[o + 2]
+    th1 = p[o + 3]
+    th2 = p[o + 4]
+    tx = p[o + 5]
+    ty = p[o + 6]
+    X = (x - p[o]) / cf - u * tx
+    Y = (y - p[o + 1]) / cf - u * ty
+    if X * X + Y * Y >= 1.0:
+        return math.nan, math.nan, math.nan
+    Xd = vx / cf
+    Yd = vy / cf
+    s = p[3] * p[0] * p[1] ** 3 / (4.0 * cf * cf)
+    # relative velocity (Xd − r tx, Yd − r ty): a = ΩX − 2(Yd − r ty), b = ΩY + 2(Xd − r tx)
+    r = 0.0
+    gx, gy, dgx, dgy = arc_force(X, Y, omega * X - 2.0 * Yd, omega * Y + 2.0 * Xd, th1, th2, True,
+                                 0.0, 0.0, 2.0 * ty, -2.0 * tx)
+    if not math.isfinite(gx):
+        return math.nan, math.nan, math.nan
+    if gx == 0.0 and gy == 0.0:
+        return 0.0, 0.0, 0.0
+    scale = abs(omega) + 2.0 * math.sqrt(Xd * Xd + Yd * Yd) + 1e-300
+    lo = -math.inf
+    hi = math.inf
+    d = 0.05 * scale
+    dry_high = 0                       # +1: the dry side is at high rates, −1: at low rates
+    for _ in range(PAD_MAX_ITER):
+        ft = gx * tx + gy * ty
+        dft = dgx * tx + dgy * ty
+        dry = gx == 0.0 and gy == 0.0
+        if dry:
+            if dry_high > 0:
+                hi = r
+            else:
+                lo = r
+        elif ft < 0.0:
+            lo = r
+        else:
+            hi = r
+        if ft == 0.0 and not dry:
+            break
+        rn = math.nan
+        if dft > 0.0 and not dry:
+            rn = r - ft / dft
+            if not (lo <= rn <= hi):
+                rn = math.nan
+        if not math.isfinite(rn):
+            if math.isfinite(lo) and math.isfinite(hi):
+                rn = 0.5 * (lo + hi)
+            elif math.isfinite(lo):
+                rn = r + d
+                d *= 2.0
+                dry_high = 1
+            else:
+                rn = r - d
+                d *= 2.0
+                dry_high = -1
+        if abs(rn - r) <= PAD_TOL * (scale + abs(r)):
+            break
+        r = rn
+        gx, gy, dgx, dgy = arc_force(X, Y, omega * X - 2.0 * (Yd - r * ty), omega * Y + 2.0 * (Xd - r * tx),
+                                     th1, th2, True, 0.0, 0.0, 2.0 * ty, -2.0 * tx)
+    return s * gx, s * gy, r
+
+
+@njit(**NUMBA_OPTIONS)
+def tilting_pad_force_states(p, x, y, vx, vy, omega, u, du_dt):
+    """Force (N) of a tilting-pad bearing whose pad tilts are states ``u`` (centre shifts in c_f);
+    writes each pad's tilt rate into ``du_dt`` (see :func:`pad_rate`)."""
+    n = int(p[4])
+    fx = 0.0
+    fy = 0.0
+    for k in range(n):
+        gx, gy, r = pad_rate(p, k, u[k], x, y, vx, vy, omega)
+        du_dt[k] = r
+        fx += gx
+        fy += gy
+    return fx, fy
+
+
+@njit(**NUMBA_OPTIONS)
 def tilting_pad_force(p, x, y, vx, vy, omega):
     """Force (N) of a tilting-pad bearing: each pad at its own moment equilibrium, summed."""
     n = int(p[4])

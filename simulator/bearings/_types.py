@@ -317,6 +317,28 @@ class TiltingPadBearing(_Bearing):
     def _force(self, params, x, y, vx, vy, w):  # type: ignore[no-untyped-def]
         return F.tilting_pad_force(params, x, y, vx, vy, w)
 
+    def pad_tilts(self, x_m: float, y_m: float, speed_rad_s: float) -> np.ndarray:
+        """Each pad's equilibrium tilt state u (centre-of-curvature shift along its pivot tangent, in
+        units of the pad clearance) with the journal at rest at (x, y): the initial pad states of
+        :meth:`force_with_pad_states`."""
+        _, p = self.kernel()
+        return np.array([F.pad_force(p, k, float(x_m), float(y_m), 0.0, 0.0, float(speed_rad_s))[2]
+                         for k in range(self.pads)])
+
+    def force_with_pad_states(self, x_m: float, y_m: float, vx_m_s: float, vy_m_s: float, speed_rad_s: float,
+                              pad_tilts: np.ndarray) -> tuple[float, float, np.ndarray]:
+        """Force (N) with the pad tilts as states (massless pads, each in moment equilibrium with its
+        own squeeze film) and their rates du/dt (1/s): the pad dynamics that :meth:`force_n` freezes.
+        Compiled: ``_film.tilting_pad_force_states`` (exported as ``tilting_pad_force_states``)."""
+        _, p = self.kernel()
+        u = np.ascontiguousarray(pad_tilts, dtype=float)
+        if u.shape != (self.pads,):
+            raise ValueError(f"pad_tilts must hold {self.pads} values, got shape {u.shape}")
+        du = np.zeros(self.pads)
+        fx, fy = F.tilting_pad_force_states(p, float(x_m), float(y_m), float(vx_m_s), float(vy_m_s),
+                                            float(speed_rad_s), u, du)
+        return float(fx), float(fy), du
+
     def pad_coefficients(self, x_m: float, y_m: float, speed_rad_s: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """Per pad, at the journal at rest at (x, y): the pad's film K_p, C_p (2×2, the pad held at
         its equilibrium tilt; central differences as :meth:`coefficients`) and its tangent t."""
