@@ -318,3 +318,45 @@ def test_pad_states_reproduce_the_synchronous_pad_assembly_coefficients():
     np.testing.assert_allclose(first, want, rtol=1e-4, atol=1e-4 * np.abs(want).max())
     Kq, Cq = b.coefficients(x0, y0, W_RAD_S)
     assert np.abs(first - (-(Kq + 1j * om * Cq) @ r)).max() > 0.1 * np.abs(want).max()
+
+
+def test_equilibrium_is_bounded_by_each_film_not_by_the_assembled_clearance():
+    """A two-lobe bore's horizontal clearance (m 0.5: √3 c to the lobe circles) and a load-between-pads
+    bearing's vertical one exceed c: heavy loads put the journal there, carried by the film; the
+    journal at rest with no load sits at the centre."""
+    ell = ALL[1]
+    x, y = ell.equilibrium(-1e6, 0.0, W_RAD_S)
+    assert x < -1.0 * C and ell.film_eccentricity(x, y) < 0.99
+    np.testing.assert_allclose(ell.force_n(x, y, 0.0, 0.0, W_RAD_S), (1e6, 0.0), atol=1e-6 * 1e6)
+    tp = ALL[2]
+    x, y = tp.equilibrium(0.0, -1e7, W_RAD_S)
+    assert y < -1.0 * C and tp.film_eccentricity(x, y) < 0.99
+    np.testing.assert_allclose(tp.force_n(x, y, 0.0, 0.0, W_RAD_S), (0.0, 1e7), atol=1e-6 * 1e7)
+    for b in ALL[:4]:
+        assert np.hypot(*b.equilibrium(0.0, 0.0, W_RAD_S)) < 1e-9 * C
+    with pytest.raises(ValueError, match="cannot carry"):
+        ell.equilibrium(-1e9, 0.0, W_RAD_S)
+
+
+def test_a_toml_shaft_line_table_names_a_bearing():
+    import tomllib
+    doc = tomllib.loads("""
+[[bearing]]
+type = "tilting_pad"
+diameter_m = 0.45
+length_m = 0.35
+clearance_m = 0.35e-3
+viscosity_pa_s = 0.018
+pads = 5
+load = "on_pad"
+[[bearing]]
+type = "two_lobe"
+diameter_m = 0.25
+length_m = 0.15
+clearance_m = 0.2e-3
+viscosity_pa_s = 0.018
+preload = 0.4
+""")
+    a, b = (bearing_from_dict(t) for t in doc["bearing"])
+    assert isinstance(a, TiltingPadBearing) and a.pads == 5 and a.load == "on_pad" and a.pad_arc_deg == 57.6
+    assert isinstance(b, EllipticalBearing) and b.preload == 0.4 and b.to_dict()["type"] == "elliptical"

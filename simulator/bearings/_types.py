@@ -121,10 +121,10 @@ class _Bearing:
                 r = self._newton(r, lam * W, w)
                 if r is None:
                     break
-        if r is None or np.hypot(*r) >= EQ_MAX_ECCENTRICITY * self.clearance_m:
+        if r is None or self.film_eccentricity(r[0], r[1]) >= EQ_MAX_ECCENTRICITY:
             raise ValueError(f"the {self.TYPE} bearing cannot carry a load of {np.hypot(*W):.4g} N at "
-                             f"{w:.4g} rad/s: the journal reaches eccentricity ≥ {EQ_MAX_ECCENTRICITY} "
-                             "(raise the speed, the length, the viscosity, or lower the load)")
+                             f"{w:.4g} rad/s: the journal reaches eccentricity ≥ {EQ_MAX_ECCENTRICITY} of a film's "
+                             "clearance (raise the speed, the length, the viscosity, or lower the load)")
         return float(r[0]), float(r[1])
 
     def _newton(self, r0: np.ndarray, W: np.ndarray, w: float) -> np.ndarray | None:
@@ -146,7 +146,7 @@ class _Bearing:
             ok = False
             for _h in range(40):
                 rn = r + step
-                if np.hypot(*rn) < c:
+                if self.film_eccentricity(rn[0], rn[1]) < 1.0:
                     rn_res = np.array(self._force(p, rn[0], rn[1], 0.0, 0.0, w)) + W
                     if np.all(np.isfinite(rn_res)) and np.hypot(*rn_res) < np.hypot(*res):
                         ok = True
@@ -158,6 +158,11 @@ class _Bearing:
             if np.hypot(*step) <= 1e-13 * c:
                 return r
         return r if np.hypot(*res) <= 1e-8 * scale else None
+
+    def film_eccentricity(self, x_m: float, y_m: float) -> float:
+        """The journal's largest eccentricity in any of its films, as a fraction of that film's
+        clearance (1: touching): |r|/c for the plain bearing."""
+        return float(math.hypot(x_m, y_m) / self.clearance_m)
 
     # -- TOML / JSON
     def to_dict(self) -> dict[str, Any]:
@@ -251,10 +256,16 @@ class EllipticalBearing(_Bearing):
     def _force(self, params, x, y, vx, vy, w):  # type: ignore[no-untyped-def]
         return F.lobed_force(params, x, y, vx, vy, w)
 
+    def film_eccentricity(self, x_m: float, y_m: float) -> float:
+        """Largest |r − r_lobe|/c_l over the lobes (each lobe's circle of curvature bounds its film)."""
+        _, p = self.kernel()
+        return max(math.hypot(x_m - p[o], y_m - p[o + 1]) / p[o + 2] for o in (F.HEADER, F.HEADER + F.LOBE_STRIDE))
+
 
 @dataclasses.dataclass(frozen=True)
 class TiltingPadBearing(_Bearing):
-    """Tilting-pad bearing, pad by pad: ``pads`` pads of ``pad_arc_deg``, pivoted at the fraction
+    """Tilting-pad bearing, pad by pad: ``pads`` pads of ``pad_arc_deg`` (default: 80 % of the pitch
+    360°/pads), pivoted at the fraction
     ``pivot_offset`` of the arc from the leading edge (for Ω > 0), pad clearance c_p = c/(1 − m)
     (``preload`` m), the load (−y) on a pad or between two pads.
 
@@ -270,7 +281,7 @@ class TiltingPadBearing(_Bearing):
     clearance_m: float
     viscosity_pa_s: float
     pads: int = 4
-    pad_arc_deg: float = 80.0
+    pad_arc_deg: float | None = None
     pivot_offset: float = 0.5
     preload: float = 0.0
     load: str = "between_pads"
@@ -281,7 +292,7 @@ class TiltingPadBearing(_Bearing):
         self._check_geometry()
         if isinstance(self.pads, bool) or not isinstance(self.pads, int | np.integer) or not 2 <= self.pads <= 12:
             raise ValueError(f"pads must be an integer from 2 to 12, got {self.pads!r}")
-        a = float(self.pad_arc_deg)
+        a = 0.8 * 360.0 / self.pads if self.pad_arc_deg is None else float(self.pad_arc_deg)
         if not (0.0 < a and self.pads * a < 360.0):
             raise ValueError(f"pad_arc_deg must be > 0 and leave room between the {self.pads} pads "
                              f"(pads × arc < 360°), got {self.pad_arc_deg!r}")
@@ -306,7 +317,7 @@ class TiltingPadBearing(_Bearing):
 
     def kernel(self) -> tuple[int, np.ndarray]:
         cp = self.clearance_m / (1.0 - self.preload)
-        arc = math.radians(self.pad_arc_deg)
+        arc = math.radians(float(self.pad_arc_deg or 0.0))
         p = [0.5 * self.diameter_m, self.length_m, self.clearance_m, self.viscosity_pa_s, float(self.pads)]
         for th in self.pivot_angles_rad():
             d = cp - self.clearance_m
@@ -316,6 +327,17 @@ class TiltingPadBearing(_Bearing):
 
     def _force(self, params, x, y, vx, vy, w):  # type: ignore[no-untyped-def]
         return F.tilting_pad_force(params, x, y, vx, vy, w)
+
+    def film_eccentricity(self, x_m: float, y_m: float) -> float:
+        """Largest approach to a pad along its pivot line, (r − r_pad)·e_pivot / c_p (pads tilt
+        tangentially, so this is what bounds each pad's film)."""
+        _, p = self.kernel()
+        out = 0.0
+        for k in range(self.pads):
+            o = F.HEADER + F.PAD_STRIDE * k
+            tx, ty = p[o + 5], p[o + 6]
+            out = max(out, ((x_m - p[o]) * ty - (y_m - p[o + 1]) * tx) / p[o + 2])
+        return float(out)
 
     def pad_tilts(self, x_m: float, y_m: float, speed_rad_s: float) -> np.ndarray:
         """Each pad's equilibrium tilt state u (centre-of-curvature shift along its pivot tangent, in
