@@ -360,3 +360,16 @@ preload = 0.4
     a, b = (bearing_from_dict(t) for t in doc["bearing"])
     assert isinstance(a, TiltingPadBearing) and a.pads == 5 and a.load == "on_pad" and a.pad_arc_deg == 57.6
     assert isinstance(b, EllipticalBearing) and b.preload == 0.4 and b.to_dict()["type"] == "elliptical"
+
+
+@pytest.mark.parametrize("b", ALL[:4] + [TiltingPadBearing(D, L, C, MU, pads=4, preload=0.0, load="on_pad")],
+                         ids=lambda b: b.TYPE)
+def test_equilibrium_converges_for_loads_in_any_direction_and_both_rotations(b):
+    rng = np.random.default_rng(2024)
+    for _ in range(25):
+        mag, ang = 10 ** rng.uniform(3, 6.5), rng.uniform(0, 2 * math.pi)
+        speed = W_RAD_S * rng.choice([1.0, -1.0]) * rng.uniform(0.2, 1.2)
+        load = (mag * math.cos(ang), mag * math.sin(ang))
+        r = b.equilibrium(*load, speed)
+        f = b.force_n(*r, 0.0, 0.0, speed)
+        assert math.hypot(f[0] + load[0], f[1] + load[1]) < 1e-8 * mag
