@@ -373,3 +373,19 @@ def test_equilibrium_converges_for_loads_in_any_direction_and_both_rotations(b):
         r = b.equilibrium(*load, speed)
         f = b.force_n(*r, 0.0, 0.0, speed)
         assert math.hypot(f[0] + load[0], f[1] + load[1]) < 1e-8 * mag
+
+
+def test_pad_states_are_continuous_where_a_quasi_static_pad_loses_its_loaded_tilt():
+    """5-pad LOP (m 0.2, offset 0.6) near 680 kN: the two upper pads' loaded quasi-static tilts vanish
+    at a fold between y = −0.4682 c and −0.4687 c and the compiled force jumps; with the tilts as
+    states the force is continuous there (docs/bearings.md)."""
+    b = TiltingPadBearing(D, L, C, MU, pads=5, pad_arc_deg=60.0, pivot_offset=0.6, preload=0.2, load="on_pad")
+    s = MU * (W_RAD_S / (2 * math.pi)) * L * D * (D / 2 / C) ** 2 / np.geomspace(0.03, 3.0, 36)[8]
+    x, y = b.equilibrium(0.0, -s, W_RAD_S)
+    u = b.pad_tilts(x, y + 5e-4 * C, W_RAD_S)
+    lo, hi = y - 1e-3 * C, y + 1e-3 * C
+    jump_quasi = b.force_n(x, lo, 0.0, 0.0, W_RAD_S)[1] - b.force_n(x, hi, 0.0, 0.0, W_RAD_S)[1]
+    jump_states = (b.force_with_pad_states(x, lo, 0.0, 0.0, W_RAD_S, u)[1]
+                   - b.force_with_pad_states(x, hi, 0.0, 0.0, W_RAD_S, u)[1])
+    assert jump_quasi > 0.04 * s              # ≈ 39 kN across 0.002 c
+    assert 0.0 < jump_states < 0.01 * s       # the film's own stiffness: ≈ 6 kN
