@@ -389,3 +389,17 @@ def test_pad_states_are_continuous_where_a_quasi_static_pad_loses_its_loaded_til
                    - b.force_with_pad_states(x, hi, 0.0, 0.0, W_RAD_S, u)[1])
     assert jump_quasi > 0.04 * s              # ≈ 39 kN across 0.002 c
     assert 0.0 < jump_states < 0.01 * s       # the film's own stiffness: ≈ 6 kN
+
+
+@pytest.mark.parametrize("b", ALL, ids=lambda b: b.TYPE)
+def test_non_finite_states_give_nan_not_a_force(b):
+    """A trial integrator stage with a non-finite state must be rejected, not given a force."""
+    code, p = b.kernel()
+    for args in [(math.nan, 0.0, 0.0, 0.0), (0.0, 0.0, math.nan, 0.0), (0.0, -1e-4, 0.0, math.inf)]:
+        assert not np.all(np.isfinite(bearing_force(code, p, *args, W_RAD_S)))
+    if not isinstance(b, LinearBearing):
+        assert all(math.isnan(v) for v in b.force_n(0.0, -1.01 * C / (1 - getattr(b, "preload", 0.0)) - C, 0.0, 0.0,
+                                                    W_RAD_S))
+    if isinstance(b, TiltingPadBearing):
+        u = b.pad_tilts(0.0, -0.1 * C, W_RAD_S)
+        assert not np.all(np.isfinite(b.force_with_pad_states(math.nan, 0.0, 0.0, 0.0, W_RAD_S, u)[:2]))
