@@ -403,3 +403,24 @@ def test_non_finite_states_give_nan_not_a_force(b):
     if isinstance(b, TiltingPadBearing):
         u = b.pad_tilts(0.0, -0.1 * C, W_RAD_S)
         assert not np.all(np.isfinite(b.force_with_pad_states(math.nan, 0.0, 0.0, 0.0, W_RAD_S, u)[:2]))
+
+
+def test_pad_states_mirror_under_reverse_rotation():
+    b = TiltingPadBearing(D, L, C, MU, pads=5, pivot_offset=0.5, preload=0.2, load="on_pad")
+    x, y = b.equilibrium(0.0, -ocvirk_load(0.4), W_RAD_S)
+    u = b.pad_tilts(x, y, W_RAD_S)
+    ur = b.pad_tilts(-x, y, -W_RAD_S)
+    mirror = [0, 4, 3, 2, 1]                          # pad k at −90° + 72°k mirrors to pad −k
+    np.testing.assert_allclose(ur[mirror], -u, rtol=1e-9, atol=1e-12)
+    f = b.force_with_pad_states(x + 0.01 * C, y, 0.02 * C * W_RAD_S, -0.01 * C * W_RAD_S, W_RAD_S, u)
+    g = b.force_with_pad_states(-x - 0.01 * C, y, -0.02 * C * W_RAD_S, -0.01 * C * W_RAD_S, -W_RAD_S, ur)
+    np.testing.assert_allclose((-g[0], g[1]), f[:2], rtol=1e-9)
+    np.testing.assert_allclose(g[2][mirror], -f[2], rtol=1e-8, atol=1e-9 * np.abs(f[2]).max())
+
+
+def test_fixed_geometry_films_reduce_to_their_coefficients():
+    for b in ALL[:2] + ALL[4:]:
+        r = b.equilibrium(0.0, -ocvirk_load(0.4), W_RAD_S)
+        for K1, K2 in zip(b.reduced_coefficients(*r, W_RAD_S, whirl_rad_s=0.45 * W_RAD_S), b.coefficients(*r, W_RAD_S),
+                          strict=True):
+            np.testing.assert_array_equal(K1, K2)
