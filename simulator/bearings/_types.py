@@ -279,6 +279,10 @@ class TiltingPadBearing(_Bearing):
     film force through the pivot (moment equilibrium; pad inertia and pivot friction neglected,
     small tilt, and the pad taken at rest in tilt: :func:`._film.pad_force`). ``clearance_m`` is
     the assembled radial clearance c (at the pivots).
+
+    :meth:`coefficients` linearises that quasi-static force; :meth:`reduced_coefficients` are Lund's
+    pad-assembly coefficients at a whirl frequency (what a linear analysis wants), and
+    :meth:`force_with_pad_states` carries the tilts as states (docs/bearings.md).
     """
 
     TYPE: ClassVar[str] = "tilting_pad"
