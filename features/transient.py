@@ -5,9 +5,9 @@ From a :class:`~rotordiag.features.Recording` whose speed changes:
 - :func:`track_orders` — the 1X and 2X vectors of every probe per revolution (or per speed step), from the
   keyphasor when there is one, else along a speed tracked from the signal (:func:`track_speed`; phases then have
   no reference and are not reported as phase lags). Each revolution is a least-squares fit of
-  ``c0 + Σ_k Re(C_k e^{jkθ})`` over its own samples at the shaft angle θ interpolated linearly between the pulses
-  (constant speed within a revolution), so the gap (DC) does not leak into the orders and noise is averaged over
-  every sample.
+  ``c0 + Σ_k Re(C_k e^{jkθ})`` (with linear drifts of each term across the revolution, :func:`_fit_steps`) over
+  its own samples at the shaft angle θ interpolated linearly between the pulses (constant speed within a
+  revolution), so the gap (DC) does not leak into the orders and noise is averaged over every sample.
 - :func:`waterfall` and :func:`full_spectrum` — spectra of short windows against speed (a cascade), the full
   spectrum of a probe pair (x + jy: forward whirl at positive, reverse at negative frequencies).
 - :func:`centreline` — the shaft centreline: each bearing's mean journal position per revolution.
@@ -248,17 +248,24 @@ def track_speed(rec: Recording, *, window_s: float = SPEED_WINDOW_S, hop_s: floa
 
 def _fit_steps(rec: Recording, theta: np.ndarray, bounds: np.ndarray, orders: tuple[int, ...]) -> tuple[
         np.ndarray, np.ndarray]:
-    """Least-squares [1, cos kθ, sin kθ …] per step (samples ``bounds[i]:bounds[i+1]``), every probe at once;
-    the Gram matrices and right-hand sides as sums over each step (``np.add.reduceat``). Returns
-    (vectors (n_steps, n_probes, n_orders) complex, dc (n_steps, n_probes))."""
+    """Least-squares fit per step (samples ``bounds[i]:bounds[i+1]``), every probe at once, of
+    ``c0 + d0·u + Σ_k Re((C_k + D_k·u) e^{jkθ})`` with u ∈ [−½, ½) the position within the step: the linear terms
+    take up the change of the gap and of each vector across the step (through a critical a 1X turns by degrees per
+    revolution), which a constant fit would leak into the other orders. The Gram matrices and right-hand sides are
+    sums over each step (``np.add.reduceat``). Returns (C_k at mid-step (n_steps, n_probes, n_orders) complex,
+    c0 (n_steps, n_probes))."""
     i0, i1 = int(bounds[0]), int(bounds[-1])
     th = theta[i0:i1]
-    cols = [np.ones_like(th)]
-    for k in orders:
-        cols += [np.cos(k * th), np.sin(k * th)]
-    m = len(cols)
     idx = (bounds[:-1] - i0).astype(np.intp)
+    lengths = np.diff(bounds).astype(np.intp)
     n_steps = idx.size
+    pos = np.arange(i1 - i0, dtype=float) - np.repeat(idx.astype(float), lengths)
+    u = pos / np.repeat(lengths.astype(float), lengths) - 0.5
+    cols = [np.ones_like(th), u]
+    for k in orders:
+        c, s = np.cos(k * th), np.sin(k * th)
+        cols += [c, s, u * c, u * s]
+    m = len(cols)
     gram = np.empty((n_steps, m, m))
     for a in range(m):
         for b in range(a, m):
@@ -273,7 +280,7 @@ def _fit_steps(rec: Recording, theta: np.ndarray, bounds: np.ndarray, orders: tu
     coef = np.linalg.solve(gram, rhs)  # (n_steps, m, n_probes)
     vec = np.empty((n_steps, len(rec.channels), len(orders)), dtype=complex)
     for j in range(len(orders)):
-        vec[:, :, j] = coef[:, 1 + 2 * j] - 1j * coef[:, 2 + 2 * j]
+        vec[:, :, j] = coef[:, 2 + 4 * j] - 1j * coef[:, 3 + 4 * j]
     return vec, coef[:, 0]
 
 
@@ -316,7 +323,12 @@ def track_orders(rec: Recording, *, orders: tuple[int, ...] = (1, 2), revs_per_s
         notes += st.notes
         notes.append("no keyphasor: speed tracked from the signal; phases are not referenced to a mark (no phase lag)")
         t = np.arange(n) / fs
-        f_hz = np.interp(t, st.time_s[good], st.speed_rpm[good] / 60.0)
+        tg, fg = st.time_s[good], st.speed_rpm[good] / 60.0
+        f_hz = np.interp(t, tg, fg)
+        # the half window before the first and after the last window centre: the neighbouring slope carried on
+        for sel, (i, j) in ((t < tg[0], (0, 1)), (t > tg[-1], (-2, -1))):
+            slope = (fg[j] - fg[i]) / (tg[j] - tg[i])
+            f_hz[sel] = fg[j if j == -1 else i] + slope * (t[sel] - tg[j if j == -1 else i])
         cyc = np.concatenate([[0.0], np.cumsum(0.5 * (f_hz[1:] + f_hz[:-1]) / fs)])
         k = np.arange(int(np.floor(cyc[-1])) + 1)
         marks = np.interp(k, cyc, t)
