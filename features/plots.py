@@ -277,12 +277,15 @@ def save_figures(figs: dict[str, Any], out_dir: str | Path, *, dpi: int = 100, c
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
+    umask = os.umask(0)
+    os.umask(umask)
     try:
         for name, fig in figs.items():
             fd, tmp = tempfile.mkstemp(suffix=".png", dir=out, prefix=f".{name}.")
             os.close(fd)
             try:
                 fig.savefig(tmp, dpi=dpi)
+                os.chmod(tmp, 0o666 & ~umask)  # mkstemp's 0600 → what a plain open() would give
                 os.replace(tmp, out / f"{name}.png")
             finally:
                 if os.path.exists(tmp):

@@ -5,7 +5,7 @@ From a :class:`~rotordiag.features.Recording` whose speed changes:
 - :func:`track_orders` — the 1X and 2X vectors of every probe per revolution (or per speed step), from the
   keyphasor when there is one, else along a speed tracked from the signal (:func:`track_speed`; phases then have
   no reference and are not reported as phase lags). Each revolution is a least-squares fit of
-  ``c0 + Σ_k Re(C_k e^{jkθ})`` (with linear drifts of each term across the revolution, :func:`_fit_steps`) over
+  ``c0 + Σ_k Re(C_k e^{jkθ})`` (with a linear drift of the gap across the revolution, :func:`_fit_steps`) over
   its own samples at the shaft angle θ interpolated linearly between the pulses (constant speed within a
   revolution), so the gap (DC) does not leak into the orders and noise is averaged over every sample.
 - :func:`waterfall` and :func:`full_spectrum` — spectra of short windows against speed (a cascade), the full
@@ -249,11 +249,14 @@ def track_speed(rec: Recording, *, window_s: float = SPEED_WINDOW_S, hop_s: floa
 def _fit_steps(rec: Recording, theta: np.ndarray, bounds: np.ndarray, orders: tuple[int, ...]) -> tuple[
         np.ndarray, np.ndarray]:
     """Least-squares fit per step (samples ``bounds[i]:bounds[i+1]``), every probe at once, of
-    ``c0 + d0·u + Σ_k Re((C_k + D_k·u) e^{jkθ})`` with u ∈ [−½, ½) the position within the step: the linear terms
-    take up the change of the gap and of each vector across the step (through a critical a 1X turns by degrees per
-    revolution), which a constant fit would leak into the other orders. The Gram matrices and right-hand sides are
-    sums over each step (``np.add.reduceat``). Returns (C_k at mid-step (n_steps, n_probes, n_orders) complex,
-    c0 (n_steps, n_probes))."""
+    ``c0 + d0·u + Σ_k Re(C_k e^{jkθ})`` with u ∈ [−½, ½) the position within the step: the linear term takes up
+    the gap's change across the step (the centreline rising), which would otherwise leak into the orders. The
+    orders are held constant over the step: drift terms for them too would let the fit take non-synchronous
+    lines near 1X (a whirl, a beat) for a changing 1X — measured on a simulated run-up of the paper's model, whose
+    sub-synchronous whirl then doubled the 1X peak and made it ragged. The price is a leak of a fast-changing
+    vector into the other orders through a sharp critical (0.3 % of the 1X through a ζ = 0.05 critical at
+    40 r/min/s, tests/test_features_transient.py). The Gram matrices and right-hand sides are sums over each step
+    (``np.add.reduceat``). Returns (C_k (n_steps, n_probes, n_orders) complex, c0 at mid-step (n_steps, n_probes))."""
     i0, i1 = int(bounds[0]), int(bounds[-1])
     th = theta[i0:i1]
     idx = (bounds[:-1] - i0).astype(np.intp)
@@ -263,8 +266,7 @@ def _fit_steps(rec: Recording, theta: np.ndarray, bounds: np.ndarray, orders: tu
     u = pos / np.repeat(lengths.astype(float), lengths) - 0.5
     cols = [np.ones_like(th), u]
     for k in orders:
-        c, s = np.cos(k * th), np.sin(k * th)
-        cols += [c, s, u * c, u * s]
+        cols += [np.cos(k * th), np.sin(k * th)]
     m = len(cols)
     gram = np.empty((n_steps, m, m))
     for a in range(m):
@@ -280,7 +282,7 @@ def _fit_steps(rec: Recording, theta: np.ndarray, bounds: np.ndarray, orders: tu
     coef = np.linalg.solve(gram, rhs)  # (n_steps, m, n_probes)
     vec = np.empty((n_steps, len(rec.channels), len(orders)), dtype=complex)
     for j in range(len(orders)):
-        vec[:, :, j] = coef[:, 2 + 4 * j] - 1j * coef[:, 3 + 4 * j]
+        vec[:, :, j] = coef[:, 2 + 2 * j] - 1j * coef[:, 3 + 2 * j]
     return vec, coef[:, 0]
 
 

@@ -72,7 +72,10 @@ def test_tracked_1x_2x_match_the_known_vectors():
         assert np.allclose(tr.amp_um_pp[:, p, 0], 2 * np.abs(got1))
         lag = np.mod(-np.degrees(np.angle(want1)), 360.0)
         assert np.max(np.abs((tr.phase_lag_deg[:, p, 0] - lag + 180.0) % 360.0 - 180.0)) < 1.0
-        assert np.max(np.abs(tr.vectors_um[:, p, 1] / truth[key][1] - 1)) < 0.01
+        # 2X: right to 1 % of itself plus the leak of the fast-turning 1X through the critical (the fit holds each
+        # vector constant over a revolution): at most 0.5 % of the 1X
+        err2 = np.abs(tr.vectors_um[:, p, 1] - truth[key][1])
+        assert np.all(err2 <= 0.01 * abs(truth[key][1]) + 0.005 * np.abs(want1))
     # the resonance: peak within 1 % of 1500 r/min (the model above peaks at 1500/√(1 − 2ζ²))
     pk = tr.peaks(1)
     assert len(pk) == 4 and all(abs(q["speed_rpm"] / 1500.0 - 1) < 0.01 for q in pk)
