@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -212,7 +213,7 @@ def orbits_figure(orbits: list[Orbit], title: str = "") -> Any:
 
 
 def campbell_figure(speeds_rpm: np.ndarray, frequencies_hz: np.ndarray, damping_ratios: np.ndarray,
-                    criticals: list[Any] = (), measured_peaks: list[dict] = (), title: str = "") -> Any:
+                    criticals: Sequence[Any] = (), measured_peaks: Sequence[dict] = (), title: str = "") -> Any:
     """Damped natural frequencies of the plant model against speed (colour: damping ratio), the 1X and 2X
     lines, the model's critical speeds (○) and the measured 1X/2X peaks (×)."""
     plt = _plt()

@@ -24,6 +24,7 @@ read with (a 160-s start-up of 8 probes at 25.6 kHz; a longer file is refused by
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -481,12 +482,9 @@ def _clearances(rec: Recording) -> dict[int, float]:
     c = rec.clearance_um
     if c is None:
         return {}
-    if isinstance(c, dict):
+    if isinstance(c, Mapping):
         return {int(b): float(v) for b, v in c.items() if v is not None}
-    try:
-        return {b: float(c) for b in rec.bearings}
-    except (TypeError, ValueError):
-        return {}
+    return {b: float(c) for b in rec.bearings}
 
 
 @dataclass(frozen=True)
