@@ -57,15 +57,17 @@ def bode_figure(track: OrderTrack, probes: list[int] | None = None, title: str =
     n_o = len(track.orders)
     fig, axes = plt.subplots(2, n_o, figsize=(6.5 * n_o, 7.5), sharex=True, squeeze=False,
                              gridspec_kw={"height_ratios": [1, 1.2]})
-    keep = ~track.in_doubt
-    amp, ph = track.amp_um_pp, track.phase_lag_deg
+    # steps whose speed is in doubt are gaps in the lines (NaN), not bridged
+    doubt = track.in_doubt[:, None, None]
+    amp = np.where(doubt, np.nan, track.amp_um_pp)
+    ph = np.where(doubt, np.nan, track.phase_lag_deg)
     for j, k in enumerate(track.orders):
         for p in probes:
-            axes[1, j].plot(track.speed_rpm[keep], amp[keep, p, j], lw=1.0, label=_probe_label(track.probes[p]))
+            axes[1, j].plot(track.speed_rpm, amp[:, p, j], lw=1.0, label=_probe_label(track.probes[p]))
             if track.phase_referenced:
-                lag = ph[keep, p, j].copy()
+                lag = ph[:, p, j].copy()
                 lag[1:][np.abs(np.diff(lag)) > 180.0] = np.nan  # no line across the 0/360° wrap
-                axes[0, j].plot(track.speed_rpm[keep], lag, lw=1.0)
+                axes[0, j].plot(track.speed_rpm, lag, lw=1.0)
         axes[1, j].set_ylabel(f"{k}X amplitude (µm pk-pk)")
         axes[1, j].set_xlabel("speed (r/min)")
         axes[0, j].set_ylabel(f"{k}X phase lag (°)")

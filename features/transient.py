@@ -336,8 +336,7 @@ def track_orders(rec: Recording, *, orders: tuple[int, ...] = (1, 2), revs_per_s
         k = np.arange(int(np.floor(cyc[-1])) + 1)
         marks = np.interp(k, cyc, t)
         source, referenced = "signal", False
-        bad_t = st.time_s[~good]
-        doubt_at = (bad_t, 0.5 * SPEED_WINDOW_S)
+        doubt_at = (st.time_s[good], 0.5 * SPEED_WINDOW_S)
     n_revs = marks.size - 1
     if n_revs < 2:
         raise ValueError(f"{n_revs} whole revolution(s) in the record; a start-up needs many")
@@ -360,9 +359,12 @@ def track_orders(rec: Recording, *, orders: tuple[int, ...] = (1, 2), revs_per_s
     mid = 0.5 * (t0 + t1)
     in_doubt = np.zeros(speed.size, dtype=bool)
     if doubt_at is not None:
-        bad_t, half = doubt_at
-        for tb in bad_t:
-            in_doubt |= (t1 >= tb - half) & (t0 <= tb + half)
+        good_t, half = doubt_at
+        # a step is read only where a sound window covers it: not across a stretch of doubtful windows, nor past
+        # the last sound one (the speed there is carried over, not measured)
+        j = np.clip(np.searchsorted(good_t, mid), 1, good_t.size - 1)
+        nearest = np.minimum(np.abs(mid - good_t[j - 1]), np.abs(mid - good_t[j]))
+        in_doubt = nearest > half
     kind = _kind_and_reversal(speed, mid)
     if kind == "steady":
         notes.append("the speed changes by less than 2 %: a steady recording, not a start-up or coast-down")
@@ -399,11 +401,12 @@ def _slices(track: OrderTrack, fs: float, n_points: int, window_s: float, max_sl
     wn = int(2 ** np.round(np.log2(max(64.0, window_s * fs))))
     wn = min(wn, n_points)
     t_mid = track.time_s
-    keep = ~track.in_doubt
-    times = np.linspace(t_mid[keep].min(), t_mid[keep].max(), min(max_slices, int(keep.sum())))
-    starts = np.clip(np.round(times * fs - wn / 2).astype(int), 0, n_points - wn)
-    speed = np.interp((starts + wn / 2) / fs, t_mid[keep], track.speed_rpm[keep])
-    return starts, speed, (starts + wn / 2) / fs, wn
+    keep = np.flatnonzero(~track.in_doubt)
+    if keep.size == 0:
+        raise ValueError("no step of the run has a sound speed: no spectra")
+    pick = keep[np.unique(np.round(np.linspace(0, keep.size - 1, min(max_slices, keep.size))).astype(int))]
+    starts = np.clip(np.round(t_mid[pick] * fs - wn / 2).astype(int), 0, n_points - wn)
+    return starts, track.speed_rpm[pick], (starts + wn / 2) / fs, wn
 
 
 def waterfall(rec: Recording, track: OrderTrack, probe: int = 0, *, window_s: float = 0.5,
@@ -512,11 +515,12 @@ def orbits_at(rec: Recording, track: OrderTrack, speeds_rpm: list[float]) -> lis
         i = int(np.argmin(np.abs(track.speed_rpm - float(s)) + np.where(track.in_doubt, np.inf, 0.0)))
         a, b_ = int(track.sample_bounds[i]), int(track.sample_bounds[i + 1])
         for b in rec.bearings:
-            xy = rec.xy_um(b)[:, a:b_]
             idx = [j for j, c in enumerate(rec.channels) if c.bearing == b]
+            th1, th2 = np.deg2rad([rec.channels[j].angle_deg for j in idx])
+            det = np.sin(th2 - th1)
+            p1, p2 = rec.channels[idx[0]].data_um[a:b_], rec.channels[idx[1]].data_um[a:b_]
+            xy = np.array([(np.sin(th2) * p1 - np.sin(th1) * p2) / det, (-np.cos(th2) * p1 + np.cos(th1) * p2) / det])
             if k1 is not None:
-                th1, th2 = np.deg2rad([rec.channels[j].angle_deg for j in idx])
-                det = np.sin(th2 - th1)
                 c1, c2 = track.vectors_um[i, idx[0], k1], track.vectors_um[i, idx[1], k1]
                 cx = (np.sin(th2) * c1 - np.sin(th1) * c2) / det
                 cy = (-np.cos(th2) * c1 + np.cos(th1) * c2) / det
