@@ -404,7 +404,9 @@ def _slices(track: OrderTrack, fs: float, n_points: int, window_s: float, max_sl
     keep = np.flatnonzero(~track.in_doubt)
     if keep.size == 0:
         raise ValueError("no step of the run has a sound speed: no spectra")
-    pick = keep[np.unique(np.round(np.linspace(0, keep.size - 1, min(max_slices, keep.size))).astype(int))]
+    # evenly spread in time (a ramp: evenly in speed), each at the nearest sound step
+    want = np.linspace(t_mid[keep[0]], t_mid[keep[-1]], min(max_slices, keep.size))
+    pick = np.unique(keep[np.argmin(np.abs(t_mid[keep][None, :] - want[:, None]), axis=1)])
     starts = np.clip(np.round(t_mid[pick] * fs - wn / 2).astype(int), 0, n_points - wn)
     return starts, track.speed_rpm[pick], (starts + wn / 2) / fs, wn
 
