@@ -159,7 +159,7 @@ def test_a_ramp_that_reverses_is_refused():
         T.track_orders(Recording(sample_rate_hz=FS, channels=chans, keyphasor_times_s=kp))
 
 
-@pytest.mark.parametrize("suffix", [".csv", ".npy", ".h5", ".uff"])
+@pytest.mark.parametrize("suffix", [".csv", ".npy", ".h5", ".uff", ".json"])
 def test_every_reader_format_tracks_the_same(tmp_path: Path, suffix: str):
     from rotordiag.models.transient_cli import read_transient
     from rotordiag.simulator.cli import write_probes
@@ -172,11 +172,19 @@ def test_every_reader_format_tracks_the_same(tmp_path: Path, suffix: str):
         sig[near] = -np.clip(0.5 * (t[near] - tk) * FS + 0.5, 0.0, 1.0)
     w = np.array([c.data for c in rec.channels])
     path = tmp_path / f"run{suffix}"
-    write_probes(path, w, LAYOUT, FS, keyphasor_signal=sig)
+    if suffix == ".json":   # the /diagnose body: pulse times, not a pulse channel
+        import json
+
+        body = {"sample_rate_hz": FS, "keyphasor_times_s": kp[1:].tolist(),
+                "channels": [{"bearing": b, "angle_deg": a, "units": "um", "data": w[i].tolist()}
+                             for i, (b, a) in enumerate(LAYOUT)]}
+        path.write_text(json.dumps(body))
+    else:
+        write_probes(path, w, LAYOUT, FS, keyphasor_signal=sig)
     given = {"sample_rate_hz": FS, "channels": "1@45,1@135,2@45,2@135"}
     if suffix in (".npy", ".h5"):
         given["keyphasor_channel"] = "4"
-    if suffix == ".csv":
+    if suffix in (".csv", ".json"):
         given["channels"] = None
     res = read_transient(path, given)
     got = T.track_orders(res.recording)
@@ -217,3 +225,23 @@ def test_plots_are_written_whole(tmp_path: Path):
     assert not [q for q in tmp_path.iterdir() if q.name.startswith(".")]
     with pytest.raises(ValueError, match="the run covers"):
         T.orbits_at(rec, tr, [3000.0])
+
+
+def test_plots_cli_refuses_a_keyphasor_that_stops_and_writes_nothing(tmp_path: Path):
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+    from rotordiag.simulator.cli import write_probes
+
+    rec, _, _ = _synthetic(dur_s=8.0, rpm1=1300.0)
+    t, _, kp, _ = _ramp(900.0, 1300.0, 8.0)
+    sig = np.zeros(t.size)
+    for tk in kp[1: kp.size // 2]:                       # the pulses stop half-way through the run
+        sig[(t >= tk) & (t < tk + 0.004)] = -1.0
+    path = tmp_path / "stops.csv"
+    write_probes(path, np.array([c.data for c in rec.channels]), LAYOUT, FS, keyphasor_signal=sig)
+    out = tmp_path / "png"
+    r = CliRunner().invoke(app, ["plots", str(path), "--out-dir", str(out)])
+    assert r.exit_code == 2
+    assert "keyphasor drops out: the last pulse is at t = " in r.output and "leave the keyphasor out" in r.output
+    assert not out.exists()

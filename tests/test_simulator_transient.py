@@ -96,3 +96,15 @@ def test_keyphasor_signal_reads_back_to_the_marks():
     kp = res.keyphasor_times_s[res.keyphasor_times_s > 0.5 / res.sample_rate_hz]
     assert got.size == kp.size
     assert np.max(np.abs(got - kp)) < 1e-3 / res.sample_rate_hz
+
+
+def test_a_model_behind_the_variable_speed_interface_runs_the_same():
+    """The door a shaft train comes in by: a model object in place of the plant gives the same run."""
+    from rotordiag.simulator.transient import PlantModel
+
+    plant = Plant.default()
+    prof = SpeedProfile.linear(1000, 1100, 1.0)
+    a = simulate_transient(plant, prof, 0.2, 0.05, settle_revs=20)
+    b = simulate_transient(PlantModel(plant, 0.2, 0.05), prof, settle_revs=20)
+    assert np.array_equal(a.journal_displacements_m, b.journal_displacements_m)
+    assert np.array_equal(a.keyphasor_times_s, b.keyphasor_times_s)
