@@ -1,7 +1,7 @@
 """Rendering of the transient plots (issue 46): Bode, polar, waterfall, full spectrum, shaft centreline, orbits,
 Campbell — matplotlib figures from the data of :mod:`rotordiag.features.transient` (and
 :mod:`rotordiag.simulator.campbell`). Nothing here computes a vibration quantity; every figure carries the
-conventions (:data:`~rotordiag.features.transient.CONVENTIONS`) in its footer.
+conventions (:func:`~rotordiag.features.transient.conventions`, lengths in µm or mil) in its footer.
 
 :func:`transient_figures` builds them all; :func:`save_figures` writes PNGs (each to a temporary name first, then
 renamed, so a failure leaves no half-written file).
@@ -16,13 +16,15 @@ from typing import Any
 
 import numpy as np
 
+from rotordiag.core.units import factor_to_um
+
 from .transient import (
-    CONVENTIONS,
     Centreline,
     Orbit,
     OrderTrack,
     Waterfall,
     centreline,
+    conventions,
     full_spectrum,
     orbits_at,
     waterfall,
@@ -41,25 +43,33 @@ def _plt():
     return plt
 
 
-def _footer(fig: Any, extra: str = "") -> None:
-    fig.text(0.01, 0.005, CONVENTIONS + (f"; {extra}" if extra else ""), fontsize=7, color="0.3", ha="left",
+def _footer(fig: Any, extra: str = "", units: str = "um") -> None:
+    fig.text(0.01, 0.005, conventions(units) + (f"; {extra}" if extra else ""), fontsize=7, color="0.3", ha="left",
              va="bottom", wrap=True)
+
+
+def _units(units: str) -> tuple[float, str]:
+    """(factor from µm, label) of the plot's length unit: ``um`` or ``mil`` (1 mil = 25.4 µm)."""
+    if units not in ("um", "mil"):
+        raise ValueError(f"units must be 'um' or 'mil', got {units!r}")
+    return (1.0, "µm") if units == "um" else (1.0 / factor_to_um("mil"), "mil")
 
 
 def _probe_label(p: tuple[int, float]) -> str:
     return f"b{p[0]}@{p[1]:g}°"
 
 
-def bode_figure(track: OrderTrack, probes: list[int] | None = None, title: str = "") -> Any:
-    """Amplitude (µm pk-pk) and phase lag (°) against speed for each order (columns) and probe (lines)."""
+def bode_figure(track: OrderTrack, probes: list[int] | None = None, title: str = "", units: str = "um") -> Any:
+    """Amplitude (µm or mil pk-pk) and phase lag (°) against speed for each order (columns) and probe (lines)."""
     plt = _plt()
+    f_u, u = _units(units)
     probes = list(range(len(track.probes))) if probes is None else probes
     n_o = len(track.orders)
     fig, axes = plt.subplots(2, n_o, figsize=(6.5 * n_o, 7.5), sharex=True, squeeze=False,
                              gridspec_kw={"height_ratios": [1, 1.2]})
     # steps whose speed is in doubt are gaps in the lines (NaN), not bridged
     doubt = track.in_doubt[:, None, None]
-    amp = np.where(doubt, np.nan, track.amp_um_pp)
+    amp = np.where(doubt, np.nan, track.amp_um_pp) * f_u
     ph = np.where(doubt, np.nan, track.phase_lag_deg)
     for j, k in enumerate(track.orders):
         for p in probes:
@@ -68,7 +78,7 @@ def bode_figure(track: OrderTrack, probes: list[int] | None = None, title: str =
                 lag = ph[:, p, j].copy()
                 lag[1:][np.abs(np.diff(lag)) > 180.0] = np.nan  # no line across the 0/360° wrap
                 axes[0, j].plot(track.speed_rpm, lag, lw=1.0)
-        axes[1, j].set_ylabel(f"{k}X amplitude (µm pk-pk)")
+        axes[1, j].set_ylabel(f"{k}X amplitude ({u} pk-pk)")
         axes[1, j].set_xlabel("speed (r/min)")
         axes[0, j].set_ylabel(f"{k}X phase lag (°)")
         axes[0, j].set_ylim(360, 0)   # lag grows downward, the vibration engineer's Bode
@@ -82,14 +92,16 @@ def bode_figure(track: OrderTrack, probes: list[int] | None = None, title: str =
     axes[1, 0].legend(fontsize=7, ncol=2)
     fig.suptitle(title or f"Bode plot ({track.kind}, speed from {track.speed_source})")
     fig.subplots_adjust(left=0.08, right=0.95, bottom=0.10, top=0.93, hspace=0.35, wspace=0.35)
-    _footer(fig)
+    _footer(fig, "", units)
     return fig
 
 
-def polar_figure(track: OrderTrack, probes: list[int] | None = None, order: int = 1, title: str = "") -> Any:
+def polar_figure(track: OrderTrack, probes: list[int] | None = None, order: int = 1, title: str = "",
+                 units: str = "um") -> Any:
     """The kX vector (µm pk-pk, phase lag) of each probe as speed changes: phase lag measured from the top of
     the plot against the direction of rotation (clockwise on the page), speeds labelled along the path."""
     plt = _plt()
+    f_u, u = _units(units)
     if not track.phase_referenced:
         raise ValueError("a polar plot needs phase lags: the recording has no keyphasor")
     probes = list(range(len(track.probes))) if probes is None else probes
@@ -105,7 +117,7 @@ def polar_figure(track: OrderTrack, probes: list[int] | None = None, order: int 
         ax.set_theta_zero_location("N")
         ax.set_theta_direction(-1)
         lag = np.radians(track.phase_lag_deg[keep, p, j])
-        a = track.amp_um_pp[keep, p, j]
+        a = track.amp_um_pp[keep, p, j] * f_u
         ax.plot(lag, a, lw=0.8)
         for s in np.linspace(sp.min(), sp.max(), 5):
             q = int(np.argmin(np.abs(sp - s)))
@@ -113,21 +125,22 @@ def polar_figure(track: OrderTrack, probes: list[int] | None = None, order: int 
             ax.annotate(f"{sp[q]:.0f}", (lag[q], a[q]), fontsize=6)
         ax.set_title(f"{_probe_label(track.probes[p])} {order}X", fontsize=9)
         ax.tick_params(labelsize=6)
-    fig.suptitle(title or f"Polar plot {order}X (µm pk-pk at phase lag; points labelled r/min)")
+    fig.suptitle(title or f"Polar plot {order}X ({u} pk-pk at phase lag; points labelled r/min)")
     fig.subplots_adjust(left=0.08, right=0.95, bottom=0.11, top=0.90, hspace=0.35, wspace=0.35)
-    _footer(fig, "phase lag clockwise from the top")
+    _footer(fig, "phase lag clockwise from the top", units)
     return fig
 
 
-def waterfall_figure(wf: Waterfall, max_order: float = 3.5, title: str = "") -> Any:
+def waterfall_figure(wf: Waterfall, max_order: float = 3.5, title: str = "", units: str = "um") -> Any:
     """A cascade: each window's spectrum drawn at its speed, with the 1X and 2X (and −1X for a full spectrum)
-    lines; amplitude µm pk-pk (scaled to the largest line)."""
+    lines; amplitude µm (or mil) pk-pk (scaled to the largest line)."""
     plt = _plt()
+    f_u, u = _units(units)
     fig, ax = plt.subplots(figsize=(9, 7))
     f_hi = max_order * wf.speed_rpm.max() / 60.0
     sel = (np.abs(wf.frequencies_hz) <= f_hi) if wf.full else (wf.frequencies_hz <= f_hi)
     f = wf.frequencies_hz[sel]
-    a = wf.amp_um_pp[:, sel]
+    a = wf.amp_um_pp[:, sel] * f_u
     step = np.median(np.diff(wf.speed_rpm)) if wf.speed_rpm.size > 1 else 1.0
     scale = abs(step) * 6.0 / max(float(a.max()), 1e-12)
     from matplotlib.collections import PolyCollection
@@ -155,62 +168,66 @@ def waterfall_figure(wf: Waterfall, max_order: float = 3.5, title: str = "") -> 
     ax.legend(loc="lower right", fontsize=8)
     peak = float(a.max())
     ax.set_title(title or f"{'Full-spectrum cascade' if wf.full else 'Waterfall'} — {wf.label} "
-                 f"(largest line {peak:.1f} µm pk-pk = {6 * abs(step):.0f} r/min of height)")
+                 f"(largest line {peak:.{2 if units == 'mil' else 1}f} {u} pk-pk = {6 * abs(step):.0f} r/min of height)")
     fig.subplots_adjust(left=0.08, right=0.95, bottom=0.10, top=0.93, hspace=0.35, wspace=0.35)
-    _footer(fig, "Hann window; x + jy: forward whirl (+x → +y) at positive frequencies" if wf.full else "Hann window")
+    _footer(fig, "Hann window; x + jy: forward whirl (+x → +y) at positive frequencies" if wf.full else "Hann window",
+            units)
     return fig
 
 
-def centreline_figure(cl: Centreline, title: str = "") -> Any:
+def centreline_figure(cl: Centreline, title: str = "", units: str = "um") -> Any:
     """Each bearing's mean journal position per revolution, coloured by speed, inside its clearance circle."""
     plt = _plt()
+    f_u, u = _units(units)
     n = len(cl.bearings)
     fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 4.8), squeeze=False)
     for i, b in enumerate(cl.bearings):
         ax = axes[0, i]
-        sc = ax.scatter(cl.x_um[:, i], cl.y_um[:, i], c=cl.speed_rpm, s=4, cmap="viridis")
-        ax.plot(cl.x_um[0, i], cl.y_um[0, i], "k^", ms=6, label="start")
+        sc = ax.scatter(cl.x_um[:, i] * f_u, cl.y_um[:, i] * f_u, c=cl.speed_rpm, s=4, cmap="viridis")
+        ax.plot(cl.x_um[0, i] * f_u, cl.y_um[0, i] * f_u, "k^", ms=6, label="start")
         c = cl.clearance_um.get(b)
         if c:
+            c = c * f_u
             t = np.linspace(0, 2 * np.pi, 200)
-            ax.plot(c * np.cos(t), c * np.sin(t), "k--", lw=0.7, label=f"clearance {c:g} µm")
+            ax.plot(c * np.cos(t), c * np.sin(t), "k--", lw=0.7, label=f"clearance {c:.4g} {u}")
             ax.set_xlim(-1.1 * c, 1.1 * c)
             ax.set_ylim(-1.1 * c, 1.1 * c)
         ax.axhline(0, color="0.8", lw=0.5)
         ax.axvline(0, color="0.8", lw=0.5)
         ax.set_aspect("equal")
         ax.set_title(f"bearing {b}")
-        ax.set_xlabel("x horizontal (µm)")
-        ax.set_ylabel("y vertical (µm)")
+        ax.set_xlabel(f"x horizontal ({u})")
+        ax.set_ylabel(f"y vertical ({u})")
         ax.legend(fontsize=7, loc="upper right")
     fig.colorbar(sc, ax=axes[0, -1], label="speed (r/min)", shrink=0.8)
     fig.suptitle(title or f"Shaft centreline (position {cl.reference})")
     fig.subplots_adjust(left=0.08, right=0.95, bottom=0.11, top=0.93, hspace=0.35, wspace=0.35)
-    _footer(fig, "mean position per revolution")
+    _footer(fig, "mean position per revolution", units)
     return fig
 
 
-def orbits_figure(orbits: list[Orbit], title: str = "") -> Any:
+def orbits_figure(orbits: list[Orbit], title: str = "", units: str = "um") -> Any:
     """Orbits (raw, grey; 1X-filtered, blue; keyphasor dot) of each bearing (columns) at each speed (rows)."""
     plt = _plt()
+    f_u, u = _units(units)
     bearings = sorted({o.bearing for o in orbits})
     speeds = sorted({round(o.speed_rpm, 3) for o in orbits})
     fig, axes = plt.subplots(len(speeds), len(bearings), figsize=(3.3 * len(bearings), 3.3 * len(speeds) + 0.5),
                              squeeze=False)
     for o in orbits:
         ax = axes[speeds.index(round(o.speed_rpm, 3)), bearings.index(o.bearing)]
-        ax.plot(o.x_um, o.y_um, color="0.6", lw=0.7)
-        ax.plot(o.x1_um, o.y1_um, color="C0", lw=1.0)
+        ax.plot(o.x_um * f_u, o.y_um * f_u, color="0.6", lw=0.7)
+        ax.plot(o.x1_um * f_u, o.y1_um * f_u, color="C0", lw=1.0)
         if o.mark_um is not None:
-            ax.plot(*o.mark_um, "ko", ms=4)
+            ax.plot(o.mark_um[0] * f_u, o.mark_um[1] * f_u, "ko", ms=4)
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_title(f"bearing {o.bearing} at {o.speed_rpm:.0f} r/min", fontsize=8)
         ax.tick_params(labelsize=6)
-        ax.set_xlabel("x (µm)", fontsize=7)
-        ax.set_ylabel("y (µm)", fontsize=7)
+        ax.set_xlabel(f"x ({u})", fontsize=7)
+        ax.set_ylabel(f"y ({u})", fontsize=7)
     fig.suptitle(title or "Orbits over one revolution (grey raw, blue 1X, dot: keyphasor mark)")
     fig.subplots_adjust(left=0.08, right=0.95, bottom=0.11, top=0.90, hspace=0.35, wspace=0.35)
-    _footer(fig, "rotation +x → +y (counter-clockwise on the page)")
+    _footer(fig, "rotation +x → +y (counter-clockwise on the page)", units)
     return fig
 
 
@@ -246,23 +263,24 @@ def campbell_figure(speeds_rpm: np.ndarray, frequencies_hz: np.ndarray, damping_
 
 
 def transient_figures(rec: Any, track: OrderTrack, *, orbit_speeds_rpm: list[float] | None = None,
-                      plant: Any = None, centreline_reference: str = "as recorded") -> dict[str, Any]:
+                      plant: Any = None, centreline_reference: str = "as recorded", units: str = "um") -> dict[str, Any]:
     """Every plot of a start-up or coast-down as {name: Figure}: ``bode``, ``polar`` (keyphasor only),
     ``waterfall_b<bearing>`` (first probe of each bearing), ``full_spectrum_b<bearing>``, ``centreline`` (DC-coupled
     only), ``orbits``, ``campbell`` (with ``plant``: the plant model's Campbell over the run's speeds)."""
-    figs: dict[str, Any] = {"bode": bode_figure(track)}
+    _units(units)
+    figs: dict[str, Any] = {"bode": bode_figure(track, units=units)}
     if track.phase_referenced:
-        figs["polar"] = polar_figure(track)
+        figs["polar"] = polar_figure(track, units=units)
     for b in rec.bearings:
         first = next(i for i, c in enumerate(rec.channels) if c.bearing == b)
-        figs[f"waterfall_b{b}"] = waterfall_figure(waterfall(rec, track, first))
-        figs[f"full_spectrum_b{b}"] = waterfall_figure(full_spectrum(rec, track, b))
+        figs[f"waterfall_b{b}"] = waterfall_figure(waterfall(rec, track, first), units=units)
+        figs[f"full_spectrum_b{b}"] = waterfall_figure(full_spectrum(rec, track, b), units=units)
     if not rec.dc_removed:
-        figs["centreline"] = centreline_figure(centreline(rec, track, reference=centreline_reference))
+        figs["centreline"] = centreline_figure(centreline(rec, track, reference=centreline_reference), units=units)
     keep = ~track.in_doubt
     lo, hi = float(track.speed_rpm[keep].min()), float(track.speed_rpm[keep].max())
     speeds = orbit_speeds_rpm if orbit_speeds_rpm else [lo + f * (hi - lo) for f in (0.1, 0.5, 0.9)]
-    figs["orbits"] = orbits_figure(orbits_at(rec, track, speeds))
+    figs["orbits"] = orbits_figure(orbits_at(rec, track, speeds), units=units)
     if plant is not None:
         from rotordiag.simulator.campbell import campbell, critical_speeds
         from rotordiag.simulator.params import SPEED_RANGE_RPM

@@ -35,12 +35,19 @@ from ._speed import estimate_speed_hz
 from .reader import ReadLimits
 
 __all__ = [
-    "CONVENTIONS", "TRANSIENT_READ_LIMITS", "OrderTrack", "SpeedTrack", "Waterfall", "Centreline", "Orbit",
+    "CONVENTIONS", "conventions", "TRANSIENT_READ_LIMITS", "OrderTrack", "SpeedTrack", "Waterfall", "Centreline", "Orbit",
     "track_orders", "track_speed", "waterfall", "full_spectrum", "centreline", "orbits_at", "check_pulses",
 ]
 
-CONVENTIONS = ("amplitude µm pk-pk; phase lag ° (keyphasor mark → next positive peak, 0–360°, in the order's own "
-               "cycle); x horizontal, y vertical up, probe angles ° from +x toward +y, shaft turning +x → +y")
+def conventions(units: str = "um") -> str:
+    """The conventions of the transient data and plots, lengths in ``units`` (``um`` or ``mil``)."""
+    u = "mil" if units == "mil" else "µm"
+    return (f"amplitude {u} pk-pk; phase lag ° (keyphasor mark → next positive peak, 0–360°, in the order's own "
+            "cycle); x horizontal, y vertical up, probe angles ° from +x toward +y, viewed from the end where the "
+            "shaft turns +x → +y (counter-clockwise; the reader mirrors a clockwise view)")
+
+
+CONVENTIONS = conventions("um")
 #: 4 Mi points per channel: 160 s at 25.6 kHz, 8 probes (256 MiB as float64).
 TRANSIENT_READ_LIMITS = ReadLimits(max_points=4 * 2**20, max_file_bytes=768 * 2**20, max_hdf5_bytes=512 * 2**20,
                                    max_keyphasor_pulses=200_000)

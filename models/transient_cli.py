@@ -62,6 +62,7 @@ def register(app: typer.Typer) -> None:
         plant: Optional[Path] = typer.Option(None, "--plant", help="Plant file for the Campbell diagram (TOML/JSON)."),
         campbell: bool = typer.Option(False, "--campbell", help="Campbell diagram of the default plant (MODEL.md) when no --plant is given."),
         centreline_reference: str = typer.Option("as recorded", "--centreline-reference", help="'as recorded' (the probes' zero: the bearing centre for rotordiag's recordings) | 'slow roll at the bottom'."),
+        output_units: str = typer.Option("um", "--output-units", help="Lengths on the plots: um | mil."),
         as_json: bool = typer.Option(False, "--json", help="Print the tracked 1X/2X peaks and the files as JSON."),
     ) -> None:
         """Bode, polar, waterfall, full spectrum, centreline, orbit and Campbell plots of a start-up or coast-down."""
@@ -82,7 +83,7 @@ def register(app: typer.Typer) -> None:
 
                 pl = Plant.from_file(plant) if plant is not None else Plant.default()
             figs = transient_figures(res.recording, track, orbit_speeds_rpm=parse_speeds(orbit_speeds), plant=pl,
-                                     centreline_reference=centreline_reference)
+                                     centreline_reference=centreline_reference, units=output_units)
             paths = save_figures(figs, out_dir)
         except ValueError as exc:
             _fail(f"{file}: {exc}")

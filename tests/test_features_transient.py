@@ -245,3 +245,23 @@ def test_plots_cli_refuses_a_keyphasor_that_stops_and_writes_nothing(tmp_path: P
     assert r.exit_code == 2
     assert "keyphasor drops out: the last pulse is at t = " in r.output and "leave the keyphasor out" in r.output
     assert not out.exists()
+
+
+def test_plots_in_mils_scale_every_length_and_say_so():
+    import matplotlib.pyplot as plt
+
+    from rotordiag.features.plots import bode_figure, centreline_figure
+
+    rec, _, _ = _synthetic(dur_s=8.0, rpm1=1300.0)
+    tr = T.track_orders(rec)
+    um, mil = bode_figure(tr), bode_figure(tr, units="mil")
+    a_um = um.axes[2].lines[0].get_ydata()       # 1X amplitude axis, first probe
+    a_mil = mil.axes[2].lines[0].get_ydata()
+    assert np.allclose(a_mil * 25.4, a_um) and "mil pk-pk" in mil.axes[2].get_ylabel()
+    assert any("amplitude mil pk-pk" in t.get_text() for t in mil.texts)
+    cl = centreline_figure(T.centreline(rec, tr), units="mil")
+    assert "mil" in cl.axes[0].get_xlabel()
+    with pytest.raises(ValueError, match="units must be 'um' or 'mil'"):
+        bode_figure(tr, units="inch")
+    for f in (um, mil, cl):
+        plt.close(f)
