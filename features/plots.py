@@ -67,10 +67,10 @@ def bode_figure(track: OrderTrack, probes: list[int] | None = None, title: str =
     n_o = len(track.orders)
     fig, axes = plt.subplots(2, n_o, figsize=(6.5 * n_o, 7.5), sharex=True, squeeze=False,
                              gridspec_kw={"height_ratios": [1, 1.2]})
-    # steps whose speed is in doubt are gaps in the lines (NaN), not bridged
-    doubt = track.in_doubt[:, None, None]
-    amp = np.where(doubt, np.nan, track.amp_um_pp) * f_u
-    ph = np.where(doubt, np.nan, track.phase_lag_deg)
+    # vectors that cannot be read (speed in doubt, non-synchronous vibration swamping the orders) are gaps, not bridged
+    ok = track.readable()
+    amp = np.where(ok, track.amp_um_pp, np.nan) * f_u
+    ph = np.where(ok, track.phase_lag_deg, np.nan)
     for j, k in enumerate(track.orders):
         for p in probes:
             axes[1, j].plot(track.speed_rpm, amp[:, p, j], lw=1.0, label=_probe_label(track.probes[p]))
@@ -116,11 +116,13 @@ def polar_figure(track: OrderTrack, probes: list[int] | None = None, order: int 
         ax = fig.add_subplot(rows, cols, i + 1, projection="polar")
         ax.set_theta_zero_location("N")
         ax.set_theta_direction(-1)
-        lag = np.radians(track.phase_lag_deg[keep, p, j])
-        a = track.amp_um_pp[keep, p, j] * f_u
+        ok = track.readable()[keep, p, j]
+        lag = np.radians(np.where(ok, track.phase_lag_deg[keep, p, j], np.nan))
+        a = np.where(ok, track.amp_um_pp[keep, p, j], np.nan) * f_u
         ax.plot(lag, a, lw=0.8)
-        for s in np.linspace(sp.min(), sp.max(), 5):
-            q = int(np.argmin(np.abs(sp - s)))
+        fin = np.flatnonzero(np.isfinite(a))
+        for s in (np.linspace(sp[fin].min(), sp[fin].max(), 5) if fin.size else ()):
+            q = int(fin[np.argmin(np.abs(sp[fin] - s))])
             ax.plot(lag[q], a[q], "o", ms=3, color="C3")
             ax.annotate(f"{sp[q]:.0f}", (lag[q], a[q]), fontsize=6)
         ax.set_title(f"{_probe_label(track.probes[p])} {order}X", fontsize=9)

@@ -59,6 +59,10 @@ PULSE_STOP_PERIODS = 2.5
 #: Speed reversal: the (median-smoothed) speed falls back from its running maximum (run-up; rises from its running
 #: minimum in a coast-down) by more than this fraction of the speed range.
 REVERSAL_FRACTION = 0.05
+#: The orders of a step are not read where the RMS of what the fit leaves exceeds this × the orders' RMS.
+NONSYNC_MAX_RATIO = 1.0
+#: ... or where the vector's second difference between steps exceeds this fraction of it.
+VECTOR_JUMP_MAX = 0.25
 #: Windows of the speed tracked from the signal, s, and their hop.
 SPEED_WINDOW_S = 1.0
 SPEED_HOP_S = 0.5
@@ -128,6 +132,16 @@ class OrderTrack:
     sample_bounds: np.ndarray
     notes: list[str] = field(default_factory=list)
     conventions: str = CONVENTIONS
+    #: (n_steps, n_probes, n_orders): the vector cannot be read — what the fit leaves exceeds
+    #: ``NONSYNC_MAX_RATIO`` × the orders' RMS, or it jumps by more than ``VECTOR_JUMP_MAX`` between steps
+    nonsync: np.ndarray | None = None
+    residual_rms_um: np.ndarray | None = None
+
+    def readable(self) -> np.ndarray:
+        """(n_steps, n_probes, n_orders) mask of the vectors that can be read: speed not in doubt, the order neither
+        swamped by non-synchronous vibration or noise nor jumping between revolutions."""
+        ok = np.broadcast_to(~self.in_doubt[:, None, None], self.vectors_um.shape)
+        return ok.copy() if self.nonsync is None else ok & ~self.nonsync
 
     @property
     def amp_um_pp(self) -> np.ndarray:
@@ -143,9 +157,9 @@ class OrderTrack:
 
     def peaks(self, order: int = 1) -> list[dict]:
         """Each probe's largest kX amplitude and its speed, where it is a resonance peak (the amplitude falls to
-        1/√2 of it on both sides within the run; steps in doubt left out)."""
+        1/√2 of it on both sides within the run; vectors that cannot be read, :meth:`readable`, left out)."""
         k = self.orders.index(order)
-        amp = np.where(self.in_doubt[:, None], np.nan, self.amp_um_pp[:, :, k])
+        amp = np.where(self.readable()[:, :, k], self.amp_um_pp[:, :, k], np.nan)
         out = []
         for p, (b, a) in enumerate(self.probes):
             if np.all(np.isnan(amp[:, p])):
@@ -255,7 +269,7 @@ def track_speed(rec: Recording, *, window_s: float = SPEED_WINDOW_S, hop_s: floa
 
 
 def _fit_steps(rec: Recording, theta: np.ndarray, bounds: np.ndarray, orders: tuple[int, ...]) -> tuple[
-        np.ndarray, np.ndarray]:
+        np.ndarray, np.ndarray, np.ndarray]:
     """Least-squares fit per step (samples ``bounds[i]:bounds[i+1]``), every probe at once, of
     ``c0 + d0·u + Σ_k Re(C_k e^{jkθ})`` with u ∈ [−½, ½) the position within the step: the linear term takes up
     the gap's change across the step (the centreline rising), which would otherwise leak into the orders. The
@@ -264,7 +278,8 @@ def _fit_steps(rec: Recording, theta: np.ndarray, bounds: np.ndarray, orders: tu
     sub-synchronous whirl then doubled the 1X peak and made it ragged. The price is a leak of a fast-changing
     vector into the other orders through a sharp critical (0.3 % of the 1X through a ζ = 0.05 critical at
     40 r/min/s, tests/test_features_transient.py). The Gram matrices and right-hand sides are sums over each step
-    (``np.add.reduceat``). Returns (C_k (n_steps, n_probes, n_orders) complex, c0 at mid-step (n_steps, n_probes))."""
+    (``np.add.reduceat``). Returns (C_k (n_steps, n_probes, n_orders) complex, c0 at mid-step (n_steps, n_probes),
+    RMS of what the fit leaves (n_steps, n_probes))."""
     i0, i1 = int(bounds[0]), int(bounds[-1])
     th = theta[i0:i1]
     idx = (bounds[:-1] - i0).astype(np.intp)
@@ -283,15 +298,20 @@ def _fit_steps(rec: Recording, theta: np.ndarray, bounds: np.ndarray, orders: tu
             gram[:, a, b] = g
             gram[:, b, a] = g
     rhs = np.empty((n_steps, m, len(rec.channels)))
+    sumsq = np.empty((n_steps, len(rec.channels)))
     for p, ch in enumerate(rec.channels):
         x = ch.data_um[i0:i1]
         for a in range(m):
             rhs[:, a, p] = np.add.reduceat(x * cols[a], idx)
+        sumsq[:, p] = np.add.reduceat(x * x, idx)
     coef = np.linalg.solve(gram, rhs)  # (n_steps, m, n_probes)
     vec = np.empty((n_steps, len(rec.channels), len(orders)), dtype=complex)
     for j in range(len(orders)):
         vec[:, :, j] = coef[:, 2 + 2 * j] - 1j * coef[:, 3 + 2 * j]
-    return vec, coef[:, 0]
+    # least squares: residual sum of squares = Σx² − βᵀ(Dᵀx)
+    rss = np.maximum(sumsq - np.einsum("sap,sap->sp", coef, rhs), 0.0)
+    resid_rms = np.sqrt(rss / lengths[:, None])
+    return vec, coef[:, 0], resid_rms
 
 
 def _step_bounds(rev_idx: np.ndarray, n_revs: int, revs_per_step: int) -> np.ndarray:
@@ -358,7 +378,18 @@ def track_orders(rec: Recording, *, orders: tuple[int, ...] = (1, 2), revs_per_s
     theta = np.zeros(n)
     theta[rev_idx[0]:rev_idx[-1]] = 2 * np.pi * np.interp(t, marks, np.arange(marks.size, dtype=float))
     bounds = _step_bounds(rev_idx, n_revs, revs_per_step)
-    vec, dc = _fit_steps(rec, theta, bounds, tuple(int(k) for k in orders))
+    vec, dc, resid = _fit_steps(rec, theta, bounds, tuple(int(k) for k in orders))
+    # a revolution is one order wide: a line within an order of 1X (a whirl at 0.4–0.5X, a whip) leaks into the
+    # fitted orders. Where what the fit leaves is larger than the orders it found, the orders are not read.
+    sync_rms = np.sqrt(0.5 * np.sum(np.abs(vec) ** 2, axis=2))
+    nonsync = np.repeat((resid > NONSYNC_MAX_RATIO * sync_rms)[:, :, None], len(orders), axis=2)
+    # and a vector that jumps from one step to the next is no synchronous response (which turns by a few degrees
+    # per revolution even through a critical) but a leak of a line beside the order, or the order in the noise
+    if vec.shape[0] >= 3:
+        jump = np.full(vec.shape, np.inf)
+        jump[1:-1] = np.abs(vec[1:-1] - 0.5 * (vec[:-2] + vec[2:])) / np.maximum(np.abs(vec[1:-1]), 1e-12)
+        jump[0], jump[-1] = jump[1], jump[-2]
+        nonsync |= jump > VECTOR_JUMP_MAX
     # step speed from the marks the step spans
     mk = np.searchsorted(rev_idx, bounds)
     t0, t1 = marks[mk[:-1]], marks[mk[1:]]
@@ -373,10 +404,17 @@ def track_orders(rec: Recording, *, orders: tuple[int, ...] = (1, 2), revs_per_s
         nearest = np.minimum(np.abs(mid - good_t[j - 1]), np.abs(mid - good_t[j]))
         in_doubt = nearest > half
     kind = _kind_and_reversal(speed, mid)
+    for jo, order in enumerate(orders):
+        bad = np.flatnonzero(nonsync[:, :, jo].sum(axis=1) * 2 > nonsync.shape[1])
+        if bad.size:
+            notes.append(f"{order}X not readable at most probes in {bad.size} of {speed.size} steps "
+                         f"({speed[bad].min():.0f}–{speed[bad].max():.0f} r/min): non-synchronous vibration (a whirl "
+                         "or whip? see the cascade) or noise swamps it, or it jumps between revolutions; left out of "
+                         "the Bode, polar and peaks")
     if kind == "steady":
         notes.append("the speed changes by less than 2 %: a steady recording, not a start-up or coast-down")
     return OrderTrack(mid, speed, _probe_names(rec), tuple(int(k) for k in orders), vec, dc, referenced, source,
-                      in_doubt, kind, bounds, notes)
+                      in_doubt, kind, bounds, notes, nonsync=nonsync, residual_rms_um=resid)
 
 
 @dataclass(frozen=True)

@@ -265,3 +265,22 @@ def test_plots_in_mils_scale_every_length_and_say_so():
         bode_figure(tr, units="inch")
     for f in (um, mil, cl):
         plt.close(f)
+
+
+def test_a_whirl_beside_1x_is_not_read_as_a_1x_peak():
+    """A sub-synchronous whirl at 0.45X (20× the 1X) from t = 20 s: one revolution is one order wide, so the
+    per-revolution fit would take much of it for 1X and report a 1X 'peak' there; those vectors jump from
+    revolution to revolution and are left out, and the resonance at 1500 r/min is still the peak."""
+    from dataclasses import replace
+
+    rec, _, _ = _synthetic()
+    t, th, _, _ = _ramp(900.0, 2100.0, 30.0)
+    whirl = np.where(t > 20.0, 200.0, 0.0)
+    chans = [replace(c, data=c.data + whirl * np.cos(0.45 * th - math.radians(c.angle_deg))) for c in rec.channels]
+    tr = T.track_orders(replace(rec, channels=chans))
+    late = tr.time_s > 20.5
+    assert tr.readable()[late, :, 0].mean() < 0.1
+    assert tr.readable()[tr.time_s < 19.0, :, 0].mean() > 0.95
+    assert any(n.startswith("1X not readable") for n in tr.notes)
+    pk = tr.peaks(1)
+    assert pk and all(abs(q["speed_rpm"] / 1500.0 - 1) < 0.01 for q in pk)
