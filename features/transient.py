@@ -63,6 +63,8 @@ REVERSAL_FRACTION = 0.05
 NONSYNC_MAX_RATIO = 1.0
 #: ... or where the vector's second difference between steps exceeds this fraction of it.
 VECTOR_JUMP_MAX = 0.25
+#: ... and a vector is read only inside a run of at least this many readable steps.
+MIN_READABLE_RUN = 5
 #: Windows of the speed tracked from the signal, s, and their hop.
 SPEED_WINDOW_S = 1.0
 SPEED_HOP_S = 0.5
@@ -390,6 +392,14 @@ def track_orders(rec: Recording, *, orders: tuple[int, ...] = (1, 2), revs_per_s
         jump[1:-1] = np.abs(vec[1:-1] - 0.5 * (vec[:-2] + vec[2:])) / np.maximum(np.abs(vec[1:-1]), 1e-12)
         jump[0], jump[-1] = jump[1], jump[-2]
         nonsync |= jump > VECTOR_JUMP_MAX
+    # a few steps that pass among many that do not are chance, not a readable stretch
+    for p_ in range(nonsync.shape[1]):
+        for jo in range(nonsync.shape[2]):
+            ok = np.concatenate([[False], ~nonsync[:, p_, jo], [False]])
+            edges = np.flatnonzero(np.diff(ok.astype(np.int8)))
+            for a, b in zip(edges[::2], edges[1::2]):
+                if b - a < MIN_READABLE_RUN:
+                    nonsync[a:b, p_, jo] = True
     # step speed from the marks the step spans
     mk = np.searchsorted(rev_idx, bounds)
     t0, t1 = marks[mk[:-1]], marks[mk[1:]]
