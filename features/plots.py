@@ -259,7 +259,7 @@ def campbell_figure(speeds_rpm: np.ndarray, frequencies_hz: np.ndarray, damping_
     ax.set_ylim(0, min(float(frequencies_hz.max()) * 1.05, 2.6 * speeds_rpm.max() / 60.0))
     ax.legend(fontsize=8, loc="upper left")
     ax.set_title(title or "Campbell diagram of the plant model (linearised about the static equilibrium)")
-    fig.subplots_adjust(left=0.08, right=0.95, bottom=0.10, top=0.93, hspace=0.35, wspace=0.35)
+    fig.subplots_adjust(left=0.08, right=0.95, bottom=0.15, top=0.93, hspace=0.35, wspace=0.35)
     _footer(fig)
     return fig
 

@@ -73,7 +73,9 @@ def campbell(plant: Plant, speeds_rpm: np.ndarray | list[float]) -> CampbellData
 
 def critical_speeds(data: CampbellData, orders: tuple[int, ...] = (1,)) -> list[CriticalSpeed]:
     """Where a branch of ``data`` crosses ``order`` × running speed (linear interpolation between the grid
-    speeds), with AF ≥ :data:`MIN_AMPLIFICATION_FACTOR`; sorted by speed."""
+    speeds), with AF ≥ :data:`MIN_AMPLIFICATION_FACTOR`; sorted by speed. A branch is the k-th lowest frequency,
+    so where two modes cross near the line its damping may be either's: a critical there can come out twice, a
+    few r/min apart (the linearised model does not track mode shapes)."""
     out: list[CriticalSpeed] = []
     sp = data.speeds_rpm
     for order in orders:
