@@ -108,3 +108,17 @@ def test_a_model_behind_the_variable_speed_interface_runs_the_same():
     b = simulate_transient(PlantModel(plant, 0.2, 0.05), prof, settle_revs=20)
     assert np.array_equal(a.journal_displacements_m, b.journal_displacements_m)
     assert np.array_equal(a.keyphasor_times_s, b.keyphasor_times_s)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"sample_rate_hz": 100.0}, "sample_rate_hz must be in"),
+    ({"settle_revs": -1}, "settle_revs must be in"),
+    ({"misalignment": 1.5}, "misalignment"),
+])
+def test_simulate_transient_refuses_bad_arguments(kwargs, message):
+    args = {"misalignment": 0.1, "unbalance": 0.05, **kwargs}
+    with pytest.raises(ValueError, match=message):
+        simulate_transient(Plant.default(), SpeedProfile.linear(1000, 1500, 2), args.pop("misalignment"),
+                           args.pop("unbalance"), **args)
+    with pytest.raises(ValueError, match="profile must be a SpeedProfile"):
+        simulate_transient(Plant.default(), "1000:1500:2")  # type: ignore[arg-type]
