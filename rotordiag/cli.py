@@ -18,13 +18,14 @@ app = typer.Typer(
 
 def _register_all() -> None:
     from rotordiag.models import cli as models_cli
+    from rotordiag.models import transient_cli
     from rotordiag.service import cli as service_cli
     from rotordiag.simulator import cli as simulator_cli
     from rotordiag.simulator.analysis import cli as analysis_cli
     from rotordiag.simulator.dataset import cli as dataset_cli
     from rotordiag.simulator.steady import cli as steady_cli
 
-    for module in (simulator_cli, analysis_cli, dataset_cli, steady_cli, models_cli, service_cli):
+    for module in (simulator_cli, analysis_cli, dataset_cli, steady_cli, models_cli, transient_cli, service_cli):
         module.register(app)
 
 

@@ -45,6 +45,7 @@ def register(app: typer.Typer) -> None:
             raise typer.Exit(2) from None
 
     _register_baseline(app)
+    _register_report(app)
 
 
 def _register_baseline(app: typer.Typer) -> None:
@@ -178,3 +179,116 @@ class _DbState:
 
     def __init__(self, sessions) -> None:
         self.sessions = sessions
+
+
+def asset_history_dicts(asset_id: str, limit: int = 200) -> list[dict]:
+    """An asset's stored diagnoses from the service's database (ROTORDIAG_* settings, as ``rotordiag serve``),
+    oldest first, as the plain dicts :mod:`rotordiag.models.report` takes. Raises ValueError for an unknown asset
+    or unreadable settings."""
+    from pydantic import ValidationError
+
+    from rotordiag.service.core.config import Settings
+    from rotordiag.service.core.db import init_db, make_engine
+    from rotordiag.service.store import asset_history
+
+    try:
+        settings = Settings()
+    except ValidationError as exc:
+        raise ValueError(f"invalid service settings: {exc}") from None
+    sessions = init_db(make_engine(settings.effective_database_url))
+    with sessions() as s:
+        rows = asset_history(s, asset_id, limit, None)
+        out = [{"created_at": r.created_at.strftime("%Y-%m-%d %H:%M"), "severity": r.severity,
+                "misalignment": r.misalignment, "misalignment_low": r.misalignment_low,
+                "misalignment_high": r.misalignment_high, "speed_rpm": r.speed_rpm,
+                "status": (r.verdict or {}).get("status")} for r in rows]
+    if not out:
+        raise ValueError(f"asset {asset_id!r} has no stored diagnoses in {settings.effective_database_url}")
+    return out
+
+
+def _register_report(app: typer.Typer) -> None:
+    """``rotordiag report``: a PDF and an HTML page to hand on."""
+
+    @app.command()
+    def report(
+        recording: Optional[Path] = typer.Argument(None, help="A steady recording: its verdict, reasons and evidence."),
+        out: Path = typer.Option(..., "--out", help="The PDF to write (the HTML page goes next to it, .html)."),
+        startup: Optional[Path] = typer.Option(None, "--startup", help="A start-up or coast-down recording: its Bode, "
+                                                                       "polar, cascade, centreline, orbit plots."),
+        asset: Optional[str] = typer.Option(None, "--asset", help="The asset's id: its trend from the service's "
+                                                                  "database (ROTORDIAG_* settings, as `rotordiag serve`)."),
+        registry: Optional[Path] = typer.Option(None, "--registry", help="Model registry (default: the shipped one)."),
+        version: Optional[str] = typer.Option(None, "--version", help="Model version (default: the active one)."),
+        sample_rate_hz: Optional[float] = typer.Option(None, "--sample-rate-hz", help="Sample rate, Hz (both files)."),
+        channels: Optional[str] = typer.Option(None, "--channels", help="Probe layout in file order, BEARING@ANGLE."),
+        keyphasor_channel: Optional[str] = typer.Option(None, "--keyphasor-channel", help="Raw keyphasor channel (column or index)."),
+        clearance_um: Optional[float] = typer.Option(None, "--clearance-um", help="Radial bearing clearance, µm."),
+        plant: Optional[Path] = typer.Option(None, "--plant", help="Plant file: adds its Campbell diagram."),
+        title: Optional[str] = typer.Option(None, "--title", help="Report title."),
+    ) -> None:
+        """Write a report (PDF + HTML): the verdict with its status, reasons and evidence, the start-up plots, the trend."""
+        if recording is None and startup is None and asset is None:
+            typer.secho("error: give a RECORDING, --startup or --asset", fg="red", err=True)
+            raise typer.Exit(2)
+        if out.suffix.lower() != ".pdf":
+            typer.secho(f"error: --out {out}: the report is a .pdf (the .html is written next to it)", fg="red",
+                        err=True)
+            raise typer.Exit(2)
+        from rotordiag.models.cli import default_registry
+        from rotordiag.models.registry import RegistryError
+        from rotordiag.models.report import build_report, write_report
+
+        given = {"sample_rate_hz": sample_rate_hz, "channels": channels, "keyphasor_channel": keyphasor_channel,
+                 "clearance_um": clearance_um}
+        recs: list[dict] = []
+        verdict = None
+        note = None
+        track = None
+        figs: dict = {}
+        history: list[dict] = []
+        try:
+            if recording is not None:
+                from rotordiag.features.reader import read_recording
+                from rotordiag.models.diagnose_files import diagnose_read, load_options
+                from rotordiag.models.predict import load_bundle
+
+                res = read_recording(recording, options=load_options(recording, None, given))
+                try:
+                    bundle = load_bundle(registry or default_registry(), version)
+                except RegistryError as exc:
+                    raise ValueError(str(exc)) from None
+                v, res, _ = diagnose_read(bundle, res)
+                verdict = v.to_dict()
+                recs.append({"file": str(recording), "role": "steady", "format": res.format, "notes": res.notes})
+            else:
+                note = "no steady recording given: no verdict (the start-up plots and the trend are evidence only)"
+            if startup is not None:
+                from rotordiag.features.plots import transient_figures
+                from rotordiag.features.transient import track_orders
+                from rotordiag.models.transient_cli import read_transient
+
+                sres = read_transient(startup, given)
+                track = track_orders(sres.recording)
+                pl = None
+                if plant is not None:
+                    from rotordiag.simulator import Plant
+
+                    pl = Plant.from_file(plant)
+                figs = transient_figures(sres.recording, track, plant=pl)
+                recs.append({"file": str(startup), "role": "start-up", "format": sres.format, "notes": sres.notes})
+            if asset is not None:
+                history = asset_history_dicts(asset)
+            content = build_report(title=title or f"rotordiag report{' — ' + asset if asset else ''}", asset_id=asset,
+                                   recordings=recs, verdict=verdict, verdict_note=note, history=history,
+                                   track=track, figures=figs)
+            paths = write_report(content, out, out.with_suffix(".html"))
+        except (ValueError, OSError) as exc:
+            typer.secho(f"error: {exc}", fg="red", err=True)
+            raise typer.Exit(2) from None
+        finally:
+            import matplotlib.pyplot as plt
+
+            for f in figs.values():
+                plt.close(f)
+        typer.echo("wrote " + ", ".join(str(p) for p in paths))

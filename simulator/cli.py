@@ -109,16 +109,20 @@ def probe_recording(res, sample_rate_hz: float, snr_db: float, runout_um: float,
 
 
 def write_probes(path: Path, waveforms_um, channels, sample_rate_hz: float, *, speed_rpm: float | None = None,
-                 clearance_um: float | None = None) -> None:
+                 clearance_um: float | None = None, keyphasor_signal=None) -> None:
     """Write probe waveforms (µm) as .csv (``time_s`` then ``b<bearing>@<angle>`` columns, times to
     6 significant digits as DAQ exports print them), .npy (channels × points), .h5 (``waveforms``,
     ``channels`` table, ``sample_rate_hz`` / ``units`` / ``speed_rpm`` / ``clearance_um`` attributes) or
     .uff/.unv (universal file, one binary type-58b time record per probe, ID line 1 ``b<bearing>@<angle>``,
-    ordinate unit label ``um``; written with pyuff)."""
+    ordinate unit label ``um``; written with pyuff). A ``keyphasor_signal`` (raw pulse channel) goes last: a
+    ``kp`` column / record, or the last row of .npy / .h5 (read with ``--keyphasor-channel <its index>``)."""
     import numpy as np
 
     suffix = path.suffix.lower()
     names = [f"b{b}@{a:g}" for b, a in channels]
+    if keyphasor_signal is not None:
+        waveforms_um = np.vstack([waveforms_um, np.asarray(keyphasor_signal, dtype=float)[None]])
+        names = names + ["kp"]
     if suffix == ".csv":
         t = np.arange(waveforms_um.shape[1]) / sample_rate_hz
         with path.open("w") as fh:
@@ -145,7 +149,7 @@ def write_probes(path: Path, waveforms_um, channels, sample_rate_hz: float, *, s
 
         path.unlink(missing_ok=True)  # pyuff appends to an existing file
         uff = pyuff.UFF(str(path))
-        for k, (name, (bearing, _angle)) in enumerate(zip(names, channels)):
+        for k, (name, (bearing, _angle)) in enumerate(zip(names, [*channels, (0, 0.0)])):
             record = {
                 "type": 58, "binary": 1, "id1": name, "id2": "rotordiag simulate --probes-out", "id3": "",
                 "id4": "", "id5": "", "func_type": 1, "func_id": k + 1, "ver_num": 0, "load_case_id": 0,
@@ -299,6 +303,55 @@ def register(app: typer.Typer) -> None:
             except ValueError as exc:
                 raise typer.BadParameter(str(exc), param_hint="--probes-out") from None
             typer.echo(f"wrote {probes_out} ({w.shape[0]} probes × {w.shape[1]} samples at {fs:g} Hz, µm)", err=True)
+
+    @app.command()
+    def runup(
+        profile: str = typer.Option(..., help="Speed profile: START:END:DURATION (r/min, r/min, s), e.g. "
+                                              "100:3000:60 (a run-up; 3000:100:60 a coast-down), or time@speed "
+                                              "points, e.g. 0@100,20@1500,60@3000. The model covers 100–6000 r/min."),
+        misalignment: float = typer.Option(0.0, help="Non-dimensional parallel misalignment Δ = δ/c (0–0.9)."),
+        unbalance: float = typer.Option(0.05, help="Non-dimensional generator unbalance A = a/c (0–0.5)."),
+        mechanism: str = typer.Option("pin", help=MECHANISM_HELP),
+        plant: Optional[Path] = typer.Option(None, help="Plant file (TOML or JSON); default MODEL.md's plant."),
+        sample_rate_hz: float = typer.Option(2560.0, "--sample-rate-hz", help="Acquisition rate, Hz."),
+        settle_revs: int = typer.Option(200, help="Revolutions at the first speed before t = 0 (a settled start)."),
+        offset_angle_deg: float = typer.Option(0.0, help="Offset direction φ0, degrees (as `simulate`)."),
+        snr_db: float = typer.Option(40.0, "--snr-db", help="Probe noise, dB (inf: none)."),
+        seed: int = typer.Option(0, "--seed", help="Seed of the probe noise."),
+        out: Path = typer.Option(..., "--out", help="Probe file: .csv (with a kp keyphasor column), .npy/.h5 (the "
+                                                    "keyphasor as the last channel, index 8) or .uff."),
+    ) -> None:
+        """Simulate a run-up or coast-down of the paper's model and write what 8 probes and a keyphasor record."""
+        import math
+
+        from rotordiag.simulator.transient import SpeedProfile, simulate_transient
+
+        pl = load_plant(plant)
+        try:
+            prof = SpeedProfile.parse(profile)
+            res = simulate_transient(pl, prof, misalignment, unbalance, mechanism=mechanism,
+                                     sample_rate_hz=sample_rate_hz, settle_revs=settle_revs,
+                                     offset_angle_rad=math.radians(offset_angle_deg))
+            w = res.probe_waveforms_um(snr_db=snr_db, seed=seed)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc)) from None
+        typer.echo(f"{prof.kind} {prof.speeds_rpm[0]:g} → {prof.speeds_rpm[-1]:g} r/min in {prof.duration_s:g} s: "
+                   f"status {res.status} ({res.message}); {res.time_s.size} samples, "
+                   f"{res.keyphasor_times_s.size} keyphasor pulses, {res.wall_time_s:.1f} s", err=True)
+        if res.time_s.size < 16:
+            raise typer.BadParameter("the run stopped before it recorded anything; nothing written")
+        from .transient import DEFAULT_CHANNELS
+
+        tmp = out.with_name(f".{out.name}.part{out.suffix}")
+        try:
+            write_probes(tmp, w, DEFAULT_CHANNELS, sample_rate_hz, clearance_um=pl.clearance_m * 1e6,
+                         keyphasor_signal=res.keyphasor_signal())
+            tmp.replace(out)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--out") from None
+        finally:
+            tmp.unlink(missing_ok=True)
+        typer.echo(f"wrote {out} (8 probes + keyphasor × {w.shape[1]} samples at {sample_rate_hz:g} Hz, µm)", err=True)
 
     plant_app = typer.Typer(help="Build plant files.", no_args_is_help=True)
     app.add_typer(plant_app, name="plant")
