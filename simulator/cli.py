@@ -306,8 +306,8 @@ def register(app: typer.Typer) -> None:
 
     @app.command()
     def runup(
-        profile: str = typer.Option(..., help="Speed profile: START:END:DURATION (r/min, r/min, s), e.g. "
-                                              "100:3000:60 (a run-up; 3000:100:60 a coast-down), or time@speed "
+        profile: str = typer.Option(..., help="Speed profile: start, end and duration separated by colons (r/min, r/min, s), e.g. "
+                                              "100:3000:60 (a run-up; 3000:120:60 a coast-down), or time@speed "
                                               "points, e.g. 0@100,20@1500,60@3000. The model covers 100–6000 r/min."),
         misalignment: float = typer.Option(0.0, help="Non-dimensional parallel misalignment Δ = δ/c (0–0.9)."),
         unbalance: float = typer.Option(0.05, help="Non-dimensional generator unbalance A = a/c (0–0.5)."),
