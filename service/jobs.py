@@ -195,6 +195,8 @@ class JobManager:
         self._unrecorded: dict[str, dict[str, Any]] = {}  # outcomes the database refused, written again later
         self._lock = threading.RLock()
         self._retry_thread: threading.Thread | None = None
+        self._interrupt_pending = False                   # recover() could not write yet
+        self._stale: list[str] | None = None              # the rows it has to mark
 
     # -- registry of work functions ---------------------------------------------------------
     def register(self, kind: str, work: WorkFunction) -> None:
@@ -209,11 +211,12 @@ class JobManager:
         return self._work[kind]
 
     # -- lifecycle --------------------------------------------------------------------------
-    def mark_interrupted(self) -> int:
-        """Mark jobs a previous process left queued/running as ``interrupted``; return how many."""
+    def mark_interrupted(self, ids: list[str] | None = None) -> int:
+        """Mark jobs a previous process left queued/running (those of ``ids`` only, when given) as
+        ``interrupted``; return how many."""
         with self.sessions.begin() as s:
             res = s.execute(
-                update(Job).where(Job.status.in_(ACTIVE)).values(
+                update(Job).where(Job.status.in_(ACTIVE), *([Job.id.in_(ids)] if ids is not None else [])).values(
                     status="interrupted", message="the server stopped while this job was queued or running; "
                     "POST /jobs/{id}/resume continues it", updated_at=utcnow()))
             return res.rowcount or 0
@@ -473,8 +476,32 @@ class JobManager:
         with self.sessions.begin() as s:
             s.execute(update(Job).where(Job.id == job_id, Job.status.in_(over)).values(**values, updated_at=utcnow()))
 
+    def recover(self) -> int:
+        """At startup: mark the jobs a previous process left queued/running ``interrupted``; when the database
+        refuses the write (a full disk), keep trying every few seconds instead of failing the start."""
+        try:
+            return self.mark_interrupted()
+        except DatabaseError as exc:
+            log.error("cannot mark the jobs of the previous run interrupted (%s); retrying every %g s",
+                      exc.orig, RECORD_RETRY_S)
+            try:
+                with self.sessions() as s:
+                    self._stale = list(s.scalars(select(Job.id).where(Job.status.in_(ACTIVE))))
+            except DatabaseError:
+                self._stale = None                        # unreadable too: all active rows (none run yet)
+            self._interrupt_pending = True
+            self._start_retry()
+            return 0
+
     def _flush_unrecorded(self) -> int:
         """Write the outcomes the database refused before; returns how many are still unwritten."""
+        if self._interrupt_pending:
+            try:
+                with self._lock:
+                    self.mark_interrupted(self._stale)
+                    self._interrupt_pending = False
+            except DatabaseError:
+                return len(self._unrecorded) + 1
         with self._lock:
             for job_id, outcome in list(self._unrecorded.items()):
                 try:

@@ -39,7 +39,7 @@ class AppState:
         sessions = init_db(engine)
         models = ModelStore.open(settings)
         jobs = JobManager(settings, sessions, models)
-        n = jobs.mark_interrupted()
+        n = jobs.recover()
         if n:
             log.warning("%d job(s) were running when the server last stopped; marked interrupted "
                         "(POST /jobs/{id}/resume continues them)", n)

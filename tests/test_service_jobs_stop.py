@@ -309,3 +309,37 @@ def test_a_signal_stops_the_server_in_the_stated_time_and_the_job_resumes(tmp_pa
     finally:
         proc.send_signal(signal.SIGTERM)
         proc.communicate(timeout=STOP_BOUND_S + 30)
+
+
+def test_a_start_on_a_full_disk_still_starts_and_marks_the_previous_jobs_once_it_can(tmp_path, monkeypatch):
+    from rotordiag.service import state as state_module
+
+    monkeypatch.setattr(jobs_module, "RECORD_RETRY_S", 0.3)
+    settings = make_settings(tmp_path)
+    with TestClient(create_app(settings)) as c:
+        engine = c.app.state.rd.engine
+        with engine.begin() as conn:            # a job the previous process left running
+            conn.execute(text("INSERT INTO jobs (id, kind, status, params, progress, stage, message, attempts, "
+                              "created_at, updated_at) VALUES ('old-job', 'dataset', 'running', '{}', 0.5, "
+                              "'simulating', 'simulating: 8/16', 1, '2026-01-01 00:00:00', '2026-01-01 00:00:00')"))
+        c.app.state.rd.jobs.mark_interrupted = lambda ids=None: 0   # as if this process were killed
+    on = {"full": True}
+    make_engine = state_module.make_engine
+
+    def full_engine(url):
+        engine = make_engine(url)
+        _disk(engine, on)
+        return engine
+
+    monkeypatch.setattr(state_module, "make_engine", full_engine)
+    app = create_app(settings)
+    with TestClient(app) as c:
+        h = c.get("/health")
+        assert h.status_code == 503 and "disk is full" in h.json()["detail"], h.text
+        assert c.get("/jobs/old-job").json()["status"] == "running"      # cannot be marked yet
+        on["full"] = False
+        app.state.rd.jobs.register("dataset", lambda params, ctx: {"ok": True})
+        j = _wait(c.get, "old-job", {"interrupted"}, timeout=10)
+        assert "resume" in j["message"]
+        assert c.post("/jobs/old-job/resume", headers=auth()).status_code == 200
+        assert _wait(c.get, "old-job", {"succeeded"})["result"] == {"ok": True}
