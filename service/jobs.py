@@ -349,14 +349,13 @@ class JobManager:
         """
         with self._lock:
             ctx = self._live.get(job_id)
-            job = self.get(job_id)
+            job = self.get(job_id)           # with an outcome not yet written: that outcome (finished)
             if job is None:
                 return None
             if ctx is None:
                 if job.status not in ACTIVE:
                     raise ValueError(f"job {job_id} is {job.status}; only queued or running jobs can be cancelled")
-                # queued (its thread skips it), or running in no thread of this process (an outcome unwritten)
-                self._unrecorded.pop(job_id, None)
+                # queued (its thread will skip it), or left running by a previous process and not yet marked
                 with self.sessions.begin() as s:
                     s.execute(update(Job).where(Job.id == job_id).values(
                         status="cancelled", stage="cancelled", message=_CANCELLED, finished_at=utcnow(),
