@@ -1,11 +1,21 @@
-"""Job manager: jobs are rows in the database, run in a small thread pool, fan out on Dask.
+"""Job manager: jobs are rows in the database, run in a few job threads, fan out on Dask.
 
 A job's row is the source of truth. Whatever happens to the process, a job is
-in one of ``queued``, ``running``, ``succeeded``, ``failed``, ``interrupted``.
+in one of ``queued``, ``running``, ``succeeded``, ``failed``, ``interrupted``, ``cancelled``.
 At startup every ``queued``/``running`` row left by a previous process is
 marked ``interrupted``; ``resume`` starts it again, and the work functions are
 resumable (dataset generation completes only the missing samples of its HDF5
 file; retraining reuses a finished dataset), so no finished work is lost.
+
+Stopping: ``cancel`` (``POST /jobs/{id}/cancel``) and a server shutdown stop a running job
+within seconds at any stage: its Dask tasks are cancelled and the workers running them
+restarted, a step in a child process (model training) is killed, and every progress report
+checks. At shutdown the job threads get ``shutdown_timeout_s``; a job still running then is
+left ``interrupted`` and the process exits anyway (the threads are daemons).
+
+An outcome that cannot be written (a full disk) is kept in memory, shown by ``get``/``list``
+and written again every few seconds until it lands; a row left ``running`` by a thread
+that has ended can be resumed or cancelled, and at the next start it is ``interrupted``.
 
 The Dask client is created lazily on the first job: a connection to
 ``dask_scheduler_address`` when set, otherwise a ``distributed.LocalCluster``
@@ -15,14 +25,16 @@ jobs and closed at shutdown.
 from __future__ import annotations
 
 import logging
+import queue
 import threading
+import time
 import traceback
 import uuid
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from sqlalchemy import func, select, update
+from sqlalchemy.exc import DatabaseError
 from sqlalchemy.orm import sessionmaker
 
 from .core.config import Settings
@@ -31,31 +43,52 @@ from .core.db import Job, utcnow
 log = logging.getLogger("rotordiag.service.jobs")
 
 ACTIVE = ("queued", "running")
-RESUMABLE = ("interrupted", "failed")
-STATUSES = ("queued", "running", "succeeded", "failed", "interrupted")
+RESUMABLE = ("interrupted", "failed", "cancelled")
+STATUSES = ("queued", "running", "succeeded", "failed", "interrupted", "cancelled")
+
+#: seconds between attempts to write an outcome the database refused
+RECORD_RETRY_S = 2.0
+#: seconds ``cancel`` waits for the job's thread to end before answering
+CANCEL_WAIT_S = 10.0
 
 
 class JobInterrupted(Exception):
     """Raised inside a job when the server is shutting down."""
 
 
+class JobCancelled(Exception):
+    """Raised inside a job that was cancelled (``POST /jobs/{id}/cancel``)."""
+
+
 class JobContext:
-    """What a work function gets: settings, Dask client, model store, progress reporting."""
+    """What a work function gets: settings, Dask client, model store, progress reporting, stop checks."""
 
     def __init__(self, manager: JobManager, job_id: str) -> None:
         self._manager = manager
         self.job_id = job_id
         self.settings = manager.settings
         self.models = manager.models
+        self.cancel_event = threading.Event()
+        self.done = threading.Event()
+        self._on_stop: list[Callable[[], None]] = []
+        self._lock = threading.Lock()
+        self._futures: list[Any] = []
 
-    def client(self):
-        """The shared ``distributed.Client`` (created on first use)."""
-        return self._manager.client()
+    def client(self) -> Any:
+        """The shared ``distributed.Client`` (created on first use), seen through a wrapper that remembers
+        this job's futures so that a cancel or a shutdown can cancel them."""
+        return _JobClient(self._manager.client(), self)
 
-    def progress(self, fraction: float, stage: str | None = None, message: str | None = None) -> None:
-        """Record progress (0-1); raises :class:`JobInterrupted` when the server is stopping."""
+    def check(self) -> None:
+        """Raise :class:`JobInterrupted` when the server is stopping, :class:`JobCancelled` when cancelled."""
         if self._manager.stopping.is_set():
             raise JobInterrupted("server shutting down")
+        if self.cancel_event.is_set():
+            raise JobCancelled("cancelled")
+
+    def progress(self, fraction: float, stage: str | None = None, message: str | None = None) -> None:
+        """Record progress (0-1); raises :class:`JobInterrupted`/:class:`JobCancelled` when the job must stop."""
+        self.check()
         values: dict[str, Any] = {"progress": float(min(max(fraction, 0.0), 1.0)), "updated_at": utcnow()}
         if stage is not None:
             values["stage"] = stage
@@ -64,16 +97,76 @@ class JobContext:
         with self._manager.sessions.begin() as s:
             s.execute(update(Job).where(Job.id == self.job_id).values(**values))
 
+    def on_stop(self, hook: Callable[[], None]) -> Callable[[], None]:
+        """Call ``hook()`` (from another thread) when this job is cancelled or the server stops; runs it at
+        once when that has already happened. Returns a function that unregisters it."""
+        with self._lock:
+            self._on_stop.append(hook)
+        if self.stopping:
+            _quietly(hook)
+
+        def remove() -> None:
+            with self._lock:
+                if hook in self._on_stop:
+                    self._on_stop.remove(hook)
+        return remove
+
+    def _stop(self) -> None:
+        """Stop whatever the job is waiting on: its Dask tasks, its child processes."""
+        with self._lock:
+            hooks, futures = list(self._on_stop), list(self._futures)
+        for hook in hooks:
+            _quietly(hook)
+        if futures:   # at shutdown the cluster closes anyway: no worker restart
+            self._manager.cancel_futures(futures, restart=not self._manager.stopping.is_set())
+
+    def _track(self, future: Any) -> None:
+        with self._lock:
+            self._futures.append(future)
+            if len(self._futures) > 4096:           # keep the unfinished ones only
+                self._futures = [f for f in self._futures if not f.done()]
+        if self.stopping:
+            self._stop()
+
     @property
     def stopping(self) -> bool:
-        return self._manager.stopping.is_set()
+        """The job must stop: cancelled, or the server is shutting down."""
+        return self._manager.stopping.is_set() or self.cancel_event.is_set()
+
+    @property
+    def cancelled(self) -> bool:
+        return self.cancel_event.is_set()
+
+
+class _JobClient:
+    """A ``distributed.Client`` that records the futures one job submits (everything else passes through)."""
+
+    def __init__(self, client: Any, ctx: JobContext) -> None:
+        self._client = client
+        self._ctx = ctx
+
+    def submit(self, *args: Any, **kwargs: Any) -> Any:
+        self._ctx.check()
+        future = self._client.submit(*args, **kwargs)
+        self._ctx._track(future)
+        return future
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._client, name)
+
+
+def _quietly(fn: Callable[[], None]) -> None:
+    try:
+        fn()
+    except Exception:  # noqa: BLE001 - a stop hook must not stop the others
+        log.exception("stopping a job")
 
 
 WorkFunction = Callable[[dict[str, Any], JobContext], dict[str, Any]]
 
 
 class JobManager:
-    """Create, run, resume and report jobs.
+    """Create, run, cancel, resume and report jobs.
 
     Parameters
     ----------
@@ -89,11 +182,21 @@ class JobManager:
         self.sessions = sessions
         self.models = models
         self.stopping = threading.Event()
-        self._executor = ThreadPoolExecutor(settings.job_threads, thread_name_prefix="rotordiag-job")
+        self._queue: queue.Queue[str | None] = queue.Queue()
+        self._threads = [threading.Thread(target=self._thread_main, name=f"rotordiag-job-{i}", daemon=True)
+                         for i in range(settings.job_threads)]
+        for t in self._threads:
+            t.start()
         self._client = None
         self._cluster = None
         self._client_lock = threading.Lock()
         self._work: dict[str, WorkFunction] = {}
+        self._live: dict[str, JobContext] = {}           # jobs whose thread runs now
+        self._unrecorded: dict[str, dict[str, Any]] = {}  # outcomes the database refused, written again later
+        self._lock = threading.RLock()
+        self._retry_thread: threading.Thread | None = None
+        self._interrupt_pending = False                   # recover() could not write yet
+        self._stale: list[str] | None = None              # the rows it has to mark
 
     # -- registry of work functions ---------------------------------------------------------
     def register(self, kind: str, work: WorkFunction) -> None:
@@ -108,24 +211,42 @@ class JobManager:
         return self._work[kind]
 
     # -- lifecycle --------------------------------------------------------------------------
-    def mark_interrupted(self) -> int:
-        """Mark jobs a previous process left queued/running as ``interrupted``; return how many."""
+    def mark_interrupted(self, ids: list[str] | None = None) -> int:
+        """Mark jobs a previous process left queued/running (those of ``ids`` only, when given) as
+        ``interrupted``; return how many."""
         with self.sessions.begin() as s:
             res = s.execute(
-                update(Job).where(Job.status.in_(ACTIVE)).values(
+                update(Job).where(Job.status.in_(ACTIVE), *([Job.id.in_(ids)] if ids is not None else [])).values(
                     status="interrupted", message="the server stopped while this job was queued or running; "
                     "POST /jobs/{id}/resume continues it", updated_at=utcnow()))
             return res.rowcount or 0
 
     def shutdown(self) -> None:
-        """Stop accepting work, interrupt running jobs, close the Dask client."""
+        """Stop accepting work, stop running jobs (Dask tasks cancelled, child processes killed), wait for
+        the job threads at most ``settings.shutdown_timeout_s``, close the Dask client.
+
+        Running and queued jobs are left ``interrupted`` (resumable); when the database cannot be written
+        now, the next start marks them so."""
         self.stopping.set()
-        self._executor.shutdown(wait=False, cancel_futures=True)
-        self.mark_interrupted()   # right away, in case the process is killed while we wait below
-        self._close_client()      # makes running simulations fail fast
-        # A job thread in a step that cannot be interrupted (a model fit) ends it first; it then records
-        # its own outcome ("succeeded" when the step was the last one).
-        self._executor.shutdown(wait=True)
+        for _ in self._threads:
+            self._queue.put(None)
+        with self._lock:
+            live = list(self._live.values())
+        for ctx in live:
+            ctx._stop()
+        try:
+            self.mark_interrupted()   # right away, in case the process is killed while we wait below
+        except DatabaseError as exc:
+            log.error("cannot mark the running jobs interrupted (%s); the next start does", exc.orig)
+        deadline = time.monotonic() + self.settings.shutdown_timeout_s
+        for ctx in live:
+            ctx.done.wait(max(0.0, deadline - time.monotonic()))
+        still = [ctx.job_id for ctx in live if not ctx.done.is_set()]
+        if still:
+            log.warning("job(s) %s did not stop within %g s; left interrupted (resumable)", ", ".join(still),
+                        self.settings.shutdown_timeout_s)
+        self._flush_unrecorded()
+        self._close_client()
 
     def client(self):
         """The Dask client shared by jobs, created on first use."""
@@ -150,6 +271,25 @@ class JobManager:
                     self._client = Client(self._cluster, set_as_default=False)
             return self._client
 
+    def cancel_futures(self, futures: list[Any], restart: bool = True) -> None:
+        """Cancel Dask futures and, with ``restart``, restart the workers still running them (a running task
+        is not interrupted by a cancel; its worker process is)."""
+        with self._client_lock:
+            client = self._client
+        if client is None:
+            return
+        keys = {f.key for f in futures if not f.done()}
+        if not keys:
+            return
+        try:
+            busy = [w for w, ks in client.processing().items() if keys & set(ks)]
+        except Exception:  # noqa: BLE001 - best effort: the cancel below still happens
+            busy = []
+        client.cancel(futures, force=True)
+        if busy and restart:
+            threading.Thread(target=_quietly, args=(lambda: client.restart_workers(busy, timeout=60),),
+                             name="rotordiag-job-restart", daemon=True).start()
+
     def _close_client(self) -> None:
         with self._client_lock:
             client, cluster = self._client, self._cluster
@@ -157,49 +297,93 @@ class JobManager:
         for thing in (client, cluster):
             if thing is not None:
                 try:
-                    thing.close()
-                except Exception:  # pragma: no cover - best effort at shutdown
-                    log.exception("closing Dask %s", type(thing).__name__)
+                    thing.close(timeout=5)
+                except Exception:  # noqa: BLE001 - best effort at shutdown
+                    log.warning("closing Dask %s did not finish cleanly", type(thing).__name__)
 
     # -- API ---------------------------------------------------------------------------------
     def submit(self, kind: str, params: dict[str, Any]) -> Job:
         """Store a new job and queue it."""
         self._work_for(kind)  # fail early on an unknown kind
+        if self.stopping.is_set():
+            raise JobInterrupted("server shutting down")
         job = Job(id=str(uuid.uuid4()), kind=kind, status="queued", params=params, progress=0.0,
                   stage="queued", message="waiting for a job slot", attempts=0)
         with self.sessions.begin() as s:
             s.add(job)
-        self._executor.submit(self._run, job.id)
+        self._queue.put(job.id)
         return job
 
     def resume(self, job_id: str) -> Job | None:
-        """Queue an interrupted or failed job again; ``None`` when it does not exist.
+        """Queue an interrupted, failed or cancelled job again (or one whose thread ended without its
+        outcome written); ``None`` when it does not exist.
 
         Raises
         ------
         ValueError
             When the job is not in a resumable state.
         """
-        with self.sessions.begin() as s:
-            job = s.get(Job, job_id)
+        with self._lock:
+            with self.sessions.begin() as s:
+                job = s.get(Job, job_id)
+                if job is None:
+                    return None
+                status = self._status(job)
+                if status not in RESUMABLE:
+                    raise ValueError(f"job {job_id} is {status}; only interrupted, failed or cancelled jobs can be "
+                                     "resumed")
+                job.status, job.stage, job.message, job.error = "queued", "queued", "resumed; waiting for a job slot", None
+            self._unrecorded.pop(job_id, None)
+        self._queue.put(job_id)
+        return self.get(job_id)
+
+    def cancel(self, job_id: str, wait_s: float = CANCEL_WAIT_S) -> Job | None:
+        """Stop a queued or running job; ``None`` when it does not exist. A running job's thread is given
+        ``wait_s`` to end (its Dask tasks are cancelled and their workers restarted, a training child process
+        killed); the job ends ``cancelled`` and can be resumed.
+
+        Raises
+        ------
+        ValueError
+            When the job has already finished.
+        """
+        with self._lock:
+            ctx = self._live.get(job_id)
+            job = self.get(job_id)           # with an outcome not yet written: that outcome (finished)
             if job is None:
                 return None
-            if job.status not in RESUMABLE:
-                raise ValueError(f"job {job_id} is {job.status}; only interrupted or failed jobs can be resumed")
-            job.status, job.stage, job.message, job.error = "queued", "queued", "resumed; waiting for a job slot", None
-        self._executor.submit(self._run, job_id)
+            if ctx is None:
+                if job.status not in ACTIVE:
+                    raise ValueError(f"job {job_id} is {job.status}; only queued or running jobs can be cancelled")
+                # queued (its thread will skip it), or left running by a previous process and not yet marked
+                with self.sessions.begin() as s:
+                    s.execute(update(Job).where(Job.id == job_id).values(
+                        status="cancelled", stage="cancelled", message=_CANCELLED, finished_at=utcnow(),
+                        updated_at=utcnow()))
+                return self.get(job_id)
+            ctx.cancel_event.set()
+        ctx._stop()
+        if not ctx.done.wait(wait_s):
+            try:
+                with self.sessions.begin() as s:
+                    s.execute(update(Job).where(Job.id == job_id, Job.status == "running").values(
+                        message="cancel requested: the job stops at its next check (feature extraction: after "
+                        "the recording it is on)", updated_at=utcnow()))
+            except DatabaseError:
+                pass                                       # the outcome write will say it
         return self.get(job_id)
 
     def get(self, job_id: str) -> Job | None:
         with self.sessions() as s:
-            return s.get(Job, job_id)
+            job = s.get(Job, job_id)
+        return self._overlay(job) if job is not None else None
 
     def list(self, limit: int = 100, status: str | None = None) -> list[Job]:
         with self.sessions() as s:
             q = select(Job).order_by(Job.created_at.desc()).limit(limit)
             if status is not None:
                 q = q.where(Job.status == status)
-            return list(s.scalars(q))
+            return [self._overlay(j) for j in s.scalars(q)]
 
     def counts(self) -> dict[str, int]:
         """Number of jobs per status (every status present, zero when none)."""
@@ -209,36 +393,142 @@ class JobManager:
         out.update({status: int(n) for status, n in rows})
         return out
 
+    def _status(self, job: Job) -> str:
+        """The job's state as this process knows it: a row ``running``/``queued`` whose thread has ended with
+        its outcome unwritten counts as that outcome."""
+        pending = self._unrecorded.get(job.id)
+        return pending["status"] if pending is not None and job.status in ACTIVE else job.status
+
+    def _overlay(self, job: Job) -> Job:
+        """``job`` (detached) with the outcome the database has not taken yet, said so in its message."""
+        pending = self._unrecorded.get(job.id)
+        if pending is not None and job.status in ACTIVE:
+            for k, v in pending.items():
+                if k != "db_error":
+                    setattr(job, k, v)
+            job.message = (f"{pending['message']} (not yet written to the database: {pending['db_error']}; "
+                           "retried every few seconds)")
+        return job
+
     # -- execution ---------------------------------------------------------------------------
-    def _run(self, job_id: str) -> None:
-        if self.stopping.is_set():
-            return
-        with self.sessions.begin() as s:
-            job = s.get(Job, job_id)
-            if job is None or job.status != "queued":
+    def _thread_main(self) -> None:
+        while True:
+            job_id = self._queue.get()
+            if job_id is None or self.stopping.is_set():
                 return
-            job.status, job.stage, job.message = "running", "starting", "started"
-            job.attempts += 1
-            job.started_at = utcnow()
-            kind, params = job.kind, dict(job.params)
-        ctx = JobContext(self, job_id)
+            try:
+                self._run(job_id)
+            except Exception:  # noqa: BLE001 - a job thread must survive whatever one job did
+                log.exception("job %s", job_id)
+
+    def _run(self, job_id: str) -> None:
+        with self._lock:
+            if self.stopping.is_set():
+                return
+            with self.sessions.begin() as s:
+                job = s.get(Job, job_id)
+                if job is None or job.status != "queued":
+                    return
+                job.status, job.stage, job.message = "running", "starting", "started"
+                job.attempts += 1
+                job.started_at = utcnow()
+                kind, params = job.kind, dict(job.params)
+            ctx = self._live[job_id] = JobContext(self, job_id)
         try:
             result = self._work_for(kind)(params, ctx)
+            outcome = {"status": "succeeded", "progress": 1.0, "stage": "done", "message": "finished",
+                       "result": result, "error": None}
         except BaseException as exc:  # noqa: BLE001 - every outcome must land in the row
-            if self.stopping.is_set() or isinstance(exc, JobInterrupted):
-                status, error = "interrupted", None
-                message = "interrupted by a server shutdown; POST /jobs/{id}/resume continues it"
+            if ctx.cancelled:
+                outcome = {"status": "cancelled", "stage": "cancelled", "message": _CANCELLED, "error": None}
+            elif self.stopping.is_set() or isinstance(exc, JobInterrupted):
+                outcome = {"status": "interrupted", "message": "interrupted by a server shutdown; "
+                           "POST /jobs/{id}/resume continues it", "error": None}
             else:
-                status, message = "failed", "failed"
-                error = f"{type(exc).__name__}: {exc}"
+                outcome = {"status": "failed", "message": "failed", "error": f"{type(exc).__name__}: {exc}"}
                 log.error("job %s (%s) failed:\n%s", job_id, kind, traceback.format_exc())
-            with self.sessions.begin() as s:
-                s.execute(update(Job).where(Job.id == job_id).values(
-                    status=status, message=message, error=error, finished_at=utcnow(), updated_at=utcnow()))
             if not isinstance(exc, Exception):
+                self._finish(job_id, ctx, outcome)
                 raise
-            return
+        self._finish(job_id, ctx, outcome)
+
+    def _finish(self, job_id: str, ctx: JobContext, outcome: dict[str, Any]) -> None:
+        outcome = {**outcome, "finished_at": utcnow()}
+        with self._lock:
+            try:
+                try:
+                    self._write(job_id, outcome)
+                except DatabaseError:
+                    raise
+                except Exception as exc:  # noqa: BLE001 - e.g. a result the JSON column cannot hold
+                    log.exception("job %s: its outcome cannot be stored", job_id)
+                    outcome = {"status": "failed", "message": "failed", "result": None, "finished_at": utcnow(),
+                               "error": f"the job's result cannot be stored: {type(exc).__name__}: {exc}"}
+                    self._write(job_id, outcome)
+            except DatabaseError as exc:
+                log.error("job %s ended %s but the database refused the outcome (%s); retrying every %g s",
+                          job_id, outcome["status"], exc.orig, RECORD_RETRY_S)
+                self._unrecorded[job_id] = {**outcome, "db_error": str(exc.orig)}
+                self._start_retry()
+            finally:
+                self._live.pop(job_id, None)
+        ctx.done.set()
+
+    def _write(self, job_id: str, outcome: dict[str, Any]) -> None:
+        values = {k: v for k, v in outcome.items() if k != "db_error"}
+        # only over the state this run left (a cancel of an orphaned row in between wins); at shutdown also over
+        # the `interrupted` that shutdown() wrote ahead, so a job whose last step finished says so
+        over = ACTIVE + ("interrupted",) if self.stopping.is_set() else ACTIVE
         with self.sessions.begin() as s:
-            s.execute(update(Job).where(Job.id == job_id).values(
-                status="succeeded", progress=1.0, stage="done", message="finished", result=result,
-                finished_at=utcnow(), updated_at=utcnow()))
+            s.execute(update(Job).where(Job.id == job_id, Job.status.in_(over)).values(**values, updated_at=utcnow()))
+
+    def recover(self) -> int:
+        """At startup: mark the jobs a previous process left queued/running ``interrupted``; when the database
+        refuses the write (a full disk), keep trying every few seconds instead of failing the start."""
+        try:
+            return self.mark_interrupted()
+        except DatabaseError as exc:
+            log.error("cannot mark the jobs of the previous run interrupted (%s); retrying every %g s",
+                      exc.orig, RECORD_RETRY_S)
+            try:
+                with self.sessions() as s:
+                    self._stale = list(s.scalars(select(Job.id).where(Job.status.in_(ACTIVE))))
+            except DatabaseError:
+                self._stale = None                        # unreadable too: all active rows (none run yet)
+            self._interrupt_pending = True
+            self._start_retry()
+            return 0
+
+    def _flush_unrecorded(self) -> int:
+        """Write the outcomes the database refused before; returns how many are still unwritten."""
+        if self._interrupt_pending:
+            try:
+                with self._lock:
+                    self.mark_interrupted(self._stale)
+                    self._interrupt_pending = False
+            except DatabaseError:
+                return len(self._unrecorded) + 1
+        with self._lock:
+            for job_id, outcome in list(self._unrecorded.items()):
+                try:
+                    self._write(job_id, outcome)
+                except DatabaseError:
+                    continue
+                del self._unrecorded[job_id]
+                log.info("job %s: outcome %s written to the database", job_id, outcome["status"])
+            return len(self._unrecorded)
+
+    def _start_retry(self) -> None:
+        if self._retry_thread is not None and self._retry_thread.is_alive():
+            return
+
+        def loop() -> None:
+            while not self.stopping.wait(RECORD_RETRY_S):
+                if self._flush_unrecorded() == 0:
+                    return
+
+        self._retry_thread = threading.Thread(target=loop, name="rotordiag-job-record", daemon=True)
+        self._retry_thread.start()
+
+
+_CANCELLED = "cancelled by POST /jobs/{id}/cancel; POST /jobs/{id}/resume continues it"

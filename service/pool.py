@@ -87,6 +87,32 @@ def _warm(version: str | None) -> None:
         fast_predictor(_store().load(version).model)
 
 
+def _warm_diagnosis(version: str | None) -> None:
+    """Diagnose a synthetic recording (1X and 2X sines at 1800 r/min on the four bearings) once, before the
+    worker says it is ready: the first real request then finds every lazily compiled kernel and lazily imported
+    module in place (a fresh container's first diagnosis took 28 s without it), and /health stays `starting`
+    until then."""
+    if version is None:
+        return
+    import numpy as np
+
+    from .parsing import recording_from_model
+    from .schemas import RecordingIn
+
+    fs_hz, f_hz = 2048.0, 30.0
+    t = np.arange(int(4 * fs_hz)) / fs_hz
+    channels = [{"bearing": b, "angle_deg": a, "units": "um",
+                 "data": (20.0 * np.cos(2 * np.pi * f_hz * t - np.radians(a + 30 * b))
+                          + 4.0 * np.cos(4 * np.pi * f_hz * t - np.radians(2 * a))).tolist()}
+                for b in (1, 2, 3, 4) for a in (45.0, 135.0)]
+    rec = recording_from_model(RecordingIn.model_validate(
+        {"sample_rate_hz": fs_hz, "speed_rpm": 60 * f_hz, "channels": channels}))
+    try:
+        _store().diagnose(rec, version)
+    except ValueError:
+        pass                 # a refusal still ran the features; the model itself was loaded by _warm
+
+
 def _load_check(version: str) -> dict[str, Any]:
     """The model this worker holds for ``version``: ``{"sha256", "problem"}`` (``problem`` is ``None``
     when a diagnosis with it would work). Reloads the file when it changed on disk."""
@@ -198,6 +224,7 @@ def _worker_main(sock: socket.socket, registry_root: str, version: str | None, m
         _warm(version)
         from .parsing import parse_body  # noqa: F401  (imported before the limit, not on the first request)
         from .web.plotdata import plot_data  # noqa: F401
+        _warm_diagnosis(version)
     except Exception as exc:  # noqa: BLE001 - reported per request (503) by _load_check/_work
         log.warning("diagnosis worker %d: could not preload model %s: %s", os.getpid(), version, exc)
     _MEMORY_BYTES = memory_bytes
@@ -379,12 +406,23 @@ class _Worker:
         return bytes(buf)
 
     def stop(self, timeout_s: float = 5.0) -> None:
+        self.close()
+        self.reap(time.monotonic() + timeout_s)
+
+    def close(self) -> None:
+        """Close the socket: the worker returns once the request it computes is done."""
         self._reader.cancel()
         self.sock.close()            # the worker sees end of file and returns
-        self.process.join(timeout_s)
+
+    def reap(self, deadline: float) -> None:
+        """Wait for the closed worker until ``deadline`` (``time.monotonic()``), then terminate, then kill it."""
+        self.process.join(max(0.0, deadline - time.monotonic()))
         if self.process.is_alive():
             self.process.terminate()
-            self.process.join(timeout_s)
+            self.process.join(2.0)
+        if self.process.is_alive():
+            self.process.kill()
+            self.process.join(1.0)
 
 
 #: how long /health may reuse the workers' answer about the model they hold
@@ -423,6 +461,7 @@ class DiagnosisPool:
         self._next = 0                   # round-robin start for ties
         self._checked: dict[str, tuple[float, str | None]] = {}
         self.model_sha256: str | None = None   # of the model file the workers hold (last check)
+        self.checked_version: str | None = None  # the version a worker last answered a check for
         self._closing = False
 
     def _new_worker(self) -> _Worker:
@@ -539,11 +578,16 @@ class DiagnosisPool:
         problems = sorted({a["problem"] for a in answers if a["problem"]})
         hashes = {a["sha256"] for a in answers}
         self.model_sha256 = next(iter(hashes)) if len(hashes) == 1 else None
+        self.checked_version = version
         if problems:
             return "; ".join(problems)
         if len(hashes) > 1:
             return f"diagnosis workers hold different files of model {version} (sha256 {sorted(map(str, hashes))})"
         return None
+
+    def any_ready(self) -> bool:
+        """Whether a worker has started and loaded its model (a check answered at once)."""
+        return any(w.alive and w.ready for w in self._workers)
 
     def check_model(self, version: str, timeout_s: float = 30.0) -> str | None:
         """``None`` when the workers hold ``version`` and can diagnose with it, else why not.
@@ -568,9 +612,20 @@ class DiagnosisPool:
         self._checked = {version: (time.monotonic(), problem)}
         return problem
 
-    def shutdown(self) -> None:
-        """Stop the workers (each finishes the request it holds first)."""
+    def shutdown(self, timeout_s: float = 5.0) -> None:
+        """Stop the workers: all are told at once, each may finish the request it holds within ``timeout_s``
+        (in all, not each), then it is terminated (at most ``timeout_s`` + 3 s in all)."""
         self._closing = True
         for w in self._workers:
-            w.stop()
+            w.close()
+        deadline = time.monotonic() + timeout_s
+        for w in self._workers:
+            w.process.join(max(0.0, deadline - time.monotonic()))
+        for signal_them in ("terminate", "kill"):      # whatever is left, all at once
+            left = [w.process for w in self._workers if w.process.is_alive()]
+            for proc in left:
+                getattr(proc, signal_them)()
+            deadline = time.monotonic() + 1.5
+            for proc in left:
+                proc.join(max(0.0, deadline - time.monotonic()))
         self._workers.clear()

@@ -1,5 +1,5 @@
-"""Database engine, session factory and the tables: jobs, asset diagnoses, asset baselines and asset
-alarm settings (SQLAlchemy 2); :func:`init_db` adds columns that an older database lacks."""
+"""Database engine, session factory and the tables: jobs, asset diagnoses, asset baselines, asset
+alarm settings and the health probe (SQLAlchemy 2); :func:`init_db` adds columns that an older database lacks."""
 from __future__ import annotations
 
 import datetime as dt
@@ -109,6 +109,15 @@ class AssetSettings(Base):
     asset_id: Mapped[str] = mapped_column(String(128), primary_key=True)
     thresholds: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
     updated_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow, onupdate=utcnow)
+
+
+class ServiceProbe(Base):
+    """One row per probe name that ``GET /health`` rewrites: proof that the database takes a real write."""
+
+    __tablename__ = "service_probe"
+
+    name: Mapped[str] = mapped_column(String(32), primary_key=True)
+    written_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow)
 
 
 def make_engine(url: str) -> Engine:
