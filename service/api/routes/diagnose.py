@@ -17,7 +17,16 @@ from rotordiag.models.output_units import verdict_in_units
 from ...baseline import record_verdict
 from ...inference import ModelUnavailable
 from ...parsing import MAX_TAKE_FILES, Body, batch_record, checked, parse_batch, parse_body, recording_from_model
-from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
+from ...schemas import (
+    MAX_BATCH_VALUES,
+    MAX_LABEL_LEN,
+    MAX_RECORD_VALUES,
+    AssetId,
+    BatchItem,
+    BatchResponse,
+    DiagnoseResponse,
+    ErrorOut,
+)
 from ..deps import (
     AcquisitionsQuery,
     AnglesQuery,
@@ -142,7 +151,7 @@ async def _read_body(request: Request, slow_roll: bool = False) -> tuple[str, Bo
     """
     media = _media_type(request)
     if media in JSON_TYPES:
-        return "json", await request.body(), "", None
+        return "json", await read_json_bounded(request, MAX_RECORD_VALUES), "", None
     if media in NPY_TYPES:
         return "npy", await request.body(), "", None
     if media == "multipart/form-data":
@@ -169,6 +178,21 @@ async def _read_body(request: Request, slow_roll: bool = False) -> tuple[str, Bo
     raise InputError(
         f"unsupported Content-Type {media or '(none)'!r}: send application/json (DiagnoseRequest), "
         "application/octet-stream (an NPY array) or multipart/form-data (a CSV/NPY/HDF5 file in part 'file')", "unsupported_type")
+
+
+async def read_json_bounded(request: Request, max_values: int) -> bytes:
+    """A JSON body, its values counted while it streams in: past ``max_values`` (commas bound them from above,
+    ``features.safe_io.count_json_values``) it is refused with 413 at once, before the rest is read or anything
+    decoded, so a body of millions of numbers never reaches a diagnosis worker."""
+    chunks: list[bytes] = []
+    commas = 0
+    async for chunk in request.stream():
+        commas += chunk.count(b",")
+        if commas > max_values:
+            raise InputError(f"JSON holds more than {max_values} values; send a shorter recording (fewer samples per "
+                             "channel), split a batch, or send an NPY array", "too_large")
+        chunks.append(chunk)
+    return b"".join(chunks)
 
 
 async def _read_form(request: Request, max_files: int = 1) -> Any:
@@ -334,7 +358,7 @@ async def diagnose_batch(request: Request, state: StateDep,
                          output_units: OutputUnitsQuery = "um") -> dict:
     """The body (a ``BatchRequest``) is parsed in a diagnosis worker, not here; the records are then
     diagnosed one per worker call, in parallel across the workers."""
-    body = await request.body()
+    body = await read_json_bounded(request, MAX_BATCH_VALUES)
     cap = state.settings.max_batch_records
     if state.pool is not None:
         records = (await in_worker(state, "batch_parse", body))[1]
