@@ -48,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, short_bearing_attitude_deg
+from rotordiag.core.reasons import INCONCLUSIVE, UNCERTAIN, require_code
 from rotordiag.features import speed_in_doubt
 
 from .baselines import DEFAULT_RULE_CUTS, RuleOfThumb
@@ -62,8 +63,6 @@ __all__ = ["Reason", "RecordingChecks", "ModelCall", "assess", "consistent_estim
            "interval_far_bands", "envelope_reasons"]
 
 CONFIDENT = "confident"
-UNCERTAIN = "uncertain"
-INCONCLUSIVE = "inconclusive"
 
 #: OOD score (distance to training data over its usual distance) beyond which no severity is given
 OOD_INCONCLUSIVE = 3.0
@@ -105,8 +104,8 @@ class Reason:
     Attributes
     ----------
     code : str
-        Stable identifier (a sanity check's code, ``ood``, ``scale``, ``speed_ambiguous``,
-        ``features_missing``, ``low_probability``, ``class_delta_disagree``).
+        Stable identifier, one of the catalogue's (:mod:`rotordiag.core.reasons`; any other is refused, as is a
+        status the catalogue does not allow the code).
     status : str
         ``uncertain`` or ``inconclusive``: what this reason alone makes of the verdict.
     message : str
@@ -116,6 +115,9 @@ class Reason:
     code: str
     status: str
     message: str
+
+    def __post_init__(self) -> None:
+        require_code(self.code, self.status)
 
     def to_dict(self) -> dict:
         return {"code": self.code, "status": self.status, "message": self.message}
