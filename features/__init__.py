@@ -86,7 +86,8 @@ from ._config import (
     speed_in_doubt,
 )
 from ._evidence import EvidenceItem, evidence
-from ._extract import BearingDetail, FeatureResult, extract_features
+from ._extract import BearingDetail, FeatureResult
+from ._extraction import extract_features
 from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
 from ._orbit import OrbitShape
 from ._recording import ProbeChannel, Recording, parse_speed_range

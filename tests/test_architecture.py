@@ -185,3 +185,83 @@ def test_every_collected_test_has_its_own_node_id(request):
 
     shared = sorted(i for i, n in Counter(item.nodeid for item in request.session.items).items() if n > 1)
     assert not shared, f"tests that share a node id: {shared[:5]}"
+
+
+def _runtime_imports(path: Path, module: str) -> list[tuple[int, str]]:
+    """(line, imported project module) for every import in the file that runs (those under ``if TYPE_CHECKING:``
+    left out); ``from package import name`` counts as an import of the submodule when ``name`` is one."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    typing_only = {id(n) for node in ast.walk(tree)
+                   if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+                   for stmt in node.body for n in ast.walk(stmt)}
+    known = {_module_name(p) for p in _package_sources()}
+    out = []
+    for line, target, names in _imports(path, module):
+        if not target.startswith("rotordiag"):
+            continue
+        out += [(line, f"{target}.{n}") for n in names if f"{target}.{n}" in known]
+        if target in known and not any(f"{target}.{n}" in known for n in names):
+            out.append((line, target))
+    lines_typing = {n.lineno for n in ast.walk(tree) if id(n) in typing_only and hasattr(n, "lineno")}
+    return [(line, t) for line, t in out if line not in lines_typing]
+
+
+def _import_graph() -> dict[str, set[str]]:
+    """Project module → the project modules it imports at run time (also inside functions), packages' own
+    ``__init__`` re-exports left out (importing a package's API is not a circle with its parts)."""
+    graph: dict[str, set[str]] = {}
+    for path in _package_sources():
+        module = _module_name(path)
+        if path.name == "__init__.py":
+            continue
+        graph[module] = {t for _, t in _runtime_imports(path, module) if t != module}
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in graph:
+                continue
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_circles_between_modules():
+    """No two modules of the project import each other, directly or through others, at run time — not even from
+    inside a function (issue 43, item 3): a circle means neither can be read or changed alone."""
+    found = _cycles(_import_graph())
+    assert not found, "import circles:\n" + "\n".join(" ↔ ".join(c) for c in found)
+
+
+def test_the_circle_finder_finds_a_circle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
