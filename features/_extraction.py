@@ -17,7 +17,7 @@ from ._recording import Recording
 from ._sanity import check_recording
 from ._takes import extract_by_take
 
-__all__ = ["extract_features"]
+__all__ = ["extract_features", "with_speed_notes"]
 
 
 def extract_features(recording: Recording, *, speed_estimate_rpm: float | None = None,
@@ -55,15 +55,36 @@ def extract_features(recording: Recording, *, speed_estimate_rpm: float | None =
     if speed_estimate_rpm is not None:
         if not (np.isfinite(speed_estimate_rpm) and speed_estimate_rpm > 0):
             raise ValueError(f"speed_estimate_rpm: must be a positive number of r/min, got {speed_estimate_rpm!r}")
-        notes = list(speed_notes)
-        if not any(cfg.speed_in_doubt(w) for w in notes):
-            notes.append(f"{cfg.SPEED_AMBIGUOUS}: {float(speed_estimate_rpm):.1f} r/min was estimated outside this "
-                         "package's reading of the spectrum (speed_estimate_rpm); confirm it with speed_rpm or "
-                         "keyphasor_times_s")
-        estimate = (float(speed_estimate_rpm), notes)
+        estimate = (float(speed_estimate_rpm), _speed_notes(float(speed_estimate_rpm), speed_notes))
     with _blas_limit:
         if recording.keyphasor_takes is not None:
             result = extract_by_take(recording, _extract)
         else:
             result = _extract(recording, estimate)
         return replace(result, sanity=check_recording(recording, result))
+
+
+def _speed_notes(speed_rpm: float, notes: Sequence[str]) -> list[str]:
+    """The warnings that go with a speed estimated elsewhere: ``notes``, and one that puts it in doubt when none
+    does."""
+    out = list(notes)
+    if not any(cfg.speed_in_doubt(w) for w in out):
+        out.append(f"{cfg.SPEED_AMBIGUOUS}: {speed_rpm:.1f} r/min was estimated outside this package's reading of "
+                   "the spectrum (speed_estimate_rpm); confirm it with speed_rpm or keyphasor_times_s")
+    return out
+
+
+def with_speed_notes(fr: FeatureResult, notes: Sequence[str]) -> FeatureResult | None:
+    """``extract_features(recording, speed_estimate_rpm=fr.speed_rpm, speed_notes=notes)`` made from
+    ``fr = extract_features(recording, speed_estimate_rpm=fr.speed_rpm)`` without extracting again: the two differ
+    in their speed notes alone (the notes lead the warnings, and nothing else reads them). None when ``fr`` is not
+    such a result (its speed not estimated elsewhere, or read by take)."""
+    if fr.speed_source != "estimated" or fr.speed_rpm is None:
+        return None
+    own = _speed_notes(float(fr.speed_rpm), ())
+    warnings = list(fr.warnings)
+    for i in range(len(warnings) - len(own) + 1):
+        if warnings[i:i + len(own)] == own:
+            return replace(fr, warnings=type(fr.warnings)(warnings[:i] + _speed_notes(float(fr.speed_rpm), notes)
+                                                          + warnings[i + len(own):]))
+    return None

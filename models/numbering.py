@@ -63,7 +63,11 @@ def _mirror_plan(names: tuple[str, ...]) -> tuple[np.ndarray, ...]:
     """Where :func:`mirrored_row` takes each column from, per feature-name list (built once per model):
     (columns, their per-bearing sources), (phase-difference columns, their sources), columns with no source."""
     index = {n: i for i, n in enumerate(names)}
-    same, src_same, phase, src_phase, absent = [], [], [], [], []
+    same: list[int] = []
+    src_same: list[int] = []
+    phase: list[int] = []
+    src_phase: list[int] = []
+    absent: list[int] = []
     for j, name in enumerate(names):
         parsed = bearing_feature(name)
         if parsed is None:

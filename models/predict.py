@@ -26,6 +26,7 @@ from .numbering import has_every_bearing, mirrored_row, numbering_reason
 from .registry import Registry
 from .reverse_2x import reverse_2x_reason
 from .status import (
+    DEFAULT_POLICY,
     INCONCLUSIVE,
     ModelCall,
     Reason,
@@ -33,6 +34,7 @@ from .status import (
     assess,
     consistent_estimate,
     journals_at_one_position,
+    policy_of,
 )
 
 if TYPE_CHECKING:
@@ -421,7 +423,8 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
                   band_names=[str(c) for c in model.classes_], misaligned_call=band > 0,
                   alarm=_alarm(model, proba, cls, X), delta_interval=(float(interval[0, 0]), float(interval[0, 1])),
                   band_edges=bands.edges, interval_level=1.0 - float(model.regressor_.alpha),
-                  one_position_call=_one_position_call(model, fast, names, row) if band > 0 else None))
+                  one_position_call=_one_position_call(model, fast, names, row) if band > 0 else None),
+        policy_of(bundle.card) if isinstance(bundle, ModelBundle) else DEFAULT_POLICY)
     shown: float | None = delta
     shown_iv: tuple[float | None, float | None] = (lo, hi)
     if status == INCONCLUSIVE:

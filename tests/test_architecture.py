@@ -265,3 +265,53 @@ def test_no_import_circles_between_modules():
 def test_the_circle_finder_finds_a_circle():
     assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
     assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_no_climbs_inside_the_service():
+    """The domain modules below the API (the worker pool, inference, …) never import the API or the web page's
+    modules, and the web page reads requests through ``service.api.recordings`` and the API's dependencies, not
+    through another route module (issue 43, item 3)."""
+    bad = []
+    for path in _package_sources():
+        module = _module_name(path)
+        targets = [(line, t) for line, t in _runtime_imports(path, module)]
+        if module.split(".")[-1] in SERVICE_DOMAIN_MODULES and module.count(".") == 2:
+            bad += [f"{module}:{line} imports {t}" for line, t in targets
+                    if t.startswith(("rotordiag.service.api", "rotordiag.service.web"))]
+        if module.startswith("rotordiag.service.web"):
+            bad += [f"{module}:{line} imports {t}" for line, t in targets if t.startswith("rotordiag.service.api.routes")]
+    assert not bad, "climbs:\n" + "\n".join(bad)
+
+
+def test_features_classify_motion_without_the_analysis_sweeps():
+    """``rotordiag.features`` uses the simulator's motion classifier, which loads no analysis sweeps."""
+    import subprocess
+    import sys
+
+    code = ("import sys, rotordiag.features; "
+            "print(any(m.startswith('rotordiag.simulator.analysis') for m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    assert out.stdout.strip() == "False", out.stdout + out.stderr
+
+
+def test_the_modules_docs_architecture_names_exist():
+    """docs/architecture.md stays true to the code: every file or folder it names in backticks (``models/x.py``)
+    and every dotted module (``rotordiag.models.x``) exists (issue 43, item 4)."""
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    paths = set(re.findall(r"`((?:rotordiag|simulator|features|models|service|tests|benchmarks|docs|examples)/[\w./-]*)`",
+                           text))
+    dotted = {m.split(":")[0] for m in re.findall(r"`(rotordiag(?:\.\w+)+(?::\w+)?)", text)}
+    dotted |= {f"rotordiag.{m}" for m in re.findall(r"`((?:simulator|features|models|service)(?:\.\w+)+)", text)}
+    sources = {_module_name(p): p for p in _package_sources()}
+    assert len(paths) >= 15 and len(dotted) >= 10          # the page names modules (the test can fail)
+    missing = [p for p in sorted(paths) if not (ROOT / p).exists()]
+
+    def exists(name: str) -> bool:
+        """A module, or a name a module defines or imports (``rotordiag.models.status.DecisionPolicy``)."""
+        if name in sources:
+            return True
+        module, attr = name.rsplit(".", 1)
+        return module in sources and re.search(rf"\b{attr}\b", sources[module].read_text(encoding="utf-8")) is not None
+
+    missing += [m for m in sorted(dotted) if not exists(m)]
+    assert not missing, f"docs/architecture.md names what does not exist: {missing}"

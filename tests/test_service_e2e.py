@@ -7,14 +7,13 @@ import signal
 import socket
 import subprocess
 import sys
-import time
 import urllib.error
 import urllib.request
 from pathlib import Path
 
 import pytest
 
-from tests.service_util import API_KEY, diagnose_json, shipped_or_tiny_registry, simulated_channels
+from tests.service_util import API_KEY, diagnose_json, shipped_or_tiny_registry, simulated_channels, wait_until
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -45,20 +44,17 @@ def server(tmp_path_factory):
     cmd = [str(exe), "serve", "--host", "127.0.0.1", "--port", str(port)]
     proc = subprocess.Popen(cmd, cwd=tmp, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     base = f"http://127.0.0.1:{port}"
-    t0 = time.monotonic()
-    while True:
+
+    def answered() -> bool:
         if proc.poll() is not None:
             pytest.fail(f"server exited with {proc.returncode}:\n{proc.stdout.read()}")
-        try:
-            status, _ = _request(base + "/health")
-            if status in (200, 503):
-                break
-        except OSError:
-            pass
-        if time.monotonic() - t0 > 60:
-            proc.kill()
-            pytest.fail("server did not answer /health within 60 s")
-        time.sleep(0.2)
+        return _request(base + "/health")[0] in (200, 503)
+
+    try:
+        wait_until(answered, "server's /health", every_s=0.2)
+    except AssertionError:
+        proc.kill()
+        raise
     yield base, port, tmp
     proc.send_signal(signal.SIGINT)
     try:
