@@ -10,6 +10,8 @@ import anyio
 import anyio.to_thread
 from fastapi import Depends, Query, Request
 
+from rotordiag.core.input_bounds import SENSITIVITY_RANGE_V_PER_MM
+
 from ..parsing import MAX_TAKE_FILES, Body, parse_body
 from ..pool import DiagnoseBody, DiagnoseRecord, WorkerCall
 from .deps import (
@@ -38,7 +40,8 @@ def reader_query(
     bearings: BearingsQuery = None,
     angles_deg: AnglesQuery = None,
     keyphasor_times_s: KeyphasorQuery = None,
-    sensitivity_v_per_mm: Annotated[float | None, Query(gt=0, le=1e3, allow_inf_nan=False, description=(
+    sensitivity_v_per_mm: Annotated[float | None, Query(ge=SENSITIVITY_RANGE_V_PER_MM[0],
+                                                        le=SENSITIVITY_RANGE_V_PER_MM[1], allow_inf_nan=False, description=(
         "Binary/multipart with `units=V` only: probe scale factor, V/mm (7.87 = 200 mV/mil)."))] = None,
     gap_voltage_v: Annotated[float | None, Query(ge=-100, le=100, allow_inf_nan=False, description=(
         "Binary/multipart with `units=V` only: DC gap voltage, V (default: each channel's mean)."))] = None,

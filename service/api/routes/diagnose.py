@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
 from typing import Annotated, Any, Literal
 
 import anyio
@@ -10,11 +11,12 @@ import anyio.to_thread
 from fastapi import APIRouter, HTTPException, Query, Request
 from fastapi.concurrency import run_in_threadpool
 
+from rotordiag.core.input_bounds import SAMPLE_RATE_RANGE_HZ
 from rotordiag.models.output_units import verdict_in_units
 
 from ...baseline import record_verdict
 from ...inference import ModelUnavailable
-from ...parsing import MAX_TAKE_FILES, checked, parse_batch, parse_body, recording_from_model
+from ...parsing import MAX_TAKE_FILES, batch_record, checked, parse_batch, parse_body, recording_from_model
 from ...pool import DiagnoseBody, DiagnoseRecord, ParseBatch
 from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
 from ..deps import (
@@ -28,6 +30,7 @@ from ..recordings import ReaderQueryDep, diagnosis_limiter, in_worker, read_body
 from ..routing import FiniteJSONRoute
 
 router = APIRouter(tags=["diagnose"], route_class=FiniteJSONRoute)
+log = logging.getLogger("rotordiag.service")
 
 
 _ERRORS: dict[int | str, dict[str, Any]] = {
@@ -114,7 +117,7 @@ async def diagnose(
                                                "active one.")] = None,
     output_units: OutputUnitsQuery = "um",
     slow_roll_sample_rate_hz: Annotated[float | None, Query(
-        gt=0, le=1e6, allow_inf_nan=False, description="Multipart with `slow_roll_file` only: the slow-roll file's "
+        ge=SAMPLE_RATE_RANGE_HZ[0], le=SAMPLE_RATE_RANGE_HZ[1], allow_inf_nan=False, description="Multipart with `slow_roll_file` only: the slow-roll file's "
         "sample rate, Hz (default: `sample_rate_hz`).")] = None,
     slow_roll_keyphasor_times_s: Annotated[str | None, Query(
         max_length=200_000, description="Multipart with `slow_roll_file` only: the slow-roll file's keyphasor pulse "
@@ -174,9 +177,9 @@ async def diagnose_batch(request: Request, state: StateDep,
         results = await asyncio.gather(*(_batch_item(state, i, rec, model_version) for i, rec in enumerate(records)))
         items = list(results)
     else:
-        batch = await anyio.to_thread.run_sync(parse_batch, body, limiter=diagnosis_limiter(state))
-        _check_batch_size(len(batch.records), cap)
-        items = await anyio.to_thread.run_sync(_batch_sync, state, batch.records, model_version,
+        records = await anyio.to_thread.run_sync(parse_batch, body, limiter=diagnosis_limiter(state))
+        _check_batch_size(len(records), cap)
+        items = await anyio.to_thread.run_sync(_batch_sync, state, records, model_version,
                                                limiter=diagnosis_limiter(state))
     if output_units != "um":
         for it in items:
@@ -198,26 +201,34 @@ async def _batch_item(state, i: int, record: dict[str, Any], version: str | None
         return BatchItem(index=i, status_code=STATUS_OF_KIND[exc.kind], error=str(exc))
     except RequestInvalid as exc:
         return BatchItem(index=i, status_code=422, error=json.dumps(exc.errors))
-    except HTTPException as exc:
-        if exc.status_code >= 500:
-            raise
+    except HTTPException as exc:             # no model, or the worker stopped on this record: this record's answer
         return BatchItem(index=i, status_code=exc.status_code, error=str(exc.detail))
+    except RuntimeError:                     # a bug on this record (logged by the pool): the others still answered
+        return BatchItem(index=i, status_code=500, error=_RECORD_FAILED)
     await run_in_threadpool(record_verdict, state, asset_id, plant, verdict)
     return BatchItem(index=i, status_code=200, result=verdict)
 
 
-def _batch_sync(state, records, model_version: str | None) -> list[BatchItem]:
+#: a batch record's error when the server failed on it (the cause is in the server log)
+_RECORD_FAILED = "the server failed on this record (an internal error, logged); the other records were answered"
+
+
+def _batch_sync(state, records: list[dict[str, Any]], model_version: str | None) -> list[BatchItem]:
     items: list[BatchItem] = []
-    for i, rec in enumerate(records):
+    for i, raw in enumerate(records):
         try:
+            rec = batch_record(raw)
             recording = checked(recording_from_model, rec)
             verdict = _diagnose_sync(state, recording, model_version)
             record_verdict(state, rec.asset_id, rec.plant, verdict)
             items.append(BatchItem(index=i, status_code=200, result=verdict))
         except InputError as exc:
             items.append(BatchItem(index=i, status_code=STATUS_OF_KIND[exc.kind], error=str(exc)))
+        except RequestInvalid as exc:
+            items.append(BatchItem(index=i, status_code=422, error=json.dumps(exc.errors)))
         except HTTPException as exc:
-            if exc.status_code >= 500:
-                raise
             items.append(BatchItem(index=i, status_code=exc.status_code, error=str(exc.detail)))
+        except Exception:  # noqa: BLE001 - a bug on one record must not lose the others' answers
+            log.exception("batch record %d failed", i)
+            items.append(BatchItem(index=i, status_code=500, error=_RECORD_FAILED))
     return items
