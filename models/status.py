@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, short_bearing_attitude_deg
-from rotordiag.core.reasons import INCONCLUSIVE, UNCERTAIN, require_code
+from rotordiag.core.reasons import INCONCLUSIVE, UNCERTAIN, code_info, require_code
 from rotordiag.features import speed_in_doubt
 
 from .baselines import DEFAULT_RULE_CUTS, RuleOfThumb
@@ -176,7 +176,9 @@ class Reason:
         require_code(self.code, self.status)
 
     def to_dict(self) -> dict:
-        return {"code": self.code, "status": self.status, "message": self.message}
+        """The reason as the answer carries it, with the catalogue's ``action`` (what to do, for every recording
+        with this code)."""
+        return {"code": self.code, "status": self.status, "message": self.message, "action": code_info(self.code).action}
 
 
 def consistent_estimate(band_index: int, edges: Sequence[float], point: float,

@@ -377,6 +377,8 @@ class ReasonOut(BaseModel):
                       json_schema_extra={"enum": list(CATALOGUE)})
     status: Literal["uncertain", "inconclusive"] = Field(..., description="What this reason alone makes of the verdict.")
     message: str = Field(..., description="What was found and what to check.")
+    action: str | None = Field(None, description="What to do, the same for every answer with this code: the "
+                               "catalogue's (`rotordiag.core.reasons`; docs/pipeline.md's reason table).")
 
     @field_validator("code")
     @classmethod

@@ -56,6 +56,9 @@ def test_a_code_or_status_the_catalogue_lacks_is_refused():
     with pytest.raises(ValueError, match="allows"):
         SanityFinding("zero_channel", WARN, "x")                # a channel of zeros always fails
     assert Reason("ood", INCONCLUSIVE, "x").code == "ood"
+    # the answer carries the catalogue's "what to do" beside the recording's own message (the web page shows both)
+    assert Reason("ood", INCONCLUSIVE, "x").to_dict() == {"code": "ood", "status": INCONCLUSIVE, "message": "x",
+                                                          "action": CATALOGUE["ood"].action}
     require_code("no_sync_signal", FAIL)
     require_code("no_sync_signal", WARN)
 
