@@ -314,7 +314,11 @@ _MAY_OVERFLOW = re.compile(rb"[eE][+]?0*[1-9][0-9]{2,}|[0-9]{300}")
 MAX_JSON_DEPTH = 64
 
 
-def count_json_values(data: bytes, max_values: int) -> None:
+#: an innermost JSON array (no bracket inside): where a channel's samples are
+_INNER_ARRAY = re.compile(rb"\[[^\[\]]*\]")
+
+
+def count_json_values(data: bytes, max_values: int, max_array: int | None = None) -> None:
     """Refuse JSON text that may hold more than ``max_values`` values, before anything is decoded.
 
     Every value after the first of an array or object is preceded by a comma, so the commas
@@ -322,10 +326,13 @@ def count_json_values(data: bytes, max_values: int) -> None:
     count runs at memory speed: a body is refused in milliseconds instead of being decoded into
     Python or pydantic objects that can take gigabytes.
 
+    With ``max_array``, every innermost array (a channel's samples, a pulse train) is also held to
+    ``max_array`` values, at the regular-expression engine's speed.
+
     Raises
     ------
     UnsafeFileError
-        More than ``max_values`` commas.
+        More than ``max_values`` commas, or an array of more than ``max_array`` values.
     """
     n = bytes(data[:4]).count(b"\x00")
     if n:                                            # UTF-16/32: count the commas of the decoded text
@@ -336,6 +343,11 @@ def count_json_values(data: bytes, max_values: int) -> None:
     if data.count(b",") > max_values:
         raise UnsafeFileError(f"JSON holds more than {max_values} values; send a shorter recording (fewer samples "
                               "per channel), split a batch, or send an NPY array")
+    if max_array is not None and len(data) > 4 * max_array:      # shorter text cannot hold a longer array
+        for m in _INNER_ARRAY.finditer(data):
+            if m.end() - m.start() > 2 * max_array and data.count(b",", m.start(), m.end()) >= max_array:
+                raise UnsafeFileError(f"a JSON array holds more than {max_array} values; at most {max_array} "
+                                      "samples per channel are accepted: send a shorter recording")
 
 
 def loads_json_finite(data: bytes | str, *, max_values: int | None = None) -> Any:

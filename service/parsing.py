@@ -119,13 +119,17 @@ def checked(build, *args):
         raise _read_error(exc) from None
 
 
+#: the most values one array of a JSON body may hold (a channel's samples; a keyphasor train is shorter)
+MAX_ARRAY_VALUES = max(MAX_POINTS, MAX_KEYPHASOR_PULSES)
+
+
 def _validated_json(model: Any, body: bytes, max_values: int) -> Any:
     """``model`` validated from a JSON body; a body that may hold more than ``max_values`` values (413, counted
     before anything is decoded) and non-finite numbers (422) refused first, saying so."""
     from rotordiag.features.safe_io import UnsafeFileError, count_json_values, loads_json_finite
 
     try:
-        count_json_values(body, max_values)
+        count_json_values(body, max_values, MAX_ARRAY_VALUES)
     except UnsafeFileError as exc:
         raise InputError(str(exc), "too_large") from None
     try:

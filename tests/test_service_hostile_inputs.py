@@ -68,7 +68,7 @@ def _one_channel_body(n: int) -> bytes:
 
 
 # ------------------------------------------------------------------------------------------ item 1
-@pytest.mark.parametrize("n", [15_000_000, 10_000_000])
+@pytest.mark.parametrize("n", [15_000_000, 10_000_000, 300_000])
 def test_a_json_body_of_millions_of_samples_is_refused_before_decoding_and_kills_no_worker(pooled, n):
     pool = pooled.app.state.rd.pool
     _wait_ready(pool)

@@ -14,6 +14,7 @@ from rotordiag.core.input_bounds import SENSITIVITY_RANGE_V_PER_MM
 
 from ..parsing import MAX_TAKE_FILES, Body, parse_body
 from ..pool import DiagnoseBody, DiagnoseRecord, WorkerCall
+from ..schemas import MAX_RECORD_VALUES
 from .deps import (
     AcquisitionsQuery,
     AnglesQuery,
@@ -28,7 +29,7 @@ from .deps import (
 from .errors import InputError, raise_worker_error
 
 __all__ = ["reader_query", "ReaderQueryDep", "JSON_TYPES", "NPY_TYPES", "media_type", "read_body", "in_worker",
-           "recording_answer", "diagnosis_limiter"]
+           "recording_answer", "diagnosis_limiter", "read_json_bounded"]
 
 
 def reader_query(
@@ -93,7 +94,7 @@ async def read_body(request: Request, slow_roll: bool = False) -> tuple[str, Bod
     """
     media = media_type(request)
     if media in JSON_TYPES:
-        return "json", await request.body(), "", None
+        return "json", await read_json_bounded(request, MAX_RECORD_VALUES), "", None
     if media in NPY_TYPES:
         return "npy", await request.body(), "", None
     if media == "multipart/form-data":
@@ -120,6 +121,21 @@ async def read_body(request: Request, slow_roll: bool = False) -> tuple[str, Bod
     raise InputError(
         f"unsupported Content-Type {media or '(none)'!r}: send application/json (DiagnoseRequest), "
         "application/octet-stream (an NPY array) or multipart/form-data (a CSV/NPY/HDF5 file in part 'file')", "unsupported_type")
+
+
+async def read_json_bounded(request: Request, max_values: int) -> bytes:
+    """A JSON body, its values counted while it streams in: past ``max_values`` (commas bound them from above,
+    ``features.safe_io.count_json_values``) it is refused with 413 at once, before the rest is read or anything
+    decoded, so a body of millions of numbers never reaches a diagnosis worker."""
+    chunks: list[bytes] = []
+    commas = 0
+    async for chunk in request.stream():
+        commas += chunk.count(b",")
+        if commas > max_values:
+            raise InputError(f"JSON holds more than {max_values} values; send a shorter recording (fewer samples per "
+                             "channel), split a batch, or send an NPY array", "too_large")
+        chunks.append(chunk)
+    return b"".join(chunks)
 
 
 async def _read_form(request: Request, max_files: int = 1) -> Any:

@@ -18,7 +18,7 @@ from ...baseline import record_verdict
 from ...inference import ModelUnavailable
 from ...parsing import MAX_TAKE_FILES, batch_record, checked, parse_batch, parse_body, recording_from_model
 from ...pool import DiagnoseBody, DiagnoseRecord, ParseBatch
-from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
+from ...schemas import MAX_BATCH_VALUES, MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
 from ..deps import (
     DiagnoseKeyDep,
     JsonBodyDep,
@@ -26,7 +26,7 @@ from ..deps import (
     StateDep,
 )
 from ..errors import STATUS_OF_KIND, InputError, RequestInvalid
-from ..recordings import ReaderQueryDep, diagnosis_limiter, in_worker, read_body
+from ..recordings import ReaderQueryDep, diagnosis_limiter, in_worker, read_body, read_json_bounded
 from ..routing import FiniteJSONRoute
 
 router = APIRouter(tags=["diagnose"], route_class=FiniteJSONRoute)
@@ -169,7 +169,7 @@ async def diagnose_batch(request: Request, state: StateDep,
                          output_units: OutputUnitsQuery = "um") -> dict:
     """The body (a ``BatchRequest``) is parsed in a diagnosis worker, not here; the records are then
     diagnosed one per worker call, in parallel across the workers."""
-    body = await request.body()
+    body = await read_json_bounded(request, MAX_BATCH_VALUES)
     cap = state.settings.max_batch_records
     if state.pool is not None:
         records = (await in_worker(state, ParseBatch(body)))[1]
