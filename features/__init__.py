@@ -86,7 +86,8 @@ from ._config import (
     speed_in_doubt,
 )
 from ._evidence import EvidenceItem, evidence
-from ._extract import BearingDetail, FeatureResult, extract_features
+from ._extract import BearingDetail, FeatureResult
+from ._extraction import extract_features, with_speed_notes
 from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
 from ._orbit import OrbitShape
 from ._recording import ProbeChannel, Recording, parse_speed_range
@@ -98,7 +99,7 @@ from ._speed_alternatives import speed_alternatives_rpm
 tune_malloc()
 
 __all__ = [
-    "ProbeChannel", "Recording", "parse_speed_range", "extract_features", "FeatureResult", "BearingDetail", "OrbitShape",
+    "ProbeChannel", "Recording", "parse_speed_range", "extract_features", "with_speed_notes", "FeatureResult", "BearingDetail", "OrbitShape",
     "FEATURE_NAMES", "FEATURE_SPECS", "FeatureSpec", "feature_names", "ALLOWED_UNITS", "MIN_REVS",
     "MIN_REVS_MOTION", "WHIRL_BAND", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",

@@ -1,9 +1,12 @@
-"""``extract_features``: one recording → the fixed, named feature vector plus details."""
+"""The one-pass feature extraction of a recording and its result types (``FeatureResult``, ``BearingDetail``).
+
+The entry point, ``extract_features``, is in ``features._extraction``.
+"""
 from __future__ import annotations
 
 import threading
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cache
 from typing import Any
 
@@ -19,12 +22,11 @@ from ._orbit import OrbitShape, orbit_arrays
 from ._orders import fit_orders, forward_reverse, max_sync_order
 from ._poincare import classify, poincare_points
 from ._recording import Recording
-from ._sanity import check_recording
 from ._spectrum import fast_length, hann_spectra, line_noise_amplitude, noise_rms, residual_psd
 from ._speed import shaft_angle
 from ._speed_lock import locked_speed_hz
 
-__all__ = ["BearingDetail", "FeatureResult", "extract_features"]
+__all__ = ["BearingDetail", "FeatureResult"]
 
 _NAME_INDEX = {n: i for i, n in enumerate(FEATURE_NAMES)}
 _SPEED_INDEX = _NAME_INDEX["speed_rpm"]
@@ -311,56 +313,6 @@ def _whirl_dominates(seg: np.ndarray, fs: float, f1: float) -> bool:
     if hi <= lo or k1 + 3 > power.size:
         return False
     return bool(power[lo:hi + 1].max() > power[max(k1 - 2, 0):k1 + 3].max())
-
-
-def extract_features(recording: Recording, *, speed_estimate_rpm: float | None = None,
-                     speed_notes: Sequence[str] = ()) -> FeatureResult:
-    """Features of one recording: order analysis, orbit shape, sub-harmonics, motion type.
-
-    Parameters
-    ----------
-    recording : Recording
-        x/y probe pairs of one or more bearings, sample rate, units, optional speed,
-        keyphasor and clearance.
-    speed_estimate_rpm : float, optional
-        For a recording without keyphasor or ``speed_rpm``: a running speed estimated elsewhere, used
-        instead of this package's estimate (``speed_source`` stays ``"estimated"``) — a caller that chose
-        among :func:`speed_alternatives_rpm` (``models.speed_choice``). Ignored otherwise.
-    speed_notes : sequence of str
-        The warnings that go with ``speed_estimate_rpm`` (in place of the estimator's). A speed from
-        elsewhere is never the signal's own reading: when no note puts it in doubt
-        (:func:`speed_in_doubt`), one that does is added, so a verdict at it is never ``confident``.
-
-    Returns
-    -------
-    FeatureResult
-
-    Raises
-    ------
-    ValueError
-        With a message saying what to fix: fewer than ``MIN_REVS`` (8) revolutions, fewer than
-        8 samples per revolution (3X too close to Nyquist), an unestimable speed, keyphasor
-        pulses off the record. (Bad channels are refused when the ``Recording`` is built.)
-    """
-    if not isinstance(recording, Recording):
-        raise ValueError(f"extract_features expects a features.Recording, got {type(recording).__name__}")
-    estimate = None
-    if speed_estimate_rpm is not None:
-        if not (np.isfinite(speed_estimate_rpm) and speed_estimate_rpm > 0):
-            raise ValueError(f"speed_estimate_rpm: must be a positive number of r/min, got {speed_estimate_rpm!r}")
-        notes = list(speed_notes)
-        if not any(cfg.speed_in_doubt(w) for w in notes):
-            notes.append(f"{cfg.SPEED_AMBIGUOUS}: {float(speed_estimate_rpm):.1f} r/min was estimated outside this "
-                         "package's reading of the spectrum (speed_estimate_rpm); confirm it with speed_rpm or "
-                         "keyphasor_times_s")
-        estimate = (float(speed_estimate_rpm), notes)
-    with _blas_limit:
-        if recording.keyphasor_takes is not None:
-            from ._takes import extract_by_take
-            result = extract_by_take(recording, _extract)
-        else:
-            result = _extract(recording, estimate)
-        return replace(result, sanity=check_recording(recording, result))
 
 
 def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = None) -> FeatureResult:

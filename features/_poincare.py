@@ -3,8 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rotordiag.simulator.analysis import classify_motion
-from rotordiag.simulator.analysis.motion import PERIOD_RTOL
+from rotordiag.simulator.motion import PERIOD_RTOL, classify_motion
 
 from . import _config as cfg
 

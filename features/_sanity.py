@@ -25,6 +25,8 @@ from typing import cast
 
 import numpy as np
 
+from rotordiag.core.reasons import FAIL, WARN, require_code
+
 from ._common_mode import COMMON_MODE_MIN_PROBES, CommonMode, common_mode
 from ._keyphasor import keyphasor_fault, pulses_in_record
 from ._recording import Recording
@@ -33,8 +35,6 @@ from ._speed import estimate_speed_hz
 __all__ = ["SanityFinding", "check_recording", "FAIL", "WARN", "COMMON_MODE_MIN_SHARE",
            "PROBE_RANGE_UM", "MAX_DC_UM", "ORBIT_CLEARANCE_MARGIN", "CLIP_MIN_FRACTION"]
 
-FAIL = "fail"
-WARN = "warn"
 
 #: a peak-to-peak motion beyond this (µm) is outside the linear range of any proximity probe
 #: (the common 8 mm probe is linear over about 2 mm; 2 mm pk-pk leaves no room): check units
@@ -89,10 +89,7 @@ class SanityFinding:
     Attributes
     ----------
     code : str
-        Stable identifier (``flat_channel``, ``zero_channel``, ``clipped_channel``,
-        ``orbit_exceeds_clearance``, ``orbit_exceeds_probe_range``, ``dc_implausible``,
-        ``reverse_whirl_all``, ``reverse_whirl``, ``no_sync_signal``, ``common_mode_1x``, ``common_mode_2x``,
-        ``keyphasor_faulty``, ``spike``, ``dropout``).
+        Stable identifier, one of the catalogue's (:mod:`rotordiag.core.reasons`; any other is refused).
     level : str
         ``"fail"`` or ``"warn"``.
     message : str
@@ -104,6 +101,9 @@ class SanityFinding:
     level: str
     message: str
     bearing: int | None = None
+
+    def __post_init__(self) -> None:
+        require_code(self.code, self.level)
 
     def to_dict(self) -> dict:
         return {"code": self.code, "level": self.level, "message": self.message, "bearing": self.bearing}

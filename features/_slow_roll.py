@@ -33,7 +33,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from . import _config as cfg
-from ._extract import extract_features
+from ._extraction import extract_features
 from ._recording import Recording
 from ._sanity import FAIL
 

@@ -118,8 +118,7 @@ def register(app: typer.Typer) -> None:
         file is kept as model.skops.pre-rename. Loading works without migrating too (the names are mapped
         in memory); migrating makes the files readable by other tools that use the trusted-types list.
         """
-        from .legacy import migrate_registry
-        from .registry import RegistryError
+        from .registry import RegistryError, migrate_registry
 
         root = registry or default_registry()
         if not root.is_dir():

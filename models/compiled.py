@@ -29,8 +29,8 @@ import numba
 import numpy as np
 from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
 
+from ._columns import _blank  # the estimators' own column blanking (sparse training columns → 0)
 from ._sklearn_private import hgb_trees, single_calibration
-from .estimators import _blank  # the estimators' own column blanking (sparse training columns → 0)
 from .ordinal import OrdinalSeverityClassifier
 
 

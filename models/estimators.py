@@ -22,6 +22,7 @@ import math
 import re
 import warnings
 from collections.abc import Sequence
+from functools import lru_cache
 from numbers import Integral, Real
 
 import numpy as np
@@ -53,6 +54,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from rotordiag.core.bands import DEFAULT_EDGES, DEFAULT_NAMES, SeverityBands
 from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, short_bearing_attitude_deg
 
+from ._columns import _blank, _sparse_columns
 from ._patterns import name_mask, pattern_value, require_matches
 from ._sklearn_private import Interval, StrOptions
 from .ordinal import OrdinalSeverityClassifier
@@ -60,32 +62,11 @@ from .ordinal import OrdinalSeverityClassifier
 _CALIBRATION_METHODS = ("temperature", "sigmoid", "isotonic", "none")
 
 
-MIN_FINITE_PER_COLUMN = 10
-
 #: envelope features read with a relative tolerance on their training range: a running speed is known to about
 #: ±1 % — a stated speed is locked to the record's own lines within 1 % (``features._speed_lock``), an estimate
 #: scatters — so a machine at the edge of the training speeds (3600 r/min, the top of the specs' range) read at
 #: 3606 r/min is not outside them (docs/robustness.md, seeds 815–817: 6–16 of 240 rated-machine presets were)
 ENVELOPE_REL_TOLERANCE: dict[str, float] = {"speed_rpm": 0.01}
-
-
-def _sparse_columns(X: np.ndarray) -> np.ndarray:
-    """Columns with fewer than ``MIN_FINITE_PER_COLUMN`` finite values (or all, if fewer rows).
-
-    The boosted trees cannot bin a column that is all NaN (scikit-learn 1.9 raises), which a
-    rarely defined feature can be inside one cross-validation fold; such columns are too
-    sparse to learn from anyway and are replaced by a constant.
-    """
-    need = min(MIN_FINITE_PER_COLUMN, X.shape[0])
-    return np.isfinite(X).sum(axis=0) < need
-
-
-def _blank(X: np.ndarray, columns: np.ndarray) -> np.ndarray:
-    if not columns.any():
-        return X
-    X = np.array(X, dtype=float, copy=True)
-    X[:, columns] = 0.0
-    return X
 
 
 def blank_clearance(X: np.ndarray, columns: np.ndarray, share: float, seed: int) -> np.ndarray:
@@ -706,6 +687,22 @@ class FeatureEnvelope(BaseEstimator):
         return np.where(self.outside(X).any(axis=1), -1, 1)
 
 
+@lru_cache(maxsize=16)
+def _amplitude_centre_pairs(names: tuple[str, ...], cols: bytes) -> tuple[tuple[int, int], ...]:
+    """(1X per clearance, centreline eccentricity) column pairs of each bearing, both clearance columns (``cols``:
+    ``clearance_columns_`` as bytes), that :meth:`MisalignmentModel.clearance_stated` reads; built once per model."""
+    is_col = np.frombuffer(cols, dtype=bool)
+    index = {n: j for j, n in enumerate(names)}
+    pairs = []
+    for name, ja in index.items():
+        if not name.endswith("_1x_major_pp_per_c"):
+            continue
+        jc = index.get(name.replace("_1x_major_pp_per_c", "_centre_ecc_per_c"))
+        if jc is not None and is_col[ja] and is_col[jc]:
+            pairs.append((ja, jc))
+    return tuple(pairs)
+
+
 class MisalignmentModel(BaseEstimator):
     """Severity classifier + Δ interval regressor + OOD scorer, with bands and feature names.
 
@@ -886,13 +883,9 @@ class MisalignmentModel(BaseEstimator):
         if cols is None or not cols.any():
             return np.ones(X.shape[0], dtype=bool)
         stated = np.isfinite(X[:, cols]).any(axis=1)
-        index = {n: j for j, n in enumerate(getattr(self, "feature_names_", ()))}
-        for name, ja in index.items():
-            if not name.endswith("_1x_major_pp_per_c"):
-                continue
-            jc = index.get(name.replace("_1x_major_pp_per_c", "_centre_ecc_per_c"))
-            if jc is not None and cols[ja] and cols[jc]:
-                stated &= ~(np.isfinite(X[:, ja]) & ~np.isfinite(X[:, jc]))
+        for ja, jc in _amplitude_centre_pairs(tuple(getattr(self, "feature_names_", ())),
+                                                  np.asarray(cols, dtype=bool).tobytes()):
+            stated &= ~(np.isfinite(X[:, ja]) & ~np.isfinite(X[:, jc]))
         return stated
 
     def heads(self, stated: bool):

@@ -5,7 +5,7 @@ etc., so a skops file names its own classes ``models.estimators.MisalignmentMode
 ``models.bands.SeverityBands``. :func:`renamed_skops_bytes` rewrites exactly those names
 (the table :data:`LEGACY_TYPE_NAMES`, nothing by pattern) in the file's ``schema.json``,
 in memory, to their current names; the result is then checked against the unchanged
-trusted-types list like any other file. :func:`migrate_registry` rewrites a registry's
+trusted-types list like any other file. ``models.registry.migrate_registry`` rewrites a registry's
 files on disk (``rotordiag models migrate``), verifying each rewritten model predicts
 exactly what the in-memory mapping does before it replaces the old file.
 """
@@ -13,10 +13,7 @@ from __future__ import annotations
 
 import io
 import json
-import os
-import tempfile
 import zipfile
-from pathlib import Path
 from typing import Any
 
 from ._sklearn_private import SKLEARN_RENAMED_TYPES
@@ -90,52 +87,3 @@ def renamed_skops_bytes(data: bytes) -> tuple[bytes, int]:
     except (zipfile.BadZipFile, KeyError, json.JSONDecodeError) as exc:
         raise ValueError(f"not a skops model file ({exc})") from None
     return out.getvalue(), n
-
-
-def migrate_registry(root: str | Path) -> list[str]:
-    """Rewrite every pre-rename model file of a registry to the current type names.
-
-    Each ``vNNNN/model.skops`` holding old names is rewritten, loaded back with the
-    trusted-types list, checked to give bit-identical predictions to the in-memory
-    mapping on a fixed probe table, and only then put in place with ``os.replace``
-    (the old file is kept as ``model.skops.pre-rename``); ``card.json``'s ``model_class``
-    is updated likewise. Files already current are left alone.
-
-    Returns
-    -------
-    list of str
-        The versions rewritten.
-    """
-    import numpy as np
-
-    from .registry import CARD_FILE, MODEL_FILE, load_model_bytes
-
-    migrated = []
-    for vdir in sorted(p for p in Path(root).iterdir() if p.is_dir() and (p / MODEL_FILE).is_file()):
-        path = vdir / MODEL_FILE
-        old = path.read_bytes()
-        new, n = renamed_skops_bytes(old)
-        if n == 0:
-            continue
-        reference, rewritten = load_model_bytes(old, str(path)), load_model_bytes(new, str(path))
-        probe = np.random.default_rng(0).normal(size=(64, reference.feature_median_.size))
-        probe[::7, ::3] = np.nan
-        for method in ("predict_proba", "ood_ratio"):
-            if not np.array_equal(getattr(reference, method)(probe), getattr(rewritten, method)(probe), equal_nan=True):
-                raise ValueError(f"{path}: the rewritten model's {method} differs; left unchanged")
-        fd, tmp = tempfile.mkstemp(dir=vdir, prefix=".model.", suffix=".tmp")
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(new)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(path, vdir / f"{MODEL_FILE}.pre-rename")
-        os.replace(tmp, path)
-        card_path = vdir / CARD_FILE
-        if card_path.is_file():
-            card = json.loads(card_path.read_text())
-            if card.get("model_class") in LEGACY_TYPE_NAMES:
-                card["model_class"] = LEGACY_TYPE_NAMES[card["model_class"]]
-                card_path.write_text(json.dumps(card, indent=2) + "\n")
-        migrated.append(vdir.name)
-    return migrated

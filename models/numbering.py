@@ -19,6 +19,7 @@ bearings 2 and 3 is not judged: the OOD score hardly moves (median ratio 1.04 on
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 
 import numpy as np
 
@@ -48,8 +49,25 @@ def mirrored_row(names: Sequence[str], row: np.ndarray) -> np.ndarray:
     Each per-bearing feature depends on that bearing's probes alone, so ``b{n}_…`` takes ``b{5−n}_…``'s value;
     a phase difference ``dphase_kx_bi_bj`` = wrap(φ_i − φ_j) becomes wrap(φ_{5−i} − φ_{5−j}), i.e. the wrapped
     negative of ``dphase_kx_b{5−j}_b{5−i}``; the speed and the motion type do not depend on the numbering."""
-    index = {n: i for i, n in enumerate(names)}
+    same, src_same, phase, src_phase, absent = _mirror_plan(tuple(names))
+    row = np.asarray(row, dtype=float)
     out = np.array(row, dtype=float, copy=True)
+    out[same] = row[src_same]
+    out[phase] = wrap_deg(-row[src_phase])
+    out[absent] = np.nan
+    return out
+
+
+@lru_cache(maxsize=16)
+def _mirror_plan(names: tuple[str, ...]) -> tuple[np.ndarray, ...]:
+    """Where :func:`mirrored_row` takes each column from, per feature-name list (built once per model):
+    (columns, their per-bearing sources), (phase-difference columns, their sources), columns with no source."""
+    index = {n: i for i, n in enumerate(names)}
+    same: list[int] = []
+    src_same: list[int] = []
+    phase: list[int] = []
+    src_phase: list[int] = []
+    absent: list[int] = []
     for j, name in enumerate(names):
         parsed = bearing_feature(name)
         if parsed is None:
@@ -57,11 +75,16 @@ def mirrored_row(names: Sequence[str], row: np.ndarray) -> np.ndarray:
         prefix, bearings, suffix = parsed
         if len(bearings) == 1:
             k = index.get(f"b{5 - bearings[0]}_{suffix}")
-            out[j] = row[k] if k is not None else np.nan
+            dst, src = same, src_same
         else:
             k = index.get(f"{prefix}_b{5 - bearings[1]}_b{5 - bearings[0]}_{suffix}")
-            out[j] = float(wrap_deg(-row[k])) if k is not None else np.nan
-    return out
+            dst, src = phase, src_phase
+        if k is None:
+            absent.append(j)
+        else:
+            dst.append(j)
+            src.append(k)
+    return tuple(np.array(a, dtype=np.intp) for a in (same, src_same, phase, src_phase, absent))
 
 
 def numbering_reason(ood_score: float, other_ood_score: float, call: str, other_call: str) -> Reason | None:

@@ -31,6 +31,7 @@ from sklearn.model_selection import GroupKFold, StratifiedKFold
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from ._columns import _blank, _sparse_columns
 from ._search import coordinate_ascent
 from ._sklearn_private import Interval
 
@@ -170,7 +171,6 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
             Rows on which ``max_false_alarm`` is bounded (``MisalignmentModel`` passes the
             perfectly aligned machines, Δ = 0); default: the rows of the lowest class.
         """
-        from .estimators import _blank, _sparse_columns
 
         self._validate_params()
         X, y = validate_data(self, X, y, ensure_all_finite="allow-nan")
@@ -247,7 +247,6 @@ class OrdinalSeverityClassifier(ClassifierMixin, BaseEstimator):
 
         (Not scikit-learn's ``decision_function``, whose columns are per class.)
         """
-        from .estimators import _blank
 
         check_is_fitted(self, "models_")
         X = _blank(validate_data(self, X, reset=False, ensure_all_finite="allow-nan"), self.sparse_columns_)

@@ -7,10 +7,11 @@ verdict, and an out-of-distribution warning.
 """
 from __future__ import annotations
 
+import copy
 import logging
 import weakref
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -25,6 +26,7 @@ from .numbering import has_every_bearing, mirrored_row, numbering_reason
 from .registry import Registry
 from .reverse_2x import reverse_2x_reason
 from .status import (
+    DEFAULT_POLICY,
     INCONCLUSIVE,
     ModelCall,
     Reason,
@@ -32,6 +34,7 @@ from .status import (
     assess,
     consistent_estimate,
     journals_at_one_position,
+    policy_of,
 )
 
 if TYPE_CHECKING:
@@ -112,11 +115,28 @@ class Verdict:
     speed_source: str | None = None
 
     def to_dict(self) -> dict:
-        d = asdict(self)
+        d = {f.name: _copied(getattr(self, f.name)) for f in fields(self)}     # as dataclasses.asdict, 4× faster
         d["misalignment_interval"] = list(self.misalignment_interval)
         if self.offset_interval_um is not None:
             d["offset_interval_um"] = list(self.offset_interval_um)
         return d
+
+
+def _copied(v: Any) -> Any:
+    """A deep copy of a verdict field as :func:`dataclasses.asdict` makes it (dataclasses to dicts, containers
+    copied with their types), for the few types a verdict holds."""
+    t = type(v)
+    if t is float or t is str or t is int or t is bool or v is None:
+        return v
+    if t is list:
+        return [_copied(x) for x in v]
+    if t is dict:
+        return {_copied(k): _copied(x) for k, x in v.items()}
+    if t is tuple:
+        return tuple(_copied(x) for x in v)
+    if is_dataclass(v) and not isinstance(v, type):
+        return {f.name: _copied(getattr(v, f.name)) for f in fields(v)}
+    return copy.deepcopy(v)
 
 
 def feature_vector(names: Sequence[str], feature_result) -> tuple[np.ndarray, list[str]]:
@@ -403,7 +423,8 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
                   band_names=[str(c) for c in model.classes_], misaligned_call=band > 0,
                   alarm=_alarm(model, proba, cls, X), delta_interval=(float(interval[0, 0]), float(interval[0, 1])),
                   band_edges=bands.edges, interval_level=1.0 - float(model.regressor_.alpha),
-                  one_position_call=_one_position_call(model, fast, names, row) if band > 0 else None))
+                  one_position_call=_one_position_call(model, fast, names, row) if band > 0 else None),
+        policy_of(bundle.card) if isinstance(bundle, ModelBundle) else DEFAULT_POLICY)
     shown: float | None = delta
     shown_iv: tuple[float | None, float | None] = (lo, hi)
     if status == INCONCLUSIVE:

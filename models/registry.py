@@ -361,3 +361,52 @@ class Registry:
         _atomic_write_text(self.root / HISTORY_FILE, json.dumps(history) + "\n")
         _atomic_write_text(self.root / ACTIVE_FILE, target + "\n")
         return target
+
+
+def migrate_registry(root: str | Path) -> list[str]:
+    """Rewrite every pre-rename model file of a registry to the current type names.
+
+    Each ``vNNNN/model.skops`` holding old names is rewritten, loaded back with the
+    trusted-types list, checked to give bit-identical predictions to the in-memory
+    mapping on a fixed probe table, and only then put in place with ``os.replace``
+    (the old file is kept as ``model.skops.pre-rename``); ``card.json``'s ``model_class``
+    is updated likewise. Files already current are left alone.
+
+    Returns
+    -------
+    list of str
+        The versions rewritten.
+    """
+    import numpy as np
+
+    from .legacy import LEGACY_TYPE_NAMES, renamed_skops_bytes
+
+    migrated = []
+    for vdir in sorted(p for p in Path(root).iterdir() if p.is_dir() and (p / MODEL_FILE).is_file()):
+        path = vdir / MODEL_FILE
+        old = path.read_bytes()
+        new, n = renamed_skops_bytes(old)
+        if n == 0:
+            continue
+        reference, rewritten = load_model_bytes(old, str(path)), load_model_bytes(new, str(path))
+        probe = np.random.default_rng(0).normal(size=(64, reference.feature_median_.size))
+        probe[::7, ::3] = np.nan
+        for method in ("predict_proba", "ood_ratio"):
+            if not np.array_equal(getattr(reference, method)(probe), getattr(rewritten, method)(probe), equal_nan=True):
+                raise ValueError(f"{path}: the rewritten model's {method} differs; left unchanged")
+        fd, tmp = tempfile.mkstemp(dir=vdir, prefix=".model.", suffix=".tmp")
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(new)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o644)
+        os.replace(path, vdir / f"{MODEL_FILE}.pre-rename")
+        os.replace(tmp, path)
+        card_path = vdir / CARD_FILE
+        if card_path.is_file():
+            card = json.loads(card_path.read_text())
+            if card.get("model_class") in LEGACY_TYPE_NAMES:
+                card["model_class"] = LEGACY_TYPE_NAMES[card["model_class"]]
+                card_path.write_text(json.dumps(card, indent=2) + "\n")
+        migrated.append(vdir.name)
+    return migrated

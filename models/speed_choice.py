@@ -32,6 +32,7 @@ from rotordiag.features import (
     extract_features,
     speed_alternatives_rpm,
     speed_in_doubt,
+    with_speed_notes,
 )
 
 from .predict import Verdict, diagnose
@@ -107,5 +108,7 @@ def choose_speed(bundle: Any, recording: Recording, fr: FeatureResult, verdict: 
             f"makes it like them (OOD score {v_c.ood_score:.2f}). The speed rests on that judgement, not on the "
             "signal alone: confirm it (speed_rpm, speed_range_rpm or keyphasor_times_s)")
     estimator = [f"at the estimate {fr.speed_rpm:.1f} r/min: {w}" for w in fr.warnings if speed_in_doubt(w)]
-    fr_c = extract_features(recording, speed_estimate_rpm=rpm, speed_notes=[note, *estimator])
+    noted = with_speed_notes(fr_c, [note, *estimator])      # the chosen reading's features, its notes changed
+    fr_c = noted if noted is not None else extract_features(recording, speed_estimate_rpm=rpm,
+                                                            speed_notes=[note, *estimator])
     return diagnose(bundle, fr_c, clearance_um=clearance_um, top_k=top_k), fr_c, choice

@@ -42,12 +42,14 @@ that class's band (the unclipped estimate is kept in the verdict as ``misalignme
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, fields
+from typing import Any
 
 import numpy as np
 
 from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, short_bearing_attitude_deg
+from rotordiag.core.reasons import INCONCLUSIVE, UNCERTAIN, code_info, require_code
 from rotordiag.features import speed_in_doubt
 
 from .baselines import DEFAULT_RULE_CUTS, RuleOfThumb
@@ -55,15 +57,13 @@ from .baselines import DEFAULT_RULE_CUTS, RuleOfThumb
 __all__ = ["Reason", "RecordingChecks", "ModelCall", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
            "OOD_INCONCLUSIVE", "SCALE_UNCERTAIN", "SCALE_INCONCLUSIVE", "CONFIDENT_MIN_PROBABILITY", "NEAR_CENTRE_MAX_ECC",
            "FRAME_OFFSET_DEG",
-           "CONFIDENT_MAX_FAR_PROBABILITY",
+           "CONFIDENT_MAX_FAR_PROBABILITY", "DecisionPolicy", "DEFAULT_POLICY", "policy_of",
            "SIGNATURE_MIN_2X_1X", "coupling_2x_1x", "coupling_centreline_known", "journals_at_one_position",
            "journals_apart_c", "SIGNATURE_BANDS_ABOVE_CALL", "signature_band",
            "CENTRELINE_FEATURES", "describe_feature", "far_band_probability",
            "interval_far_bands", "envelope_reasons"]
 
 CONFIDENT = "confident"
-UNCERTAIN = "uncertain"
-INCONCLUSIVE = "inconclusive"
 
 #: OOD score (distance to training data over its usual distance) beyond which no severity is given
 OOD_INCONCLUSIVE = 3.0
@@ -99,14 +99,69 @@ SIGNATURE_BANDS_ABOVE_CALL = 2
 
 
 @dataclass(frozen=True)
+class DecisionPolicy:
+    """The thresholds that turn a model's call into a verdict's status, in one object outside the estimators.
+
+    Stored with a model (its card's ``decision_policy``, written by ``models.train``); a card without one (the
+    shipped model's, made before it existed) gets :data:`DEFAULT_POLICY`, whose values are the module constants
+    above. The ordinal classifier's false-alarm thresholds stay with the classifier that was fitted with them (the
+    model file); :attr:`ModelCall.alarm` carries them to the status.
+    """
+
+    ood_inconclusive: float = OOD_INCONCLUSIVE
+    near_centre_max_ecc: float = NEAR_CENTRE_MAX_ECC
+    frame_offset_deg: float = FRAME_OFFSET_DEG
+    scale_uncertain: float = SCALE_UNCERTAIN
+    scale_inconclusive: float = SCALE_INCONCLUSIVE
+    confident_min_probability: float = CONFIDENT_MIN_PROBABILITY
+    confident_max_far_probability: float = CONFIDENT_MAX_FAR_PROBABILITY
+    signature_min_2x_1x: float = SIGNATURE_MIN_2X_1X
+    signature_bands_above_call: int = SIGNATURE_BANDS_ABOVE_CALL
+
+    def to_dict(self) -> dict[str, float]:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any] | None) -> DecisionPolicy:
+        """The policy of a card's ``decision_policy`` (None or empty: :data:`DEFAULT_POLICY`).
+
+        Raises
+        ------
+        ValueError
+            An unknown name, or a value that is not a finite positive number.
+        """
+        if not d:
+            return DEFAULT_POLICY
+        known = {f.name: f for f in fields(cls)}
+        unknown = sorted(set(d) - set(known))
+        if unknown:
+            raise ValueError(f"decision_policy: unknown threshold(s) {unknown}; known: {sorted(known)}")
+        values: dict[str, Any] = {}
+        for k, v in d.items():
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (np.isfinite(v) and v > 0):
+                raise ValueError(f"decision_policy.{k}: must be a finite positive number, got {v!r}")
+            values[k] = int(v) if k == "signature_bands_above_call" else float(v)
+        return cls(**values)
+
+
+#: the policy of every model whose card has none
+DEFAULT_POLICY = DecisionPolicy()
+
+
+def policy_of(card: Mapping[str, Any] | None) -> DecisionPolicy:
+    """The decision policy stored with a model (its card's ``decision_policy``), else :data:`DEFAULT_POLICY`."""
+    return DecisionPolicy.from_dict((card or {}).get("decision_policy"))
+
+
+@dataclass(frozen=True)
 class Reason:
     """Why a verdict is not confident.
 
     Attributes
     ----------
     code : str
-        Stable identifier (a sanity check's code, ``ood``, ``scale``, ``speed_ambiguous``,
-        ``features_missing``, ``low_probability``, ``class_delta_disagree``).
+        Stable identifier, one of the catalogue's (:mod:`rotordiag.core.reasons`; any other is refused, as is a
+        status the catalogue does not allow the code).
     status : str
         ``uncertain`` or ``inconclusive``: what this reason alone makes of the verdict.
     message : str
@@ -117,8 +172,13 @@ class Reason:
     status: str
     message: str
 
+    def __post_init__(self) -> None:
+        require_code(self.code, self.status)
+
     def to_dict(self) -> dict:
-        return {"code": self.code, "status": self.status, "message": self.message}
+        """The reason as the answer carries it, with the catalogue's ``action`` (what to do, for every recording
+        with this code)."""
+        return {"code": self.code, "status": self.status, "message": self.message, "action": code_info(self.code).action}
 
 
 def consistent_estimate(band_index: int, edges: Sequence[float], point: float,
@@ -141,7 +201,8 @@ def consistent_estimate(band_index: int, edges: Sequence[float], point: float,
     return p, (min(lo, p), max(hi, p)), agrees
 
 
-def _near_centre_reasons(names: Sequence[str], row: np.ndarray) -> list[Reason]:
+def _near_centre_reasons(names: Sequence[str], row: np.ndarray, policy: DecisionPolicy = DEFAULT_POLICY
+                          ) -> list[Reason]:
     """``journals_near_centre`` when all four bearings' centrelines are read and every journal sits within
     :data:`NEAR_CENTRE_MAX_ECC` of its bearing centre."""
     index = {n: i for i, n in enumerate(names)}
@@ -149,18 +210,19 @@ def _near_centre_reasons(names: Sequence[str], row: np.ndarray) -> list[Reason]:
     if any(j is None for j in cols):
         return []
     ecc = np.array([row[j] for j in cols if j is not None], dtype=float)       # all four found (above)
-    if not np.isfinite(ecc).all() or ecc.max() >= NEAR_CENTRE_MAX_ECC:
+    if not np.isfinite(ecc).all() or ecc.max() >= policy.near_centre_max_ecc:
         return []
     return [Reason("journals_near_centre", UNCERTAIN,
                    f"every journal sits within {ecc.max():.3f} c of its bearing centre (eccentricities "
                    f"{', '.join(f'{e:.3f}' for e in ecc)} at bearings 1–4): the rotor's weight holds at least one "
-                   f"journal further off-centre than {NEAR_CENTRE_MAX_ECC:g} c in nearly every machine (in 22 of 719 "
+                   f"journal further off-centre than {policy.near_centre_max_ecc:g} c in nearly every machine (in 22 of 719 "
                    "held-out plants of the training family it did not), so the sizes per clearance are suspect — check the units and the "
                    "probe sensitivity (numbers 10× too small read like this), the clearance (radial, in µm) and that "
                    "the DC readings are referenced to the bearing centre")]
 
 
-def _probe_frame_reasons(names: Sequence[str], row: np.ndarray) -> list[Reason]:
+def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: DecisionPolicy = DEFAULT_POLICY
+                         ) -> list[Reason]:
     """``centreline_frame_turned`` when at two or more bearings the journal sits off the load line (attitude angle)
     by more than :data:`FRAME_OFFSET_DEG` beyond a plain short journal bearing's at the same eccentricity, every one
     on the same side: the probes' frame as given is turned (wrong ``angle_deg``), or the bearings are no plain
@@ -180,7 +242,7 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray) -> list[Reason]:
     phis = attitude_angle_deg(x, y)
     offsets = phis - short_bearing_attitude_deg(e)
     found = list(zip(bearings, phis.tolist(), offsets.tolist()))
-    if not (np.all(offsets < -FRAME_OFFSET_DEG) or np.all(offsets > FRAME_OFFSET_DEG)):
+    if not (np.all(offsets < -policy.frame_offset_deg) or np.all(offsets > policy.frame_offset_deg)):
         return []
     where = ", ".join(f"bearing {b} {phi:.0f}° ({off:+.0f}°)" for b, phi, off in found)
     return [Reason("centreline_frame_turned", UNCERTAIN,
@@ -193,7 +255,8 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray) -> list[Reason]:
                    "was trained on")]
 
 
-def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray) -> list[Reason]:
+def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray,
+                   policy: DecisionPolicy = DEFAULT_POLICY) -> list[Reason]:
     index = {n: i for i, n in enumerate(names)}
     ratios = []
     for b in COUPLING_BEARINGS:
@@ -209,9 +272,9 @@ def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray) ->
                        f"no 1X vibration at bearing {b} (0 µm pk-pk) where the training data's typical is {m:.3g} µm: "
                        "check that the probes are connected and the data are not all zeros")]
     factor = m / v if v < m else v / m
-    if factor < SCALE_UNCERTAIN:
+    if factor < policy.scale_uncertain:
         return []
-    status = INCONCLUSIVE if factor >= SCALE_INCONCLUSIVE else UNCERTAIN
+    status = INCONCLUSIVE if factor >= policy.scale_inconclusive else UNCERTAIN
     side = "below" if v < m else "above"
     return [Reason("scale", status,
                    f"1X vibration at bearing {b} is {v:.3g} µm pk-pk, {factor:.0f}× {side} the training data's typical "
@@ -259,12 +322,14 @@ def _num(v: float, unit: str = "") -> str:
     return f"{text}{unit}" if unit == "°" else (f"{text} {unit}" if unit else text)
 
 
-def envelope_reasons(findings: Sequence[dict], *, max_reasons: int = 3) -> list[Reason]:
+def envelope_reasons(findings: Sequence[dict], *, max_reasons: int = 3,
+                     policy: DecisionPolicy | None = None) -> list[Reason]:
     """``outside_training`` reasons from ``MisalignmentModel.envelope_findings`` (largest excess first).
 
-    Uncertain; inconclusive when a value is :data:`SCALE_INCONCLUSIVE` times beyond the
-    training range (a tree model is blind there).
+    Uncertain; inconclusive when a value is :data:`SCALE_INCONCLUSIVE` (``policy.scale_inconclusive``) times beyond
+    the training range (a tree model is blind there).
     """
+    policy = DEFAULT_POLICY if policy is None else policy
     out = []
     for k, f in enumerate(list(findings)[:max_reasons]):
         words, unit = describe_feature(str(f["feature"]))
@@ -287,7 +352,7 @@ def envelope_reasons(findings: Sequence[dict], *, max_reasons: int = 3) -> list[
             text += "a machine or measurement unlike the training family; the model has not seen this"
         if k == max_reasons - 1 and len(findings) > max_reasons:
             text += f" (and {len(findings) - max_reasons} more feature(s) outside the training range)"
-        status = INCONCLUSIVE if factor is not None and factor >= SCALE_INCONCLUSIVE else UNCERTAIN
+        status = INCONCLUSIVE if factor is not None and factor >= policy.scale_inconclusive else UNCERTAIN
         out.append(Reason("outside_training", status, text))
     return out
 
@@ -477,11 +542,13 @@ class ModelCall:
     one_position_call: int | None = None
 
 
-def assess(checks: RecordingChecks, call: ModelCall) -> tuple[str, list[Reason]]:
+def assess(checks: RecordingChecks, call: ModelCall, policy: DecisionPolicy | None = None
+           ) -> tuple[str, list[Reason]]:
     """The verdict's status and its reasons (worst first): the recording's (:func:`_recording_reasons`), then
     the call's (:func:`_call_reasons`); ``inconclusive`` when any reason is, ``uncertain`` when there is one,
     else ``confident``."""
-    reasons = _recording_reasons(checks) + _call_reasons(call, checks)
+    policy = DEFAULT_POLICY if policy is None else policy
+    reasons = _recording_reasons(checks, policy) + _call_reasons(call, checks, policy)
     if any(r.status == INCONCLUSIVE for r in reasons):
         status = INCONCLUSIVE
     elif reasons:
@@ -492,7 +559,7 @@ def assess(checks: RecordingChecks, call: ModelCall) -> tuple[str, list[Reason]]
     return status, reasons
 
 
-def _recording_reasons(c: RecordingChecks) -> list[Reason]:
+def _recording_reasons(c: RecordingChecks, policy: DecisionPolicy = DEFAULT_POLICY) -> list[Reason]:
     """The probe set's reasons (``extra``), sanity findings, OOD score, features outside the training range,
     vibration scale, every journal near its bearing centre, an ambiguous speed estimate, features the model
     always had."""
@@ -500,14 +567,14 @@ def _recording_reasons(c: RecordingChecks) -> list[Reason]:
     for f in c.sanity:
         reasons.append(Reason(f.code, INCONCLUSIVE if f.level == "fail" else UNCERTAIN, f.message))
     if np.isfinite(c.ood_score) and c.ood_score > 1.0:
-        status = INCONCLUSIVE if c.ood_score > OOD_INCONCLUSIVE else UNCERTAIN
+        status = INCONCLUSIVE if c.ood_score > policy.ood_inconclusive else UNCERTAIN
         reasons.append(Reason("ood", status, f"the recording is unlike the training data (OOD score {c.ood_score:.2f}; "
-                              f"> 1 unusual, > {OOD_INCONCLUSIVE:g} far outside): another machine design, "
+                              f"> 1 unusual, > {policy.ood_inconclusive:g} far outside): another machine design, "
                               "operating state or measurement set-up than the model knows"))
-    reasons += envelope_reasons(c.envelope)
-    reasons += _scale_reasons(c.names, c.row, c.feature_median)
-    reasons += _near_centre_reasons(c.names, c.row)
-    reasons += _probe_frame_reasons(c.names, c.row)
+    reasons += envelope_reasons(c.envelope, policy=policy)
+    reasons += _scale_reasons(c.names, c.row, c.feature_median, policy)
+    reasons += _near_centre_reasons(c.names, c.row, policy)
+    reasons += _probe_frame_reasons(c.names, c.row, policy)
     if c.speed_source == "estimated":
         for w in c.warnings:
             if speed_in_doubt(w):
@@ -523,7 +590,7 @@ def _recording_reasons(c: RecordingChecks) -> list[Reason]:
     return reasons
 
 
-def _call_reasons(m: ModelCall, c: RecordingChecks) -> list[Reason]:
+def _call_reasons(m: ModelCall, c: RecordingChecks, policy: DecisionPolicy = DEFAULT_POLICY) -> list[Reason]:
     """Low probability, probability or Δ interval on bands two or more from the call, below the alarm
     threshold, a severity without the coupling 2X or "aligned" without the coupling centreline (these two
     read the recording's features), a severity resting on the static offset between the coupling journals
@@ -531,19 +598,19 @@ def _call_reasons(m: ModelCall, c: RecordingChecks) -> list[Reason]:
     reasons: list[Reason] = []
     probabilities, call_index, band_names = m.probabilities, m.call_index, m.band_names
     pmax = float(np.max(probabilities)) if len(probabilities) else np.nan
-    if not pmax >= CONFIDENT_MIN_PROBABILITY:
+    if not pmax >= policy.confident_min_probability:
         reasons.append(Reason("low_probability", UNCERTAIN,
                               f"no severity class is likely enough (highest probability {pmax:.0%} < "
-                              f"{CONFIDENT_MIN_PROBABILITY:.0%}): the recording lies between classes"))
+                              f"{policy.confident_min_probability:.0%}): the recording lies between classes"))
     if call_index is not None and len(probabilities):
         far = np.flatnonzero(_far_bands(len(probabilities), call_index))
         p_far = float(far_band_probability(probabilities, call_index))
-        if p_far > CONFIDENT_MAX_FAR_PROBABILITY:
+        if p_far > policy.confident_max_far_probability:
             which = " or ".join(str(band_names[int(k)]) for k in far) if len(band_names) == len(probabilities) else \
                 "bands two or more away"
             reasons.append(Reason("far_band_probability", UNCERTAIN,
                                   f"the model gives {p_far:.0%} to {which} — two or more bands from its call, more "
-                                  f"than the {CONFIDENT_MAX_FAR_PROBABILITY:.0%} a confident verdict allows: recheck, "
+                                  f"than the {policy.confident_max_far_probability:.0%} a confident verdict allows: recheck, "
                                   "or compare with this machine's baseline"))
     reached: list[int] = []
     if call_index is not None and m.delta_interval is not None and len(m.band_edges):
@@ -563,7 +630,7 @@ def _call_reasons(m: ModelCall, c: RecordingChecks) -> list[Reason]:
     ratio = coupling_2x_1x(c.names, c.row)
     outside = (np.isfinite(c.ood_score) and c.ood_score > 1.0) or bool(c.envelope)
     rule = signature_band(ratio, len(probabilities))
-    if outside and call_index is not None and rule is not None and rule - call_index >= SIGNATURE_BANDS_ABOVE_CALL:
+    if outside and call_index is not None and rule is not None and rule - call_index >= policy.signature_bands_above_call:
         called = str(band_names[call_index]) if len(band_names) > call_index else f"band {call_index}"
         read = str(band_names[rule]) if len(band_names) > rule else f"band {rule}"
         reasons.append(Reason(
@@ -575,11 +642,11 @@ def _call_reasons(m: ModelCall, c: RecordingChecks) -> list[Reason]:
             "baseline); a strong 2X has other causes too: a two-pole rotor's asymmetry under gravity, a shaft "
             "crack, looseness, or runout (give the slow-roll vectors)"))
     if m.misaligned_call:
-        if not ratio >= SIGNATURE_MIN_2X_1X:
+        if not ratio >= policy.signature_min_2x_1x:
             seen = "not measured" if not np.isfinite(ratio) else f"{ratio:.3f}"
             reasons.append(Reason("no_2x_signature", UNCERTAIN,
                                   f"called misaligned, but the coupling bearings show no 2X (largest 2X/1X {seen} < "
-                                  f"{SIGNATURE_MIN_2X_1X:g}): the classic signature is missing and nothing physical "
+                                  f"{policy.signature_min_2x_1x:g}): the classic signature is missing and nothing physical "
                                   "backs the model's call — compare with this machine's baseline, check the "
                                   "centreline, or re-record"))
         if m.one_position_call is not None and call_index is not None and m.one_position_call < call_index:

@@ -12,6 +12,7 @@ import numpy as np
 from .config import TrainConfig
 from .evaluate import METHODS, evaluate, plot_report
 from .registry import TRUSTED_TYPES, Registry, dumps_json
+from .status import DEFAULT_POLICY
 from .table import FeatureTable
 
 
@@ -104,6 +105,8 @@ def train_and_register(
         "bands": config.bands.to_dict(),
         "interval_level": 1 - float(model.regressor_.alpha),
         "ood_threshold": float(model.ood_.threshold_),
+        # the thresholds that turn the model's call into the verdict's status, stored with the model
+        "decision_policy": DEFAULT_POLICY.to_dict(),
         "envelope": None if getattr(model, "envelope_", None) is None else {
             "features": list(model.envelope_names_), "margin_spreads": float(model.envelope_.margin_),
             "held_out_flag_rate": float(model.envelope_.calibration_flag_rate_)},

@@ -273,7 +273,7 @@ def parse_body(kind: str, body: Body, filename: str, query: dict[str, Any],
     Parameters
     ----------
     kind : {"json", "npy", "upload", "takes"}
-        How the body came (``service.api.routes.diagnose._read_body``).
+        How the body came (``service.api.recordings.read_body``).
     body : bytes, or for ``takes`` a tuple of (bytes, file name)
         ``takes``: the files of a multipart upload with several parts ``file``, the takes of one recording
         (a portable analyser's, bearing pair by bearing pair), merged by :func:`_parse_takes`.

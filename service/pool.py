@@ -49,6 +49,7 @@ import time
 import traceback
 import weakref
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -191,7 +192,7 @@ def _batch_parse(body: bytes) -> tuple:
 def _plot(kind: str, body: Body, filename: str, query: dict[str, Any]) -> tuple:
     """Parse a recording and compute the web page's plot arrays: ``("ok", data)`` or an error tuple."""
     from .parsing import parse_body
-    from .web.plotdata import plot_data
+    from .plotdata import plot_data
 
     def run() -> tuple:
         recording = parse_body(kind, body, filename, query)[0]
@@ -200,8 +201,72 @@ def _plot(kind: str, body: Body, filename: str, query: dict[str, Any]) -> tuple:
     return _tagged(run)
 
 
-_CALLS: dict[str, Callable[..., Any]] = {"work": _work, "check": _load_check, "record": _record,
-                                         "batch_parse": _batch_parse, "plot": _plot}
+class WorkerCall:
+    """One call a diagnosis worker runs: a frozen dataclass of its arguments whose :meth:`run` (in the worker)
+    returns its answer (a tagged tuple, :func:`_tagged`, for the request calls). The server sends the call object itself, so what a worker runs is
+    typed and checked by the type checker, not looked up by a name."""
+
+    def run(self) -> Any:
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class DiagnoseBody(WorkerCall):
+    """Parse and diagnose one ``POST /diagnose`` body (:func:`_work`)."""
+
+    kind: str
+    body: Body
+    filename: str
+    query: dict[str, Any]
+    slow_roll: tuple[bytes, str] | None
+    version: str | None
+
+    def run(self) -> tuple:
+        return _work(self.kind, self.body, self.filename, self.query, self.slow_roll, self.version)
+
+
+@dataclass(frozen=True)
+class DiagnoseRecord(WorkerCall):
+    """Diagnose one record of a batch (:func:`_record`)."""
+
+    record: dict[str, Any]
+    version: str | None
+
+    def run(self) -> tuple:
+        return _record(self.record, self.version)
+
+
+@dataclass(frozen=True)
+class ParseBatch(WorkerCall):
+    """Parse a ``POST /diagnose/batch`` body (:func:`_batch_parse`)."""
+
+    body: bytes
+
+    def run(self) -> tuple:
+        return _batch_parse(self.body)
+
+
+@dataclass(frozen=True)
+class PlotBody(WorkerCall):
+    """The web page's plot arrays of a body sent as to ``POST /diagnose`` (:func:`_plot`)."""
+
+    kind: str
+    body: Body
+    filename: str
+    query: dict[str, Any]
+
+    def run(self) -> tuple:
+        return _plot(self.kind, self.body, self.filename, self.query)
+
+
+@dataclass(frozen=True)
+class CheckModel(WorkerCall):
+    """Which file of ``version`` the worker holds, and whether it can be used (:func:`_load_check`)."""
+
+    version: str
+
+    def run(self) -> dict[str, Any]:
+        return _load_check(self.version)
 
 
 def _recv_exact(sock: socket.socket, n: int) -> bytes | None:
@@ -224,7 +289,7 @@ def _worker_main(sock: socket.socket, registry_root: str, version: str | None, m
     try:
         _warm(version)
         from .parsing import parse_body  # noqa: F401  (imported before the limit, not on the first request)
-        from .web.plotdata import plot_data  # noqa: F401
+        from .plotdata import plot_data  # noqa: F401
         _warm_diagnosis(version)
     except Exception as exc:  # noqa: BLE001 - reported per request (503) by _load_check/_work
         log.warning("diagnosis worker %d: could not preload model %s: %s", os.getpid(), version, exc)
@@ -241,9 +306,11 @@ def _worker_main(sock: socket.socket, registry_root: str, version: str | None, m
         msg = _recv_exact(sock, _HEADER.unpack(head)[0])
         if msg is None:
             return
-        name, args = pickle.loads(msg)     # from the server process only (see the module docstring)
+        call = pickle.loads(msg)           # from the server process only (see the module docstring)
         try:
-            result = _CALLS[name](*args)
+            if not isinstance(call, WorkerCall):
+                raise TypeError(f"a diagnosis worker runs WorkerCall objects, not {type(call).__name__}")
+            result = call.run()
         except Exception as exc:  # noqa: BLE001 - a bug, not a client mistake: the server answers 500
             result = ("exception", f"{type(exc).__name__}: {exc}", traceback.format_exc())
         out = pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
@@ -330,11 +397,11 @@ class _Worker:
         self._send_lock = asyncio.Lock()
         self._reader = asyncio.ensure_future(self._read_loop())
 
-    async def call(self, name: str, args: tuple) -> Any:
-        """Send one message; the returned future resolves to the worker's answer."""
+    async def call(self, call: WorkerCall) -> Any:
+        """Send one call; the returned future resolves to the worker's answer."""
         loop = asyncio.get_running_loop()
         fut = loop.create_future()
-        msg = pickle.dumps((name, args), protocol=pickle.HIGHEST_PROTOCOL)
+        msg = pickle.dumps(call, protocol=pickle.HIGHEST_PROTOCOL)
         if not self.alive:               # its reader has finished: nobody would answer the future
             raise ConnectionResetError("diagnosis worker stopped")
         self.pending.append(fut)
@@ -551,9 +618,9 @@ class DiagnosisPool:
         async with self._free:
             self._free.notify_all()
 
-    async def _on(self, w: _Worker, name: str, args: tuple) -> tuple[bool, Any]:
+    async def _on(self, w: _Worker, call: WorkerCall) -> tuple[bool, Any]:
         try:
-            return True, await w.call(name, args)
+            return True, await w.call(call)
         except _LostInFlight:
             cause = await self._self_inflicted(w)
             self._replace(w)
@@ -572,12 +639,12 @@ class DiagnosisPool:
             w.inflight -= 1
             await self._release()
 
-    async def _call(self, name: str, args: tuple) -> Any:
+    async def _call(self, call: WorkerCall) -> Any:
         for _attempt in (1, 2):
             w = await self._acquire()
             # Shielded: a request cancelled meanwhile (client gone, shutdown) still lets the worker
             # answer its message, so the socket's framing stays intact and the worker is reused.
-            ok, result = await asyncio.shield(asyncio.ensure_future(self._on(w, name, args)))
+            ok, result = await asyncio.shield(asyncio.ensure_future(self._on(w, call)))
             if not ok:
                 continue
             if isinstance(result, tuple) and result and result[0] == "exception":
@@ -590,11 +657,11 @@ class DiagnosisPool:
     async def run(self, kind: str, body: Body, filename: str, query: dict[str, Any],
                   version: str | None, slow_roll: tuple[bytes, str] | None = None) -> tuple:
         """:func:`_work` in a worker process (returns its tagged tuple)."""
-        return await self._call("work", (kind, body, filename, query, slow_roll, version))
+        return await self._call(DiagnoseBody(kind, body, filename, query, slow_roll, version))
 
-    async def call(self, name: str, *args: Any) -> tuple:
-        """One of the worker functions (``record``, ``batch_parse``, ``plot``) in a worker process."""
-        return await self._call(name, args)
+    async def call(self, call: WorkerCall) -> tuple:
+        """``call`` (a :class:`DiagnoseRecord`, :class:`ParseBatch`, :class:`PlotBody`, …) in a worker process."""
+        return await self._call(call)
 
     async def _check_all(self, version: str) -> str | None:
         answers = []
@@ -603,7 +670,7 @@ class DiagnosisPool:
                 continue                 # busy: its answer would wait for the requests before it
             w.inflight += 1
             try:
-                answers.append(await w.call("check", (version,)))
+                answers.append(await w.call(CheckModel(version)))
             except (ConnectionResetError, DiagnosisTimeout):
                 self._replace(w)
             finally:

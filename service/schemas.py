@@ -8,6 +8,7 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, field_validator
 
 from rotordiag.core.input_bounds import CLEARANCE_RANGE_UM, SAMPLE_RATE_RANGE_HZ, SPEED_RANGE_RPM
+from rotordiag.core.reasons import CATALOGUE, known_code
 from rotordiag.simulator.dataset.spec import DESIGN_MECHANISMS
 
 #: Bounds on what one request may carry (the body-size middleware bounds the bytes as well).
@@ -373,28 +374,21 @@ class OodFindingOut(BaseModel):
 class ReasonOut(BaseModel):
     """Why a verdict is not `confident`."""
 
-    code: str = Field(..., description="Stable identifier, e.g. `orbit_exceeds_clearance`, `flat_channel`, "
-                      "`clipped_channel`, `dropout` (one channel holding one value for a stretch), `reverse_whirl_all`, `ood`, `outside_training`, `scale`, `speed_ambiguous`, `low_probability`, "
-                      "`far_band_probability`, `far_band_interval`, `below_alarm_threshold`, `no_2x_signature`, `offset_not_assessed`, `static_offset_only`, "
-                      "`signature_above_call`, `class_delta_disagree`, `journals_near_centre` (every journal within 0.15 c of "
-                      "its bearing centre: check the units, probe sensitivity and clearance), `centreline_frame_turned` (every "
-                      "journal's attitude angle 30° or more off a plain bearing's on one side: check the probe angles, or "
-                      "bearings unlike plain cylindrical ones), `bearing_numbering` (the recording is markedly more like the "
-                      "training machines with its bearings numbered 4-3-2-1), `bearing_set_untrained`, "
-                      "`bearing_set_uninformative`, `bearing_set_weak` (the probes' bearings: none of the model's training "
-                      "probe sets among them, or the one it reads tells misalignment poorly on held-out plants), "
-                      "`keyphasor_faulty` (missing or extra keyphasor pulses: the orders were tracked at a steady speed), "
-                      "`separate_acquisitions` (bearings 2 and 3 recorded in separate takes: no phase across the "
-                      "coupling), "
-                      "`reverse_2x` (a misalignment call on a coupling 2X that whirls backward: pickup or wiring), "
-                      "`spike` (a few isolated samples make the orbit larger than the clearance: a glitch), "
-                      "`clearance_diametral` (half the stated clearance makes the recording at least as like the training "
-                      "machines: check that clearance_um is the radial clearance), "
-                      "`common_mode_1x`, `common_mode_2x` (the 1X / 2X is one signal common to every probe: mains pickup or "
-                      "the probe mountings, no shaft motion), `common_mode` (without the part of the 1X / 2X common to every "
-                      "probe the class differs: check the probe cabling and grounding).")
+    code: str = Field(..., description="Stable identifier: one of the catalogue's codes (`rotordiag.core.reasons`; "
+                      "docs/pipeline.md's reason table says what each means and what to do). A physics sanity check's "
+                      "code is also a reason: `fail` makes it `inconclusive`, `warn` `uncertain`.",
+                      json_schema_extra={"enum": list(CATALOGUE)})
     status: Literal["uncertain", "inconclusive"] = Field(..., description="What this reason alone makes of the verdict.")
     message: str = Field(..., description="What was found and what to check.")
+    action: str | None = Field(None, description="What to do, the same for every answer with this code: the "
+                               "catalogue's (`rotordiag.core.reasons`; docs/pipeline.md's reason table).")
+
+    @field_validator("code")
+    @classmethod
+    def _in_catalogue(cls, v: str) -> str:
+        if not known_code(v):
+            raise ValueError(f"reason code {v!r} is not in the catalogue (rotordiag.core.reasons)")
+        return v
 
 
 class EvidenceOut(BaseModel):

@@ -1,9 +1,36 @@
 """Helpers shared by the service tests (not a test module)."""
 from __future__ import annotations
 
+import os
+import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 API_KEY = "test-key-0123456789"
+
+#: how long a readiness wait polls before it gives up (a server, a worker, a job): generous, because on a loaded
+#: machine a server's start takes minutes, and a wait that polls returns as soon as the thing is ready anyway
+READY_CEILING_S = float(os.environ.get("ROTORDIAG_TEST_READY_S", "600"))
+
+_T = TypeVar("_T")
+
+
+def wait_until(ready: Callable[[], _T], what: str, *, ceiling_s: float | None = None, every_s: float = 0.1) -> _T:
+    """Poll ``ready()`` until it returns something true (returned), for at most ``ceiling_s`` (default
+    :data:`READY_CEILING_S`); an ``OSError`` counts as not ready yet. Raises ``AssertionError`` naming ``what``."""
+    limit = READY_CEILING_S if ceiling_s is None else ceiling_s
+    t0 = time.monotonic()
+    while True:
+        try:
+            got = ready()
+        except OSError:
+            got = None
+        if got:
+            return got
+        if time.monotonic() - t0 > limit:
+            raise AssertionError(f"{what}: not ready after {limit:.0f} s (ROTORDIAG_TEST_READY_S)")
+        time.sleep(every_s)
 
 
 def make_settings(tmp_path: Path, **overrides):

@@ -185,3 +185,133 @@ def test_every_collected_test_has_its_own_node_id(request):
 
     shared = sorted(i for i, n in Counter(item.nodeid for item in request.session.items).items() if n > 1)
     assert not shared, f"tests that share a node id: {shared[:5]}"
+
+
+def _runtime_imports(path: Path, module: str) -> list[tuple[int, str]]:
+    """(line, imported project module) for every import in the file that runs (those under ``if TYPE_CHECKING:``
+    left out); ``from package import name`` counts as an import of the submodule when ``name`` is one."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    typing_only = {id(n) for node in ast.walk(tree)
+                   if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+                   for stmt in node.body for n in ast.walk(stmt)}
+    known = {_module_name(p) for p in _package_sources()}
+    out = []
+    for line, target, names in _imports(path, module):
+        if not target.startswith("rotordiag"):
+            continue
+        out += [(line, f"{target}.{n}") for n in names if f"{target}.{n}" in known]
+        if target in known and not any(f"{target}.{n}" in known for n in names):
+            out.append((line, target))
+    lines_typing = {n.lineno for n in ast.walk(tree) if id(n) in typing_only and hasattr(n, "lineno")}
+    return [(line, t) for line, t in out if line not in lines_typing]
+
+
+def _import_graph() -> dict[str, set[str]]:
+    """Project module → the project modules it imports at run time (also inside functions), packages' own
+    ``__init__`` re-exports left out (importing a package's API is not a circle with its parts)."""
+    graph: dict[str, set[str]] = {}
+    for path in _package_sources():
+        module = _module_name(path)
+        if path.name == "__init__.py":
+            continue
+        graph[module] = {t for _, t in _runtime_imports(path, module) if t != module}
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in graph:
+                continue
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_circles_between_modules():
+    """No two modules of the project import each other, directly or through others, at run time — not even from
+    inside a function (issue 43, item 3): a circle means neither can be read or changed alone."""
+    found = _cycles(_import_graph())
+    assert not found, "import circles:\n" + "\n".join(" ↔ ".join(c) for c in found)
+
+
+def test_the_circle_finder_finds_a_circle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_no_climbs_inside_the_service():
+    """The domain modules below the API (the worker pool, inference, …) never import the API or the web page's
+    modules, and the web page reads requests through ``service.api.recordings`` and the API's dependencies, not
+    through another route module (issue 43, item 3)."""
+    bad = []
+    for path in _package_sources():
+        module = _module_name(path)
+        targets = [(line, t) for line, t in _runtime_imports(path, module)]
+        if module.split(".")[-1] in SERVICE_DOMAIN_MODULES and module.count(".") == 2:
+            bad += [f"{module}:{line} imports {t}" for line, t in targets
+                    if t.startswith(("rotordiag.service.api", "rotordiag.service.web"))]
+        if module.startswith("rotordiag.service.web"):
+            bad += [f"{module}:{line} imports {t}" for line, t in targets if t.startswith("rotordiag.service.api.routes")]
+    assert not bad, "climbs:\n" + "\n".join(bad)
+
+
+def test_features_classify_motion_without_the_analysis_sweeps():
+    """``rotordiag.features`` uses the simulator's motion classifier, which loads no analysis sweeps."""
+    import subprocess
+    import sys
+
+    code = ("import sys, rotordiag.features; "
+            "print(any(m.startswith('rotordiag.simulator.analysis') for m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    assert out.stdout.strip() == "False", out.stdout + out.stderr
+
+
+def test_the_modules_docs_architecture_names_exist():
+    """docs/architecture.md stays true to the code: every file or folder it names in backticks (``models/x.py``)
+    and every dotted module (``rotordiag.models.x``) exists (issue 43, item 4)."""
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    paths = set(re.findall(r"`((?:rotordiag|simulator|features|models|service|tests|benchmarks|docs|examples)/[\w./-]*)`",
+                           text))
+    dotted = {m.split(":")[0] for m in re.findall(r"`(rotordiag(?:\.\w+)+(?::\w+)?)", text)}
+    dotted |= {f"rotordiag.{m}" for m in re.findall(r"`((?:simulator|features|models|service)(?:\.\w+)+)", text)}
+    sources = {_module_name(p): p for p in _package_sources()}
+    assert len(paths) >= 15 and len(dotted) >= 10          # the page names modules (the test can fail)
+    missing = [p for p in sorted(paths) if not (ROOT / p).exists()]
+
+    def exists(name: str) -> bool:
+        """A module, or a name a module defines or imports (``rotordiag.models.status.DecisionPolicy``)."""
+        if name in sources:
+            return True
+        module, attr = name.rsplit(".", 1)
+        return module in sources and re.search(rf"\b{attr}\b", sources[module].read_text(encoding="utf-8")) is not None
+
+    missing += [m for m in sorted(dotted) if not exists(m)]
+    assert not missing, f"docs/architecture.md names what does not exist: {missing}"

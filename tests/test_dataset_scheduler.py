@@ -6,7 +6,6 @@ import signal
 import socket
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -14,6 +13,7 @@ import pytest
 from rotordiag.simulator.dataset.generate import generate
 
 from .dataset_support import differing_datasets, write_spec
+from .service_util import wait_until
 
 BIN = Path(sys.executable).parent
 
@@ -24,16 +24,14 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def _wait_for_port(port: int, proc: subprocess.Popen, timeout_s: float = 60.0) -> None:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
+def _wait_for_port(port: int, proc: subprocess.Popen) -> None:
+    def open_port() -> bool:
         if proc.poll() is not None:
             raise AssertionError(f"dask scheduler exited: {proc.stderr.read().decode()[-2000:]}")
         with socket.socket() as s:
-            if s.connect_ex(("127.0.0.1", port)) == 0:
-                return
-        time.sleep(0.1)
-    raise AssertionError("dask scheduler did not open its port")
+            return s.connect_ex(("127.0.0.1", port)) == 0
+
+    wait_until(open_port, "the dask scheduler's port")
 
 
 @pytest.fixture

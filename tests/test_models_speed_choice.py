@@ -138,3 +138,20 @@ def test_diagnose_recording_is_extract_diagnose_and_choose(whip, monkeypatch):
     monkeypatch.setattr(diagnosis, "diagnose", diagnose)
     v, fr2 = diagnosis.diagnose_recording(None, rec)
     assert fr2.speed_rpm == pytest.approx(TRUE_RPM, rel=5e-3) and v.speed_rpm == fr2.speed_rpm
+
+
+def test_speed_notes_changed_without_extracting_again_give_the_extracted_result(whip):
+    """``features.with_speed_notes`` (the chosen reading's notes, issue 43: features once per speed hypothesis)
+    gives what extracting again with those notes gives, field for field."""
+    import pickle
+
+    from rotordiag.features import with_speed_notes
+
+    rec, _ = whip
+    notes = [f"{SPEED_AMBIGUOUS}: chosen by the model", "at the estimate 1230.0 r/min: a note"]
+    fr = extract_features(rec, speed_estimate_rpm=TRUE_RPM)
+    noted = with_speed_notes(fr, notes)
+    again = extract_features(rec, speed_estimate_rpm=TRUE_RPM, speed_notes=notes)
+    assert noted is not None and list(noted.warnings[:2]) == notes
+    assert pickle.dumps(noted) == pickle.dumps(again)
+    assert with_speed_notes(extract_features(replace(rec, speed_rpm=TRUE_RPM)), notes) is None   # a given speed

@@ -524,3 +524,30 @@ def test_journals_all_turned_off_a_plain_bearings_attitude_are_not_confident():
     assert "centreline_frame_turned" not in [r.code for r in run(-45, -44, -50, -FRAME_OFFSET_DEG + 1)[1]]
     assert "centreline_frame_turned" not in [r.code for r in run(-45, +44, -50, -40)[1]]
     assert "centreline_frame_turned" not in [r.code for r in run(0, 5, -10, 3)[1]]
+
+
+def test_the_decision_policy_is_stored_with_the_model_and_defaults_to_the_shipped_thresholds():
+    """issue 43: the thresholds are one object (``DecisionPolicy``) read from the model's card; a card without one
+    (the shipped model's) gets the module constants, and a stored policy changes the status."""
+    from rotordiag.models.status import (
+        CONFIDENT_MIN_PROBABILITY,
+        DEFAULT_POLICY,
+        OOD_INCONCLUSIVE,
+        DecisionPolicy,
+        policy_of,
+    )
+
+    assert policy_of(None) is DEFAULT_POLICY and policy_of({"version": "v1"}) is DEFAULT_POLICY
+    assert DEFAULT_POLICY.confident_min_probability == CONFIDENT_MIN_PROBABILITY
+    assert DEFAULT_POLICY.ood_inconclusive == OOD_INCONCLUSIVE
+    stored = policy_of({"decision_policy": {**DEFAULT_POLICY.to_dict(), "ood_inconclusive": 1.5}})
+    assert stored.ood_inconclusive == 1.5 and stored.scale_uncertain == DEFAULT_POLICY.scale_uncertain
+    with pytest.raises(ValueError, match="unknown"):
+        DecisionPolicy.from_dict({"ood_limit": 2.0})
+    with pytest.raises(ValueError, match="positive"):
+        DecisionPolicy.from_dict({"ood_inconclusive": -1.0})
+    checks = RecordingChecks(names=[], row=np.array([]), feature_median=np.array([]), sanity=(), ood_score=2.0,
+                             never_missing=(), speed_source="given", warnings=())
+    call = ModelCall(probabilities=[0.9, 0.05, 0.03, 0.02], class_delta_agree=True)
+    assert assess(checks, call)[0] == "uncertain"                               # OOD 2 < 3: uncertain
+    assert assess(checks, call, stored)[0] == "inconclusive"                    # OOD 2 > 1.5: inconclusive

@@ -7,14 +7,13 @@ import signal
 import socket
 import subprocess
 import sys
-import time
 import urllib.error
 import urllib.request
 from pathlib import Path
 
 import pytest
 
-from tests.service_util import API_KEY, diagnose_json, shipped_or_tiny_registry, simulated_channels
+from tests.service_util import API_KEY, diagnose_json, shipped_or_tiny_registry, simulated_channels, wait_until
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -45,21 +44,19 @@ def server(tmp_path_factory):
     cmd = [str(exe), "serve", "--host", "127.0.0.1", "--port", str(port)]
     proc = subprocess.Popen(cmd, cwd=tmp, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     base = f"http://127.0.0.1:{port}"
-    t0 = time.monotonic()
-    while True:
+
+    def answered() -> bool:
         if proc.poll() is not None:
             pytest.fail(f"server exited with {proc.returncode}:\n{proc.stdout.read()}")
-        try:
-            status, raw = _request(base + "/health")
-            # 503 `starting` until a diagnosis worker has loaded and checked the model
-            if status == 200 or (status == 503 and json.loads(raw)["status"] != "starting"):
-                break
-        except OSError:
-            pass
-        if time.monotonic() - t0 > 120:
-            proc.kill()
-            pytest.fail("server did not answer /health (other than `starting`) within 120 s")
-        time.sleep(0.2)
+        status, raw = _request(base + "/health")
+        # 503 `starting` until a diagnosis worker has loaded and checked the model
+        return status == 200 or (status == 503 and json.loads(raw)["status"] != "starting")
+
+    try:
+        wait_until(answered, "server's /health (other than `starting`)", every_s=0.2)
+    except AssertionError:
+        proc.kill()
+        raise
     yield base, port, tmp
     proc.send_signal(signal.SIGINT)
     try:

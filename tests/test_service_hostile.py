@@ -26,6 +26,7 @@ from tests.service_util import (
     shipped_or_tiny_registry,
     simulated_channels,
     two_takes,
+    wait_until,
     write_takes_csv,
 )
 
@@ -406,11 +407,8 @@ def test_a_request_over_the_time_limit_is_stopped_not_retried(pooled, rec):
     assert pooled.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0)).status_code == 200
 
 
-def _wait_ready(pool, timeout_s=120.0):
-    t0 = time.monotonic()
-    while not all(w.ready and w.alive for w in pool._workers):
-        assert time.monotonic() - t0 < timeout_s, "a replacement worker did not become ready"
-        time.sleep(0.1)
+def _wait_ready(pool):
+    wait_until(lambda: all(w.ready and w.alive for w in pool._workers), "a replacement worker")
 
 
 def test_a_killed_workers_requests_go_to_the_warm_worker_at_once(pooled, rec):
@@ -481,16 +479,12 @@ def server(tmp_path_factory, registry):
     proc = subprocess.Popen([str(exe), "serve", "--host", "127.0.0.1", "--port", str(port)], cwd=tmp, env=env,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     base = f"http://127.0.0.1:{port}"
-    t0 = time.monotonic()
-    while True:
+
+    def healthy() -> bool:
         assert proc.poll() is None, "server exited"
-        try:
-            if _request(base + "/health")[0] == 200:
-                break
-        except OSError:
-            pass
-        assert time.monotonic() - t0 < 90, "server did not answer /health"
-        time.sleep(0.2)
+        return _request(base + "/health")[0] == 200
+
+    wait_until(healthy, "server's /health", every_s=0.2)
     yield base, port
     proc.send_signal(signal.SIGINT)
     try:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from rotordiag.service.web.plotdata import _reduce_max, full_spectrum_um_pp, half_spectrum_um_pp
+from rotordiag.service.plotdata import _reduce_max, full_spectrum_um_pp, half_spectrum_um_pp
 from tests.service_util import make_settings
 
 FS = 2048.0

@@ -20,9 +20,10 @@ from ..api.deps import (
     DiagnoseKeyDep,
     StateDep,
 )
-from ..api.routes.diagnose import ReaderQueryDep, recording_answer  # same body forms and messages as /diagnose
+from ..api.recordings import ReaderQueryDep, recording_answer  # same body forms and messages as /diagnose
 from ..errors import InputError
-from .plotdata import plot_data
+from ..plotdata import plot_data
+from ..pool import PlotBody
 
 #: the page's files, installed with the package (found through importlib.resources)
 STATIC_DIR = Path(str(files("rotordiag.service.web.static")))
@@ -106,11 +107,11 @@ async def plot(
     reader: ReaderQueryDep,
     sample_index: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
 ) -> dict[str, Any]:
-    """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.web.plotdata``).
+    """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.plotdata``).
 
     Parsed and computed in a diagnosis worker (memory and time limits), as /diagnose; with
     ``ROTORDIAG_DIAGNOSIS_WORKERS=0`` in a thread of the server (HDF5 still decoded in the sandbox).
     Needs the API key when /diagnose does (``ROTORDIAG_DIAGNOSE_REQUIRES_KEY``).
     """
     query = dict(asset_id=None, plant=None, sample_index=sample_index, **reader)
-    return await recording_answer(request, state, query, "plot", lambda recording: _plot_sync(state, recording))
+    return await recording_answer(request, state, query, PlotBody, lambda recording: _plot_sync(state, recording))

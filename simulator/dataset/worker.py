@@ -76,7 +76,7 @@ class SampleOutput:
 def _motion(poincare_m: np.ndarray) -> tuple[str, int]:
     """Motion label from the analysis package's classifier (optional hook)."""
     try:
-        from rotordiag.simulator.analysis import classify_motion
+        from rotordiag.simulator.motion import classify_motion
     except ImportError:  # analysis package absent: no motion label
         return "", 0
     pts = poincare_m[np.all(np.isfinite(poincare_m.reshape(len(poincare_m), -1)), axis=1)]

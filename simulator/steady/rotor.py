@@ -145,7 +145,7 @@ def brute_force_start(family: RotorFamily, value: float, revs: int,
     # import simulate``) before anyone read it rebinds rotordiag.simulator.simulate to the module
     from rotordiag.simulator import simulate
 
-    from ..analysis.motion import detect_period
+    from ..motion import detect_period
 
     if revs < 1:
         raise ValueError(f"revs must be >= 1, got {revs!r}")

@@ -32,7 +32,7 @@ import numpy as np
 
 from rotordiag.core.numerics import DEFAULT_ATOL, DEFAULT_RTOL
 
-from ..analysis.motion import detect_period
+from ..motion import detect_period
 from ..params import Plant
 from ..system import TWO_PI, RotorSystem
 from .maps import MapEval, PeriodicMap, RotorMap

@@ -38,7 +38,7 @@ from ..deps import (
     StateDep,
 )
 from ..errors import InputError
-from .diagnose import ReaderQueryDep
+from ..recordings import ReaderQueryDep
 
 router = APIRouter(tags=["assets"])
 

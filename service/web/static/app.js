@@ -470,7 +470,10 @@
     st.textContent = STATUS_TEXT[status] || status;
     st.className = "status " + status;
     const reasons = v.reasons || [];
-    $("verdict-reasons").replaceChildren(...reasons.map((r) => el("li", { class: r.status, text: plainWords(r.message) })));
+    // the message says what was found in this recording; the action (the reasons catalogue's, the same for every
+    // answer with the code) what to do
+    $("verdict-reasons").replaceChildren(...reasons.map((r) => el("li", {
+      class: r.status, text: plainWords(r.message) + (r.action ? ` — What to do: ${plainWords(r.action)}.` : "") })));
     show($("verdict-reasons-box"), reasons.length > 0);
     const ev = $("verdict-evidence").tBodies[0];
     ev.replaceChildren(...(v.evidence || []).map((e) => el("tr", {}, el("td", { text: e.scope }), el("td", { text: e.name }),
