@@ -133,11 +133,11 @@ def _work(kind: str, body: Body, filename: str, query: dict[str, Any], slow_roll
     """Parse and diagnose one request in the worker: ``("ok", verdict, asset_id, plant)`` or an error
     tuple (:func:`_tagged`). ``slow_roll``: an uploaded slow-roll recording and its file name, parsed
     here like the main body (:func:`service.parsing.parse_body`)."""
-    from .parsing import parse_body
+    from .parsing import parse_request
 
     def run() -> tuple:
-        recording, asset_id, plant = parse_body(kind, body, filename, query, slow_roll)
-        return ("ok", _store().diagnose(recording, version), asset_id, plant)
+        recording, asset_id, plant, notes = parse_request(kind, body, filename, query, slow_roll)
+        return ("ok", {**_store().diagnose(recording, version), "input_notes": notes}, asset_id, plant)
 
     return _tagged(run)
 

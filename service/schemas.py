@@ -442,6 +442,9 @@ class DiagnoseResponse(BaseModel):
     model_version: str = Field(..., description="Registered model version that produced the verdict.")
     bands: dict[str, Any] = Field(..., description="The model's severity bands: `edges` (Δ) and `names`.")
     warnings: list[str] = Field(..., description="Anything that makes the verdict less certain.")
+    input_notes: list[str] = Field(default_factory=list, description="What the reader assumed or left out of an "
+                                   "uploaded file: the sample rate from its time column or header, the probe "
+                                   "voltages' conversion to µm, metadata lines skipped, columns not read as probes.")
     bearings: list[BearingOut] = Field(..., description="Per-bearing key features from the features package.")
     diagnosis_id: int | None = Field(None, description="With an `asset_id`: the id of the stored diagnosis.")
     baseline: BaselineSectionOut | None = Field(None, description="With an `asset_id`: whether the asset's baseline "

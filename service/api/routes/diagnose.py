@@ -14,7 +14,7 @@ from rotordiag.models.output_units import verdict_in_units
 
 from ...baseline import record_verdict
 from ...inference import ModelUnavailable
-from ...parsing import MAX_TAKE_FILES, Body, checked, parse_batch, parse_body, recording_from_model
+from ...parsing import MAX_TAKE_FILES, Body, checked, parse_batch, parse_body, parse_request, recording_from_model
 from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
 from ..deps import (
     AcquisitionsQuery,
@@ -48,8 +48,15 @@ def reader_query(
     keyphasor_times_s: KeyphasorQuery = None,
     sensitivity_v_per_mm: Annotated[float | None, Query(gt=0, le=1e3, allow_inf_nan=False, description=(
         "Binary/multipart with `units=V` only: probe scale factor, V/mm (7.87 = 200 mV/mil)."))] = None,
+    sensitivity: Annotated[str | None, Query(min_length=1, max_length=32, description=(
+        "Binary/multipart with `units=V` or `mV` only: the probe sensitivity as the datasheet states it, "
+        "`7.87 V/mm`, `200 mV/mil` or `7.87 mV/um` (a bare number is V/mm); instead of `sensitivity_v_per_mm`."))] = None,
     gap_voltage_v: Annotated[float | None, Query(ge=-100, le=100, allow_inf_nan=False, description=(
-        "Binary/multipart with `units=V` only: DC gap voltage, V (default: each channel's mean)."))] = None,
+        "Binary/multipart with `units=V` or `mV` only: DC gap voltage, V (default: each channel's mean)."))] = None,
+    channel_map: Annotated[str | None, Query(min_length=1, max_length=2000, description=(
+        "CSV/UFF upload only: each probe column's bearing and angle by column name, `COLUMN=b<bearing>@<angle>` "
+        "separated by `;` (`GEN DE X=b2@45;GEN DE Y=b2@135`); the file's other columns (besides the time and "
+        "keyphasor) are left out and the answer's notes name them. Instead of `bearings`/`angles_deg`."))] = None,
     rotation: Annotated[Literal["ccw", "cw"], Query(description=(
         "Shaft rotation seen from the driver end; with `viewed_from` it decides whether the probe angles "
         "are mirrored so that a mirrored installation is not read as reverse whirl."))] = "ccw",
@@ -72,7 +79,8 @@ def reader_query(
     return dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, speed_range_rpm=speed_range_rpm,
                 clearance_um=clearance_um, units=units,
                 bearings=bearings, angles_deg=angles_deg, keyphasor_times_s=keyphasor_times_s,
-                sensitivity_v_per_mm=sensitivity_v_per_mm, gap_voltage_v=gap_voltage_v, rotation=rotation,
+                sensitivity_v_per_mm=sensitivity_v_per_mm, sensitivity=sensitivity, gap_voltage_v=gap_voltage_v,
+                channel_map=channel_map, rotation=rotation,
                 viewed_from=viewed_from, keyphasor_channel=keyphasor_channel, keyphasor_edge=keyphasor_edge,
                 keyphasor_threshold_v=keyphasor_threshold_v, dc_removed=dc_removed, acquisitions=acquisitions)
 
@@ -309,8 +317,8 @@ def _diagnosis_limiter(state) -> anyio.CapacityLimiter:
 
 def _parse_and_diagnose(state, kind, body, filename, query, slow_roll,
                         model_version) -> tuple[dict, str | None, str | None]:
-    recording, asset_id, plant = parse_body(kind, body, filename, query, slow_roll)
-    return _diagnose_sync(state, recording, model_version), asset_id, plant
+    recording, asset_id, plant, notes = parse_request(kind, body, filename, query, slow_roll)
+    return {**_diagnose_sync(state, recording, model_version), "input_notes": notes}, asset_id, plant
 
 
 _BATCH_BODY = {"requestBody": {"required": True, "content": {
