@@ -131,6 +131,38 @@ def register(app: typer.Typer) -> None:
         typer.echo(f"migrated: {', '.join(done)}" if done else "nothing to migrate: every model file uses the current names")
 
     @app.command()
+    def examples(
+        names: Optional[list[str]] = typer.Argument(None, help="Examples to copy (default: all of them)."),
+        copy_to: Optional[Path] = typer.Option(None, "--copy-to", help="Copy the examples (and their sidecars) "
+                                               "into this folder, to try `rotordiag diagnose FOLDER` or upload them."),
+    ) -> None:
+        """List the example recordings shipped with rotordiag (where they are, what each is), or copy them."""
+        from rotordiag.features.examples import (
+            copy_examples,
+            describe_example,
+            example_options,
+            example_path,
+            list_examples,
+        )
+
+        if copy_to is None:
+            if names:
+                _fail("give --copy-to FOLDER to copy examples; without it every example is listed")
+            typer.echo(f"example recordings in {example_path(list_examples()[0]).parent}:")
+            for name in list_examples():
+                opts = example_options(name)
+                typer.echo(f"  {name:<26s} {describe_example(name)}"
+                           + (f" (sidecar: {', '.join(f'{k}={v}' for k, v in opts.items())})" if opts else ""))
+            typer.echo("try: rotordiag diagnose <folder above>/misaligned.csv, or rotordiag examples --copy-to DIR")
+            return
+        try:
+            written = copy_examples(copy_to, names)
+        except ValueError as exc:
+            _fail(str(exc))
+        for path in written:
+            typer.echo(str(path))
+
+    @app.command()
     def diagnose(
         files: list[Path] = typer.Argument(..., help="Recordings (.csv, .npy, .h5/.hdf5, .json) or folders of them; "
                                            "'rotordiag examples' lists the shipped ones."),

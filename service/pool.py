@@ -41,8 +41,10 @@ import logging
 import multiprocessing
 import os
 import pickle
+import signal
 import socket
 import struct
+import threading
 import time
 import traceback
 import weakref
@@ -191,8 +193,13 @@ def _recv_exact(sock: socket.socket, n: int) -> bytes | None:
 
 def _worker_main(sock: socket.socket, registry_root: str, version: str | None, memory_bytes: int = 0) -> None:
     """A worker process: load the model, limit its memory, say it is ready, then answer requests until
-    the server closes the socket."""
+    the server closes the socket.
+
+    Ctrl-C in the server's terminal reaches every process of its group: a worker ignores it (from its start,
+    :meth:`_Worker.__init__`) and stops when the server closes its socket (or terminates it while it is still
+    loading the model), so stopping the server at any moment, warm-up included, prints no worker traceback."""
     global _MEMORY_BYTES
+    signal.signal(signal.SIGINT, signal.SIG_IGN)          # (already so when started by _Worker in the main thread)
     _init_worker(registry_root)
     try:
         _warm(version)
@@ -205,21 +212,24 @@ def _worker_main(sock: socket.socket, registry_root: str, version: str | None, m
 
     limit_address_space(memory_bytes)
     ready = pickle.dumps(("ready", os.getpid()), protocol=pickle.HIGHEST_PROTOCOL)
-    sock.sendall(_HEADER.pack(len(ready)) + ready)
-    while True:
-        head = _recv_exact(sock, _HEADER.size)
-        if head is None:
-            return
-        msg = _recv_exact(sock, _HEADER.unpack(head)[0])
-        if msg is None:
-            return
-        name, args = pickle.loads(msg)     # from the server process only (see the module docstring)
-        try:
-            result = _CALLS[name](*args)
-        except Exception as exc:  # noqa: BLE001 - a bug, not a client mistake: the server answers 500
-            result = ("exception", f"{type(exc).__name__}: {exc}", traceback.format_exc())
-        out = pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
-        sock.sendall(_HEADER.pack(len(out)) + out)
+    try:
+        sock.sendall(_HEADER.pack(len(ready)) + ready)
+        while True:
+            head = _recv_exact(sock, _HEADER.size)
+            if head is None:
+                return
+            msg = _recv_exact(sock, _HEADER.unpack(head)[0])
+            if msg is None:
+                return
+            name, args = pickle.loads(msg)     # from the server process only (see the module docstring)
+            try:
+                result = _CALLS[name](*args)
+            except Exception as exc:  # noqa: BLE001 - a bug, not a client mistake: the server answers 500
+                result = ("exception", f"{type(exc).__name__}: {exc}", traceback.format_exc())
+            out = pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
+            sock.sendall(_HEADER.pack(len(out)) + out)
+    except (BrokenPipeError, ConnectionResetError):
+        return                                 # the server closed the socket (it is stopping): nothing to answer
 
 
 # -- server side ---------------------------------------------------------------------------------
@@ -270,7 +280,16 @@ class _Worker:
         ctx = multiprocessing.get_context("spawn")
         self.process = ctx.Process(target=_worker_main, args=(child, str(registry_root), version, memory_bytes),
                                    name="rotordiag-diagnosis", daemon=False)
-        self.process.start()
+        # started with SIGINT ignored (a disposition a spawned interpreter keeps, unlike a blocked mask): a
+        # Ctrl-C during the worker's start-up (its imports) is no KeyboardInterrupt traceback; the server's
+        # own handler is put back at once (signal handlers can only be set from the main thread)
+        main = threading.current_thread() is threading.main_thread()
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+        try:
+            self.process.start()
+        finally:
+            if main:
+                signal.signal(signal.SIGINT, previous)
         child.close()
         global _AT_EXIT_REGISTERED
         if not _AT_EXIT_REGISTERED:
@@ -381,6 +400,8 @@ class _Worker:
     def stop(self, timeout_s: float = 5.0) -> None:
         self._reader.cancel()
         self.sock.close()            # the worker sees end of file and returns
+        if not self.ready and self.process.is_alive():
+            self.process.terminate()     # still loading the model (it reads no socket yet) and holds no request
         self.process.join(timeout_s)
         if self.process.is_alive():
             self.process.terminate()

@@ -58,27 +58,12 @@ def static(name: str) -> FileResponse:
                         headers={"X-Content-Type-Options": "nosniff", "Cache-Control": "no-cache"})
 
 
-#: what each shipped example is (features/examples; the page's "try an example")
-_EXAMPLE_TITLES = {
-    "aligned": "aligned machine (Δ = 0)",
-    "misaligned": "severely misaligned (Δ = 0.5)",
-    "misaligned_2560hz": "severely misaligned (Δ = 0.5), bare array",
-}
-_EXAMPLE_FORMATS = {".csv": "CSV with a time column and b2@45-style header", ".h5": "HDF5 with its channel table",
-                    ".npy": "NPY, sample rate given separately", ".uff": "universal file (UFF 58b)"}
-
-
 @router.get("/ui/examples")
 def examples() -> list[dict[str, Any]]:
     """The example recordings shipped with the package: name, title and the query they need."""
-    from rotordiag.features.examples import example_options, list_examples
+    from rotordiag.features.examples import describe_example, example_options, list_examples
 
-    out = []
-    for name in list_examples():
-        stem, ext = Path(name).stem, Path(name).suffix
-        out.append({"name": name, "title": f"{_EXAMPLE_TITLES.get(stem, stem)} — {_EXAMPLE_FORMATS.get(ext, ext)}",
-                    "query": example_options(name)})
-    return out
+    return [{"name": name, "title": describe_example(name), "query": example_options(name)} for name in list_examples()]
 
 
 @router.get("/ui/examples/{name}")
