@@ -116,6 +116,54 @@ def options_from_query(query: dict[str, Any]) -> Any:
         raise InputError(f"query parameters: {exc}") from None
 
 
+#: what an asset's probe configuration holds (``PUT /assets/{id}/probes``), as groups of query parameters:
+#: an upload that gives any parameter of a group replaces the configuration's whole group
+PROBE_CONFIG_GROUPS: dict[str, tuple[str, ...]] = {
+    "layout": ("channel_map", "bearings", "angles_deg"), "units": ("units",),
+    "sensitivity": ("sensitivity", "sensitivity_v_per_mm"), "gap_voltage": ("gap_voltage_v",),
+    "keyphasor": ("keyphasor_channel",)}
+PROBE_CONFIG_KEYS = tuple(k for keys in PROBE_CONFIG_GROUPS.values() for k in keys)
+
+
+def check_probe_config(config: dict[str, Any]) -> None:
+    """Refuse (InputError, saying what to fix) a probe configuration the reader would refuse for every upload."""
+    from rotordiag.core.units import INPUT_UNITS, input_unit, sensitivity_v_per_mm
+
+    unknown = sorted(set(config) - set(PROBE_CONFIG_KEYS))
+    if unknown:
+        raise InputError(f"probe configuration: unknown field(s) {unknown}; allowed: {list(PROBE_CONFIG_KEYS)}")
+    options_from_query(dict(config))
+    if config.get("units") is not None and input_unit(str(config["units"])) is None:
+        raise InputError(f"probe configuration: units {config['units']!r}: use one of {list(INPUT_UNITS)}")
+    for key in ("sensitivity", "sensitivity_v_per_mm"):
+        if config.get(key) is not None:
+            try:
+                sensitivity_v_per_mm(config[key])
+            except ValueError as exc:
+                raise InputError(f"probe configuration: {exc}") from None
+
+
+def with_probe_config(query: dict[str, Any], config: dict[str, Any] | None,
+                      asset_id: str) -> tuple[dict[str, Any], dict[str, Any] | None]:
+    """The upload's query completed by its asset's stored probe configuration (the upload's own parameters win,
+    group by group: :data:`PROBE_CONFIG_GROUPS`), and the answer's section saying what was used."""
+    if not config:
+        return query, None
+    out = dict(query)
+    used: dict[str, Any] = {}
+    overridden: list[str] = []
+    for group, keys in PROBE_CONFIG_GROUPS.items():
+        stored = {k: config[k] for k in keys if config.get(k) is not None}
+        if not stored:
+            continue
+        if any(query.get(k) is not None for k in keys):
+            overridden.append(group)
+            continue
+        out.update(stored)
+        used.update(stored)
+    return out, {"asset_id": asset_id, "used": used, "overridden_by_upload": overridden}
+
+
 def checked(build, *args):
     """Call a recording constructor, turning its ValueError (bad recording) into a 422."""
     try:

@@ -1,4 +1,4 @@
-"""Writing and reading asset diagnoses (the per-asset trend), baselines and alarm thresholds."""
+"""Writing and reading asset diagnoses (the per-asset trend), baselines, alarm thresholds and probe configurations."""
 from __future__ import annotations
 
 import datetime as dt
@@ -109,6 +109,24 @@ def put_thresholds(state: AppState, asset_id: str, thresholds: dict[str, Any]) -
             s.add(AssetSettings(asset_id=asset_id, thresholds=dict(thresholds)))
         else:
             row.thresholds = dict(thresholds)
+
+
+def get_probe_config(session: Session, asset_id: str) -> tuple[dict[str, Any], Any] | None:
+    """The asset's stored probe configuration and when it was set, or ``None``."""
+    row = session.get(AssetSettings, asset_id)
+    if row is None or not row.probes:
+        return None
+    return dict(row.probes), row.updated_at
+
+
+def put_probe_config(state: AppState, asset_id: str, probes: dict[str, Any]) -> None:
+    """Replace the asset's probe configuration (an empty dict removes it)."""
+    with state.sessions.begin() as s:
+        row = s.get(AssetSettings, asset_id)
+        if row is None:
+            s.add(AssetSettings(asset_id=asset_id, thresholds={}, probes=dict(probes) or None))
+        else:
+            row.probes = dict(probes) or None
 
 
 def latest_changes(session: Session) -> list[tuple[str, dict[str, Any]]]:

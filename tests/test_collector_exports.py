@@ -232,4 +232,59 @@ def test_http_gives_each_export_the_verdict_of_the_um_file(tmp_path, registry, e
                                ({"channel_map": channel_map, "units": "mV"}, "give the probe sensitivity")):
             r = c.post("/diagnose", params=params, files={"file": (path.name, path.read_bytes())})
             assert r.status_code == 422, (params, r.text)
-            assert needle in r.json()["detail"], r.text
+            assert needle in str(r.json()["detail"]), r.text
+
+
+# --------------------------------------------------------------------------- an asset's probes, set up once
+
+
+def test_an_assets_probe_configuration_is_used_by_every_upload_and_said_so(tmp_path, registry, exports):
+    from tests.service_util import auth
+
+    path, channel_map, stated = exports["daq_csv_ms_unit_row"]
+    body = {"file": (path.name, path.read_bytes())}
+    app = create_app(make_settings(tmp_path, shipped_registry_dir=registry))
+    with TestClient(app) as c:
+        assert c.get("/assets/unit-3/probes").status_code == 404
+        # refused as every upload would be: a mapping without '=', an unknown unit, a sensitivity without units
+        for bad, needle in (({"channel_map": "1@45,1@135"}, "COLUMN=b<bearing>@<angle>"),
+                            ({"units": "inch"}, "units 'inch'"), ({"sensitivity": "200 mV"}, "probe sensitivity"),
+                            ({"bearings": "1,1", "angles_deg": "45"}, "1 values for 2 bearings"),
+                            ({"rotation": "cw"}, "rotation")):
+            r = c.put("/assets/unit-3/probes", json=bad, headers=auth())
+            assert r.status_code == 422, (bad, r.text)
+            assert needle in str(r.json()["detail"]), r.text
+        assert c.put("/assets/unit-3/probes", json={"units": "mV"}).status_code == 401          # needs the key
+        config = {"channel_map": channel_map, "units": "mV", "sensitivity": DAQ_SENSITIVITY, "gap_voltage_v": GAP_V}
+        r = c.put("/assets/unit-3/probes", json=config, headers=auth())
+        assert r.status_code == 200, r.text
+        assert r.json()["probes"] == config
+        assert c.get("/assets/unit-3/probes").json()["probes"] == config
+        # the export alone, named to the asset: read with the stored configuration, as if given with it
+        r = c.post("/diagnose", params={"asset_id": "unit-3"}, files=body)
+        assert r.status_code == 200, r.text
+        stored = r.json()
+        given = c.post("/diagnose", params={"channel_map": channel_map, **stated, "units": "mV"}, files=body).json()
+        _same_verdict(stored, given)
+        assert stored["asset_probes"] == {"asset_id": "unit-3", "used": config, "overridden_by_upload": []}
+        assert stored["input_notes"][0].startswith("read with asset 'unit-3''s probe configuration: channel_map=")
+        # without the asset (or another asset) nothing is assumed: the export's columns are refused by name
+        r = c.post("/diagnose", params={"asset_id": "unit-4"}, files=body)
+        assert r.status_code == 422 and "are neither a time column" in r.json()["detail"]
+        # an upload's own parameters win, group by group: the wrong sensitivity given makes every length 2x
+        r = c.post("/diagnose", params={"asset_id": "unit-3", "sensitivity": "100 mV/mil"}, files=body)
+        assert r.status_code == 200, r.text
+        assert r.json()["asset_probes"]["overridden_by_upload"] == ["sensitivity"]
+        assert "sensitivity" not in r.json()["asset_probes"]["used"]
+        b2 = {b["bearing"]: b for b in r.json()["bearings"]}[2]["features"]
+        b2_ref = {b["bearing"]: b for b in stored["bearings"]}[2]["features"]
+        key = next(k for k in b2_ref if k.endswith("_um_pp") and b2_ref[k])
+        assert b2[key] == pytest.approx(2 * b2_ref[key], rel=1e-3)
+        # the page's plots are read the same way
+        r = c.post("/ui/plot-data", params={"asset_id": "unit-3"}, files=body)
+        assert r.status_code == 200, r.text
+        # removed: the asset's uploads are read as sent again
+        assert c.delete("/assets/unit-3/probes", headers=auth()).status_code == 204
+        assert c.get("/assets/unit-3/probes").status_code == 404
+        r = c.post("/diagnose", params={"asset_id": "unit-3"}, files=body)
+        assert r.status_code == 422 and "are neither a time column" in r.json()["detail"]

@@ -90,12 +90,21 @@ async def plot(
     state: StateDep,
     reader: ReaderQueryDep,
     sample_index: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
+    asset_id: Annotated[str | None, Query(min_length=1, max_length=128, pattern=r"^[A-Za-z0-9._:-]+$")] = None,
 ) -> dict[str, Any]:
-    """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.web.plotdata``).
+    """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.web.plotdata``);
+    with ``asset_id``, read with the asset's probe configuration as /diagnose reads it (nothing is stored).
 
     Parsed and computed in a diagnosis worker (memory and time limits), as /diagnose; with
     ``ROTORDIAG_DIAGNOSIS_WORKERS=0`` in a thread of the server (HDF5 still decoded in the sandbox).
     Needs the API key when /diagnose does (``ROTORDIAG_DIAGNOSE_REQUIRES_KEY``).
     """
     query = dict(asset_id=None, plant=None, sample_index=sample_index, **reader)
+    if asset_id is not None and "application/json" not in request.headers.get("content-type", ""):
+        from fastapi.concurrency import run_in_threadpool
+
+        from ..api.routes.diagnose import asset_probes_query
+
+        query = {**(await run_in_threadpool(asset_probes_query, state, {**query, "asset_id": asset_id}))[0],
+                 "asset_id": None}
     return await recording_answer(request, state, query, "plot", lambda recording: _plot_sync(state, recording))

@@ -295,15 +295,36 @@ async def diagnose_from_request(request: Request, state, query: dict[str, Any], 
     in flight per worker) or a thread; with ``store``, compare with the asset's baseline and store the result
     here (``service.baseline.record_verdict``). Returns the verdict and the request's asset id."""
     kind, body, filename, slow_roll = await _read_body(request, slow_roll=slow_roll_allowed)
+    probes = None
+    if kind != "json" and query.get("asset_id"):    # a JSON body states its channels itself
+        query, probes = await run_in_threadpool(asset_probes_query, state, query)
     if state.pool is not None:
         _, verdict, asset_id, plant = await in_worker(state, "work", kind, body, filename, query, slow_roll, version)
     else:
         verdict, asset_id, plant = await anyio.to_thread.run_sync(_parse_and_diagnose, state, kind, body, filename,
                                                                   query, slow_roll, version,
                                                                   limiter=_diagnosis_limiter(state))
+    if probes is not None:
+        verdict["asset_probes"] = probes
+        used = ", ".join(f"{k}={v}" for k, v in probes["used"].items())
+        verdict.setdefault("input_notes", []).insert(0, f"read with asset {probes['asset_id']!r}'s probe "
+                                                     f"configuration: {used or 'nothing of it'}"
+                                                     + (f" (given with this upload instead: "
+                                                        f"{', '.join(probes['overridden_by_upload'])})"
+                                                        if probes["overridden_by_upload"] else ""))
     if store:
         await run_in_threadpool(record_verdict, state, asset_id, plant, verdict)
     return verdict, asset_id
+
+
+def asset_probes_query(state, query: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any] | None]:
+    """The upload's query completed by its asset's stored probe configuration (``service.parsing.with_probe_config``)."""
+    from ...parsing import with_probe_config
+    from ...store import get_probe_config
+
+    with state.sessions() as s:
+        found = get_probe_config(s, query["asset_id"])
+    return with_probe_config(query, found[0] if found else None, query["asset_id"])
 
 
 def _diagnosis_limiter(state) -> anyio.CapacityLimiter:

@@ -593,9 +593,9 @@
     }
     if (formValue("sample-index") !== null && formValue("sample-index") !== "0") q.set("sample_index", formValue("sample-index"));
     if ($("dc-removed").checked) q.set("dc_removed", "true");
-    const qp = new URLSearchParams(q);
     const asset = formValue("asset");
-    if (asset) q.set("asset_id", asset);
+    if (asset) q.set("asset_id", asset);       // the plots too are read with the asset's probe configuration
+    const qp = new URLSearchParams(q);
     q.set("output_units", $("length-units").value);
     const opts = () => { const fd = new FormData(); for (const f of files) fd.append("file", f, f.name); return { method: "POST", body: fd }; };
     return { diagnose: [`/diagnose?${q}`, opts()], plot: [`/ui/plot-data?${qp}`, opts()], asset };
