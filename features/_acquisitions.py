@@ -17,6 +17,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from rotordiag.core.input_bounds import KEYPHASOR_MAX_TIME_S, KEYPHASOR_MIN_INTERVAL_S
+
 from ._config import BEARINGS
 
 __all__ = ["parse_acquisitions", "acquisitions_in_order", "format_acquisitions", "split_pairs", "parse_keyphasor_takes"]
@@ -90,6 +92,9 @@ def _pulse_train(value: object, name: str) -> np.ndarray:
         raise ValueError(f"{name} contains NaN/inf; give pulse times in s")
     if np.any(np.diff(kp) <= 0):
         raise ValueError(f"{name} must be strictly increasing (one pulse per revolution)")
+    if np.max(np.abs(kp)) > KEYPHASOR_MAX_TIME_S or np.min(np.diff(kp)) < KEYPHASOR_MIN_INTERVAL_S:
+        raise ValueError(f"{name}: pulse times must lie within ±{KEYPHASOR_MAX_TIME_S:g} s of the first sample and "
+                         f"at least {KEYPHASOR_MIN_INTERVAL_S:g} s apart: check the units (seconds)")
     return kp
 
 

@@ -7,20 +7,20 @@ from typing import cast
 
 import numpy as np
 
+from rotordiag.core.input_bounds import (
+    CLEARANCE_RANGE_UM,
+    MAX_DISPLACEMENT_UM,
+    SAMPLE_RATE_RANGE_HZ,
+    SPEED_RANGE_RPM,
+    check_range,
+)
+
 from ._acquisitions import acquisitions_in_order, format_acquisitions, parse_acquisitions, parse_keyphasor_takes
 from ._config import ALLOWED_UNITS, BEARINGS, UNITS_TO_UM
 
 __all__ = ["ProbeChannel", "Recording", "parse_speed_range"]
 
 
-def _finite_positive(value: object, name: str, hint: str) -> float:
-    try:
-        v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}; {hint}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be finite and > 0, got {value!r}; {hint}")
-    return v
 
 
 def parse_speed_range(value: object, name: str = "speed_range_rpm") -> tuple[float, float]:
@@ -44,8 +44,10 @@ def parse_speed_range(value: object, name: str = "speed_range_rpm") -> tuple[flo
         raise ValueError(f"{name} must be two numbers (min, max), got {list(value)!r}; {hint}") from None
     if not (np.isfinite(lo) and np.isfinite(hi)):
         raise ValueError(f"{name} must be finite, got {lo:g}, {hi:g}; {hint}")
-    if lo <= 0:
-        raise ValueError(f"{name}: the minimum must be > 0 r/min, got {lo:g}; {hint}")
+    lo_min, hi_max = SPEED_RANGE_RPM
+    if not (lo_min <= lo and hi <= hi_max):
+        raise ValueError(f"{name} must lie between {lo_min:g} and {hi_max:g} r/min, got {lo:g}, {hi:g}: check the "
+                         f"units; {hint}")
     if lo >= hi:
         raise ValueError(f"{name}: the minimum ({lo:g}) must be below the maximum ({hi:g}); {hint}")
     return lo, hi
@@ -134,6 +136,11 @@ class ProbeChannel:
             first = int(np.argmax(bad))
             raise ValueError(f"ProbeChannel.data (bearing {b}, {angle:g}°) has {int(bad.sum())} non-finite "
                              f"sample(s) (NaN/inf), first at index {first}; remove dropouts or cut the record")
+        peak_um = float(np.max(np.abs(data))) * UNITS_TO_UM[self.units]
+        if peak_um > MAX_DISPLACEMENT_UM:
+            raise ValueError(f"ProbeChannel.data (bearing {b}, {angle:g}°) reaches {peak_um:.3g} µm; displacements "
+                             f"beyond {MAX_DISPLACEMENT_UM:g} µm are no shaft motion: check the units "
+                             f"({self.units!r} was given)")
         object.__setattr__(self, "data", data)
         if self.slow_roll_um_pp is not None:
             object.__setattr__(self, "slow_roll_um_pp", _slow_roll(self.slow_roll_um_pp, b, angle))
@@ -198,8 +205,8 @@ class Recording:
     acquisitions: Sequence[Sequence[int]] | str | None = None
 
     def __post_init__(self) -> None:
-        fs = _finite_positive(self.sample_rate_hz, "Recording.sample_rate_hz",
-                              "give the sampling rate in Hz")
+        fs = check_range(self.sample_rate_hz, "Recording.sample_rate_hz", SAMPLE_RATE_RANGE_HZ, "Hz",
+                         "give the sampling rate in Hz")
         object.__setattr__(self, "sample_rate_hz", fs)
         if not isinstance(self.dc_removed, (bool, np.bool_)):
             raise ValueError(f"Recording.dc_removed must be true or false, got {self.dc_removed!r}")
@@ -232,8 +239,9 @@ class Recording:
         acquisitions = self._acquisitions(sorted(by_bearing))
         object.__setattr__(self, "acquisitions", acquisitions)
         if self.speed_rpm is not None:
-            object.__setattr__(self, "speed_rpm", _finite_positive(
-                self.speed_rpm, "Recording.speed_rpm", "give the running speed in r/min or leave it None"))
+            object.__setattr__(self, "speed_rpm", check_range(
+                self.speed_rpm, "Recording.speed_rpm", SPEED_RANGE_RPM, "r/min",
+                "give the running speed in r/min or leave it None"))
         if self.speed_range_rpm is not None:
             rng = parse_speed_range(self.speed_range_rpm, "Recording.speed_range_rpm")
             object.__setattr__(self, "speed_range_rpm", rng)
@@ -265,11 +273,12 @@ class Recording:
                 for b, v in cl.items():
                     if isinstance(b, bool) or not isinstance(b, (int, np.integer)) or int(b) not in BEARINGS:
                         raise ValueError(f"Recording.clearance_um: key {b!r} is not a bearing number {list(BEARINGS)}")
-                    clean[int(b)] = _finite_positive(v, f"Recording.clearance_um[{b}]", "radial clearance in µm")
+                    clean[int(b)] = check_range(v, f"Recording.clearance_um[{b}]", CLEARANCE_RANGE_UM, "µm",
+                                           "radial clearance in µm")
                 object.__setattr__(self, "clearance_um", clean)
             else:
-                object.__setattr__(self, "clearance_um", _finite_positive(
-                    cl, "Recording.clearance_um", "radial bearing clearance in µm, or None"))
+                object.__setattr__(self, "clearance_um", check_range(
+                    cl, "Recording.clearance_um", CLEARANCE_RANGE_UM, "µm", "radial bearing clearance in µm, or None"))
 
     def _acquisitions(self, bearings: list[int]) -> tuple[tuple[int, ...], ...] | None:
         if self.acquisitions is None:

@@ -134,6 +134,8 @@ class ReadLimits:
     max_hdf5_bytes: int = 256 * 2**20
     max_chunk_ratio: float = 200.0
     max_keyphasor_pulses: int = 100_000
+    #: chunks an HDF5 file may be stored in (each costs a call when its compression ratio is checked)
+    max_hdf5_chunks: int = 200_000
     #: HDF5 is decoded in a child process (:mod:`rotordiag.features.sandbox`) with this much
     #: memory (``None``: 3 x ``max_hdf5_bytes`` + 256 MiB) and this wall-clock limit;
     #: ``isolate_hdf5=False`` decodes in the calling process (trusted files only).
@@ -417,6 +419,14 @@ def _detect_format(name: str, head: bytes) -> str:
 # --------------------------------------------------------------------------- formats
 
 
+class _CsvSyntaxError(ValueError):
+    """Text the csv module cannot split (:func:`read_recording` names the file in the message)."""
+
+
+#: lines a CSV file may have beyond its samples (header, comments, blank lines)
+CSV_EXTRA_LINES = 1024
+
+
 def _is_number(cell: str) -> bool:
     try:
         float(cell)
@@ -475,7 +485,7 @@ def _metadata(lines: list[list[str]]) -> dict[str, Any]:
     return out
 
 
-def _csv_table(data: bytes) -> tuple[list[str] | None, np.ndarray, dict[str, Any]]:
+def _csv_table(data: bytes, max_rows: int | None = None) -> tuple[list[str] | None, np.ndarray, dict[str, Any]]:
     """Column names, the numbers (points × columns) and what the lines above the names say.
 
     Collectors write a block of metadata lines above the column names (a LabVIEW .lvm header, ``Key: value``
@@ -483,6 +493,11 @@ def _csv_table(data: bytes) -> tuple[list[str] | None, np.ndarray, dict[str, Any
     line just above the first row of numbers, or the one above that when that line is a unit row
     (``s, mV, mV, …``).
     """
+    if max_rows is not None:             # counted on the bytes, before any line is decoded or split
+        n_lines = max(data.count(b"\n"), data.count(b"\r"))
+        if n_lines > max_rows + CSV_EXTRA_LINES:
+            raise ValueError(f"the CSV file has more than {max_rows + CSV_EXTRA_LINES} lines; at most {max_rows} "
+                             "samples (rows) are accepted: send a shorter recording")
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError:
@@ -492,7 +507,11 @@ def _csv_table(data: bytes) -> tuple[list[str] | None, np.ndarray, dict[str, Any
         raise ValueError("the CSV file has no data rows; put one probe per column and one sample per row")
     last = lines[-1]                       # a data row decides the delimiter (metadata lines may hold others)
     delim = "\t" if "\t" in last else (";" if ";" in last else ",")
-    rows = [r[:-1] if len(r) > 1 and not r[-1].strip() else r for r in csv.reader(lines, delimiter=delim)]
+    try:
+        rows = [r[:-1] if len(r) > 1 and not r[-1].strip() else r for r in csv.reader(lines, delimiter=delim)]
+    except csv.Error as exc:             # e.g. a field over the csv module's limit, or a stray NUL byte
+        raise _CsvSyntaxError(f"the CSV file cannot be read as CSV ({exc}); numbers only, one probe per column and one "
+                              "sample per row") from None
     start = next((i for i, r in enumerate(rows) if all(_is_number(v) for v in r)), None)
     if start is None:                      # names, then rows whose bad value is reported below
         start = 1
@@ -527,7 +546,7 @@ def _csv_table(data: bytes) -> tuple[list[str] | None, np.ndarray, dict[str, Any
 
 
 def _read_csv(data: bytes, opts: ReadOptions, limits: ReadLimits, notes: list[str]) -> tuple[np.ndarray, dict]:
-    header, table, meta = _csv_table(data)
+    header, table, meta = _csv_table(data, limits.max_points)
     if table.shape[0] > limits.max_points:
         raise ValueError(f"the CSV file has {table.shape[0]} rows; at most {limits.max_points} samples are accepted")
     info: dict[str, Any] = {}
@@ -779,7 +798,8 @@ def _read_hdf5(data: bytes | Path, opts: ReadOptions, limits: ReadLimits) -> tup
 def _decode_hdf5(data: bytes | Path, opts: ReadOptions, limits: ReadLimits) -> tuple[np.ndarray, dict]:
     import h5py
 
-    check_hdf5(data, max_decompressed_bytes=limits.max_hdf5_bytes, max_chunk_ratio=limits.max_chunk_ratio)
+    check_hdf5(data, max_decompressed_bytes=limits.max_hdf5_bytes, max_chunk_ratio=limits.max_chunk_ratio,
+               max_chunks=limits.max_hdf5_chunks)
     info: dict[str, Any] = {}
     source: Any = io.BytesIO(data) if isinstance(data, bytes) else str(data)
     try:
@@ -982,6 +1002,12 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
     return ReadResult(recording=rec, format=fmt, notes=notes, truth=info.get("truth"))
 
 
+def json_value_limit(limits: ReadLimits) -> int:
+    """The most values a JSON recording within ``limits`` can hold (samples, keyphasor pulses, and a margin for the
+    other fields): a JSON text with more is refused before it is decoded."""
+    return limits.max_channels * limits.max_points + limits.max_keyphasor_pulses + 4096
+
+
 def recording_from_dict(obj: Any, options: ReadOptions | None = None, limits: ReadLimits | None = None) -> ReadResult:
     """Recording from the JSON form (the ``/diagnose`` body, decoded).
 
@@ -1101,7 +1127,7 @@ def read_recording(source: str | Path | bytes, *, filename: str = "", options: R
         raise ValueError("channels: a name mapping works for CSV and UFF files only; give the layout in file order "
                          "('1@45,1@135,...') for NPY and HDF5")
     if fmt == "json":
-        return recording_from_dict(loads_json_finite(data or b""), opts, limits)
+        return recording_from_dict(loads_json_finite(data or b"", max_values=json_value_limit(limits)), opts, limits)
     if fmt == "hdf5":
         arr, info = _read_hdf5(data if data is not None else path, opts, limits)  # type: ignore[arg-type]
     elif fmt == "npy":
@@ -1121,7 +1147,10 @@ def read_recording(source: str | Path | bytes, *, filename: str = "", options: R
         info["keyphasor_signal"] = arr[index[0]] if len(index) == 1 else [arr[k] for k in index]
         arr = np.delete(arr, index, axis=0)
     if arr is None:  # named channels: the keyphasor is picked by name or index there
-        arr, info = (_read_uff if fmt == "uff" else _read_csv)(data or b"", opts, limits, notes)
+        try:
+            arr, info = (_read_uff if fmt == "uff" else _read_csv)(data or b"", opts, limits, notes)
+        except _CsvSyntaxError as exc:
+            raise ValueError(f"{name or 'the upload'}: {exc}") from None
     if info.get("units") is not None and input_unit(str(info["units"])) is None:
         raise ValueError(f"the file's units attribute {info['units']!r} is not one of {list(INPUT_UNITS)}")
     if info.get("sample_rate_hz") is not None and not (isinstance(info["sample_rate_hz"], (int, float))

@@ -28,13 +28,14 @@ from __future__ import annotations
 import io
 import json
 import math
+import re
 import tokenize
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["UnsafeFileError", "check_hdf5", "load_npy_bounded", "loads_json_finite",
+__all__ = ["UnsafeFileError", "check_hdf5", "load_npy_bounded", "loads_json_finite", "count_json_values",
            "ALLOWED_HDF5_FILTERS", "MAX_HDF5_OBJECTS", "MAX_HDF5_CHUNKS"]
 
 #: HDF5 filter ids an upload may use: deflate (gzip), shuffle, fletcher32.
@@ -55,7 +56,8 @@ class UnsafeFileError(ValueError):
 
 
 # --------------------------------------------------------------------------- HDF5
-def check_hdf5(source: bytes | str | Path, *, max_decompressed_bytes: int, max_chunk_ratio: float) -> None:
+def check_hdf5(source: bytes | str | Path, *, max_decompressed_bytes: int, max_chunk_ratio: float,
+               max_chunks: int = MAX_HDF5_CHUNKS) -> None:
     """Refuse an HDF5 file whose decoding could read other files, crash or exhaust memory.
 
     Parameters
@@ -68,6 +70,9 @@ def check_hdf5(source: bytes | str | Path, *, max_decompressed_bytes: int, max_c
     max_chunk_ratio : float
         Bound on every allocated chunk's decompressed/stored size ratio
         (gzip reaches ~1000 on constant data; real waveforms ~1-5).
+    max_chunks : int
+        Bound on the chunks over all datasets, checked on the chunk grid (shape / chunk shape) before
+        the chunk index is read, so a file of many tiny chunks costs no per-chunk call.
 
     Raises
     ------
@@ -93,7 +98,7 @@ def check_hdf5(source: bytes | str | Path, *, max_decompressed_bytes: int, max_c
     except _H5_ERRORS as exc:
         raise UnsafeFileError(f"cannot open the HDF5 file (truncated or corrupt?): {exc}") from None
     try:
-        _Walk(max_decompressed_bytes, max_chunk_ratio).group(f, "/")
+        _Walk(max_decompressed_bytes, max_chunk_ratio, max_chunks).group(f, "/")
     except UnsafeFileError:
         raise
     except _H5_ERRORS as exc:
@@ -105,9 +110,10 @@ def check_hdf5(source: bytes | str | Path, *, max_decompressed_bytes: int, max_c
 class _Walk:
     """Depth-first walk over hard links only; state: objects seen, bytes and chunks counted."""
 
-    def __init__(self, max_bytes: int, max_ratio: float) -> None:
+    def __init__(self, max_bytes: int, max_ratio: float, max_chunks: int = MAX_HDF5_CHUNKS) -> None:
         self.max_bytes = max_bytes
         self.max_ratio = max_ratio
+        self.max_chunks = max_chunks
         self.seen: set[int] = set()
         self.total_bytes = 0
         self.total_chunks = 0
@@ -185,11 +191,17 @@ class _Walk:
         if chunk_bytes > self.max_bytes:
             raise UnsafeFileError(f"HDF5 dataset {path!r} has chunks of shape {chunk_shape} ({chunk_bytes} bytes "
                                   f"decompressed, more than {self.max_bytes}); rewrite it with smaller chunks")
+        # the chunk grid bounds the chunks that can be allocated: decided from the metadata alone
+        grid = math.prod(-(-int(n) // max(int(c), 1)) for n, c in zip(shape, chunk_shape)) if shape else 1
+        if self.total_chunks + grid > self.max_chunks:
+            raise UnsafeFileError(f"HDF5 dataset {path!r} of shape {shape} is stored in chunks of {chunk_shape}: up to "
+                                  f"{grid} chunks, more than the {self.max_chunks} accepted in one file; rewrite it "
+                                  "with larger chunks (e.g. h5py chunks=True) or without chunking")
         n_chunks = ds.id.get_num_chunks()
+        if n_chunks > grid:
+            raise UnsafeFileError(f"HDF5 dataset {path!r} claims {n_chunks} chunks in a grid of {grid}; the file is "
+                                  "corrupt")
         self.total_chunks += n_chunks
-        if self.total_chunks > MAX_HDF5_CHUNKS:
-            raise UnsafeFileError(f"the HDF5 file has more than {MAX_HDF5_CHUNKS} chunks; "
-                                  "rewrite it with larger chunks or without chunking")
         for i in range(n_chunks):
             stored = ds.id.get_chunk_info(i).size
             if stored <= 0 or chunk_bytes / stored > self.max_ratio:
@@ -261,6 +273,19 @@ def load_npy_bounded(data: bytes, *, max_bytes: int) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- JSON
+_JSON_STRING = re.compile(rb'"(?:[^"\\]|\\.)*"', re.S)
+_NOT_BRACKETS = bytes(c for c in range(256) if c not in b"[]{}")
+
+
+def _depth_exceeds(raw: bytes, limit: int) -> bool:
+    """Whether the brackets of JSON text nest deeper than ``limit`` (strings left out), at C and NumPy speed."""
+    if raw.count(b"[") + raw.count(b"{") <= limit:
+        return False
+    brackets = np.frombuffer(_JSON_STRING.sub(b"", raw).translate(None, _NOT_BRACKETS), dtype=np.uint8)
+    steps = np.where((brackets == ord("[")) | (brackets == ord("{")), 1, -1)
+    return bool(brackets.size) and int(np.cumsum(steps).max()) > limit
+
+
 def _refuse_constant(name: str) -> Any:
     raise UnsafeFileError(f"JSON contains {name}; numbers must be finite — send null or leave the value out "
                           "(NaN/Infinity are not valid JSON)")
@@ -282,13 +307,59 @@ def _bounded_int(text: str) -> int:
     return int(text)
 
 
-def loads_json_finite(data: bytes | str) -> Any:
-    """``json.loads`` that refuses non-finite numbers.
+#: number spellings that may overflow a float (a 3-digit exponent, or 300+ digits in a row): only a body that
+#: holds one is decoded number by number in Python; every other body at the C decoder's speed
+_MAY_OVERFLOW = re.compile(rb"[eE][+]?0*[1-9][0-9]{2,}|[0-9]{300}")
+#: JSON nesting deeper than this is refused before decoding (a recording needs 4 levels)
+MAX_JSON_DEPTH = 64
+
+
+#: an innermost JSON array (no bracket inside): where a channel's samples are
+_INNER_ARRAY = re.compile(rb"\[[^\[\]]*\]")
+
+
+def count_json_values(data: bytes, max_values: int, max_array: int | None = None) -> None:
+    """Refuse JSON text that may hold more than ``max_values`` values, before anything is decoded.
+
+    Every value after the first of an array or object is preceded by a comma, so the commas
+    bound the count from above (commas inside strings only make the bound more cautious). The
+    count runs at memory speed: a body is refused in milliseconds instead of being decoded into
+    Python or pydantic objects that can take gigabytes.
+
+    With ``max_array``, every innermost array (a channel's samples, a pulse train) is also held to
+    ``max_array`` values, at the regular-expression engine's speed.
+
+    Raises
+    ------
+    UnsafeFileError
+        More than ``max_values`` commas, or an array of more than ``max_array`` values.
+    """
+    n = bytes(data[:4]).count(b"\x00")
+    if n:                                            # UTF-16/32: count the commas of the decoded text
+        try:
+            data = data.decode(json.detect_encoding(data)).encode()
+        except (UnicodeDecodeError, LookupError):
+            return                                   # json.loads reports it
+    if data.count(b",") > max_values:
+        raise UnsafeFileError(f"JSON holds more than {max_values} values; send a shorter recording (fewer samples "
+                              "per channel), split a batch, or send an NPY array")
+    if max_array is not None and len(data) > 4 * max_array:      # shorter text cannot hold a longer array
+        for m in _INNER_ARRAY.finditer(data):
+            if m.end() - m.start() > 2 * max_array and data.count(b",", m.start(), m.end()) >= max_array:
+                raise UnsafeFileError(f"a JSON array holds more than {max_array} values; at most {max_array} "
+                                      "samples per channel are accepted: send a shorter recording")
+
+
+def loads_json_finite(data: bytes | str, *, max_values: int | None = None) -> Any:
+    """``json.loads`` that refuses non-finite numbers, and optionally bodies with too many values.
 
     Parameters
     ----------
     data : bytes or str
         JSON text (bytes in UTF-8/16/32, as ``json.loads`` detects).
+    max_values : int, optional
+        Refuse text that may hold more values than this before decoding it
+        (:func:`count_json_values`).
 
     Returns
     -------
@@ -299,11 +370,19 @@ def loads_json_finite(data: bytes | str) -> Any:
     ------
     UnsafeFileError
         ``NaN``, ``Infinity``, ``-Infinity``, a float that overflows (``1e999``),
-        an integer beyond float range, or nesting too deep to decode.
+        an integer beyond float range, nesting too deep, or more than ``max_values`` values.
     json.JSONDecodeError
         Text that is not JSON (a ``ValueError`` whose message gives the position).
     """
+    raw = data.encode() if isinstance(data, str) else bytes(data)
+    if max_values is not None:
+        count_json_values(raw, max_values)
+    if _depth_exceeds(raw, MAX_JSON_DEPTH):
+        raise UnsafeFileError(f"JSON is nested more than {MAX_JSON_DEPTH} levels deep; send a flat object")
+    exact = b"\x00" in raw[:4] or _MAY_OVERFLOW.search(raw) is not None
     try:
+        if not exact:                                # no spelling that can overflow: the C decoder's floats are finite
+            return json.loads(raw, parse_constant=_refuse_constant)
         return json.loads(data, parse_constant=_refuse_constant, parse_float=_finite_float,
                           parse_int=_bounded_int)
     except RecursionError:

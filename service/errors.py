@@ -12,7 +12,7 @@ import math
 from typing import Any, Literal
 
 #: what kind of client mistake an :class:`InputError` is (the API maps each to a status)
-InputKind = Literal["invalid", "malformed", "unsupported_type", "not_found", "conflict"]
+InputKind = Literal["invalid", "malformed", "unsupported_type", "not_found", "conflict", "too_large"]
 
 
 class InputError(ValueError):
@@ -21,10 +21,11 @@ class InputError(ValueError):
     Parameters
     ----------
     message : str
-    kind : {"invalid", "malformed", "unsupported_type", "not_found", "conflict"}
+    kind : {"invalid", "malformed", "unsupported_type", "not_found", "conflict", "too_large"}
         ``invalid``: the content cannot be used (default); ``malformed``: the request itself is
         broken; ``unsupported_type``: a file or content type that is not read; ``not_found``: a
-        named model, job, asset or diagnosis does not exist; ``conflict``: the state does not allow it.
+        named model, job, asset or diagnosis does not exist; ``conflict``: the state does not allow it;
+        ``too_large``: the request holds more values than the service reads (refused before decoding).
     """
 
     def __init__(self, message: str, kind: InputKind = "invalid") -> None:

@@ -44,6 +44,13 @@ class ModelStore:
         self._files: dict[str, tuple[tuple[int, int, int], str]] = {}   # version -> (stat key, sha256)
         self._lock = threading.Lock()
 
+    def _public(self, message: str, path: Path) -> str:
+        """``message`` without the server's paths (the model file's and the registry's): a client sees the
+        version and what is wrong, the log has the paths."""
+        for text, name in ((str(path), path.name), (str(self.root.resolve()), "<registry>"), (str(self.root), "<registry>")):
+            message = message.replace(text, name)
+        return message
+
     @classmethod
     def open(cls, settings: Settings) -> ModelStore:
         """Open ``settings.registry_dir``, seeding it from the shipped registry when it is empty.
@@ -123,12 +130,15 @@ class ModelStore:
                 try:
                     data = path.read_bytes()
                 except OSError as exc:
-                    raise ModelUnavailable(f"model {version}: its file cannot be read ({exc})") from None
+                    log.error("model %s: cannot read %s: %s", version, path, exc)
+                    raise ModelUnavailable(f"model {version}: its file cannot be read ({exc.strerror or 'I/O error'}); "
+                                           "the server log names the file") from None
                 digest = hashlib.sha256(data).hexdigest()   # of the bytes loaded, not a second read
                 try:
                     model, card = load_model_bytes(data, str(path)), self.registry.card(version)
                 except RegistryError as exc:
-                    raise ModelUnavailable(str(exc)) from None
+                    log.error("model %s: %s", version, exc)
+                    raise ModelUnavailable(f"model {version}: {self._public(str(exc), path)}") from None
                 _check_usable(model, version)
                 bundle = ModelBundle(model=model, card=card, version=version)
                 self._cache[version] = bundle

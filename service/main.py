@@ -18,6 +18,7 @@ from .api.auth import ApiKeyGate
 from .api.errors import install_error_handlers
 from .api.routes import assets, diagnose, health, jobs, models
 from .api.routes.docs import install_docs
+from .api.routing import RelativeSlashRedirect
 from .core.config import Settings
 from .core.limits import BodySizeLimitMiddleware
 from .metrics import install_metrics
@@ -68,6 +69,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         lifespan=lifespan,
         docs_url=None,       # /docs from the installed Swagger UI (service/api/routes/docs.py), never a CDN
         redoc_url=None,
+        redirect_slashes=False,  # RelativeSlashRedirect: no Host header copied into Location
         openapi_tags=[
             {"name": "diagnose", "description": "Diagnose probe waveforms."},
             {"name": "jobs", "description": "Dataset generation and retraining jobs (run on Dask)."},
@@ -85,6 +87,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     install_metrics(app)
     # Added last = outermost of the user middleware: bytes are counted (and timed) before anything reads
     # them, and the API key is checked from the headers before any body is read (service/api/auth.py).
+    app.add_middleware(RelativeSlashRedirect)
     app.add_middleware(BodySizeLimitMiddleware, max_body_bytes=settings.max_body_bytes,
                        body_timeout_s=settings.body_timeout_s)
     app.add_middleware(ApiKeyGate)

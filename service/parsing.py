@@ -14,7 +14,20 @@ import numpy as np
 from pydantic import ValidationError
 
 from .errors import InputError, RequestInvalid, validation_detail
-from .schemas import MAX_CHANNELS, MAX_KEYPHASOR_PULSES, MAX_POINTS, BatchRequest, DiagnoseRequest, RecordingIn
+from .schemas import (
+    MAX_BATCH_VALUES,
+    MAX_CHANNELS,
+    MAX_KEYPHASOR_PULSES,
+    MAX_POINTS,
+    MAX_RECORD_VALUES,
+    BatchEnvelope,
+    DiagnoseRequest,
+    RecordingIn,
+)
+
+#: chunks an uploaded HDF5 file may be stored in: h5py's automatic chunking of a full recording (8 × 262,144
+#: float64) makes 512, and each chunk costs a call when its compression ratio is checked
+MAX_HDF5_CHUNKS = 8192
 
 #: Default probe layout for an 8-channel array: bearings 1-4, an XY pair each (the reader's default).
 DEFAULT_BEARINGS = (1, 1, 2, 2, 3, 3, 4, 4)
@@ -35,7 +48,8 @@ def service_limits() -> Any:
     from rotordiag.features.reader import ReadLimits
 
     return ReadLimits(max_channels=MAX_CHANNELS, max_points=MAX_POINTS, max_file_bytes=512 * 2**20,
-                      max_hdf5_bytes=64 * 2**20, max_keyphasor_pulses=MAX_KEYPHASOR_PULSES)
+                      max_hdf5_bytes=64 * 2**20, max_keyphasor_pulses=MAX_KEYPHASOR_PULSES,
+                      max_hdf5_chunks=MAX_HDF5_CHUNKS)
 
 
 def _read_error(exc: ValueError) -> InputError:
@@ -172,10 +186,19 @@ def checked(build, *args):
         raise _read_error(exc) from None
 
 
-def _validated_json(model: Any, body: bytes) -> Any:
-    """``model`` validated from a JSON body; non-finite numbers refused first (422 saying so)."""
-    from rotordiag.features.safe_io import UnsafeFileError, loads_json_finite
+#: the most values one array of a JSON body may hold (a channel's samples; a keyphasor train is shorter)
+MAX_ARRAY_VALUES = max(MAX_POINTS, MAX_KEYPHASOR_PULSES)
 
+
+def _validated_json(model: Any, body: bytes, max_values: int) -> Any:
+    """``model`` validated from a JSON body; a body that may hold more than ``max_values`` values (413, counted
+    before anything is decoded) and non-finite numbers (422) refused first, saying so."""
+    from rotordiag.features.safe_io import UnsafeFileError, count_json_values, loads_json_finite
+
+    try:
+        count_json_values(body, max_values, MAX_ARRAY_VALUES)
+    except UnsafeFileError as exc:
+        raise InputError(str(exc), "too_large") from None
     try:
         loads_json_finite(body)
     except UnsafeFileError as exc:
@@ -188,9 +211,18 @@ def _validated_json(model: Any, body: bytes) -> Any:
         raise RequestInvalid(validation_detail(exc, ("body",))) from None
 
 
-def parse_batch(body: bytes) -> Any:
-    """The ``BatchRequest`` of a POST /diagnose/batch body (4xx as for :func:`parse_body`)."""
-    return _validated_json(BatchRequest, body)
+def parse_batch(body: bytes) -> list[dict[str, Any]]:
+    """The records of a POST /diagnose/batch body, each still to be validated by :func:`batch_record` (4xx as for
+    :func:`parse_body` when the body itself is wrong: not JSON, no ``records`` list, too many values)."""
+    return _validated_json(BatchEnvelope, body, MAX_BATCH_VALUES).records
+
+
+def batch_record(record: dict[str, Any]) -> DiagnoseRequest:
+    """One record of a batch validated as a ``DiagnoseRequest`` (:class:`RequestInvalid` naming its fields)."""
+    try:
+        return DiagnoseRequest.model_validate(record)
+    except ValidationError as exc:
+        raise RequestInvalid(validation_detail(exc, ("record",))) from None
 
 
 #: query parameters that apply to the slow-roll file instead of the main file's (the rest are shared:
@@ -346,7 +378,7 @@ def parse_request(kind: str, body: Body, filename: str, query: dict[str, Any],
             raise InputError("a slow-roll recording comes as a second file (part 'slow_roll_file') of a multipart "
                              "upload; with a JSON body give the slow-roll vectors per channel (channels[].slow_roll)")
         if kind == "json":
-            req = _validated_json(DiagnoseRequest, body)
+            req = _validated_json(DiagnoseRequest, body, MAX_RECORD_VALUES)
             return checked(recording_from_model, req), req.asset_id, req.plant, []
         if not body:
             raise InputError("empty body: send an NPY file (numpy.save) with an (n_channels, n_points) array, "

@@ -27,7 +27,9 @@ replaced, the request is answered 422 (:class:`DiagnosisTimeout`) and not retrie
 
 Failover: a worker that dies (a crash in native code, killed from outside, or over the time
 limit) is replaced by a fresh process at once, and the requests it held are retried once on a
-*warm* worker — a worker counts as ready only after it has loaded the model and said so, so
+*warm* worker — except the one it was computing when it stopped itself (an abort, e.g. an allocation
+failure under its memory limit, or a crash): that request is answered 503 saying so, never handed to
+the next worker to kill it too — a worker counts as ready only after it has loaded the model and said so, so
 no request waits for a cold replacement while a warm worker exists. Requests go to the ready
 worker with the fewest in flight, ties broken round-robin, so sequential requests spread
 across the workers.
@@ -145,12 +147,11 @@ def _work(kind: str, body: Body, filename: str, query: dict[str, Any], slow_roll
 
 
 def _record(record: dict[str, Any], version: str | None) -> tuple:
-    """Diagnose one record of a batch (a ``DiagnoseRequest`` as validated by :func:`_batch_parse`)."""
-    from .parsing import checked, recording_from_model
-    from .schemas import DiagnoseRequest
+    """Validate and diagnose one record of a batch (a record dict of :func:`_batch_parse`)."""
+    from .parsing import batch_record, checked, recording_from_model
 
     def run() -> tuple:
-        req = DiagnoseRequest.model_validate(record)
+        req = batch_record(record)
         return ("ok", _store().diagnose(checked(recording_from_model, req), version), req.asset_id, req.plant)
 
     return _tagged(run)
@@ -160,7 +161,7 @@ def _batch_parse(body: bytes) -> tuple:
     """Parse a POST /diagnose/batch body: ``("ok", [record dict, ...])`` or an error tuple."""
     from .parsing import parse_batch
 
-    return _tagged(lambda: ("ok", [r.model_dump() for r in parse_batch(body).records]))
+    return _tagged(lambda: ("ok", parse_batch(body)))
 
 
 def _plot(kind: str, body: Body, filename: str, query: dict[str, Any]) -> tuple:
@@ -239,6 +240,16 @@ class WorkerCrashed(RuntimeError):
 
 class DiagnosisTimeout(RuntimeError):
     """A request ran past the time limit; its worker was killed (reported as 422, not retried)."""
+
+
+class _LostInFlight(ConnectionResetError):
+    """The worker died while computing this request (the head of its queue): the request may have killed it."""
+
+
+#: exit signals of a worker that stopped itself (an allocation failure aborts, native code crashes): the request it
+#: was computing is not retried on another worker, which it would kill too. SIGKILL/SIGTERM come from outside.
+_SELF_INFLICTED_SIGNALS = {6: "SIGABRT: memory allocation failed", 11: "SIGSEGV", 7: "SIGBUS", 8: "SIGFPE",
+                           4: "SIGILL"}
 
 
 _LIVE_WORKERS: weakref.WeakSet[_Worker] = weakref.WeakSet()
@@ -379,10 +390,13 @@ class _Worker:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
+        head = self.ready               # a ready worker was computing the head request when it died
         while self.pending:
             fut = self.pending.popleft()
             if not fut.done():
-                fut.set_exception(ConnectionResetError(f"diagnosis worker stopped: {exc}"))
+                kind = _LostInFlight if head else ConnectionResetError
+                fut.set_exception(kind(f"diagnosis worker stopped: {exc}"))
+            head = False
         if self._on_ready is not None:   # wake requests waiting for a worker: this one is gone
             self._on_ready()
 
@@ -469,6 +483,20 @@ class DiagnosisPool:
         self._workers[self._workers.index(w)] = self._new_worker()
         w.stop(timeout_s=1.0)
 
+    @staticmethod
+    async def _self_inflicted(w: _Worker, wait_s: float = 2.0) -> str | None:
+        """Why ``w``'s process stopped when it stopped itself (a signal of :data:`_SELF_INFLICTED_SIGNALS` or an
+        exit status other than 0); ``None`` when it was killed from outside or its status is not known in time."""
+        t0 = time.monotonic()
+        while w.process.exitcode is None and time.monotonic() - t0 < wait_s:
+            await asyncio.sleep(0.02)
+        code = w.process.exitcode
+        if code is None or code == 0 or code in (-9, -15):
+            return None
+        if code < 0:
+            return _SELF_INFLICTED_SIGNALS.get(-code, f"signal {-code}")
+        return f"exit status {code}"
+
     def _pick(self) -> _Worker | None:
         """The ready worker with the fewest requests in flight (ties round-robin); a cold one only when
         no worker is ready."""
@@ -508,6 +536,14 @@ class DiagnosisPool:
     async def _on(self, w: _Worker, name: str, args: tuple) -> tuple[bool, Any]:
         try:
             return True, await w.call(name, args)
+        except _LostInFlight:
+            cause = await self._self_inflicted(w)
+            self._replace(w)
+            if cause is None:
+                return False, None           # killed from outside: retried once
+            raise WorkerCrashed(f"the diagnosis worker stopped while reading this request ({cause}); it was "
+                                "replaced and the request is not retried. Send a smaller recording (fewer samples "
+                                "per channel, or an NPY array of float32)") from None
         except ConnectionResetError:
             self._replace(w)
             return False, None

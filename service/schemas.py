@@ -7,6 +7,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, field_validator
 
+from rotordiag.core.input_bounds import CLEARANCE_RANGE_UM, SAMPLE_RATE_RANGE_HZ, SPEED_RANGE_RPM
 from rotordiag.simulator.dataset.spec import DESIGN_MECHANISMS
 
 #: Bounds on what one request may carry (the body-size middleware bounds the bytes as well).
@@ -14,6 +15,12 @@ MAX_CHANNELS = 8                # 4 bearings x 2 probes
 MAX_POINTS = 262_144            # samples per channel (16 s at 16 kHz)
 MAX_KEYPHASOR_PULSES = 100_000
 MAX_LABEL_LEN = 128
+#: Values (numbers, strings, ...) one JSON recording may hold: every sample, every pulse, and a margin for the rest;
+#: counted before the body is decoded (``features.safe_io.count_json_values``), so no body makes a worker allocate
+#: more than a full recording needs.
+MAX_RECORD_VALUES = MAX_CHANNELS * MAX_POINTS + MAX_KEYPHASOR_PULSES + 4096
+#: Values one POST /diagnose/batch body may hold (two full recordings' worth; split larger batches).
+MAX_BATCH_VALUES = 2 * MAX_RECORD_VALUES
 
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 
@@ -21,6 +28,9 @@ _ASSET_ID_RE = re.compile(r"^[A-Za-z0-9._:-]+$")
 
 
 def _check_asset_id(value: str) -> str:
+    if value in (".", ".."):
+        raise ValueError("asset_id may not be '.' or '..' (it becomes a path segment of /assets/{asset_id}/...); "
+                         "name the machine train, e.g. unit-3-gen-exc")
     if not _ASSET_ID_RE.match(value):
         raise ValueError("asset_id may contain only letters, digits and . _ : - (it becomes part of the URL "
                          "/assets/{asset_id}/history, so no '/', spaces or other characters)")
@@ -70,10 +80,11 @@ class ChannelIn(_Strict):
 class RecordingIn(_Strict):
     """Waveforms of one measurement: XY probe pairs at one or more bearings."""
 
-    sample_rate_hz: FiniteFloat = Field(..., gt=0, le=1e6, description="Sample rate of every channel, Hz.",
+    sample_rate_hz: FiniteFloat = Field(..., ge=SAMPLE_RATE_RANGE_HZ[0], le=SAMPLE_RATE_RANGE_HZ[1],
+                                        description="Sample rate of every channel, Hz.",
                                         examples=[4096.0])
     speed_rpm: FiniteFloat | None = Field(
-        None, gt=0, le=100_000,
+        None, ge=SPEED_RANGE_RPM[0], le=SPEED_RANGE_RPM[1],
         description="Running speed, r/min (the control system's reading or the nominal speed will do: the orders "
                     "are locked to the signals' synchronous lines within ±1 % of it, and the speed used is in the "
                     "answer). Omit to estimate it from the signals (or from `keyphasor_times_s`).",
@@ -94,7 +105,7 @@ class RecordingIn(_Strict):
         "there (a whirl or whip line is then not taken for 1X). 0 < min < max; `speed_rpm`, when given, must lie "
         "inside.", examples=[[2900.0, 3100.0]])
     clearance_um: FiniteFloat | None = Field(
-        None, gt=0, le=100_000,
+        None, ge=CLEARANCE_RANGE_UM[0], le=CLEARANCE_RANGE_UM[1],
         description="Radial bearing clearance c, micrometres; when given, amplitudes are also reported divided by c "
         "and the offset δ = Δ·c is reported in micrometres.", examples=[350.0])
     dc_removed: bool = Field(
@@ -138,6 +149,13 @@ class BatchRequest(_Strict):
     records: list[DiagnoseRequest] = Field(..., min_length=1, max_length=10_000,
                                            description="Recordings to diagnose (the server caps the count; "
                                            "see ROTORDIAG_MAX_BATCH_RECORDS).")
+
+
+class BatchEnvelope(_Strict):
+    """What a POST /diagnose/batch body is checked against before its records: the list and its length. Each record
+    is then validated on its own as a ``DiagnoseRequest``, so one bad record is that record's 422, not the batch's."""
+
+    records: list[dict[str, Any]] = Field(..., min_length=1, max_length=10_000)
 
 
 class ErrorOut(BaseModel):

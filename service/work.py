@@ -33,6 +33,88 @@ RETRAIN_DEFAULT_SWEEP: dict[str, Any] = {
 }
 
 
+#: Bounds on what one job may ask for, checked at POST time (422) so that an absurd job is never queued
+#: (docs/service.md, "Job bounds"): simulated samples, stored points (samples x points per channel, about
+#: 8 GiB of float64 over 8 probes), integration steps (samples x (transient revolutions x steps per revolution
+#: + points)), and the integers of the training options (iterations, trees, leaves).
+MAX_JOB_SAMPLES = 20_000
+MAX_JOB_POINTS = 2**27
+MAX_JOB_STEPS = 2**34
+MAX_TRAINING_INT = 100_000
+#: largest magnitude of a number in the training options
+MAX_TRAINING_NUMBER = 1e6
+
+
+def check_job_size(resolved: Any) -> None:
+    """Refuse a resolved dataset spec whose work is beyond the job bounds (:data:`MAX_JOB_SAMPLES`, ...).
+
+    Raises
+    ------
+    InputError
+        Naming the quantity, its value and the bound.
+    """
+    from rotordiag.simulator.dataset.design import build_design
+    from rotordiag.simulator.dataset.spec import SpecError
+
+    spec = resolved.spec
+    if spec.design.method == "grid":
+        try:
+            n = build_design(resolved).n_samples
+        except SpecError as exc:
+            raise InputError(str(exc)) from None
+    else:
+        n = int(spec.design.n_samples)
+    if n > MAX_JOB_SAMPLES:
+        raise InputError(f"design: {n} samples; a job may simulate at most {MAX_JOB_SAMPLES} (lower n_samples or the "
+                         "grid's levels, or generate larger datasets with the `rotordiag dataset` command)")
+    points = spec.n_points
+    if n * points > MAX_JOB_POINTS:
+        raise InputError(f"measurement: {n} samples x {points} points per channel = {n * points} points; a job may "
+                         f"store at most {MAX_JOB_POINTS} (shorten duration_s/duration_revs, lower the sample rate "
+                         "or n_samples)")
+    steps = n * (spec.simulation.transient_revs * spec.simulation.samples_per_rev + points)
+    if steps > MAX_JOB_STEPS:
+        raise InputError(f"simulation: about {steps:.3g} integration steps (samples x (transient_revs x "
+                         f"samples_per_rev + points)); a job may take at most {MAX_JOB_STEPS:.3g} (lower "
+                         "transient_revs, samples_per_rev or n_samples)")
+
+
+def _check_training_numbers(value: Any, where: str = "training") -> None:
+    """Every number of the training options finite and of a sane size (``max_iter`` = 10^12 is no request)."""
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _check_training_numbers(v, f"{where}.{k}")
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            _check_training_numbers(v, f"{where}[{i}]")
+    elif isinstance(value, bool) or value is None or isinstance(value, str):
+        return
+    elif isinstance(value, int):
+        if abs(value) > MAX_TRAINING_INT and not where.endswith("seed"):
+            raise InputError(f"{where} = {value}: integers of the training options may be at most "
+                             f"{MAX_TRAINING_INT} (seeds excepted)")
+    elif isinstance(value, float) and not (math.isfinite(value) and abs(value) <= MAX_TRAINING_NUMBER):
+        raise InputError(f"{where} = {value!r}: numbers of the training options must be finite and at most "
+                         f"{MAX_TRAINING_NUMBER:g} in size")
+
+
+def _check_plant_types(values: dict[str, Any], base: Any) -> None:
+    """Plant values of the type of the plant's own fields: a number for a number (``true`` is not a mass)."""
+    defaults = base.to_dict()
+    for name, v in values.items():
+        d = defaults.get(name)
+        if isinstance(d, str):
+            if not isinstance(v, str):
+                raise InputError(f"plant.{name}: expected a string, got {v!r}")
+            continue
+        items = v if isinstance(v, list) else [v]
+        for x in items:
+            if isinstance(x, list):
+                items.extend(x)
+            elif isinstance(x, bool) or not isinstance(x, (int, float)):
+                raise InputError(f"plant.{name}: expected a number (SI units, as the name says), got {x!r}")
+
+
 #: What a retraining request may set under ``sweep.plant`` (the plant itself comes from ``plant``/``shaftline``).
 RETRAIN_SWEEP_PLANT_KEYS = frozenset({"perturb", "scale"})
 
@@ -42,6 +124,8 @@ def _spec_toml_from_dict(spec: dict[str, Any]) -> str:
 
     try:
         return tomli_w.dumps(spec)
+    except RecursionError:
+        raise InputError("spec: nested too deeply; a spec has a few levels of tables") from None
     except (TypeError, ValueError) as exc:
         raise InputError(f"spec: cannot be written as TOML ({exc}); use objects, numbers, strings and lists") from None
 
@@ -55,6 +139,8 @@ def _validate_spec_text(text: str) -> Any:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"the spec is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise InputError("the spec is nested too deeply; a spec has a few levels of tables") from None
     plant = raw.get("plant")
     if isinstance(plant, dict):   # checked before anything reads a file
         if "file" in plant:
@@ -65,9 +151,14 @@ def _validate_spec_text(text: str) -> Any:
             raise InputError(f"{key}: a spec sent over HTTP cannot name a file on the server; give the "
                              "shaft-line tables themselves in plant.shaftline (or use plant.presets)")
     try:
-        return parse_spec(text)
+        resolved = parse_spec(text)
     except SpecError as exc:
         raise InputError(str(exc)) from None
+    except (OverflowError, RecursionError):
+        raise InputError("the spec holds a number too large to use (e.g. inf or 1e308 where a finite size is "
+                         "needed); check the units and sizes") from None
+    check_job_size(resolved)
+    return resolved
 
 
 def prepare_dataset_job(body: Any, settings: Settings) -> dict[str, Any]:
@@ -90,11 +181,12 @@ def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
 
         try:
             base = shaftline.to_plant(shaftline.ShaftLine.from_dict(body.shaftline))
-        except (TypeError, ValueError) as exc:
+        except (TypeError, ValueError, OverflowError, ZeroDivisionError, FloatingPointError) as exc:
             raise InputError(f"shaftline: {exc}") from None
+    _check_plant_types(body.plant, base)
     try:
         plant = base.replace(**body.plant) if body.plant else base
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise InputError(f"plant: {exc}") from None
     sweep = dict(body.sweep)
     if "plant" in sweep:
@@ -111,9 +203,10 @@ def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
         spec["plant"]["shaftline"] = body.shaftline
     text = _spec_toml_from_dict(spec)
     resolved = _validate_spec_text(text)
+    _check_training_numbers(body.training)
     try:
         train_cfg = TrainConfig.shipped(body.training)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise InputError(f"training: {exc}") from None
     field = [r.model_dump(mode="json") for r in body.field_data]
     if field:

@@ -195,11 +195,20 @@ def test_sample_rate_too_low_for_3x_refused():
 
 
 @pytest.mark.parametrize("kw,match", [
-    (dict(sample_rate_hz=-1.0), "sample_rate_hz must be finite and > 0"),
-    (dict(speed_rpm=0.0), "speed_rpm must be finite and > 0"),
+    (dict(sample_rate_hz=-1.0), "sample_rate_hz must be between 1 and 1e\\+06 Hz"),
+    (dict(sample_rate_hz=5e-324), "sample_rate_hz must be between .* check the units"),
+    (dict(sample_rate_hz=1e308), "sample_rate_hz must be between .* check the units"),
+    (dict(sample_rate_hz=float("nan")), "sample_rate_hz must be between"),
+    (dict(speed_rpm=0.0), "speed_rpm must be between 1 and 100000 r/min"),
+    (dict(speed_rpm=5e-324), "speed_rpm must be between .* check the units"),
+    (dict(speed_rpm=-0.0), "speed_rpm must be between"),
     (dict(keyphasor_times_s=[0.1, 0.05, 0.2]), "strictly increasing"),
     (dict(keyphasor_times_s=[[0.1, 0.2]]), "1-D array"),
-    (dict(clearance_um=-3.0), "clearance_um must be finite and > 0"),
+    (dict(keyphasor_times_s=[0.0, 5e-324, 1e-323]), "at least 1e-06 s apart: check the units"),
+    (dict(keyphasor_times_s=[0.0, 1e300]), "within ±1e\\+07 s"),
+    (dict(clearance_um=-3.0), "clearance_um must be between 1 and 100000 µm"),
+    (dict(clearance_um=5e-324), "clearance_um must be between"),
+    (dict(speed_range_rpm=(5e-324, 3000.0)), "speed_range_rpm must lie between 1 and 100000 r/min"),
     (dict(clearance_um={7: 300.0}), "not a bearing number"),
 ])
 def test_recording_fields_validated(kw, match):

@@ -406,7 +406,8 @@ def test_speed_range_hint_json_and_query(client, rec):
                     headers={"content-type": "application/octet-stream"})
     assert r.status_code == 200, r.text
     assert r.json()["speed_rpm"] == pytest.approx(1800.0, rel=5e-4)
-    for bad, needle in (([1900.0, 1700.0], "must be below the maximum"), ([-5.0, 1900.0], "must be > 0")):
+    for bad, needle in (([1900.0, 1700.0], "must be below the maximum"),
+                          ([-5.0, 1900.0], "must lie between 1 and 100000 r/min")):
         r = _post_channels(client, channels, speed_range_rpm=bad)
         assert r.status_code == 422 and "speed_range_rpm" in r.json()["detail"] and needle in r.json()["detail"]
     r = _post_channels(client, channels, speed_rpm=1800.0, speed_range_rpm=[2900.0, 3100.0])

@@ -113,9 +113,9 @@ def volts_to_um(volts, sensitivity_v_per_mm: float, gap_voltage_v: float | None 
 
     import numpy as np
 
-    s = float(sensitivity_v_per_mm)
-    if not (math.isfinite(s) and s > 0):
-        raise ValueError(f"probe sensitivity must be a positive number of V/mm (e.g. 7.87), got {sensitivity_v_per_mm!r}")
+    from .input_bounds import SENSITIVITY_RANGE_V_PER_MM, check_range
+
+    s = check_range(sensitivity_v_per_mm, "probe sensitivity", SENSITIVITY_RANGE_V_PER_MM, "V/mm", "e.g. 7.87")
     v = np.asarray(volts, dtype=np.float64)
     if gap_voltage_v is None:
         ref = float(v.mean()) if v.size else 0.0

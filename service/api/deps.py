@@ -9,6 +9,8 @@ from fastapi import Depends, HTTPException, Query, Request, Security
 from fastapi.security import APIKeyHeader
 from sqlalchemy.orm import Session
 
+from rotordiag.core.input_bounds import CLEARANCE_RANGE_UM, SAMPLE_RATE_RANGE_HZ, SPEED_RANGE_RPM
+
 from ..core.config import Settings
 from ..inference import ModelStore
 from ..jobs import JobManager
@@ -83,11 +85,11 @@ JsonBodyDep = Depends(require_json)
 
 # The query parameters that describe an uploaded recording's layout (binary or multipart uploads:
 # /diagnose, /assets/{id}/baseline, /ui/plot-data), declared once.
-SampleRateQuery = Annotated[float | None, Query(gt=0, le=1e6, allow_inf_nan=False,
+SampleRateQuery = Annotated[float | None, Query(ge=SAMPLE_RATE_RANGE_HZ[0], le=SAMPLE_RATE_RANGE_HZ[1], allow_inf_nan=False,
                                                 description="Binary/multipart only: sample rate, Hz.")]
-SpeedQuery = Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False,
+SpeedQuery = Annotated[float | None, Query(ge=SPEED_RANGE_RPM[0], le=SPEED_RANGE_RPM[1], allow_inf_nan=False,
                                            description="Binary/multipart only: running speed, r/min.")]
-ClearanceQuery = Annotated[float | None, Query(gt=0, le=100_000, allow_inf_nan=False,
+ClearanceQuery = Annotated[float | None, Query(ge=CLEARANCE_RANGE_UM[0], le=CLEARANCE_RANGE_UM[1], allow_inf_nan=False,
                                                description="Binary/multipart only: radial clearance, µm.")]
 UnitsQuery = Annotated[str | None, Query(min_length=1, max_length=16,
                                          description="Binary/multipart only: units of the array (`um`, `mm`, `m`, "

@@ -18,7 +18,8 @@ from pydantic import ValidationError
 from ..errors import InputError, RequestInvalid, validation_detail
 
 #: HTTP status of each kind of client mistake (:class:`service.errors.InputError`)
-STATUS_OF_KIND = {"invalid": 422, "malformed": 400, "unsupported_type": 415, "not_found": 404, "conflict": 409}
+STATUS_OF_KIND = {"invalid": 422, "malformed": 400, "unsupported_type": 415, "not_found": 404, "conflict": 409,
+                  "too_large": 413}
 
 
 def raise_worker_error(answer: Any, *, version_given: bool = False) -> NoReturn:

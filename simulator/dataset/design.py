@@ -114,7 +114,7 @@ class Design:
             self._levels.append([mech] if isinstance(mech, str) else list(mech))
             self._levels.append(list(self._bases))
             self._shape = tuple(len(v) for v in self._levels)
-            n = int(np.prod(self._shape))
+            n = math.prod(self._shape)          # exact: np.prod wraps around in int64 on a huge grid
             if spec.design.n_samples is not None and spec.design.n_samples != n:
                 raise SpecError(f"invalid dataset spec:\n  design.n_samples = {spec.design.n_samples} but the grid "
                                 f"has {n} points ({' × '.join(map(str, self._shape))}); remove n_samples or fix it")

@@ -304,8 +304,8 @@ class Measurement(_Strict):
         description="probe directions, degrees counter-clockwise from +x (horizontal); 90 = top",
     )
     sample_rate_hz: float = Field(gt=0, le=1e6)
-    duration_s: float | None = Field(default=None, gt=0)
-    duration_revs: float | None = Field(default=None, gt=0)
+    duration_s: float | None = Field(default=None, gt=0, le=3600.0, allow_inf_nan=False)
+    duration_revs: float | None = Field(default=None, gt=0, le=1e6, allow_inf_nan=False)
     snr_db: Variable = math.inf
     runout_1x_um: Variable = 0.0
     runout_2x_um: Variable = 0.0

@@ -25,6 +25,7 @@ from ...schemas import (
     MAX_LABEL_LEN,
     AssetBaselineOut,
     AssetHistory,
+    AssetId,
     AssetPoint,
     BaselineOut,
     ErrorOut,
@@ -52,8 +53,8 @@ from .diagnose import ReaderQueryDep
 
 router = APIRouter(tags=["assets"])
 
-AssetPath = Annotated[str, Path(min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:-]+$",
-                                description="The `asset_id` sent with /diagnose.")]
+AssetPath = Annotated[AssetId, Path(min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:-]+$",
+                                    description="The `asset_id` sent with /diagnose.")]
 
 
 def _iso_time(value: object) -> object:

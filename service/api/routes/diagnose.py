@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
 from typing import Annotated, Any, Literal
 
 import anyio
@@ -10,12 +11,31 @@ import anyio.to_thread
 from fastapi import APIRouter, Depends, HTTPException, Query, Request
 from fastapi.concurrency import run_in_threadpool
 
+from rotordiag.core.input_bounds import SAMPLE_RATE_RANGE_HZ, SENSITIVITY_RANGE_V_PER_MM
 from rotordiag.models.output_units import verdict_in_units
 
 from ...baseline import record_verdict
 from ...inference import ModelUnavailable
-from ...parsing import MAX_TAKE_FILES, Body, checked, parse_batch, parse_body, parse_request, recording_from_model
-from ...schemas import MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
+from ...parsing import (
+    MAX_TAKE_FILES,
+    Body,
+    batch_record,
+    checked,
+    parse_batch,
+    parse_body,
+    parse_request,
+    recording_from_model,
+)
+from ...schemas import (
+    MAX_BATCH_VALUES,
+    MAX_LABEL_LEN,
+    MAX_RECORD_VALUES,
+    AssetId,
+    BatchItem,
+    BatchResponse,
+    DiagnoseResponse,
+    ErrorOut,
+)
 from ..deps import (
     AcquisitionsQuery,
     AnglesQuery,
@@ -35,6 +55,7 @@ from ..errors import STATUS_OF_KIND, InputError, RequestInvalid, raise_worker_er
 from ..routing import FiniteJSONRoute
 
 router = APIRouter(tags=["diagnose"], route_class=FiniteJSONRoute)
+log = logging.getLogger("rotordiag.service")
 
 
 def reader_query(
@@ -46,7 +67,8 @@ def reader_query(
     bearings: BearingsQuery = None,
     angles_deg: AnglesQuery = None,
     keyphasor_times_s: KeyphasorQuery = None,
-    sensitivity_v_per_mm: Annotated[float | None, Query(gt=0, le=1e3, allow_inf_nan=False, description=(
+    sensitivity_v_per_mm: Annotated[float | None, Query(ge=SENSITIVITY_RANGE_V_PER_MM[0],
+                                                        le=SENSITIVITY_RANGE_V_PER_MM[1], allow_inf_nan=False, description=(
         "Binary/multipart with `units=V` only: probe scale factor, V/mm (7.87 = 200 mV/mil)."))] = None,
     sensitivity: Annotated[str | None, Query(min_length=1, max_length=32, description=(
         "Binary/multipart with `units=V` or `mV` only: the probe sensitivity as the datasheet states it, "
@@ -146,7 +168,7 @@ async def _read_body(request: Request, slow_roll: bool = False) -> tuple[str, Bo
     """
     media = _media_type(request)
     if media in JSON_TYPES:
-        return "json", await request.body(), "", None
+        return "json", await read_json_bounded(request, MAX_RECORD_VALUES), "", None
     if media in NPY_TYPES:
         return "npy", await request.body(), "", None
     if media == "multipart/form-data":
@@ -173,6 +195,21 @@ async def _read_body(request: Request, slow_roll: bool = False) -> tuple[str, Bo
     raise InputError(
         f"unsupported Content-Type {media or '(none)'!r}: send application/json (DiagnoseRequest), "
         "application/octet-stream (an NPY array) or multipart/form-data (a CSV/NPY/HDF5 file in part 'file')", "unsupported_type")
+
+
+async def read_json_bounded(request: Request, max_values: int) -> bytes:
+    """A JSON body, its values counted while it streams in: past ``max_values`` (commas bound them from above,
+    ``features.safe_io.count_json_values``) it is refused with 413 at once, before the rest is read or anything
+    decoded, so a body of millions of numbers never reaches a diagnosis worker."""
+    chunks: list[bytes] = []
+    commas = 0
+    async for chunk in request.stream():
+        commas += chunk.count(b",")
+        if commas > max_values:
+            raise InputError(f"JSON holds more than {max_values} values; send a shorter recording (fewer samples per "
+                             "channel), split a batch, or send an NPY array", "too_large")
+        chunks.append(chunk)
+    return b"".join(chunks)
 
 
 async def _read_form(request: Request, max_files: int = 1) -> Any:
@@ -277,7 +314,7 @@ async def diagnose(
                                                "active one.")] = None,
     output_units: OutputUnitsQuery = "um",
     slow_roll_sample_rate_hz: Annotated[float | None, Query(
-        gt=0, le=1e6, allow_inf_nan=False, description="Multipart with `slow_roll_file` only: the slow-roll file's "
+        ge=SAMPLE_RATE_RANGE_HZ[0], le=SAMPLE_RATE_RANGE_HZ[1], allow_inf_nan=False, description="Multipart with `slow_roll_file` only: the slow-roll file's "
         "sample rate, Hz (default: `sample_rate_hz`).")] = None,
     slow_roll_keyphasor_times_s: Annotated[str | None, Query(
         max_length=200_000, description="Multipart with `slow_roll_file` only: the slow-roll file's keyphasor pulse "
@@ -359,7 +396,7 @@ async def diagnose_batch(request: Request, state: StateDep,
                          output_units: OutputUnitsQuery = "um") -> dict:
     """The body (a ``BatchRequest``) is parsed in a diagnosis worker, not here; the records are then
     diagnosed one per worker call, in parallel across the workers."""
-    body = await request.body()
+    body = await read_json_bounded(request, MAX_BATCH_VALUES)
     cap = state.settings.max_batch_records
     if state.pool is not None:
         records = (await in_worker(state, "batch_parse", body))[1]
@@ -367,9 +404,9 @@ async def diagnose_batch(request: Request, state: StateDep,
         results = await asyncio.gather(*(_batch_item(state, i, rec, model_version) for i, rec in enumerate(records)))
         items = list(results)
     else:
-        batch = await anyio.to_thread.run_sync(parse_batch, body, limiter=_diagnosis_limiter(state))
-        _check_batch_size(len(batch.records), cap)
-        items = await anyio.to_thread.run_sync(_batch_sync, state, batch.records, model_version,
+        records = await anyio.to_thread.run_sync(parse_batch, body, limiter=_diagnosis_limiter(state))
+        _check_batch_size(len(records), cap)
+        items = await anyio.to_thread.run_sync(_batch_sync, state, records, model_version,
                                                limiter=_diagnosis_limiter(state))
     if output_units != "um":
         for it in items:
@@ -391,26 +428,34 @@ async def _batch_item(state, i: int, record: dict[str, Any], version: str | None
         return BatchItem(index=i, status_code=STATUS_OF_KIND[exc.kind], error=str(exc))
     except RequestInvalid as exc:
         return BatchItem(index=i, status_code=422, error=json.dumps(exc.errors))
-    except HTTPException as exc:
-        if exc.status_code >= 500:
-            raise
+    except HTTPException as exc:             # no model, or the worker stopped on this record: this record's answer
         return BatchItem(index=i, status_code=exc.status_code, error=str(exc.detail))
+    except RuntimeError:                     # a bug on this record (logged by the pool): the others still answered
+        return BatchItem(index=i, status_code=500, error=_RECORD_FAILED)
     await run_in_threadpool(record_verdict, state, asset_id, plant, verdict)
     return BatchItem(index=i, status_code=200, result=verdict)
 
 
-def _batch_sync(state, records, model_version: str | None) -> list[BatchItem]:
+#: a batch record's error when the server failed on it (the cause is in the server log)
+_RECORD_FAILED = "the server failed on this record (an internal error, logged); the other records were answered"
+
+
+def _batch_sync(state, records: list[dict[str, Any]], model_version: str | None) -> list[BatchItem]:
     items: list[BatchItem] = []
-    for i, rec in enumerate(records):
+    for i, raw in enumerate(records):
         try:
+            rec = batch_record(raw)
             recording = checked(recording_from_model, rec)
             verdict = _diagnose_sync(state, recording, model_version)
             record_verdict(state, rec.asset_id, rec.plant, verdict)
             items.append(BatchItem(index=i, status_code=200, result=verdict))
         except InputError as exc:
             items.append(BatchItem(index=i, status_code=STATUS_OF_KIND[exc.kind], error=str(exc)))
+        except RequestInvalid as exc:
+            items.append(BatchItem(index=i, status_code=422, error=json.dumps(exc.errors)))
         except HTTPException as exc:
-            if exc.status_code >= 500:
-                raise
             items.append(BatchItem(index=i, status_code=exc.status_code, error=str(exc.detail)))
+        except Exception:  # noqa: BLE001 - a bug on one record must not lose the others' answers
+            log.exception("batch record %d failed", i)
+            items.append(BatchItem(index=i, status_code=500, error=_RECORD_FAILED))
     return items
