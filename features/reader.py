@@ -523,6 +523,10 @@ def _csv_table(data: bytes, max_rows: int | None = None) -> tuple[list[str] | No
     units_row: list[str] | None = None
     if preamble:
         header = [h.strip() for h in preamble.pop()]
+        if preamble and any(_is_number(h) for h in header):
+            raise ValueError(f"the CSV file has a row that is neither names nor numbers ({header!r}, line "
+                             f"{len(preamble) + 1} without comments) above its first row of numbers: a value that is "
+                             "not a number in a data row? numbers only, one probe per column")
         if header and header[-1].lower() == "comment" and len(header) == width + 1:
             header = header[:-1]           # LabVIEW's empty Comment column
         known = sum(1 for h in header if input_unit(h) or h.strip("[]() ").lower() in TIME_UNITS)

@@ -145,6 +145,12 @@ def test_an_uneven_time_column_in_ms_is_refused_with_the_row(reference):
                        filename="x.csv")
 
 
+def test_a_bad_first_data_row_is_not_taken_for_the_column_names():
+    body = b"b1@45,b1@135\n1,oops\n" + b"".join(f"{k},{-k}\n".encode() for k in range(50))
+    with pytest.raises(ValueError, match=r"neither names nor numbers \(\['1', 'oops'\]"):
+        read_recording(body, filename="x.csv", options=ReadOptions(sample_rate_hz=1000))
+
+
 def test_units_in_column_names_and_mixed_units_refused(reference):
     rec, data = reference
     t = np.arange(data.shape[1]) / rec.sample_rate_hz
