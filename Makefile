@@ -12,8 +12,11 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
+# `make run PORT=8080` (HOST=0.0.0.0 to listen on every interface)
+HOST ?= 127.0.0.1
+PORT ?= 8000
 run: $(STAMP)
-	$(VENV)/bin/rotordiag serve
+	$(VENV)/bin/rotordiag serve --host $(HOST) --port $(PORT)
 
 # Two pytest-xdist workers (one per core of the development machine); a test file stays on one
 # worker (--dist loadfile), so its module-scoped servers and clusters start once.

@@ -93,6 +93,9 @@ class ProbeChannel:
         with the same keyphasor reference (phase lag φ: the kX component is
         ``A/2 · cos(kθ − φ)``). They are subtracted as vectors from the fitted orders
         (needs ``Recording.keyphasor_times_s``).
+    declared_as : str, optional
+        How the file stated the values before the reader converted them to ``units`` (e.g.
+        ``"V at 7.87 V/mm, gap -10 V"``), so that a units check names what the user declared.
     """
 
     bearing: int
@@ -100,6 +103,7 @@ class ProbeChannel:
     units: str
     data: np.ndarray = field(repr=False)
     slow_roll_um_pp: Mapping[int, tuple[float, float]] | None = None
+    declared_as: str | None = None
 
     def __post_init__(self) -> None:
         b = self.bearing

@@ -221,7 +221,7 @@ def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
         x, y = rec.xy_um(b)
         ptp = max(float(np.ptp(x)), float(np.ptp(y)))
         c = float(det.clearance_um)
-        units = sorted({ch.units for ch in rec.channels if ch.bearing == b})
+        units = sorted({ch.declared_as or ch.units for ch in rec.channels if ch.bearing == b})
         units_txt = "/".join(units)
         beyond = bool(np.isfinite(c) and c > 0 and ptp > ORBIT_CLEARANCE_MARGIN * 2 * c)
         noise_pp = noise_peak_to_peak_um(det.noise_rms_um, x.size) if beyond else 0.0

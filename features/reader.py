@@ -17,8 +17,10 @@ What a file may say, and what :class:`ReadOptions` may add (options win over the
   from column name to ``"b2@45"`` (``{"GEN DE X": "b2@45", ...}``; other columns are
   ignored). Without either, 8 channels are read as the dataset default
   b1@45, b1@135, b2@45, …, b4@135; any other count is an error.
-- **Time base**: ``sample_rate_hz``, or a time column (``time_s``, ``time``, ``t``, ``t_s``
-  in seconds; ``time_ms`` in ms). The rate is the mean spacing; every time must lie within
+- **Time base**: ``sample_rate_hz``, or a time column (``time``, ``t`` or LabVIEW's ``X_Value``, with
+  its unit in any common spelling: ``Time (s)``, ``Time [ms]``, ``t_s``, ``time_us``, or in a unit row
+  below the names; seconds when none), or a collector's metadata line (``Delta_X``, ``Sample Rate: 4096 Hz``).
+  The rate is the mean spacing; every time must lie within
   ``TIME_TOLERANCE`` (a fifth) of a sample interval of the uniform grid, which the
   rounding of real DAQ exports (times printed to 6 significant digits) passes; a dropped
   or repeated sample fails with the row named.
@@ -30,9 +32,11 @@ What a file may say, and what :class:`ReadOptions` may add (options win over the
   ``rising`` for a projection or a TTL pulse). Crossings are re-armed only after the signal
   has gone back past the threshold by a tenth of the span (hysteresis), and each time is
   interpolated linearly between the two samples around the crossing.
-- **Units**: ``um`` (``µm``), ``mm``, ``m``, ``mil``, or ``V`` with
-  ``sensitivity_v_per_mm`` (e.g. 7.87) and ``gap_voltage_v`` (the DC gap voltage; without
-  it the mean is removed), see :func:`rotordiag.core.units.volts_to_um`.
+- **Units**: ``um`` (``µm``), ``mm``, ``m``, ``mil``, or ``V`` / ``mV`` with
+  ``sensitivity_v_per_mm`` (7.87, or as the datasheet says it: ``"200 mV/mil"``, ``"7.87 mV/um"``) and
+  ``gap_voltage_v`` (the DC gap voltage in V; without it the mean is removed), see
+  :func:`rotordiag.core.units.volts_to_um`. A file states them in the column names (``GEN DE X [mV]``),
+  a unit row below the names, or a metadata line (``Units: mil``; LabVIEW ``Y_Unit_Label``).
 - **Direction**: probe angles are degrees counter-clockwise from the horizontal to the
   observer's right, seen from ``viewed_from`` (``driver``: the turbine/generator end,
   API 670's convention; ``non-driver``: the exciter end). ``rotation`` is the direction
@@ -44,7 +48,10 @@ What a file may say, and what :class:`ReadOptions` may add (options win over the
 Formats:
 
 - **CSV**: one column per channel, one row per sample, comma (or semicolon / tab)
-  separated; an optional header row; ``#`` comment lines are skipped.
+  separated; an optional header row, optionally followed by a unit row; ``#`` comment lines and a
+  collector's metadata block above the column names (a LabVIEW .lvm header, ``Key: value`` lines)
+  are skipped. A column that is neither time, keyphasor, named ``b2@45`` nor mapped is never read
+  as a probe: without a mapping it is refused by name, with one it is left out and a note names it.
 - **NPY**: a 2-D numeric array, channels × points (points × channels is transposed when
   only that matches the layout); never unpickled.
 - **HDF5**: a rotordiag dataset file (``waveforms`` (N, C, P) with the ``channels``
@@ -69,7 +76,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from rotordiag.core.units import INPUT_UNITS, UNITS_TO_UM, volts_to_um
+from rotordiag.core.units import INPUT_UNITS, UNITS_TO_UM, VOLTS_PER, input_unit, sensitivity_v_per_mm, volts_to_um
 
 from ._acquisitions import acquisitions_in_order, parse_keyphasor_takes
 from ._recording import ProbeChannel, Recording, parse_speed_range
@@ -77,21 +84,36 @@ from .safe_io import check_hdf5, load_npy_bounded, loads_json_finite
 from .sandbox import call_isolated
 
 __all__ = ["ReadOptions", "ReadLimits", "ReadResult", "read_recording", "recording_from_dict", "parse_layout",
+           "parse_channel_map", "TIME_UNITS",
            "keyphasor_times_from_pulses", "keyphasor_channels", "sample_rate_from_times", "DEFAULT_LAYOUT", "FORMATS", "TIME_TOLERANCE"]
 
 #: layout assumed for an 8-channel file that does not say its own (the dataset default)
 DEFAULT_LAYOUT: tuple[tuple[int, float], ...] = tuple((b, a) for b in (1, 2, 3, 4) for a in (45.0, 135.0))
 #: formats and the file-name endings that select them
-FORMATS: dict[str, tuple[str, ...]] = {"csv": (".csv", ".txt"), "npy": (".npy",), "hdf5": (".h5", ".hdf5", ".hdf"),
+FORMATS: dict[str, tuple[str, ...]] = {"csv": (".csv", ".txt", ".lvm"), "npy": (".npy",), "hdf5": (".h5", ".hdf5", ".hdf"),
                                        "json": (".json",), "uff": (".uff", ".unv")}
 #: largest deviation of a time stamp from the uniform grid, in sample intervals
 TIME_TOLERANCE = 0.2
-_TIME_COLUMNS = {"time_s": 1.0, "time": 1.0, "t": 1.0, "t_s": 1.0, "time [s]": 1.0, "time_ms": 1e-3}
+#: time units a time column may be in (its name, ``Time [ms]``, or the unit row below the names) → seconds
+TIME_UNITS: dict[str, float] = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0, "ms": 1e-3,
+                                "msec": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3, "us": 1e-6, "µs": 1e-6,
+                                "μs": 1e-6, "usec": 1e-6, "microsecond": 1e-6, "microseconds": 1e-6, "ns": 1e-9}
+#: a time column: ``time``, ``t``, ``X_Value`` (LabVIEW .lvm), ``elapsed time``, with an optional unit
+#: (``Time (s)``, ``Time [ms]``, ``t_s``, ``time_us``, ``time/s``); the unit must be one of TIME_UNITS
+_TIME_NAME_RE = re.compile(r"^(?:time|t|x_value|elapsed[ _]?time|zeit)(?:[\s_/-]*[(\[]?\s*([a-zµμ]+)\s*[)\]]?)?$",
+                           re.IGNORECASE)
+#: a column name that ends in its unit: ``GEN DE X [mV]``, ``b2@45 (um)``
+_NAME_UNIT_RE = re.compile(r"^(.*?)\s*[(\[]\s*([^()\[\]]+?)\s*[)\]]\s*$")
+#: header lines of a metadata block that give the sample interval (s) or the sample rate (Hz)
+_META_INTERVAL_KEYS = ("delta_x", "sample interval", "sample_interval_s", "dt")
+_META_RATE_KEYS = ("sample rate", "sampling rate", "sample_rate", "sample_rate_hz", "sampling frequency", "fs",
+                   "sample rate (hz)", "sampling rate (hz)", "sample frequency")
+_META_UNIT_KEYS = ("units", "unit", "y_unit_label", "engineering units", "eu")
 _KP_COLUMNS = ("kp", "keyphasor", "kph", "keyphasor_v")
 _LAYOUT_RE = re.compile(r"^\s*b?([1-4])\s*@\s*(-?\d+(?:\.\d*)?)\s*$", re.IGNORECASE)
 #: CSV column names: ``b2@45`` and the spelled-out ``b2_45deg_um`` / ``b2 45° mil`` (unit suffix optional)
-_HEADER_RE = re.compile(r"^\s*b([1-4])\s*[@_ ]\s*(-?\d+(?:\.\d*)?)\s*(?:deg|°)?(?:[_ ]*\[?(um|µm|mm|mil|v)\]?)?\s*$",
-                        re.IGNORECASE)
+_HEADER_RE = re.compile(r"^\s*b([1-4])\s*[@_ ]\s*(-?\d+(?:\.\d*)?)\s*(?:deg|°)?"
+                        r"(?:[_ ]*[\[(]?(um|µm|μm|mm|mils?|mv|v)[\])]?)?\s*$", re.IGNORECASE)
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 _NPY_MAGIC = b"\x93NUMPY"
 #: a universal file starts with a "-1" delimiter line followed by the dataset type (58: function at a DOF)
@@ -130,11 +152,15 @@ class ReadOptions:
     ----------
     sample_rate_hz : float, optional
     units : str, optional
-        ``um``, ``mm``, ``m``, ``mil`` or ``V`` (default: the file's, else ``um``).
-    sensitivity_v_per_mm, gap_voltage_v : float, optional
-        For ``units="V"``: probe scale factor (positive, V/mm) and DC gap voltage (V).
+        ``um``, ``mm``, ``m``, ``mil``, ``V`` or ``mV`` (default: the file's, else ``um``).
+    sensitivity_v_per_mm : float or str, optional
+        For ``units`` V or mV: the probe scale factor, a positive number of V/mm or text with its units as a
+        datasheet states it (``"200 mV/mil"``, ``"7.87 mV/um"``; :func:`rotordiag.core.units.sensitivity_v_per_mm`).
+    gap_voltage_v : float, optional
+        For ``units`` V or mV: the DC gap voltage, in V (``-10``) whatever the file's voltage unit.
     channels : str, sequence or mapping, optional
-        Layout in file order, or column name → ``"b<bearing>@<angle>"`` (see module docstring).
+        Layout in file order, or column name → ``"b<bearing>@<angle>"`` (see module docstring; a text
+        mapping ``"GEN DE X=b2@45;GEN DE Y=b2@135"`` is read by :func:`parse_channel_map`).
     keyphasor_channel : str or int, optional
         Column name or index (file order) of a raw keyphasor pulse channel; with ``acquisitions``, one per
         acquisition separated by semicolons (``"kp_a;kp_b"``), in the order the acquisitions are listed.
@@ -164,7 +190,7 @@ class ReadOptions:
 
     sample_rate_hz: float | None = None
     units: str | None = None
-    sensitivity_v_per_mm: float | None = None
+    sensitivity_v_per_mm: float | str | None = None
     gap_voltage_v: float | None = None
     channels: str | Sequence[Any] | Mapping[str, str] | None = None
     keyphasor_channel: str | int | None = None
@@ -238,6 +264,30 @@ def parse_layout(text: str | Sequence[Any]) -> list[tuple[int, float]]:
             except (TypeError, ValueError):
                 raise ValueError(f"channels: entry {k + 1} {item!r} is not (bearing, angle_deg)") from None
     return out
+
+
+def parse_channel_map(text: str) -> str | dict[str, str]:
+    """``'GEN DE X=b2@45;GEN DE Y=b2@135'`` → a column-name mapping; text without ``=`` is a layout in file
+    order and comes back as it is (the CLI's ``--channels``, the API's ``channel_map``, a sidecar).
+
+    Raises
+    ------
+    ValueError
+        An entry that is not ``COLUMN=b<bearing>@<angle>``, or a column named twice.
+    """
+    if "=" not in text:
+        return text
+    mapping: dict[str, str] = {}
+    for part in (p for p in text.split(";") if p.strip()):
+        name, sep, where = part.rpartition("=")
+        if not sep or not name.strip():
+            raise ValueError(f"channel mapping: {part.strip()!r} is not COLUMN=b<bearing>@<angle> (e.g. "
+                             "'GEN DE X=b2@45;GEN DE Y=b2@135')")
+        if name.strip().lower() in (k.lower() for k in mapping):
+            raise ValueError(f"channel mapping: column {name.strip()!r} is mapped twice")
+        parse_layout([where.strip()])
+        mapping[name.strip()] = where.strip()
+    return mapping
 
 
 def sample_rate_from_times(times_s: np.ndarray, tolerance: float = TIME_TOLERANCE) -> float:
@@ -377,7 +427,72 @@ class _CsvSyntaxError(ValueError):
 CSV_EXTRA_LINES = 1024
 
 
-def _csv_table(data: bytes, max_rows: int | None = None) -> tuple[list[str] | None, np.ndarray]:
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
+
+
+def _time_factor(name: str, unit_cell: str | None = None) -> float | None:
+    """Seconds per unit of a time column named ``name`` (its unit from the name, else from the unit row,
+    else s), or ``None`` when ``name`` is no time column."""
+    m = _TIME_NAME_RE.match(name.strip())
+    if m is None:
+        return None
+    unit = m.group(1)
+    if unit is None and unit_cell:
+        unit = unit_cell.strip().strip("[]()").strip()
+    if not unit:
+        return 1.0
+    return TIME_UNITS.get(unit.lower() if unit not in ("µs", "μs") else unit)
+
+
+def _metadata(lines: list[list[str]]) -> dict[str, Any]:
+    """What a collector's metadata block (``key<delimiter>value`` or ``key: value`` lines above the column
+    names) says of the sample rate and the units; every other line is skipped."""
+    out: dict[str, Any] = {}
+    for cells in lines:
+        if len(cells) == 1 and (":" in cells[0] or "=" in cells[0]):
+            key, _, rest = cells[0].replace("=", ":", 1).partition(":")
+            cells = [key, rest]
+        key = cells[0].strip().lower()
+        values = [c.strip() for c in cells[1:] if c.strip()]
+        if not values:
+            continue
+        if key in _META_INTERVAL_KEYS or key in _META_RATE_KEYS:
+            first = values[0].split()
+            try:
+                nums = {float(v.split()[0]) for v in values}
+            except ValueError:
+                continue
+            if len(nums) != 1 or not all(math.isfinite(v) and v > 0 for v in nums):
+                raise ValueError(f"the file's header line {cells[0].strip()!r} gives {values}: one positive "
+                                 "sample interval/rate is needed (every channel sampled together)")
+            v = nums.pop()
+            scale = {"khz": 1e3, "hz": 1.0, "ms": 1e-3, "s": 1.0, "us": 1e-6}.get(first[1].lower(), None) \
+                if len(first) > 1 else 1.0
+            if scale is None:
+                continue
+            rate = 1.0 / (v * scale) if key in _META_INTERVAL_KEYS else v * scale
+            out["sample_rate_from_header"] = (_simplest_rate(1.0 / rate) if key in _META_INTERVAL_KEYS else rate,
+                                              cells[0].strip())
+        elif key in _META_UNIT_KEYS:
+            units = {input_unit(v) for v in values}
+            if len(units) == 1 and None not in units:
+                out["header_units"] = (units.pop(), cells[0].strip())
+    return out
+
+
+def _csv_table(data: bytes, max_rows: int | None = None) -> tuple[list[str] | None, np.ndarray, dict[str, Any]]:
+    """Column names, the numbers (points × columns) and what the lines above the names say.
+
+    Collectors write a block of metadata lines above the column names (a LabVIEW .lvm header, ``Key: value``
+    lines); those are skipped (their sample rate and units are kept, :func:`_metadata`). The names are the
+    line just above the first row of numbers, or the one above that when that line is a unit row
+    (``s, mV, mV, …``).
+    """
     if max_rows is not None:             # counted on the bytes, before any line is decoded or split
         n_lines = max(data.count(b"\n"), data.count(b"\r"))
         if n_lines > max_rows + CSV_EXTRA_LINES:
@@ -390,22 +505,36 @@ def _csv_table(data: bytes, max_rows: int | None = None) -> tuple[list[str] | No
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise ValueError("the CSV file has no data rows; put one probe per column and one sample per row")
-    delim = ","
-    if "," not in lines[0]:
-        delim = ";" if ";" in lines[0] else ("\t" if "\t" in lines[0] else ",")
+    last = lines[-1]                       # a data row decides the delimiter (metadata lines may hold others)
+    delim = "\t" if "\t" in last else (";" if ";" in last else ",")
     try:
-        rows = list(csv.reader(lines, delimiter=delim))
+        rows = [r[:-1] if len(r) > 1 and not r[-1].strip() else r for r in csv.reader(lines, delimiter=delim)]
     except csv.Error as exc:             # e.g. a field over the csv module's limit, or a stray NUL byte
         raise _CsvSyntaxError(f"the CSV file cannot be read as CSV ({exc}); numbers only, one probe per column and one "
-                         "sample per row") from None
-    header = None
-    try:
-        [float(v) for v in rows[0]]
-    except ValueError:
-        header, rows = [h.strip() for h in rows[0]], rows[1:]
+                              "sample per row") from None
+    start = next((i for i, r in enumerate(rows) if all(_is_number(v) for v in r)), None)
+    if start is None:                      # names, then rows whose bad value is reported below
+        start = 1
+    preamble, rows = rows[:start], rows[start:]
     if not rows:
         raise ValueError("the CSV file has a header but no data rows")
     width = len(rows[0])
+    header: list[str] | None = None
+    units_row: list[str] | None = None
+    if preamble:
+        header = [h.strip() for h in preamble.pop()]
+        if preamble and any(_is_number(h) for h in header):
+            raise ValueError(f"the CSV file has a row that is neither names nor numbers ({header!r}, line "
+                             f"{len(preamble) + 1} without comments) above its first row of numbers: a value that is "
+                             "not a number in a data row? numbers only, one probe per column")
+        if header and header[-1].lower() == "comment" and len(header) == width + 1:
+            header = header[:-1]           # LabVIEW's empty Comment column
+        known = sum(1 for h in header if input_unit(h) or h.strip("[]() ").lower() in TIME_UNITS)
+        if preamble and len(header) == width and 2 * known >= width and len(preamble[-1]) >= width:
+            units_row, header = header, [h.strip() for h in preamble.pop()][:width]
+    meta = _metadata(preamble)
+    meta["skipped_lines"] = len(preamble)
+    meta["units_row"] = units_row
     for k, r in enumerate(rows):
         if len(r) != width:
             raise ValueError(f"CSV data row {k + 1} has {len(r)} values but the first row has {width}; "
@@ -417,43 +546,67 @@ def _csv_table(data: bytes, max_rows: int | None = None) -> tuple[list[str] | No
                          "numbers only, one probe per column") from None
     if header is not None and len(header) != width:
         raise ValueError(f"the CSV header has {len(header)} names for {width} columns")
-    return header, table
+    return header, table, meta
 
 
 def _read_csv(data: bytes, opts: ReadOptions, limits: ReadLimits, notes: list[str]) -> tuple[np.ndarray, dict]:
-    header, table = _csv_table(data, limits.max_points)
+    header, table, meta = _csv_table(data, limits.max_points)
     if table.shape[0] > limits.max_points:
         raise ValueError(f"the CSV file has {table.shape[0]} rows; at most {limits.max_points} samples are accepted")
-    return _named_columns(header, table, opts, {}, what="the CSV file")
+    info: dict[str, Any] = {}
+    if meta["skipped_lines"]:
+        notes.append(f"{meta['skipped_lines']} metadata line(s) above the column names skipped")
+    if "sample_rate_from_header" in meta:
+        info["sample_rate_from_header"] = meta["sample_rate_from_header"]
+    if "header_units" in meta:
+        info["units"], line = meta["header_units"]
+        notes.append(f"units {info['units']} from the header line {line!r}")
+    return _named_columns(header, table, opts, info, what="the CSV file", units_row=meta["units_row"], notes=notes)
 
 
 def _named_columns(header: list[str] | None, table: np.ndarray, opts: ReadOptions, info: dict[str, Any], *,
-                   what: str) -> tuple[np.ndarray, dict]:
+                   what: str, units_row: list[str] | None = None,
+                   notes: list[str] | None = None) -> tuple[np.ndarray, dict]:
     """Channels × points and what the column names say (time column, keyphasor, layout, units).
 
-    Shared by CSV (header row) and UFF (one function record per named channel).
+    Shared by CSV (header row) and UFF (one function record per named channel). A column is read as a
+    probe only when the layout in file order says so, when the mapping names it, or when its name is
+    ``b<bearing>@<angle>``; with a mapping, the other columns are left out and a note names them.
     """
+    notes = notes if notes is not None else []
     names = header or [str(k) for k in range(table.shape[1])]
     keep = list(range(table.shape[1]))
     lowered = [n.strip().lower() for n in names]
+    split = [_NAME_UNIT_RE.match(n) for n in names]
+    bases = [(m.group(1).strip().lower() if m else n) for m, n in zip(split, lowered)]
+    col_units = [input_unit(m.group(2)) if m else None for m in split]
+    if units_row is not None:
+        col_units = [input_unit(u) or cu for u, cu in zip(units_row, col_units)]
     if header is not None:
-        for j, n in enumerate(lowered):
-            if n in _TIME_COLUMNS:
-                info["sample_rate_from_time"] = sample_rate_from_times(table[:, j] * _TIME_COLUMNS[n])
-                keep.remove(j)
-                break
+        for j, n in enumerate(names):
+            factor = _time_factor(n, units_row[j] if units_row is not None else None)
+            if factor is None:
+                if _TIME_NAME_RE.match(n.strip()):
+                    raise ValueError(f"{what}: the time column {n!r} has a unit that is not a time unit; use s, ms, "
+                                     "us or ns (e.g. 'Time [ms]')")
+                continue
+            if "sample_rate_from_time" not in info:
+                info["sample_rate_from_time"] = sample_rate_from_times(table[:, j] * factor)
+                info["time_column"] = n
+            keep.remove(j)
     kp_js: list[int] = []
     for kp_col in keyphasor_channels(opts.keyphasor_channel):
         if isinstance(kp_col, str):
-            if kp_col.lower() not in lowered:
+            key = kp_col.strip().lower()
+            if key not in lowered and key not in bases:
                 raise ValueError(f"keyphasor channel {kp_col!r} is not a column of {what} (columns: {names})")
-            kp_js.append(lowered.index(kp_col.lower()))
+            kp_js.append(lowered.index(key) if key in lowered else bases.index(key))
         else:
             if not 0 <= kp_col < table.shape[1]:
                 raise ValueError(f"keyphasor channel {kp_col} is outside the file's columns 0..{table.shape[1] - 1}")
             kp_js.append(kp_col)
     if opts.keyphasor_channel is None and header is not None:
-        kp_js = [j for j in (next((j for j, n in enumerate(lowered) if n in _KP_COLUMNS), None),) if j is not None]
+        kp_js = [j for j in (next((j for j, n in enumerate(bases) if n in _KP_COLUMNS), None),) if j is not None]
     if kp_js:
         info["keyphasor_signal"] = table[:, kp_js[0]] if len(kp_js) == 1 else [table[:, j] for j in kp_js]
         for j in kp_js:
@@ -463,30 +616,56 @@ def _named_columns(header: list[str] | None, table: np.ndarray, opts: ReadOption
     if mapping is not None:
         cols, layout = [], []
         for name, where in mapping.items():
-            if name.strip().lower() not in lowered:
+            key = name.strip().lower()
+            if key in lowered:
+                j = lowered.index(key)
+            elif key in bases:
+                j = bases.index(key)
+            else:
                 raise ValueError(f"channels: column {name!r} is not a channel name of {what} (names: {names})")
-            cols.append(lowered.index(name.strip().lower()))
+            if j not in keep:
+                raise ValueError(f"channels: column {name!r} is the {what}'s time or keyphasor column, not a probe")
+            cols.append(j)
             layout.extend(parse_layout([where]))
         info["layout"] = layout
+        left = [names[j] for j in keep if j not in cols]
+        if left:
+            notes.append(f"column(s) {left} are neither time, keyphasor nor in the channel mapping: not read")
+        _column_units(info, [names[j] for j in cols], [col_units[j] for j in cols], what)
         return table[:, cols].T, info
     if header is not None and opts.channels is None:
         kept = [names[j] for j in keep]
-        matches = [_HEADER_RE.match(n) or _LAYOUT_RE.match(n) for n in kept]
+        matches = [_HEADER_RE.match(n) or _LAYOUT_RE.match(n) or _LAYOUT_RE.match(bases[j]) for n, j in zip(kept, keep)]
         if all(matches):
             info["layout"] = [(int(m.group(1)), float(m.group(2))) for m in matches if m]
-            suffixes = {(m.group(3) or "").lower().replace("µm", "um") for m in matches if m and m.lastindex == 3}
+            suffixes = {(m.group(3) or "").lower() for m in matches if m and m.lastindex == 3}
             if len(suffixes) == 1 and "" not in suffixes:
-                info["units"] = "V" if suffixes == {"v"} else suffixes.pop()
+                info["units"] = input_unit(suffixes.pop())
         else:
             bad = [n for n, m in zip(kept, matches) if not m]
-            raise ValueError(f"{what}: channels {bad} are not named BEARING@ANGLE like 'b2@45' (time columns: "
-                             f"time_s or time_ms; keyphasor: kp); rename them or give the channel mapping")
+            raise ValueError(f"{what}: column(s) {bad} are neither a time column (e.g. 'Time (s)', 'Time [ms]', "
+                             "'t_s'), a keyphasor (kp) nor named BEARING@ANGLE like 'b2@45', so they are not read "
+                             "as probes; map each probe column to its bearing and angle (CLI --channels "
+                             "'GEN DE X=b2@45;GEN DE Y=b2@135', API channel_map=) or rename the columns")
+    info["column_names"] = [names[j] for j in keep]
+    _column_units(info, [names[j] for j in keep], [col_units[j] for j in keep], what)
     return table[:, keep].T, info
+
+
+def _column_units(info: dict[str, Any], names: list[str], units: list[str | None], what: str) -> None:
+    """The probes' common unit from their column names or the unit row (wins over a metadata line)."""
+    given = {u for u in units if u is not None}
+    if len(given) > 1:
+        detail = ", ".join(f"{n!r}: {u}" for n, u in zip(names, units) if u is not None)
+        raise ValueError(f"{what}: the probe columns are in different units ({detail}); export every probe in the "
+                         "same units")
+    if given:
+        info["units"] = given.pop()
 
 
 #: UFF ordinate unit labels (record 10) -> reader units
 _UFF_UNITS = {"um": "um", "µm": "um", "micron": "um", "microns": "um", "micrometer": "um", "mm": "mm", "m": "m",
-              "mil": "mil", "mils": "mil", "v": "V", "volt": "V", "volts": "V"}
+              "mil": "mil", "mils": "mil", "v": "V", "volt": "V", "volts": "V", "mv": "mV"}
 
 
 def _decode_uff(data: bytes | Path, limits: ReadLimits) -> tuple[list[str], np.ndarray, float, str | None, list[str]]:
@@ -587,7 +766,7 @@ def _read_uff(data: bytes | Path, opts: ReadOptions, limits: ReadLimits, notes: 
     info: dict[str, Any] = {"sample_rate_hz": rate_hz}
     if unit is not None:
         info["units"] = unit
-    return _named_columns(names, table, opts, info, what="the UFF file")
+    return _named_columns(names, table, opts, info, what="the UFF file", notes=notes)
 
 
 def _read_npy(data: bytes, limits: ReadLimits) -> np.ndarray:
@@ -725,6 +904,11 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
     if arr.shape[0] != len(layout):
         if arr.shape[1] == len(layout):
             arr = arr.T                                    # points × channels
+        elif info.get("column_names"):
+            raise ValueError(f"the file has {arr.shape[0]} columns read as probes ({info['column_names']}) but the "
+                             f"layout names {len(layout)} channels; give one BEARING@ANGLE per probe column, or map "
+                             "the probe columns by name (CLI --channels 'GEN DE X=b2@45;…', API channel_map=): the "
+                             "columns not mapped are then left out")
         else:
             raise ValueError(f"the file has {arr.shape[0]} channels (rows) × {arr.shape[1]} points but the layout "
                              f"names {len(layout)} channels; give one BEARING@ANGLE per channel")
@@ -735,36 +919,55 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
     layout = _mirror(layout, opts, notes)
 
     fs = opts.sample_rate_hz if opts.sample_rate_hz is not None else info.get("sample_rate_hz")
+    header_rate = info.get("sample_rate_from_header")
+    if header_rate is not None and "sample_rate_from_time" in info \
+            and abs(info["sample_rate_from_time"] / header_rate[0] - 1) > 1e-3:
+        raise ValueError(f"the file's header line {header_rate[1]!r} ({header_rate[0]:.6g} Hz) disagrees with its "
+                         f"time column {info.get('time_column')!r} ({info['sample_rate_from_time']:.6g} Hz); "
+                         "give the sample rate (sample_rate_hz) to say which is right")
     if fs is None:
         fs = info.get("sample_rate_from_time")
         if fs is not None:
-            notes.append(f"sample rate {fs:.6g} Hz from the time column")
+            notes.append(f"sample rate {fs:.6g} Hz from the time column"
+                         + (f" {info['time_column']!r}" if info.get("time_column") else ""))
+        elif header_rate is not None:
+            fs = header_rate[0]
+            notes.append(f"sample rate {fs:.6g} Hz from the file's header line {header_rate[1]!r}")
     elif "sample_rate_from_time" in info and abs(info["sample_rate_from_time"] / float(fs) - 1) > 1e-3:
         raise ValueError(f"the sample rate given ({float(fs):g} Hz) disagrees with the time column "
                          f"({info['sample_rate_from_time']:.6g} Hz); drop one of them")
     if fs is None:
-        raise ValueError("sample rate unknown: add a time column (time_s) or give the sample rate in Hz "
-                         "(CLI --sample-rate-hz, API sample_rate_hz=)")
+        raise ValueError("sample rate unknown: add a time column (e.g. 'Time (s)', 'Time [ms]', 't_s') or give "
+                         "the sample rate in Hz (CLI --sample-rate-hz, API sample_rate_hz=)")
 
-    units = str(opts.units if opts.units is not None else info.get("units", "um")).strip()
-    if units == "µm":
-        units = "um"
+    units_text = str(opts.units if opts.units is not None else info.get("units", "um")).strip()
+    units = input_unit(units_text) or units_text
     if units not in INPUT_UNITS:
-        raise ValueError(f"units {units!r} not understood: use one of {list(INPUT_UNITS)} "
-                         "(V needs the probe sensitivity in V/mm, e.g. 7.87)")
+        raise ValueError(f"units {units_text!r} not understood: use one of {list(INPUT_UNITS)} "
+                         "(V and mV need the probe sensitivity, e.g. 7.87 V/mm = 200 mV/mil = 7.87 mV/um)")
+    file_units = input_unit(str(info["units"])) if info.get("units") is not None else None
+    if opts.units is not None and file_units is not None and file_units != units:
+        notes.append(f"the file says its values are in {file_units}; read as {units}, as given")
     dc_removed = opts.dc_removed if opts.dc_removed is not None else info.get("dc_removed", False)  # Recording checks it
-    if units == "V":
+    declared = None
+    if units in VOLTS_PER:
         if opts.sensitivity_v_per_mm is None:
-            raise ValueError("units V: give the probe sensitivity in V/mm (e.g. 7.87 for 200 mV/mil) and the "
-                             "gap voltage in V")
-        arr = np.stack([volts_to_um(row, opts.sensitivity_v_per_mm, opts.gap_voltage_v) for row in arr])
+            raise ValueError(f"units {units}: give the probe sensitivity (e.g. '7.87 V/mm', '200 mV/mil' or "
+                             "'7.87 mV/um'; CLI --sensitivity, API sensitivity=) and the gap voltage in V")
+        sens = sensitivity_v_per_mm(opts.sensitivity_v_per_mm)
+        arr = np.stack([volts_to_um(row * VOLTS_PER[units], sens, opts.gap_voltage_v) for row in arr])
+        declared = f"{units} at {sens:.4g} V/mm" + ("" if opts.gap_voltage_v is None
+                                                    else f", gap {float(opts.gap_voltage_v):g} V")
+        notes.append(f"probe voltages ({units}) converted to µm at {sens:.4g} V/mm ({sens * 25.4:.4g} mV/mil)"
+                     + ("" if opts.gap_voltage_v is None else f" about the gap voltage {float(opts.gap_voltage_v):g} V"))
         units = "um"
         if opts.gap_voltage_v is None:
             dc_removed = True
             notes.append("no gap voltage given: each channel's mean voltage is taken as the gap voltage, so the "
                          "DC part is no shaft position (no centreline)")
     slow = info.get("slow_roll") or [None] * len(layout)
-    channels = [ProbeChannel(bearing=b, angle_deg=a, units=units, data=arr[i], slow_roll_um_pp=slow[i])
+    channels = [ProbeChannel(bearing=b, angle_deg=a, units=units, data=arr[i], slow_roll_um_pp=slow[i],
+                             declared_as=declared)
                 for i, (b, a) in enumerate(layout)]
 
     kp: Any = opts.keyphasor_times_s
@@ -952,7 +1155,7 @@ def read_recording(source: str | Path | bytes, *, filename: str = "", options: R
             arr, info = (_read_uff if fmt == "uff" else _read_csv)(data or b"", opts, limits, notes)
         except _CsvSyntaxError as exc:
             raise ValueError(f"{name or 'the upload'}: {exc}") from None
-    if info.get("units") is not None and str(info["units"]).strip() not in (*UNITS_TO_UM, "V"):
+    if info.get("units") is not None and input_unit(str(info["units"])) is None:
         raise ValueError(f"the file's units attribute {info['units']!r} is not one of {list(INPUT_UNITS)}")
     if info.get("sample_rate_hz") is not None and not (isinstance(info["sample_rate_hz"], (int, float))
                                                        and math.isfinite(info["sample_rate_hz"])):

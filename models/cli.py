@@ -130,6 +130,38 @@ def register(app: typer.Typer) -> None:
         typer.echo(f"migrated: {', '.join(done)}" if done else "nothing to migrate: every model file uses the current names")
 
     @app.command()
+    def examples(
+        names: Optional[list[str]] = typer.Argument(None, help="Examples to copy (default: all of them)."),
+        copy_to: Optional[Path] = typer.Option(None, "--copy-to", help="Copy the examples (and their sidecars) "
+                                               "into this folder, to try `rotordiag diagnose FOLDER` or upload them."),
+    ) -> None:
+        """List the example recordings shipped with rotordiag (where they are, what each is), or copy them."""
+        from rotordiag.features.examples import (
+            copy_examples,
+            describe_example,
+            example_options,
+            example_path,
+            list_examples,
+        )
+
+        if copy_to is None:
+            if names:
+                _fail("give --copy-to FOLDER to copy examples; without it every example is listed")
+            typer.echo(f"example recordings in {example_path(list_examples()[0]).parent}:")
+            for name in list_examples():
+                opts = example_options(name)
+                typer.echo(f"  {name:<26s} {describe_example(name)}"
+                           + (f" (sidecar: {', '.join(f'{k}={v}' for k, v in opts.items())})" if opts else ""))
+            typer.echo("try: rotordiag diagnose <folder above>/misaligned.csv, or rotordiag examples --copy-to DIR")
+            return
+        try:
+            written = copy_examples(copy_to, names)
+        except ValueError as exc:
+            _fail(str(exc))
+        for path in written:
+            typer.echo(str(path))
+
+    @app.command()
     def diagnose(
         files: list[Path] = typer.Argument(..., help="Recordings (.csv, .npy, .h5/.hdf5, .json) or folders of them; "
                                            "'rotordiag examples' lists the shipped ones."),
@@ -137,10 +169,11 @@ def register(app: typer.Typer) -> None:
         version: Optional[str] = typer.Option(None, "--version", help="Model version (default: the active one)."),
         sidecar: Optional[Path] = typer.Option(None, "--sidecar", help="JSON with the options below by name (default: FILE with .json next to a .csv/.npy/.h5)."),
         sample_rate_hz: Optional[float] = typer.Option(None, "--sample-rate-hz", help="Sample rate, Hz (or a time_s column in the CSV)."),
-        units: Optional[str] = typer.Option(None, "--units", help="um | mm | m | mil | V (V needs --sensitivity-v-per-mm)."),
-        sensitivity_v_per_mm: Optional[float] = typer.Option(None, "--sensitivity-v-per-mm", help="Probe scale factor for --units V, V/mm (7.87 = 200 mV/mil)."),
-        gap_voltage_v: Optional[float] = typer.Option(None, "--gap-voltage-v", help="DC gap voltage for --units V, V (default: each channel's mean)."),
-        channels: Optional[str] = typer.Option(None, "--channels", help="Probe layout in file order, BEARING@ANGLE: '1@45,1@135,2@45,2@135'; or for a CSV 'COLUMN=b2@45;COLUMN=b2@135'."),
+        units: Optional[str] = typer.Option(None, "--units", help="um | mm | m | mil | V | mV (default: the file's, from its column names, unit row or header; else um). V and mV need --sensitivity."),
+        sensitivity: Optional[str] = typer.Option(None, "--sensitivity", help="Probe sensitivity for --units V/mV as the datasheet states it: '7.87 V/mm', '200 mV/mil', '7.87 mV/um' (a bare number is V/mm)."),
+        sensitivity_v_per_mm: Optional[float] = typer.Option(None, "--sensitivity-v-per-mm", help="Probe scale factor for --units V/mV, V/mm (7.87 = 200 mV/mil); or --sensitivity."),
+        gap_voltage_v: Optional[float] = typer.Option(None, "--gap-voltage-v", help="DC gap voltage for --units V/mV, in V (default: each channel's mean)."),
+        channels: Optional[str] = typer.Option(None, "--channels", help="Probe layout in file order, BEARING@ANGLE: '1@45,1@135,2@45,2@135'; or for a CSV/UFF by column name 'GEN DE X=b2@45;GEN DE Y=b2@135' (other columns besides time and keyphasor are not read; a note names them)."),
         keyphasor_channel: Optional[str] = typer.Option(None, "--keyphasor-channel", help="Raw keyphasor pulse channel: CSV column name, or index in file order (default: a CSV column named kp/keyphasor); with --acquisitions, one per acquisition separated by semicolons (kp_a;kp_b)."),
         keyphasor_edge: str = typer.Option("falling", "--keyphasor-edge", help="falling (a notch) | rising (a projection, TTL)."),
         keyphasor_threshold: Optional[float] = typer.Option(None, "--keyphasor-threshold", help="Pulse threshold in the channel's units (default: halfway between its 1st and 99th percentile)."),
@@ -184,9 +217,12 @@ def register(app: typer.Typer) -> None:
 
         try:
             um_to(None, output_units)
+            if sensitivity is not None and sensitivity_v_per_mm is not None:
+                raise ValueError("--sensitivity and --sensitivity-v-per-mm: give the probe sensitivity once")
             paths = collect_files(files)
             given = {
-                "sample_rate_hz": sample_rate_hz, "units": units, "sensitivity_v_per_mm": sensitivity_v_per_mm,
+                "sample_rate_hz": sample_rate_hz, "units": units,
+                "sensitivity_v_per_mm": sensitivity if sensitivity is not None else sensitivity_v_per_mm,
                 "gap_voltage_v": gap_voltage_v, "channels": channels, "keyphasor_channel": keyphasor_channel,
                 "keyphasor_edge": keyphasor_edge, "keyphasor_threshold_v": keyphasor_threshold,
                 "rotation": rotation, "viewed_from": viewed_from, "speed_rpm": speed_rpm,

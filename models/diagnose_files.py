@@ -12,7 +12,15 @@ from pathlib import Path
 from typing import Any
 
 from rotordiag.core.units import um_to
-from rotordiag.features.reader import FORMATS, ReadLimits, ReadOptions, ReadResult, parse_layout, read_recording
+from rotordiag.features.reader import (
+    FORMATS,
+    ReadLimits,
+    ReadOptions,
+    ReadResult,
+    parse_channel_map,
+    parse_layout,
+    read_recording,
+)
 
 __all__ = ["collect_files", "load_options", "diagnose_one", "diagnose_takes", "diagnose_read", "verdict_row", "verdict_json", "write_table", "CLI_LIMITS",
            "coupling_clearance_um", "slow_roll_from_file"]
@@ -51,19 +59,6 @@ def collect_files(items: Sequence[Path]) -> list[Path]:
     return out
 
 
-def _parse_channels_option(text: str) -> str | dict[str, str]:
-    """``'1@45,1@135'`` stays a layout; ``'GEN X=b2@45;GEN Y=b2@135'`` becomes a column mapping."""
-    if "=" not in text:
-        return text
-    mapping = {}
-    for part in text.split(";"):
-        name, sep, where = part.partition("=")
-        if not sep or not name.strip():
-            raise ValueError(f"--channels: {part!r} is not COLUMN=b<bearing>@<angle>")
-        mapping[name.strip()] = where.strip()
-    return mapping
-
-
 def load_options(path: Path, sidecar: Path | None, given: Mapping[str, Any]) -> ReadOptions:
     """Reader options for ``path``: its sidecar JSON (``sidecar``, else ``path`` with ``.json`` when it
     exists), overridden by the options ``given`` (``None`` = not given).
@@ -93,7 +88,7 @@ def load_options(path: Path, sidecar: Path | None, given: Mapping[str, Any]) -> 
             side["clearance_um"] = {int(k): v for k, v in side["clearance_um"].items()}
     merged = {**side, **{k: v for k, v in given.items() if v is not None}}
     if isinstance(merged.get("channels"), str):
-        merged["channels"] = _parse_channels_option(merged["channels"])
+        merged["channels"] = parse_channel_map(merged["channels"])
     if merged.get("channels") is not None:
         try:
             if isinstance(merged["channels"], Mapping):

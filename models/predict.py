@@ -462,11 +462,24 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
 
 
 def format_verdict(v: Verdict, output_units: str = "um") -> str:
-    """Human-readable multi-line text of a verdict (for the CLI); the offset in ``output_units`` (um | mil)."""
-    from rotordiag.core.units import um_to
+    """Human-readable multi-line text of a verdict (for the CLI); every length in ``output_units`` (um | mil):
+    the offset, the µm-named features (renamed ``…_mil_pp``, values and ranges converted) and the evidence
+    texts, as the API's ``output_units`` (:func:`rotordiag.models.output_units.verdict_in_units`)."""
+    import copy
+
+    from rotordiag.core.units import lengths_in, um_to
+
+    from .output_units import verdict_in_units
 
     unit = "mil" if output_units.strip().lower().startswith("mil") else "µm"
     scale = float(um_to(1.0, "mil" if unit == "mil" else "um"))
+
+    def named(name: str, *values: Any) -> tuple[str, list[Any]]:
+        """A feature's name and values in the output units (``b2_1x_major_um_pp`` → ``b2_1x_major_mil_pp``)."""
+        ((new, converted),) = lengths_in({name: list(values)}, "mil" if unit == "mil" else "um").items()
+        return new, converted
+
+    evidence = verdict_in_units({"evidence": copy.deepcopy(v.evidence)}, output_units)["evidence"]
     lines = [f"status: {v.status}"]
     for r in v.reasons:
         lines.append(f"  {r['status']}: {r['message']}")
@@ -484,6 +497,8 @@ def format_verdict(v: Verdict, output_units: str = "um") -> str:
         a, b = v.offset_interval_um
         nd = 2 if unit == "mil" else 1
         lines.append(f"offset δ: {v.offset_um * scale:.{nd}f} {unit}  ({a * scale:.{nd}f} – {b * scale:.{nd}f} {unit})")
+    elif v.misalignment is None:
+        lines.append("offset δ: not given (inconclusive)")
     else:
         lines.append(f"offset δ: unknown (give the bearing clearance to convert Δ to {unit})")
     if v.speed_rpm is not None:
@@ -491,19 +506,20 @@ def format_verdict(v: Verdict, output_units: str = "um") -> str:
     lines.append(f"motion type: {v.motion_type or 'not determined'}")
     lines.append("features that drove the verdict (drop in P(severity) when set to the training median):")
     for f in v.top_features:
-        val = "missing" if f.value is None else f"{f.value:.4g}"
-        lines.append(f"  {f.name:<40s} {val:>10s}  (typical {f.reference:.4g})  {f.contribution:+.3f}")
+        name, (value, reference) = named(f.name, f.value, f.reference)
+        val = "missing" if value is None else f"{value:.4g}"
+        lines.append(f"  {name:<40s} {val:>10s}  (typical {reference:.4g})  {f.contribution:+.3f}")
     lines.append(f"out-of-distribution score: {v.ood_score:.2f}" + ("  ⚠ OOD" if v.ood else ""))
     for found in v.ood_findings:
-        lines.append(f"  outside the training range: {found['feature']} = {found['value']:.4g} "
-                     f"(training {found['train_min']:.4g} … {found['train_max']:.4g})")
+        name, (value, lo_, hi_) = named(found["feature"], found["value"], found["train_min"], found["train_max"])
+        lines.append(f"  outside the training range: {name} = {value:.4g} (training {lo_:.4g} … {hi_:.4g})")
     if v.model_version:
         lines.append(f"model: {v.model_version}")
     for w in v.warnings:
         lines.append(f"warning: {w}")
-    if v.evidence:
+    if evidence:
         lines.append("evidence (measured, independent of the model):")
-        for e in v.evidence:
+        for e in evidence:
             lines.append(f"  {e['scope']:<14s} {e['name']:<24s} {e['value']}")
             lines.append(f"  {'':<14s} {'':<24s} → {e['meaning']}")
     return "\n".join(lines)

@@ -86,6 +86,25 @@ def options_from_query(query: dict[str, Any]) -> Any:
     kc = opts.get("keyphasor_channel")
     if isinstance(kc, str) and kc.strip().isdigit():
         opts["keyphasor_channel"] = int(kc)
+    if q.get("sensitivity") is not None:
+        if "sensitivity_v_per_mm" in opts:
+            raise InputError("sensitivity and sensitivity_v_per_mm: give the probe sensitivity once")
+        opts["sensitivity_v_per_mm"] = str(q["sensitivity"])
+    if q.get("channel_map") is not None:
+        from rotordiag.features.reader import parse_channel_map
+
+        if q.get("bearings") is not None or q.get("angles_deg") is not None:
+            raise InputError("channel_map and bearings/angles_deg: give the layout one way, by column name "
+                             "(channel_map) or in file order (bearings, angles_deg)")
+        try:
+            mapping = parse_channel_map(str(q["channel_map"]))
+        except ValueError as exc:
+            raise InputError(f"channel_map: {exc}") from None
+        if not isinstance(mapping, dict):
+            raise InputError("channel_map: give COLUMN=b<bearing>@<angle> for each probe column, separated by ';' "
+                             "(e.g. 'GEN DE X=b2@45;GEN DE Y=b2@135'); a layout in file order goes in bearings= "
+                             "and angles_deg=")
+        opts["channels"] = mapping
     bearings = _parse_list(q.get("bearings"), "bearings", int)
     angles = _parse_list(q.get("angles_deg"), "angles_deg", float)
     if angles is not None and bearings is None:
@@ -109,6 +128,54 @@ def options_from_query(query: dict[str, Any]) -> Any:
         return ReadOptions(**opts)
     except TypeError as exc:
         raise InputError(f"query parameters: {exc}") from None
+
+
+#: what an asset's probe configuration holds (``PUT /assets/{id}/probes``), as groups of query parameters:
+#: an upload that gives any parameter of a group replaces the configuration's whole group
+PROBE_CONFIG_GROUPS: dict[str, tuple[str, ...]] = {
+    "layout": ("channel_map", "bearings", "angles_deg"), "units": ("units",),
+    "sensitivity": ("sensitivity", "sensitivity_v_per_mm"), "gap_voltage": ("gap_voltage_v",),
+    "keyphasor": ("keyphasor_channel",)}
+PROBE_CONFIG_KEYS = tuple(k for keys in PROBE_CONFIG_GROUPS.values() for k in keys)
+
+
+def check_probe_config(config: dict[str, Any]) -> None:
+    """Refuse (InputError, saying what to fix) a probe configuration the reader would refuse for every upload."""
+    from rotordiag.core.units import INPUT_UNITS, input_unit, sensitivity_v_per_mm
+
+    unknown = sorted(set(config) - set(PROBE_CONFIG_KEYS))
+    if unknown:
+        raise InputError(f"probe configuration: unknown field(s) {unknown}; allowed: {list(PROBE_CONFIG_KEYS)}")
+    options_from_query(dict(config))
+    if config.get("units") is not None and input_unit(str(config["units"])) is None:
+        raise InputError(f"probe configuration: units {config['units']!r}: use one of {list(INPUT_UNITS)}")
+    for key in ("sensitivity", "sensitivity_v_per_mm"):
+        if config.get(key) is not None:
+            try:
+                sensitivity_v_per_mm(config[key])
+            except ValueError as exc:
+                raise InputError(f"probe configuration: {exc}") from None
+
+
+def with_probe_config(query: dict[str, Any], config: dict[str, Any] | None,
+                      asset_id: str) -> tuple[dict[str, Any], dict[str, Any] | None]:
+    """The upload's query completed by its asset's stored probe configuration (the upload's own parameters win,
+    group by group: :data:`PROBE_CONFIG_GROUPS`), and the answer's section saying what was used."""
+    if not config:
+        return query, None
+    out = dict(query)
+    used: dict[str, Any] = {}
+    overridden: list[str] = []
+    for group, keys in PROBE_CONFIG_GROUPS.items():
+        stored = {k: config[k] for k in keys if config.get(k) is not None}
+        if not stored:
+            continue
+        if any(query.get(k) is not None for k in keys):
+            overridden.append(group)
+            continue
+        out.update(stored)
+        used.update(stored)
+    return out, {"asset_id": asset_id, "used": used, "overridden_by_upload": overridden}
 
 
 def checked(build, *args):
@@ -217,6 +284,9 @@ def take_queries(query: dict[str, Any], labels: list[str]) -> list[dict[str, Any
         ``acquisitions`` given (each file is one), or a per-take value with a count of parts other than the files'.
     """
     n = len(labels)
+    if (query.get("channel_map") or "").strip():
+        raise InputError(f"channel_map with {n} take files: give each take's layout in file order with bearings= "
+                         "and angles_deg= (one value per file, separated by ';'), or name the columns b2@45")
     if (query.get("acquisitions") or "").strip():
         raise InputError(f"acquisitions: the {n} files in part 'file' are the takes, each its own acquisition; leave "
                          "acquisitions out (or send one file holding every take, with acquisitions)")
@@ -268,7 +338,14 @@ def _parse_takes(files: tuple[tuple[bytes, str], ...], query: dict[str, Any]) ->
 
 def parse_body(kind: str, body: Body, filename: str, query: dict[str, Any],
                slow_roll: tuple[bytes, str] | None = None) -> tuple[Any, str | None, str | None]:
-    """Recording, asset_id, plant from a request body.
+    """Recording, asset_id, plant from a request body (:func:`parse_request` without the reader's notes)."""
+    return parse_request(kind, body, filename, query, slow_roll)[:3]
+
+
+def parse_request(kind: str, body: Body, filename: str, query: dict[str, Any],
+                  slow_roll: tuple[bytes, str] | None = None) -> tuple[Any, str | None, str | None, list[str]]:
+    """Recording, asset_id, plant and the reader's notes (what it assumed or left out: the time column's
+    sample rate, the unit conversion, columns not read) from a request body.
 
     Parameters
     ----------
@@ -302,7 +379,7 @@ def parse_body(kind: str, body: Body, filename: str, query: dict[str, Any],
                              "upload; with a JSON body give the slow-roll vectors per channel (channels[].slow_roll)")
         if kind == "json":
             req = _validated_json(DiagnoseRequest, body, MAX_RECORD_VALUES)
-            return checked(recording_from_model, req), req.asset_id, req.plant
+            return checked(recording_from_model, req), req.asset_id, req.plant, []
         if not body:
             raise InputError("empty body: send an NPY file (numpy.save) with an (n_channels, n_points) array, "
                              "or a CSV/HDF5/JSON file as a multipart upload")
@@ -324,4 +401,4 @@ def parse_body(kind: str, body: Body, filename: str, query: dict[str, Any],
             recording = apply_slow_roll(recording, slow)[0]
         except ValueError as exc:
             raise InputError(f"slow_roll_file: {exc}") from None
-    return recording, asset_id, plant
+    return recording, asset_id, plant, list(res.notes)

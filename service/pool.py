@@ -43,8 +43,10 @@ import logging
 import multiprocessing
 import os
 import pickle
+import signal
 import socket
 import struct
+import threading
 import time
 import traceback
 import weakref
@@ -162,11 +164,11 @@ def _work(kind: str, body: Body, filename: str, query: dict[str, Any], slow_roll
     """Parse and diagnose one request in the worker: ``("ok", verdict, asset_id, plant)`` or an error
     tuple (:func:`_tagged`). ``slow_roll``: an uploaded slow-roll recording and its file name, parsed
     here like the main body (:func:`service.parsing.parse_body`)."""
-    from .parsing import parse_body
+    from .parsing import parse_request
 
     def run() -> tuple:
-        recording, asset_id, plant = parse_body(kind, body, filename, query, slow_roll)
-        return ("ok", _store().diagnose(recording, version), asset_id, plant)
+        recording, asset_id, plant, notes = parse_request(kind, body, filename, query, slow_roll)
+        return ("ok", {**_store().diagnose(recording, version), "input_notes": notes}, asset_id, plant)
 
     return _tagged(run)
 
@@ -283,8 +285,13 @@ def _recv_exact(sock: socket.socket, n: int) -> bytes | None:
 
 def _worker_main(sock: socket.socket, registry_root: str, version: str | None, memory_bytes: int = 0) -> None:
     """A worker process: load the model, limit its memory, say it is ready, then answer requests until
-    the server closes the socket."""
+    the server closes the socket.
+
+    Ctrl-C in the server's terminal reaches every process of its group: a worker ignores it (from its start,
+    :meth:`_Worker.__init__`) and stops when the server closes its socket (or terminates it while it is still
+    loading the model), so stopping the server at any moment, warm-up included, prints no worker traceback."""
     global _MEMORY_BYTES
+    signal.signal(signal.SIGINT, signal.SIG_IGN)          # (already so when started by _Worker in the main thread)
     _init_worker(registry_root)
     try:
         _warm(version)
@@ -298,23 +305,26 @@ def _worker_main(sock: socket.socket, registry_root: str, version: str | None, m
 
     limit_address_space(memory_bytes)
     ready = pickle.dumps(("ready", os.getpid()), protocol=pickle.HIGHEST_PROTOCOL)
-    sock.sendall(_HEADER.pack(len(ready)) + ready)
-    while True:
-        head = _recv_exact(sock, _HEADER.size)
-        if head is None:
-            return
-        msg = _recv_exact(sock, _HEADER.unpack(head)[0])
-        if msg is None:
-            return
-        call = pickle.loads(msg)           # from the server process only (see the module docstring)
-        try:
-            if not isinstance(call, WorkerCall):
-                raise TypeError(f"a diagnosis worker runs WorkerCall objects, not {type(call).__name__}")
-            result = call.run()
-        except Exception as exc:  # noqa: BLE001 - a bug, not a client mistake: the server answers 500
-            result = ("exception", f"{type(exc).__name__}: {exc}", traceback.format_exc())
-        out = pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
-        sock.sendall(_HEADER.pack(len(out)) + out)
+    try:
+        sock.sendall(_HEADER.pack(len(ready)) + ready)
+        while True:
+            head = _recv_exact(sock, _HEADER.size)
+            if head is None:
+                return
+            msg = _recv_exact(sock, _HEADER.unpack(head)[0])
+            if msg is None:
+                return
+            call = pickle.loads(msg)           # from the server process only (see the module docstring)
+            try:
+                if not isinstance(call, WorkerCall):
+                    raise TypeError(f"a diagnosis worker runs WorkerCall objects, not {type(call).__name__}")
+                result = call.run()
+            except Exception as exc:  # noqa: BLE001 - a bug, not a client mistake: the server answers 500
+                result = ("exception", f"{type(exc).__name__}: {exc}", traceback.format_exc())
+            out = pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
+            sock.sendall(_HEADER.pack(len(out)) + out)
+    except (BrokenPipeError, ConnectionResetError):
+        return                                 # the server closed the socket (it is stopping): nothing to answer
 
 
 # -- server side ---------------------------------------------------------------------------------
@@ -375,7 +385,16 @@ class _Worker:
         ctx = multiprocessing.get_context("spawn")
         self.process = ctx.Process(target=_worker_main, args=(child, str(registry_root), version, memory_bytes),
                                    name="rotordiag-diagnosis", daemon=False)
-        self.process.start()
+        # started with SIGINT ignored (a disposition a spawned interpreter keeps, unlike a blocked mask): a
+        # Ctrl-C during the worker's start-up (its imports) is no KeyboardInterrupt traceback; the server's
+        # own handler is put back at once (signal handlers can only be set from the main thread)
+        main = threading.current_thread() is threading.main_thread()
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+        try:
+            self.process.start()
+        finally:
+            if main:
+                signal.signal(signal.SIGINT, previous)
         child.close()
         global _AT_EXIT_REGISTERED
         if not _AT_EXIT_REGISTERED:
@@ -494,6 +513,8 @@ class _Worker:
         """Close the socket: the worker returns once the request it computes is done."""
         self._reader.cancel()
         self.sock.close()            # the worker sees end of file and returns
+        if not self.ready and self.process.is_alive():
+            self.process.terminate()     # still loading the model (it reads no socket yet) and holds no request
 
     def reap(self, deadline: float) -> None:
         """Wait for the closed worker until ``deadline`` (``time.monotonic()``), then terminate, then kill it."""

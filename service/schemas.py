@@ -276,6 +276,39 @@ class ThresholdsIn(_Strict):
                                                 "`{\"dc_shift_um\": 25}`; `{}` restores the shipped thresholds.")
 
 
+class ProbeConfigIn(_Strict):
+    """PUT /assets/{id}/probes: the asset's probe configuration, used by every upload (binary or multipart)
+    that names the asset; each field as the /diagnose query parameter of the same name."""
+
+    channel_map: str | None = Field(None, min_length=1, max_length=2000, description="Probe columns by name, "
+                                    "`GEN DE X=b2@45;GEN DE Y=b2@135;…` (or `bearings`/`angles_deg`).")
+    bearings: str | None = Field(None, max_length=64, pattern=r"^[0-9, ]*$",
+                                 description="Bearing of each channel in file order, e.g. `2,2,3,3`.")
+    angles_deg: str | None = Field(None, max_length=256, description="Probe angle of each channel in file order.")
+    units: str | None = Field(None, min_length=1, max_length=16, description="`um`, `mm`, `m`, `mil`, `V` or `mV`.")
+    sensitivity: str | None = Field(None, min_length=1, max_length=32, description="For V/mV: as the datasheet "
+                                    "states it, `200 mV/mil`, `7.87 V/mm`, `7.87 mV/um`.")
+    gap_voltage_v: float | None = Field(None, ge=-100, le=100, description="For V/mV: the DC gap voltage, V.")
+    keyphasor_channel: str | None = Field(None, min_length=1, max_length=64, description="The keyphasor column.")
+
+
+class ProbeConfigOut(BaseModel):
+    """GET/PUT /assets/{id}/probes."""
+
+    asset_id: str = Field(..., description="The asset.")
+    probes: dict[str, Any] = Field(..., description="The stored fields (those not set are left out).")
+    updated_at: dt.datetime | None = Field(None, description="When it was set (UTC).")
+
+
+class AssetProbesSection(BaseModel):
+    """In a /diagnose answer: the asset's stored probe configuration and what of it this upload used."""
+
+    asset_id: str = Field(..., description="The asset whose configuration it is.")
+    used: dict[str, Any] = Field(..., description="The stored fields this upload was read with.")
+    overridden_by_upload: list[str] = Field(..., description="Groups (`layout`, `units`, `sensitivity`, "
+                                            "`gap_voltage`, `keyphasor`) the upload gave itself instead.")
+
+
 class AssetPoint(BaseModel):
     """One stored diagnosis of an asset."""
 
@@ -457,6 +490,11 @@ class DiagnoseResponse(BaseModel):
     model_version: str = Field(..., description="Registered model version that produced the verdict.")
     bands: dict[str, Any] = Field(..., description="The model's severity bands: `edges` (Δ) and `names`.")
     warnings: list[str] = Field(..., description="Anything that makes the verdict less certain.")
+    asset_probes: AssetProbesSection | None = Field(None, description="With an `asset_id` that has a probe "
+                                                    "configuration (PUT /assets/{id}/probes): what of it was used.")
+    input_notes: list[str] = Field(default_factory=list, description="What the reader assumed or left out of an "
+                                   "uploaded file: the sample rate from its time column or header, the probe "
+                                   "voltages' conversion to µm, metadata lines skipped, columns not read as probes.")
     bearings: list[BearingOut] = Field(..., description="Per-bearing key features from the features package.")
     diagnosis_id: int | None = Field(None, description="With an `asset_id` and the API key: the id of the stored "
                                      "diagnosis.")

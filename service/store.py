@@ -1,5 +1,6 @@
-"""Writing and reading asset diagnoses (the per-asset trend), baselines and alarm thresholds; the history's
-retention (full diagnoses for a while, summaries longer) and the checks ``GET /health`` makes of the storage."""
+"""Writing and reading asset diagnoses (the per-asset trend), baselines, alarm thresholds and probe configurations;
+the history's retention (full diagnoses for a while, summaries longer) and the checks ``GET /health`` makes of the
+storage."""
 from __future__ import annotations
 
 import datetime as dt
@@ -226,6 +227,24 @@ def put_thresholds(state: AppState, asset_id: str, thresholds: dict[str, Any]) -
             s.add(AssetSettings(asset_id=asset_id, thresholds=dict(thresholds)))
         else:
             row.thresholds = dict(thresholds)
+
+
+def get_probe_config(session: Session, asset_id: str) -> tuple[dict[str, Any], Any] | None:
+    """The asset's stored probe configuration and when it was set, or ``None``."""
+    row = session.get(AssetSettings, asset_id)
+    if row is None or not row.probes:
+        return None
+    return dict(row.probes), row.updated_at
+
+
+def put_probe_config(state: AppState, asset_id: str, probes: dict[str, Any]) -> None:
+    """Replace the asset's probe configuration (an empty dict removes it)."""
+    with state.sessions.begin() as s:
+        row = s.get(AssetSettings, asset_id)
+        if row is None:
+            s.add(AssetSettings(asset_id=asset_id, thresholds={}, probes=dict(probes) or None))
+        else:
+            row.probes = dict(probes) or None
 
 
 def latest_changes(session: Session) -> list[tuple[str, dict[str, Any]]]:

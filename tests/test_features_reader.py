@@ -73,10 +73,13 @@ def test_explicit_column_mapping_and_bad_header(example):
     t = np.arange(data.shape[0]) / example.sample_rate_hz
     body = _csv(["time_s", "GEN DE X", "GEN DE Y", "EXC DE X", "EXC DE Y", "spare"],
                 np.column_stack([t, data, np.zeros(t.size)]))
-    with pytest.raises(ValueError, match=r"not named BEARING@ANGLE"):
+    with pytest.raises(ValueError, match=r"\['GEN DE X', .*'spare'\] are neither a time column .* nor named "
+                       r"BEARING@ANGLE.*not read as probes"):
         read_recording(body, filename="plant.csv")
     mapping = {"GEN DE X": "b1@45", "GEN DE Y": "b1@135", "EXC DE X": "b2@45", "EXC DE Y": "b2@135"}
-    rec = read_recording(body, filename="plant.csv", options=ReadOptions(channels=mapping)).recording
+    res = read_recording(body, filename="plant.csv", options=ReadOptions(channels=mapping))
+    rec = res.recording
+    assert "column(s) ['spare'] are neither time, keyphasor nor in the channel mapping: not read" in res.notes
     assert [(c.bearing, c.angle_deg) for c in rec.channels] == [(1, 45.0), (1, 135.0), (2, 45.0), (2, 135.0)]
     np.testing.assert_allclose(rec.channels[2].data, data[:, 2], atol=1e-3)
     with pytest.raises(ValueError, match="'GEN NDE X' is not a channel name of the CSV file"):

@@ -63,7 +63,7 @@ def test_channel_name_mapping_and_units_from_the_ordinate_label(tmp_path):
             d["ordinate_axis_units_lab"] = "mm"
 
     path = _rewrite(src, tmp_path / "named.uff", rename)
-    with pytest.raises(ValueError, match="not named BEARING@ANGLE"):
+    with pytest.raises(ValueError, match="nor named BEARING@ANGLE"):
         read_recording(path)
     mapping = {"GEN DE X": "b2@45", "GEN DE Y": "b2@135", "EXC DE X": "b3@45", "EXC DE Y": "b3@135"}
     rec = read_recording(path, options=ReadOptions(channels=mapping)).recording

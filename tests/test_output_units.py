@@ -90,6 +90,43 @@ def test_api_answers_in_mils_and_the_cli_agrees(client, tmp_path):
     assert row["offset_mil"] == pytest.approx(mil["offset_mil"])
 
 
+def test_cli_text_in_mils_converts_every_length_not_only_the_offset(tmp_path):
+    """``rotordiag diagnose --output-units mil`` (the text, not --json): the offset, the evidence amplitudes and
+    any µm-named feature are in mils, each the µm text's number / 25.4 (issue 45: only the offset was)."""
+    from rotordiag.models.predict import FeatureContribution, Verdict, format_verdict
+
+    args = ["diagnose", str(example_path("misaligned.csv")), "--clearance-um", "350"]
+    um = CliRunner().invoke(cli_app, args)
+    mil = CliRunner().invoke(cli_app, [*args, "--output-units", "mil"])
+    assert um.exit_code == 0 and mil.exit_code == 0, um.output + mil.output
+
+    def section(text):
+        return text.split("evidence (measured, independent of the model):")[1]
+
+    um_amounts = [float(x) for x in re.findall(r"(-?\d+(?:\.\d+)?) µm", section(um.stdout))]
+    mil_amounts = [float(x) for x in re.findall(r"(-?\d+(?:\.\d+)?) mil", section(mil.stdout))]
+    assert um_amounts and "µm" not in section(mil.stdout)
+    assert mil_amounts == pytest.approx([x / MIL for x in um_amounts], rel=5e-3)   # 3 significant digits
+    # a µm-named feature among the top features and a training range: renamed and converted
+    verdict = json.loads(CliRunner().invoke(cli_app, [*args, "--json"]).stdout)
+
+    fields = {k: verdict.get(k) for k in Verdict.__dataclass_fields__ if k in verdict}
+    fields["top_features"] = [FeatureContribution(name="b2_1x_major_um_pp", value=50.8, reference=25.4,
+                                                  contribution=0.1)]
+    fields["ood_findings"] = [{"feature": "b3_x_direct_um_pp", "value": 254.0, "train_min": 2.54, "train_max": 127.0}]
+    for k in ("misalignment_interval", "offset_interval_um"):
+        if isinstance(fields.get(k), list):
+            fields[k] = tuple(fields[k])
+    text = format_verdict(Verdict(**fields), "mil")
+    assert re.search(r"b2_1x_major_mil_pp\s+2 +\(typical 1\)", text), text
+    assert "b3_x_direct_mil_pp = 10 (training 0.1 … 5)" in text
+    assert "_um_pp" not in text
+    # an inconclusive verdict with the clearance given does not ask for the clearance (issue 45)
+    fields.update(misalignment=None, offset_um=None, offset_interval_um=None, status="inconclusive")
+    text = format_verdict(Verdict(**fields), "um")
+    assert "offset δ: not given (inconclusive)" in text and "give the bearing clearance" not in text
+
+
 def test_unknown_output_units_is_a_422_that_names_the_choices(client):
     path = example_path("misaligned.csv")
     r = client.post("/diagnose?output_units=inch", files={"file": (path.name, path.read_bytes())})

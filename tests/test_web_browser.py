@@ -794,3 +794,30 @@ def test_mains_pickup_is_shown_as_evidence_not_as_a_severity(server, browser, re
     reasons = " ".join(e.text for e in d.find_elements("css selector", "#verdict-reasons li"))
     assert "grounding" in reasons
     _screenshot(d, "mains-pickup")
+
+
+def test_a_daq_export_in_mv_with_columns_mapped_by_name(server, browser, tmp_path):
+    """A DAQ export as it comes (Time [ms], a unit row, probe output in mV, a temperature column): the page's
+    column mapping, units, sensitivity and gap-voltage fields read it, and the answer says how it was read."""
+    from rotordiag.features.examples import example_path
+    from rotordiag.features.reader import read_recording
+    from tests.collector_exports import DAQ_SENSITIVITY, GAP_V, mapping, write_daq_csv
+
+    rec = read_recording(example_path("misaligned.csv")).recording
+    path = tmp_path / "daq.csv"
+    names = write_daq_csv(path, np.stack([c.data for c in rec.channels]), rec.sample_rate_hz)
+    _open(browser, server)
+    browser.find_element("id", "channel-map").send_keys(mapping(names))
+    Select(browser.find_element("id", "units")).select_by_value("mV")
+    browser.find_element("id", "sensitivity").send_keys(DAQ_SENSITIVITY)
+    browser.find_element("id", "gap-voltage").send_keys(str(GAP_V))
+    _submit_file(browser, path)
+    verdict = browser.execute_script("return window.rotordiag.state.verdict")
+    notes = verdict["input_notes"]
+    assert "column(s) ['BRG 2 TEMP'] are neither time, keyphasor nor in the channel mapping: not read" in notes
+    shown = browser.find_element("id", "verdict-input-notes").text
+    assert "BRG 2 TEMP" in shown and "7.874 V/mm" in shown, shown
+    browser.find_element("id", "sensitivity").clear()
+    _submit_file(browser, path, expect="error")
+    text = browser.find_element("id", "form-error").text
+    assert "give the probe sensitivity" in text, text

@@ -20,9 +20,17 @@ from __future__ import annotations
 from importlib.resources import files
 from pathlib import Path
 
-__all__ = ["example_options", "example_path", "list_examples"]
+__all__ = ["example_options", "example_path", "list_examples", "describe_example", "copy_examples"]
 
 _ENDINGS = (".csv", ".npy", ".h5", ".uff")
+#: what each example recording is (by file stem) and how its format is written (by ending)
+_TITLES = {
+    "aligned": "aligned machine (Δ = 0)",
+    "misaligned": "severely misaligned (Δ = 0.5)",
+    "misaligned_2560hz": "severely misaligned (Δ = 0.5), bare array",
+}
+_FORMATS = {".csv": "CSV with a time column and b2@45-style header", ".h5": "HDF5 with its channel table",
+            ".npy": "NPY, sample rate given separately", ".uff": "universal file (UFF 58b)"}
 
 
 def list_examples() -> list[str]:
@@ -62,3 +70,34 @@ def example_options(name: str) -> dict[str, object]:
     if path.suffix == ".json" or not sidecar.is_file():
         return {}
     return dict(json.loads(sidecar.read_text()))
+
+
+def describe_example(name: str) -> str:
+    """One line on what an example recording is and how it is written (the CLI's and the web page's lists)."""
+    path = Path(name)
+    return f"{_TITLES.get(path.stem, path.stem)} — {_FORMATS.get(path.suffix, path.suffix)}"
+
+
+def copy_examples(folder: Path, names: list[str] | None = None) -> list[Path]:
+    """Copy example recordings (all, or ``names``) and their sidecars into ``folder`` (made if missing).
+
+    Returns the files written. An existing file of the same name is not overwritten.
+
+    Raises
+    ------
+    ValueError
+        For a name that is not one of :func:`list_examples`, or a file already in ``folder``.
+    """
+    import shutil
+
+    chosen = list_examples() if not names else list(names)
+    for name in chosen:
+        example_path(name)                              # names the choices when unknown
+    sources = [example_path(n) for n in chosen]
+    sources += [p.with_suffix(".json") for p in sources if p.with_suffix(".json").is_file()]
+    folder = Path(folder)
+    clash = [p.name for p in sources if (folder / p.name).exists()]
+    if clash:
+        raise ValueError(f"{folder}: {clash} already there; choose another folder or remove them")
+    folder.mkdir(parents=True, exist_ok=True)
+    return [Path(shutil.copyfile(p, folder / p.name)) for p in sources]

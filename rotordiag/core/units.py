@@ -23,9 +23,62 @@ def factor_to_um(units: str) -> float:
     return UNITS_TO_UM[key]
 
 
-#: input units a reader accepts: the displacement units plus ``"V"`` (proximity-probe output voltage,
-#: converted with a probe sensitivity and a gap voltage, :func:`volts_to_um`)
-INPUT_UNITS: tuple[str, ...] = (*ALLOWED_UNITS, "V")
+#: input units a reader accepts: the displacement units plus ``"V"`` and ``"mV"`` (proximity-probe output
+#: voltage, converted with a probe sensitivity and a gap voltage, :func:`volts_to_um`)
+INPUT_UNITS: tuple[str, ...] = (*ALLOWED_UNITS, "V", "mV")
+#: volts per unit of the voltage units
+VOLTS_PER: dict[str, float] = {"V": 1.0, "mV": 1e-3}
+#: spellings of the input units seen in file headers and unit rows (lower case, brackets stripped) → INPUT_UNITS
+UNIT_SPELLINGS: dict[str, str] = {
+    "um": "um", "µm": "um", "μm": "um", "micron": "um", "microns": "um", "micrometer": "um", "micrometre": "um",
+    "micrometers": "um", "micrometres": "um", "mm": "mm", "m": "m", "mil": "mil", "mils": "mil",
+    "v": "V", "volt": "V", "volts": "V", "mv": "mV", "millivolt": "mV", "millivolts": "mV"}
+
+
+def input_unit(text: str) -> str | None:
+    """The input unit a header or unit-row spelling names (``"[mV]"`` → ``"mV"``, ``"Volts"`` → ``"V"``,
+    ``"µm"`` → ``"um"``), or ``None`` for anything else."""
+    key = str(text).strip().strip("[]()").strip()
+    if key in ("mV", "V"):
+        return key
+    return UNIT_SPELLINGS.get(key.lower())
+
+
+#: the distance units a probe sensitivity may be stated per, in mm
+_MM_PER = {"mm": 1.0, "um": 1e-3, "µm": 1e-3, "μm": 1e-3, "mil": UM_PER_MIL * 1e-3, "m": 1e3}
+
+def sensitivity_v_per_mm(value: float | str) -> float:
+    """A probe sensitivity as the datasheet states it → V/mm.
+
+    ``7.87`` (a bare number: V/mm), ``"7.87 V/mm"``, ``"200 mV/mil"``, ``"7.87 mV/um"`` (= mV/µm),
+    ``"0.2 V/mil"`` all give 7.87 V/mm (200 mV/mil = 0.2 V / 0.0254 mm = 7.874 V/mm).
+
+    Raises
+    ------
+    ValueError
+        For text that is not ``NUMBER [m]V/(mm|um|µm|mil|m)`` or a value that is not finite and positive.
+    """
+    import math
+    import re
+
+    if isinstance(value, str):
+        m = re.fullmatch(r"\s*([-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?|[-+]?\.\d+)\s*"
+                         r"(?:(mV|V)\s*/\s*(mm|um|µm|μm|mils?|m))?\s*", value)
+        if m is None:
+            raise ValueError(f"probe sensitivity {value!r}: give a number and its units, e.g. '7.87 V/mm', "
+                             "'200 mV/mil' or '7.87 mV/um' (a bare number is V/mm)")
+        number = float(m.group(1))
+        if m.group(2):
+            per = m.group(3).rstrip("s") if m.group(3).startswith("mil") else m.group(3)
+            number = number * VOLTS_PER[m.group(2)] / _MM_PER[per]
+    else:
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"probe sensitivity {value!r} is not a number of V/mm (e.g. 7.87)") from None
+    if not (math.isfinite(number) and number > 0):
+        raise ValueError(f"probe sensitivity must be a positive number (e.g. 7.87 V/mm = 200 mV/mil), got {value!r}")
+    return number
 #: units amplitudes can be reported in (µm or mils)
 OUTPUT_UNITS: tuple[str, ...] = ("um", "mil")
 #: the sensitivity of the common 8 mm proximity probe system (200 mV/mil)

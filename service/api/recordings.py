@@ -44,8 +44,15 @@ def reader_query(
     sensitivity_v_per_mm: Annotated[float | None, Query(ge=SENSITIVITY_RANGE_V_PER_MM[0],
                                                         le=SENSITIVITY_RANGE_V_PER_MM[1], allow_inf_nan=False, description=(
         "Binary/multipart with `units=V` only: probe scale factor, V/mm (7.87 = 200 mV/mil)."))] = None,
+    sensitivity: Annotated[str | None, Query(min_length=1, max_length=32, description=(
+        "Binary/multipart with `units=V` or `mV` only: the probe sensitivity as the datasheet states it, "
+        "`7.87 V/mm`, `200 mV/mil` or `7.87 mV/um` (a bare number is V/mm); instead of `sensitivity_v_per_mm`."))] = None,
     gap_voltage_v: Annotated[float | None, Query(ge=-100, le=100, allow_inf_nan=False, description=(
-        "Binary/multipart with `units=V` only: DC gap voltage, V (default: each channel's mean)."))] = None,
+        "Binary/multipart with `units=V` or `mV` only: DC gap voltage, V (default: each channel's mean)."))] = None,
+    channel_map: Annotated[str | None, Query(min_length=1, max_length=2000, description=(
+        "CSV/UFF upload only: each probe column's bearing and angle by column name, `COLUMN=b<bearing>@<angle>` "
+        "separated by `;` (`GEN DE X=b2@45;GEN DE Y=b2@135`); the file's other columns (besides the time and "
+        "keyphasor) are left out and the answer's notes name them. Instead of `bearings`/`angles_deg`."))] = None,
     rotation: Annotated[Literal["ccw", "cw"], Query(description=(
         "Shaft rotation seen from the driver end; with `viewed_from` it decides whether the probe angles "
         "are mirrored so that a mirrored installation is not read as reverse whirl."))] = "ccw",
@@ -68,12 +75,23 @@ def reader_query(
     return dict(sample_rate_hz=sample_rate_hz, speed_rpm=speed_rpm, speed_range_rpm=speed_range_rpm,
                 clearance_um=clearance_um, units=units,
                 bearings=bearings, angles_deg=angles_deg, keyphasor_times_s=keyphasor_times_s,
-                sensitivity_v_per_mm=sensitivity_v_per_mm, gap_voltage_v=gap_voltage_v, rotation=rotation,
+                sensitivity_v_per_mm=sensitivity_v_per_mm, sensitivity=sensitivity, gap_voltage_v=gap_voltage_v,
+                channel_map=channel_map, rotation=rotation,
                 viewed_from=viewed_from, keyphasor_channel=keyphasor_channel, keyphasor_edge=keyphasor_edge,
                 keyphasor_threshold_v=keyphasor_threshold_v, dc_removed=dc_removed, acquisitions=acquisitions)
 
 
 ReaderQueryDep = Annotated[dict, Depends(reader_query)]
+
+
+def asset_probes_query(state, query: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any] | None]:
+    """The upload's query completed by its asset's stored probe configuration (``service.parsing.with_probe_config``)."""
+    from ..parsing import with_probe_config
+    from ..store import get_probe_config
+
+    with state.sessions() as s:
+        found = get_probe_config(s, query["asset_id"])
+    return with_probe_config(query, found[0] if found else None, query["asset_id"])
 
 
 JSON_TYPES = ("application/json",)

@@ -102,13 +102,16 @@ class AssetBaseline(Base):
 
 
 class AssetSettings(Base):
-    """Per-asset alarm thresholds on the change (overrides of ``models.change``'s shipped ones)."""
+    """Per-asset alarm thresholds on the change (overrides of ``models.change``'s shipped ones) and probe
+    configuration (``service.parsing.with_probe_config``)."""
 
     __tablename__ = "asset_settings"
 
     asset_id: Mapped[str] = mapped_column(String(128), primary_key=True)
     thresholds: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
     updated_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow, onupdate=utcnow)
+    # the asset's probe configuration (PUT /assets/{id}/probes): reader options every upload to it uses
+    probes: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
 
 
 class ServiceProbe(Base):

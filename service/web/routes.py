@@ -59,27 +59,12 @@ def static(name: str) -> FileResponse:
                         headers={"X-Content-Type-Options": "nosniff", "Cache-Control": "no-cache"})
 
 
-#: what each shipped example is (features/examples; the page's "try an example")
-_EXAMPLE_TITLES = {
-    "aligned": "aligned machine (Δ = 0)",
-    "misaligned": "severely misaligned (Δ = 0.5)",
-    "misaligned_2560hz": "severely misaligned (Δ = 0.5), bare array",
-}
-_EXAMPLE_FORMATS = {".csv": "CSV with a time column and b2@45-style header", ".h5": "HDF5 with its channel table",
-                    ".npy": "NPY, sample rate given separately", ".uff": "universal file (UFF 58b)"}
-
-
 @router.get("/ui/examples")
 def examples() -> list[dict[str, Any]]:
     """The example recordings shipped with the package: name, title and the query they need."""
-    from rotordiag.features.examples import example_options, list_examples
+    from rotordiag.features.examples import describe_example, example_options, list_examples
 
-    out = []
-    for name in list_examples():
-        stem, ext = Path(name).stem, Path(name).suffix
-        out.append({"name": name, "title": f"{_EXAMPLE_TITLES.get(stem, stem)} — {_EXAMPLE_FORMATS.get(ext, ext)}",
-                    "query": example_options(name)})
-    return out
+    return [{"name": name, "title": describe_example(name), "query": example_options(name)} for name in list_examples()]
 
 
 @router.get("/ui/examples/{name}")
@@ -106,12 +91,21 @@ async def plot(
     state: StateDep,
     reader: ReaderQueryDep,
     sample_index: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
+    asset_id: Annotated[str | None, Query(min_length=1, max_length=128, pattern=r"^[A-Za-z0-9._:-]+$")] = None,
 ) -> dict[str, Any]:
-    """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.plotdata``).
+    """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.plotdata``);
+    with ``asset_id``, read with the asset's probe configuration as /diagnose reads it (nothing is stored).
 
     Parsed and computed in a diagnosis worker (memory and time limits), as /diagnose; with
     ``ROTORDIAG_DIAGNOSIS_WORKERS=0`` in a thread of the server (HDF5 still decoded in the sandbox).
     Needs the API key when /diagnose does (``ROTORDIAG_DIAGNOSE_REQUIRES_KEY``).
     """
     query = dict(asset_id=None, plant=None, sample_index=sample_index, **reader)
+    if asset_id is not None and "application/json" not in request.headers.get("content-type", ""):
+        from fastapi.concurrency import run_in_threadpool
+
+        from ..api.recordings import asset_probes_query
+
+        query = {**(await run_in_threadpool(asset_probes_query, state, {**query, "asset_id": asset_id}))[0],
+                 "asset_id": None}
     return await recording_answer(request, state, query, PlotBody, lambda recording: _plot_sync(state, recording))

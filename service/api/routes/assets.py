@@ -1,5 +1,6 @@
-"""GET /assets/{asset_id}/history; the asset baseline (GET/POST/DELETE /assets/{asset_id}/baseline) and
-alarm thresholds (GET/PUT /assets/{asset_id}/thresholds)."""
+"""GET /assets/{asset_id}/history; the asset baseline (GET/POST/DELETE /assets/{asset_id}/baseline),
+alarm thresholds (GET/PUT /assets/{asset_id}/thresholds) and probe configuration (GET/PUT/DELETE
+/assets/{asset_id}/probes)."""
 from __future__ import annotations
 
 import datetime as dt
@@ -28,9 +29,19 @@ from ...schemas import (
     AssetPoint,
     BaselineOut,
     ErrorOut,
+    ProbeConfigIn,
+    ProbeConfigOut,
     ThresholdsIn,
 )
-from ...store import asset_history, delete_baseline, get_baseline, get_thresholds, put_thresholds
+from ...store import (
+    asset_history,
+    delete_baseline,
+    get_baseline,
+    get_probe_config,
+    get_thresholds,
+    put_probe_config,
+    put_thresholds,
+)
 from ..deps import (
     ApiKeyDep,
     JsonBodyDep,
@@ -187,3 +198,40 @@ def put_asset_thresholds(asset_id: AssetPath, body: ThresholdsIn, state: StateDe
         raise InputError(f"thresholds: {', '.join(bad)} must be a non-negative number (or null to not alarm on it)")
     put_thresholds(state, asset_id, body.thresholds)
     return get_asset_baseline(asset_id, session)
+
+
+@router.get("/assets/{asset_id}/probes", response_model=ProbeConfigOut, responses=_BASELINE_ERRORS,
+            summary="An asset's probe configuration")
+def get_asset_probes(asset_id: AssetPath, session: SessionDep) -> ProbeConfigOut:
+    found = get_probe_config(session, asset_id)
+    if found is None:
+        raise InputError(f"asset {asset_id!r} has no probe configuration; set one with PUT /assets/{asset_id}/probes",
+                         "not_found")
+    return ProbeConfigOut(asset_id=asset_id, probes=found[0], updated_at=found[1])
+
+
+@router.put("/assets/{asset_id}/probes", response_model=ProbeConfigOut,
+            dependencies=[ApiKeyDep, JsonBodyDep], responses=_BASELINE_ERRORS,
+            summary="Set an asset's probe configuration",
+            description="The column mapping (or layout in file order), units, probe sensitivity, gap voltage and "
+            "keyphasor column of the asset's probes, stored once: every binary or multipart upload with this "
+            "`asset_id` (POST /diagnose, POST /assets/{id}/baseline) is read with them and its answer says so "
+            "(`asset_probes`, `input_notes`). An upload's own query parameters win, group by group (`layout`: "
+            "channel_map/bearings/angles_deg; `units`; `sensitivity`; `gap_voltage`; `keyphasor`). `{}` removes it.")
+def put_asset_probes(asset_id: AssetPath, body: ProbeConfigIn, state: StateDep, session: SessionDep) -> ProbeConfigOut:
+    from ...parsing import check_probe_config
+
+    probes = body.model_dump(exclude_none=True)
+    check_probe_config(probes)
+    put_probe_config(state, asset_id, probes)
+    if not probes:
+        return ProbeConfigOut(asset_id=asset_id, probes={}, updated_at=None)
+    return get_asset_probes(asset_id, session)
+
+
+@router.delete("/assets/{asset_id}/probes", status_code=204, dependencies=[ApiKeyDep],
+               responses=_BASELINE_ERRORS, summary="Remove an asset's probe configuration")
+def delete_asset_probes(asset_id: AssetPath, state: StateDep, session: SessionDep) -> None:
+    if get_probe_config(session, asset_id) is None:
+        raise InputError(f"asset {asset_id!r} has no probe configuration", "not_found")
+    put_probe_config(state, asset_id, {})

@@ -17,7 +17,7 @@ from rotordiag.models.output_units import verdict_in_units
 
 from ...baseline import record_verdict
 from ...inference import ModelUnavailable
-from ...parsing import MAX_TAKE_FILES, batch_record, checked, parse_batch, parse_body, recording_from_model
+from ...parsing import MAX_TAKE_FILES, batch_record, checked, parse_batch, parse_request, recording_from_model
 from ...pool import DiagnoseBody, DiagnoseRecord, ParseBatch
 from ...schemas import MAX_BATCH_VALUES, MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
 from ..deps import (
@@ -28,7 +28,7 @@ from ..deps import (
     StateDep,
 )
 from ..errors import STATUS_OF_KIND, InputError, RequestInvalid
-from ..recordings import ReaderQueryDep, diagnosis_limiter, in_worker, read_body, read_json_bounded
+from ..recordings import ReaderQueryDep, asset_probes_query, diagnosis_limiter, in_worker, read_body, read_json_bounded
 from ..routing import FiniteJSONRoute
 
 router = APIRouter(tags=["diagnose"], route_class=FiniteJSONRoute)
@@ -143,12 +143,23 @@ async def diagnose_from_request(request: Request, state, query: dict[str, Any], 
     ``may_store`` (the request carried the API key), store the result here
     (``service.baseline.record_verdict``). Returns the verdict and the request's asset id."""
     kind, body, filename, slow_roll = await read_body(request, slow_roll=slow_roll_allowed)
+    probes = None
+    if kind != "json" and query.get("asset_id"):    # a JSON body states its channels itself
+        query, probes = await run_in_threadpool(asset_probes_query, state, query)
     if state.pool is not None:
         _, verdict, asset_id, plant = await in_worker(state, DiagnoseBody(kind, body, filename, query, slow_roll, version))
     else:
         verdict, asset_id, plant = await anyio.to_thread.run_sync(_parse_and_diagnose, state, kind, body, filename,
                                                                   query, slow_roll, version,
                                                                   limiter=diagnosis_limiter(state))
+    if probes is not None:
+        verdict["asset_probes"] = probes
+        used = ", ".join(f"{k}={v}" for k, v in probes["used"].items())
+        verdict.setdefault("input_notes", []).insert(0, f"read with asset {probes['asset_id']!r}'s probe "
+                                                     f"configuration: {used or 'nothing of it'}"
+                                                     + (f" (given with this upload instead: "
+                                                        f"{', '.join(probes['overridden_by_upload'])})"
+                                                        if probes["overridden_by_upload"] else ""))
     if store:
         await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store)
     return verdict, asset_id
@@ -156,8 +167,8 @@ async def diagnose_from_request(request: Request, state, query: dict[str, Any], 
 
 def _parse_and_diagnose(state, kind, body, filename, query, slow_roll,
                         model_version) -> tuple[dict, str | None, str | None]:
-    recording, asset_id, plant = parse_body(kind, body, filename, query, slow_roll)
-    return _diagnose_sync(state, recording, model_version), asset_id, plant
+    recording, asset_id, plant, notes = parse_request(kind, body, filename, query, slow_roll)
+    return {**_diagnose_sync(state, recording, model_version), "input_notes": notes}, asset_id, plant
 
 
 _BATCH_BODY = {"requestBody": {"required": True, "content": {

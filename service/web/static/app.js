@@ -41,6 +41,7 @@
     dc_removed: "“DC part is no shaft position”", acquisitions: "the bearings sampled together",
     keyphasor_channel: "the keyphasor channel(s)",
     sensitivity_v_per_mm: "the probe sensitivity (V/mm)", gap_voltage_v: "the gap voltage (V)",
+    sensitivity: "the probe sensitivity", channel_map: "the probe columns by name",
   };
   // whole messages an engineer meets first, said as what to do in this form
   const PLAIN = [
@@ -533,6 +534,8 @@
     }
     const wl = $("verdict-warnings");
     wl.replaceChildren(...(v.warnings || []).map((w) => el("li", { text: plainWords(w) })));
+    $("verdict-input-notes").replaceChildren(...(v.input_notes || []).map((n) => el("li", { text: n })));
+    show($("verdict-input-notes-box"), (v.input_notes || []).length > 0);
     show($("verdict"), true);
   }
 
@@ -590,14 +593,15 @@
     if (!files.length) throw new Error("Choose a waveform file (CSV, NPY, HDF5 or UFF), or switch the source to an example or “Paste JSON”.");
     for (const [key, id] of Object.entries(numeric)) if (formValue(id) !== null) q.set(key, formValue(id));
     for (const [key, id] of [["units", "units"], ["bearings", "bearings"], ["angles_deg", "angles"],
-      ["speed_range_rpm", "speed-range"], ["acquisitions", "acquisitions"], ["keyphasor_channel", "keyphasor-channel"]]) {
+      ["speed_range_rpm", "speed-range"], ["acquisitions", "acquisitions"], ["keyphasor_channel", "keyphasor-channel"],
+      ["channel_map", "channel-map"], ["sensitivity", "sensitivity"], ["gap_voltage_v", "gap-voltage"]]) {
       if (formValue(id) !== null) q.set(key, formValue(id));
     }
     if (formValue("sample-index") !== null && formValue("sample-index") !== "0") q.set("sample_index", formValue("sample-index"));
     if ($("dc-removed").checked) q.set("dc_removed", "true");
-    const qp = new URLSearchParams(q);
     const asset = formValue("asset");
-    if (asset) q.set("asset_id", asset);
+    if (asset) q.set("asset_id", asset);       // the plots too are read with the asset's probe configuration
+    const qp = new URLSearchParams(q);
     q.set("output_units", $("length-units").value);
     const opts = () => { const fd = new FormData(); for (const f of files) fd.append("file", f, f.name); return { method: "POST", body: fd, headers: keyHeader() }; };
     return { diagnose: [`/diagnose?${q}`, opts()], plot: [`/ui/plot-data?${qp}`, opts()], asset };
