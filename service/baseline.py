@@ -18,15 +18,13 @@ from typing import TYPE_CHECKING, Any
 
 from .core.db import AssetBaseline
 from .errors import InputError
-from .store import first_diagnoses, get_baseline, get_diagnosis, get_thresholds, put_baseline, store_diagnosis
+from .store import AUTO_N, first_diagnoses, get_baseline, get_diagnosis, get_thresholds, put_baseline, store_diagnosis
 
 if TYPE_CHECKING:
     from sqlalchemy.orm import Session
 
     from .state import AppState
 
-#: recordings an automatic baseline is made of (default of ``?n=``)
-AUTO_N = 3
 
 
 def _iso(t: dt.datetime | None) -> str | None:

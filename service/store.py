@@ -48,6 +48,10 @@ def store_diagnosis(state: AppState, asset_id: str, plant: str | None, verdict: 
     return row_id
 
 
+#: recordings an automatic baseline is made of (default of ``?n=``; ``service.baseline`` takes them)
+AUTO_N = 3
+
+
 def apply_retention(session: Session, settings: Any, asset_id: str) -> tuple[int, int]:
     """Bound the stored history of ``asset_id`` (runs in the transaction that stores a diagnosis).
 
@@ -56,11 +60,9 @@ def apply_retention(session: Session, settings: Any, asset_id: str) -> tuple[int
     summary columns (time, severity, Δ and interval, speed, OOD, alarm, change) stay, for
     ``history_summary_days``, then the row is deleted; beyond ``history_max_rows`` rows the oldest are deleted
     too. While the asset has no baseline, the recordings an
-    automatic baseline would be made of (its first ``baseline.AUTO_N`` with a signature) keep their signature.
+    automatic baseline would be made of (its first ``AUTO_N`` with a signature) keep their signature.
     Returns ``(trimmed, deleted)``.
     """
-    from .baseline import AUTO_N
-
     now = utcnow()
     keep_n = int(settings.history_keep_recordings)
     keep_days = float(settings.history_keep_days)

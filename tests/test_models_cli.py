@@ -178,7 +178,7 @@ def test_diagnose_npy_csv_and_dataset_row(trained, dataset, tmp_path):
         (["--channels", "9@45"], "--channels"),
         (["--sidecar", "nope.json"], "--sidecar"),
         (["--speed-range-rpm", "3100,2900"], "--speed-range-rpm: the minimum (3100) must be below the maximum"),
-        (["--speed-range-rpm", "-5,3000"], "--speed-range-rpm: the minimum must be > 0"),
+        (["--speed-range-rpm", "-5,3000"], "--speed-range-rpm must lie between 1 and 100000 r/min"),
         (["--speed-range-rpm", "3000"], "--speed-range-rpm must be two numbers"),
         (["--speed-range-rpm", "2900,3100", "--speed-rpm", "1500"], "speed_rpm 1500 lies outside speed_range_rpm"),
     ],
