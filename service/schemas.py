@@ -305,6 +305,9 @@ class HealthOut(BaseModel):
     model_sha256: str | None = Field(None, description="SHA-256 of the model file the diagnosis workers (or the "
                                      "server, without workers) hold for `model_version`; checked at least every 5 s.")
     detail: str = Field("", description="What is wrong when degraded.")
+    replica: str = Field("", description="This API process's name among the replicas sharing the database "
+                         "(ROTORDIAG_REPLICA_ID); each replica answers for itself.")
+    jobs_held: int = Field(0, description="Jobs this replica is running (claimed from the database).")
 
 
 # --- diagnosis output -------------------------------------------------------------------------

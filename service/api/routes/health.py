@@ -42,4 +42,5 @@ def health(state: StateDep, response: Response) -> HealthOut:
     if problems:
         response.status_code = 503
     return HealthOut(status="degraded" if problems else "ok", version=code_version(), database=db_ok,
-                     model_version=version, model_sha256=sha256, detail="; ".join(problems))
+                     model_version=version, model_sha256=sha256, detail="; ".join(problems),
+                     replica=state.jobs.replica, jobs_held=state.jobs.held())
