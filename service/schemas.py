@@ -165,11 +165,15 @@ class JobOut(BaseModel):
     params: dict[str, Any] = Field(..., description="The request that created the job.")
     result: dict[str, Any] | None = Field(None, description="Dataset summary or new model version and evaluation.")
     error: str | None = Field(None, description="Why the job failed.")
-    attempts: int = Field(..., description="How many times the job has been started (resumes count).")
+    attempts: int = Field(..., description="How many times the job has been started (resumes and takeovers count).")
     created_at: dt.datetime = Field(..., description="When the job was created (UTC).")
     started_at: dt.datetime | None = Field(..., description="When its last attempt started (UTC).")
     finished_at: dt.datetime | None = Field(..., description="When it last finished, failed or was interrupted (UTC).")
     updated_at: dt.datetime = Field(..., description="Last progress update (UTC).")
+    lease_owner: str | None = Field(None, description="The replica that runs (or last ran) the job.")
+    lease_expires_at: dt.datetime | None = Field(
+        None, description="While it runs: when the holder's lease ends unless renewed (UTC); past it, another "
+        "replica takes the job over.")
 
 
 # --- assets ---------------------------------------------------------------------------------
