@@ -248,3 +248,20 @@ def test_activation_on_one_replica_is_seen_by_the_other_at_its_next_request(tmp_
         assert r.status_code == 200, r.text
         assert b.post("/diagnose", json=body).json()["model_version"] == second
         assert b.get("/health").json()["model_version"] == second
+
+
+def test_retrain_taken_over_after_registering_reuses_the_version(tmp_path):
+    """A retraining job whose holder died between registering the model and recording success is not
+    trained (and registered) a second time by the replica that takes it over."""
+    import json
+
+    from rotordiag.models.registry import Registry
+    from rotordiag.service.work import _registered_by
+
+    for version, job in (("v0001", None), ("v0002", "job-a"), ("v0003", "job-b")):
+        (tmp_path / version).mkdir()
+        (tmp_path / version / "card.json").write_text(json.dumps({"retrain_job": job} if job else {}))
+    (tmp_path / "v0004").mkdir()                      # a version whose card is unreadable is passed over
+    reg = Registry(tmp_path)
+    assert _registered_by(reg, "job-a") == "v0002" and _registered_by(reg, "job-b") == "v0003"
+    assert _registered_by(reg, "job-c") is None
