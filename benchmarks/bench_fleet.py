@@ -31,13 +31,15 @@ from types import SimpleNamespace
 
 import numpy as np
 
+API_KEY = "bench"
+
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))
 sys.path.insert(0, str(ROOT))
 
 from bench_service import _drive_entry, payloads, recording  # noqa: E402
 
-from tests.fleet_util import start_replica  # noqa: E402
+from tests.fleet_util import request, start_replica  # noqa: E402
 from tests.pg_util import postgres_cluster  # noqa: E402
 
 
@@ -49,7 +51,7 @@ def _throughput(replicas, body_args, concurrency: int, duration_s: float) -> dic
     for i, rep in enumerate(replicas):
         parent, child = ctx.Pipe()
         p = ctx.Process(target=_drive_entry, args=((rep.port, f"{path}&asset_id=bench-{rep.name}", ctype, body,
-                                                    concurrency, duration_s), child))
+                                                    concurrency, duration_s, {"X-API-Key": API_KEY}), child))
         p.start()
         procs.append((p, parent))
     lat: list[float] = []
@@ -82,7 +84,10 @@ def _history_rate(url: str, threads: int, duration_s: float, sync_commit: bool =
             cur.execute("SET synchronous_commit TO off")
             cur.close()
             dbapi_connection.commit()
-    state = SimpleNamespace(sessions=init_db(engine))
+    from rotordiag.service.core.config import Settings
+
+    # the shipped retention settings: each write also applies the asset's retention, as the API's do
+    state = SimpleNamespace(sessions=init_db(engine), settings=Settings(_env_file=None))
     verdict = {"model_version": "v0001", "severity": "moderate", "misalignment": 0.21,
                "misalignment_interval": [0.15, 0.27], "speed_rpm": 1800.0, "ood": False,
                "key_features": {f"f{i}": float(i) for i in range(24)}, "warnings": [], "bearings": []}
@@ -124,7 +129,7 @@ def main() -> None:
     with postgres_cluster(durable=True) as pg, tempfile.TemporaryDirectory(prefix="bench-fleet-") as tmp:
         url = pg.new_database()
         env = {"ROTORDIAG_DATABASE_URL": url, "ROTORDIAG_DATA_DIR": str(Path(tmp) / "data"),
-               "ROTORDIAG_API_KEY": "bench", "ROTORDIAG_SHIPPED_REGISTRY_DIR": str(shipped_or_tiny_registry()),
+               "ROTORDIAG_API_KEY": API_KEY, "ROTORDIAG_SHIPPED_REGISTRY_DIR": str(shipped_or_tiny_registry()),
                "ROTORDIAG_DIAGNOSIS_WORKERS": str(args.workers_per_replica), "ROTORDIAG_LOG_LEVEL": "warning"}
         replicas = [start_replica("r1", Path(tmp) / "r1", env)]
         replicas.append(start_replica("r2", Path(tmp) / "r2", env))
@@ -140,6 +145,9 @@ def main() -> None:
                 print(f"{n:>8} {r['rps']:8.1f} {r['p50_ms']:8.0f} {r['p99_ms']:8.0f} {r['errors']:7d} {r['n']:9d}")
             print(f"ratio 2 replicas / 1 replica: {res[2]['rps'] / res[1]['rps']:.2f} "
                   f"(load average {os.getloadavg()[0]:.1f} now)")
+            stored = sum(request(f"{replicas[0].base}/assets/bench-{r.name}/history?limit=10000")[1].get("count", 0)
+                         for r in replicas)
+            print(f"history rows stored by the runs (warm-up included): {stored}")
         finally:
             for rep in replicas:
                 rep.stop()

@@ -88,13 +88,21 @@ def attach_baseline(state: AppState, asset_id: str, verdict: dict[str, Any], sig
     verdict["evidence"] = list(section.pop("evidence", [])) + list(verdict.get("evidence") or [])
 
 
-def record_verdict(state: AppState, asset_id: str | None, plant: str | None, verdict: dict[str, Any]) -> int | None:
+def record_verdict(state: AppState, asset_id: str | None, plant: str | None, verdict: dict[str, Any],
+                   store: bool = True) -> int | None:
     """The last step of every diagnosis: take the recording's signature out of the answer and, with an
-    ``asset_id``, compare with the asset's baseline and store the diagnosis (its id goes into the answer)."""
+    ``asset_id``, compare with the asset's baseline and, when ``store`` (the request carried the API key),
+    store the diagnosis (its id goes into the answer). The answer says whether it was stored (``stored``,
+    and ``storage_note`` when not)."""
     signature = verdict.pop("signature", None)
     if asset_id is None:
         return None
     attach_baseline(state, asset_id, verdict, signature)
+    verdict["stored"] = store
+    if not store:
+        verdict["storage_note"] = (f"not stored in the history of asset {asset_id!r}: storing a diagnosis needs the "
+                                   "API key in the X-API-Key header; this answer is complete without it")
+        return None
     verdict["diagnosis_id"] = store_diagnosis(state, asset_id, plant, verdict, signature)
     return verdict["diagnosis_id"]
 
@@ -113,8 +121,9 @@ def from_diagnosis(state: AppState, asset_id: str, diagnosis_id: int, source: st
             raise InputError(f"asset {asset_id!r} has no stored diagnosis {diagnosis_id}; GET "
                              f"/assets/{asset_id}/history lists its diagnoses with their ids", "not_found")
         if d.signature is None:
-            raise InputError(f"diagnosis {diagnosis_id} was stored before baselines existed and keeps no signature; "
-                             "send its recording to this endpoint instead", "conflict")
+            raise InputError(f"diagnosis {diagnosis_id} keeps no signature (it was stored before baselines existed, "
+                             "or only its summary is kept past the history's retention); send its recording to "
+                             "this endpoint instead", "conflict")
         row = AssetBaseline(asset_id=asset_id, source=source, diagnosis_ids=[d.id], recorded_at=d.created_at,
                             speed_rpm=d.speed_rpm, model_version=d.model_version, signature=d.signature)
     return baseline_dict(put_baseline(state, row))

@@ -38,8 +38,10 @@ def register(app: typer.Typer) -> None:
             # processes (ROTORDIAG_DIAGNOSIS_WORKERS, service/pool.py), jobs scale out on Dask, and more
             # replicas (another `rotordiag serve` on this or another host, sharing a PostgreSQL
             # ROTORDIAG_DATABASE_URL and the data directory) claim jobs from the database.
+            # SIGINT/SIGTERM: open requests get shutdown_timeout_s, then the jobs get it again (service/jobs.py)
             uvicorn.run("rotordiag.service.main:app", host=host, port=port,
-                        log_level=settings.log_level.lower(), access_log=False)
+                        log_level=settings.log_level.lower(), access_log=False,
+                        timeout_graceful_shutdown=max(1, round(settings.shutdown_timeout_s)))
         except OSError as exc:  # e.g. address in use
             typer.secho(f"error: cannot listen on {host}:{port}: {exc}", fg="red", err=True)
             raise typer.Exit(2) from None
@@ -137,7 +139,7 @@ def _register_baseline(app: typer.Typer) -> None:
             typer.secho(f"error: invalid settings: {exc}", fg="red", err=True)
             raise typer.Exit(2) from None
         settings.data_dir.mkdir(parents=True, exist_ok=True)
-        return _DbState(init_db(make_engine(settings.effective_database_url))), settings
+        return _DbState(init_db(make_engine(settings.effective_database_url)), settings), settings
 
     def _fail(message: str) -> None:
         typer.secho(f"error: {message}", fg="red", err=True)
@@ -245,7 +247,9 @@ def _register_baseline(app: typer.Typer) -> None:
 
 
 class _DbState:
-    """The part of ``AppState`` that the baseline functions use (the database), for the CLI."""
+    """The part of ``AppState`` that the baseline functions use (the database and the settings: the history's
+    retention), for the CLI."""
 
-    def __init__(self, sessions) -> None:
+    def __init__(self, sessions, settings) -> None:
         self.sessions = sessions
+        self.settings = settings

@@ -1,7 +1,8 @@
 """Prometheus metrics of this replica: request latency histograms (prometheus-fastapi-instrumentator), the
 replica's name (``rotordiag_replica_info{replica}``), the jobs it runs and has taken over, plus job counts and,
 per asset with a baseline, the latest change against it (``rotordiag_asset_change{asset, quantity}``) and
-its trend alarm (``rotordiag_asset_alarm{asset}``).
+its trend alarm (``rotordiag_asset_alarm{asset}``), and per asset the storage its history uses
+(``rotordiag_asset_history_bytes{asset}``, ``rotordiag_asset_history_rows{asset, kind}``).
 
 Each app gets its own ``CollectorRegistry`` so several apps (tests) can live in one process. Request
 figures are per replica: scrape every replica, not the load balancer (docs/service.md).
@@ -65,6 +66,38 @@ def _asset_metrics(state):
         alarm.add_metric([asset], 1.0 if ch.get("changed") else 0.0)
     yield change
     yield alarm
+    yield from _history_metrics(state)
+
+
+#: how long the per-asset storage figures are reused between scrapes, s (they scan the history table)
+HISTORY_SIZES_TTL_S = 30.0
+_SIZES_CACHE: dict[int, tuple[float, list]] = {}
+
+
+def _history_metrics(state):
+    """Per asset: the bytes its stored history holds and its full diagnoses and summaries (the retention
+    settings bound both; ``service.store.apply_retention``)."""
+    import time
+
+    from .store import history_sizes
+
+    now = time.monotonic()
+    cached = _SIZES_CACHE.get(id(state))
+    if cached is None or now - cached[0] > HISTORY_SIZES_TTL_S:
+        with state.sessions() as s:
+            cached = (now, history_sizes(s))
+        _SIZES_CACHE.clear()
+        _SIZES_CACHE[id(state)] = cached
+    size = GaugeMetricFamily("rotordiag_asset_history_bytes", "Bytes of stored diagnoses per asset (the JSON of "
+                             "verdicts, key features, signatures and changes), refreshed every 30 s.", labels=["asset"])
+    rows = GaugeMetricFamily("rotordiag_asset_history_rows", "Stored diagnoses per asset: `full` (with verdict and "
+                             "signature) or `summary` (past the retention of full records).", labels=["asset", "kind"])
+    for asset, n_bytes, n_full, n_summary in cached[1]:
+        size.add_metric([asset], float(n_bytes))
+        rows.add_metric([asset, "full"], float(n_full))
+        rows.add_metric([asset, "summary"], float(n_summary))
+    yield size
+    yield rows
 
 
 def install_metrics(app: FastAPI) -> None:

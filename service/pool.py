@@ -379,12 +379,23 @@ class _Worker:
         return bytes(buf)
 
     def stop(self, timeout_s: float = 5.0) -> None:
+        self.close()
+        self.reap(time.monotonic() + timeout_s)
+
+    def close(self) -> None:
+        """Close the socket: the worker returns once the request it computes is done."""
         self._reader.cancel()
         self.sock.close()            # the worker sees end of file and returns
-        self.process.join(timeout_s)
+
+    def reap(self, deadline: float) -> None:
+        """Wait for the closed worker until ``deadline`` (``time.monotonic()``), then terminate, then kill it."""
+        self.process.join(max(0.0, deadline - time.monotonic()))
         if self.process.is_alive():
             self.process.terminate()
-            self.process.join(timeout_s)
+            self.process.join(2.0)
+        if self.process.is_alive():
+            self.process.kill()
+            self.process.join(1.0)
 
 
 #: how long /health may reuse the workers' answer about the model they hold
@@ -423,6 +434,7 @@ class DiagnosisPool:
         self._next = 0                   # round-robin start for ties
         self._checked: dict[str, tuple[float, str | None]] = {}
         self.model_sha256: str | None = None   # of the model file the workers hold (last check)
+        self.checked_version: str | None = None  # the version a worker last answered a check for
         self._closing = False
 
     def _new_worker(self) -> _Worker:
@@ -539,11 +551,16 @@ class DiagnosisPool:
         problems = sorted({a["problem"] for a in answers if a["problem"]})
         hashes = {a["sha256"] for a in answers}
         self.model_sha256 = next(iter(hashes)) if len(hashes) == 1 else None
+        self.checked_version = version
         if problems:
             return "; ".join(problems)
         if len(hashes) > 1:
             return f"diagnosis workers hold different files of model {version} (sha256 {sorted(map(str, hashes))})"
         return None
+
+    def any_ready(self) -> bool:
+        """Whether a worker has started and loaded its model (a check answered at once)."""
+        return any(w.alive and w.ready for w in self._workers)
 
     def check_model(self, version: str, timeout_s: float = 30.0) -> str | None:
         """``None`` when the workers hold ``version`` and can diagnose with it, else why not.
@@ -568,9 +585,20 @@ class DiagnosisPool:
         self._checked = {version: (time.monotonic(), problem)}
         return problem
 
-    def shutdown(self) -> None:
-        """Stop the workers (each finishes the request it holds first)."""
+    def shutdown(self, timeout_s: float = 5.0) -> None:
+        """Stop the workers: all are told at once, each may finish the request it holds within ``timeout_s``
+        (in all, not each), then it is terminated (at most ``timeout_s`` + 3 s in all)."""
         self._closing = True
         for w in self._workers:
-            w.stop()
+            w.close()
+        deadline = time.monotonic() + timeout_s
+        for w in self._workers:
+            w.process.join(max(0.0, deadline - time.monotonic()))
+        for signal_them in ("terminate", "kill"):      # whatever is left, all at once
+            left = [w.process for w in self._workers if w.process.is_alive()]
+            for proc in left:
+                getattr(proc, signal_them)()
+            deadline = time.monotonic() + 1.5
+            for proc in left:
+                proc.join(max(0.0, deadline - time.monotonic()))
         self._workers.clear()

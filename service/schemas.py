@@ -148,7 +148,7 @@ class ErrorOut(BaseModel):
 
 # --- jobs -----------------------------------------------------------------------------------
 
-JobStatus = Literal["queued", "running", "succeeded", "failed", "interrupted"]
+JobStatus = Literal["queued", "running", "succeeded", "failed", "interrupted", "cancelled"]
 
 
 class JobOut(BaseModel):
@@ -157,8 +157,8 @@ class JobOut(BaseModel):
     id: str = Field(..., description="Job identifier (UUID).")
     kind: Literal["dataset", "retrain"] = Field(..., description="`dataset` (POST /datasets) or `retrain` "
                                                 "(POST /models/retrain).")
-    status: JobStatus = Field(..., description="`interrupted`: the server stopped while it ran; "
-                              "POST /jobs/{id}/resume continues it.")
+    status: JobStatus = Field(..., description="`interrupted`: the server stopped while it ran; `cancelled`: "
+                              "stopped by POST /jobs/{id}/cancel; POST /jobs/{id}/resume continues either.")
     progress: float = Field(..., ge=0, le=1, description="Fraction done, 0-1.")
     stage: str = Field(..., description="Current stage, e.g. `simulating`, `training`.")
     message: str = Field(..., description="Human-readable progress note.")
@@ -301,10 +301,13 @@ class AssetHistory(BaseModel):
 class HealthOut(BaseModel):
     """Liveness and readiness."""
 
-    status: Literal["ok", "degraded"] = Field(..., description="`degraded` when no model can be loaded or the "
-                                              "database does not answer.")
+    status: Literal["ok", "starting", "degraded"] = Field(
+        ..., description="`starting` until a diagnosis worker has loaded and checked the active model; `degraded` "
+        "when no model can be loaded or its checksum is unknown, the database cannot be read and written, or the "
+        "data disk is nearly full (`detail` says which); `ok` otherwise. Anything but `ok` answers 503.")
     version: str = Field(..., description="Code version.")
-    database: bool = Field(..., description="The database answered.")
+    database: bool = Field(..., description="The database read a table and took a write.")
+    disk_free_mb: float | None = Field(None, description="Free space on the disk holding the data directory, MiB.")
     model_version: str | None = Field(None, description="Active model version, if any.")
     model_sha256: str | None = Field(None, description="SHA-256 of the model file the diagnosis workers (or the "
                                      "server, without workers) hold for `model_version`; checked at least every 5 s.")
@@ -450,7 +453,12 @@ class DiagnoseResponse(BaseModel):
     bands: dict[str, Any] = Field(..., description="The model's severity bands: `edges` (Δ) and `names`.")
     warnings: list[str] = Field(..., description="Anything that makes the verdict less certain.")
     bearings: list[BearingOut] = Field(..., description="Per-bearing key features from the features package.")
-    diagnosis_id: int | None = Field(None, description="With an `asset_id`: the id of the stored diagnosis.")
+    diagnosis_id: int | None = Field(None, description="With an `asset_id` and the API key: the id of the stored "
+                                     "diagnosis.")
+    stored: bool | None = Field(None, description="With an `asset_id`: whether this diagnosis was stored in the "
+                                "asset's history (only requests with the `X-API-Key` header store).")
+    storage_note: str | None = Field(None, description="With an `asset_id` and no API key: why the diagnosis was "
+                                     "not stored.")
     baseline: BaselineSectionOut | None = Field(None, description="With an `asset_id`: whether the asset's baseline "
                                                 "was used, its date, and what changed since it (the change items are "
                                                 "also in `evidence`, scope `change since baseline`).")

@@ -53,11 +53,11 @@ class AppState:
         return cls(settings=settings, engine=engine, sessions=sessions, models=models, jobs=jobs, pool=pool)
 
     def stop(self) -> None:
-        """Stop the job threads (running jobs are marked interrupted), the diagnosis workers, and close
-        the engine."""
+        """Stop the job threads (running jobs are marked interrupted; at most ``shutdown_timeout_s`` + 10 s),
+        the diagnosis workers (at most 8 s), and close the engine."""
         self.jobs.shutdown()
         if self.pool is not None:
-            self.pool.shutdown()
+            self.pool.shutdown(timeout_s=5.0)
         self.engine.dispose()
 
 

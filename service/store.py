@@ -1,12 +1,13 @@
-"""Writing and reading asset diagnoses (the per-asset trend), baselines and alarm thresholds."""
+"""Writing and reading asset diagnoses (the per-asset trend), baselines and alarm thresholds; the history's
+retention (full diagnoses for a while, summaries longer) and the checks ``GET /health`` makes of the storage."""
 from __future__ import annotations
 
 import datetime as dt
 from typing import TYPE_CHECKING, Any
 
-from sqlalchemy import select
+from sqlalchemy import Text, cast, delete, func, select, update
 
-from .core.db import AssetBaseline, AssetDiagnosis, AssetSettings
+from .core.db import AssetBaseline, AssetDiagnosis, AssetSettings, Job, ServiceProbe, utcnow
 
 if TYPE_CHECKING:
     from sqlalchemy.orm import Session
@@ -41,7 +42,115 @@ def store_diagnosis(state: AppState, asset_id: str, plant: str | None, verdict: 
     with state.sessions.begin() as s:
         s.add(row)
         s.flush()
-        return int(row.id)
+        row_id = int(row.id)
+        apply_retention(s, state.settings, asset_id)
+    return row_id
+
+
+def apply_retention(session: Session, settings: Any, asset_id: str) -> tuple[int, int]:
+    """Bound the stored history of ``asset_id`` (runs in the transaction that stores a diagnosis).
+
+    A diagnosis keeps its full record (verdict, key features, signature: about 30 kB) while it is among the
+    asset's latest ``history_keep_recordings`` and younger than ``history_keep_days``; after that only its
+    summary columns (time, severity, Δ and interval, speed, OOD, alarm, change) stay, for
+    ``history_summary_days``, then the row is deleted. While the asset has no baseline, the recordings an
+    automatic baseline would be made of (its first ``baseline.AUTO_N`` with a signature) keep their signature.
+    Returns ``(trimmed, deleted)``.
+    """
+    from .baseline import AUTO_N
+
+    now = utcnow()
+    keep_n = int(settings.history_keep_recordings)
+    keep_days = float(settings.history_keep_days)
+    full = (AssetDiagnosis.asset_id == asset_id) & AssetDiagnosis.signature.is_not(None)
+    old: list[int] = []
+    if keep_n > 0:
+        old += list(session.scalars(select(AssetDiagnosis.id).where(full)
+                                    .order_by(AssetDiagnosis.created_at.desc(), AssetDiagnosis.id.desc())
+                                    .offset(keep_n)))
+    if keep_days > 0:
+        cutoff = now - dt.timedelta(days=keep_days)
+        old += list(session.scalars(select(AssetDiagnosis.id).where(full, AssetDiagnosis.created_at < cutoff)))
+    trimmed = 0
+    if old:
+        if session.get(AssetBaseline, asset_id) is None:
+            keep = {r.id for r in first_diagnoses(session, asset_id, AUTO_N)}
+            old = [i for i in old if i not in keep]
+        ids = sorted(set(old))
+        if ids:
+            trimmed = _rowcount(session.execute(update(AssetDiagnosis).where(AssetDiagnosis.id.in_(ids)).values(
+                verdict={}, key_features={}, signature=None)))
+    deleted = 0
+    if settings.history_summary_days > 0:
+        cutoff = now - dt.timedelta(days=float(settings.history_summary_days))
+        deleted = _rowcount(session.execute(delete(AssetDiagnosis).where(
+            AssetDiagnosis.asset_id == asset_id, AssetDiagnosis.created_at < cutoff)))
+    return trimmed, deleted
+
+
+def _rowcount(result: Any) -> int:
+    """Rows an UPDATE/DELETE touched (a ``CursorResult``'s ``rowcount``)."""
+    return int(getattr(result, "rowcount", 0) or 0)
+
+
+def history_sizes(session: Session) -> list[tuple[str, int, int, int]]:
+    """``(asset_id, stored bytes, full diagnoses, summaries)`` per asset: the bytes are the length of the
+    JSON the rows hold (verdict, key features, signature, change), the bulk of what an asset's history uses
+    on disk (for the metrics)."""
+    def size(col: Any) -> Any:
+        return func.coalesce(func.length(cast(col, Text)), 0)
+
+    q = (select(AssetDiagnosis.asset_id,
+                func.sum(size(AssetDiagnosis.verdict) + size(AssetDiagnosis.key_features)
+                         + size(AssetDiagnosis.signature) + size(AssetDiagnosis.change)),
+                func.count(AssetDiagnosis.signature), func.count())
+         .group_by(AssetDiagnosis.asset_id))
+    return [(a, int(b or 0), int(n_full), int(n) - int(n_full)) for a, b, n_full, n in session.execute(q)]
+
+
+def database_problem(state: AppState) -> str | None:
+    """``None`` when the database reads a real table and takes a write (the health probe row), else what
+    failed, in words (``SELECT 1`` alone answers from a truncated file or a full disk)."""
+    try:
+        with state.sessions.begin() as s:
+            s.execute(select(Job.id).limit(1)).all()
+            s.execute(select(AssetDiagnosis.id).order_by(AssetDiagnosis.id.desc()).limit(1)).all()
+            s.merge(ServiceProbe(name="health", written_at=utcnow()))
+    except Exception as exc:  # noqa: BLE001 - reported, not raised
+        return f"database: cannot read and write ({database_error_text(exc)})"
+    return None
+
+
+def database_error_text(exc: BaseException) -> str:
+    """What a database error means for the user, with the driver's own message (no SQL, no parameters)."""
+    orig = getattr(exc, "orig", None) or exc
+    msg = str(orig).splitlines()[0] if str(orig) else type(orig).__name__
+    low = msg.lower()
+    if "full" in low:
+        return f"the data disk is full: {msg}; free space on it"
+    if "not a database" in low or "malformed" in low or "disk i/o" in low:
+        return f"the database file is damaged or unreadable: {msg}; restore it from a backup"
+    if "locked" in low or "busy" in low:
+        return f"the database is busy: {msg}; retry in a moment"
+    return msg
+
+
+def disk_problem(settings: Any) -> str | None:
+    """``None`` unless the disk holding ``data_dir`` has less than ``min_free_disk_mb`` MiB free."""
+    import shutil
+
+    limit = int(settings.min_free_disk_mb)
+    if limit <= 0:
+        return None
+    try:
+        usage = shutil.disk_usage(settings.data_dir)
+    except OSError as exc:
+        return f"data disk: cannot be read ({exc.strerror or exc})"
+    free_mb = usage.free / 2**20
+    if free_mb < limit:
+        return (f"data disk nearly full: {free_mb:.0f} MiB free of {usage.total / 2**20:.0f} MiB "
+                f"(below ROTORDIAG_MIN_FREE_DISK_MB = {limit}); free space on it")
+    return None
 
 
 def asset_history(session: Session, asset_id: str, limit: int, since: dt.datetime | None) -> list[AssetDiagnosis]:
@@ -113,8 +222,6 @@ def put_thresholds(state: AppState, asset_id: str, thresholds: dict[str, Any]) -
 
 def latest_changes(session: Session) -> list[tuple[str, dict[str, Any]]]:
     """``(asset_id, change)`` of each asset's latest diagnosis compared with a baseline (for the metrics)."""
-    from sqlalchemy import func
-
     last = (select(AssetDiagnosis.asset_id, func.max(AssetDiagnosis.id).label("id"))
             .where(AssetDiagnosis.change.is_not(None)).group_by(AssetDiagnosis.asset_id).subquery())
     q = select(AssetDiagnosis).join(last, AssetDiagnosis.id == last.c.id)

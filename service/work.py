@@ -193,7 +193,6 @@ def run_retrain(params: dict[str, Any], ctx) -> dict[str, Any]:
     """
     from rotordiag.models.config import TrainConfig
     from rotordiag.models.dataset import load_feature_table
-    from rotordiag.models.train import train_and_register
 
     out = ctx.settings.datasets_dir / f"retrain-{ctx.job_id}.h5"
     dataset = _generate(params["spec_toml"], out, ctx, 0.0, 0.6)
@@ -208,10 +207,10 @@ def run_retrain(params: dict[str, Any], ctx) -> dict[str, Any]:
     activate = bool(params.get("activate"))
     version = _registered_by(ctx.models.registry, ctx.job_id)
     if version is None:
-        version, _report = train_and_register(
-            table, config, ctx.models.registry, activate=activate,
-            card_extra={"retrain_job": ctx.job_id, "plant_overrides": params.get("plant") or {},
-                        "field_records": len(field), "features_never_measured": dropped})
+        # in a child process, so that a cancel or a shutdown stops a fit that has no progress to check
+        version = run_in_child(ctx, _train_step, table, params["training"], str(ctx.models.root), activate,
+                               {"retrain_job": ctx.job_id, "plant_overrides": params.get("plant") or {},
+                                "field_records": len(field), "features_never_measured": dropped})
     else:   # an earlier attempt registered it, then died before recording success: do not train it twice
         ctx.progress(0.95, "training", f"{version} was registered by an earlier attempt of this job")
         if activate:
@@ -234,6 +233,82 @@ def _registered_by(registry, job_id: str) -> str | None:
         except RegistryError:
             continue
     return None
+
+
+def _train_step(table: Any, training: dict[str, Any], registry_root: str, activate: bool,
+                card_extra: dict[str, Any]) -> str:
+    """Evaluate, fit and register (``models.train.train_and_register``); runs in a child process. The
+    registry writes a version into a temporary directory and renames it, so a killed child leaves none."""
+    from pathlib import Path
+
+    from rotordiag.models.config import TrainConfig
+    from rotordiag.models.registry import Registry
+    from rotordiag.models.train import train_and_register
+
+    version, _report = train_and_register(table, TrainConfig.from_dict(training), Registry(Path(registry_root)),
+                                          activate=activate, card_extra=card_extra)
+    return version
+
+
+def _child_main(conn: Any, fn: Any, args: tuple) -> None:
+    """Body of :func:`run_in_child`'s process: ``("ok", fn(*args))`` or ``("error", message, traceback)``."""
+    import traceback
+
+    try:
+        answer: tuple = ("ok", fn(*args))
+    except BaseException as exc:  # noqa: BLE001 - everything goes back to the job
+        answer = ("error", f"{type(exc).__name__}: {exc}", traceback.format_exc())
+    conn.send(answer)
+    conn.close()
+
+
+def run_in_child(ctx: Any, fn: Any, *args: Any, poll_s: float = 0.2) -> Any:
+    """``fn(*args)`` in a spawned child process that is killed within ``poll_s`` when the job is cancelled or
+    the server stops (``ctx.check()`` then raises). ``fn`` and ``args`` must be picklable; an exception in
+    the child is raised here as ``RuntimeError`` with its type and message."""
+    import multiprocessing
+
+    mp = multiprocessing.get_context("spawn")
+    receiver, sender = mp.Pipe(duplex=False)
+    proc = mp.Process(target=_child_main, args=(sender, fn, args), name=f"rotordiag-job-{ctx.job_id[:8]}")
+    proc.start()
+    sender.close()
+    remove = ctx.on_stop(lambda: _kill(proc))
+    answer: tuple | None = None
+    try:
+        while answer is None:
+            if receiver.poll(poll_s):
+                try:
+                    answer = receiver.recv()
+                except EOFError:       # the child died without answering
+                    break
+            elif not proc.is_alive() and not receiver.poll(0):
+                break
+            ctx.check()
+    finally:
+        remove()
+        if answer is None:
+            _kill(proc)
+        proc.join(10)
+        receiver.close()
+    ctx.check()
+    if answer is None:
+        raise RuntimeError(f"the job's child process ended without an answer (exit code {proc.exitcode})")
+    if answer[0] == "error":
+        import logging
+
+        logging.getLogger("rotordiag.service.jobs").error("job %s: child process failed:\n%s", ctx.job_id, answer[2])
+        raise RuntimeError(answer[1])
+    return answer[1]
+
+
+def _kill(proc: Any) -> None:
+    """Stop a child process now (SIGTERM, then SIGKILL after 2 s)."""
+    if proc.is_alive():
+        proc.terminate()
+        proc.join(2)
+    if proc.is_alive():
+        proc.kill()
 
 
 def _drop_unmeasured(table) -> tuple[Any, list[str]]:

@@ -131,11 +131,12 @@ class LoadResult:
 
 
 def bounded_load(replicas: list[Replica], make_body, n_requests: int, concurrency: int,
-                 on_progress=None, mark_down: bool = True) -> LoadResult:
+                 on_progress=None, mark_down: bool = True, headers: dict[str, str] | None = None) -> LoadResult:
     """Send ``n_requests`` POST /diagnose (body ``make_body(i)``) from ``concurrency`` threads, round robin
     over ``replicas``, as a load balancer would: a replica that refused a connection or dropped one is
     marked down and the requests after it go to the others (the failed request is counted, not retried).
-    ``on_progress(done)`` is called after each answer."""
+    ``on_progress(done)`` is called after each answer; ``headers`` go with every request (the API key, so
+    that the diagnoses are stored)."""
     res = LoadResult()
     lock = threading.Lock()
     down: set[str] = set()
@@ -151,7 +152,7 @@ def bounded_load(replicas: list[Replica], make_body, n_requests: int, concurrenc
                 rep = live[i % len(live)]
             t0 = time.monotonic()
             try:
-                status, out = request(rep.base + "/diagnose", make_body(i), timeout=120)
+                status, out = request(rep.base + "/diagnose", make_body(i), headers=headers, timeout=120)
                 err = None if status == 200 else f"HTTP {status}: {str(out)[:200]}"
             except OSError as exc:
                 status, out, err = 0, {}, f"{type(exc).__name__}: {exc}"

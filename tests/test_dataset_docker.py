@@ -57,6 +57,7 @@ def test_api_replicas_share_postgresql_and_have_their_own_names(compose):
                 assert key.removeprefix("ROTORDIAG_").lower() in Settings.model_fields, key
         names.add(env["ROTORDIAG_REPLICA_ID"])
         assert services[name]["depends_on"]["db"]["condition"] == "service_healthy"
+        assert services[name]["stop_grace_period"] == "45s"     # docs/service.md, "Stopping the server"
     assert names == set(API)
 
 

@@ -57,7 +57,7 @@ def test_baseline_needs_the_key(client):
 
 def test_no_baseline_then_a_baseline_then_change_alarm_fires_and_clears(client):
     asset = "unit-7"
-    v0 = client.post("/diagnose", json=_body(asset)).json()
+    v0 = client.post("/diagnose", json=_body(asset), headers=auth()).json()
     assert v0["baseline"]["used"] is False and "no baseline" in v0["baseline"]["message"]
     assert isinstance(v0["diagnosis_id"], int) and "signature" not in v0
     g = client.get(f"/assets/{asset}/baseline").json()
@@ -71,10 +71,10 @@ def test_no_baseline_then_a_baseline_then_change_alarm_fires_and_clears(client):
     g = client.get(f"/assets/{asset}/baseline").json()
     assert g["baseline"]["diagnosis_ids"] == b["diagnosis_ids"] and g["baseline"]["signature"]["bearings"]
 
-    same = client.post("/diagnose", json=_body(asset, seed=2)).json()
+    same = client.post("/diagnose", json=_body(asset, seed=2), headers=auth()).json()
     assert same["baseline"]["used"] and same["baseline"]["changed"] is False, same["baseline"]
     assert same["baseline"]["set_at"] == b["set_at"]
-    shifted = client.post("/diagnose", json=_body(asset, dc_shift_um=60.0, seed=3)).json()
+    shifted = client.post("/diagnose", json=_body(asset, dc_shift_um=60.0, seed=3), headers=auth()).json()
     sec = shifted["baseline"]
     assert sec["changed"] is True and "dc_shift" in sec["exceeded"], sec
     assert sec["quantities"]["dc_shift"]["bearing"] == 3
@@ -84,7 +84,7 @@ def test_no_baseline_then_a_baseline_then_change_alarm_fires_and_clears(client):
     assert f'rotordiag_asset_change{{asset="{asset}",quantity="dc_shift_um"}}' in metrics
     assert f'rotordiag_asset_alarm{{asset="{asset}"}} 1.0' in metrics
 
-    back = client.post("/diagnose", json=_body(asset, seed=4)).json()
+    back = client.post("/diagnose", json=_body(asset, seed=4), headers=auth()).json()
     assert back["baseline"]["changed"] is False
     assert f'rotordiag_asset_alarm{{asset="{asset}"}} 0.0' in client.get("/metrics").text
     h = client.get(f"/assets/{asset}/history").json()
@@ -97,7 +97,7 @@ def test_no_baseline_then_a_baseline_then_change_alarm_fires_and_clears(client):
     # thresholds are editable per asset: with a dc threshold above the shift, the same recording is no change
     t = client.put(f"/assets/{asset}/thresholds", json={"thresholds": {"dc_shift_um": 500.0}}, headers=auth())
     assert t.status_code == 200 and t.json()["thresholds"]["dc_shift_um"] == 500.0
-    assert client.post("/diagnose", json=_body(asset, dc_shift_um=60.0, seed=5)).json()["baseline"]["changed"] is False
+    assert client.post("/diagnose", json=_body(asset, dc_shift_um=60.0, seed=5), headers=auth()).json()["baseline"]["changed"] is False
     bad = client.put(f"/assets/{asset}/thresholds", json={"thresholds": {"nonsense": 1.0}}, headers=auth())
     assert bad.status_code == 422 and "unknown change quantities" in bad.text
     assert client.put(f"/assets/{asset}/thresholds", json={"thresholds": {}}, headers=auth()).status_code == 200
@@ -105,17 +105,17 @@ def test_no_baseline_then_a_baseline_then_change_alarm_fires_and_clears(client):
     # replace from a stored diagnosis (the shifted one), then delete
     r = client.post(f"/assets/{asset}/baseline?diagnosis_id={shifted['diagnosis_id']}", headers=auth())
     assert r.status_code == 200 and r.json()["source"] == "diagnosis"
-    assert client.post("/diagnose", json=_body(asset, dc_shift_um=60.0, seed=6)).json()["baseline"]["changed"] is False
+    assert client.post("/diagnose", json=_body(asset, dc_shift_um=60.0, seed=6), headers=auth()).json()["baseline"]["changed"] is False
     assert client.post(f"/assets/{asset}/baseline?diagnosis_id=999999", headers=auth()).status_code == 404
     assert client.delete(f"/assets/{asset}/baseline", headers=auth()).status_code == 204
     assert client.delete(f"/assets/{asset}/baseline", headers=auth()).status_code == 404
-    assert client.post("/diagnose", json=_body(asset)).json()["baseline"]["used"] is False
+    assert client.post("/diagnose", json=_body(asset), headers=auth()).json()["baseline"]["used"] is False
 
 
 def test_a_recording_at_another_speed_is_not_compared(client):
     asset = "unit-speed"
     assert client.post(f"/assets/{asset}/baseline", json=_body(asset), headers=auth()).status_code == 200
-    far = client.post("/diagnose", json=_body(asset, speed_rpm=2100.0)).json()["baseline"]
+    far = client.post("/diagnose", json=_body(asset, speed_rpm=2100.0), headers=auth()).json()["baseline"]
     assert far["used"] is False and far["compared"] is False and far["changed"] is None
     assert "speed differs" in far["message"] and "+16.7 %" in far["message"]
     h = client.get(f"/assets/{asset}/history").json()
@@ -125,10 +125,10 @@ def test_a_recording_at_another_speed_is_not_compared(client):
 def test_automatic_baseline_from_the_first_recordings_at_one_speed(client):
     asset = "unit-auto"
     for seed in range(2):
-        client.post("/diagnose", json=_body(asset, seed=seed))
+        client.post("/diagnose", json=_body(asset, seed=seed), headers=auth())
     r = client.post(f"/assets/{asset}/baseline?auto=true", headers=auth())
     assert r.status_code == 409 and "needs 3" in r.json()["detail"]
-    client.post("/diagnose", json=_body(asset, seed=2))
+    client.post("/diagnose", json=_body(asset, seed=2), headers=auth())
     prop = client.get(f"/assets/{asset}/baseline").json()["proposal"]
     assert len(prop["diagnosis_ids"]) == 3 and prop["speed_rpm"] == pytest.approx(SPEED_RPM, rel=1e-3)
     r = client.post(f"/assets/{asset}/baseline?auto=true", headers=auth())
@@ -143,7 +143,7 @@ def test_an_automatic_baseline_sets_the_assets_own_thresholds_from_its_repeatabi
 
     asset = "unit-own"
     for seed in range(3):
-        client.post("/diagnose", json=_body(asset, seed=20 + seed))
+        client.post("/diagnose", json=_body(asset, seed=20 + seed), headers=auth())
     b = client.post(f"/assets/{asset}/baseline?auto=true", headers=auth()).json()
     rep = b["repeatability"]
     assert rep["n_recordings"] == 3 and set(rep["thresholds"]) >= {"1x_change_um_pp", "2x_change_um_pp", "dc_shift_um"}
@@ -152,21 +152,21 @@ def test_an_automatic_baseline_sets_the_assets_own_thresholds_from_its_repeatabi
     assert got["thresholds_origin"]["orbit_2x_1x_change"] == "shipped"
     assert REPEAT_FLOOR["dc_shift_um"] <= got["thresholds"]["dc_shift_um"] < 2.0 < shipped_rule().thresholds["dc_shift_um"]
     assert got["thresholds"]["dc_shift_per_c"] is None
-    same = client.post("/diagnose", json=_body(asset, seed=30)).json()["baseline"]
+    same = client.post("/diagnose", json=_body(asset, seed=30), headers=auth()).json()["baseline"]
     assert same["compared"] and not same["changed"]
     assert any("own repeatability" in n for n in same["notes"])
-    moved = client.post("/diagnose", json=_body(asset, dc_shift_um=2.0, seed=31)).json()["baseline"]
+    moved = client.post("/diagnose", json=_body(asset, dc_shift_um=2.0, seed=31), headers=auth()).json()["baseline"]
     assert moved["changed"] and "dc_shift" in moved["exceeded"]
     r = client.put(f"/assets/{asset}/thresholds", json={"thresholds": {"dc_shift_um": 5.0}}, headers=auth()).json()
     assert r["thresholds"]["dc_shift_um"] == 5.0 and r["thresholds_origin"]["dc_shift_um"] == "edited"
-    again = client.post("/diagnose", json=_body(asset, dc_shift_um=2.0, seed=32)).json()["baseline"]
+    again = client.post("/diagnose", json=_body(asset, dc_shift_um=2.0, seed=32), headers=auth()).json()["baseline"]
     assert not again["changed"]
 
 
 def test_automatic_baseline_refuses_recordings_of_different_speed_bands(client):
     asset = "unit-mixed"
     for speed in (SPEED_RPM, SPEED_RPM, 2100.0):
-        client.post("/diagnose", json=_body(asset, speed_rpm=speed))
+        client.post("/diagnose", json=_body(asset, speed_rpm=speed), headers=auth())
     r = client.post(f"/assets/{asset}/baseline?auto=true", headers=auth())
     assert r.status_code == 409 and "not at one operating condition" in r.json()["detail"]
 
@@ -202,7 +202,7 @@ def test_an_old_database_gets_the_new_columns(tmp_path, registry_src):
         assert h["count"] == 1 and h["points"][0]["alarm"] is None
         r = c.post(f"/assets/old/baseline?diagnosis_id={h['points'][0]['id']}", headers=auth())
         assert r.status_code == 409 and "send its recording" in r.json()["detail"]
-        assert c.post("/diagnose", json=_body("old")).json()["diagnosis_id"] == 2
+        assert c.post("/diagnose", json=_body("old"), headers=auth()).json()["diagnosis_id"] == 2
 
 
 def test_cli_sets_shows_and_uses_a_baseline(tmp_path, monkeypatch, registry_src):

@@ -65,7 +65,7 @@ def test_pre_alembic_sqlite_database_is_adopted_with_its_rows(tmp_path):
     engine = make_engine(_old_sqlite(tmp_path / "old.sqlite3"))
     assert current_revision(engine) is None
     sessions = init_db(engine)
-    assert current_revision(engine) == head_revision() == "v0002"
+    assert current_revision(engine) == head_revision() == "v0003"
     _check_reference_rows(sessions)
     init_db(engine)   # a second start changes nothing
     _check_reference_rows(sessions)
@@ -89,9 +89,10 @@ def test_versions_up_and_down_keep_the_rows(database_url):
         conn.execute(text("INSERT INTO jobs (id, kind, status, params, progress, stage, message, attempts, "
                           "created_at, updated_at) VALUES ('j1', 'dataset', 'running', '{\"n\": 3}', 0.5, "
                           "'simulating', 'm', 1, '2026-11-01 12:00:00', '2026-11-01 12:00:00')"))
-    migrate(engine)
+    migrate(engine, "v0002")
     assert current_revision(engine) == "v0002"
     sessions = init_db(engine)
+    assert current_revision(engine) == "v0003"
     with sessions() as s:
         job = s.get(Job, "j1")
         assert job is not None and job.params == {"n": 3} and job.progress == 0.5 and job.lease_expires_at is None
@@ -101,7 +102,7 @@ def test_versions_up_and_down_keep_the_rows(database_url):
     with engine.connect() as conn:
         assert conn.execute(text("SELECT status FROM jobs WHERE id = 'j1'")).scalar_one() == "running"
     migrate(engine)
-    assert current_revision(engine) == "v0002"
+    assert current_revision(engine) == "v0003"
     engine.dispose()
 
 
@@ -145,7 +146,7 @@ def test_copy_sqlite_store_into_postgresql(tmp_path, postgres):
     dst_url = postgres.new_database()
     dst = make_engine(dst_url)
     copied = copy_store(src, dst)
-    assert copied == {"asset_baselines": 1, "asset_diagnoses": 3, "asset_settings": 1, "jobs": 2}
+    assert copied == {"asset_baselines": 1, "asset_diagnoses": 3, "asset_settings": 1, "jobs": 2, "service_probe": 0}
     sessions = init_db(dst)
     _check_reference_rows(sessions)
     with sessions.begin() as s:   # the id sequence continues after the copied rows
@@ -171,6 +172,6 @@ def test_db_copy_command(tmp_path, postgres):
     assert r.exit_code == 0, r.output
     assert "asset_diagnoses: 3 row(s)" in r.output
     r = runner.invoke(app, ["db", "current", "--url", dst])
-    assert r.exit_code == 0 and "database: v0002" in r.output
+    assert r.exit_code == 0 and "database: v0003" in r.output
     r = runner.invoke(app, ["db", "copy", dst, "--from", src])
     assert r.exit_code == 2 and "already holds rows" in r.output

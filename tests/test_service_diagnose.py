@@ -282,7 +282,7 @@ def test_asset_history_trend(client, rec):
     fs, channels = rec
     for _ in range(3):
         r = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, asset_id="unit-7",
-                                                         plant="Riverside"))
+                                                         plant="Riverside"), headers=auth())   # the key stores
         assert r.status_code == 200
     v = r.json()
     h = client.get("/assets/unit-7/history").json()

@@ -73,7 +73,7 @@ def test_replica_killed_during_retrain_under_load(tmp_path, postgres):
                 threading.Thread(target=holder.kill_host).start()
 
         load = bounded_load(replicas, lambda i: {**template, "asset_id": f"load-{i:04d}"}, N_REQUESTS,
-                            CONCURRENCY, on_progress=kill_midway)
+                            CONCURRENCY, on_progress=kill_midway, headers={"X-API-Key": API_KEY})
         assert killed_at and not holder.alive()
         print(f"\n/diagnose load: {load.sent} sent, {len(load.ok)} ok, {len(load.failed)} failed "
               f"(all on {holder.name}: {Counter(r for _, r, _ in load.failed)}), worst latency "

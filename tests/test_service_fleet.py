@@ -29,11 +29,11 @@ def _queue(manager: JobManager, n: int) -> list[str]:
 
 # --- store ----------------------------------------------------------------------------------------
 
-def test_store_reads_and_writes(database_url):
+def test_store_reads_and_writes(tmp_path, database_url):
     from rotordiag.service import store
     from rotordiag.service.core.db import AssetBaseline
 
-    state = SimpleNamespace(sessions=init_db(make_engine(database_url)))
+    state = SimpleNamespace(sessions=init_db(make_engine(database_url)), settings=make_settings(tmp_path))
     ids = []
     for i in range(4):
         verdict = {"model_version": "v0001", "severity": "low", "misalignment": 0.1 * i,
@@ -154,14 +154,15 @@ def test_two_running_replicas_share_the_queue_and_a_dead_ones_job_is_finished(tm
         assert {r for _, r, _ in runs} == {"host-a", "host-b"}
         # host-a takes the next job and dies with it: no renewals, no claims, no writes
         b.stopping.set()                # hold host-b back so that host-a claims it
-        b._loop.join(5)
+        for t in b._threads:
+            t.join(5)
         hung = a.submit("dataset", {"hang": True}).id
         deadline = time.monotonic() + 10
         while (a.get(hung).lease_owner != "host-a"):
             assert time.monotonic() < deadline
             time.sleep(0.05)
-        a.stopping.set()
-        a._loop.join(5)
+        a.stopping.set()                # no more renewals (its job thread stays stuck in the job)
+        a._threads[-1].join(5)
         b2 = _manager(tmp_path, database_url, "host-b2", job_lease_s=1.0, job_poll_s=0.1)
         b2.register("dataset", work_on(b2))
         b2.start()
@@ -196,7 +197,7 @@ def test_api_on_postgresql_history_and_jobs(tmp_path, postgres):
     from fastapi.testclient import TestClient
 
     from rotordiag.service.main import create_app
-    from tests.service_util import diagnose_json, shipped_or_tiny_registry, simulated_channels
+    from tests.service_util import auth, diagnose_json, shipped_or_tiny_registry, simulated_channels
 
     url = postgres.new_database()
     settings = make_settings(tmp_path, database_url=url, shipped_registry_dir=shipped_or_tiny_registry(),
@@ -206,7 +207,8 @@ def test_api_on_postgresql_history_and_jobs(tmp_path, postgres):
     with TestClient(app) as c:
         ids = []
         for _ in range(2):
-            r = c.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, asset_id="unit-9"))
+            r = c.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, asset_id="unit-9"),
+                       headers=auth())   # storing history needs the key
             assert r.status_code == 200, r.text
             ids.append(r.json()["diagnosis_id"])
         h = c.get("/assets/unit-9/history").json()

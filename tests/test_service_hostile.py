@@ -302,7 +302,8 @@ def test_asset_id_with_a_slash_is_refused_in_the_users_terms(plain, rec):
     r = plain.post("/diagnose", content=buf.getvalue(), headers={"Content-Type": "application/octet-stream"},
                    params={"sample_rate_hz": fs, "asset_id": "a/b"})
     assert r.status_code == 422 and "no '/'" in json.dumps(r.json()), r.text
-    r = plain.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, asset_id="site:unit-3"))
+    r = plain.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, asset_id="site:unit-3"),
+                   headers=auth())   # storing needs the key
     assert r.status_code == 200
     assert plain.get("/assets/site:unit-3/history").json()["count"] == 1
 

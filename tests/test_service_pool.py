@@ -72,7 +72,8 @@ def test_worker_errors_are_the_same_4xx(clients, rec, case):
 def test_asset_history_is_stored_by_the_server(clients, rec):
     pooled, _ = clients
     fs, channels = rec
-    r = pooled.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, asset_id="unit-7"))
+    r = pooled.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, asset_id="unit-7"),
+                    headers=auth())   # storing needs the key
     assert r.status_code == 200, r.text
     hist = pooled.get("/assets/unit-7/history").json()
     assert hist["count"] == 1

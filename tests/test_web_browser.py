@@ -210,11 +210,13 @@ def _screenshot(driver, name: str) -> Path:
 
 
 def _submit_file(driver, path: Path | list[Path], *, asset: str = "", sample_rate: str = "", clearance: str = "",
-                 expect: str = "done"):
-    """Submit ``path`` (a list: several files chosen at once, the takes of one recording) with these fields."""
+                 key: str = "", expect: str = "done"):
+    """Submit ``path`` (a list: several files chosen at once, the takes of one recording) with these fields
+    (``key``: the API key typed in the form, without which the diagnosis is not stored)."""
     d = driver
     d.find_element("css selector", "input[name=source][value=file]").click()
-    for field, value in (("sample-rate", sample_rate), ("clearance", clearance), ("asset", asset)):
+    for field, value in (("sample-rate", sample_rate), ("clearance", clearance), ("asset", asset),
+                         ("diagnose-key", key)):
         el = d.find_element("id", field)
         el.clear()
         if value:
@@ -405,9 +407,11 @@ def test_broken_uploads_show_the_services_message(server, browser, tmp_path):
 def test_asset_trend_after_three_diagnoses(server, browser, recordings, tmp_path):
     asset = "web-unit-7"
     _open(browser, server)
+    # stored in the trend: the key typed in the form (an anonymous diagnosis is answered, not stored)
     _submit_file(browser, _write_npy(tmp_path / "a.npy", recordings[0.05]), asset=asset, sample_rate=str(FS_HZ),
-                 clearance=str(CLEARANCE_UM))
-    _submit_file(browser, _write_hdf5(tmp_path / "b.h5", recordings[0.2]), asset=asset)  # rate from the file
+                 clearance=str(CLEARANCE_UM), key="web-test-key")
+    _submit_file(browser, _write_hdf5(tmp_path / "b.h5", recordings[0.2]), asset=asset,
+                 key="web-test-key")  # rate from the file
     # the third as pasted JSON (set as the textarea's value: typing 150 kB is slow), rate from the form
     browser.find_element("css selector", "input[name=source][value=json]").click()
     browser.execute_script("document.getElementById('json-text').value = arguments[0]",
@@ -552,7 +556,7 @@ def test_baseline_and_change_are_shown(server, browser, recordings, tmp_path):
     asset = "web-base-1"
     body = {"sample_rate_hz": FS_HZ, "clearance_um": CLEARANCE_UM, "asset_id": asset, **_json_body(recordings[0.05])}
     req = urllib.request.Request(server + "/diagnose", data=json.dumps(body).encode(),
-                                 headers={"Content-Type": "application/json"})
+                                 headers={"Content-Type": "application/json", "X-API-Key": "web-test-key"})
     with urllib.request.urlopen(req, timeout=120) as r:
         first = json.loads(r.read())
     req = urllib.request.Request(f"{server}/assets/{asset}/baseline?diagnosis_id={first['diagnosis_id']}",
@@ -570,7 +574,7 @@ def test_baseline_and_change_are_shown(server, browser, recordings, tmp_path):
 
     _open(browser, server)
     _submit_file(browser, _write_npy(tmp_path / "later.npy", recordings[0.45]), asset=asset,
-                 sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
+                 sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM), key="web-test-key")
     box = browser.find_element("id", "verdict-baseline")
     assert box.is_displayed()
     assert f"Baseline of {base['set_at']} used" in box.text and "changed since the baseline" in box.text
@@ -598,7 +602,7 @@ def test_baseline_is_set_from_the_page(server, browser, recordings):
         data = recordings[0.05] + 0.05 * rng.standard_normal(recordings[0.05].shape)
         body = {"sample_rate_hz": FS_HZ, "clearance_um": CLEARANCE_UM, "asset_id": asset, **_json_body(data)}
         req = urllib.request.Request(server + "/diagnose", data=json.dumps(body).encode(),
-                                     headers={"Content-Type": "application/json"})
+                                     headers={"Content-Type": "application/json", "X-API-Key": "web-test-key"})
         with urllib.request.urlopen(req, timeout=120) as r:
             assert r.status == 200
     _open(browser, server)

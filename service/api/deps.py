@@ -62,7 +62,17 @@ def diagnose_key(state: StateDep, key: Annotated[str | None, Security(_api_key_h
         require_api_key(state, key)
 
 
+def may_store(state: StateDep, key: Annotated[str | None, Security(_api_key_header)]) -> bool:
+    """Whether a diagnosis request may write to an asset's history: it carries the API key (403 when the key it
+    carries is wrong). Without one the diagnosis is answered and not stored."""
+    if not key:
+        return False
+    require_api_key(state, key)
+    return True
+
+
 SettingsDep = Annotated[Settings, Depends(get_settings)]
+MayStoreDep = Annotated[bool, Depends(may_store)]
 SessionDep = Annotated[Session, Depends(get_db)]
 ModelsDep = Annotated[ModelStore, Depends(get_models)]
 JobsDep = Annotated[JobManager, Depends(get_jobs)]

@@ -4,18 +4,23 @@ This module is where the service's and the lower layers' exceptions get HTTP sta
 features/models packages raise ``ValueError`` (a bad recording → 422) and the service's own
 :class:`InputError` carries its status; :func:`raise_worker_error` maps what a diagnosis
 worker answered (``service.pool``): a client mistake → its 4xx, no model → 503 (404 when the
-request named a version), a request over the time limit → 422, a worker that died twice → 503.
+request named a version), a request over the time limit → 422, a worker that died twice → 503; and a
+database that cannot read or write (a full disk, a damaged file) → 503 saying which, never 500.
 """
 from __future__ import annotations
 
+import logging
 from typing import Any, NoReturn
 
 from fastapi import FastAPI, HTTPException, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from pydantic import ValidationError
+from sqlalchemy.exc import DatabaseError as SQLAlchemyDatabaseError
 
 from ..errors import InputError, RequestInvalid, validation_detail
+
+log = logging.getLogger("rotordiag.service")
 
 #: HTTP status of each kind of client mistake (:class:`service.errors.InputError`)
 STATUS_OF_KIND = {"invalid": 422, "malformed": 400, "unsupported_type": 415, "not_found": 404, "conflict": 409}
@@ -65,6 +70,16 @@ def install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(InputError)
     async def _input_error(request: Request, exc: InputError) -> JSONResponse:
         return JSONResponse(status_code=STATUS_OF_KIND[exc.kind], content={"detail": str(exc)})
+
+    @app.exception_handler(SQLAlchemyDatabaseError)
+    async def _database_error(request: Request, exc: SQLAlchemyDatabaseError) -> JSONResponse:
+        # a full disk, a damaged or locked database: the server's state, not the request -> 503 saying what
+        from ..store import database_error_text
+
+        log.error("database error on %s %s: %s", request.method, request.url.path, exc.orig)
+        return JSONResponse(status_code=503, headers={"Retry-After": "30"}, content={
+            "detail": f"the database could not complete this request, nothing was stored: "
+                      f"{database_error_text(exc)}"})
 
     @app.exception_handler(RequestInvalid)
     async def _request_invalid(request: Request, exc: RequestInvalid) -> JSONResponse:

@@ -51,8 +51,9 @@ class Settings(BaseSettings):
         description="Key required in the `X-API-Key` header by every write endpoint except /diagnose.",
     )
     diagnose_requires_key: bool = Field(
-        False, description="Also require the API key on POST /diagnose and /diagnose/batch (they store "
-        "asset history); off by default so monitoring systems can diagnose without a key.")
+        False, description="Also require the API key on POST /diagnose and /diagnose/batch; off by default so "
+        "monitoring systems can diagnose without a key (an anonymous diagnosis is answered, never stored in an "
+        "asset's history: storing it needs the key).")
     dask_scheduler_address: str = Field(
         "", description="Address of an existing Dask scheduler (e.g. `tcp://scheduler:8786`); "
         "empty means a local cluster created the first time a job runs.",
@@ -103,6 +104,24 @@ class Settings(BaseSettings):
     job_poll_s: float = Field(
         1.0, gt=0, le=60, allow_inf_nan=False,
         description="How often each replica looks for queued jobs and expired leases, s.")
+    shutdown_timeout_s: float = Field(
+        10.0, ge=0, le=600, allow_inf_nan=False,
+        description="At SIGINT/SIGTERM, how long the server waits for running jobs to stop, s; a job still running "
+        "then is left `interrupted` (resumable) and the process exits anyway.")
+    min_free_disk_mb: int = Field(
+        1024, ge=0, le=2**40,
+        description="Free space, MiB, below which the disk holding `data_dir` counts as nearly full: /health says "
+        "`degraded`. 0: not checked.")
+    history_keep_recordings: int = Field(
+        1000, ge=0, le=10_000_000,
+        description="Full diagnoses (verdict, key features, signature) kept per asset, the latest first; older "
+        "ones keep only their summary (time, severity, Δ and interval, speed, alarm, change). 0: no count limit.")
+    history_keep_days: float = Field(
+        90.0, ge=0, le=36_500, allow_inf_nan=False,
+        description="Days a full diagnosis is kept before only its summary is; 0: no age limit.")
+    history_summary_days: float = Field(
+        3650.0, ge=0, le=36_500, allow_inf_nan=False,
+        description="Days a diagnosis summary is kept before it is deleted; 0: kept for ever.")
     log_level: str = Field("info", description="Log level of the service and uvicorn.")
 
     @field_validator("database_url", "dask_scheduler_address")

@@ -1,7 +1,7 @@
-"""Database engine, session factory and the tables: jobs, asset diagnoses, asset baselines and asset
-alarm settings (SQLAlchemy 2). One URL selects the backend: SQLite (the embedded default) or
-PostgreSQL (``postgresql://…``, driven by psycopg 3). :func:`init_db` brings the schema to the newest
-version with Alembic (``service/migrations``), adopting a database made before Alembic."""
+"""Database engine, session factory and the tables: jobs, asset diagnoses, asset baselines, asset
+alarm settings and the health probe (SQLAlchemy 2). One URL selects the backend: SQLite (the embedded
+default) or PostgreSQL (``postgresql://…``, driven by psycopg 3). :func:`init_db` brings the schema to
+the newest version with Alembic (``service/migrations``), adopting a database made before Alembic."""
 from __future__ import annotations
 
 import contextlib
@@ -133,6 +133,15 @@ class AssetSettings(Base):
     asset_id: Mapped[str] = mapped_column(String(128), primary_key=True)
     thresholds: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict)
     updated_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow, onupdate=utcnow)
+
+
+class ServiceProbe(Base):
+    """One row per probe name that ``GET /health`` rewrites: proof that the database takes a real write."""
+
+    __tablename__ = "service_probe"
+
+    name: Mapped[str] = mapped_column(String(32), primary_key=True)
+    written_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow)
 
 
 def normalize_url(url: str) -> str:

@@ -24,6 +24,7 @@ from ..deps import (
     DiagnoseKeyDep,
     JsonBodyDep,
     KeyphasorQuery,
+    MayStoreDep,
     ModelsDep,
     SampleRateQuery,
     SpeedQuery,
@@ -251,15 +252,18 @@ OutputUnitsQuery = Annotated[Literal["um", "mil"], Query(
     summary="Diagnose one recording",
     description="Returns the severity class, probabilities, Δ estimate with interval, offset in µm (when "
     "`clearance_um` is given), motion type, per-bearing key features, top contributing features, OOD flag, "
-    "warnings and the model version. With an `asset_id`, the diagnosis is stored for the asset's history.",
+    "warnings and the model version. With an `asset_id`, the recording is compared with the asset's baseline; the "
+    "diagnosis is stored in the asset's history only when the request carries the API key (`stored` says whether).",
 )
 async def diagnose(
     request: Request,
     state: StateDep,
     models: ModelsDep,
     reader: ReaderQueryDep,
-    asset_id: Annotated[AssetId | None, Query(description="Binary/multipart only: asset identifier (stores the "
-                                              "diagnosis in the asset's history).")] = None,
+    writer: MayStoreDep,
+    asset_id: Annotated[AssetId | None, Query(description="Binary/multipart only: asset identifier (compares with "
+                                              "the asset's baseline; with the API key also stores the diagnosis "
+                                              "in the asset's history).")] = None,
     plant: Annotated[str | None, Query(min_length=1, max_length=MAX_LABEL_LEN,
                                        description="Binary/multipart only: plant label.")] = None,
     sample_index: Annotated[int, Query(ge=0, le=10_000_000, description="HDF5 upload of a dataset file only: "
@@ -277,15 +281,18 @@ async def diagnose(
 ) -> dict:
     query = dict(asset_id=asset_id, plant=plant, sample_index=sample_index, **reader)
     query.update(slow_roll_sample_rate_hz=slow_roll_sample_rate_hz, slow_roll_keyphasor_times_s=slow_roll_keyphasor_times_s)
-    verdict, _ = await diagnose_from_request(request, state, query, model_version, slow_roll_allowed=True)
+    verdict, _ = await diagnose_from_request(request, state, query, model_version, slow_roll_allowed=True,
+                                             may_store=writer)
     return verdict_in_units(verdict, output_units)   # stored in µm; answered in the units asked for
 
 
 async def diagnose_from_request(request: Request, state, query: dict[str, Any], version: str | None,
-                                store: bool = True, slow_roll_allowed: bool = False) -> tuple[dict, str | None]:
+                                store: bool = True, slow_roll_allowed: bool = False,
+                                may_store: bool = False) -> tuple[dict, str | None]:
     """Read the body, parse and diagnose it in a worker process (``service.pool``, which bounds the requests
-    in flight per worker) or a thread; with ``store``, compare with the asset's baseline and store the result
-    here (``service.baseline.record_verdict``). Returns the verdict and the request's asset id."""
+    in flight per worker) or a thread; with ``store``, compare with the asset's baseline and, when
+    ``may_store`` (the request carried the API key), store the result here
+    (``service.baseline.record_verdict``). Returns the verdict and the request's asset id."""
     kind, body, filename, slow_roll = await _read_body(request, slow_roll=slow_roll_allowed)
     if state.pool is not None:
         _, verdict, asset_id, plant = await in_worker(state, "work", kind, body, filename, query, slow_roll, version)
@@ -294,7 +301,7 @@ async def diagnose_from_request(request: Request, state, query: dict[str, Any], 
                                                                   query, slow_roll, version,
                                                                   limiter=_diagnosis_limiter(state))
     if store:
-        await run_in_threadpool(record_verdict, state, asset_id, plant, verdict)
+        await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store)
     return verdict, asset_id
 
 
@@ -325,7 +332,7 @@ _BATCH_BODY = {"requestBody": {"required": True, "content": {
     "`status_code` and `error` while the others still get results. The number of records is capped by "
     "ROTORDIAG_MAX_BATCH_RECORDS.",
 )
-async def diagnose_batch(request: Request, state: StateDep,
+async def diagnose_batch(request: Request, state: StateDep, writer: MayStoreDep,
                          model_version: Annotated[str | None, Query(min_length=1, max_length=128)] = None,
                          output_units: OutputUnitsQuery = "um") -> dict:
     """The body (a ``BatchRequest``) is parsed in a diagnosis worker, not here; the records are then
@@ -335,12 +342,13 @@ async def diagnose_batch(request: Request, state: StateDep,
     if state.pool is not None:
         records = (await in_worker(state, "batch_parse", body))[1]
         _check_batch_size(len(records), cap)
-        results = await asyncio.gather(*(_batch_item(state, i, rec, model_version) for i, rec in enumerate(records)))
+        results = await asyncio.gather(*(_batch_item(state, i, rec, model_version, writer)
+                                         for i, rec in enumerate(records)))
         items = list(results)
     else:
         batch = await anyio.to_thread.run_sync(parse_batch, body, limiter=_diagnosis_limiter(state))
         _check_batch_size(len(batch.records), cap)
-        items = await anyio.to_thread.run_sync(_batch_sync, state, batch.records, model_version,
+        items = await anyio.to_thread.run_sync(_batch_sync, state, batch.records, model_version, writer,
                                                limiter=_diagnosis_limiter(state))
     if output_units != "um":
         for it in items:
@@ -355,7 +363,7 @@ def _check_batch_size(n: int, cap: int) -> None:
                          "(ROTORDIAG_MAX_BATCH_RECORDS); split the batch")
 
 
-async def _batch_item(state, i: int, record: dict[str, Any], version: str | None) -> BatchItem:
+async def _batch_item(state, i: int, record: dict[str, Any], version: str | None, may_store: bool) -> BatchItem:
     try:
         _, verdict, asset_id, plant = await in_worker(state, "record", record, version)
     except InputError as exc:
@@ -366,17 +374,17 @@ async def _batch_item(state, i: int, record: dict[str, Any], version: str | None
         if exc.status_code >= 500:
             raise
         return BatchItem(index=i, status_code=exc.status_code, error=str(exc.detail))
-    await run_in_threadpool(record_verdict, state, asset_id, plant, verdict)
+    await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store)
     return BatchItem(index=i, status_code=200, result=verdict)
 
 
-def _batch_sync(state, records, model_version: str | None) -> list[BatchItem]:
+def _batch_sync(state, records, model_version: str | None, may_store: bool) -> list[BatchItem]:
     items: list[BatchItem] = []
     for i, rec in enumerate(records):
         try:
             recording = checked(recording_from_model, rec)
             verdict = _diagnose_sync(state, recording, model_version)
-            record_verdict(state, rec.asset_id, rec.plant, verdict)
+            record_verdict(state, rec.asset_id, rec.plant, verdict, may_store)
             items.append(BatchItem(index=i, status_code=200, result=verdict))
         except InputError as exc:
             items.append(BatchItem(index=i, status_code=STATUS_OF_KIND[exc.kind], error=str(exc)))

@@ -1,11 +1,13 @@
-"""Jobs: POST /datasets, POST /models/retrain, GET /jobs, GET /jobs/{id}, POST /jobs/{id}/resume."""
+"""Jobs: POST /datasets, POST /models/retrain, GET /jobs, GET /jobs/{id}, POST /jobs/{id}/resume,
+POST /jobs/{id}/cancel."""
 from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Path, Query
+from fastapi import APIRouter, HTTPException, Path, Query
 from fastapi.concurrency import run_in_threadpool
 
+from ...jobs import JobInterrupted
 from ...schemas import DatasetJobRequest, ErrorOut, JobCreated, JobList, JobOut, JobStatus, RetrainRequest
 from ...work import prepare_dataset_job, prepare_retrain_job
 from ..deps import ApiKeyDep, JobsDep, JsonBodyDep
@@ -21,6 +23,13 @@ _AUTH: dict[int | str, dict[str, Any]] = {400: {"model": ErrorOut, "description"
 _JobId = Annotated[str, Path(min_length=1, max_length=64, description="Job id returned by the creating POST.")]
 
 
+def _submit(jobs, kind: str, params: dict[str, Any]):
+    try:
+        return jobs.submit(kind, params)
+    except JobInterrupted:
+        raise HTTPException(503, "the server is shutting down; submit the job again once it is back") from None
+
+
 def _out(job) -> JobOut:
     return JobOut.model_validate(job, from_attributes=True)
 
@@ -30,7 +39,7 @@ def _out(job) -> JobOut:
              summary="Generate a labelled dataset from a sweep spec (job)")
 async def create_dataset(body: DatasetJobRequest, jobs: JobsDep) -> JobCreated:
     params = await run_in_threadpool(prepare_dataset_job, body, jobs.settings)
-    job = jobs.submit("dataset", params)
+    job = await run_in_threadpool(_submit, jobs, "dataset", params)
     return JobCreated(id=job.id, status=job.status, url=f"/jobs/{job.id}")
 
 
@@ -40,7 +49,7 @@ async def create_dataset(body: DatasetJobRequest, jobs: JobsDep) -> JobCreated:
              summary="Retrain the model for a plant (job)")
 async def create_retrain(body: RetrainRequest, jobs: JobsDep) -> JobCreated:
     params = await run_in_threadpool(prepare_retrain_job, body, jobs.settings)
-    job = jobs.submit("retrain", params)
+    job = await run_in_threadpool(_submit, jobs, "retrain", params)
     return JobCreated(id=job.id, status=job.status, url=f"/jobs/{job.id}")
 
 
@@ -66,6 +75,24 @@ def get_job(job_id: _JobId, jobs: JobsDep) -> JobOut:
 def resume_job(job_id: _JobId, jobs: JobsDep) -> JobOut:
     try:
         job = jobs.resume(job_id)
+    except ValueError as exc:
+        raise InputError(str(exc), "conflict") from None
+    if job is None:
+        raise InputError(f"no job with id {job_id!r}", "not_found")
+    return _out(job)
+
+
+@router.post("/jobs/{job_id}/cancel", response_model=JobOut, dependencies=[ApiKeyDep],
+             responses={**_AUTH, 404: {"model": ErrorOut},
+                        409: {"model": ErrorOut, "description": "The job has already finished."}},
+             summary="Stop a queued or running job",
+             description="Stops the job at any stage within seconds (its Dask tasks are cancelled and the workers "
+             "running them restarted; a model fit in progress is killed) and answers its state, `cancelled` once "
+             "its thread has ended (at most 10 s). A cancelled job keeps its finished work: "
+             "POST /jobs/{id}/resume continues it.")
+def cancel_job(job_id: _JobId, jobs: JobsDep) -> JobOut:
+    try:
+        job = jobs.cancel(job_id)
     except ValueError as exc:
         raise InputError(str(exc), "conflict") from None
     if job is None:

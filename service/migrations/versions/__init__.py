@@ -1,1 +1,2 @@
-"""Schema versions, oldest first: ``v0001`` the schema as of issue 47's start, ``v0002`` job leases."""
+"""Schema versions, oldest first: ``v0001`` the schema before Alembic, ``v0002`` job leases, ``v0003`` the
+health probe table."""

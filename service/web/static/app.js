@@ -541,12 +541,15 @@
     const parts = [b.used ? `Baseline of ${b.set_at} used (${b.source}, ${fixed(b.speed_rpm, 0)} r/min).` :
       "No baseline used."];
     parts.push(plainWords(b.message));
+    if (state.verdict && state.verdict.storage_note) parts.push(plainWords(state.verdict.storage_note) + ".");
     box.textContent = parts.join(" ");
     show(box, true);
   }
 
   // ---- diagnose ---------------------------------------------------------------------------------
   function formValue(id) { const v = $(id).value.trim(); return v === "" ? null : v; }
+  // the API key typed in the form: a diagnosis is stored in the asset's history only with it
+  function keyHeader() { const k = $("diagnose-key").value; return k ? { "X-API-Key": k } : {}; }
 
   function buildRequests() {
     const source = document.querySelector("input[name=source]:checked").value;
@@ -569,7 +572,7 @@
       if (!("acquisitions" in body) && formValue("acquisitions") !== null) body.acquisitions = formValue("acquisitions");
       if (!("asset_id" in body) && formValue("asset")) body.asset_id = formValue("asset");
       const json = JSON.stringify(body);
-      const opts = () => ({ method: "POST", headers: { "Content-Type": "application/json" }, body: json });
+      const opts = () => ({ method: "POST", headers: { "Content-Type": "application/json", ...keyHeader() }, body: json });
       return { diagnose: [`/diagnose?output_units=${$("length-units").value}`, opts()], plot: ["/ui/plot-data", opts()],
         asset: body.asset_id || null };
     }
@@ -593,7 +596,7 @@
     const asset = formValue("asset");
     if (asset) q.set("asset_id", asset);
     q.set("output_units", $("length-units").value);
-    const opts = () => { const fd = new FormData(); for (const f of files) fd.append("file", f, f.name); return { method: "POST", body: fd }; };
+    const opts = () => { const fd = new FormData(); for (const f of files) fd.append("file", f, f.name); return { method: "POST", body: fd, headers: keyHeader() }; };
     return { diagnose: [`/diagnose?${q}`, opts()], plot: [`/ui/plot-data?${qp}`, opts()], asset };
   }
 
