@@ -267,3 +267,41 @@ def test_retrain_taken_over_after_registering_reuses_the_version(tmp_path):
     reg = Registry(tmp_path)
     assert _registered_by(reg, "job-a") == "v0002" and _registered_by(reg, "job-b") == "v0003"
     assert _registered_by(reg, "job-c") is None
+
+
+def test_cancel_through_another_replica_stops_the_holder(tmp_path, database_url):
+    """POST /jobs/{id}/cancel may reach a replica that does not run the job: the row is cancelled there, and
+    the holder stops at its next progress report without writing over it."""
+    a = _manager(tmp_path, database_url, "host-a", job_poll_s=0.1)
+    b = _manager(tmp_path, database_url, "host-b")
+    stopped = threading.Event()
+
+    def work(params, ctx):
+        try:
+            while True:
+                ctx.progress(0.5, "working")
+                time.sleep(0.05)
+        except JobLost:
+            stopped.set()
+            raise
+
+    a.register("dataset", work)
+    b.register("dataset", work)
+    job_id = a.submit("dataset", {}).id
+    a.start()
+    try:
+        deadline = time.monotonic() + 20
+        while a.get(job_id).status != "running":
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        job = b.cancel(job_id)
+        assert job.status == "cancelled"
+        assert stopped.wait(10)
+        deadline = time.monotonic() + 5
+        while a.held():
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        job = a.get(job_id)
+        assert job.status == "cancelled" and job.attempts == 1 and "cancel" in job.message
+    finally:
+        a.shutdown()
