@@ -413,7 +413,14 @@ class JobManager:
                 return self.get(job_id)
             ctx.cancel_event.set()
         ctx._stop()
-        ctx.done.wait(wait_s)
+        if not ctx.done.wait(wait_s):
+            try:
+                with self.sessions.begin() as s:
+                    s.execute(update(Job).where(Job.id == job_id, Job.status == "running").values(
+                        message="cancel requested: the job stops at its next check (feature extraction: after "
+                        "the recording it is on)", updated_at=utcnow()))
+            except DatabaseError:
+                pass                                       # the outcome write will say it
         return self.get(job_id)
 
     def get(self, job_id: str) -> Job | None:

@@ -53,7 +53,8 @@ def apply_retention(session: Session, settings: Any, asset_id: str) -> tuple[int
     A diagnosis keeps its full record (verdict, key features, signature: about 30 kB) while it is among the
     asset's latest ``history_keep_recordings`` and younger than ``history_keep_days``; after that only its
     summary columns (time, severity, Δ and interval, speed, OOD, alarm, change) stay, for
-    ``history_summary_days``, then the row is deleted. While the asset has no baseline, the recordings an
+    ``history_summary_days``, then the row is deleted; beyond ``history_max_rows`` rows the oldest are deleted
+    too. While the asset has no baseline, the recordings an
     automatic baseline would be made of (its first ``baseline.AUTO_N`` with a signature) keep their signature.
     Returns ``(trimmed, deleted)``.
     """
@@ -85,6 +86,13 @@ def apply_retention(session: Session, settings: Any, asset_id: str) -> tuple[int
         cutoff = now - dt.timedelta(days=float(settings.history_summary_days))
         deleted = _rowcount(session.execute(delete(AssetDiagnosis).where(
             AssetDiagnosis.asset_id == asset_id, AssetDiagnosis.created_at < cutoff)))
+    max_rows = int(getattr(settings, "history_max_rows", 0) or 0)
+    if max_rows > 0:
+        beyond = list(session.scalars(select(AssetDiagnosis.id).where(AssetDiagnosis.asset_id == asset_id)
+                                      .order_by(AssetDiagnosis.created_at.desc(), AssetDiagnosis.id.desc())
+                                      .offset(max_rows)))
+        if beyond:
+            deleted += _rowcount(session.execute(delete(AssetDiagnosis).where(AssetDiagnosis.id.in_(beyond))))
     return trimmed, deleted
 
 

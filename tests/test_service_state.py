@@ -236,3 +236,17 @@ def test_history_retention_keeps_full_records_then_summaries_and_the_size_is_in_
             assert s.get(AssetDiagnosis, ids[0]) is None
             assert s.get(AssetDiagnosis, ids[-2]).signature is None and s.get(AssetDiagnosis, ids[-2]).severity
             assert s.get(AssetDiagnosis, ids[-1]).signature is not None
+        # what a summary holds (docs/service.md: about 5 kB with a change against a baseline, 20 kB in full)
+        with app.state.rd.engine.connect() as conn:
+            sizes = conn.execute(text(
+                "SELECT LENGTH(verdict) + LENGTH(key_features) + COALESCE(LENGTH(signature), 0) "
+                "+ COALESCE(LENGTH(change), 0), signature IS NULL FROM asset_diagnoses")).all()
+        summary = max(n for n, trimmed in sizes if trimmed)
+        full = min(n for n, trimmed in sizes if not trimmed)
+        print(f"stored JSON per diagnosis: full {full} B, summary {summary} B")
+        assert 3 * summary < full
+        # and at most history_max_rows rows per asset, the oldest deleted first
+        app.state.rd.settings.history_max_rows = 3
+        ids.append(c.post("/diagnose", json=body("unit-4", seed=11), headers=auth()).json()["diagnosis_id"])
+        kept = [p["id"] for p in c.get("/assets/unit-4/history").json()["points"]]
+        assert kept == [ids[3], ids[5], ids[6]]          # the 3 latest by time (ids[4] was back-dated 31 days)

@@ -119,6 +119,9 @@ class Settings(BaseSettings):
     history_keep_days: float = Field(
         90.0, ge=0, le=36_500, allow_inf_nan=False,
         description="Days a full diagnosis is kept before only its summary is; 0: no age limit.")
+    history_max_rows: int = Field(
+        100_000, ge=0, le=100_000_000,
+        description="Stored diagnoses per asset, full or summary; the oldest beyond it are deleted. 0: no limit.")
     history_summary_days: float = Field(
         3650.0, ge=0, le=36_500, allow_inf_nan=False,
         description="Days a diagnosis summary is kept before it is deleted; 0: kept for ever.")
