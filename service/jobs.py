@@ -396,7 +396,7 @@ class JobManager:
         """
         with self._lock:
             ctx = self._live.get(job_id)
-            job = self.get(job_id)
+            job = self.get(job_id)           # with an outcome not yet written: that outcome (finished)
             if job is None:
                 return None
             if ctx is None:

@@ -161,7 +161,7 @@ def test_cancel_stops_a_job_waiting_on_a_running_dask_task_and_frees_the_worker(
         assert c.get("/metrics").text.count('rotordiag_jobs{status="cancelled"} 1.0') == 1
 
 
-def test_cancel_stops_a_dataset_job_and_resume_completes_only_the_rest(tmp_path):
+def test_cancel_stops_a_dataset_job_between_samples_and_resume_continues_it(tmp_path):
     from rotordiag.simulator.dataset.store import open_dataset
 
     settings = make_settings(tmp_path, dask_local_workers=1)
