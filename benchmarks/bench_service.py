@@ -74,7 +74,7 @@ def payloads(data, bearings, angles):
     }
 
 
-def _worker(port, path, ctype, body, duration_s, out_q, start_evt):
+def _worker(port, path, ctype, body, duration_s, out_q, start_evt, headers=None):
     import http.client
 
     conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
@@ -84,7 +84,7 @@ def _worker(port, path, ctype, body, duration_s, out_q, start_evt):
     while time.perf_counter() < t_end:
         t0 = time.perf_counter()
         try:
-            conn.request("POST", path, body=body, headers={"Content-Type": ctype})
+            conn.request("POST", path, body=body, headers={"Content-Type": ctype, **(headers or {})})
             r = conn.getresponse()
             r.read()
             ok = r.status == 200
@@ -101,14 +101,15 @@ def _worker(port, path, ctype, body, duration_s, out_q, start_evt):
     out_q.put((lat, errors))
 
 
-def drive(port, path, ctype, body, concurrency, duration_s):
-    """Run in a separate process: ``concurrency`` threads, each with one persistent connection."""
+def drive(port, path, ctype, body, concurrency, duration_s, headers=None):
+    """Run in a separate process: ``concurrency`` threads, each with one persistent connection (``headers``:
+    extra request headers, e.g. the API key that stores a diagnosis with an ``asset_id``)."""
     import queue
     import threading
 
     q: queue.Queue = queue.Queue()
     start = threading.Event()
-    threads = [threading.Thread(target=_worker, args=(port, path, ctype, body, duration_s, q, start))
+    threads = [threading.Thread(target=_worker, args=(port, path, ctype, body, duration_s, q, start, headers))
                for _ in range(concurrency)]
     for t in threads:
         t.start()

@@ -34,10 +34,10 @@ def register(app: typer.Typer) -> None:
             typer.secho(f"error: invalid settings: {msgs}", fg="red", err=True)
             raise typer.Exit(2) from None
         try:
-            # One server process: it owns the job table (a second uvicorn worker would mark the first
-            # one's running jobs interrupted at its startup). Diagnoses use every core through the
-            # diagnosis worker processes (ROTORDIAG_DIAGNOSIS_WORKERS, service/pool.py); jobs scale out
-            # on Dask.
+            # One uvicorn process per replica: diagnoses use every core through the diagnosis worker
+            # processes (ROTORDIAG_DIAGNOSIS_WORKERS, service/pool.py), jobs scale out on Dask, and more
+            # replicas (another `rotordiag serve` on this or another host, sharing a PostgreSQL
+            # ROTORDIAG_DATABASE_URL and the data directory) claim jobs from the database.
             # SIGINT/SIGTERM: open requests get shutdown_timeout_s, then the jobs get it again (service/jobs.py)
             uvicorn.run("rotordiag.service.main:app", host=host, port=port,
                         log_level=settings.log_level.lower(), access_log=False,
@@ -48,6 +48,77 @@ def register(app: typer.Typer) -> None:
 
     _register_baseline(app)
     _register_report(app)
+    _register_db(app)
+
+
+def _register_db(app: typer.Typer) -> None:
+    """``rotordiag db current|upgrade|copy``: the schema version of the service's database, and copying a
+    SQLite store into PostgreSQL."""
+    db_app = typer.Typer(help="The service's database (ROTORDIAG_DATABASE_URL, as `rotordiag serve`): schema "
+                         "version, upgrade, copy into another database.", no_args_is_help=True)
+    app.add_typer(db_app, name="db")
+
+    def _url(url: Optional[str]) -> str:
+        if url:
+            return url
+        from pydantic import ValidationError
+
+        from rotordiag.service.core.config import Settings
+
+        try:
+            return Settings().effective_database_url
+        except ValidationError as exc:
+            typer.secho(f"error: invalid settings: {exc}", fg="red", err=True)
+            raise typer.Exit(2) from None
+
+    def _engine(url: str):
+        from sqlalchemy.exc import ArgumentError
+
+        from rotordiag.service.core.db import make_engine
+
+        try:
+            return make_engine(url)
+        except (ArgumentError, ImportError) as exc:
+            typer.secho(f"error: database URL {url!r}: {exc}", fg="red", err=True)
+            raise typer.Exit(2) from None
+
+    @db_app.command("current")
+    def current(url: Optional[str] = typer.Option(None, "--url", help="Database URL (default: the settings').")) -> None:
+        """Print the database's schema version and the newest one this code knows."""
+        from rotordiag.service.core.db import current_revision, head_revision
+
+        engine = _engine(_url(url))
+        typer.echo(f"database: {current_revision(engine) or 'none (not migrated yet)'}; newest: {head_revision()}")
+
+    @db_app.command("upgrade")
+    def upgrade(url: Optional[str] = typer.Option(None, "--url", help="Database URL (default: the settings').")) -> None:
+        """Migrate the database to the newest schema version (the server does this at its start too)."""
+        from rotordiag.service.core.db import current_revision, migrate
+
+        engine = _engine(_url(url))
+        migrate(engine)
+        typer.echo(f"database at schema version {current_revision(engine)}")
+
+    @db_app.command("copy")
+    def copy(target: str = typer.Argument(..., help="URL of the EMPTY database to copy into, e.g. "
+                                          "postgresql://rotordiag:PASSWORD@db:5432/rotordiag."),
+             source: Optional[str] = typer.Option(None, "--from", help="URL of the database to copy "
+                                                  "(default: the settings', e.g. the SQLite file under data_dir).")) -> None:
+        """Copy every job, diagnosis, baseline and alarm setting into another database (SQLite → PostgreSQL).
+
+        Stop the server first: rows written during the copy would be missed."""
+        from sqlalchemy.exc import OperationalError
+
+        from rotordiag.service.core.db import CopyError, copy_store
+
+        src, dst = _engine(_url(source)), _engine(target)
+        try:
+            copied = copy_store(src, dst)
+        except (CopyError, OperationalError) as exc:
+            typer.secho(f"error: {str(exc).splitlines()[0]}", fg="red", err=True)
+            raise typer.Exit(2) from None
+        for table, n in copied.items():
+            typer.echo(f"{table}: {n} row(s)")
 
 
 def _register_baseline(app: typer.Typer) -> None:

@@ -1,21 +1,36 @@
-"""Job manager: jobs are rows in the database, run in a few job threads, fan out on Dask.
+"""Job manager: jobs are rows in the database, claimed by any replica, run in a few job threads,
+fanned out on Dask.
 
-A job's row is the source of truth. Whatever happens to the process, a job is
+A job's row is the source of truth. Whatever happens to a process, a job is
 in one of ``queued``, ``running``, ``succeeded``, ``failed``, ``interrupted``, ``cancelled``.
-At startup every ``queued``/``running`` row left by a previous process is
-marked ``interrupted``; ``resume`` starts it again, and the work functions are
+
+Several replicas (API processes on one or more hosts) share the database and
+none owns a job: each job thread of each replica claims a ``queued`` job, or a
+``running`` one whose lease has run out, in one statement (``UPDATE … WHERE id =
+(SELECT … FOR UPDATE SKIP LOCKED)`` on PostgreSQL; on SQLite the same statement
+runs under the database's single-writer lock). The claim writes the replica's id
+(``lease_owner``), a lease end (``lease_expires_at``, now + ``job_lease_s``) and
+one more attempt. The holder renews the lease every third of ``job_lease_s`` and
+with each progress report; every write it makes names its own id and attempt, so
+a holder that lost its lease (it stalled past the lease, or the job was cancelled
+through another replica) changes nothing and stops. When a holder dies (SIGKILL,
+a lost host), another replica claims the job once the lease has run out, at most
+``job_lease_s + job_poll_s`` later, and runs it again: the work functions are
 resumable (dataset generation completes only the missing samples of its HDF5
-file; retraining reuses a finished dataset), so no finished work is lost.
+file; retraining reuses a finished dataset and a model an earlier attempt
+registered), so finished work is not lost. Lease ends are written with the
+replicas' own clocks, which must agree to well within ``job_lease_s`` (NTP).
 
 Stopping: ``cancel`` (``POST /jobs/{id}/cancel``) and a server shutdown stop a running job
 within seconds at any stage: its Dask tasks are cancelled and the workers running them
 restarted, a step in a child process (model training) is killed, and every progress report
-checks. At shutdown the job threads get ``shutdown_timeout_s``; a job still running then is
-left ``interrupted`` and the process exits anyway (the threads are daemons).
+checks. At shutdown the job threads get ``shutdown_timeout_s``; the jobs this replica runs are
+left ``interrupted`` (``resume`` queues them again for any replica) and the process exits anyway
+(the threads are daemons).
 
 An outcome that cannot be written (a full disk) is kept in memory, shown by ``get``/``list``
-and written again every few seconds until it lands; a row left ``running`` by a thread
-that has ended can be resumed or cancelled, and at the next start it is ``interrupted``.
+and written again every few seconds until it lands, the lease renewed meanwhile; a row left
+``running`` by a thread that has ended can be resumed or cancelled.
 
 The Dask client is created lazily on the first job: a connection to
 ``dask_scheduler_address`` when set, otherwise a ``distributed.LocalCluster``
@@ -24,8 +39,8 @@ jobs and closed at shutdown.
 """
 from __future__ import annotations
 
+import datetime as dt
 import logging
-import queue
 import threading
 import time
 import traceback
@@ -33,7 +48,7 @@ import uuid
 from collections.abc import Callable
 from typing import Any
 
-from sqlalchemy import func, select, update
+from sqlalchemy import and_, case, func, literal, or_, select, update
 from sqlalchemy.exc import DatabaseError
 from sqlalchemy.orm import sessionmaker
 
@@ -60,15 +75,22 @@ class JobCancelled(Exception):
     """Raised inside a job that was cancelled (``POST /jobs/{id}/cancel``)."""
 
 
+class JobLost(JobInterrupted):
+    """Raised inside a job whose lease this replica no longer holds (taken over, or cancelled through
+    another replica): it stops without writing anything."""
+
+
 class JobContext:
     """What a work function gets: settings, Dask client, model store, progress reporting, stop checks."""
 
-    def __init__(self, manager: JobManager, job_id: str) -> None:
+    def __init__(self, manager: JobManager, job_id: str, attempt: int = 0) -> None:
         self._manager = manager
         self.job_id = job_id
+        self.attempt = attempt
         self.settings = manager.settings
         self.models = manager.models
         self.cancel_event = threading.Event()
+        self.lost_event = threading.Event()
         self.done = threading.Event()
         self._on_stop: list[Callable[[], None]] = []
         self._lock = threading.Lock()
@@ -80,22 +102,29 @@ class JobContext:
         return _JobClient(self._manager.client(), self)
 
     def check(self) -> None:
-        """Raise :class:`JobInterrupted` when the server is stopping, :class:`JobCancelled` when cancelled."""
+        """Raise :class:`JobInterrupted` when the server is stopping, :class:`JobCancelled` when cancelled,
+        :class:`JobLost` when this replica no longer holds the job."""
+        if self.lost_event.is_set():
+            raise JobLost(f"job {self.job_id}: this replica no longer holds its lease")
         if self._manager.stopping.is_set():
             raise JobInterrupted("server shutting down")
         if self.cancel_event.is_set():
             raise JobCancelled("cancelled")
 
     def progress(self, fraction: float, stage: str | None = None, message: str | None = None) -> None:
-        """Record progress (0-1); raises :class:`JobInterrupted`/:class:`JobCancelled` when the job must stop."""
+        """Record progress (0-1) and renew the lease; raises :class:`JobInterrupted`/:class:`JobCancelled`/
+        :class:`JobLost` when the job must stop."""
         self.check()
-        values: dict[str, Any] = {"progress": float(min(max(fraction, 0.0), 1.0)), "updated_at": utcnow()}
+        now = utcnow()
+        values: dict[str, Any] = {"progress": float(min(max(fraction, 0.0), 1.0)), "updated_at": now,
+                                  "lease_expires_at": now + self._manager.lease}
         if stage is not None:
             values["stage"] = stage
         if message is not None:
             values["message"] = message
-        with self._manager.sessions.begin() as s:
-            s.execute(update(Job).where(Job.id == self.job_id).values(**values))
+        if not self._manager._write_held(self.job_id, self.attempt, values, over=("running",)):
+            self.lost_event.set()
+            self.check()
 
     def on_stop(self, hook: Callable[[], None]) -> Callable[[], None]:
         """Call ``hook()`` (from another thread) when this job is cancelled or the server stops; runs it at
@@ -130,8 +159,8 @@ class JobContext:
 
     @property
     def stopping(self) -> bool:
-        """The job must stop: cancelled, or the server is shutting down."""
-        return self._manager.stopping.is_set() or self.cancel_event.is_set()
+        """The job must stop: cancelled, lost, or the server is shutting down."""
+        return self._manager.stopping.is_set() or self.cancel_event.is_set() or self.lost_event.is_set()
 
     @property
     def cancelled(self) -> bool:
@@ -182,11 +211,12 @@ class JobManager:
         self.sessions = sessions
         self.models = models
         self.stopping = threading.Event()
-        self._queue: queue.Queue[str | None] = queue.Queue()
-        self._threads = [threading.Thread(target=self._thread_main, name=f"rotordiag-job-{i}", daemon=True)
-                         for i in range(settings.job_threads)]
-        for t in self._threads:
-            t.start()
+        self.replica = settings.effective_replica_id
+        self.lease = dt.timedelta(seconds=settings.job_lease_s)
+        self._wake = threading.Event()                   # a job was queued here: claim at once
+        self._threads: list[threading.Thread] = []
+        self._held: dict[str, int] = {}                  # job id -> attempt, of the jobs this replica holds
+        self.takeovers = 0                               # jobs claimed after their holder's lease ran out
         self._client = None
         self._cluster = None
         self._client_lock = threading.Lock()
@@ -195,8 +225,6 @@ class JobManager:
         self._unrecorded: dict[str, dict[str, Any]] = {}  # outcomes the database refused, written again later
         self._lock = threading.RLock()
         self._retry_thread: threading.Thread | None = None
-        self._interrupt_pending = False                   # recover() could not write yet
-        self._stale: list[str] | None = None              # the rows it has to mark
 
     # -- registry of work functions ---------------------------------------------------------
     def register(self, kind: str, work: WorkFunction) -> None:
@@ -211,25 +239,41 @@ class JobManager:
         return self._work[kind]
 
     # -- lifecycle --------------------------------------------------------------------------
-    def mark_interrupted(self, ids: list[str] | None = None) -> int:
-        """Mark jobs a previous process left queued/running (those of ``ids`` only, when given) as
-        ``interrupted``; return how many."""
+    def start(self) -> None:
+        """Start the job threads (each claims queued jobs and those whose holder died) and the lease thread
+        (renews this replica's leases)."""
+        if self._threads:
+            return
+        self._threads = [threading.Thread(target=self._thread_main, name=f"rotordiag-job-{i}", daemon=True)
+                         for i in range(self.settings.job_threads)]
+        self._threads.append(threading.Thread(target=self._lease_main, name="rotordiag-job-lease", daemon=True))
+        for t in self._threads:
+            t.start()
+
+    def mark_interrupted(self) -> int:
+        """Mark the jobs this replica holds ``interrupted`` (at shutdown); return how many."""
         with self.sessions.begin() as s:
             res = s.execute(
-                update(Job).where(Job.status.in_(ACTIVE), *([Job.id.in_(ids)] if ids is not None else [])).values(
-                    status="interrupted", message="the server stopped while this job was queued or running; "
-                    "POST /jobs/{id}/resume continues it", updated_at=utcnow()))
+                update(Job).where(Job.status == "running", Job.lease_owner == self.replica).values(
+                    status="interrupted", lease_expires_at=None,
+                    message="the server stopped while this job was running; POST /jobs/{id}/resume continues it",
+                    updated_at=utcnow()))
             return res.rowcount or 0
+
+    def held(self) -> int:
+        """Number of jobs this replica holds (running, or ended with the outcome not yet written)."""
+        with self._lock:
+            return len(self._held)
 
     def shutdown(self) -> None:
         """Stop accepting work, stop running jobs (Dask tasks cancelled, child processes killed), wait for
         the job threads at most ``settings.shutdown_timeout_s``, close the Dask client.
 
-        Running and queued jobs are left ``interrupted`` (resumable); when the database cannot be written
-        now, the next start marks them so."""
+        The jobs this replica runs are left ``interrupted`` (resumable); queued ones stay queued for any
+        replica. When the database cannot be written now, their leases run out and another replica (or this
+        one, restarted) takes them over."""
         self.stopping.set()
-        for _ in self._threads:
-            self._queue.put(None)
+        self._wake.set()
         with self._lock:
             live = list(self._live.values())
         for ctx in live:
@@ -237,7 +281,8 @@ class JobManager:
         try:
             self.mark_interrupted()   # right away, in case the process is killed while we wait below
         except DatabaseError as exc:
-            log.error("cannot mark the running jobs interrupted (%s); the next start does", exc.orig)
+            log.error("cannot mark the running jobs interrupted (%s); their leases run out and another replica "
+                      "(or the next start) takes them over", exc.orig)
         deadline = time.monotonic() + self.settings.shutdown_timeout_s
         for ctx in live:
             ctx.done.wait(max(0.0, deadline - time.monotonic()))
@@ -311,7 +356,7 @@ class JobManager:
                   stage="queued", message="waiting for a job slot", attempts=0)
         with self.sessions.begin() as s:
             s.add(job)
-        self._queue.put(job.id)
+        self._wake.set()   # this replica's job threads look at once; the others' within job_poll_s
         return job
 
     def resume(self, job_id: str) -> Job | None:
@@ -333,8 +378,10 @@ class JobManager:
                     raise ValueError(f"job {job_id} is {status}; only interrupted, failed or cancelled jobs can be "
                                      "resumed")
                 job.status, job.stage, job.message, job.error = "queued", "queued", "resumed; waiting for a job slot", None
+                job.lease_owner = job.lease_expires_at = None
             self._unrecorded.pop(job_id, None)
-        self._queue.put(job_id)
+            self._held.pop(job_id, None)
+        self._wake.set()
         return self.get(job_id)
 
     def cancel(self, job_id: str, wait_s: float = CANCEL_WAIT_S) -> Job | None:
@@ -355,11 +402,14 @@ class JobManager:
             if ctx is None:
                 if job.status not in ACTIVE:
                     raise ValueError(f"job {job_id} is {job.status}; only queued or running jobs can be cancelled")
-                # queued (its thread will skip it), or left running by a previous process and not yet marked
+                # queued (no replica claims it any more), running on another replica (whose next progress
+                # report or lease renewal finds it cancelled and stops it), or ended with its outcome unwritten
+                self._unrecorded.pop(job_id, None)
+                self._held.pop(job_id, None)
                 with self.sessions.begin() as s:
-                    s.execute(update(Job).where(Job.id == job_id).values(
+                    s.execute(update(Job).where(Job.id == job_id, Job.status.in_(ACTIVE)).values(
                         status="cancelled", stage="cancelled", message=_CANCELLED, finished_at=utcnow(),
-                        updated_at=utcnow()))
+                        lease_expires_at=None, updated_at=utcnow()))
                 return self.get(job_id)
             ctx.cancel_event.set()
         ctx._stop()
@@ -410,35 +460,117 @@ class JobManager:
                            "retried every few seconds)")
         return job
 
+    # -- claiming ----------------------------------------------------------------------------
+    def _claimable(self, now: dt.datetime):
+        expired = or_(Job.lease_expires_at.is_(None), Job.lease_expires_at < now)
+        return or_(Job.status == "queued", and_(Job.status == "running", expired))
+
+    def claim(self) -> tuple[str, str, dict[str, Any], int] | None:
+        """Claim the oldest queued job, or a running one whose lease ran out, for this replica.
+
+        One ``UPDATE … WHERE id = (SELECT … LIMIT 1 FOR UPDATE SKIP LOCKED) AND <still claimable>``:
+        on PostgreSQL replicas skip the rows others are claiming; SQLite ignores ``FOR UPDATE`` and runs
+        the statement under its single-writer lock. Returns ``(id, kind, params, attempt)`` or None.
+        """
+        now = utcnow()
+        claimable = self._claimable(now)
+        oldest = (select(Job.id).where(claimable).order_by(Job.created_at, Job.id).limit(1)
+                  .with_for_update(skip_locked=True).scalar_subquery())
+        taken_over = Job.status == "running"
+        stmt = (update(Job).where(Job.id == oldest, claimable).values(
+            status="running", lease_owner=self.replica, lease_expires_at=now + self.lease,
+            attempts=Job.attempts + 1, started_at=now, updated_at=now, error=None,
+            stage=case((taken_over, literal("taken over")), else_=literal("starting")),
+            message=case((taken_over, literal("taken over by ") + literal(self.replica)
+                          + literal(" after the lease of ") + func.coalesce(Job.lease_owner, literal("a replica"))
+                          + literal(" ran out")), else_=literal("started on ") + literal(self.replica)),
+        ).returning(Job.id, Job.kind, Job.params, Job.attempts, Job.stage)
+            .execution_options(synchronize_session=False))
+        with self.sessions.begin() as s:
+            row = s.execute(stmt).first()
+        if row is None:
+            return None
+        job_id, kind, params, attempt, stage = row
+        if stage == "taken over":
+            self.takeovers += 1
+            log.warning("job %s (%s): taken over (attempt %d) from a replica whose lease ran out", job_id, kind,
+                        attempt)
+        return str(job_id), str(kind), dict(params or {}), int(attempt)
+
+    def _write_held(self, job_id: str, attempt: int, values: dict[str, Any],
+                    over: tuple[str, ...] = ACTIVE) -> bool:
+        """Update the row of a job this replica holds, fenced by replica id and attempt and by its state
+        (``over``); False when another replica has claimed it since, or it was cancelled."""
+        with self.sessions.begin() as s:
+            res = s.execute(update(Job).where(Job.id == job_id, Job.lease_owner == self.replica,
+                                              Job.attempts == attempt, Job.status.in_(over)).values(**values)
+                            .execution_options(synchronize_session=False))
+            return bool(res.rowcount)
+
+    def _renew_leases(self) -> None:
+        """Renew the leases of the jobs this replica holds; a job found taken over or cancelled is stopped."""
+        with self._lock:
+            held = dict(self._held)
+        for job_id, attempt in held.items():
+            try:
+                ok = self._write_held(job_id, attempt, {"lease_expires_at": utcnow() + self.lease},
+                                      over=("running",))
+            except DatabaseError as exc:
+                log.warning("job %s: lease not renewed (%s)", job_id, exc.orig)
+                continue
+            if not ok:
+                with self._lock:
+                    ctx = self._live.get(job_id)
+                    if job_id not in self._unrecorded:
+                        self._held.pop(job_id, None)
+                if ctx is not None and not ctx.lost_event.is_set():
+                    log.warning("job %s: lease lost (taken over, or cancelled through another replica); "
+                                "stopping it here", job_id)
+                    ctx.lost_event.set()
+                    ctx._stop()
+
+    def _lease_main(self) -> None:
+        while not self.stopping.wait(self.settings.job_lease_s / 3.0):
+            self._renew_leases()
+
     # -- execution ---------------------------------------------------------------------------
     def _thread_main(self) -> None:
-        while True:
-            job_id = self._queue.get()
-            if job_id is None or self.stopping.is_set():
-                return
+        poll_s = self.settings.job_poll_s
+        while not self.stopping.is_set():
             try:
-                self._run(job_id)
-            except Exception:  # noqa: BLE001 - a job thread must survive whatever one job did
-                log.exception("job %s", job_id)
+                with self._lock:
+                    claimed = None if self.stopping.is_set() else self.claim()
+                    if claimed is not None:
+                        job_id, kind, params, attempt = claimed
+                        self._held[job_id] = attempt
+                        ctx = self._live[job_id] = JobContext(self, job_id, attempt)
+                if claimed is None:
+                    self._wake.wait(poll_s)
+                    self._wake.clear()
+                    continue
+                self._run(ctx, kind, params)
+            except Exception:  # noqa: BLE001 - a job thread must survive whatever one job or the database did
+                log.exception("job thread (replica %s)", self.replica)
+                self.stopping.wait(poll_s)
 
-    def _run(self, job_id: str) -> None:
-        with self._lock:
-            if self.stopping.is_set():
-                return
-            with self.sessions.begin() as s:
-                job = s.get(Job, job_id)
-                if job is None or job.status != "queued":
-                    return
-                job.status, job.stage, job.message = "running", "starting", "started"
-                job.attempts += 1
-                job.started_at = utcnow()
-                kind, params = job.kind, dict(job.params)
-            ctx = self._live[job_id] = JobContext(self, job_id)
+    def _run(self, ctx: JobContext, kind: str, params: dict[str, Any]) -> None:
+        job_id = ctx.job_id
         try:
             result = self._work_for(kind)(params, ctx)
             outcome = {"status": "succeeded", "progress": 1.0, "stage": "done", "message": "finished",
                        "result": result, "error": None}
         except BaseException as exc:  # noqa: BLE001 - every outcome must land in the row
+            if ctx.lost_event.is_set() or isinstance(exc, JobLost):
+                log.warning("job %s (%s): stopped here; another replica holds it, or it was cancelled", job_id,
+                            kind)
+                ctx._stop()
+                with self._lock:
+                    self._live.pop(job_id, None)
+                    self._held.pop(job_id, None)
+                ctx.done.set()
+                if not isinstance(exc, Exception):
+                    raise
+                return
             if ctx.cancelled:
                 outcome = {"status": "cancelled", "stage": "cancelled", "message": _CANCELLED, "error": None}
             elif self.stopping.is_set() or isinstance(exc, JobInterrupted):
@@ -470,44 +602,26 @@ class JobManager:
                           job_id, outcome["status"], exc.orig, RECORD_RETRY_S)
                 self._unrecorded[job_id] = {**outcome, "db_error": str(exc.orig)}
                 self._start_retry()
+            else:
+                self._held.pop(job_id, None)
             finally:
                 self._live.pop(job_id, None)
         ctx.done.set()
 
     def _write(self, job_id: str, outcome: dict[str, Any]) -> None:
         values = {k: v for k, v in outcome.items() if k != "db_error"}
-        # only over the state this run left (a cancel of an orphaned row in between wins); at shutdown also over
-        # the `interrupted` that shutdown() wrote ahead, so a job whose last step finished says so
+        # only over the state this run left (a cancel in between wins), and only while this replica's attempt
+        # holds the job (one that was taken over is the new holder's); at shutdown also over the
+        # `interrupted` that shutdown() wrote ahead, so a job whose last step finished says so
         over = ACTIVE + ("interrupted",) if self.stopping.is_set() else ACTIVE
-        with self.sessions.begin() as s:
-            s.execute(update(Job).where(Job.id == job_id, Job.status.in_(over)).values(**values, updated_at=utcnow()))
-
-    def recover(self) -> int:
-        """At startup: mark the jobs a previous process left queued/running ``interrupted``; when the database
-        refuses the write (a full disk), keep trying every few seconds instead of failing the start."""
-        try:
-            return self.mark_interrupted()
-        except DatabaseError as exc:
-            log.error("cannot mark the jobs of the previous run interrupted (%s); retrying every %g s",
-                      exc.orig, RECORD_RETRY_S)
-            try:
-                with self.sessions() as s:
-                    self._stale = list(s.scalars(select(Job.id).where(Job.status.in_(ACTIVE))))
-            except DatabaseError:
-                self._stale = None                        # unreadable too: all active rows (none run yet)
-            self._interrupt_pending = True
-            self._start_retry()
-            return 0
+        attempt = self._held.get(job_id)
+        if attempt is None or not self._write_held(job_id, attempt, {**values, "lease_expires_at": None,
+                                                                     "updated_at": utcnow()}, over=over):
+            log.warning("job %s: outcome %s not written: another replica has taken the job over, or it was "
+                        "cancelled", job_id, values.get("status"))
 
     def _flush_unrecorded(self) -> int:
         """Write the outcomes the database refused before; returns how many are still unwritten."""
-        if self._interrupt_pending:
-            try:
-                with self._lock:
-                    self.mark_interrupted(self._stale)
-                    self._interrupt_pending = False
-            except DatabaseError:
-                return len(self._unrecorded) + 1
         with self._lock:
             for job_id, outcome in list(self._unrecorded.items()):
                 try:
@@ -515,6 +629,7 @@ class JobManager:
                 except DatabaseError:
                     continue
                 del self._unrecorded[job_id]
+                self._held.pop(job_id, None)
                 log.info("job %s: outcome %s written to the database", job_id, outcome["status"])
             return len(self._unrecorded)
 

@@ -1,15 +1,17 @@
-"""Prometheus metrics: request latency histograms (prometheus-fastapi-instrumentator) plus job counts and,
+"""Prometheus metrics of this replica: request latency histograms (prometheus-fastapi-instrumentator), the
+replica's name (``rotordiag_replica_info{replica}``), the jobs it runs and has taken over, plus job counts and,
 per asset with a baseline, the latest change against it (``rotordiag_asset_change{asset, quantity}``) and
 its trend alarm (``rotordiag_asset_alarm{asset}``), and per asset the storage its history uses
 (``rotordiag_asset_history_bytes{asset}``, ``rotordiag_asset_history_rows{asset, kind}``).
 
-Each app gets its own ``CollectorRegistry`` so several apps (tests) can live in one process.
+Each app gets its own ``CollectorRegistry`` so several apps (tests) can live in one process. Request
+figures are per replica: scrape every replica, not the load balancer (docs/service.md).
 """
 from __future__ import annotations
 
 from fastapi import FastAPI
 from prometheus_client import CollectorRegistry
-from prometheus_client.core import GaugeMetricFamily
+from prometheus_client.core import CounterMetricFamily, GaugeMetricFamily
 from prometheus_fastapi_instrumentator import Instrumentator
 
 
@@ -30,6 +32,13 @@ class _JobCollector:
         for status, n in state.jobs.counts().items():
             jobs.add_metric([status], n)
         yield jobs
+        replica = GaugeMetricFamily("rotordiag_replica_info", "This replica's name (value 1).", labels=["replica"])
+        replica.add_metric([state.jobs.replica], 1)
+        yield replica
+        yield GaugeMetricFamily("rotordiag_replica_jobs_held", "Jobs this replica is running.",
+                                value=state.jobs.held())
+        yield CounterMetricFamily("rotordiag_replica_job_takeovers", "Jobs this replica claimed after their "
+                                  "holder's lease ran out.", value=state.jobs.takeovers)
         model = GaugeMetricFamily("rotordiag_active_model_info", "Active model version (value 1).", labels=["version"])
         version = state.models.active_version()
         if version is not None:

@@ -184,11 +184,15 @@ class JobOut(BaseModel):
     params: dict[str, Any] = Field(..., description="The request that created the job.")
     result: dict[str, Any] | None = Field(None, description="Dataset summary or new model version and evaluation.")
     error: str | None = Field(None, description="Why the job failed.")
-    attempts: int = Field(..., description="How many times the job has been started (resumes count).")
+    attempts: int = Field(..., description="How many times the job has been started (resumes and takeovers count).")
     created_at: dt.datetime = Field(..., description="When the job was created (UTC).")
     started_at: dt.datetime | None = Field(..., description="When its last attempt started (UTC).")
     finished_at: dt.datetime | None = Field(..., description="When it last finished, failed or was interrupted (UTC).")
     updated_at: dt.datetime = Field(..., description="Last progress update (UTC).")
+    lease_owner: str | None = Field(None, description="The replica that runs (or last ran) the job.")
+    lease_expires_at: dt.datetime | None = Field(
+        None, description="While it runs: when the holder's lease ends unless renewed (UTC); past it, another "
+        "replica takes the job over.")
 
 
 # --- assets ---------------------------------------------------------------------------------
@@ -360,6 +364,9 @@ class HealthOut(BaseModel):
     model_sha256: str | None = Field(None, description="SHA-256 of the model file the diagnosis workers (or the "
                                      "server, without workers) hold for `model_version`; checked at least every 5 s.")
     detail: str = Field("", description="What is wrong when degraded.")
+    replica: str = Field("", description="This API process's name among the replicas sharing the database "
+                         "(ROTORDIAG_REPLICA_ID); each replica answers for itself.")
+    jobs_held: int = Field(0, description="Jobs this replica is running (claimed from the database).")
 
 
 # --- diagnosis output -------------------------------------------------------------------------

@@ -30,7 +30,7 @@ class AppState:
 
     @classmethod
     def start(cls, settings: Settings) -> AppState:
-        """Create the data directory and tables, open the registry, recover interrupted jobs."""
+        """Create the data directory, migrate the database, open the registry, start claiming jobs."""
         _configure_logging(settings.log_level)
         settings.data_dir.mkdir(parents=True, exist_ok=True)
         settings.datasets_dir.mkdir(parents=True, exist_ok=True)
@@ -39,18 +39,16 @@ class AppState:
         sessions = init_db(engine)
         models = ModelStore.open(settings)
         jobs = JobManager(settings, sessions, models)
-        n = jobs.recover()
-        if n:
-            log.warning("%d job(s) were running when the server last stopped; marked interrupted "
-                        "(POST /jobs/{id}/resume continues them)", n)
+        jobs.start()   # claims queued jobs and those whose holder died (service.jobs)
         pool = None
         if settings.effective_diagnosis_workers > 0:
             pool = DiagnosisPool(settings.registry_dir, settings.effective_diagnosis_workers,
                                  version=models.active_version(),
                                  memory_bytes=settings.diagnosis_worker_memory_mb * 2**20,
                                  timeout_s=settings.diagnosis_timeout_s)
-        log.info("rotordiag service ready: data_dir=%s database=%s registry=%s",
-                 settings.data_dir.resolve(), engine.url.render_as_string(hide_password=True),
+        log.info("rotordiag service ready: replica=%s data_dir=%s database=%s registry=%s",
+                 settings.effective_replica_id, settings.data_dir.resolve(),
+                 engine.url.render_as_string(hide_password=True),
                  settings.registry_dir.resolve())
         return cls(settings=settings, engine=engine, sessions=sessions, models=models, jobs=jobs, pool=pool)
 

@@ -298,14 +298,34 @@ def run_retrain(params: dict[str, Any], ctx) -> dict[str, Any]:
     table, dropped = _drop_unmeasured(table)
     ctx.progress(0.8, "training", f"training on {len(table)} rows (held-out-plant evaluation, then final fit)")
     activate = bool(params.get("activate"))
-    # in a child process, so that a cancel or a shutdown stops a fit that has no progress to check
-    version = run_in_child(ctx, _train_step, table, params["training"], str(ctx.models.root), activate,
-                           {"retrain_job": ctx.job_id, "plant_overrides": params.get("plant") or {},
-                            "field_records": len(field), "features_never_measured": dropped})
+    version = _registered_by(ctx.models.registry, ctx.job_id)
+    if version is None:
+        # in a child process, so that a cancel or a shutdown stops a fit that has no progress to check
+        version = run_in_child(ctx, _train_step, table, params["training"], str(ctx.models.root), activate,
+                               {"retrain_job": ctx.job_id, "plant_overrides": params.get("plant") or {},
+                                "field_records": len(field), "features_never_measured": dropped})
+    else:   # an earlier attempt registered it, then died before recording success: do not train it twice
+        ctx.progress(0.95, "training", f"{version} was registered by an earlier attempt of this job")
+        if activate:
+            ctx.models.registry.activate(version)
     card = ctx.models.registry.card(version)
     return {"version": version, "activated": activate, "metrics": card.get("metrics"),
             "n_rows": len(table), "field_records": len(field), "features_never_measured": dropped,
             "report": str((ctx.models.root / version / "report.json").resolve()), "dataset": dataset}
+
+
+def _registered_by(registry, job_id: str) -> str | None:
+    """The version an earlier attempt of retraining job ``job_id`` registered (a job taken over after its
+    holder died between registering and recording success), or None."""
+    from rotordiag.models.registry import RegistryError
+
+    for version in reversed(registry.versions()):
+        try:
+            if registry.card(version).get("retrain_job") == job_id:
+                return version
+        except RegistryError:
+            continue
+    return None
 
 
 def _train_step(table: Any, training: dict[str, Any], registry_root: str, activate: bool,

@@ -33,3 +33,34 @@ if _ROOT not in sys.path:
     sys.path.append(_ROOT)
 if not any(isinstance(f, _BareImportBlocker) for f in sys.meta_path):
     sys.meta_path.insert(0, _BareImportBlocker())
+
+
+# --- PostgreSQL (issue 47) ------------------------------------------------------------------------
+import os  # noqa: E402
+
+import pytest  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def postgres():
+    """A throw-away PostgreSQL cluster (tests/pg_util.py) for the whole session.
+
+    Skipped, with the reason, only where no server binary is installed; under CI (``CI`` set) a missing
+    server fails instead, since .ci/run installs Debian's ``postgresql``."""
+    from tests.pg_util import find_pg_bin, postgres_cluster
+
+    if find_pg_bin() is None:
+        reason = "no PostgreSQL server binary (initdb/pg_ctl) installed: `apt-get install -y postgresql`"
+        if os.environ.get("CI"):
+            pytest.fail(f"CI must run the PostgreSQL tests: {reason}")
+        pytest.skip(reason)
+    with postgres_cluster() as cluster:
+        yield cluster
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def database_url(request, tmp_path) -> str:
+    """A fresh, empty database of each backend: a SQLite file, or a new database on the session's cluster."""
+    if request.param == "sqlite":
+        return f"sqlite:///{tmp_path / 'store.sqlite3'}"
+    return request.getfixturevalue("postgres").new_database()

@@ -1,5 +1,5 @@
 """Jobs that can be stopped and whose end is always recorded (issue 44, item 5): an outcome the database
-refuses (a full disk) is retried, shown meanwhile, and surfaced as `interrupted` at the next start;
+refuses (a full disk) is retried, shown meanwhile, and taken over (run again) at the next start;
 POST /jobs/{id}/cancel stops a job within seconds in a Dask task, between samples of a dataset, and in a
 training step's child process; SIGTERM/SIGINT stop `rotordiag serve` within the stated time with the job
 left resumable."""
@@ -96,8 +96,11 @@ def test_an_outcome_the_database_refuses_is_retried_and_the_job_can_be_resumed(t
         assert _wait(c.get, other.id, {"succeeded"})["status"] == "succeeded"
 
 
-def test_an_outcome_never_written_is_surfaced_as_interrupted_at_the_next_start(tmp_path):
-    settings = make_settings(tmp_path)
+def test_an_outcome_never_written_is_taken_over_at_the_next_start(tmp_path):
+    """The row of a job whose outcome never reached the database stays `running` with a lease nobody renews
+    (issue 47): once the lease has run out, the next start (or any other replica) claims the job and runs it
+    again (a retry), without a resume."""
+    settings = make_settings(tmp_path, job_lease_s=1.0, job_poll_s=0.2)
     app = create_app(settings)
     on = {"full": False}
 
@@ -110,14 +113,13 @@ def test_an_outcome_never_written_is_surfaced_as_interrupted_at_the_next_start(t
         app.state.rd.jobs.register("dataset", work)
         job = app.state.rd.jobs.submit("dataset", {})
         _wait(c.get, job.id, {"failed"})
-    # stopped with the disk still full: nothing could be written; the next start says what is known
+    # stopped with the disk still full: nothing could be written
     app2 = create_app(settings)
     with TestClient(app2) as c:
         app2.state.rd.jobs.register("dataset", lambda params, ctx: {"ok": True})
-        j = c.get(f"/jobs/{job.id}").json()
-        assert j["status"] == "interrupted" and "resume" in j["message"], j
-        assert c.post(f"/jobs/{job.id}/resume", headers=auth()).status_code == 200
-        assert _wait(c.get, job.id, {"succeeded"})["status"] == "succeeded"
+        j = _wait(c.get, job.id, {"succeeded"})
+        assert j["result"] == {"ok": True} and j["attempts"] == 2, j
+        assert j["lease_owner"] == app2.state.rd.jobs.replica
 
 
 # ------------------------------------------------------------------------------------------ cancel
@@ -316,18 +318,22 @@ def test_a_signal_stops_the_server_in_the_stated_time_and_the_job_resumes(tmp_pa
         proc.communicate(timeout=STOP_BOUND_S + 30)
 
 
-def test_a_start_on_a_full_disk_still_starts_and_marks_the_previous_jobs_once_it_can(tmp_path, monkeypatch):
+def test_a_start_on_a_full_disk_still_starts_and_the_previous_jobs_are_taken_over_once_it_can(tmp_path,
+                                                                                              monkeypatch):
+    """A job a killed process left `running` (no lease: written before leases, or its holder is gone) is
+    claimed by the next start once the database takes writes again (issue 47: leases), and finishes."""
     from rotordiag.service import state as state_module
+    from rotordiag.service.core.db import make_engine as plain_engine
 
-    monkeypatch.setattr(jobs_module, "RECORD_RETRY_S", 0.3)
-    settings = make_settings(tmp_path)
-    with TestClient(create_app(settings)) as c:
-        engine = c.app.state.rd.engine
-        with engine.begin() as conn:            # a job the previous process left running
-            conn.execute(text("INSERT INTO jobs (id, kind, status, params, progress, stage, message, attempts, "
-                              "created_at, updated_at) VALUES ('old-job', 'dataset', 'running', '{}', 0.5, "
-                              "'simulating', 'simulating: 8/16', 1, '2026-01-01 00:00:00', '2026-01-01 00:00:00')"))
-        c.app.state.rd.jobs.mark_interrupted = lambda ids=None: 0   # as if this process were killed
+    settings = make_settings(tmp_path, job_poll_s=0.2)
+    with TestClient(create_app(settings)):
+        pass                                        # the database exists
+    engine = plain_engine(settings.effective_database_url)
+    with engine.begin() as conn:                    # a job the previous process left running
+        conn.execute(text("INSERT INTO jobs (id, kind, status, params, progress, stage, message, attempts, "
+                          "created_at, updated_at) VALUES ('old-job', 'dataset', 'running', '{}', 0.5, "
+                          "'simulating', 'simulating: 8/16', 1, '2026-01-01 00:00:00', '2026-01-01 00:00:00')"))
+    engine.dispose()
     on = {"full": True}
     make_engine = state_module.make_engine
 
@@ -341,13 +347,12 @@ def test_a_start_on_a_full_disk_still_starts_and_marks_the_previous_jobs_once_it
     with TestClient(app) as c:
         h = c.get("/health")
         assert h.status_code == 503 and "disk is full" in h.json()["detail"], h.text
-        assert c.get("/jobs/old-job").json()["status"] == "running"      # cannot be marked yet
-        on["full"] = False
         app.state.rd.jobs.register("dataset", lambda params, ctx: {"ok": True})
-        j = _wait(c.get, "old-job", {"interrupted"}, timeout=10)
-        assert "resume" in j["message"]
-        assert c.post("/jobs/old-job/resume", headers=auth()).status_code == 200
-        assert _wait(c.get, "old-job", {"succeeded"})["result"] == {"ok": True}
+        time.sleep(0.5)
+        assert c.get("/jobs/old-job").json()["status"] == "running"      # cannot be claimed yet
+        on["full"] = False
+        j = _wait(c.get, "old-job", {"succeeded"}, timeout=20)
+        assert j["result"] == {"ok": True} and j["attempts"] == 2 and j["lease_owner"] == app.state.rd.jobs.replica
 
 
 def test_a_job_busy_in_its_own_thread_says_cancel_requested_then_ends_cancelled(tmp_path):

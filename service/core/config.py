@@ -42,7 +42,9 @@ class Settings(BaseSettings):
     )
     data_dir: Path = Field(Path("./data"), description="Directory for the database, datasets and retrained models.")
     database_url: str = Field(
-        "", description="SQLAlchemy URL; empty means a SQLite file `<data_dir>/rotordiag.sqlite3`.",
+        "", description="SQLAlchemy URL of the store: empty means a SQLite file `<data_dir>/rotordiag.sqlite3` "
+        "(one server process); `postgresql://user:password@host:5432/rotordiag` is the production store that "
+        "several API replicas share (docs/service.md).",
     )
     api_key: SecretStr = Field(
         SecretStr(""),
@@ -92,6 +94,16 @@ class Settings(BaseSettings):
         description="Time a client has to send a request body once its headers have arrived, s; a slower one "
         "is answered 408 and its connection closed.")
     job_threads: int = Field(1, ge=1, le=16, description="Jobs run at the same time (each fans out on Dask).")
+    replica_id: str = Field(
+        "", max_length=100, description="This API process's name among the replicas sharing the database (in "
+        "job leases, /health and /metrics); empty means `<hostname>-<pid>-<random>`, new at each start.")
+    job_lease_s: float = Field(
+        30.0, ge=1.0, le=3600, allow_inf_nan=False,
+        description="How long a replica's hold on a running job lasts without renewal, s (renewed every third of "
+        "it); a job whose holder died is taken over by another replica at most this plus `job_poll_s` later.")
+    job_poll_s: float = Field(
+        1.0, gt=0, le=60, allow_inf_nan=False,
+        description="How often each replica looks for queued jobs and expired leases, s.")
     shutdown_timeout_s: float = Field(
         10.0, ge=0, le=600, allow_inf_nan=False,
         description="At SIGINT/SIGTERM, how long the server waits for running jobs to stop, s; a job still running "
@@ -143,6 +155,14 @@ class Settings(BaseSettings):
             "send it as the X-API-Key header to write endpoints.", key,
         )
         return key
+
+    @cached_property
+    def effective_replica_id(self) -> str:
+        """``replica_id``, or a name unique to this process (host, pid and a random part)."""
+        import os
+        import socket
+
+        return self.replica_id.strip() or f"{socket.gethostname()}-{os.getpid()}-{secrets.token_hex(3)}"
 
     @property
     def effective_database_url(self) -> str:

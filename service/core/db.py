@@ -1,12 +1,30 @@
 """Database engine, session factory and the tables: jobs, asset diagnoses, asset baselines, asset
-alarm settings and the health probe (SQLAlchemy 2); :func:`init_db` adds columns that an older database lacks."""
+alarm settings and the health probe (SQLAlchemy 2). One URL selects the backend: SQLite (the embedded
+default) or PostgreSQL (``postgresql://…``, driven by psycopg 3). :func:`init_db` brings the schema to
+the newest version with Alembic (``service/migrations``), adopting a database made before Alembic."""
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
+from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
-from sqlalchemy import JSON, Boolean, DateTime, Float, Integer, String, Text, TypeDecorator, create_engine, event
-from sqlalchemy.engine import Engine
+from sqlalchemy import (
+    JSON,
+    Boolean,
+    DateTime,
+    Float,
+    Index,
+    Integer,
+    String,
+    Text,
+    TypeDecorator,
+    create_engine,
+    event,
+    text,
+)
+from sqlalchemy.engine import Connection, Engine
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
 
 
@@ -55,6 +73,12 @@ class Job(Base):
     started_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime(), nullable=True)
     finished_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime(), nullable=True)
     updated_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow, onupdate=utcnow)
+    # the replica running the job and until when its hold is good (issue 47): a running job whose lease
+    # has run out is claimed again by any replica (service.jobs)
+    lease_owner: Mapped[str | None] = mapped_column(String(128), nullable=True)
+    lease_expires_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+
+    __table_args__ = (Index("ix_jobs_status_lease", "status", "lease_expires_at"),)
 
 
 class AssetDiagnosis(Base):
@@ -123,8 +147,18 @@ class ServiceProbe(Base):
     written_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow)
 
 
+def normalize_url(url: str) -> str:
+    """``url`` with PostgreSQL spelled for psycopg 3 (``postgres://`` and ``postgresql://`` would select
+    psycopg2, which is not a dependency); other URLs unchanged."""
+    for prefix in ("postgres://", "postgresql://"):
+        if url.startswith(prefix):
+            return "postgresql+psycopg://" + url[len(prefix):]
+    return url
+
+
 def make_engine(url: str) -> Engine:
     """Create the engine; SQLite gets WAL mode and cross-thread use (the app runs sync routes in threads)."""
+    url = normalize_url(url)
     if url.startswith("sqlite"):
         engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 30})
 
@@ -136,35 +170,128 @@ def make_engine(url: str) -> Engine:
             cur.execute("PRAGMA foreign_keys=ON")
             cur.close()
     else:
-        engine = create_engine(url, pool_pre_ping=True)
+        engine = create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=10)
     return engine
 
 
 def init_db(engine: Engine) -> sessionmaker:
-    """Create missing tables, add missing (nullable) columns to existing ones, return a session factory."""
-    Base.metadata.create_all(engine)
-    add_missing_columns(engine)
+    """Migrate the database to the newest schema version, return a session factory."""
+    migrate(engine)
     return sessionmaker(engine, expire_on_commit=False)
 
 
-def add_missing_columns(engine: Engine) -> list[str]:
-    """Schema migration for databases made by an older version: ``ALTER TABLE … ADD COLUMN`` for every
-    nullable column of the models that a table lacks (new columns are always nullable). Returns
-    ``table.column`` of each column added."""
-    from sqlalchemy import inspect, text
+#: Alembic's folder (env.py, versions/) inside the installed package.
+MIGRATIONS_DIR = Path(__file__).resolve().parents[1] / "migrations"
+#: PostgreSQL advisory-lock key held while one replica migrates (the others wait, then find nothing to do).
+_MIGRATION_LOCK_KEY = 4747_0001
 
-    added = []
-    insp = inspect(engine)
-    with engine.begin() as conn:
-        for table in Base.metadata.sorted_tables:
-            have = {c["name"] for c in insp.get_columns(table.name)}
-            for col in table.columns:
-                if col.name in have:
-                    continue
-                if not col.nullable:
-                    raise RuntimeError(f"database table {table.name} lacks the required column {col.name}; "
-                                       "it cannot be added in place")
-                ddl = col.type.compile(dialect=engine.dialect)
-                conn.execute(text(f'ALTER TABLE "{table.name}" ADD COLUMN "{col.name}" {ddl}'))
-                added.append(f"{table.name}.{col.name}")
-    return added
+
+def _alembic_config(connection: Connection | None = None):
+    from alembic.config import Config
+
+    cfg = Config()
+    cfg.set_main_option("script_location", str(MIGRATIONS_DIR))
+    cfg.attributes["connection"] = connection
+    return cfg
+
+
+def head_revision() -> str:
+    """The newest schema version the code knows."""
+    from alembic.script import ScriptDirectory
+
+    head = ScriptDirectory.from_config(_alembic_config()).get_current_head()
+    assert head is not None
+    return head
+
+
+def current_revision(engine: Engine) -> str | None:
+    """The schema version the database is at (None: never migrated, e.g. a pre-Alembic database)."""
+    with engine.connect() as conn:
+        return _current(conn)
+
+
+def migrate(engine: Engine, revision: str = "head") -> None:
+    """Upgrade (or, for an older ``revision``, downgrade) the schema with Alembic.
+
+    Several replicas may start at once: on PostgreSQL the first holds an advisory lock while it
+    migrates and the others wait for it, then find the schema current; on SQLite a lock file
+    next to the database does the same for processes on one host.
+    """
+    from alembic import command
+
+    with _migration_lock(engine), engine.begin() as conn:
+        if conn.dialect.name == "postgresql":
+            conn.execute(text("SELECT pg_advisory_xact_lock(:k)"), {"k": _MIGRATION_LOCK_KEY})
+        cfg = _alembic_config(conn)
+        have = _current(conn)
+        if revision == "head" or have is None or _is_ahead(revision, have):
+            command.upgrade(cfg, revision)
+        else:
+            command.downgrade(cfg, revision)
+
+
+def _current(conn: Connection) -> str | None:
+    from alembic.runtime.migration import MigrationContext
+
+    return MigrationContext.configure(conn).get_current_revision()
+
+
+def _is_ahead(target: str, have: str) -> bool:
+    """True when ``target`` comes after ``have`` in the version chain."""
+    from alembic.script import ScriptDirectory
+
+    script = ScriptDirectory.from_config(_alembic_config())
+    return any(rev.revision == have for rev in script.iterate_revisions(target, "base") if rev.revision != target)
+
+
+@contextlib.contextmanager
+def _migration_lock(engine: Engine) -> Iterator[None]:
+    database = engine.url.database if engine.url.get_backend_name() == "sqlite" else None
+    if not database or database == ":memory:":
+        yield
+        return
+    import fcntl
+
+    with open(f"{database}.migrate-lock", "a+b") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
+
+
+class CopyError(RuntimeError):
+    """The store cannot be copied (the target already holds rows, or the source is newer than the code)."""
+
+
+def copy_store(source: Engine, target: Engine, batch_rows: int = 500) -> dict[str, int]:
+    """Copy every row of a service database (e.g. the SQLite file) into another (e.g. PostgreSQL).
+
+    Both are migrated to the newest schema first (the source in place, as the server would at its
+    start); the target must hold no rows. Rows keep their ids; on PostgreSQL the id sequence of
+    ``asset_diagnoses`` is moved past the largest copied id. One transaction on the target: it
+    has all the rows or none. Returns the rows copied per table.
+    """
+    from sqlalchemy import func, select
+
+    migrate(source)
+    migrate(target)
+    tables = Base.metadata.sorted_tables
+    with target.connect() as tconn:
+        busy = {t.name: tconn.execute(select(func.count()).select_from(t)).scalar_one() for t in tables}
+    busy = {k: v for k, v in busy.items() if v}
+    if busy:
+        raise CopyError(f"the target database already holds rows ({busy}); copy into an empty database")
+    copied: dict[str, int] = {}
+    with source.connect() as sconn, target.begin() as tconn:
+        for table in tables:
+            n = 0
+            result = sconn.execution_options(stream_results=True).execute(select(table))
+            while rows := result.fetchmany(batch_rows):
+                tconn.execute(table.insert(), [dict(r._mapping) for r in rows])
+                n += len(rows)
+            copied[table.name] = n
+        if tconn.dialect.name == "postgresql":
+            tconn.execute(text("SELECT setval(pg_get_serial_sequence('asset_diagnoses', 'id'), "
+                               "COALESCE((SELECT MAX(id) FROM asset_diagnoses), 0) + 1, false)"))
+    return copied

@@ -67,4 +67,5 @@ def health(state: StateDep, response: Response) -> HealthOut:
     except OSError:
         free_mb = None
     return HealthOut(status=status, version=code_version(), database=db_problem is None, disk_free_mb=free_mb,
-                     model_version=version, model_sha256=sha256, detail="; ".join(problems))
+                     model_version=version, model_sha256=sha256, detail="; ".join(problems),
+                     replica=state.jobs.replica, jobs_held=state.jobs.held())

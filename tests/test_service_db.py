@@ -1,0 +1,179 @@
+"""The service database under Alembic (issue 47): a database the service wrote before Alembic is
+adopted with its rows, the schema versions go up and down with the data kept, the migrated schema
+equals the models', several replicas may migrate at once, and `rotordiag db copy` moves a SQLite
+store into PostgreSQL. Backend-neutral tests run on SQLite and on a real PostgreSQL server."""
+from __future__ import annotations
+
+import datetime as dt
+import sqlite3
+import threading
+from pathlib import Path
+
+import pytest
+from sqlalchemy import func, inspect, select, text
+
+from rotordiag.service.core.db import (
+    AssetBaseline,
+    AssetDiagnosis,
+    AssetSettings,
+    Base,
+    CopyError,
+    Job,
+    copy_store,
+    current_revision,
+    head_revision,
+    init_db,
+    make_engine,
+    migrate,
+)
+
+DUMP = Path(__file__).parent / "reference" / "service_db_before_alembic.sql"
+
+
+def _old_sqlite(path: Path, drop: tuple[str, ...] = ()) -> str:
+    """A SQLite file as the service wrote it before Alembic (tests/reference dump), minus ``drop`` columns
+    of asset_diagnoses (what a still older version lacked)."""
+    con = sqlite3.connect(path)
+    con.executescript(DUMP.read_text())
+    for col in drop:
+        con.execute(f'ALTER TABLE asset_diagnoses DROP COLUMN "{col}"')
+    con.commit()
+    con.close()
+    return f"sqlite:///{path}"
+
+
+def _check_reference_rows(sessions) -> None:
+    """The rows of the reference dump, read back through the models (values written by the old code)."""
+    with sessions() as s:
+        jobs = {j.id[-1]: j for j in s.scalars(select(Job))}
+        assert jobs["1"].status == "succeeded" and jobs["1"].result == {"n_samples": 16}
+        assert jobs["2"].status == "interrupted" and jobs["2"].params == {"spec_toml": "y"}
+        assert jobs["1"].created_at == dt.datetime(2026, 11, 1, 12, 0, tzinfo=dt.UTC)
+        assert jobs["2"].lease_owner is None and jobs["2"].lease_expires_at is None
+        rows = list(s.scalars(select(AssetDiagnosis).order_by(AssetDiagnosis.id)))
+        assert [r.id for r in rows] == [1, 2, 3]
+        assert [r.misalignment for r in rows] == pytest.approx([0.20, 0.21, 0.22])
+        assert rows[2].change == {"compared": True, "changed": True} and rows[2].alarm is True
+        assert rows[0].verdict["severity"] == "moderate" and rows[1].signature == {"x1_amp_um_pp": 41.0}
+        base = s.get(AssetBaseline, "unit-7")
+        assert base is not None and base.diagnosis_ids == [1, 2] and base.signature == {"x1_amp_um_pp": 40.0}
+        settings = s.get(AssetSettings, "unit-7")
+        assert settings is not None and settings.thresholds == {"x1_amp_rel": 0.3}
+
+
+def test_pre_alembic_sqlite_database_is_adopted_with_its_rows(tmp_path):
+    engine = make_engine(_old_sqlite(tmp_path / "old.sqlite3"))
+    assert current_revision(engine) is None
+    sessions = init_db(engine)
+    assert current_revision(engine) == head_revision() == "v0004"
+    _check_reference_rows(sessions)
+    init_db(engine)   # a second start changes nothing
+    _check_reference_rows(sessions)
+
+
+def test_older_database_lacking_nullable_columns_gets_them(tmp_path):
+    engine = make_engine(_old_sqlite(tmp_path / "older.sqlite3", drop=("alarm", "change", "signature")))
+    init_db(engine)
+    cols = {c["name"] for c in inspect(engine).get_columns("asset_diagnoses")}
+    assert {"alarm", "change", "signature"} <= cols
+    with engine.connect() as conn:
+        assert conn.execute(text("SELECT COUNT(*) FROM asset_diagnoses WHERE alarm IS NULL")).scalar_one() == 3
+
+
+def test_versions_up_and_down_keep_the_rows(database_url):
+    engine = make_engine(database_url)
+    migrate(engine, "v0001")
+    assert current_revision(engine) == "v0001"
+    assert "lease_owner" not in {c["name"] for c in inspect(engine).get_columns("jobs")}
+    with engine.begin() as conn:   # a job written by version v0001's code
+        conn.execute(text("INSERT INTO jobs (id, kind, status, params, progress, stage, message, attempts, "
+                          "created_at, updated_at) VALUES ('j1', 'dataset', 'running', '{\"n\": 3}', 0.5, "
+                          "'simulating', 'm', 1, '2026-11-01 12:00:00', '2026-11-01 12:00:00')"))
+    migrate(engine, "v0002")
+    assert current_revision(engine) == "v0002"
+    sessions = init_db(engine)
+    assert current_revision(engine) == "v0004"
+    with sessions() as s:
+        job = s.get(Job, "j1")
+        assert job is not None and job.params == {"n": 3} and job.progress == 0.5 and job.lease_expires_at is None
+    migrate(engine, "v0001")
+    assert current_revision(engine) == "v0001"
+    assert "lease_owner" not in {c["name"] for c in inspect(engine).get_columns("jobs")}
+    with engine.connect() as conn:
+        assert conn.execute(text("SELECT status FROM jobs WHERE id = 'j1'")).scalar_one() == "running"
+    assert "probes" not in {c["name"] for c in inspect(engine).get_columns("asset_settings")}
+    migrate(engine)
+    assert current_revision(engine) == "v0004"
+    assert "probes" in {c["name"] for c in inspect(engine).get_columns("asset_settings")}
+    engine.dispose()
+
+
+def test_migrated_schema_equals_the_models(database_url):
+    """Alembic's autogenerate comparison finds nothing between the migrated database and the models."""
+    from alembic.autogenerate import compare_metadata
+    from alembic.runtime.migration import MigrationContext
+
+    engine = make_engine(database_url)
+    migrate(engine)
+    with engine.connect() as conn:
+        diff = compare_metadata(MigrationContext.configure(conn), Base.metadata)
+    assert diff == [], diff
+    engine.dispose()
+
+
+def test_replicas_starting_together_migrate_once(postgres):
+    """Four 'replicas' migrating one empty PostgreSQL database at once all succeed (advisory lock)."""
+    url = postgres.new_database()
+    errors: list[BaseException] = []
+
+    def start() -> None:
+        try:
+            e = make_engine(url)
+            init_db(e)
+            e.dispose()
+        except BaseException as exc:  # noqa: BLE001 - reported below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=start) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(60)
+    assert errors == []
+    assert current_revision(make_engine(url)) == head_revision()
+
+
+def test_copy_sqlite_store_into_postgresql(tmp_path, postgres):
+    src = make_engine(_old_sqlite(tmp_path / "old.sqlite3"))
+    dst_url = postgres.new_database()
+    dst = make_engine(dst_url)
+    copied = copy_store(src, dst)
+    assert copied == {"asset_baselines": 1, "asset_diagnoses": 3, "asset_settings": 1, "jobs": 2, "service_probe": 0}
+    sessions = init_db(dst)
+    _check_reference_rows(sessions)
+    with sessions.begin() as s:   # the id sequence continues after the copied rows
+        row = AssetDiagnosis(asset_id="unit-8", model_version="v0001", severity="none", verdict={}, key_features={})
+        s.add(row)
+        s.flush()
+        assert row.id == 4
+    with pytest.raises(CopyError, match="already holds rows"):
+        copy_store(src, dst)
+    with sessions() as s:
+        assert s.scalar(select(func.count()).select_from(AssetDiagnosis)) == 4
+
+
+def test_db_copy_command(tmp_path, postgres):
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    src = _old_sqlite(tmp_path / "old.sqlite3")
+    dst = postgres.new_database()
+    runner = CliRunner()
+    r = runner.invoke(app, ["db", "copy", dst, "--from", src])
+    assert r.exit_code == 0, r.output
+    assert "asset_diagnoses: 3 row(s)" in r.output
+    r = runner.invoke(app, ["db", "current", "--url", dst])
+    assert r.exit_code == 0 and "database: v0004" in r.output
+    r = runner.invoke(app, ["db", "copy", dst, "--from", src])
+    assert r.exit_code == 2 and "already holds rows" in r.output
