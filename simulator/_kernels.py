@@ -82,18 +82,18 @@ DIVERGENCE_LIMIT = 1.0e4
 
 # ----------------------------------------------------------------- oil film
 @njit(**NUMBA_OPTIONS)
-def capone_force(X, Y, Xd, Yd):
-    """Capone short-bearing force f = (fx, fy) at journal position (X, Y)
-    and velocity (X', Y') (non-dimensional; MODEL.md section 4).
+def capone_force_ab(X, Y, a, b):
+    """Capone short-bearing force for the squeeze–wedge vector (a, b) = (X − 2Y', Y + 2X').
 
-    Returns NaN outside the bearing (X² + Y² ≥ 1), so a trial Runge–Kutta
-    stage that leaves the domain gets a non-finite error and is rejected.
+    The film's right-hand side Ω∂h/∂θ + 2∂h/∂t is c·(a sinθ − b cosθ) with a = ΩX − 2Ẏ,
+    b = ΩY + 2Ẋ, so the force depends on (X, Y) and on (a, b) alone and is positively
+    homogeneous of degree 1 in (a, b). With Ω = 1 this is :func:`capone_force`; the
+    dimensional bearings (:mod:`rotordiag.simulator.bearings`) pass a, b in rad/s, which also
+    covers Ω ≤ 0 (reverse rotation, pure squeeze).
     """
     h = 1.0 - X * X - Y * Y
     if h <= 0.0:
         return math.nan, math.nan
-    a = X - 2.0 * Yd
-    b = Y + 2.0 * Xd
     n = math.sqrt(a * a + b * b)
     if n == 0.0:
         return 0.0, 0.0
@@ -109,6 +109,17 @@ def capone_force(X, Y, Xd, Yd):
     fx = coef * (3.0 * X * V - sa * G - 2.0 * ca * S)
     fy = coef * (3.0 * Y * V + ca * G - 2.0 * sa * S)
     return fx, fy
+
+
+@njit(**NUMBA_OPTIONS)
+def capone_force(X, Y, Xd, Yd):
+    """Capone short-bearing force f = (fx, fy) at journal position (X, Y)
+    and velocity (X', Y') (non-dimensional; MODEL.md section 4).
+
+    Returns NaN outside the bearing (X² + Y² ≥ 1), so a trial Runge–Kutta
+    stage that leaves the domain gets a non-finite error and is rejected.
+    """
+    return capone_force_ab(X, Y, X - 2.0 * Yd, Y + 2.0 * Xd)
 
 
 @njit(**NUMBA_OPTIONS)
