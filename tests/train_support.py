@@ -1,38 +1,18 @@
-"""Shared builders for the shaft-train tests: a linear K/C bearing (test double until the oil-film
-bearings of ``rotordiag.simulator.bearings`` are merged) and a small generator–exciter train."""
+"""Shared builders for the shaft-train tests: linear K/C bearings and a small generator–exciter train."""
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-import numpy as np
-
+from rotordiag.simulator.bearings import LinearBearing
 from rotordiag.simulator.train import Coupling, Disk, Rotor, Support, Train, Unbalance, uniform_elements
 
 
-@dataclass(frozen=True)
-class KCBearing:
-    """f = −K·d − C·v, constant coefficients."""
-
-    kxx: float
-    kyy: float
-    kxy: float = 0.0
-    kyx: float = 0.0
-    cxx: float = 0.0
-    cyy: float = 0.0
-    cxy: float = 0.0
-    cyx: float = 0.0
-    clearance_m: float = 1e-3
-
-    def force_n(self, x_m, y_m, vx_m_s, vy_m_s, speed_rad_s):
-        return (-(self.kxx * x_m + self.kxy * y_m + self.cxx * vx_m_s + self.cxy * vy_m_s),
-                -(self.kyx * x_m + self.kyy * y_m + self.cyx * vx_m_s + self.cyy * vy_m_s))
-
-    def coefficients(self, x_m, y_m, speed_rad_s):
-        return (np.array([[self.kxx, self.kxy], [self.kyx, self.kyy]]),
-                np.array([[self.cxx, self.cxy], [self.cyx, self.cyy]]))
+def KCBearing(kxx: float, kyy: float, kxy: float = 0.0, kyx: float = 0.0, cxx: float = 0.0, cyy: float = 0.0,
+              cxy: float = 0.0, cyx: float = 0.0, clearance_m: float = 1e-3) -> LinearBearing:
+    """A linear bearing f = −K·d − C·v with constant coefficients."""
+    return LinearBearing(diameter_m=0.3, length_m=0.15, clearance_m=clearance_m,
+                         stiffness_n_m=[[kxx, kxy], [kyx, kyy]], damping_n_s_m=[[cxx, cxy], [cyx, cyy]])
 
 
-def iso(k: float, c: float = 0.0, clearance_m: float = 1e-3) -> KCBearing:
+def iso(k: float, c: float = 0.0, clearance_m: float = 1e-3) -> LinearBearing:
     return KCBearing(k, k, cxx=c, cyy=c, clearance_m=clearance_m)
 
 
