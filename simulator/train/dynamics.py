@@ -200,6 +200,15 @@ class TrainRun:
     nfev: int
     wall_time_s: float
     inputs: dict = field(default_factory=dict)
+    states: np.ndarray | None = None
+    basis: np.ndarray | None = None
+
+    def node_m(self, node: int) -> np.ndarray:
+        """(x, y) of any node of the full model at the samples, m (needs ``record_state=True``)."""
+        if self.states is None or self.basis is None:
+            raise ValueError("run simulate_train with record_state=True to read interior nodes")
+        n = self.basis.shape[1]
+        return self.states[:, :n] @ self.basis[4 * node: 4 * node + 2].T
 
     def probe_m(self, bearing: int, angle_deg: float) -> np.ndarray:
         """Signal of a proximity probe at ``angle_deg`` (from +x toward +y) at ``bearing``: the journal
@@ -275,10 +284,11 @@ def initial_state(kernel: Kernel, speed_rpm: float) -> np.ndarray:
 def simulate_train(train: Train | Assembly | Reduced | Kernel, speed_rpm: float, *, transient_revs: int = 320,
                    record_revs: int = 128, samples_per_rev: int = 128, n_modes: int = 12,
                    rtol: float = DEFAULT_RTOL, atol_m: float = 1e-10,
-                   initial: np.ndarray | None = None) -> TrainRun:
+                   initial: np.ndarray | None = None, record_state: bool = False) -> TrainRun:
     """Steady response of the train at ``speed_rpm``: ``transient_revs`` revolutions discarded, then
     ``record_revs`` recorded at ``samples_per_rev``. Starts from the static state unless ``initial`` is
-    given. ``atol_m`` is the absolute tolerance on every reduced coordinate and velocity."""
+    given. ``atol_m`` is the absolute tolerance on every reduced coordinate and velocity; ``record_state``
+    keeps the reduced states at the samples (``TrainRun.node_m`` reads any node from them)."""
     t0 = time.perf_counter()
     if not (np.isfinite(speed_rpm) and speed_rpm > 0):
         raise TrainError(f"speed_rpm must be positive (got {speed_rpm!r})")
@@ -307,4 +317,5 @@ def simulate_train(train: Train | Assembly | Reduced | Kernel, speed_rpm: float,
                     n_rejected=int(nrej), nfev=int(nfev), wall_time_s=time.perf_counter() - t0,
                     inputs={"speed_rpm": float(speed_rpm), "transient_revs": transient_revs,
                             "record_revs": record_revs, "samples_per_rev": samples_per_rev, "n_modes": n_modes,
-                            "rtol": rtol, "atol_m": atol_m})
+                            "rtol": rtol, "atol_m": atol_m},
+                    states=grid if record_state else None, basis=red.T if record_state else None)
