@@ -27,7 +27,7 @@ import numpy as np
 OUT = Path(__file__).with_name("train_ross_reference.json")
 
 #: (length m, outer diameter m, elements) per segment, from the coupling-free end
-GENERATOR = ((0.3, 0.25, 2), (0.5, 0.40, 2), (3.0, 1.0, 14), (0.5, 0.40, 2), (0.3, 0.25, 2), (0.3, 0.20, 2))
+GENERATOR = ((0.3, 0.25, 2), (0.5, 0.40, 2), (3.0, 1.0, 15), (0.5, 0.40, 2), (0.3, 0.25, 2), (0.3, 0.20, 2))
 EXCITER = ((0.25, 0.15, 2), (0.2, 0.15, 2), (1.2, 0.30, 6), (0.2, 0.15, 2), (0.2, 0.15, 2))
 YOUNG_PA, SHEAR_PA, DENSITY = 2.05e11, 7.9e10, 7850.0
 BEARING_K = (1.2e9, 1.2e9, 0.8e9, 0.8e9)  # kxx; kyy = 1.6 kxx; c = 4e-4 s × k
