@@ -9,6 +9,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from rotordiag.simulator.train import (
     Material,
@@ -159,3 +160,63 @@ def test_exponential_integrator_agrees_with_adaptive_dormand_prince_on_oil_films
         np.testing.assert_allclose(_line(a.journal_m, 8, order), _line(b.journal_m, 8, order),
                                    atol=2e-3 * np.abs(_line(b.journal_m, 8, 1)).max())
     assert np.abs(_line(b.journal_m, 8, 2)).max() > 0.002 * np.abs(_line(b.journal_m, 8, 1)).max()
+
+
+def test_flexible_couplings_kinematic_2x_matches_the_frequency_response_to_its_forcing():
+    """A flexible coupling under parallel offset δ: the double-engagement 2X force ±(k u + c u̇),
+    u = (δ/2)(cos(2Ωt + ψ + γ), sin(2Ωt + ψ + γ)), on the two hubs; the journals' 2X from the time response
+    against the full model's harmonic response to that forcing at 2Ω (no asymmetry, no unbalance)."""
+    from rotordiag.simulator.train import Coupling
+
+    delta, psi, gam, kc, cc = 2e-4, 0.3, -math.pi / 2, 5e7, 2e3
+    cpl = Coupling("flexible", lateral_stiffness_n_m=kc, angular_stiffness_n_m_rad=1e6, lateral_damping_n_s_m=cc,
+                   kinematic_offset_m=delta, kinematic_phase_rad=psi, kinematic_direction_rad=gam)
+    t = replace(two_rotor_train(iso(2e9, 3e5), iso(5e8, 8e4), coupling=cpl), gravity_m_s2=0.0)
+    speed = 1800.0
+    run = simulate_train(t, speed, transient_revs=300, record_revs=8, samples_per_rev=32, n_modes=12)
+    assert run.ok
+    X2 = _line(run.journal_m, 8, 2)
+    asm = assemble(t)
+    w = speed * math.pi / 30
+    M, C, K = linear_matrices(asm, w)
+    a, b = asm.coupling_nodes[0]
+    # u = Re(U e^{2iΩt}) with U = (δ/2) e^{i(ψ+γ)} (1, −i); force on b: +(k + 2iΩ c) U, on a: the opposite
+    U = 0.5 * delta * np.exp(1j * (psi + gam)) * np.array([1.0, -1j])
+    F = np.zeros(asm.n_dof, dtype=complex)
+    F[4 * b: 4 * b + 2] += (kc + 2j * w * cc) * U
+    F[4 * a: 4 * a + 2] -= (kc + 2j * w * cc) * U
+    Q = np.linalg.solve(K - (2 * w) ** 2 * M + 2j * w * C, F)
+    R = np.stack([Q[4 * asm.support_nodes], Q[4 * asm.support_nodes + 1]], axis=1)
+    np.testing.assert_allclose(np.abs(X2), np.abs(R), rtol=0.01, atol=1e-3 * np.abs(R).max())
+    big = np.abs(R) > 0.1 * np.abs(R).max()
+    assert np.abs(np.angle(X2[big] / R[big])).max() < 0.01
+    assert np.abs(_line(run.journal_m, 8, 1)).max() < 1e-3 * np.abs(R).max()  # nothing at 1X
+
+
+def test_three_bearing_train_with_the_exciter_overhung_on_one_bearing():
+    """Exciter on a single outboard bearing, rigidly coupled: the static state carries the exciter on the
+    generator's coupling-end bearing; the loads sum to the weight and the aligned reference is refused with
+    a message that says why."""
+    from rotordiag.simulator.train import TrainError, aligned_offsets, static_state
+
+    t = two_rotor_train(iso(2e9, 2e5), iso(5e8, 5e4))
+    exc = t.rotors[1]
+    exc1 = replace(exc, supports=exc.supports[1:])
+    t3 = Train((t.rotors[0], exc1), t.couplings)
+    st = static_state(t3, 3000.0)
+    asm = assemble(t3)
+    weight = -asm.gravity_n[1::4].sum()
+    assert -st.bearing_load_n[:, 1].sum() == pytest.approx(weight, rel=1e-9)
+    assert len(st.bearing_load_n) == 3
+    # the coupling hands the generator what the exciter's own bearing does not carry of its weight
+    from rotordiag.simulator.train.fe import section
+
+    w_exc = 9.81 * (sum(exc.material.density_kg_m3 * section(e.outer_diameter_m, e.inner_diameter_m)[0] * e.length_m
+                        for e in exc.elements) + sum(d.mass_kg for d in exc.disks))
+    r_b4 = -st.bearing_load_n[2, 1]
+    assert st.coupling_load[0][1] == pytest.approx(-(w_exc - r_b4), rel=1e-6)
+    assert w_exc - r_b4 > 0.2 * w_exc
+    with pytest.raises(TrainError, match="one bearing"):
+        aligned_offsets(t3, 3000.0)
+    with pytest.raises(TrainError, match="one bearing and no coupling"):
+        Train((t.rotors[0], exc1), (replace(t.couplings[0], kind="flexible", lateral_stiffness_n_m=1e7),))
