@@ -120,16 +120,45 @@ def test_two_lobe_force_against_reynolds_quadrature():
 
 
 # ----------------------------------------------------------------- tilting pad
-def test_tilting_pad_static_force_against_moment_balance_about_the_pivot():
-    b = ALL[2]
+def _check_tilting_pad_against_reference(b, points, n_scan):
     R = D / 2
     cp = C / (1 - b.preload)
     arc = math.radians(b.pad_arc_deg)
     piv = b.pivot_angles_rad()
     arcs = [(t - b.pivot_offset * arc, t + (1 - b.pivot_offset) * arc) for t in piv]
-    for x, y in [(0.0, -0.3 * C), (0.1 * C, -0.5 * C), (-0.2 * C, 0.1 * C)]:
-        want = ref.tilting_pad_static_force(R, L, MU, C, cp, piv, arcs, x, y, W_RAD_S)
+    for x, y in points:
+        want = ref.tilting_pad_static_force(R, L, MU, C, cp, piv, arcs, x, y, W_RAD_S, n_scan=n_scan)
         np.testing.assert_allclose(b.force_n(x, y, 0.0, 0.0, W_RAD_S), want, rtol=1e-7, atol=1e-7 * np.abs(want).max())
+
+
+def test_tilting_pad_static_force_against_moment_balance_about_the_pivot():
+    _check_tilting_pad_against_reference(ALL[2], [(0.1 * C, -0.5 * C)], n_scan=40)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("b", ALL[2:4], ids=["4pad_lbp", "5pad_lop_offset"])
+def test_tilting_pad_static_force_against_moment_balance_many_positions(b):
+    _check_tilting_pad_against_reference(b, [(0.0, -0.3 * C), (0.1 * C, -0.5 * C), (-0.2 * C, 0.1 * C),
+                                             (0.3 * C, 0.2 * C)], n_scan=400)
+
+
+def test_tilting_pad_reduced_coefficients():
+    """Lund's pad assembly: each pad's reduced impedance is radial (no stiffness or damping along its
+    tangent), so the sum is symmetric, and with the load between symmetric pads it has no
+    cross-coupling; at ω → 0 it is the stiffness of the compiled (quasi-static) force."""
+    b = ALL[2]
+    r = b.equilibrium(0.0, -ocvirk_load(0.5), W_RAD_S)
+    for Kp, Cp, t in b.pad_coefficients(*r, W_RAD_S):
+        Zp = Kp + 1j * W_RAD_S * Cp
+        Zr = Zp - np.outer(Zp @ t, t @ Zp) / (t @ Zp @ t)
+        assert np.abs(Zr @ t).max() < 1e-9 * np.abs(Zp).max() and np.abs(t @ Zr).max() < 1e-9 * np.abs(Zp).max()
+    K, Cm = b.reduced_coefficients(*r, W_RAD_S)
+    assert abs(K[0, 1]) < 1e-8 * K[1, 1] and abs(K[1, 0]) < 1e-8 * K[1, 1]
+    assert abs(Cm[0, 1]) < 1e-8 * Cm[1, 1] and abs(Cm[1, 0]) < 1e-8 * Cm[1, 1]
+    assert K[0, 0] > 0 and K[1, 1] > 0 and Cm[0, 0] > 0 and Cm[1, 1] > 0
+    K0, _ = b.reduced_coefficients(*r, W_RAD_S, whirl_rad_s=1e-7 * W_RAD_S)
+    Kq, _ = b.coefficients(*r, W_RAD_S)
+    np.testing.assert_allclose(K0, Kq, rtol=1e-6, atol=1e-6 * Kq[1, 1])
 
 
 @pytest.mark.parametrize("b", ALL[2:4], ids=["4pad_lbp", "5pad_lop"])
@@ -246,3 +275,88 @@ def test_equilibrium_refuses_loads_no_film_carries():
         PLAIN.equilibrium(0.0, -1e4, 0.0)
     with pytest.raises(ValueError, match="cannot carry"):
         PLAIN.equilibrium(0.0, -1e3 * ocvirk_load(0.9), W_RAD_S)
+
+
+def test_pad_states_reproduce_the_synchronous_pad_assembly_coefficients():
+    """Massless pads as states, integrated (RK4, 400 steps a period) under a small prescribed
+    elliptical synchronous orbit: the force's first harmonic is −(K + iΩC)·r with Lund's reduced K, C
+    (an independent check of the reduction), not the quasi-static coefficients."""
+    b = ALL[2]
+    x0, y0 = b.equilibrium(0.0, -1e5, W_RAD_S)
+    u = b.pad_tilts(x0, y0, W_RAD_S)
+    fx0, fy0, du = b.force_with_pad_states(x0, y0, 0.0, 0.0, W_RAD_S, u)
+    assert (fx0, fy0) == pytest.approx(b.force_n(x0, y0, 0.0, 0.0, W_RAD_S), rel=1e-12, abs=1e-6)
+    assert np.abs(du).max() < 1e-9 * W_RAD_S                       # at rest: the pads stay
+    amp, om = 1e-3 * C, W_RAD_S
+
+    def rates(t, u):
+        c, s = math.cos(om * t), math.sin(om * t)
+        fx, fy, du = b.force_with_pad_states(x0 + amp * c, y0 + 0.5 * amp * s, -amp * om * s, 0.5 * amp * om * c,
+                                             W_RAD_S, u)
+        return du, fx, fy
+
+    n = 400
+    h = 2 * math.pi / om / n
+    t = 0.0
+    rec = []
+    for cycle in range(8):
+        for _ in range(n):
+            k1, fx, fy = rates(t, u)
+            if cycle == 7:
+                rec.append((t, fx - fx0, fy - fy0))
+            k2 = rates(t + h / 2, u + h / 2 * k1)[0]
+            k3 = rates(t + h / 2, u + h / 2 * k2)[0]
+            k4 = rates(t + h, u + h * k3)[0]
+            u = u + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            t += h
+    rec = np.array(rec)
+    e = np.exp(-1j * om * rec[:, 0])
+    first = 2 / n * np.array([np.sum(rec[:, 1] * e), np.sum(rec[:, 2] * e)])
+    r = np.array([amp, -0.5j * amp])
+    K, Cm = b.reduced_coefficients(x0, y0, W_RAD_S)
+    want = -(K + 1j * om * Cm) @ r
+    np.testing.assert_allclose(first, want, rtol=1e-4, atol=1e-4 * np.abs(want).max())
+    Kq, Cq = b.coefficients(x0, y0, W_RAD_S)
+    assert np.abs(first - (-(Kq + 1j * om * Cq) @ r)).max() > 0.1 * np.abs(want).max()
+
+
+def test_equilibrium_is_bounded_by_each_film_not_by_the_assembled_clearance():
+    """A two-lobe bore's horizontal clearance (m 0.5: √3 c to the lobe circles) and a load-between-pads
+    bearing's vertical one exceed c: heavy loads put the journal there, carried by the film; the
+    journal at rest with no load sits at the centre."""
+    ell = ALL[1]
+    x, y = ell.equilibrium(-1e6, 0.0, W_RAD_S)
+    assert x < -1.0 * C and ell.film_eccentricity(x, y) < 0.99
+    np.testing.assert_allclose(ell.force_n(x, y, 0.0, 0.0, W_RAD_S), (1e6, 0.0), atol=1e-6 * 1e6)
+    tp = ALL[2]
+    x, y = tp.equilibrium(0.0, -1e7, W_RAD_S)
+    assert y < -1.0 * C and tp.film_eccentricity(x, y) < 0.99
+    np.testing.assert_allclose(tp.force_n(x, y, 0.0, 0.0, W_RAD_S), (0.0, 1e7), atol=1e-6 * 1e7)
+    for b in ALL[:4]:
+        assert np.hypot(*b.equilibrium(0.0, 0.0, W_RAD_S)) < 1e-9 * C
+    with pytest.raises(ValueError, match="cannot carry"):
+        ell.equilibrium(-1e9, 0.0, W_RAD_S)
+
+
+def test_a_toml_shaft_line_table_names_a_bearing():
+    import tomllib
+    doc = tomllib.loads("""
+[[bearing]]
+type = "tilting_pad"
+diameter_m = 0.45
+length_m = 0.35
+clearance_m = 0.35e-3
+viscosity_pa_s = 0.018
+pads = 5
+load = "on_pad"
+[[bearing]]
+type = "two_lobe"
+diameter_m = 0.25
+length_m = 0.15
+clearance_m = 0.2e-3
+viscosity_pa_s = 0.018
+preload = 0.4
+""")
+    a, b = (bearing_from_dict(t) for t in doc["bearing"])
+    assert isinstance(a, TiltingPadBearing) and a.pads == 5 and a.load == "on_pad" and a.pad_arc_deg == 57.6
+    assert isinstance(b, EllipticalBearing) and b.preload == 0.4 and b.to_dict()["type"] == "elliptical"

@@ -46,11 +46,19 @@ N_GAUSS = 16
 _GX, _GW = np.polynomial.legendre.leggauss(N_GAUSS)
 GAUSS_X = np.ascontiguousarray(_GX)
 GAUSS_W = np.ascontiguousarray(_GW)
+N_HALF = N_GAUSS // 2
+#: the positive nodes and their weights (the rule is symmetric)
+GAUSS_XP = np.ascontiguousarray(_GX[N_HALF:])
+GAUSS_WP = np.ascontiguousarray(_GW[N_HALF:])
 #: Tilting-pad moment balance: Newton stops when the step in u (pad-centre shift / c_f) is below this.
 #: Quadrature pieces are at most PIECE_FACTOR·acosh(1/ε) long (ε the journal eccentricity in the film).
 PIECE_FACTOR = 1.5
 PAD_TOL = 1e-14
-PAD_MAX_ITER = 50
+PAD_MAX_ITER = 80
+#: Tilting pads: the first trial puts the journal this fraction of the film's half-width towards the trailing edge.
+PAD_GUESS = 0.35
+#: A Newton step in u below this is applied to the force linearly instead of by a new film evaluation.
+PAD_LAST_STEP = 1e-7
 
 
 @njit(**NUMBA_OPTIONS)
@@ -83,24 +91,30 @@ def _pieces(lo, hi, X, Y, deriv, dXu, dYu, dau, dbu, a, b):
     s1 = 0.0
     s2 = 0.0
     s3 = 0.0
+    hw = 0.5 * w
     for k in range(m):
         c0 = lo + (k + 0.5) * w
-        for j in range(N_GAUSS):
-            th = c0 + 0.5 * w * GAUSS_X[j]
-            ct = math.cos(th)
-            st = math.sin(th)
-            H = 1.0 - X * ct - Y * st
-            g = a * st - b * ct
-            ih3 = 1.0 / (H * H * H)
-            q = 0.5 * w * GAUSS_W[j] * 2.0
-            s0 += q * g * ct * ih3
-            s1 += q * g * st * ih3
-            if deriv:
-                dH = -(dXu * ct + dYu * st)
-                dg = dau * st - dbu * ct
-                d = (dg - 3.0 * g * dH / H) * ih3
-                s2 += q * d * ct
-                s3 += q * d * st
+        cc = math.cos(c0)
+        sc = math.sin(c0)
+        for j in range(N_HALF):
+            # the node pair c0 ± hw·x_j shares cos(hw x_j), sin(hw x_j)
+            ch = math.cos(hw * GAUSS_XP[j])
+            sh = math.sin(hw * GAUSS_XP[j])
+            q = hw * GAUSS_WP[j] * 2.0
+            for sgn in (1.0, -1.0):
+                ct = cc * ch - sgn * sc * sh
+                st = sc * ch + sgn * cc * sh
+                H = 1.0 - X * ct - Y * st
+                g = a * st - b * ct
+                ih3 = 1.0 / (H * H * H)
+                s0 += q * g * ct * ih3
+                s1 += q * g * st * ih3
+                if deriv:
+                    dH = -(dXu * ct + dYu * st)
+                    dg = dau * st - dbu * ct
+                    d = (dg - 3.0 * g * dH / H) * ih3
+                    s2 += q * d * ct
+                    s3 += q * d * st
     return s0, s1, s2, s3
 
 
@@ -159,12 +173,12 @@ def lobed_force(p, x, y, vx, vy, omega):
 @njit(**NUMBA_OPTIONS)
 def _pad_ft(X0, Y0, Xd, Yd, omega, u, th1, th2, tx, ty):
     """Pad film force (non-dimensional) with the pad centre shifted by u, its component along t and
-    that component's u-derivative."""
+    that component's u-derivative, and the force's u-derivative."""
     X = X0 - u * tx
     Y = Y0 - u * ty
     gx, gy, dgx, dgy = arc_force(X, Y, omega * X - 2.0 * Yd, omega * Y + 2.0 * Xd, th1, th2, True,
                                  -tx, -ty, -omega * tx, -omega * ty)
-    return gx, gy, gx * tx + gy * ty, dgx * tx + dgy * ty
+    return gx, gy, gx * tx + gy * ty, dgx * tx + dgy * ty, dgx, dgy
 
 
 @njit(**NUMBA_OPTIONS)
@@ -199,62 +213,158 @@ def pad_force(p, k, x, y, vx, vy, omega):
     half = math.sqrt(1.0 - xi2)            # the film exists for |u − u0| < half
     umin = u0 - half
     umax = u0 + half
-    gx, gy, ft, dft = _pad_ft(X0, Y0, Xd, Yd, omega, u0, th1, th2, tx, ty)
-    if not math.isfinite(ft):
-        return math.nan, math.nan, u0
-    if gx == 0.0 and gy == 0.0:
-        return 0.0, 0.0, u0                # no pressure anywhere on the pad
-    # bracket [lo, hi] with F_t(lo) < 0 ≤ F_t(hi)
+    # bracket [lo, hi] with F_t(lo) < 0 ≤ F_t(hi) while iterating
     dry_is_high = omega >= 0.0            # the side of the trivial root (the pad runs dry)
-    u = u0
+    # start with the journal displaced PAD_GUESS towards the trailing edge (the loaded roots of
+    # short-bearing pads lie at 0.2–0.45 c_f for pivot offsets 0.5–0.6 and all loads)
+    u = u0 - PAD_GUESS * half if dry_is_high else u0 + PAD_GUESS * half
+    gx, gy, ft, dft, dgx, dgy = _pad_ft(X0, Y0, Xd, Yd, omega, u, th1, th2, tx, ty)
     lo = umin
     hi = umax
-    have_lo = ft < 0.0
-    have_hi = not have_lo
-    if have_lo:
-        lo = u
-    else:
-        hi = u
-    d = 0.02
-    for _ in range(60):
-        if have_lo and have_hi:
-            break
-        if have_lo:
-            un = min(u + d, u + 0.5 * (umax - u))
-        else:
-            un = max(u - d, u - 0.5 * (u - umin))
-        d *= 2.0
-        gx, gy, ft, dft = _pad_ft(X0, Y0, Xd, Yd, omega, un, th1, th2, tx, ty)
+    have_lo = False
+    have_hi = False
+    d = 0.05
+    for _ in range(PAD_MAX_ITER):
         if not math.isfinite(ft):
-            return math.nan, math.nan, un
-        u = un
-        if ft < 0.0 or (gx == 0.0 and gy == 0.0 and not dry_is_high):
+            return math.nan, math.nan, u
+        dry = gx == 0.0 and gy == 0.0
+        if ft < 0.0 or (dry and not dry_is_high):
             lo = u
             have_lo = True
         else:
             hi = u
             have_hi = True
-    if not (have_lo and have_hi):
-        return math.nan, math.nan, u
-    # Newton in the bracket, bisection when a step leaves it or the slope is not positive
-    for _ in range(PAD_MAX_ITER):
-        if dft > 0.0 and not (gx == 0.0 and gy == 0.0):
-            un = u - ft / dft
-            if not (lo < un < hi):
-                un = 0.5 * (lo + hi)
+        if ft == 0.0 and not dry:
+            break
+        if dft > 0.0 and not dry:
+            un = u - ft / dft                 # Newton
+            if not (lo <= un <= hi):
+                un = math.nan
         else:
-            un = 0.5 * (lo + hi)
-        if abs(un - u) <= PAD_TOL * (1.0 + abs(u)) or hi - lo <= PAD_TOL * (1.0 + abs(u)):
+            un = math.nan
+        if not math.isfinite(un):
+            if have_lo and have_hi:
+                un = 0.5 * (lo + hi)          # bisection inside the bracket
+            elif have_lo:
+                un = min(u + d, u + 0.5 * (umax - u))
+                d *= 2.0
+            else:
+                un = max(u - d, u - 0.5 * (u - umin))
+                d *= 2.0
+        if abs(un - u) <= PAD_TOL * (1.0 + abs(u)):
+            break
+        if abs(un - u) <= PAD_LAST_STEP and lo <= un <= hi and dft > 0.0:
+            # the last Newton step is tiny: move the force along it (error ~ step², at round-off)
+            gx += dgx * (un - u)
+            gy += dgy * (un - u)
+            u = un
             break
         u = un
-        gx, gy, ft, dft = _pad_ft(X0, Y0, Xd, Yd, omega, u, th1, th2, tx, ty)
-        if not math.isfinite(ft):
-            return math.nan, math.nan, u
-        if ft < 0.0 or (gx == 0.0 and gy == 0.0 and not dry_is_high):
-            lo = u
-        else:
-            hi = u
+        gx, gy, ft, dft, dgx, dgy = _pad_ft(X0, Y0, Xd, Yd, omega, u, th1, th2, tx, ty)
     return s * gx, s * gy, u
+
+
+@njit(**NUMBA_OPTIONS)
+def pad_fixed_force(p, k, u, x, y, vx, vy, omega):
+    """Force (N) of pad ``k`` held at the centre shift u (in c_f), the pad at rest: the pad's own
+    film coefficients for the pad-assembly reduction."""
+    o = HEADER + PAD_STRIDE * k
+    cf = p[o + 2]
+    X0 = (x - p[o]) / cf
+    Y0 = (y - p[o + 1]) / cf
+    gx, gy, _, _, _, _ = _pad_ft(X0, Y0, vx / cf, vy / cf, omega, u, p[o + 3], p[o + 4], p[o + 5], p[o + 6])
+    s = p[3] * p[0] * p[1] ** 3 / (4.0 * cf * cf)
+    return s * gx, s * gy
+
+
+@njit(**NUMBA_OPTIONS)
+def pad_rate(p, k, u, x, y, vx, vy, omega):
+    """Force (N) of pad ``k`` whose tilt is a state (centre shift u, in c_f) and the tilt rate du/dt
+    (1/s) that keeps the massless pad in moment equilibrium, F·t = 0 with the pad's own motion in the
+    squeeze term: the pad-dynamics alternative to :func:`pad_force` for trains that carry pad states.
+
+    F_t rises with du/dt (the pad's squeeze film damps it); the rate is found by Newton's method
+    with the analytic derivative inside a bracket grown from 0. A pad whose film runs dry on one side
+    of the bracket is taken to lift off at the rate where it just runs dry; a dry pad keeps its tilt.
+    """
+    o = HEADER + PAD_STRIDE * k
+    cf = p[o + 2]
+    th1 = p[o + 3]
+    th2 = p[o + 4]
+    tx = p[o + 5]
+    ty = p[o + 6]
+    X = (x - p[o]) / cf - u * tx
+    Y = (y - p[o + 1]) / cf - u * ty
+    if X * X + Y * Y >= 1.0:
+        return math.nan, math.nan, math.nan
+    Xd = vx / cf
+    Yd = vy / cf
+    s = p[3] * p[0] * p[1] ** 3 / (4.0 * cf * cf)
+    # relative velocity (Xd − r tx, Yd − r ty): a = ΩX − 2(Yd − r ty), b = ΩY + 2(Xd − r tx)
+    r = 0.0
+    gx, gy, dgx, dgy = arc_force(X, Y, omega * X - 2.0 * Yd, omega * Y + 2.0 * Xd, th1, th2, True,
+                                 0.0, 0.0, 2.0 * ty, -2.0 * tx)
+    if not math.isfinite(gx):
+        return math.nan, math.nan, math.nan
+    if gx == 0.0 and gy == 0.0:
+        return 0.0, 0.0, 0.0
+    scale = abs(omega) + 2.0 * math.sqrt(Xd * Xd + Yd * Yd) + 1e-300
+    lo = -math.inf
+    hi = math.inf
+    d = 0.05 * scale
+    dry_high = 0                       # +1: the dry side is at high rates, −1: at low rates
+    for _ in range(PAD_MAX_ITER):
+        ft = gx * tx + gy * ty
+        dft = dgx * tx + dgy * ty
+        dry = gx == 0.0 and gy == 0.0
+        if dry:
+            if dry_high > 0:
+                hi = r
+            else:
+                lo = r
+        elif ft < 0.0:
+            lo = r
+        else:
+            hi = r
+        if ft == 0.0 and not dry:
+            break
+        rn = math.nan
+        if dft > 0.0 and not dry:
+            rn = r - ft / dft
+            if not (lo <= rn <= hi):
+                rn = math.nan
+        if not math.isfinite(rn):
+            if math.isfinite(lo) and math.isfinite(hi):
+                rn = 0.5 * (lo + hi)
+            elif math.isfinite(lo):
+                rn = r + d
+                d *= 2.0
+                dry_high = 1
+            else:
+                rn = r - d
+                d *= 2.0
+                dry_high = -1
+        if abs(rn - r) <= PAD_TOL * (scale + abs(r)):
+            break
+        r = rn
+        gx, gy, dgx, dgy = arc_force(X, Y, omega * X - 2.0 * (Yd - r * ty), omega * Y + 2.0 * (Xd - r * tx),
+                                     th1, th2, True, 0.0, 0.0, 2.0 * ty, -2.0 * tx)
+    return s * gx, s * gy, r
+
+
+@njit(**NUMBA_OPTIONS)
+def tilting_pad_force_states(p, x, y, vx, vy, omega, u, du_dt):
+    """Force (N) of a tilting-pad bearing whose pad tilts are states ``u`` (centre shifts in c_f);
+    writes each pad's tilt rate into ``du_dt`` (see :func:`pad_rate`)."""
+    n = int(p[4])
+    fx = 0.0
+    fy = 0.0
+    for k in range(n):
+        gx, gy, r = pad_rate(p, k, u[k], x, y, vx, vy, omega)
+        du_dt[k] = r
+        fx += gx
+        fy += gy
+    return fx, fy
 
 
 @njit(**NUMBA_OPTIONS)

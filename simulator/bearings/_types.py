@@ -121,10 +121,10 @@ class _Bearing:
                 r = self._newton(r, lam * W, w)
                 if r is None:
                     break
-        if r is None or np.hypot(*r) >= EQ_MAX_ECCENTRICITY * self.clearance_m:
+        if r is None or self.film_eccentricity(r[0], r[1]) >= EQ_MAX_ECCENTRICITY:
             raise ValueError(f"the {self.TYPE} bearing cannot carry a load of {np.hypot(*W):.4g} N at "
-                             f"{w:.4g} rad/s: the journal reaches eccentricity ≥ {EQ_MAX_ECCENTRICITY} "
-                             "(raise the speed, the length, the viscosity, or lower the load)")
+                             f"{w:.4g} rad/s: the journal reaches eccentricity ≥ {EQ_MAX_ECCENTRICITY} of a film's "
+                             "clearance (raise the speed, the length, the viscosity, or lower the load)")
         return float(r[0]), float(r[1])
 
     def _newton(self, r0: np.ndarray, W: np.ndarray, w: float) -> np.ndarray | None:
@@ -146,7 +146,7 @@ class _Bearing:
             ok = False
             for _h in range(40):
                 rn = r + step
-                if np.hypot(*rn) < c:
+                if self.film_eccentricity(rn[0], rn[1]) < 1.0:
                     rn_res = np.array(self._force(p, rn[0], rn[1], 0.0, 0.0, w)) + W
                     if np.all(np.isfinite(rn_res)) and np.hypot(*rn_res) < np.hypot(*res):
                         ok = True
@@ -158,6 +158,11 @@ class _Bearing:
             if np.hypot(*step) <= 1e-13 * c:
                 return r
         return r if np.hypot(*res) <= 1e-8 * scale else None
+
+    def film_eccentricity(self, x_m: float, y_m: float) -> float:
+        """The journal's largest eccentricity in any of its films, as a fraction of that film's
+        clearance (1: touching): |r|/c for the plain bearing."""
+        return float(math.hypot(x_m, y_m) / self.clearance_m)
 
     # -- TOML / JSON
     def to_dict(self) -> dict[str, Any]:
@@ -251,10 +256,16 @@ class EllipticalBearing(_Bearing):
     def _force(self, params, x, y, vx, vy, w):  # type: ignore[no-untyped-def]
         return F.lobed_force(params, x, y, vx, vy, w)
 
+    def film_eccentricity(self, x_m: float, y_m: float) -> float:
+        """Largest |r − r_lobe|/c_l over the lobes (each lobe's circle of curvature bounds its film)."""
+        _, p = self.kernel()
+        return max(math.hypot(x_m - p[o], y_m - p[o + 1]) / p[o + 2] for o in (F.HEADER, F.HEADER + F.LOBE_STRIDE))
+
 
 @dataclasses.dataclass(frozen=True)
 class TiltingPadBearing(_Bearing):
-    """Tilting-pad bearing, pad by pad: ``pads`` pads of ``pad_arc_deg``, pivoted at the fraction
+    """Tilting-pad bearing, pad by pad: ``pads`` pads of ``pad_arc_deg`` (default: 80 % of the pitch
+    360°/pads), pivoted at the fraction
     ``pivot_offset`` of the arc from the leading edge (for Ω > 0), pad clearance c_p = c/(1 − m)
     (``preload`` m), the load (−y) on a pad or between two pads.
 
@@ -270,7 +281,7 @@ class TiltingPadBearing(_Bearing):
     clearance_m: float
     viscosity_pa_s: float
     pads: int = 4
-    pad_arc_deg: float = 80.0
+    pad_arc_deg: float | None = None
     pivot_offset: float = 0.5
     preload: float = 0.0
     load: str = "between_pads"
@@ -281,7 +292,7 @@ class TiltingPadBearing(_Bearing):
         self._check_geometry()
         if isinstance(self.pads, bool) or not isinstance(self.pads, int | np.integer) or not 2 <= self.pads <= 12:
             raise ValueError(f"pads must be an integer from 2 to 12, got {self.pads!r}")
-        a = float(self.pad_arc_deg)
+        a = 0.8 * 360.0 / self.pads if self.pad_arc_deg is None else float(self.pad_arc_deg)
         if not (0.0 < a and self.pads * a < 360.0):
             raise ValueError(f"pad_arc_deg must be > 0 and leave room between the {self.pads} pads "
                              f"(pads × arc < 360°), got {self.pad_arc_deg!r}")
@@ -306,7 +317,7 @@ class TiltingPadBearing(_Bearing):
 
     def kernel(self) -> tuple[int, np.ndarray]:
         cp = self.clearance_m / (1.0 - self.preload)
-        arc = math.radians(self.pad_arc_deg)
+        arc = math.radians(float(self.pad_arc_deg or 0.0))
         p = [0.5 * self.diameter_m, self.length_m, self.clearance_m, self.viscosity_pa_s, float(self.pads)]
         for th in self.pivot_angles_rad():
             d = cp - self.clearance_m
@@ -316,6 +327,84 @@ class TiltingPadBearing(_Bearing):
 
     def _force(self, params, x, y, vx, vy, w):  # type: ignore[no-untyped-def]
         return F.tilting_pad_force(params, x, y, vx, vy, w)
+
+    def film_eccentricity(self, x_m: float, y_m: float) -> float:
+        """Largest approach to a pad along its pivot line, (r − r_pad)·e_pivot / c_p (pads tilt
+        tangentially, so this is what bounds each pad's film)."""
+        _, p = self.kernel()
+        out = 0.0
+        for k in range(self.pads):
+            o = F.HEADER + F.PAD_STRIDE * k
+            tx, ty = p[o + 5], p[o + 6]
+            out = max(out, ((x_m - p[o]) * ty - (y_m - p[o + 1]) * tx) / p[o + 2])
+        return float(out)
+
+    def pad_tilts(self, x_m: float, y_m: float, speed_rad_s: float) -> np.ndarray:
+        """Each pad's equilibrium tilt state u (centre-of-curvature shift along its pivot tangent, in
+        units of the pad clearance) with the journal at rest at (x, y): the initial pad states of
+        :meth:`force_with_pad_states`."""
+        _, p = self.kernel()
+        return np.array([F.pad_force(p, k, float(x_m), float(y_m), 0.0, 0.0, float(speed_rad_s))[2]
+                         for k in range(self.pads)])
+
+    def force_with_pad_states(self, x_m: float, y_m: float, vx_m_s: float, vy_m_s: float, speed_rad_s: float,
+                              pad_tilts: np.ndarray) -> tuple[float, float, np.ndarray]:
+        """Force (N) with the pad tilts as states (massless pads, each in moment equilibrium with its
+        own squeeze film) and their rates du/dt (1/s): the pad dynamics that :meth:`force_n` freezes.
+        Compiled: ``_film.tilting_pad_force_states`` (exported as ``tilting_pad_force_states``)."""
+        _, p = self.kernel()
+        u = np.ascontiguousarray(pad_tilts, dtype=float)
+        if u.shape != (self.pads,):
+            raise ValueError(f"pad_tilts must hold {self.pads} values, got shape {u.shape}")
+        du = np.zeros(self.pads)
+        fx, fy = F.tilting_pad_force_states(p, float(x_m), float(y_m), float(vx_m_s), float(vy_m_s),
+                                            float(speed_rad_s), u, du)
+        return float(fx), float(fy), du
+
+    def pad_coefficients(self, x_m: float, y_m: float, speed_rad_s: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """Per pad, at the journal at rest at (x, y): the pad's film K_p, C_p (2×2, the pad held at
+        its equilibrium tilt; central differences as :meth:`coefficients`) and its tangent t."""
+        _, p = self.kernel()
+        x, y, w = float(x_m), float(y_m), float(speed_rad_s)
+        hr = FD_STEP * self.clearance_m
+        hv = FD_STEP * self.clearance_m * max(abs(w), 1.0)
+        out = []
+        for k in range(self.pads):
+            fx, fy, u = F.pad_force(p, k, x, y, 0.0, 0.0, w)
+            if not (math.isfinite(fx) and math.isfinite(fy)):
+                raise ValueError(f"the journal at ({x_m:.4g}, {y_m:.4g}) m is outside the film of pad {k}")
+            Kp = np.empty((2, 2))
+            Cp = np.empty((2, 2))
+            for j in range(2):
+                e = np.eye(2)[j]
+                fp = np.array(F.pad_fixed_force(p, k, u, x + hr * e[0], y + hr * e[1], 0.0, 0.0, w))
+                fm = np.array(F.pad_fixed_force(p, k, u, x - hr * e[0], y - hr * e[1], 0.0, 0.0, w))
+                Kp[:, j] = -(fp - fm) / (2.0 * hr)
+                fp = np.array(F.pad_fixed_force(p, k, u, x, y, hv * e[0], hv * e[1], w))
+                fm = np.array(F.pad_fixed_force(p, k, u, x, y, -hv * e[0], -hv * e[1], w))
+                Cp[:, j] = -(fp - fm) / (2.0 * hv)
+            o = F.HEADER + F.PAD_STRIDE * k
+            out.append((Kp, Cp, p[o + 5:o + 7].copy()))
+        return out
+
+    def reduced_coefficients(self, x_m: float, y_m: float, speed_rad_s: float,
+                             whirl_rad_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """K and C reduced at the whirl frequency ω (synchronous, ω = Ω, by default) by Lund's pad
+        assembly method: each massless pad moves with the film (its tilt a degree of freedom), so
+        with Z_p = K_p + iωC_p its reduced impedance is Z_p − Z_p t tᵀ Z_p / (tᵀ Z_p t), a purely
+        radial term; K = Re ΣZ, C = Im ΣZ / ω. These are the coefficients tilting-pad tables quote.
+        :meth:`coefficients` linearises the compiled force instead (pad at rest in tilt): its K is
+        this K at ω → 0, its damping differs (see docs/bearings.md)."""
+        w = float(speed_rad_s)
+        om = w if whirl_rad_s is None else float(whirl_rad_s)
+        if om <= 0.0:
+            raise ValueError(f"whirl_rad_s must be > 0 (got {om!r}); at ω → 0 use coefficients()")
+        Z = np.zeros((2, 2), dtype=complex)
+        for Kp, Cp, t in self.pad_coefficients(x_m, y_m, w):
+            Zp = Kp + 1j * om * Cp
+            den = t @ Zp @ t
+            Z += Zp - np.outer(Zp @ t, t @ Zp) / den if den != 0 else Zp
+        return Z.real.copy(), Z.imag / om
 
 
 def _matrices(value: Any, name: str, n: int | None) -> tuple:

@@ -42,8 +42,8 @@ def film_force(R, L, mu, cf, centre, th1, th2, x, y, vx, vy, omega, shift=(0.0, 
 
 
 def pad_moment(R, L, mu, cf, centre, th1, th2, pivot_angle, x, y, omega, shift):
-    """Moment about the pivot (at radius R + cf... taken on the pad surface line through the
-    pad's centre of curvature) of the pressure on the pad, per unit of pressure integral."""
+    """Moment (N·m) of the film pressure on the pad about its pivot, a point on the pad's back
+    1.5 R from its centre of curvature along the pivot direction, summed point by point."""
     fx, fy, pbar = film_force(R, L, mu, cf, centre, th1, th2, x, y, 0.0, 0.0, omega, shift)
     # pivot point: on the pad's back, along the pivot direction from the pad's centre of curvature
     px = centre[0] + shift[0] + 1.5 * R * math.cos(pivot_angle)
@@ -59,7 +59,7 @@ def pad_moment(R, L, mu, cf, centre, th1, th2, pivot_angle, x, y, omega, shift):
     return quad(m, th1, th2, limit=400, epsabs=0.0, epsrel=1e-12)[0], (fx, fy)
 
 
-def tilting_pad_static_force(R, L, mu, c, cp, pivots, arcs, x, y, omega):
+def tilting_pad_static_force(R, L, mu, c, cp, pivots, arcs, x, y, omega, n_scan=400):
     """Static force of a tilting-pad bearing, each pad's tilt (a shift of its centre of curvature
     perpendicular to the pivot line) from a root of its moment about the pivot (``brentq``)."""
     fx = fy = 0.0
@@ -71,7 +71,7 @@ def tilting_pad_static_force(R, L, mu, c, cp, pivots, arcs, x, y, omega):
         rel = np.array([x, y]) - centre
         u0 = rel @ t
         half = math.sqrt(max(cp**2 - (rel @ e) ** 2, 0.0))
-        us = np.linspace(u0 - 0.999 * half, u0 + 0.999 * half, 400)
+        us = np.linspace(u0 - 0.999 * half, u0 + 0.999 * half, n_scan)
         vals = [pad_moment(R, L, mu, cp, centre, th1, th2, piv, x, y, omega, tuple(u * t))[0] for u in us]
         loaded = [abs(v) > 0 for v in vals]
         roots = [i for i in range(len(us) - 1) if loaded[i] and loaded[i + 1] and vals[i] * vals[i + 1] < 0]
