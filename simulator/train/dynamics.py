@@ -5,7 +5,8 @@ Dormand–Prince 5(4) (the paper model's integrator and tolerances, ``rotordiag.
 bearing films evaluated by ``rotordiag.simulator.bearings.bearing_force`` inside the kernel. The record
 is sampled at exact shaft phases (``samples_per_rev`` per revolution, t = 0 at the start of the
 transient, so t·Ω ≡ 0 mod 2π at the keyphasor); the journals are read relative to their bearing
-housings, DC included.
+housings, DC included. A plain bearing's journal reaching ε ≥ 0.999 ends the run as ``contact``; the other
+films return NaN outside their bores, which ends it as ``diverged``.
 """
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ from numba import njit
 
 from rotordiag.core.numerics import DEFAULT_RTOL, MAX_STEPS_PER_REV, NUMBA_OPTIONS
 
-from ..bearings import bearing_force
+from ..bearings import BEARING_PLAIN, bearing_force
 from .fe import Assembly, assemble
 from .linear import bearing_coefficients
 from .model import Train, TrainError
@@ -168,7 +169,7 @@ def _integrate(s0, t_end, h0, rtol, atol, grid_dt, grid_t0, grid, max_steps, arg
                 j = sup[b]
                 ex = (s[j] - centres[b, 0]) / clear[b]
                 ey = (s[j + 1] - centres[b, 1]) / clear[b]
-                if ex * ex + ey * ey >= 0.999 * 0.999 and codes[b] != 3:
+                if ex * ex + ey * ey >= 0.999 * 0.999 and codes[b] == BEARING_PLAIN:
                     status = 1
             if status != 0:
                 break
@@ -267,7 +268,7 @@ def _integrate_etd(s0, h, n_steps, grid_every, grid_first, grid, n, Lb, E, E2, P
             j = sup[bb]
             ex = (u[j] - centres[bb, 0]) / clear[bb]
             ey = (u[j + 1] - centres[bb, 1]) / clear[bb]
-            if ex * ex + ey * ey >= 0.999 * 0.999 and codes[bb] != 3:
+            if ex * ex + ey * ey >= 0.999 * 0.999 and codes[bb] == BEARING_PLAIN:
                 status = 1
         if status != 0:
             break
