@@ -220,3 +220,28 @@ def test_three_bearing_train_with_the_exciter_overhung_on_one_bearing():
         aligned_offsets(t3, 3000.0)
     with pytest.raises(TrainError, match="one bearing and no coupling"):
         Train((t.rotors[0], exc1), (replace(t.couplings[0], kind="flexible", lateral_stiffness_n_m=1e7),))
+
+
+@pytest.mark.parametrize("kind", ["elliptical", "tilting_pad"])
+def test_trains_on_two_lobe_and_tilting_pad_films_settle_and_run(kind):
+    """The static Newton solution and the time response with the other film types: loads carry the weight,
+    the run stays period-1 near its static state at a moderate speed."""
+    from rotordiag.simulator.bearings import EllipticalBearing, TiltingPadBearing
+    from rotordiag.simulator.train import static_state
+
+    ref = _ref()
+    bench = importlib.util.spec_from_file_location("bench_train", BENCH / "bench_train.py")
+    mod = importlib.util.module_from_spec(bench)
+    bench.loader.exec_module(mod)
+    t = mod.plain_train(ref)
+    cls = EllipticalBearing if kind == "elliptical" else TiltingPadBearing
+    bg = cls(diameter_m=0.25, length_m=0.2, clearance_m=190e-6, viscosity_pa_s=0.02)
+    be = cls(diameter_m=0.15, length_m=0.1, clearance_m=120e-6, viscosity_pa_s=0.02)
+    t = replace(t, rotors=tuple(replace(r, supports=tuple(replace(s, bearing=b) for s in r.supports))
+                                for r, b in zip(t.rotors, (bg, be), strict=True)))
+    st = static_state(t, 3000.0)
+    asm = assemble(t)
+    assert -st.bearing_load_n[:, 1].sum() == pytest.approx(-asm.gravity_n[1::4].sum(), rel=1e-8)
+    run = simulate_train(t, 3000.0, transient_revs=40, record_revs=4, samples_per_rev=32)
+    assert run.ok
+    np.testing.assert_allclose(run.journal_m.mean(0), st.journal_m, atol=0.05 * 120e-6)

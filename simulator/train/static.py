@@ -30,7 +30,8 @@ class StaticState:
     bearing_load_n : ndarray (n_bearings, 2)
         Force of the journal on each bearing (gravity down gives a negative y).
     eccentricity : ndarray (n_bearings,)
-        |journal − centre| / clearance.
+        |journal − centre| / clearance (for a two-lobe or tilting-pad bearing its assembled clearance; the
+        test for touching uses the bearing's own ``film_eccentricity``).
     attitude_angle_deg : ndarray (n_bearings,)
         Angle from the load on the film to the journal displacement, positive in the direction of
         rotation (the convention of ``SimulationResult.attitude_angle_deg``).
@@ -89,11 +90,20 @@ def _bearing_jacobian(brg, x: float, y: float, speed: float) -> np.ndarray:
     return J
 
 
+def film_eccentricity(brg, x_m: float, y_m: float) -> float:
+    """How close the journal is to the wall of its film (1: touching): the bearing's own measure where it
+    has one (a two-lobe or tilting-pad bore is not a circle of radius c), else |r|/c."""
+    f = getattr(brg, "film_eccentricity", None)
+    if f is not None:
+        return float(f(float(x_m), float(y_m)))
+    return math.hypot(x_m, y_m) / float(brg.clearance_m)
+
+
 def _eccentricities(asm: Assembly, q: np.ndarray, centres: np.ndarray) -> np.ndarray:
     out = np.empty(len(asm.bearings))
     for b, node in enumerate(asm.support_nodes):
         d = q[4 * node: 4 * node + 2] - centres[b]
-        out[b] = math.hypot(d[0], d[1]) / float(asm.bearings[b].clearance_m)
+        out[b] = film_eccentricity(asm.bearings[b], d[0], d[1])
     return out
 
 
@@ -161,12 +171,11 @@ def _newton(asm: Assembly, Keff: np.ndarray, q: np.ndarray, speed: float, load: 
         # keep every journal inside its clearance: shorten the step so no ε exceeds (1 + ε_old)/2
         alpha = 1.0
         for b, node in enumerate(asm.support_nodes):
-            c = float(asm.bearings[b].clearance_m)
+            brg = asm.bearings[b]
             d0 = q[4 * node: 4 * node + 2] - centres[b]
             dd = dq[4 * node: 4 * node + 2]
-            e0 = math.hypot(*d0) / c
-            lim = 0.5 * (1.0 + e0)
-            while math.hypot(*(d0 + alpha * dd)) / c > lim and alpha > 1e-6:
+            lim = 0.5 * (1.0 + film_eccentricity(brg, d0[0], d0[1]))
+            while film_eccentricity(brg, *(d0 + alpha * dd)) > lim and alpha > 1e-6:
                 alpha *= 0.5
         r_norm = float(np.linalg.norm(r))
         while True:
@@ -193,10 +202,11 @@ def _state(asm: Assembly, q: np.ndarray, speed: float, centres: np.ndarray, iter
     load = -f
     a = np.arctan2(journal[:, 1], journal[:, 0]) - np.arctan2(load[:, 1], load[:, 0])
     att = np.degrees(np.angle(np.exp(1j * a)))
-    if np.any(ecc >= 1.0):
-        b = int(np.argmax(ecc))
+    film = _eccentricities(asm, q, centres)
+    if np.any(film >= 1.0):
+        b = int(np.argmax(film))
         raise TrainError(f"bearing {_support_name(asm, b)}: the journal sits outside its clearance at rest "
-                         f"(ε = {ecc[b]:.2f}); reduce the offsets or enlarge the clearance")
+                         f"(film eccentricity {film[b]:.2f}); reduce the offsets or enlarge the clearance")
     return StaticState(assembly=asm, speed_rad_s=speed, q=q, journal_m=journal, bearing_load_n=load,
                        eccentricity=ecc, attitude_angle_deg=att, coupling_load=coupling_loads(asm, q, speed, f),
                        iterations=iterations)
