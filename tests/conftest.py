@@ -11,6 +11,7 @@ helpers as ``tests.<module>``; static bare imports anywhere in the tree are refu
 """
 from __future__ import annotations
 
+import os
 import sys
 from importlib.abc import MetaPathFinder
 from pathlib import Path
@@ -28,6 +29,16 @@ class _BareImportBlocker(MetaPathFinder):
         return None
 
 
+# One BLAS/OpenMP thread per test process: `make test` runs two xdist workers on two cores, and each worker's
+# BLAS spreading its eigenvalue and solve calls over every core made the shaft-train tests about 20x slower
+# (oversubscription). Set before NumPy loads its BLAS here and inherited by every server or worker a test starts;
+# threadpoolctl holds the limit where a library was loaded earlier.
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+from threadpoolctl import threadpool_limits  # noqa: E402
+
+threadpool_limits(1)
+
 _ROOT = str(Path(__file__).resolve().parents[1])
 if _ROOT not in sys.path:
     sys.path.append(_ROOT)
@@ -36,7 +47,6 @@ if not any(isinstance(f, _BareImportBlocker) for f in sys.meta_path):
 
 
 # --- PostgreSQL (issue 47) ------------------------------------------------------------------------
-import os  # noqa: E402
 
 import pytest  # noqa: E402
 
