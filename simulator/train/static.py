@@ -17,6 +17,10 @@ from .fe import Assembly, assemble
 from .model import Train, TrainError
 
 
+#: load steps that may fail before the static solution gives up (a journal pushed out of its film)
+MAX_LOAD_STEP_FAILURES = 12
+
+
 @dataclass
 class StaticState:
     """The train at rest on its oil films at speed ``speed_rad_s``.
@@ -126,6 +130,7 @@ def static_state(train: Train | Assembly, speed_rpm: float, *, tol_n: float = 1e
     q = np.zeros(asm.n_dof) if q0 is None else np.array(q0, dtype=float)
     scale = max(1.0, float(np.abs(asm.gravity_n).sum()))
     lam, step, total_iter = (1.0, 1.0, 0) if q0 is not None else (0.0, 1.0, 0)
+    fails = 0
     # at zero weight and offsets the straight shaft-line with centred journals is the solution
     while True:
         target = min(1.0, lam + step) if q0 is None else 1.0
@@ -139,7 +144,8 @@ def static_state(train: Train | Assembly, speed_rpm: float, *, tol_n: float = 1e
             step = min(1.0, step * 2)
         else:
             step /= 4
-            if step < 1e-3:
+            fails += 1
+            if step < 1e-3 or fails > MAX_LOAD_STEP_FAILURES:
                 ecc = _eccentricities(asm, q_try, centres)
                 worst = int(np.nanargmax(ecc)) if np.all(np.isfinite(ecc)) else 0
                 name = _support_name(asm, worst)
@@ -183,6 +189,8 @@ def _newton(asm: Assembly, Keff: np.ndarray, q: np.ndarray, speed: float, load: 
             r_new = _residual(asm, Keff, q_new, speed, load, centres)
             if np.all(np.isfinite(r_new)) and (np.linalg.norm(r_new) < r_norm or alpha < 1e-4):
                 break
+            if alpha < 1e-4:  # every shorter step leaves a film (NaN): this load step fails
+                return q, False, it
             alpha *= 0.5
         q, r = q_new, r_new
         if not np.all(np.isfinite(r)):
