@@ -5,7 +5,7 @@
 Each type is called through ``bearing_force(code, params, ...)`` from a compiled loop over a
 small orbit about its static position under 60 kN at 3000 r/min (D 0.45 m, L 0.35 m, c 0.35 mm,
 μ 0.018 Pa·s), with velocity, so every call solves a new film (and, for tilting pads, new pad
-tilts). Prints µs of process CPU time per call (the minimum over the repeats: CPU time, not wall
+tilts; with the pad tilts as states, the tilt rates at fixed tilts). Prints µs of process CPU time per call (the minimum over the repeats: CPU time, not wall
 time, because the machine is shared) and the ratio to
 the plain bearing, whose Capone closed form is the simulator's film today.
 """
@@ -19,6 +19,7 @@ import argparse
 import math
 import time
 
+import numpy as np
 from numba import njit
 
 from rotordiag.simulator.bearings import (
@@ -27,6 +28,7 @@ from rotordiag.simulator.bearings import (
     PlainBearing,
     TiltingPadBearing,
     bearing_force,
+    tilting_pad_force_states,
 )
 
 D, L, C, MU = 0.45, 0.35, 0.35e-3, 0.018
@@ -43,6 +45,28 @@ def _orbit(code, params, x0, y0, amp, omega, n):
         fx, fy = bearing_force(code, params, x0 + amp * c, y0 + amp * sn, -amp * omega * sn, amp * omega * c, omega)
         s += fx + fy
     return s
+
+
+@njit(cache=False)
+def _orbit_states(params, x0, y0, amp, omega, n, u):
+    du = np.zeros(u.size)
+    s = 0.0
+    for i in range(n):
+        ph = 2.0 * math.pi * i / 997.0
+        c, sn = math.cos(ph), math.sin(ph)
+        fx, fy = tilting_pad_force_states(params, x0 + amp * c, y0 + amp * sn, -amp * omega * sn, amp * omega * c,
+                                          omega, u, du)
+        s += fx + fy + du[0]
+    return s
+
+
+def _time(fn, repeats):
+    best = math.inf
+    for _ in range(repeats):
+        t0 = time.process_time()
+        fn()
+        best = min(best, time.process_time() - t0)
+    return best
 
 
 def main() -> None:
@@ -67,15 +91,14 @@ def main() -> None:
         code, p = b.kernel()
         amp = 0.05 * C
         _orbit(code, p, x0, y0, amp, SPEED_RAD_S, 10)
-        best = math.inf
-        for _ in range(args.repeats):
-            t0 = time.process_time()
-            _orbit(code, p, x0, y0, amp, SPEED_RAD_S, args.n)
-            best = min(best, time.process_time() - t0)
-        us = best / args.n * 1e6
+        us = _time(lambda: _orbit(code, p, x0, y0, amp, SPEED_RAD_S, args.n), args.repeats) / args.n * 1e6
         base = base or us
         print(f"{name:44s} {us:9.3f} {us / base:8.1f}")
-
+        if isinstance(b, TiltingPadBearing):
+            u = b.pad_tilts(x0, y0, SPEED_RAD_S)
+            _orbit_states(p, x0, y0, amp, SPEED_RAD_S, 10, u)
+            us = _time(lambda: _orbit_states(p, x0, y0, amp, SPEED_RAD_S, args.n, u), args.repeats) / args.n * 1e6
+            print(f"{'  same, pad tilts as states (rates)':44s} {us:9.3f} {us / base:8.1f}")
 
 if __name__ == "__main__":
     main()

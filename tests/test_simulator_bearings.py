@@ -360,3 +360,67 @@ preload = 0.4
     a, b = (bearing_from_dict(t) for t in doc["bearing"])
     assert isinstance(a, TiltingPadBearing) and a.pads == 5 and a.load == "on_pad" and a.pad_arc_deg == 57.6
     assert isinstance(b, EllipticalBearing) and b.preload == 0.4 and b.to_dict()["type"] == "elliptical"
+
+
+@pytest.mark.parametrize("b", ALL[:4] + [TiltingPadBearing(D, L, C, MU, pads=4, preload=0.0, load="on_pad")],
+                         ids=lambda b: b.TYPE)
+def test_equilibrium_converges_for_loads_in_any_direction_and_both_rotations(b):
+    rng = np.random.default_rng(2024)
+    for _ in range(25):
+        mag, ang = 10 ** rng.uniform(3, 6.5), rng.uniform(0, 2 * math.pi)
+        speed = W_RAD_S * rng.choice([1.0, -1.0]) * rng.uniform(0.2, 1.2)
+        load = (mag * math.cos(ang), mag * math.sin(ang))
+        r = b.equilibrium(*load, speed)
+        f = b.force_n(*r, 0.0, 0.0, speed)
+        assert math.hypot(f[0] + load[0], f[1] + load[1]) < 1e-8 * mag
+
+
+def test_pad_states_are_continuous_where_a_quasi_static_pad_loses_its_loaded_tilt():
+    """5-pad LOP (m 0.2, offset 0.6) near 680 kN: the two upper pads' loaded quasi-static tilts vanish
+    at a fold between y = −0.4682 c and −0.4687 c and the compiled force jumps; with the tilts as
+    states the force is continuous there (docs/bearings.md)."""
+    b = TiltingPadBearing(D, L, C, MU, pads=5, pad_arc_deg=60.0, pivot_offset=0.6, preload=0.2, load="on_pad")
+    s = MU * (W_RAD_S / (2 * math.pi)) * L * D * (D / 2 / C) ** 2 / np.geomspace(0.03, 3.0, 36)[8]
+    x, y = b.equilibrium(0.0, -s, W_RAD_S)
+    u = b.pad_tilts(x, y + 5e-4 * C, W_RAD_S)
+    lo, hi = y - 1e-3 * C, y + 1e-3 * C
+    jump_quasi = b.force_n(x, lo, 0.0, 0.0, W_RAD_S)[1] - b.force_n(x, hi, 0.0, 0.0, W_RAD_S)[1]
+    jump_states = (b.force_with_pad_states(x, lo, 0.0, 0.0, W_RAD_S, u)[1]
+                   - b.force_with_pad_states(x, hi, 0.0, 0.0, W_RAD_S, u)[1])
+    assert jump_quasi > 0.04 * s              # ≈ 39 kN across 0.002 c
+    assert 0.0 < jump_states < 0.01 * s       # the film's own stiffness: ≈ 6 kN
+
+
+@pytest.mark.parametrize("b", ALL, ids=lambda b: b.TYPE)
+def test_non_finite_states_give_nan_not_a_force(b):
+    """A trial integrator stage with a non-finite state must be rejected, not given a force."""
+    code, p = b.kernel()
+    for args in [(math.nan, 0.0, 0.0, 0.0), (0.0, 0.0, math.nan, 0.0), (0.0, -1e-4, 0.0, math.inf)]:
+        assert not np.all(np.isfinite(bearing_force(code, p, *args, W_RAD_S)))
+    if not isinstance(b, LinearBearing):
+        assert all(math.isnan(v) for v in b.force_n(0.0, -1.01 * C / (1 - getattr(b, "preload", 0.0)) - C, 0.0, 0.0,
+                                                    W_RAD_S))
+    if isinstance(b, TiltingPadBearing):
+        u = b.pad_tilts(0.0, -0.1 * C, W_RAD_S)
+        assert not np.all(np.isfinite(b.force_with_pad_states(math.nan, 0.0, 0.0, 0.0, W_RAD_S, u)[:2]))
+
+
+def test_pad_states_mirror_under_reverse_rotation():
+    b = TiltingPadBearing(D, L, C, MU, pads=5, pivot_offset=0.5, preload=0.2, load="on_pad")
+    x, y = b.equilibrium(0.0, -ocvirk_load(0.4), W_RAD_S)
+    u = b.pad_tilts(x, y, W_RAD_S)
+    ur = b.pad_tilts(-x, y, -W_RAD_S)
+    mirror = [0, 4, 3, 2, 1]                          # pad k at −90° + 72°k mirrors to pad −k
+    np.testing.assert_allclose(ur[mirror], -u, rtol=1e-9, atol=1e-12)
+    f = b.force_with_pad_states(x + 0.01 * C, y, 0.02 * C * W_RAD_S, -0.01 * C * W_RAD_S, W_RAD_S, u)
+    g = b.force_with_pad_states(-x - 0.01 * C, y, -0.02 * C * W_RAD_S, -0.01 * C * W_RAD_S, -W_RAD_S, ur)
+    np.testing.assert_allclose((-g[0], g[1]), f[:2], rtol=1e-9)
+    np.testing.assert_allclose(g[2][mirror], -f[2], rtol=1e-8, atol=1e-9 * np.abs(f[2]).max())
+
+
+def test_fixed_geometry_films_reduce_to_their_coefficients():
+    for b in ALL[:2] + ALL[4:]:
+        r = b.equilibrium(0.0, -ocvirk_load(0.4), W_RAD_S)
+        for K1, K2 in zip(b.reduced_coefficients(*r, W_RAD_S, whirl_rad_s=0.45 * W_RAD_S), b.coefficients(*r, W_RAD_S),
+                          strict=True):
+            np.testing.assert_array_equal(K1, K2)

@@ -245,3 +245,24 @@ def test_trains_on_two_lobe_and_tilting_pad_films_settle_and_run(kind):
     run = simulate_train(t, 3000.0, transient_revs=40, record_revs=4, samples_per_rev=32)
     assert run.ok
     np.testing.assert_allclose(run.journal_m.mean(0), st.journal_m, atol=0.05 * 120e-6)
+
+
+def test_aligned_reference_on_oil_films_and_the_load_transfer_of_a_downward_offset():
+    """Plain bearings: the catenary moves (here half a millimetre at the exciter's far bearing) leave the
+    coupling without shear or moment; an exciter line moved down from there unloads the exciter's
+    coupling-end bearing and loads the generator's (the field's and the paper model's direction)."""
+    from rotordiag.simulator.train import aligned_offsets, misaligned, static_state, with_moves
+
+    bench = importlib.util.spec_from_file_location("bench_train", BENCH / "bench_train.py")
+    mod = importlib.util.module_from_spec(bench)
+    bench.loader.exec_module(mod)
+    t = mod.plain_train(_ref())
+    moves = aligned_offsets(t, 3000.0)
+    assert np.abs(moves).max() > 4 * 120e-6  # far beyond the clearance: the continuation must carry it
+    al = static_state(with_moves(t, moves), 3000.0)
+    straight = static_state(t, 3000.0)
+    assert np.abs(al.coupling_load[0]).max() < 1e-6 * np.abs(straight.coupling_load[0]).max()
+    down = static_state(misaligned(with_moves(t, moves), offset_m=50e-6), 3000.0)
+    load = -down.bearing_load_n[:, 1]
+    load0 = -al.bearing_load_n[:, 1]
+    assert load[2] < load0[2] - 2e3 and load[1] > load0[1] + 2e3

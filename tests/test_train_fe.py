@@ -10,6 +10,7 @@ from scipy.linalg import eig
 from rotordiag.simulator.train import (
     STEEL,
     Coupling,
+    Disk,
     Material,
     Rotor,
     Support,
@@ -241,3 +242,25 @@ def test_a_journal_pushed_outside_its_clearance_is_refused_with_the_bearing_name
     bad = misaligned(t, offset_m=5e-3)
     with pytest.raises(TrainError, match="clearance.*B3"):
         static_state(bad, 3000.0)
+
+
+def test_internal_damping_destabilises_the_forward_mode_above_its_critical_speed():
+    """Rotating (internal) damping alone on stiff undamped supports: the forward whirl is stable below the
+    first forward critical speed and unstable above it (Kimball–Newkirk; e.g. Friswell et al. §3.6)."""
+    from dataclasses import replace
+
+    from rotordiag.simulator.train import critical_speeds
+
+    r = Rotor("s", uniform_elements(2.0, 0.1, 16), disks=(Disk(8, 50.0, 0.3, 0.15),),
+              supports=(Support(0, iso(1e12)), Support(16, iso(1e12))))
+    t = Train((r,), gravity_m_s2=0.0, internal_damping_s=2e-4)
+    wc = critical_speeds(replace(t, internal_damping_s=0.0), 1, 20000.0, n_grid=60)[0]
+
+    def first_forward_logdec(speed_rpm):
+        m = modes(t, speed_rpm, about_static=False)
+        # the forward bending mode near the critical (heavily overdamped high modes have tiny frequencies)
+        k = np.argmin(np.where(m.forward, np.abs(m.frequency_hz - wc / 60), np.inf))
+        return m.log_decrement[k]
+
+    assert first_forward_logdec(0.97 * wc) > 0
+    assert first_forward_logdec(1.03 * wc) < 0

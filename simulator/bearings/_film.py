@@ -125,11 +125,13 @@ def arc_force(X, Y, a, b, th1, th2, deriv, dXu, dYu, dau, dbu):
 
     NaN when the journal is not inside the film's clearance circle (X² + Y² ≥ 1).
     """
-    if X * X + Y * Y >= 1.0:
+    if not X * X + Y * Y < 1.0:              # also NaN positions
         return math.nan, math.nan, math.nan, math.nan
     n = math.sqrt(a * a + b * b)
     if n == 0.0:
         return 0.0, 0.0, 0.0, 0.0
+    if not math.isfinite(n):
+        return math.nan, math.nan, math.nan, math.nan
     # g = n sin(θ − θ0), θ0 = atan2(b, a): positive pressure (g < 0) on (θ0 + π, θ0 + 2π)
     s = math.atan2(b, a) + math.pi
     s = th1 + ((s - th1) % (2.0 * math.pi))   # in [th1, th1 + 2π)
@@ -208,7 +210,7 @@ def pad_force(p, k, x, y, vx, vy, omega):
     s = p[3] * p[0] * p[1] ** 3 / (4.0 * cf * cf)
     u0 = X0 * tx + Y0 * ty                 # journal centred tangentially on the pad
     xi2 = X0 * X0 + Y0 * Y0 - u0 * u0      # squared normal distance
-    if xi2 >= 1.0:
+    if not xi2 < 1.0:
         return math.nan, math.nan, u0
     half = math.sqrt(1.0 - xi2)            # the film exists for |u − u0| < half
     umin = u0 - half
@@ -295,7 +297,7 @@ def pad_rate(p, k, u, x, y, vx, vy, omega):
     ty = p[o + 6]
     X = (x - p[o]) / cf - u * tx
     Y = (y - p[o + 1]) / cf - u * ty
-    if X * X + Y * Y >= 1.0:
+    if not X * X + Y * Y < 1.0:
         return math.nan, math.nan, math.nan
     Xd = vx / cf
     Yd = vy / cf

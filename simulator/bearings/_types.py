@@ -90,6 +90,12 @@ class _Bearing:
                              f"of this {self.TYPE} bearing (clearance {self.clearance_m:.4g} m)")
         return K, C
 
+    def reduced_coefficients(self, x_m: float, y_m: float, speed_rad_s: float,
+                             whirl_rad_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """K and C for a linear analysis at the whirl frequency ω: for a film of fixed geometry they do
+        not depend on ω and are :meth:`coefficients`; tilting pads reduce their tilts (Lund)."""
+        return self.coefficients(x_m, y_m, speed_rad_s)
+
     def equilibrium(self, load_x_n: float, load_y_n: float, speed_rad_s: float) -> tuple[float, float]:
         """Static journal position (m, from the bearing centre) under a static load W = (load_x, load_y)
         applied to the journal (gravity: load_y < 0): the root of F(r, 0) + W = 0.
@@ -273,6 +279,10 @@ class TiltingPadBearing(_Bearing):
     film force through the pivot (moment equilibrium; pad inertia and pivot friction neglected,
     small tilt, and the pad taken at rest in tilt: :func:`._film.pad_force`). ``clearance_m`` is
     the assembled radial clearance c (at the pivots).
+
+    :meth:`coefficients` linearises that quasi-static force; :meth:`reduced_coefficients` are Lund's
+    pad-assembly coefficients at a whirl frequency (what a linear analysis wants), and
+    :meth:`force_with_pad_states` carries the tilts as states (docs/bearings.md).
     """
 
     TYPE: ClassVar[str] = "tilting_pad"

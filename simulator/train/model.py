@@ -10,7 +10,7 @@ All quantities are SI.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
 import numpy as np
@@ -159,7 +159,6 @@ class Train:
     internal_damping_s: float = 0.0
     rayleigh_mass_1_s: float = 0.0
     rayleigh_stiffness_s: float = 0.0
-    extra: dict = field(default_factory=dict, compare=False, hash=False)
 
     def __post_init__(self) -> None:
         validate(self)

@@ -17,10 +17,6 @@ from .fe import Assembly, assemble
 from .model import Train, TrainError
 
 
-#: load steps that may fail before the static solution gives up (a journal pushed out of its film)
-MAX_LOAD_STEP_FAILURES = 12
-
-
 @dataclass
 class StaticState:
     """The train at rest on its oil films at speed ``speed_rad_s``.
@@ -130,29 +126,40 @@ def static_state(train: Train | Assembly, speed_rpm: float, *, tol_n: float = 1e
     q = np.zeros(asm.n_dof) if q0 is None else np.array(q0, dtype=float)
     scale = max(1.0, float(np.abs(asm.gravity_n).sum()))
     lam, step, total_iter = (1.0, 1.0, 0) if q0 is not None else (0.0, 1.0, 0)
-    fails = 0
-    # at zero weight and offsets the straight shaft-line with centred journals is the solution
+    # the shaft's deflection that carries every journal with its bearing centre (stiff springs at the
+    # centres): the predictor as the offsets are raised, so each journal stays near its moving centre
+    kb = 1e3 * float(np.max(np.abs(np.diag(asm.K))))
+    Ks = Keff.copy()
+    f = np.zeros(asm.n_dof)
+    for b, node in enumerate(asm.support_nodes):
+        for ax in range(2):
+            Ks[4 * node + ax, 4 * node + ax] += kb
+            f[4 * node + ax] += kb * centres_full[b, ax]
+    q_centres = np.linalg.solve(Ks, f)
+    if q0 is None:
+        q = np.zeros(asm.n_dof)  # zero weight and offsets: the straight line with centred journals
+    q_try = q
     while True:
-        target = min(1.0, lam + step) if q0 is None else 1.0
+        target = min(1.0, lam + step)
         centres = centres_full * target  # gravity and bearing offsets are raised together
-        q_try, ok, it = _newton(asm, Keff, q, speed, target, centres, tol_n * scale, max_iter)
+        guess = q + (target - lam) * q_centres if q0 is None else q
+        q_try, ok, it = _newton(asm, Keff, guess, speed, target, centres, tol_n * scale, max_iter)
         total_iter += it
         if ok:
             q, lam = q_try, target
             if lam >= 1.0:
                 break
-            step = min(1.0, step * 2)
+            step = min(1.0 - lam, step * 2)
         else:
             step /= 4
-            fails += 1
-            if step < 1e-3 or fails > MAX_LOAD_STEP_FAILURES:
+            if step < 1e-3:
                 ecc = _eccentricities(asm, q_try, centres)
-                worst = int(np.nanargmax(ecc)) if np.all(np.isfinite(ecc)) else 0
+                worst = int(np.nanargmax(ecc)) if np.any(np.isfinite(ecc)) else 0
                 name = _support_name(asm, worst)
                 raise TrainError(
                     f"no static state with every journal inside its clearance at {speed_rpm:g} r/min "
-                    f"(bearing {name} reaches ε = {ecc[worst]:.2f} beyond {100 * lam:.0f} % of the weight and offsets): "
-                    f"reduce the bearing offsets, enlarge that bearing or raise the speed")
+                    f"(bearing {name} reaches a film eccentricity {ecc[worst]:.2f} beyond {100 * lam:.0f} % of "
+                    f"the weight and offsets): reduce the bearing offsets, enlarge that bearing or raise the speed")
     return _state(asm, q, speed, centres_full, total_iter)
 
 
@@ -165,6 +172,8 @@ def _newton(asm: Assembly, Keff: np.ndarray, q: np.ndarray, speed: float, load: 
             tol: float, max_iter: int) -> tuple[np.ndarray, bool, int]:
     q = q.copy()
     r = _residual(asm, Keff, q, speed, load, centres)
+    if not np.all(np.isfinite(r)):
+        return q, False, 0
     for it in range(1, max_iter + 1):
         J = Keff.copy()
         for b, node in enumerate(asm.support_nodes):
@@ -189,7 +198,7 @@ def _newton(asm: Assembly, Keff: np.ndarray, q: np.ndarray, speed: float, load: 
             r_new = _residual(asm, Keff, q_new, speed, load, centres)
             if np.all(np.isfinite(r_new)) and (np.linalg.norm(r_new) < r_norm or alpha < 1e-4):
                 break
-            if alpha < 1e-4:  # every shorter step leaves a film (NaN): this load step fails
+            if alpha < 1e-12:
                 return q, False, it
             alpha *= 0.5
         q, r = q_new, r_new
