@@ -194,9 +194,6 @@ def test_bad_trains_say_what_to_fix():
     with pytest.raises(TrainError, match="bearing 3 .*pads"):
         train_from_shaftline(_gen50(type=["plain", "plain", "tilting_pad", "plain"],
                                     options=[{}, {}, {"pads": 1}, {}]))
-    # a 1 mm move of the exciter's bearings on a 0.25 mm clearance: no journal can sit inside it
-    with pytest.raises(TrainError, match="clearance"):
-        static_state(train_from_shaftline(_gen50(centre_y_m=[0.0, 0.0, -1e-3, -1e-3])), 3000.0)
 
 
 def test_cli_checks_a_train_and_refuses_bad_input(tmp_path):
@@ -209,6 +206,6 @@ def test_cli_checks_a_train_and_refuses_bad_input(tmp_path):
     bad.write_text(OLD_FILE.replace("clearance_m = 0.35e-3", "clearance_m = 0.35e-3\ntype = ['none'] * 4"))
     r = CliRunner().invoke(app, ["plant", "from-shaftline", str(bad), "--speed-rpm", "3000"])
     assert r.exit_code == 2 and "not valid TOML" in r.output
-    bad.write_text(OLD_FILE.replace("clearance_m = 0.35e-3", "clearance_m = 0.35e-3\ncentre_y_m = [0, 0, -2e-3, -2e-3]"))
+    bad.write_text(OLD_FILE.replace("body_masses = [[1.7, 1500.0]]", "body_masses = [[1.7, 1500.0]]\noverhang = [[-0.3, 0.25]]"))
     r = CliRunner().invoke(app, ["plant", "from-shaftline", str(bad), "--speed-rpm", "3000"])
-    assert r.exit_code == 2 and "clearance" in r.output and "Traceback" not in r.output
+    assert r.exit_code == 2 and "exciter.overhang[0] length_m" in r.output and "Traceback" not in r.output

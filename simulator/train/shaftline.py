@@ -119,5 +119,4 @@ def train_from_shaftline(line: ShaftLine, *, max_element_m: float = 0.3) -> Trai
                        lateral_damping_n_s_m=line.coupling_damping_n_s_m,
                        angular_damping_n_m_s_rad=line.coupling_angular_damping_n_m_s_rad)
     w1 = 2 * math.pi * reduce_rotor(line.generator, line.material).first_pinned_hz
-    return Train((gen, exc), (cpl,), rayleigh_stiffness_s=2 * line.damping_ratio / w1,
-                 extra={"shaftline": True})
+    return Train((gen, exc), (cpl,), rayleigh_stiffness_s=2 * line.damping_ratio / w1)
