@@ -361,17 +361,47 @@ def register(app: typer.Typer) -> None:
         file: Optional[Path] = typer.Argument(None, help="Shaft-line TOML (see examples/shaftline_200mw.toml)."),
         preset: Optional[str] = typer.Option(None, help="A named machine instead of FILE: gen50_2pole, "
                                                         "gen200_2pole, gen600_2pole, gen600_4pole."),
-        out: Path = typer.Option(..., help="Plant file to write (.toml or .json)."),
+        out: Optional[Path] = typer.Option(None, help="Lumped plant file to write (.toml or .json), for the "
+                                                      "paper model; without it only the train is checked."),
+        speed_rpm: Optional[float] = typer.Option(None, help="Check the finite-element train at this speed: "
+                                                             "static bearing loads and stability margin."),
         bearing_stiffness_n_m: float = typer.Option(1e9, help="Bearing stiffness of the critical-speed check."),
     ) -> None:
-        """Reduce a shaft-line description to the lumped plant and write it; print the first two critical
-        speeds of the full beam model and of the lumped plant (the reduction's check)."""
+        """Build the finite-element train of a shaft line (its static state and stability margin at
+        --speed-rpm); with --out also reduce it to the lumped plant of the paper model and print the
+        first two critical speeds of the beam model and of the lumped plant (the reduction's check)."""
         from rotordiag.simulator import shaftline as sl
+        from rotordiag.simulator.train import TrainError, static_state
+        from rotordiag.simulator.train.shaftline import train_from_shaftline
+        from rotordiag.simulator.train.stability import stability
 
         if (file is None) == (preset is None):
             raise typer.BadParameter("give either FILE or --preset", param_hint="FILE")
+        if out is None and speed_rpm is None:
+            raise typer.BadParameter("give --out (the lumped plant) and/or --speed-rpm (check the train)",
+                                     param_hint="--out")
         try:
             line = sl.ShaftLine.from_file(file) if file is not None else sl.preset(preset)  # type: ignore[arg-type]
+            train = train_from_shaftline(line)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc)) from None
+        if speed_rpm is not None:
+            try:
+                st = static_state(train, speed_rpm)
+                stab = stability(train, speed_rpm)
+            except (TrainError, ValueError) as exc:
+                raise typer.BadParameter(str(exc), param_hint="--speed-rpm") from None
+            n = sum(r.n_stations for r in train.rotors)
+            typer.echo(f"train: {n} stations; at {speed_rpm:g} r/min:")
+            for (_, s), load, e in zip(train.supports(), st.bearing_load_n, st.eccentricity, strict=True):
+                typer.echo(f"  {s.name}: {type(s.bearing).__name__}, load {-load[1] / 1e3:.1f} kN down, "
+                           f"{load[0] / 1e3:+.1f} kN horizontal, |e|/c {e:.2f}")
+            typer.echo(f"  least-damped mode {stab.frequency_hz:.1f} Hz "
+                       f"({'forward' if stab.forward else 'backward'}), log decrement {stab.log_decrement:.3f} "
+                       f"({'stable' if stab.stable else 'UNSTABLE: beyond the stability threshold'})")
+        if out is None:
+            return
+        try:
             pl = sl.to_plant(line)
             pl.to_file(out)
         except ValueError as exc:

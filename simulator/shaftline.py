@@ -88,14 +88,17 @@ class Rotor:
 
     segments: tuple[tuple[float, float], ...]
     body_masses: tuple[tuple[float, float], ...] = ()
+    overhang: tuple[tuple[float, float], ...] = ()
+    disks: tuple[tuple[float, float, float, float], ...] = ()
 
     @classmethod
     def from_dict(cls, name: str, d: dict[str, Any]) -> Rotor:
         if not isinstance(d, dict):
             raise ValueError(f"[{name}] must be a table with 'segments' (and optionally 'body_masses')")
-        unknown = set(d) - {"segments", "body_masses"}
+        unknown = set(d) - {"segments", "body_masses", "overhang", "disks"}
         if unknown:
-            raise ValueError(f"[{name}] has unknown keys {sorted(unknown)}; known: segments, body_masses")
+            raise ValueError(f"[{name}] has unknown keys {sorted(unknown)}; known: segments, body_masses, "
+                             f"overhang, disks")
         segs = d.get("segments")
         if not isinstance(segs, list) or not segs:
             raise ValueError(f"{name}.segments must be a non-empty list of [length_m, diameter_m]")
@@ -121,7 +124,36 @@ class Rotor:
             if not 0 <= x <= span:
                 raise ValueError(f"{name}.body_masses[{i}] position {x} m is outside the span [0, {span:g}] m")
             masses.append((x, _pos(f"{name}.body_masses[{i}] mass_kg", b[1])))
-        return cls(tuple(segments), tuple(masses))
+        over = d.get("overhang", [])
+        if not isinstance(over, list) or len(over) > MAX_ITEMS:
+            raise ValueError(f"{name}.overhang must be a list of at most {MAX_ITEMS} [length_m, diameter_m] "
+                             f"(the shaft from the coupling-end bearing to the coupling flange)")
+        overhang = []
+        for i, s in enumerate(over):
+            if not (isinstance(s, (list, tuple)) and len(s) == 2):
+                raise ValueError(f"{name}.overhang[{i}] must be [length_m, diameter_m], got {s!r}")
+            overhang.append((_pos(f"{name}.overhang[{i}] length_m", s[0]), _pos(f"{name}.overhang[{i}] diameter_m", s[1])))
+        if sum(s[0] for s in overhang) > MAX_SPAN_M / 4:
+            raise ValueError(f"{name}.overhang: at most {MAX_SPAN_M / 4:g} m from the bearing to the flange")
+        dk = d.get("disks", [])
+        if not isinstance(dk, list) or len(dk) > MAX_ITEMS:
+            raise ValueError(f"{name}.disks must be a list of at most {MAX_ITEMS} "
+                             f"[position_m, mass_kg, polar_kg_m2, transverse_kg_m2]")
+        disks = []
+        for i, b in enumerate(dk):
+            if not (isinstance(b, (list, tuple)) and len(b) == 4):
+                raise ValueError(f"{name}.disks[{i}] must be [position_m, mass_kg, polar_kg_m2, transverse_kg_m2], "
+                                 f"got {b!r}")
+            x = _number(f"{name}.disks[{i}] position_m", b[0])
+            if not 0 <= x <= span:
+                raise ValueError(f"{name}.disks[{i}] position {x} m is outside the span [0, {span:g}] m "
+                                 f"(positions are from the rotor's first bearing)")
+            jp = _number(f"{name}.disks[{i}] polar_kg_m2", b[2])
+            jt = _number(f"{name}.disks[{i}] transverse_kg_m2", b[3])
+            if jp < 0 or jt < 0:
+                raise ValueError(f"{name}.disks[{i}]: inertias must be ≥ 0, got {jp}, {jt}")
+            disks.append((x, _pos(f"{name}.disks[{i}] mass_kg", b[1]), jp, jt))
+        return cls(tuple(segments), tuple(masses), tuple(overhang), tuple(disks))
 
     @property
     def span_m(self) -> float:
@@ -144,6 +176,15 @@ class ShaftLine:
     generator_asymmetry: float = 0.0549
     damping_ratio: float = 0.008
     extra: dict[str, Any] = field(default_factory=dict)
+    #: per bearing 1..4: a type of ``simulator.bearings`` (plain, elliptical, tilting_pad, linear) or "none"
+    bearing_types: tuple[str, str, str, str] = ("plain", "plain", "plain", "plain")
+    #: per bearing: further keys of its bearing table (preload, pads, load, stiffness_n_m, ...)
+    bearing_options: tuple[dict[str, Any], ...] = ({}, {}, {}, {})
+    #: per bearing: centre (x horizontal, y vertical up) from the straight shaft-line axis, m
+    bearing_centres_m: tuple[tuple[float, float], ...] = ((0.0, 0.0),) * 4
+    coupling_angular_stiffness_n_m_rad: float = 0.0
+    coupling_damping_n_s_m: float = 0.0
+    coupling_angular_damping_n_m_s_rad: float = 0.0
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> ShaftLine:
@@ -179,6 +220,18 @@ class ShaftLine:
         ctype = coupling.get("type", "rigid")
         if ctype not in COUPLING_TYPES:
             raise ValueError(f"coupling.type must be one of {COUPLING_TYPES}, got {ctype!r}")
+        cunknown = set(coupling) - {"type", "stiffness_n_m", "angular_stiffness_n_m_rad", "damping_n_s_m",
+                                    "angular_damping_n_m_s_rad"}
+        if cunknown:
+            raise ValueError(f"[coupling] has unknown keys {sorted(cunknown)}; known: type, stiffness_n_m, "
+                             f"angular_stiffness_n_m_rad, damping_n_s_m, angular_damping_n_m_s_rad")
+        coupling_extra = {}
+        for k in ("angular_stiffness_n_m_rad", "damping_n_s_m", "angular_damping_n_m_s_rad"):
+            v = _number(f"coupling.{k}", coupling.get(k, 0.0))
+            if v < 0:
+                raise ValueError(f"coupling.{k} must be ≥ 0, got {v}")
+            coupling_extra[k] = v
+        types, options, centres = _bearing_tables(b)
         zeta = _number("damping_ratio", d.get("damping_ratio", 0.008))
         if not 0 <= zeta < 1:
             raise ValueError(f"damping_ratio must be in [0, 1), got {zeta!r}")
@@ -195,6 +248,12 @@ class ShaftLine:
             generator_asymmetry=_number("generator_asymmetry", d.get("generator_asymmetry", 0.0549)),
             damping_ratio=zeta,
             extra=_table("plant", d.get("plant", {})),
+            bearing_types=types,
+            bearing_options=options,
+            bearing_centres_m=centres,
+            coupling_angular_stiffness_n_m_rad=coupling_extra["angular_stiffness_n_m_rad"],
+            coupling_damping_n_s_m=coupling_extra["damping_n_s_m"],
+            coupling_angular_damping_n_m_s_rad=coupling_extra["angular_damping_n_m_s_rad"],
         )
 
     @classmethod
@@ -206,6 +265,49 @@ class ShaftLine:
             return cls.from_dict(tomllib.loads(path.read_text()))
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"shaft-line file {path.name!r} is not valid TOML: {exc}") from exc
+
+
+#: what a bearing slot may hold: a type of ``rotordiag.simulator.bearings`` or none (no bearing there)
+BEARING_SLOT_TYPES: tuple[str, ...] = ("plain", "elliptical", "two_lobe", "tilting_pad", "linear", "none")
+_BEARING_KEYS = {"diameter_m", "length_m", "clearance_m", "type", "options", "centre_x_m", "centre_y_m"}
+
+
+def _bearing_tables(b: dict[str, Any]) -> tuple[tuple, tuple, tuple]:
+    """Types, per-bearing option tables and centres from ``[bearings]`` (all optional: plain, none, centred)."""
+    unknown = set(b) - _BEARING_KEYS
+    if unknown:
+        raise ValueError(f"[bearings] has unknown keys {sorted(unknown)}; known: {sorted(_BEARING_KEYS)}")
+    types = b.get("type", ["plain"] * 4)
+    if not (isinstance(types, list) and len(types) == 4 and all(isinstance(t, str) for t in types)):
+        raise ValueError(f"bearings.type must be a list of 4 names (bearings 1..4) from {BEARING_SLOT_TYPES}, "
+                         f"got {types!r}")
+    for i, t in enumerate(types):
+        if t not in BEARING_SLOT_TYPES:
+            raise ValueError(f"bearings.type[{i}] {t!r} is not one of {BEARING_SLOT_TYPES}")
+    if types[0] == "none" or types[1] == "none" or types[2] == "none":
+        raise ValueError("bearings.type: only bearing 4 (the exciter's far end) may be \"none\" (an exciter "
+                         "overhung on its coupling-end bearing); the generator needs bearings 1 and 2 and the "
+                         "exciter bearing 3")
+    opts = b.get("options", [{}] * 4)
+    if not (isinstance(opts, list) and len(opts) == 4 and all(isinstance(o, dict) for o in opts)):
+        raise ValueError("bearings.options must be a list of 4 tables (bearings 1..4), e.g. "
+                         "[{pads = 4}, {pads = 4}, {preload = 0.5}, {}]")
+    for i, o in enumerate(opts):
+        bad = {"type", "diameter_m", "length_m", "viscosity_pa_s"} & set(o)
+        if bad:
+            raise ValueError(f"bearings.options[{i}] must not repeat {sorted(bad)}: give them in [bearings] / [oil]")
+    cx = b.get("centre_x_m", [0.0] * 4)
+    cy = b.get("centre_y_m", [0.0] * 4)
+    for name, v in (("bearings.centre_x_m", cx), ("bearings.centre_y_m", cy)):
+        if not (isinstance(v, list) and len(v) == 4):
+            raise ValueError(f"{name} must be a list of 4 numbers (m, bearings 1..4), got {v!r}")
+    centres = tuple((_number(f"bearings.centre_x_m[{i}]", cx[i]), _number(f"bearings.centre_y_m[{i}]", cy[i]))
+                    for i in range(4))
+    for i, (x, y) in enumerate(centres):
+        if abs(x) > 0.05 or abs(y) > 0.05:
+            raise ValueError(f"bearing {i + 1} centre ({x}, {y}) m is more than 50 mm off the shaft line; "
+                             f"give offsets in metres (e.g. 0.2e-3 for 0.2 mm)")
+    return tuple(types), tuple(dict(o) for o in opts), centres
 
 
 # ----------------------------------------------------------------------------- beam finite elements
@@ -349,8 +451,11 @@ def lumped_critical_speeds(plant: Plant, bearing_stiffness_n_m: float, n: int = 
 
 
 # ----------------------------------------------------------------------------- presets
-def _preset(body, windings, shaft, journal, exc, bearings_d, bearings_l, clearance, rated):
-    """Two-bearing generator (journal, shaft, body, shaft, journal) and exciter (journal, shaft, journal)."""
+def _preset(body, windings, shaft, journal, exc, bearings_d, bearings_l, clearance, rated, *, types, options,
+            overhang=(0.5, 0.3), asymmetry=0.0549):
+    """Two-bearing generator (journal, shaft, body, shaft, journal) and exciter (journal, shaft, journal),
+    with overhangs from the coupling-end bearings to the flange (generator, exciter lengths in m, the
+    journal diameter) and the bearing types of ``simulator.bearings``."""
     body_d, body_l = body
     jd, jl = journal
     sd, sl = shaft
@@ -358,25 +463,43 @@ def _preset(body, windings, shaft, journal, exc, bearings_d, bearings_l, clearan
     ejd, ejl, esd, esl, arm = exc
     return {
         "generator": {"segments": [[jl, jd], [sl, sd], [body_l, body_d], [sl, sd], [jl, jd]],
-                      "body_masses": [[x, m] for x, m in zip(wpos, windings)]},
-        "exciter": {"segments": [[ejl, ejd], [esl, esd], [ejl, ejd]], "body_masses": [[ejl + esl / 2, arm]]},
-        "bearings": {"diameter_m": list(bearings_d), "length_m": list(bearings_l), "clearance_m": clearance},
+                      "body_masses": [[x, m] for x, m in zip(wpos, windings)], "overhang": [[overhang[0], jd]]},
+        "exciter": {"segments": [[ejl, ejd], [esl, esd], [ejl, ejd]], "body_masses": [[ejl + esl / 2, arm]],
+                    "overhang": [[overhang[1], ejd]]},
+        "bearings": {"diameter_m": list(bearings_d), "length_m": list(bearings_l), "clearance_m": clearance,
+                     "type": list(types), "options": [dict(o) for o in options]},
+        "generator_asymmetry": asymmetry,
         "rated_speed_rpm": list(rated),
     }
 
 
+_TP4 = {"pads": 4, "load": "between_pads"}
+_LEMON = {"preload": 0.5}
+
 #: Illustrative machine families (docs/model.md): dimensions from the usual proportions of two-pole
 #: (body ≤ ≈ 1.2 m at 3000/3600 r/min) and four-pole (larger body, 1500/1800 r/min) generators — not a
-#: vendor's drawings. Each has ``rated_speed_rpm`` (not a plant parameter) for the user's operating points.
+#: vendor's drawings. Bearings as such machines have: four-pad tilting-pad journals on the large two-pole
+#: generators, two-lobe (elliptical, preload 0.5) on the small generator, the four-pole generator and the
+#: exciters; a four-pole rotor nearly symmetric (ρ = 0.005; two-pole ρ = 0.0549, the paper's). Each has
+#: ``rated_speed_rpm`` (not a plant parameter) for the user's operating points; its stability margin at
+#: rated speed is in docs/train-misalignment.md and tests/test_train_shaftline.py. The lumped plant
+#: (:func:`to_plant`) reads only the span, masses, bearing sizes, clearance and ρ.
 PRESETS: dict[str, dict[str, Any]] = {
     "gen50_2pole": _preset((0.75, 3.2), [1200.0] * 4, (0.42, 0.6), (0.30, 0.4), (0.18, 0.3, 0.26, 1.8, 600.0),
-                           (0.30, 0.30, 0.18, 0.18), (0.24, 0.24, 0.11, 0.11), 0.25e-3, (3000, 3600)),
+                           (0.30, 0.30, 0.18, 0.18), (0.24, 0.24, 0.11, 0.11), 0.25e-3, (3000, 3600),
+                           types=("elliptical",) * 4, options=(_LEMON,) * 4, overhang=(0.4, 0.25)),
     "gen200_2pole": _preset((1.0, 5.0), [3000.0] * 4, (0.6, 0.9), (0.45, 0.6), (0.25, 0.4, 0.36, 2.6, 1500.0),
-                            (0.45, 0.45, 0.25, 0.25), (0.35, 0.35, 0.15, 0.15), 0.35e-3, (3000, 3600)),
+                            (0.45, 0.45, 0.25, 0.25), (0.35, 0.35, 0.15, 0.15), 0.35e-3, (3000, 3600),
+                            types=("tilting_pad", "tilting_pad", "elliptical", "elliptical"),
+                            options=(_TP4, _TP4, _LEMON, _LEMON)),
     "gen600_2pole": _preset((1.15, 6.8), [5000.0] * 4, (0.75, 1.1), (0.55, 0.7), (0.30, 0.5, 0.45, 3.2, 3000.0),
-                            (0.55, 0.55, 0.30, 0.30), (0.45, 0.45, 0.20, 0.20), 0.45e-3, (3000, 3600)),
+                            (0.55, 0.55, 0.30, 0.30), (0.45, 0.45, 0.20, 0.20), 0.45e-3, (3000, 3600),
+                            types=("tilting_pad", "tilting_pad", "elliptical", "elliptical"),
+                            options=(_TP4, _TP4, _LEMON, _LEMON), overhang=(0.6, 0.35)),
     "gen600_4pole": _preset((1.6, 5.5), [7000.0] * 4, (0.85, 1.2), (0.60, 0.8), (0.30, 0.5, 0.45, 3.2, 3000.0),
-                            (0.60, 0.60, 0.30, 0.30), (0.50, 0.50, 0.20, 0.20), 0.50e-3, (1500, 1800)),
+                            (0.60, 0.60, 0.30, 0.30), (0.50, 0.50, 0.20, 0.20), 0.50e-3, (1500, 1800),
+                            types=("elliptical",) * 4, options=(_LEMON,) * 4, overhang=(0.6, 0.35),
+                            asymmetry=0.005),
 }
 
 

@@ -38,9 +38,10 @@ def bearing_coefficients(brg, x_m: float, y_m: float, speed_rad_s: float) -> tup
 
 
 def linear_matrices(asm: Assembly, speed_rad_s: float, journal_m: np.ndarray | None = None,
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                    coefficients=bearing_coefficients) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """M, C, K of the train linearised at spin ``speed_rad_s`` about journals at ``journal_m`` (relative
-    to their bearing centres; zero if not given), the asymmetric stiffness at its mean."""
+    to their bearing centres; zero if not given), the asymmetric stiffness at its mean. ``coefficients``
+    (brg, x, y, Ω) → (K, C) gives each bearing's (default: the force's own derivatives)."""
     eta = asm.train.internal_damping_s
     K = asm.K + eta * speed_rad_s * asm.K_circ
     C = asm.C + speed_rad_s * asm.G + eta * asm.K_shaft
@@ -48,7 +49,7 @@ def linear_matrices(asm: Assembly, speed_rad_s: float, journal_m: np.ndarray | N
     C = C.copy()
     for b, node in enumerate(asm.support_nodes):
         x, y = (0.0, 0.0) if journal_m is None else journal_m[b]
-        kb, cb = bearing_coefficients(asm.bearings[b], float(x), float(y), speed_rad_s)
+        kb, cb = coefficients(asm.bearings[b], float(x), float(y), speed_rad_s)
         s = slice(4 * node, 4 * node + 2)
         K[s, s] += kb
         C[s, s] += cb
@@ -72,7 +73,7 @@ class Modes:
 
 
 def modes(train: Train | Assembly, speed_rpm: float, static: StaticState | None = None,
-          n_modes: int | None = None, *, about_static: bool = True) -> Modes:
+          n_modes: int | None = None, *, about_static: bool = True, coefficients=bearing_coefficients) -> Modes:
     """Damped eigenvalues and mode shapes of the train linearised at ``speed_rpm``.
 
     ``about_static`` (default) linearises the bearings about the static state (solved here unless
@@ -84,7 +85,7 @@ def modes(train: Train | Assembly, speed_rpm: float, static: StaticState | None 
     if about_static:
         st = static if static is not None else static_state(asm, speed_rpm)
         journal = st.journal_m
-    M, C, K = linear_matrices(asm, speed, journal)
+    M, C, K = linear_matrices(asm, speed, journal, coefficients)
     n = M.shape[0]
     A = np.zeros((2 * n, 2 * n))
     A[:n, n:] = np.eye(n)
