@@ -305,6 +305,8 @@ def test_a_signal_stops_the_server_in_the_stated_time_and_the_job_resumes(tmp_pa
     print(f"{signal.Signals(sig).name}: server stopped {elapsed:.1f} s after the signal")
     assert elapsed < STOP_BOUND_S, (elapsed, out[-3000:])
     assert "Traceback" not in out, out[-3000:]
+    port = _free_port()           # a fresh port: another test process may have taken the old one meanwhile
+    base = f"http://127.0.0.1:{port}"
     proc = _serve(tmp_path, port)
     try:
         status, j = _request(f"{base}/jobs/{job['id']}")
