@@ -91,9 +91,8 @@ def main() -> int:
     ap.add_argument("--ross-revs", type=int, default=32, help="revolutions ROSS is timed over")
     args = ap.parse_args()
     ref = _ref()
-    from rotordiag.simulator.train import assemble, critical_speeds, unbalance_response
+    from rotordiag.simulator.train import assemble, critical_speeds, reduced_critical_speeds, unbalance_response
     from rotordiag.simulator.train.dynamics import simulate_train
-    from rotordiag.simulator.train.linear import linear_matrices
     from rotordiag.simulator.train.reduced import reduce
 
     train = plain_train(ref)
@@ -122,27 +121,7 @@ def main() -> int:
     red = reduce(asm, args.modes)
     full = critical_speeds(asm, 6, 9000.0, n_grid=90)
 
-    # critical speeds of the reduced model: project the linear matrices (same bracketing as the full model)
-    from scipy.optimize import brentq
-
-    def freqs(s):
-        w = s * math.pi / 30
-        M, C, K = linear_matrices(asm, w)
-        Mr, Cr, Kr = (red.T.T @ A @ red.T for A in (M, C, K))
-        n = red.n
-        A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(Mr, Kr), -np.linalg.solve(Mr, Cr)]])
-        lam = np.linalg.eigvals(A)
-        return np.sort(lam.imag[lam.imag > 1e-6]) / (2 * math.pi)
-
-    grid = np.linspace(50.0, 9000.0, 90)
-    f = np.array([freqs(s)[:16] for s in grid])
-    crit = []
-    for k in range(16):
-        g = f[:, k] - grid / 60
-        for j in range(len(grid) - 1):
-            if g[j] > 0 >= g[j + 1]:
-                crit.append(brentq(lambda s, k=k: freqs(s)[k] - s / 60, grid[j], grid[j + 1], xtol=1e-6))
-    crit = np.sort(crit)[:6]
+    crit = reduced_critical_speeds(red, 6, 9000.0, n_grid=90)
     print(f"[3] reduction ({args.modes} fixed-interface modes + {len(red.boundary)} bearing DOFs = {red.n} of "
           f"{asm.n_dof}): first 6 critical speeds full {np.round(full, 1).tolist()} r/min, "
           f"max error {100 * np.abs(crit / full - 1).max():.4f} %")

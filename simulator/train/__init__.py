@@ -14,7 +14,7 @@ modes, campbell, critical_speeds, unbalance_response
 from __future__ import annotations
 
 from .fe import Assembly, assemble
-from .linear import Modes, campbell, critical_speeds, modes, unbalance_response
+from .linear import Modes, campbell, critical_speeds, modes, reduced_critical_speeds, unbalance_response
 from .model import (
     STEEL,
     Coupling,
@@ -33,7 +33,7 @@ from .model import (
 from .static import StaticState, aligned_offsets, static_state, with_moves
 
 __all__ = [
-    "Assembly", "assemble", "Modes", "campbell", "critical_speeds", "modes", "unbalance_response", "STEEL",
+    "Assembly", "assemble", "Modes", "campbell", "critical_speeds", "reduced_critical_speeds", "modes", "unbalance_response", "STEEL",
     "Coupling", "Disk", "Material", "Rotor", "ShaftElement", "Support", "Train", "TrainError", "Unbalance",
     "bearing_moved", "misaligned", "uniform_elements", "StaticState", "aligned_offsets", "static_state",
     "with_moves",

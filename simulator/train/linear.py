@@ -15,6 +15,7 @@ import scipy.linalg as sla
 
 from .fe import Assembly, assemble
 from .model import Train
+from .reduced import Reduced
 from .static import StaticState, static_state
 
 
@@ -142,20 +143,42 @@ def critical_speeds(train: Train | Assembly, n: int, max_rpm: float, *, n_grid: 
                     about_static: bool = False) -> np.ndarray:
     """Speeds (r/min) where a forward or backward damped natural frequency equals the running speed (1X),
     the lowest ``n`` below ``max_rpm``, from the Campbell diagram by bracketing and Brent's method."""
-    from scipy.optimize import brentq
-
     asm = train if isinstance(train, Assembly) else assemble(train)
     n_track = 2 * n + 4
+    grid = np.linspace(max_rpm / n_grid, max_rpm, n_grid)
+    return _one_x_crossings(lambda s: modes(asm, s, n_modes=n_track, about_static=about_static).frequency_hz,
+                            campbell(asm, grid, n_track, about_static=about_static), grid, n_track)[:n]
 
-    def gap(s: float, k: int) -> float:
-        return modes(asm, s, n_modes=n_track, about_static=about_static).frequency_hz[k] - s / 60.0
+
+def reduced_critical_speeds(red: Reduced, n: int, max_rpm: float, *, n_grid: int = 80,
+                            n_track: int = 16) -> np.ndarray:
+    """The critical speeds (r/min) of the reduced model ``red``: the full model's linear matrices (journals
+    centred) projected on its basis, then the 1X crossings as :func:`critical_speeds` finds them; what the
+    reduction's accuracy is judged by."""
+    asm = red.assembly
+
+    def freqs_hz(speed_rpm: float) -> np.ndarray:
+        M, C, K = linear_matrices(asm, speed_rpm * math.pi / 30.0)
+        Mr, Cr, Kr = (red.T.T @ A @ red.T for A in (M, C, K))
+        m = Mr.shape[0]
+        A = np.block([[np.zeros((m, m)), np.eye(m)], [-np.linalg.solve(Mr, Kr), -np.linalg.solve(Mr, Cr)]])
+        lam = np.linalg.eigvals(A)
+        return np.sort(lam.imag[lam.imag > 1e-6]) / (2 * math.pi)
 
     grid = np.linspace(max_rpm / n_grid, max_rpm, n_grid)
-    freqs = campbell(asm, grid, n_track, about_static=about_static)
+    table = np.array([freqs_hz(s)[:n_track] for s in grid])
+    return _one_x_crossings(freqs_hz, table, grid, n_track)[:n]
+
+
+def _one_x_crossings(freqs_hz, table: np.ndarray, grid: np.ndarray, n_track: int) -> np.ndarray:
+    """Speeds where branch k of ``freqs_hz(speed_rpm)`` (tabulated on ``grid`` in ``table``) crosses 1X, by
+    bracketing on the grid and Brent's method, sorted."""
+    from scipy.optimize import brentq
+
     found = []
     for k in range(n_track):
-        g = freqs[:, k] - grid / 60.0
+        g = table[:, k] - grid / 60.0
         for j in range(len(grid) - 1):
             if g[j] > 0 >= g[j + 1]:
-                found.append(brentq(gap, grid[j], grid[j + 1], args=(k,), xtol=1e-6))
-    return np.sort(np.array(found))[:n]
+                found.append(brentq(lambda s, k=k: freqs_hz(s)[k] - s / 60.0, grid[j], grid[j + 1], xtol=1e-6))
+    return np.sort(np.array(found))
