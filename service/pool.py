@@ -262,6 +262,20 @@ class PlotBody(WorkerCall):
 
 
 @dataclass(frozen=True)
+class AssetReport(WorkerCall):
+    """An asset's report (``GET /assets/{id}/report``) as PDF or HTML bytes, from the plain data read from the
+    store (:func:`service.report.asset_report_inputs`): ``("ok", bytes)`` or an error tuple."""
+
+    inputs: dict[str, Any]
+    fmt: str
+
+    def run(self) -> tuple:
+        from .report import render_asset_report
+
+        return _tagged(lambda: ("ok", render_asset_report(self.inputs, self.fmt)))
+
+
+@dataclass(frozen=True)
 class CheckModel(WorkerCall):
     """Which file of ``version`` the worker holds, and whether it can be used (:func:`_load_check`)."""
 

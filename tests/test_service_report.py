@@ -1,0 +1,112 @@
+"""GET /assets/{id}/report (service/report.py): an asset's report from the store, as PDF and HTML, in a diagnosis
+worker and in a thread; what it holds is checked against the /diagnose answers it was made from."""
+from __future__ import annotations
+
+import html
+import shutil
+import subprocess
+
+import pytest
+from fastapi.testclient import TestClient
+
+from rotordiag.service.main import create_app
+from tests.service_util import auth, diagnose_json, make_settings, shipped_or_tiny_registry, simulated_channels
+
+
+@pytest.fixture(scope="module")
+def clients(tmp_path_factory):
+    registry = shipped_or_tiny_registry(tmp_path_factory.mktemp("registry"))
+    pooled = create_app(make_settings(tmp_path_factory.mktemp("pooled"), shipped_registry_dir=registry,
+                                      diagnosis_workers=1))
+    plain = create_app(make_settings(tmp_path_factory.mktemp("plain"), shipped_registry_dir=registry))
+    fs, channels = simulated_channels(misalignment=0.2, speed_rpm=1800.0, sample_rate_hz=2048.0, record_revs=40)
+    verdicts = []
+    with TestClient(pooled) as a, TestClient(plain) as b:
+        for c in (a, b):
+            for speed in (1800.0, 1790.0):
+                r = c.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=speed, asset_id="G3",
+                                                           plant="Riverside"), headers=auth())
+                assert r.status_code == 200, r.text
+            verdicts.append(r.json())
+        yield a, b, verdicts
+
+
+@pytest.mark.parametrize("which", ["pooled", "plain"])
+def test_html_report_holds_the_latest_verdict_its_reasons_evidence_and_the_trend(clients, which):
+    pooled, plain, verdicts = clients
+    c, v = (pooled, verdicts[0]) if which == "pooled" else (plain, verdicts[1])
+    r = c.get("/assets/G3/report", params={"format": "html"})      # a read: no API key, as /history
+    assert r.status_code == 200, r.text
+    assert r.headers["content-type"].startswith("text/html")
+    assert "script-src" not in r.headers["content-security-policy"] and "default-src 'none'" in \
+        r.headers["content-security-policy"]
+    page = html.unescape(r.text)
+    assert "rotordiag report — G3" in page
+    assert f"status: {v['status']}    severity: {v['severity']}" in page
+    assert f"{v['misalignment']:.3f}" in page
+    assert "Reasons" in page and all(x["message"] in page for x in v["reasons"] + [{"message": w} for w in v["warnings"]])
+    assert v["evidence"] and all(f"{e['name']}: {e['value']}" in page for e in v["evidence"])
+    assert "Trend (2 stored diagnoses)" in page and "2 stored diagnoses" in page
+    assert "plant Riverside" in page and f"model {v['model_version']}" in page
+    assert "the service stores verdicts, not waveforms" in page
+    assert page.count("data:image/png;base64,") == 1          # the trend plot
+
+
+def test_pdf_report_is_a_pdf_with_the_same_text(clients):
+    pooled, plain, verdicts = clients
+    r = pooled.get("/assets/G3/report")
+    assert r.status_code == 200, r.text
+    assert r.headers["content-type"] == "application/pdf" and r.content.startswith(b"%PDF-")
+    assert 'filename="rotordiag-report-G3.pdf"' in r.headers["content-disposition"]
+    if shutil.which("pdftotext") is None:
+        pytest.skip("pdftotext (poppler-utils) not installed: the PDF's text is not checked")
+    text = subprocess.run(["pdftotext", "-", "-"], input=r.content, capture_output=True, check=True).stdout.decode()
+    v = verdicts[0]
+    assert f"severity: {v['severity']}" in text and "Reasons" in text and "Evidence (model-independent)" in text
+    assert "Trend of G3" in text                               # the trend plot's page
+
+
+def test_report_of_an_unknown_asset_is_404_and_a_bad_format_422(clients):
+    pooled, plain, _ = clients
+    for c in (pooled, plain):
+        r = c.get("/assets/nobody/report")
+        assert r.status_code == 404 and "no diagnosis stored for asset 'nobody'" in r.json()["detail"]
+        assert c.get("/assets/G3/report", params={"format": "docx"}).status_code == 422
+        assert c.get("/assets/bad%20id/report").status_code == 422
+
+
+def test_report_past_the_time_limit_is_refused_not_left_hanging(clients, monkeypatch):
+    _, plain, _ = clients
+    import time
+
+    import rotordiag.service.report as report
+
+    monkeypatch.setattr(plain.app.state.rd.settings, "diagnosis_timeout_s", 0.2)
+    monkeypatch.setattr(report, "render_asset_report", lambda inputs, fmt: time.sleep(1.0) or b"late")
+    t0 = time.monotonic()
+    r = plain.get("/assets/G3/report")
+    assert r.status_code == 422 and "longer than the limit of 0.2 s" in r.json()["detail"]
+    assert time.monotonic() - t0 < 0.9
+
+
+def test_cli_report_of_an_asset_has_the_service_reports_content(clients, tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    _, plain, verdicts = clients
+    monkeypatch.setenv("ROTORDIAG_DATA_DIR", str(plain.app.state.rd.settings.data_dir))
+    monkeypatch.setenv("ROTORDIAG_ENVIRONMENT", "development")
+    out = tmp_path / "g3.pdf"
+    r = CliRunner().invoke(app, ["report", "--asset", "G3", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    cli_page = html.unescape((tmp_path / "g3.html").read_text())
+    service_page = html.unescape(plain.get("/assets/G3/report", params={"format": "html"}).text)
+
+    def body(page: str) -> list[str]:   # the text lines, without the generation time and the embedded plot
+        return [ln for ln in page.splitlines() if "generated " not in ln and "base64," not in ln]
+
+    assert body(cli_page) == body(service_page)
+    assert f"severity: {verdicts[1]['severity']}" in cli_page
+    r = CliRunner().invoke(app, ["report", "--asset", "nobody", "--out", str(tmp_path / "x.pdf")])
+    assert r.exit_code == 2 and "has no stored diagnoses" in r.output and not (tmp_path / "x.pdf").exists()
