@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ReportContent", "build_report", "report_bytes", "write_report", "summary_lines"]
+__all__ = ["ReportContent", "build_report", "report_bytes", "transient_summary", "write_report", "summary_lines"]
 
 
 @dataclass
@@ -58,6 +58,15 @@ class ReportContent:
     notes: list[str] = field(default_factory=list)
 
 
+def transient_summary(track: Any) -> dict:
+    """A start-up's summary (a ``features.transient.OrderTrack``): kind, speed source and range, steps tracked,
+    the 1X and 2X resonance peaks, conventions and notes (plain data; the report and the web page show it)."""
+    return {"kind": track.kind, "speed_source": track.speed_source,
+            "speed_range_rpm": [float(track.speed_rpm.min()), float(track.speed_rpm.max())],
+            "n_steps": int(track.speed_rpm.size), "peaks": track.peaks(1) + track.peaks(2),
+            "conventions": track.conventions, "notes": list(track.notes)}
+
+
 def build_report(*, title: str, asset_id: str | None = None, recordings: list[dict] | None = None,
                  verdict: dict | None = None, verdict_note: str | None = None, history: list[dict] | None = None,
                  track: Any = None, figures: dict[str, Any] | None = None,
@@ -65,12 +74,7 @@ def build_report(*, title: str, asset_id: str | None = None, recordings: list[di
     """Assemble a :class:`ReportContent`; ``track`` (a ``features.transient.OrderTrack``) gives the start-up summary."""
     from rotordiag.core.version import code_version
 
-    transient = None
-    if track is not None:
-        transient = {"kind": track.kind, "speed_source": track.speed_source,
-                     "speed_range_rpm": [float(track.speed_rpm.min()), float(track.speed_rpm.max())],
-                     "n_steps": int(track.speed_rpm.size), "peaks": track.peaks(1) + track.peaks(2),
-                     "conventions": track.conventions, "notes": list(track.notes)}
+    transient = transient_summary(track) if track is not None else None
     if history:
         figures = dict(figures or {})
         figures = {"trend": _trend_figure(history, asset_id), **figures}
@@ -115,6 +119,8 @@ def summary_lines(c: ReportContent) -> list[tuple[str, str]]:
             out.append(("b", f"{r.get('status')}: {r.get('message')}"))
         for w in v.get("warnings") or []:
             out.append(("b", f"warning: {w}"))
+        if not (v.get("reasons") or v.get("warnings")):
+            out.append(("t", "none given"))
         out.append(("h", "Evidence (model-independent)"))
         for e in v.get("evidence") or []:
             out.append(("b", f"{e.get('scope')} · {e.get('name')}: {e.get('value')} — {e.get('meaning')}"))
@@ -133,7 +139,8 @@ def summary_lines(c: ReportContent) -> list[tuple[str, str]]:
             out.append(("b", f"note: {n}"))
         out.append(("t", f"conventions: {t['conventions']}"))
     if c.history:
-        out.append(("h", f"Trend ({len(c.history)} stored diagnoses)"))
+        n = len(c.history)
+        out.append(("h", f"Trend ({n} stored diagnos{'is' if n == 1 else 'es'})"))
         for h in c.history[-12:]:
             out.append(("b", f"{h.get('created_at')}: {h.get('severity')} Δ {_fmt(h.get('misalignment'))} "
                              f"({_fmt(h.get('misalignment_low'))} – {_fmt(h.get('misalignment_high'))}) at "

@@ -50,7 +50,7 @@ def asset_report_inputs(session: Session, asset_id: str, limit: int = REPORT_HIS
         verdict: dict[str, Any] | None = v
     else:
         verdict = None
-    recordings.append({"file": f"{len(rows)} stored diagnoses, {rows[0].created_at:%Y-%m-%d %H:%M} to "
+    recordings.append({"file": f"{len(rows)} stored diagnos{'is' if len(rows) == 1 else 'es'}, {rows[0].created_at:%Y-%m-%d %H:%M} to "
                                f"{rows[-1].created_at:%Y-%m-%d %H:%M} UTC (the trend below)",
                        "role": "trend", "format": "stored summaries", "notes": []})
     return {"asset_id": asset_id, "history": history_dicts(rows), "verdict": verdict, "recordings": recordings,

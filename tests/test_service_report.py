@@ -1,11 +1,16 @@
 """GET /assets/{id}/report (service/report.py): an asset's report from the store, as PDF and HTML, in a diagnosis
-worker and in a thread; what it holds is checked against the /diagnose answers it was made from."""
+worker and in a thread; what it holds is checked against the /diagnose answers it was made from. And the web page's
+start-up plots (POST /ui/transient-plots): a simulated run-up's PNGs and 1X peaks, and bad input's messages."""
 from __future__ import annotations
 
+import base64
 import html
+import io
 import shutil
 import subprocess
+from pathlib import Path
 
+import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
@@ -110,3 +115,57 @@ def test_cli_report_of_an_asset_has_the_service_reports_content(clients, tmp_pat
     assert f"severity: {verdicts[1]['severity']}" in cli_page
     r = CliRunner().invoke(app, ["report", "--asset", "nobody", "--out", str(tmp_path / "x.pdf")])
     assert r.exit_code == 2 and "has no stored diagnoses" in r.output and not (tmp_path / "x.pdf").exists()
+
+
+@pytest.fixture(scope="module")
+def runup_csv(tmp_path_factory) -> Path:
+    """The paper model's run-up 900 → 1500 r/min in 6 s (Δ 0.3), 8 probes + keyphasor at 2560 Hz."""
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    out = tmp_path_factory.mktemp("runup") / "runup.csv"
+    r = CliRunner().invoke(app, ["runup", "--profile", "900:1500:6", "--misalignment", "0.3", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    return out
+
+
+@pytest.mark.parametrize("which", ["pooled", "plain"])
+def test_transient_plots_of_a_runup_show_the_plots_and_the_critical_speed(clients, runup_csv, which):
+    pooled, plain, _ = clients
+    c = pooled if which == "pooled" else plain
+    r = c.post("/ui/transient-plots", files={"file": ("runup.csv", runup_csv.read_bytes())})
+    assert r.status_code == 200, r.text
+    t = r.json()
+    assert t["kind"] == "run-up" and t["speed_source"] == "keyphasor" and t["units"] == "um"
+    lo, hi = t["speed_range_rpm"]
+    assert 880 < lo < 950 and 1450 < hi <= 1501
+    names = [f["name"] for f in t["figures"]]
+    assert {"bode", "polar", "centreline", "orbits"} <= set(names)
+    assert {f"{k}_b{b}" for k in ("waterfall", "full_spectrum") for b in (1, 2, 3, 4)} <= set(names)
+    from PIL import Image
+
+    for f in t["figures"]:
+        img = Image.open(io.BytesIO(base64.b64decode(f["png_base64"])))
+        assert img.format == "PNG" and img.width >= 400
+    # bearing 1 horizontal-ish probe: the linearised model's damped critical at 1106 r/min, half-power half-width
+    # ±105 r/min (docs/transient.md, simulator.campbell): the 1X peak lies within it
+    b1 = [p for p in t["peaks"] if p["order"] == 1 and p["bearing"] == 1 and p["angle_deg"] == 45.0]
+    assert b1 and abs(b1[0]["speed_rpm"] - 1106) < 105, t["peaks"]
+    assert "pk-pk" in t["conventions"] and "phase lag" in t["conventions"]
+
+
+def test_transient_plots_refuse_a_keyphasor_that_drops_out_and_a_broken_file(clients, runup_csv):
+    pooled, plain, _ = clients
+    a = np.loadtxt(runup_csv, delimiter=",", skiprows=1)
+    a[6000:7500, -1] = 0.0                                    # 0.6 s of keyphasor without pulses, mid-run
+    buf = io.StringIO()
+    np.savetxt(buf, a, delimiter=",", header=runup_csv.read_text().splitlines()[0], comments="", fmt="%.6g")
+    for c in (pooled, plain):
+        r = c.post("/ui/transient-plots", files={"file": ("dropout.csv", buf.getvalue().encode())})
+        assert r.status_code == 422 and "keyphasor drops out" in r.json()["detail"], r.text
+        r = c.post("/ui/transient-plots", files={"file": ("x.csv", b"time_s,a\n0,zz\n")})
+        assert 400 <= r.status_code < 500, r.text
+        r = c.post("/ui/transient-plots", params={"output_units": "furlong"},
+                   files={"file": ("runup.csv", runup_csv.read_bytes())})
+        assert r.status_code == 422
