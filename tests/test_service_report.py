@@ -169,3 +169,26 @@ def test_transient_plots_refuse_a_keyphasor_that_drops_out_and_a_broken_file(cli
         r = c.post("/ui/transient-plots", params={"output_units": "furlong"},
                    files={"file": ("runup.csv", runup_csv.read_bytes())})
         assert r.status_code == 422
+
+
+def test_report_shows_the_latest_full_verdict_when_retention_trimmed_the_last(clients):
+    from sqlalchemy import update
+
+    from rotordiag.service.core.db import AssetDiagnosis
+
+    _, plain, _ = clients
+    fs, channels = simulated_channels(misalignment=0.2, speed_rpm=1800.0, sample_rate_hz=2048.0, record_revs=40)
+    for _ in range(2):
+        r = plain.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, asset_id="G4"), headers=auth())
+        assert r.status_code == 200, r.text
+    ids = [p["id"] for p in plain.get("/assets/G4/history").json()["points"]]
+    with plain.app.state.rd.sessions.begin() as s:          # what retention leaves of an old diagnosis
+        s.execute(update(AssetDiagnosis).where(AssetDiagnosis.id == ids[-1]).values(verdict={}, key_features={}))
+    page = html.unescape(plain.get("/assets/G4/report", params={"format": "html"}).text)
+    assert f"latest: stored diagnosis #{ids[0]}" in page
+    assert f"the latest diagnosis (#{ids[-1]}) keeps only its summary; the verdict shown is #{ids[0]}'s" in page
+    assert "status: " in page and "Trend (2 stored diagnoses)" in page
+    with plain.app.state.rd.sessions.begin() as s:
+        s.execute(update(AssetDiagnosis).where(AssetDiagnosis.asset_id == "G4").values(verdict={}))
+    page = html.unescape(plain.get("/assets/G4/report", params={"format": "html"}).text)
+    assert "no stored diagnosis of this asset keeps its full verdict" in page and "status: " not in page
