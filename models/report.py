@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ReportContent", "build_report", "write_report", "summary_lines"]
+__all__ = ["ReportContent", "build_report", "report_bytes", "transient_summary", "write_report", "summary_lines"]
 
 
 @dataclass
@@ -41,6 +41,8 @@ class ReportContent:
     transient : dict or None
         The start-up's summary: kind, speed range, speed source, 1X/2X peaks, conventions, notes.
     figures : dict of name → matplotlib Figure
+    notes : list of str
+        What the report leaves out and why (e.g. a service report has no start-up plots: waveforms are not stored).
     """
 
     title: str
@@ -53,26 +55,32 @@ class ReportContent:
     figures: dict[str, Any] = field(default_factory=dict)
     generated_at: str = field(default_factory=lambda: dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC"))
     code_version: str = ""
+    notes: list[str] = field(default_factory=list)
+
+
+def transient_summary(track: Any) -> dict:
+    """A start-up's summary (a ``features.transient.OrderTrack``): kind, speed source and range, steps tracked,
+    the 1X and 2X resonance peaks, conventions and notes (plain data; the report and the web page show it)."""
+    return {"kind": track.kind, "speed_source": track.speed_source,
+            "speed_range_rpm": [float(track.speed_rpm.min()), float(track.speed_rpm.max())],
+            "n_steps": int(track.speed_rpm.size), "peaks": track.peaks(1) + track.peaks(2),
+            "conventions": track.conventions, "notes": list(track.notes)}
 
 
 def build_report(*, title: str, asset_id: str | None = None, recordings: list[dict] | None = None,
                  verdict: dict | None = None, verdict_note: str | None = None, history: list[dict] | None = None,
-                 track: Any = None, figures: dict[str, Any] | None = None) -> ReportContent:
+                 track: Any = None, figures: dict[str, Any] | None = None,
+                 notes: list[str] | None = None) -> ReportContent:
     """Assemble a :class:`ReportContent`; ``track`` (a ``features.transient.OrderTrack``) gives the start-up summary."""
     from rotordiag.core.version import code_version
 
-    transient = None
-    if track is not None:
-        transient = {"kind": track.kind, "speed_source": track.speed_source,
-                     "speed_range_rpm": [float(track.speed_rpm.min()), float(track.speed_rpm.max())],
-                     "n_steps": int(track.speed_rpm.size), "peaks": track.peaks(1) + track.peaks(2),
-                     "conventions": track.conventions, "notes": list(track.notes)}
+    transient = transient_summary(track) if track is not None else None
     if history:
         figures = dict(figures or {})
         figures = {"trend": _trend_figure(history, asset_id), **figures}
     return ReportContent(title=title, asset_id=asset_id, recordings=list(recordings or []), verdict=verdict,
                          verdict_note=verdict_note, history=list(history or []), transient=transient,
-                         figures=dict(figures or {}), code_version=code_version())
+                         figures=dict(figures or {}), code_version=code_version(), notes=list(notes or []))
 
 
 def _fmt(v: Any, nd: int = 3) -> str:
@@ -89,6 +97,8 @@ def summary_lines(c: ReportContent) -> list[tuple[str, str]]:
         out.append(("b", f"{r.get('role', '')}: {r.get('file')} ({r.get('format', '?')})"))
         for n in r.get("notes") or []:
             out.append(("b", f"    note: {n}"))
+    for n in c.notes:
+        out.append(("b", f"note: {n}"))
     out.append(("h", "Verdict"))
     v = c.verdict
     if v is None:
@@ -109,6 +119,8 @@ def summary_lines(c: ReportContent) -> list[tuple[str, str]]:
             out.append(("b", f"{r.get('status')}: {r.get('message')}"))
         for w in v.get("warnings") or []:
             out.append(("b", f"warning: {w}"))
+        if not (v.get("reasons") or v.get("warnings")):
+            out.append(("t", "none given"))
         out.append(("h", "Evidence (model-independent)"))
         for e in v.get("evidence") or []:
             out.append(("b", f"{e.get('scope')} · {e.get('name')}: {e.get('value')} — {e.get('meaning')}"))
@@ -127,7 +139,8 @@ def summary_lines(c: ReportContent) -> list[tuple[str, str]]:
             out.append(("b", f"note: {n}"))
         out.append(("t", f"conventions: {t['conventions']}"))
     if c.history:
-        out.append(("h", f"Trend ({len(c.history)} stored diagnoses)"))
+        n = len(c.history)
+        out.append(("h", f"Trend ({n} stored diagnos{'is' if n == 1 else 'es'})"))
         for h in c.history[-12:]:
             out.append(("b", f"{h.get('created_at')}: {h.get('severity')} Δ {_fmt(h.get('misalignment'))} "
                              f"({_fmt(h.get('misalignment_low'))} – {_fmt(h.get('misalignment_high'))}) at "
@@ -207,33 +220,43 @@ def _atomic(path: Path, write) -> None:
             os.unlink(tmp)
 
 
-def write_report(content: ReportContent, pdf_path: str | Path, html_path: str | Path | None = None) -> list[Path]:
-    """Write the PDF (text pages, then one page per figure) and, with ``html_path``, the same content as one HTML
-    file (figures embedded as PNG). Returns the paths written."""
+def report_bytes(content: ReportContent, fmt: str = "pdf") -> bytes:
+    """The report as bytes: ``fmt`` ``"pdf"`` (text pages, then one page per figure) or ``"html"`` (one
+    self-contained page with the same text and the figures embedded as PNG)."""
+    lines = summary_lines(content)
+    if fmt == "html":
+        return _html(content, lines).encode("utf-8")
+    if fmt != "pdf":
+        raise ValueError(f"report format {fmt!r}: give pdf or html")
     from matplotlib.backends.backend_pdf import PdfPages
 
     plt = _plt()
-    lines = summary_lines(content)
-    pdf_path = Path(pdf_path)
-    written = []
     text_pages = _text_pages(lines, content.title)
+    buf = io.BytesIO()
     try:
-        def pdf(tmp: str) -> None:
-            with PdfPages(tmp, metadata={"Title": content.title, "Creator": f"rotordiag {content.code_version}"}) as pp:
-                for f in text_pages:
-                    pp.savefig(f)
-                for f in content.figures.values():
-                    pp.savefig(f)
-
-        _atomic(pdf_path, pdf)
-        written.append(pdf_path)
-        if html_path is not None:
-            html_path = Path(html_path)
-            _atomic(html_path, lambda tmp: Path(tmp).write_text(_html(content, lines), encoding="utf-8"))
-            written.append(html_path)
+        with PdfPages(buf, metadata={"Title": content.title, "Creator": f"rotordiag {content.code_version}"}) as pp:
+            for f in text_pages:
+                pp.savefig(f)
+            for f in content.figures.values():
+                pp.savefig(f)
     finally:
         for f in text_pages:
             plt.close(f)
+    return buf.getvalue()
+
+
+def write_report(content: ReportContent, pdf_path: str | Path, html_path: str | Path | None = None) -> list[Path]:
+    """Write the PDF and, with ``html_path``, the HTML page (:func:`report_bytes`), each to a temporary name
+    first. Returns the paths written."""
+    pdf_path = Path(pdf_path)
+    data = report_bytes(content, "pdf")
+    _atomic(pdf_path, lambda tmp: Path(tmp).write_bytes(data))
+    written = [pdf_path]
+    if html_path is not None:
+        html_path = Path(html_path)
+        page = report_bytes(content, "html")
+        _atomic(html_path, lambda tmp: Path(tmp).write_bytes(page))
+        written.append(html_path)
     return written
 
 

@@ -256,15 +256,15 @@ class _DbState:
         self.settings = settings
 
 
-def asset_history_dicts(asset_id: str, limit: int = 200) -> list[dict]:
-    """An asset's stored diagnoses from the service's database (ROTORDIAG_* settings, as ``rotordiag serve``),
-    oldest first, as the plain dicts :mod:`rotordiag.models.report` takes. Raises ValueError for an unknown asset
-    or unreadable settings."""
+def asset_report_data(asset_id: str) -> dict:
+    """What ``GET /assets/{id}/report`` shows of an asset (:func:`rotordiag.service.report.asset_report_inputs`:
+    its trend, latest stored verdict, recordings and notes), from the service's database (ROTORDIAG_* settings,
+    as ``rotordiag serve``). Raises ValueError for an unknown asset or unreadable settings."""
     from pydantic import ValidationError
 
     from rotordiag.service.core.config import Settings
     from rotordiag.service.core.db import init_db, make_engine
-    from rotordiag.service.store import asset_history
+    from rotordiag.service.report import asset_report_inputs
 
     try:
         settings = Settings()
@@ -272,12 +272,8 @@ def asset_history_dicts(asset_id: str, limit: int = 200) -> list[dict]:
         raise ValueError(f"invalid service settings: {exc}") from None
     sessions = init_db(make_engine(settings.effective_database_url))
     with sessions() as s:
-        rows = asset_history(s, asset_id, limit, None)
-        out = [{"created_at": r.created_at.strftime("%Y-%m-%d %H:%M"), "severity": r.severity,
-                "misalignment": r.misalignment, "misalignment_low": r.misalignment_low,
-                "misalignment_high": r.misalignment_high, "speed_rpm": r.speed_rpm,
-                "status": (r.verdict or {}).get("status")} for r in rows]
-    if not out:
+        out = asset_report_inputs(s, asset_id)
+    if out is None:
         raise ValueError(f"asset {asset_id!r} has no stored diagnoses in {settings.effective_database_url}")
     return out
 
@@ -352,11 +348,19 @@ def _register_report(app: typer.Typer) -> None:
                     pl = Plant.from_file(plant)
                 figs = transient_figures(sres.recording, track, plant=pl)
                 recs.append({"file": str(startup), "role": "start-up", "format": sres.format, "notes": sres.notes})
+            notes: list[str] = []
             if asset is not None:
-                history = asset_history_dicts(asset)
+                stored = asset_report_data(asset)
+                history = stored["history"]
+                if recording is None:   # the asset's latest stored verdict, as GET /assets/{id}/report shows it
+                    verdict, note = stored["verdict"], stored["verdict_note"]
+                    from rotordiag.service.report import NO_WAVEFORMS_NOTE
+
+                    recs = stored["recordings"] + recs
+                    notes = [n for n in stored["notes"] if startup is None or n != NO_WAVEFORMS_NOTE]
             content = build_report(title=title or f"rotordiag report{' — ' + asset if asset else ''}", asset_id=asset,
                                    recordings=recs, verdict=verdict, verdict_note=note, history=history,
-                                   track=track, figures=figs)
+                                   track=track, figures=figs, notes=notes)
             paths = write_report(content, out, out.with_suffix(".html"))
         except (ValueError, OSError) as exc:
             typer.secho(f"error: {exc}", fg="red", err=True)

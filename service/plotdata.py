@@ -212,3 +212,37 @@ def plot_data(recording: Recording, feature_result: Any = None) -> dict[str, Any
         "warnings": list(fr.warnings),
         "bearings": out_bearings,
     }
+
+
+#: resolution of the start-up plots' PNGs on the page (the CLI writes 100 dpi; 80 keeps the answer ~1 MB)
+TRANSIENT_PNG_DPI = 80
+
+
+def transient_plots(recording: Recording, units: str = "um") -> dict[str, Any]:
+    """A start-up or coast-down recording's plots as the page shows them: ``features.transient.track_orders``
+    and ``features.plots.transient_figures`` (Bode, polar, cascade and full spectrum per bearing, centreline,
+    orbits) rendered to PNG (base64), with the run's summary (``models.report.transient_summary``: kind, speed
+    range and source, 1X/2X peaks, conventions, notes). ``units``: ``"um"`` or ``"mil"``. Raises ValueError
+    (the features package's message) for a recording that cannot be tracked."""
+    import base64
+    import io
+
+    import matplotlib.pyplot as plt
+
+    from rotordiag.features.plots import transient_figures
+    from rotordiag.features.transient import track_orders
+    from rotordiag.models.report import transient_summary
+
+    track = track_orders(recording)
+    figs = transient_figures(recording, track, units=units)
+    try:
+        figures = []
+        for name, fig in figs.items():
+            buf = io.BytesIO()
+            fig.savefig(buf, format="png", dpi=TRANSIENT_PNG_DPI)
+            figures.append({"name": name, "title": fig.axes[0].get_title() if fig.axes else name,
+                            "png_base64": base64.b64encode(buf.getvalue()).decode("ascii")})
+    finally:
+        for fig in figs.values():
+            plt.close(fig)
+    return {**transient_summary(track), "units": units, "figures": figures}

@@ -261,6 +261,43 @@ class PlotBody(WorkerCall):
         return _plot(self.kind, self.body, self.filename, self.query)
 
 
+def _transient(kind: str, body: Body, filename: str, query: dict[str, Any], units: str) -> tuple:
+    """Parse a start-up / coast-down recording and render its plots (:func:`service.plotdata.transient_plots`):
+    ``("ok", data)`` or an error tuple."""
+    from .parsing import parse_body
+    from .plotdata import transient_plots
+
+    return _tagged(lambda: ("ok", transient_plots(parse_body(kind, body, filename, query)[0], units)))
+
+
+@dataclass(frozen=True)
+class TransientPlots(WorkerCall):
+    """The web page's start-up plots of a body sent as to ``POST /diagnose`` (:func:`_transient`)."""
+
+    kind: str
+    body: Body
+    filename: str
+    query: dict[str, Any]
+    units: str
+
+    def run(self) -> tuple:
+        return _transient(self.kind, self.body, self.filename, self.query, self.units)
+
+
+@dataclass(frozen=True)
+class AssetReport(WorkerCall):
+    """An asset's report (``GET /assets/{id}/report``) as PDF or HTML bytes, from the plain data read from the
+    store (:func:`service.report.asset_report_inputs`): ``("ok", bytes)`` or an error tuple."""
+
+    inputs: dict[str, Any]
+    fmt: str
+
+    def run(self) -> tuple:
+        from .report import render_asset_report
+
+        return _tagged(lambda: ("ok", render_asset_report(self.inputs, self.fmt)))
+
+
 @dataclass(frozen=True)
 class CheckModel(WorkerCall):
     """Which file of ``version`` the worker holds, and whether it can be used (:func:`_load_check`)."""

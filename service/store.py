@@ -177,6 +177,15 @@ def asset_history(session: Session, asset_id: str, limit: int, since: dt.datetim
     return rows
 
 
+def history_dicts(rows: list[AssetDiagnosis]) -> list[dict[str, Any]]:
+    """Stored diagnoses (:func:`asset_history`) as the plain dicts of :mod:`rotordiag.models.report`'s trend:
+    time (UTC, to the minute), severity, Δ and its interval, speed and the verdict's status."""
+    return [{"created_at": r.created_at.strftime("%Y-%m-%d %H:%M"), "severity": r.severity,
+             "misalignment": r.misalignment, "misalignment_low": r.misalignment_low,
+             "misalignment_high": r.misalignment_high, "speed_rpm": r.speed_rpm,
+             "status": (r.verdict or {}).get("status")} for r in rows]
+
+
 def get_diagnosis(session: Session, asset_id: str, diagnosis_id: int) -> AssetDiagnosis | None:
     """The stored diagnosis ``diagnosis_id`` of ``asset_id`` (None when there is none)."""
     row = session.get(AssetDiagnosis, diagnosis_id)

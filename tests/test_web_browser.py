@@ -821,3 +821,59 @@ def test_a_daq_export_in_mv_with_columns_mapped_by_name(server, browser, tmp_pat
     _submit_file(browser, path, expect="error")
     text = browser.find_element("id", "form-error").text
     assert "give the probe sensitivity" in text, text
+
+
+def test_startup_recording_shows_its_plots_and_an_asset_its_report_link(server, browser, recordings, tmp_path):
+    """A run-up uploaded on the page (button "Start-up / coast-down plots"): the Bode, polar, cascade, full spectrum
+    and centreline PNGs are shown and decoded by the browser, with the 1X peaks; a broken file's message is shown in
+    that section. An asset's trend links its report, which opens as a page with its embedded trend plot."""
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    runup = tmp_path / "runup.csv"
+    r = CliRunner().invoke(app, ["runup", "--profile", "900:1500:6", "--misalignment", "0.3", "--out", str(runup)])
+    assert r.exit_code == 0, r.output
+    d = browser
+    _open(d, server)
+    d.find_element("css selector", "input[name=source][value=file]").click()
+    chooser = d.find_element("id", "file")
+    chooser.clear()
+    chooser.send_keys(str(runup))
+    d.execute_script("document.body.dataset.state = 'submitted'")
+    d.find_element("id", "transient-btn").click()
+    state = _wait(d, lambda dr: dr.execute_script(
+        "const s = document.body.dataset.state; return s === 'done' || s === 'error' ? s : null"), what="the plots")
+    assert state == "done", d.find_element("id", "transient-error").text
+    shown = d.execute_script("""return [...document.querySelectorAll('#transient-figures figure')].map((f) => {
+        const img = f.querySelector('img'); return [f.dataset.name, img.complete && img.naturalWidth, img.clientWidth]; })""")
+    names = {n for n, _, _ in shown}
+    assert {"bode", "polar", "waterfall_b1", "full_spectrum_b1", "centreline", "orbits"} <= names, shown
+    assert all(natural and natural > 300 and width > 200 for _, natural, width in shown), shown
+    assert "run-up" in d.find_element("id", "transient-info").text
+    peaks = d.find_element("id", "transient-peaks").text
+    assert "1X peak at bearing 1 @ 45°" in peaks and "µm pk-pk" in peaks, peaks
+    assert not d.find_element("id", "verdict").is_displayed()     # plotted, not diagnosed
+    _screenshot(d, "startup-plots")
+    # a broken file: the service's message in the start-up section
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time_s,a\n0,zz\n")
+    chooser.clear()
+    chooser.send_keys(str(bad))
+    d.find_element("id", "transient-btn").click()
+    _wait(d, lambda dr: dr.find_element("id", "transient-error").is_displayed(), 60, "the start-up error")
+    assert "could not be drawn" in d.find_element("id", "transient-error").text
+    assert not d.find_elements("css selector", "#transient-figures figure")   # no earlier plots beside the error
+    # the asset's report link, after a stored diagnosis
+    asset = "web-report-1"
+    _submit_file(d, _write_npy(tmp_path / "a.npy", recordings[0.2]), asset=asset, sample_rate=str(FS_HZ),
+                 clearance=str(CLEARANCE_UM), key="web-test-key")
+    _wait(d, lambda dr: dr.find_element("id", "trend-report").is_displayed(), 30, "the report link")
+    pdf_href = d.find_element("id", "trend-report-pdf").get_attribute("href")
+    with urllib.request.urlopen(pdf_href, timeout=120) as resp:
+        assert resp.headers["Content-Type"] == "application/pdf" and resp.read(5) == b"%PDF-"
+    d.find_element("id", "trend-report-html").click()
+    _wait(d, lambda dr: "rotordiag report" in dr.title, 120, "the HTML report")
+    assert d.find_element("tag name", "h1").text == f"rotordiag report — {asset}"
+    assert d.execute_script("const i = document.querySelector('img'); return i.complete && i.naturalWidth") > 300
+    _screenshot(d, "asset-report-html")

@@ -1,5 +1,6 @@
 """The web page's routes: ``GET /`` (the page), ``GET /ui/static/{name}`` (its JS and CSS) and
-``POST /ui/plot-data`` (orbit and spectrum arrays of a recording).
+``POST /ui/plot-data`` (orbit and spectrum arrays of a recording), ``POST /ui/transient-plots`` (a start-up's
+or coast-down's plots as PNG).
 
 The page is a client of the API: the verdict comes from ``POST /diagnose``, the trend from
 ``GET /assets/{id}/history``, the models from ``GET /models``. ``/ui/plot-data`` accepts the same
@@ -11,7 +12,7 @@ from __future__ import annotations
 
 from importlib.resources import files
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request
 from fastapi.responses import FileResponse
@@ -22,8 +23,8 @@ from ..api.deps import (
 )
 from ..api.recordings import ReaderQueryDep, recording_answer  # same body forms and messages as /diagnose
 from ..errors import InputError
-from ..plotdata import plot_data
-from ..pool import PlotBody
+from ..plotdata import plot_data, transient_plots
+from ..pool import PlotBody, TransientPlots
 
 #: the page's files, installed with the package (found through importlib.resources)
 STATIC_DIR = Path(str(files("rotordiag.service.web.static")))
@@ -100,6 +101,14 @@ async def plot(
     ``ROTORDIAG_DIAGNOSIS_WORKERS=0`` in a thread of the server (HDF5 still decoded in the sandbox).
     Needs the API key when /diagnose does (``ROTORDIAG_DIAGNOSE_REQUIRES_KEY``).
     """
+    query = await _reader_query(request, state, reader, sample_index, asset_id)
+    return await recording_answer(request, state, query, PlotBody, lambda recording: _plot_sync(state, recording))
+
+
+async def _reader_query(request: Request, state: Any, reader: dict[str, Any], sample_index: int,
+                        asset_id: str | None) -> dict[str, Any]:
+    """The reader's query of a page upload; with ``asset_id`` (binary or multipart), the asset's stored probe
+    configuration fills what the query does not give, as /diagnose reads it (nothing is stored)."""
     query = dict(asset_id=None, plant=None, sample_index=sample_index, **reader)
     if asset_id is not None and "application/json" not in request.headers.get("content-type", ""):
         from fastapi.concurrency import run_in_threadpool
@@ -108,4 +117,31 @@ async def plot(
 
         query = {**(await run_in_threadpool(asset_probes_query, state, {**query, "asset_id": asset_id}))[0],
                  "asset_id": None}
-    return await recording_answer(request, state, query, PlotBody, lambda recording: _plot_sync(state, recording))
+    return query
+
+
+def _transient_sync(recording: Any, units: str) -> dict[str, Any]:
+    try:
+        return transient_plots(recording, units)
+    except ValueError as exc:  # the features package's messages (speed reverses, keyphasor drops out, ...)
+        raise InputError(str(exc)) from None
+
+
+@router.post("/ui/transient-plots", dependencies=[DiagnoseKeyDep])
+async def transient(
+    request: Request,
+    state: StateDep,
+    reader: ReaderQueryDep,
+    sample_index: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
+    asset_id: Annotated[str | None, Query(min_length=1, max_length=128, pattern=r"^[A-Za-z0-9._:-]+$")] = None,
+    output_units: Annotated[Literal["um", "mil"], Query()] = "um",
+) -> dict[str, Any]:
+    """A start-up or coast-down recording sent as to ``POST /diagnose``, order-tracked (``features.transient``)
+    and plotted (``features.plots``): Bode, polar, cascade and full spectrum of each bearing, centreline, orbits,
+    as PNG (base64) with the run's summary (``service.plotdata.transient_plots``). Nothing is stored. In a
+    diagnosis worker (memory and time limits), or with no workers in a thread of the server, as /ui/plot-data."""
+    query = await _reader_query(request, state, reader, sample_index, asset_id)
+    return await recording_answer(
+        request, state, query,
+        lambda kind, body, filename, q: TransientPlots(kind, body, filename, q, output_units),
+        lambda recording: _transient_sync(recording, output_units))

@@ -1,12 +1,13 @@
-"""GET /assets/{asset_id}/history; the asset baseline (GET/POST/DELETE /assets/{asset_id}/baseline),
+"""GET /assets/{asset_id}/history and /report (PDF or HTML to hand on); the asset baseline (GET/POST/DELETE /assets/{asset_id}/baseline),
 alarm thresholds (GET/PUT /assets/{asset_id}/thresholds) and probe configuration (GET/PUT/DELETE
 /assets/{asset_id}/probes)."""
 from __future__ import annotations
 
 import datetime as dt
-from typing import Annotated
+from typing import Annotated, Literal
 
-from fastapi import APIRouter, Path, Query, Request
+import anyio
+from fastapi import APIRouter, Path, Query, Request, Response
 from fastapi.concurrency import run_in_threadpool
 from pydantic import BeforeValidator
 
@@ -49,7 +50,7 @@ from ..deps import (
     StateDep,
 )
 from ..errors import InputError
-from ..recordings import ReaderQueryDep
+from ..recordings import ReaderQueryDep, diagnosis_limiter, in_worker
 
 router = APIRouter(tags=["assets"])
 
@@ -87,6 +88,58 @@ def history(
                          speed_rpm=r.speed_rpm, ood=r.ood, model_version=r.model_version, plant=r.plant,
                          key_features=r.key_features, amplitudes_um_pp=_amplitudes(r.verdict)) for r in rows]
     return AssetHistory(asset_id=asset_id, count=len(points), points=points, alarms=alarm_events(rows))
+
+
+#: the HTML report is one self-contained page: inline style, figures as data: URIs, no script
+_REPORT_HTML_HEADERS = {
+    "Content-Security-Policy": "default-src 'none'; img-src data:; style-src 'unsafe-inline'; base-uri 'none'; "
+                               "form-action 'none'; frame-ancestors 'none'",
+    "X-Content-Type-Options": "nosniff", "Cache-Control": "no-store",
+}
+
+
+@router.get("/assets/{asset_id}/report", response_class=Response,
+            responses={200: {"content": {"application/pdf": {}, "text/html": {}},
+                             "description": "The report: PDF, or with `?format=html` one self-contained HTML page."},
+                       404: {"model": ErrorOut, "description": "No diagnosis stored for this asset."},
+                       422: {"model": ErrorOut, "description": "The report took longer than the time limit."}},
+            summary="A report of an asset to hand on (PDF or HTML)",
+            description="The asset, its stored recordings (the trend and its plot), the latest verdict with its "
+            "status, severity, Δ and interval, probabilities, reasons, warnings and model-independent evidence — "
+            "the content of `rotordiag report --asset`. The service stores verdicts, not waveforms, so the start-up "
+            "plots are not in it (the report says so). Rendered in a diagnosis worker (or a thread) within "
+            "ROTORDIAG_DIAGNOSIS_TIMEOUT_S.")
+async def asset_report(
+    asset_id: AssetPath, state: StateDep,
+    format: Annotated[Literal["pdf", "html"], Query(description="pdf (default) or html.")] = "pdf",
+) -> Response:
+    from ...pool import AssetReport
+    from ...report import asset_report_inputs, render_asset_report
+
+    def read() -> dict | None:
+        with state.sessions() as s:
+            return asset_report_inputs(s, asset_id)
+
+    inputs = await run_in_threadpool(read)
+    if inputs is None:
+        raise InputError(f"no diagnosis stored for asset {asset_id!r}; POST /diagnose with \"asset_id\": "
+                         f"\"{asset_id}\" to start its history", "not_found")
+    if state.pool is not None:
+        data = (await in_worker(state, AssetReport(inputs, format)))[1]
+    else:
+        limit_s = float(state.settings.diagnosis_timeout_s)
+        try:
+            with anyio.fail_after(limit_s):
+                data = await anyio.to_thread.run_sync(render_asset_report, inputs, format,
+                                                      limiter=diagnosis_limiter(state), abandon_on_cancel=True)
+        except TimeoutError:
+            raise InputError(f"the report took longer than the limit of {limit_s:g} s to render and was abandoned; "
+                             "try again when the server is less busy (or raise ROTORDIAG_DIAGNOSIS_TIMEOUT_S)") from None
+    if format == "html":
+        return Response(data, media_type="text/html; charset=utf-8", headers=_REPORT_HTML_HEADERS)
+    return Response(data, media_type="application/pdf",
+                    headers={"Content-Disposition": f'inline; filename="rotordiag-report-{asset_id}.pdf"',
+                             "X-Content-Type-Options": "nosniff", "Cache-Control": "no-store"})
 
 
 def _amplitudes(verdict: dict | None) -> dict[str, float | None]:

@@ -1,6 +1,7 @@
 /* rotordiag web page: a client of the service's HTTP API, plots drawn on <canvas>.
  *
- * Verdict: POST /diagnose. Orbit/spectrum arrays: POST /ui/plot-data (same body).
+ * Verdict: POST /diagnose. Orbit/spectrum arrays: POST /ui/plot-data (same body). Start-up / coast-down
+ * plots: POST /ui/transient-plots (same body; PNGs). Report: GET /assets/{id}/report.
  * Trend: GET /assets/{id}/history. Models: GET /models. Health: GET /health.
  * No build step, no third-party code, nothing fetched from anywhere but this server.
  */
@@ -580,7 +581,7 @@
       const json = JSON.stringify(body);
       const opts = () => ({ method: "POST", headers: { "Content-Type": "application/json", ...keyHeader() }, body: json });
       return { diagnose: [`/diagnose?output_units=${$("length-units").value}`, opts()], plot: ["/ui/plot-data", opts()],
-        asset: body.asset_id || null };
+        transient: [`/ui/transient-plots?output_units=${$("length-units").value}`, opts()], asset: body.asset_id || null };
     }
     let files = Array.from($("file").files);
     const q = new URLSearchParams();
@@ -604,7 +605,10 @@
     const qp = new URLSearchParams(q);
     q.set("output_units", $("length-units").value);
     const opts = () => { const fd = new FormData(); for (const f of files) fd.append("file", f, f.name); return { method: "POST", body: fd, headers: keyHeader() }; };
-    return { diagnose: [`/diagnose?${q}`, opts()], plot: [`/ui/plot-data?${qp}`, opts()], asset };
+    const qt = new URLSearchParams(qp);
+    qt.set("output_units", $("length-units").value);
+    return { diagnose: [`/diagnose?${q}`, opts()], plot: [`/ui/plot-data?${qp}`, opts()],
+      transient: [`/ui/transient-plots?${qt}`, opts()], asset };
   }
 
   async function onDiagnose(ev) {
@@ -631,6 +635,48 @@
       fail(exc.message);
     } finally {
       $("diagnose-btn").disabled = false; show($("busy"), false);
+    }
+  }
+
+  // a start-up or coast-down: POST /ui/transient-plots (the same body), its PNGs and summary
+  async function onTransient() {
+    setError($("form-error"), "");
+    setError($("transient-error"), "");
+    let req;
+    try { req = buildRequests(); } catch (exc) { setError($("form-error"), exc.message); return; }
+    $("transient-btn").disabled = true; $("busy").textContent = "tracking and plotting…"; show($("busy"), true);
+    document.body.dataset.state = "busy";
+    $("transient-figures").replaceChildren(); $("transient-peaks").replaceChildren(); $("transient-notes").replaceChildren();
+    $("transient-info").textContent = ""; $("transient-conventions").textContent = "";
+    show($("transient"), true);
+    try {
+      renderTransient(await api(...req.transient));
+      document.body.dataset.state = "done";
+    } catch (exc) {
+      setError($("transient-error"), `The start-up plots could not be drawn. ${exc.message}`);
+      document.body.dataset.state = "error";
+    } finally {
+      $("transient-btn").disabled = false; show($("busy"), false); $("busy").textContent = "diagnosing…";
+    }
+  }
+
+  function renderTransient(t) {
+    const unit = t.units === "mil" ? "mil" : "µm";
+    const [lo, hi] = t.speed_range_rpm;
+    $("transient-info").textContent = `${t.kind}, ${lo.toFixed(0)}–${hi.toFixed(0)} r/min, ${t.n_steps} steps tracked, ` +
+      `speed from the ${t.speed_source}. Not a diagnosis: the verdict comes from a steady recording.`;
+    const k = t.units === "mil" ? 1 / 25.4 : 1;
+    for (const p of t.peaks) {
+      $("transient-peaks").append(el("li", { text: `${p.order}X peak at bearing ${p.bearing} @ ${p.angle_deg}°: ` +
+        `${(p.amp_um_pp * k).toFixed(t.units === "mil" ? 2 : 1)} ${unit} pk-pk at ${p.speed_rpm.toFixed(0)} r/min` }));
+    }
+    if (!t.peaks.length) $("transient-peaks").append(el("li", { text: "no 1X/2X resonance peak inside the run" }));
+    for (const n of t.notes) $("transient-notes").append(el("li", { text: n }));
+    $("transient-conventions").textContent = `Conventions: ${t.conventions}`;
+    for (const f of t.figures) {
+      $("transient-figures").append(el("figure", { "data-name": f.name },
+        el("img", { src: `data:image/png;base64,${f.png_base64}`, alt: f.title || f.name }),
+        el("figcaption", { text: f.name.replace(/_/g, " ") })));
     }
   }
 
@@ -699,10 +745,13 @@
       $("trend-info").textContent = `${h.count} diagnos${h.count === 1 ? "is" : "es"} of ${h.asset_id}` +
         (last ? `; latest: ${last.severity}, Δ = ${fixed(last.misalignment, 3)} (model ${last.model_version}).` : ".");
       renderTrend();
+      const report = `/assets/${encodeURIComponent(h.asset_id)}/report`;
+      $("trend-report-pdf").href = report; $("trend-report-html").href = `${report}?format=html`;
+      show($("trend-report"), true);
       await loadBaseline(asset, h);
     } catch (exc) {
       state.history = null;
-      show($("trend-plots"), false);
+      show($("trend-plots"), false); show($("trend-report"), false);
       $("trend-info").textContent = "";
       setError($("trend-error"), exc.message);
     }
@@ -860,6 +909,7 @@
       show($("example-fields"), source === "example");
     }));
     $("diagnose-form").addEventListener("submit", onDiagnose);
+    $("transient-btn").addEventListener("click", onTransient);
     for (const id of ["show-raw", "show-1x", "show-2x", "show-1x2x", "spectrum-scale"]) $(id).addEventListener("change", renderPlots);
     $("length-units").addEventListener("change", () => { renderPlots(); renderTrend(); });
     $("trend-form").addEventListener("submit", (ev) => { ev.preventDefault(); loadTrend($("trend-asset").value.trim()); });
@@ -872,5 +922,5 @@
   });
 
   // for the end-to-end tests and the console
-  window.rotordiag = { state, drawPlot, renderPlots, renderTrend, loadTrend };
+  window.rotordiag = { state, drawPlot, renderPlots, renderTrend, loadTrend, renderTransient };
 })();

@@ -1,0 +1,194 @@
+"""GET /assets/{id}/report (service/report.py): an asset's report from the store, as PDF and HTML, in a diagnosis
+worker and in a thread; what it holds is checked against the /diagnose answers it was made from. And the web page's
+start-up plots (POST /ui/transient-plots): a simulated run-up's PNGs and 1X peaks, and bad input's messages."""
+from __future__ import annotations
+
+import base64
+import html
+import io
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+
+from rotordiag.service.main import create_app
+from tests.service_util import auth, diagnose_json, make_settings, shipped_or_tiny_registry, simulated_channels
+
+
+@pytest.fixture(scope="module")
+def clients(tmp_path_factory):
+    registry = shipped_or_tiny_registry(tmp_path_factory.mktemp("registry"))
+    pooled = create_app(make_settings(tmp_path_factory.mktemp("pooled"), shipped_registry_dir=registry,
+                                      diagnosis_workers=1))
+    plain = create_app(make_settings(tmp_path_factory.mktemp("plain"), shipped_registry_dir=registry))
+    fs, channels = simulated_channels(misalignment=0.2, speed_rpm=1800.0, sample_rate_hz=2048.0, record_revs=40)
+    verdicts = []
+    with TestClient(pooled) as a, TestClient(plain) as b:
+        for c in (a, b):
+            for speed in (1800.0, 1790.0):
+                r = c.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=speed, asset_id="G3",
+                                                           plant="Riverside"), headers=auth())
+                assert r.status_code == 200, r.text
+            verdicts.append(r.json())
+        yield a, b, verdicts
+
+
+@pytest.mark.parametrize("which", ["pooled", "plain"])
+def test_html_report_holds_the_latest_verdict_its_reasons_evidence_and_the_trend(clients, which):
+    pooled, plain, verdicts = clients
+    c, v = (pooled, verdicts[0]) if which == "pooled" else (plain, verdicts[1])
+    r = c.get("/assets/G3/report", params={"format": "html"})      # a read: no API key, as /history
+    assert r.status_code == 200, r.text
+    assert r.headers["content-type"].startswith("text/html")
+    assert "script-src" not in r.headers["content-security-policy"] and "default-src 'none'" in \
+        r.headers["content-security-policy"]
+    page = html.unescape(r.text)
+    assert "rotordiag report — G3" in page
+    assert f"status: {v['status']}    severity: {v['severity']}" in page
+    assert f"{v['misalignment']:.3f}" in page
+    assert "Reasons" in page and all(x["message"] in page for x in v["reasons"] + [{"message": w} for w in v["warnings"]])
+    assert v["evidence"] and all(f"{e['name']}: {e['value']}" in page for e in v["evidence"])
+    assert "Trend (2 stored diagnoses)" in page and "2 stored diagnoses" in page
+    assert "plant Riverside" in page and f"model {v['model_version']}" in page
+    assert "the service stores verdicts, not waveforms" in page
+    assert page.count("data:image/png;base64,") == 1          # the trend plot
+
+
+def test_pdf_report_is_a_pdf_with_the_same_text(clients):
+    pooled, plain, verdicts = clients
+    r = pooled.get("/assets/G3/report")
+    assert r.status_code == 200, r.text
+    assert r.headers["content-type"] == "application/pdf" and r.content.startswith(b"%PDF-")
+    assert 'filename="rotordiag-report-G3.pdf"' in r.headers["content-disposition"]
+    if shutil.which("pdftotext") is None:
+        pytest.skip("pdftotext (poppler-utils) not installed: the PDF's text is not checked")
+    text = subprocess.run(["pdftotext", "-", "-"], input=r.content, capture_output=True, check=True).stdout.decode()
+    v = verdicts[0]
+    assert f"severity: {v['severity']}" in text and "Reasons" in text and "Evidence (model-independent)" in text
+    assert "Trend of G3" in text                               # the trend plot's page
+
+
+def test_report_of_an_unknown_asset_is_404_and_a_bad_format_422(clients):
+    pooled, plain, _ = clients
+    for c in (pooled, plain):
+        r = c.get("/assets/nobody/report")
+        assert r.status_code == 404 and "no diagnosis stored for asset 'nobody'" in r.json()["detail"]
+        assert c.get("/assets/G3/report", params={"format": "docx"}).status_code == 422
+        assert c.get("/assets/bad%20id/report").status_code == 422
+
+
+def test_report_past_the_time_limit_is_refused_not_left_hanging(clients, monkeypatch):
+    _, plain, _ = clients
+    import time
+
+    import rotordiag.service.report as report
+
+    monkeypatch.setattr(plain.app.state.rd.settings, "diagnosis_timeout_s", 0.2)
+    monkeypatch.setattr(report, "render_asset_report", lambda inputs, fmt: time.sleep(1.0) or b"late")
+    t0 = time.monotonic()
+    r = plain.get("/assets/G3/report")
+    assert r.status_code == 422 and "longer than the limit of 0.2 s" in r.json()["detail"]
+    assert time.monotonic() - t0 < 0.9
+
+
+def test_cli_report_of_an_asset_has_the_service_reports_content(clients, tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    _, plain, verdicts = clients
+    monkeypatch.setenv("ROTORDIAG_DATA_DIR", str(plain.app.state.rd.settings.data_dir))
+    monkeypatch.setenv("ROTORDIAG_ENVIRONMENT", "development")
+    out = tmp_path / "g3.pdf"
+    r = CliRunner().invoke(app, ["report", "--asset", "G3", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    cli_page = html.unescape((tmp_path / "g3.html").read_text())
+    service_page = html.unescape(plain.get("/assets/G3/report", params={"format": "html"}).text)
+
+    def body(page: str) -> list[str]:   # the text lines, without the generation time and the embedded plot
+        return [ln for ln in page.splitlines() if "generated " not in ln and "base64," not in ln]
+
+    assert body(cli_page) == body(service_page)
+    assert f"severity: {verdicts[1]['severity']}" in cli_page
+    r = CliRunner().invoke(app, ["report", "--asset", "nobody", "--out", str(tmp_path / "x.pdf")])
+    assert r.exit_code == 2 and "has no stored diagnoses" in r.output and not (tmp_path / "x.pdf").exists()
+
+
+@pytest.fixture(scope="module")
+def runup_csv(tmp_path_factory) -> Path:
+    """The paper model's run-up 900 → 1500 r/min in 6 s (Δ 0.3), 8 probes + keyphasor at 2560 Hz."""
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    out = tmp_path_factory.mktemp("runup") / "runup.csv"
+    r = CliRunner().invoke(app, ["runup", "--profile", "900:1500:6", "--misalignment", "0.3", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    return out
+
+
+@pytest.mark.parametrize("which", ["pooled", "plain"])
+def test_transient_plots_of_a_runup_show_the_plots_and_the_critical_speed(clients, runup_csv, which):
+    pooled, plain, _ = clients
+    c = pooled if which == "pooled" else plain
+    r = c.post("/ui/transient-plots", files={"file": ("runup.csv", runup_csv.read_bytes())})
+    assert r.status_code == 200, r.text
+    t = r.json()
+    assert t["kind"] == "run-up" and t["speed_source"] == "keyphasor" and t["units"] == "um"
+    lo, hi = t["speed_range_rpm"]
+    assert 880 < lo < 950 and 1450 < hi <= 1501
+    names = [f["name"] for f in t["figures"]]
+    assert {"bode", "polar", "centreline", "orbits"} <= set(names)
+    assert {f"{k}_b{b}" for k in ("waterfall", "full_spectrum") for b in (1, 2, 3, 4)} <= set(names)
+    from PIL import Image
+
+    for f in t["figures"]:
+        img = Image.open(io.BytesIO(base64.b64decode(f["png_base64"])))
+        assert img.format == "PNG" and img.width >= 400
+    # bearing 1 horizontal-ish probe: the linearised model's damped critical at 1106 r/min, half-power half-width
+    # ±105 r/min (docs/transient.md, simulator.campbell): the 1X peak lies within it
+    b1 = [p for p in t["peaks"] if p["order"] == 1 and p["bearing"] == 1 and p["angle_deg"] == 45.0]
+    assert b1 and abs(b1[0]["speed_rpm"] - 1106) < 105, t["peaks"]
+    assert "pk-pk" in t["conventions"] and "phase lag" in t["conventions"]
+
+
+def test_transient_plots_refuse_a_keyphasor_that_drops_out_and_a_broken_file(clients, runup_csv):
+    pooled, plain, _ = clients
+    a = np.loadtxt(runup_csv, delimiter=",", skiprows=1)
+    a[6000:7500, -1] = 0.0                                    # 0.6 s of keyphasor without pulses, mid-run
+    buf = io.StringIO()
+    np.savetxt(buf, a, delimiter=",", header=runup_csv.read_text().splitlines()[0], comments="", fmt="%.6g")
+    for c in (pooled, plain):
+        r = c.post("/ui/transient-plots", files={"file": ("dropout.csv", buf.getvalue().encode())})
+        assert r.status_code == 422 and "keyphasor drops out" in r.json()["detail"], r.text
+        r = c.post("/ui/transient-plots", files={"file": ("x.csv", b"time_s,a\n0,zz\n")})
+        assert 400 <= r.status_code < 500, r.text
+        r = c.post("/ui/transient-plots", params={"output_units": "furlong"},
+                   files={"file": ("runup.csv", runup_csv.read_bytes())})
+        assert r.status_code == 422
+
+
+def test_report_shows_the_latest_full_verdict_when_retention_trimmed_the_last(clients):
+    from sqlalchemy import update
+
+    from rotordiag.service.core.db import AssetDiagnosis
+
+    _, plain, _ = clients
+    fs, channels = simulated_channels(misalignment=0.2, speed_rpm=1800.0, sample_rate_hz=2048.0, record_revs=40)
+    for _ in range(2):
+        r = plain.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, asset_id="G4"), headers=auth())
+        assert r.status_code == 200, r.text
+    ids = [p["id"] for p in plain.get("/assets/G4/history").json()["points"]]
+    with plain.app.state.rd.sessions.begin() as s:          # what retention leaves of an old diagnosis
+        s.execute(update(AssetDiagnosis).where(AssetDiagnosis.id == ids[-1]).values(verdict={}, key_features={}))
+    page = html.unescape(plain.get("/assets/G4/report", params={"format": "html"}).text)
+    assert f"latest: stored diagnosis #{ids[0]}" in page
+    assert f"the latest diagnosis (#{ids[-1]}) keeps only its summary; the verdict shown is #{ids[0]}'s" in page
+    assert "status: " in page and "Trend (2 stored diagnoses)" in page
+    with plain.app.state.rd.sessions.begin() as s:
+        s.execute(update(AssetDiagnosis).where(AssetDiagnosis.asset_id == "G4").values(verdict={}))
+    page = html.unescape(plain.get("/assets/G4/report", params={"format": "html"}).text)
+    assert "no stored diagnosis of this asset keeps its full verdict" in page and "status: " not in page
