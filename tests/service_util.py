@@ -222,3 +222,21 @@ def write_takes_csv(path, t, cols, col_names):
     np.savetxt(path, np.column_stack([t, *cols]), delimiter=",", header=",".join(["time_s", *col_names]),
                comments="", fmt="%.9g")
     return path
+
+
+def full_disk(engine, on: dict) -> Callable:
+    """While ``on["full"]``, every INSERT/UPDATE/DELETE on ``engine`` fails as SQLite fails on a full disk: the
+    ``sqlalchemy.exc.OperationalError`` wrapping ``sqlite3.OperationalError("database or disk is full")`` that
+    the store sees from the driver (raised here already wrapped, so the fault is the same whatever SQLAlchemy
+    version runs the event hook)."""
+    import sqlite3
+
+    from sqlalchemy import event
+    from sqlalchemy.exc import OperationalError
+
+    @event.listens_for(engine, "before_cursor_execute")
+    def _raise(conn, cursor, statement, parameters, context, executemany):
+        if on["full"] and statement.lstrip().upper().startswith(("INSERT", "UPDATE", "DELETE")):
+            raise OperationalError(statement, parameters, sqlite3.OperationalError("database or disk is full"))
+
+    return _raise

@@ -9,7 +9,6 @@ import json
 import multiprocessing
 import os
 import signal
-import sqlite3
 import subprocess
 import sys
 import threading
@@ -20,11 +19,11 @@ from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
-from sqlalchemy import event, text
+from sqlalchemy import text
 
 from rotordiag.service import jobs as jobs_module
 from rotordiag.service.main import create_app
-from tests.service_util import API_KEY, auth, make_settings
+from tests.service_util import API_KEY, auth, full_disk, make_settings
 
 SPEC = {
     "design": {"method": "sobol", "n_samples": 256, "seed": 11},
@@ -52,10 +51,7 @@ def _row_status(app, job_id) -> str:
 
 
 def _disk(engine, on):
-    @event.listens_for(engine, "before_cursor_execute")
-    def _raise(conn, cursor, statement, parameters, context, executemany):
-        if on["full"] and statement.lstrip().upper().startswith(("INSERT", "UPDATE", "DELETE")):
-            raise sqlite3.OperationalError("database or disk is full")
+    full_disk(engine, on)
 
 
 # ------------------------------------------------------------------------------------------ unwritable outcomes
@@ -216,10 +212,13 @@ def test_cancel_kills_a_training_step_in_its_child_process(tmp_path):
         job = app.state.rd.jobs.submit("retrain", {})
         assert started.wait(30)
         t0 = time.monotonic()
-        while not multiprocessing.active_children():
+        def job_children():      # the training child, not the app's Dask workers (also children of this process)
+            return [p for p in multiprocessing.active_children() if p.name.startswith("rotordiag-job-")]
+
+        while not job_children():
             assert time.monotonic() - t0 < 30
             time.sleep(0.05)
-        children = multiprocessing.active_children()
+        children = job_children()
         t1 = time.monotonic()
         r = c.post(f"/jobs/{job.id}/cancel", headers=auth())
         print(f"training child process: cancelled in {time.monotonic() - t1:.2f} s")

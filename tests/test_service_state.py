@@ -11,10 +11,17 @@ import time
 import numpy as np
 import pytest
 from fastapi.testclient import TestClient
-from sqlalchemy import event, text
+from sqlalchemy import text
 
 from rotordiag.service.main import create_app
-from tests.service_util import auth, diagnose_json, make_settings, shipped_or_tiny_registry, simulated_channels
+from tests.service_util import (
+    auth,
+    diagnose_json,
+    full_disk,
+    make_settings,
+    shipped_or_tiny_registry,
+    simulated_channels,
+)
 
 
 @pytest.fixture(scope="module")
@@ -135,13 +142,7 @@ def test_a_truncated_sqlite_file_answers_503_and_health_says_degraded(tmp_path, 
 
 def _full_disk(engine, on: dict):
     """Every INSERT/UPDATE/DELETE fails as SQLite fails on a full disk while ``on["full"]``."""
-
-    @event.listens_for(engine, "before_cursor_execute")
-    def _raise(conn, cursor, statement, parameters, context, executemany):
-        if on["full"] and statement.lstrip().upper().startswith(("INSERT", "UPDATE", "DELETE")):
-            raise sqlite3.OperationalError("database or disk is full")
-
-    return _raise
+    return full_disk(engine, on)
 
 
 def test_a_full_disk_answers_503_saying_so_and_health_says_degraded(tmp_path, registry_src, body):

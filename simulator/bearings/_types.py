@@ -136,7 +136,10 @@ class _Bearing:
     def _newton(self, r0: np.ndarray, W: np.ndarray, w: float) -> np.ndarray | None:
         _, p = self.kernel()
         c = self.clearance_m
-        scale = max(float(np.hypot(*W)), 1e-300)
+        scale = float(np.hypot(*W))
+        if scale == 0.0:        # no load: "zero" relative to the force the film makes at 0.1 c (round-off)
+            scale = float(np.hypot(*self._force(p, 0.1 * c, 0.0, 0.0, 0.0, w)))
+        scale = max(scale, 1e-300) if math.isfinite(scale) else 1e-300
         r = r0.copy()
         res = np.array(self._force(p, r[0], r[1], 0.0, 0.0, w)) + W
         if not np.all(np.isfinite(res)):
