@@ -32,6 +32,8 @@ from typing import Any
 
 import numpy as np
 
+from rotordiag.core.notes import Note
+
 from ._patterns import bearing_feature
 from .status import INCONCLUSIVE, UNCERTAIN, Reason
 
@@ -151,9 +153,10 @@ class BearingPlan:
         fig = (f" (on held-out plants from {set_key(self.answering)}: macro-F1 {f['macro_f1']:.2f}, "
                f"false alarms {f['false_alarm']:.1%})" if f else "")
         doubt = f" ({_said(self.suspect)}: {_BACKWARD})" if self.suspect else ""
-        return [f"{_said(self.left_out)} not read by the model{doubt}: it was trained on the probe sets "
-                f"{self._sets()}, and the largest of them this recording has{' without it' if self.suspect else ''} "
-                f"is {set_key(self.answering)}{fig}; the evidence still shows every bearing"]
+        return [Note("bearings_not_read", detail=(
+            f"{_said(self.left_out)} not read by the model{doubt}: it was trained on the probe sets "
+            f"{self._sets()}, and the largest of them this recording has{' without it' if self.suspect else ''} "
+            f"is {set_key(self.answering)}{fig}; the evidence still shows every bearing"))]
 
     def reasons(self) -> list[Reason]:
         """``bearing_set_untrained`` or ``bearing_set_uninformative`` (inconclusive), ``bearing_set_weak``
