@@ -107,3 +107,40 @@ def test_docs_pipeline_holds_the_generated_warnings_table():
     page = (ROOT / "docs" / "pipeline.md").read_text(encoding="utf-8")
     assert notes_markdown_table() in page, "regenerate the table: python -c 'from rotordiag.core.notes import " \
                                            "notes_markdown_table; print(notes_markdown_table())'"
+
+
+def test_mil_output_is_rendered_from_typed_values_not_parsed(monkeypatch):
+    """A fresh verdict's evidence texts carry their lengths as numbers (Measured): the mil answer is rendered from
+    them — the sentence parser (the fallback for untyped texts) is never called — and every µm amount becomes the
+    same length / 25.4 in mil (1 mil = 25.4 µm exactly)."""
+    import rotordiag.models.output_units as ou
+    from rotordiag.core.notes import Measured
+    from rotordiag.features import ProbeChannel, Recording, extract_features
+    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.registry import shipped_registry_dir
+    from rotordiag.simulator import Plant, simulate
+
+    res = simulate(Plant.default(), 1800.0, 0.2, 0.05, mechanism="rigid", transient_revs=100, record_revs=40,
+                   sample_rate_hz=4096.0)
+    d = res.journal_displacements_m * 1e6
+    rec = Recording(sample_rate_hz=4096.0, speed_rpm=1800.0, channels=[
+        ProbeChannel(bearing=b, angle_deg=a, units="um",
+                     data=d[:, b - 1, 0] * np.cos(np.deg2rad(a)) + d[:, b - 1, 1] * np.sin(np.deg2rad(a)))
+        for b in range(1, 5) for a in (45.0, 135.0)])
+    v = diagnose(load_bundle(shipped_registry_dir()), extract_features(rec)).to_dict()
+
+    def no_parsing(text):
+        raise AssertionError(f"a typed text was parsed: {text!r}")
+
+    monkeypatch.setattr(ou, "_mils_text", no_parsing)
+    out = ou.verdict_in_units(v, "mil")
+    typed = [(e, o) for e, o in zip(v["evidence"], out["evidence"]) if isinstance(e["value"], Measured)]
+    assert len(typed) >= 8                                   # 1X and 2X at x and y of the coupling bearings
+    for e, o in typed:
+        assert "µm" not in o["value"] and "mil" in o["value"], o
+        for value in e["value"].values.values():
+            if isinstance(value, Length):
+                assert f"{value.value_um / UM_PER_MIL:{value.fmt}} mil" in o["value"]
+        if e["name"] in ("1X x", "2X y"):
+            assert o["number"] == pytest.approx(e["number"] / UM_PER_MIL, rel=1e-12)
+            assert o["value"].startswith(f"{e['number'] / UM_PER_MIL:.3g} mil pk-pk")

@@ -18,7 +18,7 @@ from typing import Any, Final, Literal
 
 from rotordiag.core.units import UM_PER_MIL
 
-__all__ = ["Length", "NoteInfo", "Note", "NOTES", "DOUBT", "CAUTION", "INFO", "SPEED_DOUBT_CODES",
+__all__ = ["Length", "Measured", "NoteInfo", "Note", "NOTES", "DOUBT", "CAUTION", "INFO", "SPEED_DOUBT_CODES",
            "speed_in_doubt", "notes_markdown_table"]
 
 #: severities: ``doubt`` — the running speed is in doubt (``speed_ambiguous`` reason, never ``confident``);
@@ -46,6 +46,46 @@ class Length:
         if units == "mil":
             return f"{self.value_um / UM_PER_MIL:{self.fmt}} mil"
         return f"{self.value_um:{self.fmt}} µm"
+
+
+class Measured(str):
+    """A measurement's text (an evidence value) with its typed values: a ``str`` in µm, re-rendered in mil from
+    the values (:meth:`render`), never by parsing the sentence.
+
+    Parameters
+    ----------
+    template : str
+        :meth:`str.format` template; a :class:`Length` field is written with its unit.
+    **values
+        The template's fields.
+    """
+
+    template: str
+    values: dict[str, Any]
+
+    def __new__(cls, template: str, **values: Any) -> Measured:
+        self = super().__new__(cls, template.format(**_rendered(values, "um")))
+        self.template = template
+        self.values = dict(values)
+        return self
+
+    def __reduce__(self):
+        return (_measured, (self.template, self.values))
+
+    def render(self, units: str = "um") -> str:
+        """The text with its lengths in ``units`` (``"um"`` or ``"mil"``)."""
+        return self.template.format(**_rendered(self.values, units))
+
+    @property
+    def leads_with_length(self) -> bool:
+        """Whether the text begins with a length (then an evidence item's ``number`` is that length)."""
+        for literal, name, _, _ in Formatter().parse(self.template):
+            return literal == "" and isinstance(self.values.get(name or ""), Length)
+        return False
+
+
+def _measured(template: str, values: dict[str, Any]) -> Measured:
+    return Measured(template, **values)
 
 
 @dataclass(frozen=True)
