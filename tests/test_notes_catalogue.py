@@ -144,3 +144,10 @@ def test_mil_output_is_rendered_from_typed_values_not_parsed(monkeypatch):
         if e["name"] in ("1X x", "2X y"):
             assert o["number"] == pytest.approx(e["number"] / UM_PER_MIL, rel=1e-12)
             assert o["value"].startswith(f"{e['number'] / UM_PER_MIL:.3g} mil pk-pk")
+
+
+def test_the_schema_names_every_warning_code():
+    from rotordiag.service.schemas import DiagnoseResponse
+
+    text = DiagnoseResponse.model_json_schema()["properties"]["warnings"]["description"]
+    assert all(f"`{code}`" in text for code in NOTES)
