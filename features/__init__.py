@@ -57,6 +57,8 @@ Importing the package raises glibc's malloc mmap/trim thresholds (see ``features
 ``ROTORDIAG_MALLOC_TUNING=0`` disables it) and each extraction runs with one BLAS thread
 (``features._config.BLAS_THREADS``): both measured to matter more than the arithmetic.
 """
+from rotordiag.core.notes import Note, speed_in_doubt
+
 from ._acquisitions import format_acquisitions, parse_acquisitions, parse_keyphasor_takes, split_pairs
 from ._alloc import tune_malloc
 from ._change import (
@@ -80,10 +82,7 @@ from ._config import (
     ALLOWED_UNITS,
     MIN_REVS,
     MIN_REVS_MOTION,
-    SPEED_AMBIGUOUS,
-    SPEED_NOT_CONVERGED,
     WHIRL_BAND,
-    speed_in_doubt,
 )
 from ._evidence import EvidenceItem, evidence
 from ._extract import BearingDetail, FeatureResult
@@ -104,7 +103,7 @@ __all__ = [
     "MIN_REVS_MOTION", "WHIRL_BAND", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",
     "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
-    "SPEED_AMBIGUOUS", "SPEED_NOT_CONVERGED", "speed_in_doubt", "speed_alternatives_rpm",
+    "Note", "speed_in_doubt", "speed_alternatives_rpm",
     "CommonMode", "common_mode", "common_mode_share", "without_common_mode", "with_scale", "COMMON_MODE_NOTABLE_SHARE",
     "parse_acquisitions", "parse_keyphasor_takes", "format_acquisitions", "split_pairs",
 ]

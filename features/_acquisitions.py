@@ -5,11 +5,8 @@ A recording's channels are taken to be sampled together: the phase difference of
 eight-probe train in two takes, or takes bearings 3 and 4 from another monitoring system; the takes' start times
 are not related, and a phase difference between bearings of different takes is the delay between the takes
 (k·360°·f·τ at order k), not the shaft's. ``Recording.acquisitions`` says which bearings were sampled together;
-the phase differences across acquisitions are then missing, not numbers (issue 15, item 3), and the evidence says
-why. Measured on docs/robustness.md's clean base set (seed 815): bearings 3 and 4 taken U(2, 20) ms after 1 and 2 and
-sent as one recording kept 87 of 240 verdicts `confident`, 21 of them healthy machines shown slight (the model reads
-aligned and slight apart partly by the phase across the coupling); stated, none is (``models.acquisitions``:
-``separate_acquisitions``).
+the phase differences across acquisitions are then missing, not numbers, and the evidence says why (the
+measurement behind it: docs/features.md, "Measurements behind the acquisition and keyphasor checks").
 """
 from __future__ import annotations
 

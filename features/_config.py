@@ -41,18 +41,10 @@ SUBSYNC_PEAK_MIN_RATIO = 10.0
 #: … and holds at least this fraction of the orbit's AC mean-square (amplitude ≳ 0.1 % of RMS)
 SUBSYNC_PEAK_MIN_FRAC = 1e-6
 
-#: how every warning that puts an estimated running speed in doubt begins: the estimate is ambiguous (another
-#: reading of the spectrum fits nearly as well), or its refinement failed. ``models.status`` turns each such
-#: warning into the ``speed_ambiguous`` reason (never a ``confident`` verdict): test with :func:`speed_in_doubt`,
-#: not with the words, so that rewording a warning cannot turn a doubtful speed into a confident verdict.
-SPEED_AMBIGUOUS = "speed estimate ambiguous"
-SPEED_NOT_CONVERGED = "speed refinement did not converge"
-
-
-def speed_in_doubt(warning: str) -> bool:
-    """Whether a feature-extraction warning puts the estimated running speed in doubt (it carries
-    :data:`SPEED_AMBIGUOUS` or :data:`SPEED_NOT_CONVERGED`, also behind a caller's prefix)."""
-    return SPEED_AMBIGUOUS in warning or SPEED_NOT_CONVERGED in warning
+#: a warning that puts an estimated running speed in doubt is a ``doubt`` note of the warnings catalogue
+#: (rotordiag.core.notes); ``models.status`` turns each into the ``speed_ambiguous`` reason (never a ``confident``
+#: verdict), found by its code with ``rotordiag.core.notes.speed_in_doubt``, so that rewording a warning cannot
+#: change a verdict
 
 
 #: speed search range without keyphasor / given speed (r/min)

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rotordiag.core.notes import Length, Measured
+
 from ._acquisitions import split_pairs
 from ._common_mode import COMMON_MODE_NOTABLE_SHARE, common_mode
 from ._config import CENTRELINE_MAX_ECC, PHASE_PAIRS
@@ -67,8 +69,8 @@ def _vector(det, direction: str, order: int) -> tuple[str, float]:
     amp = 2.0 * abs(c)
     ph = det.phase_deg(direction, order)
     if not np.isfinite(ph):
-        return f"{amp:.3g} µm pk-pk, phase not measurable (in the noise)", amp
-    return f"{amp:.3g} µm pk-pk ∠ {_whole_degrees(ph):.0f}°", amp
+        return Measured("{amp} pk-pk, phase not measurable (in the noise)", amp=Length(amp)), amp
+    return Measured("{amp} pk-pk ∠ {phase_deg:.0f}°", amp=Length(amp), phase_deg=_whole_degrees(ph)), amp
 
 
 def _ratio_meaning(r: float) -> str:
@@ -117,12 +119,12 @@ def _centreline(det) -> EvidenceItem:
                             "in the centreline and is not assessed; give DC readings referenced to the bearing "
                             "centre (or V with the gap voltage)", None)
     if not (np.isfinite(c) and c > 0):
-        return EvidenceItem(scope, "shaft centreline", f"mean x {mx:.4g} µm, y {my:.4g} µm (clearance unknown)",
+        return EvidenceItem(scope, "shaft centreline", Measured("mean x {x}, y {y} (clearance unknown)", x=Length(mx, ".4g"), y=Length(my, ".4g")),
                             "a position relative to the bearing centre only if the gaps are referenced to it; "
                             "give clearance_um for the eccentricity ratio", None)
     ecc = r / c
     if ecc > CENTRELINE_MAX_ECC:
-        return EvidenceItem(scope, "shaft centreline", f"mean {r:.4g} µm from zero = {ecc:.1f} c: a raw gap",
+        return EvidenceItem(scope, "shaft centreline", Measured("mean {r} from zero = {ecc:.1f} c: a raw gap", r=Length(r, ".4g"), ecc=ecc),
                             "not a position inside the bearing: the DC part is the probes' gap; reference the "
                             "gaps to the bearing centre (cold gap) to read the centreline", None)
     # attitude angle: from the load line (gravity, −y) to the line of centres, in the rotation direction (+θ)
@@ -143,14 +145,20 @@ def _slow_roll_item(det) -> EvidenceItem | None:
     """What slow-roll (runout) compensation subtracted at this bearing, or None when none was asked for."""
     if det.slow_roll_um_pp is None:
         return None
-    parts = []
+    parts: list[str] = []
+    lengths: dict[str, Length] = {}
     for angle, vec in zip(det.probe_angles_deg, det.slow_roll_um_pp):
         vec = vec or {}
-        got = [f"{k}X {vec[k][0]:.3g} µm pk-pk ∠ {vec[k][1]:.0f}°" for k in (1, 2) if k in vec]
+        got = []
+        for k in (1, 2):
+            if k in vec:
+                field_name = f"amp{len(lengths)}"
+                lengths[field_name] = Length(vec[k][0])
+                got.append(f"{k}X {{{field_name}}} pk-pk ∠ {vec[k][1]:.0f}°")
         left = [f"{k}X" for k in (1, 2) if k not in vec]
         parts.append(f"{angle:g}° probe: " + (", ".join(got) + " subtracted" if got else "nothing subtracted")
                      + (f" ({'/'.join(left)} not given or in the noise at slow roll)" if left else ""))
-    return EvidenceItem(f"bearing {det.bearing}", "slow-roll compensation", "; ".join(parts),
+    return EvidenceItem(f"bearing {det.bearing}", "slow-roll compensation", Measured("; ".join(parts), **lengths),
                         "runout (mechanical/electrical, fixed to the shaft surface) measured at slow roll with the "
                         "keyphasor, subtracted as vectors: the 1X/2X vectors reported are the shaft's vibration "
                         "without it", None)
@@ -224,8 +232,9 @@ def _common_mode_items(fr) -> list[EvidenceItem]:
                    "mounting vibration is likely; check the probe cabling and grounding")
         items.append(EvidenceItem(
             "all probes", f"{order}X common to every probe",
-            f"{100 * cm.share:.0f} % of the {order}X power: {cm.amp_um_pp:.3g} µm pk-pk ∠ "
-            f"{_whole_degrees(cm.phase_lag_deg):.0f}° at all {cm.n_probes} probes", meaning, float(cm.share)))
+            Measured(f"{100 * cm.share:.0f} % of the {order}X power: {{amp}} pk-pk ∠ "
+                     f"{_whole_degrees(cm.phase_lag_deg):.0f}° at all {cm.n_probes} probes", amp=Length(cm.amp_um_pp)),
+            meaning, float(cm.share)))
     return items
 
 

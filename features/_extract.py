@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from rotordiag.core.conventions import wrap_deg
+from rotordiag.core.notes import Note
 
 from . import _config as cfg
 from ._acquisitions import format_acquisitions, split_pairs
@@ -137,7 +138,7 @@ class FeatureResult:
         Whole revolutions analysed.
     motion_type : simulator.analysis.MotionType or None
         None when the record is too short or the classifier is unavailable.
-    warnings : tuple of str
+    warnings : tuple of rotordiag.core.notes.Note
     sanity : tuple of features.SanityFinding
         Physics sanity findings (``features._sanity.check_recording``); empty when all pass.
     """
@@ -154,6 +155,12 @@ class FeatureResult:
     sanity: tuple = ()
     #: groups of bearings sampled together (``Recording.acquisitions``); ``()``: every channel sampled together
     acquisitions: tuple[tuple[int, ...], ...] = ()
+
+    def __post_init__(self) -> None:
+        foreign = [w for w in self.warnings if not isinstance(w, Note)]
+        if foreign:                 # a programming error: every warning is a catalogue note (rotordiag.core.notes)
+            raise TypeError(f"FeatureResult.warnings: {foreign[:2]!r} are not Notes of the warnings catalogue "
+                            "(rotordiag.core.notes)")
 
     def as_dict(self) -> dict[str, float]:
         """``{name: value}`` in schema order."""
@@ -331,10 +338,9 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
     warnings = list(sa.warnings)
     dc_removed = rec.dc_removed or _means_removed(data)
     if dc_removed:
-        warnings.append("the channels carry no DC position (" + (
+        warnings.append(Note("no_dc_position", why=(
             "dc_removed" if rec.dc_removed else "every channel averages to zero: the means were removed, or the "
-            "acquisition is AC-coupled") + "): no shaft-centreline position, so a stationary shaft-line offset "
-            "is not assessed; give DC readings referenced to the bearing centre for it")
+            "acquisition is AC-coupled")))
     f1 = sa.speed_rpm / 60.0
     seg = data[:, sa.start:sa.stop]
     n_seg = seg.shape[1]
@@ -363,11 +369,8 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
         mismatch = _given_speed_mismatch(seg, mean, fs, f1, coeffs)
         if mismatch is not None:
             h, f_sig = mismatch
-            warnings.append(
-                f"speed_rpm {sa.speed_rpm:g} differs from the signal's {h}X line ({60 * f_sig:.2f} r/min, "
-                f"{100 * (f_sig / f1 - 1):+.2f} %); order amplitudes are underestimated and phases drift — "
-                "check the speed (and sample_rate_hz: a sample rate that is off moves every line alike) or give "
-                "keyphasor_times_s")
+            warnings.append(Note("speed_off_line", given_rpm=sa.speed_rpm, order=h, line_rpm=60 * f_sig,
+                                 off_pct=100 * (f_sig / f1 - 1)))
     ptp = np.ptp(seg, axis=1)
     sync0 = mean + coeffs.real.sum(axis=1)
     pts_all = poincare_points(sync0, resid, sa.start, fs, sa.rev_times_s)
@@ -375,8 +378,8 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
     values = np.full(len(FEATURE_NAMES), np.nan)
     values[_SPEED_INDEX] = sa.speed_rpm
     if sa.n_revs < cfg.MIN_REVS_SUBHARMONIC:
-        warnings.append(f"only {sa.n_revs} revolutions: sub-harmonic band features have a resolution of "
-                        f"{1 / sa.n_revs:.3f}X and are coarse (>= {cfg.MIN_REVS_SUBHARMONIC} revolutions recommended)")
+        warnings.append(Note("few_revolutions_subharmonic", n_revs=sa.n_revs, resolution_x=1 / sa.n_revs,
+                             min_revs=cfg.MIN_REVS_SUBHARMONIC))
 
     # every per-bearing feature as a column over the bearings present (schema order), then one
     # scatter into ``values``: the arithmetic is element-wise, so each value is the same float as
@@ -468,15 +471,14 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
     if sa.n_revs >= cfg.MIN_REVS_MOTION:
         orbit_size = float(np.max(ptp))
         motion, note = classify(pts_all, orbit_size, noise)
-        if motion is None:
+        if motion is None and note is not None:
             warnings.append(note)
         else:
             values[_NAME_INDEX["motion_period"]] = float(motion.period) if motion.kind == "period-n" else 0.0
             values[_NAME_INDEX["motion_quasi_periodic"]] = float(motion.kind == "quasi-periodic")
             values[_NAME_INDEX["motion_chaotic"]] = float(motion.kind == "chaotic")
     else:
-        warnings.append(f"only {sa.n_revs} revolutions: motion type not determined "
-                        f"(needs >= {cfg.MIN_REVS_MOTION})")
+        warnings.append(Note("few_revolutions_motion", n_revs=sa.n_revs, min_revs=cfg.MIN_REVS_MOTION))
 
     result = FeatureResult(
         names=FEATURE_NAMES, values=values, bearings=details, speed_rpm=float(sa.speed_rpm),
@@ -504,6 +506,5 @@ def phase_differences(values: np.ndarray, details: dict[int, BearingDetail],
                         details[bi].phase_deg(axis, k) - details[bj].phase_deg(axis, k)))
     if not split:
         return []
-    return [f"bearings recorded in separate acquisitions ({format_acquisitions(acquisitions)}): the phase "
-            "differences between " + ", ".join(f"bearings {i} and {j}" for i, j in split)
-            + f" are not measured ({why})"]
+    return [Note("separate_acquisitions_unreferenced", groups=format_acquisitions(acquisitions),
+                 pairs=", ".join(f"bearings {i} and {j}" for i, j in split), why=why)]

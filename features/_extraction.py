@@ -11,7 +11,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import _config as cfg
+from rotordiag.core.notes import Note, speed_in_doubt
+
 from ._extract import FeatureResult, _blas_limit, _extract
 from ._recording import Recording
 from ._sanity import check_recording
@@ -33,7 +34,7 @@ def extract_features(recording: Recording, *, speed_estimate_rpm: float | None =
         For a recording without keyphasor or ``speed_rpm``: a running speed estimated elsewhere, used
         instead of this package's estimate (``speed_source`` stays ``"estimated"``) — a caller that chose
         among :func:`speed_alternatives_rpm` (``models.speed_choice``). Ignored otherwise.
-    speed_notes : sequence of str
+    speed_notes : sequence of rotordiag.core.notes.Note
         The warnings that go with ``speed_estimate_rpm`` (in place of the estimator's). A speed from
         elsewhere is never the signal's own reading: when no note puts it in doubt
         (:func:`speed_in_doubt`), one that does is added, so a verdict at it is never ``confident``.
@@ -65,12 +66,19 @@ def extract_features(recording: Recording, *, speed_estimate_rpm: float | None =
 
 
 def _speed_notes(speed_rpm: float, notes: Sequence[str]) -> list[str]:
-    """The warnings that go with a speed estimated elsewhere: ``notes``, and one that puts it in doubt when none
-    does."""
+    """The warnings that go with a speed estimated elsewhere: ``notes`` (catalogue notes, as a reading's
+    ``warnings``), and one that puts it in doubt when none does.
+
+    Raises
+    ------
+    TypeError
+        For a note that is not a :class:`~rotordiag.core.notes.Note` (a programming error, never the user's).
+    """
     out = list(notes)
-    if not any(cfg.speed_in_doubt(w) for w in out):
-        out.append(f"{cfg.SPEED_AMBIGUOUS}: {speed_rpm:.1f} r/min was estimated outside this package's reading of "
-                   "the spectrum (speed_estimate_rpm); confirm it with speed_rpm or keyphasor_times_s")
+    if not all(isinstance(w, Note) for w in out):
+        raise TypeError("speed_notes: every note must be a rotordiag.core.notes.Note (a warning of the catalogue)")
+    if not any(speed_in_doubt(w) for w in out):
+        out.append(Note("speed_estimated_elsewhere", speed_rpm=speed_rpm))
     return out
 
 

@@ -7,6 +7,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from rotordiag.core.notes import Note
+
 from . import _config as cfg
 from ._lines import (
     _circular_fraction,
@@ -73,9 +75,8 @@ def _above_subsynchronous(x: np.ndarray, spec: np.ndarray, fs: float, df: float,
     if not independent:
         return f_best, None
     best = max(independent, key=lambda c: c.n_above_noise * c.amp_above_noise)
-    note = (f"a line family at {60 * f_best:.1f} cpm ({f_best / best.f_hz:.3f}X) is sub-synchronous and not harmonic "
-            f"with the running speed (oil whirl / whip?); the speed is taken from the family at "
-            f"{60 * best.f_hz:.1f} r/min")
+    note = Note("speed_above_subsynchronous", line_cpm=60 * f_best, ratio_x=f_best / best.f_hz,
+                speed_rpm=60 * best.f_hz)
     return best.f_hz, note
 
 
@@ -106,7 +107,7 @@ def _half_speed_whirl(spec: np.ndarray, df: float,
         return None
     candidates.remove(double[0])
     candidates.insert(0, double[0])
-    return (f"{cfg.SPEED_AMBIGUOUS}: {60 * double[0].f_hz:.1f} r/min chosen; the line at {60 * f0:.1f} cpm, with "
+    return Note("speed_estimate_ambiguous", detail=f"{60 * double[0].f_hz:.1f} r/min chosen; the line at {60 * f0:.1f} cpm, with "
             f"harmonics of its own, whirls in nearly circular orbits (backward / forward {circ:.3f}) and is read as "
             f"a half-speed whirl or sub-harmonic; if the machine runs at {60 * f0:.1f} r/min give speed_rpm or "
             "keyphasor_times_s")
@@ -356,7 +357,7 @@ def _hidden_1x(x: np.ndarray, spec: np.ndarray, fs: float, df: float, k_top: int
     if found is None or not (c_lo <= found[0] <= c_hi):
         return None
     g, rel_res, rel_amp = found
-    return g, (f"{cfg.SPEED_AMBIGUOUS}: {60 * g:.1f} r/min chosen: the largest line, at {60 * f_w:.1f} cpm "
+    return g, Note("speed_estimate_ambiguous", detail=f"{60 * g:.1f} r/min chosen: the largest line, at {60 * f_w:.1f} cpm "
                f"({f_w / g:.3f}X), whirls in nearly circular orbits (backward / forward {circ:.3f}), read as oil "
                f"whirl; the running speed's 1X ({rel_amp:.2f} × the whirl's 2nd harmonic) lies "
                f"{(g - 2 * f_w) * x.shape[1] / fs:.1f} record bins above that harmonic, inside its main lobe, and is "

@@ -6,9 +6,8 @@ pulse interval far from its neighbours' is therefore no speed change but a fault
 (a worn or dirty notch, the probe gap drifting past the trigger level) gives an interval of about twice the
 period, an extra one (a second edge, a scratch, electrical noise) two intervals that add up to one. Order
 tracking between such pulses puts a revolution's worth of shaft angle where there were two, or half a revolution
-where there was one, and every order's amplitude and phase comes out wrong — measured on docs/robustness.md's clean
-base set with every fifth pulse missing: 67 of 240 verdicts ``confident``, 2 of them two bands off (a moderate
-misalignment shown aligned).
+where there was one, and every order's amplitude and phase comes out wrong (measured: docs/features.md,
+"Measurements behind the acquisition and keyphasor checks").
 
 :func:`keyphasor_fault` finds such intervals; ``features._speed.shaft_angle`` then does not track orders by the
 pulses and ``features._sanity`` says what to check.

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rotordiag.core.notes import Length, Note
 from rotordiag.simulator.motion import PERIOD_RTOL, classify_motion
 
 from . import _config as cfg
@@ -57,6 +58,5 @@ def classify(points: np.ndarray, orbit_size_um: float, point_noise_rms: np.ndarr
         rtol = max(rtol, period_tolerance(point_noise_rms, points.shape[0]) / orbit_size_um)
     if not (np.isfinite(orbit_size_um) and np.isfinite(rtol)):
         # an orbit of subnormal size (e.g. samples of 1e-310): the tolerance over it overflows
-        return None, (f"motion type not determined: the orbit ({orbit_size_um:.3g} µm) is too small to classify "
-                      "against the noise; check the units of the samples")
-    return classify_motion(points, orbit_size=orbit_size_um, period_rtol=rtol), ""
+        return None, Note("motion_not_classified", orbit=Length(orbit_size_um))
+    return classify_motion(points, orbit_size=orbit_size_um, period_rtol=rtol), None

@@ -5,6 +5,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from rotordiag.core.notes import Note
+
 from . import _config as cfg
 from ._families import (
     _above_subsynchronous,
@@ -319,10 +321,8 @@ def _whirl_stage(s: _Spectrum, families: list[_Family], only_partner: bool) -> _
         whip_hz = f_best
     om, score, n_lines, r1 = partners[0]
     f_partner = _refine_partner(s.x, s.fs, df, s.power, s.floor, om, whip_hz, s.sidebands)
-    warnings = [
-        f"the line family at {60 * whip_hz:.1f} cpm ({whip_hz / f_partner:.3f}X) is a sub-synchronous "
-        f"whirl / whip: {n_lines} lines at combinations mΩ + kω of it with the running speed Ω "
-        f"({60 * f_partner:.1f} r/min)"]
+    warnings: list[str] = [Note("speed_from_whirl_partner", whirl_cpm=60 * whip_hz, ratio_x=whip_hz / f_partner,
+                                n_lines=n_lines, speed_rpm=60 * f_partner)]
     weak_1x = r1 < cfg.SPEED_PARTNER_CLEAR_SNR
     close = len(partners) > 1 and partners[1][1] >= cfg.SPEED_PARTNER_RIVAL_REL * score
     # Ω ± ω spans the same lattice mΩ + kω as Ω: a runner-up one whirl frequency away with the stronger
@@ -340,10 +340,15 @@ def _whirl_stage(s: _Spectrum, families: list[_Family], only_partner: bool) -> _
                f"{60 * shifted[0][0]:.1f} r/min, one whirl frequency away, spans the same combination lines and "
                "has the stronger 1X line" if shifted else
                "its lattice leaves more of the spectrum's lines unexplained than it explains")
-        warnings.append(
-            f"{cfg.SPEED_AMBIGUOUS}: {60 * f_partner:.1f} r/min chosen from the combination lines of a "
-            f"whirl / whip at {60 * whip_hz:.1f} cpm, but {why}; give speed_rpm or keyphasor_times_s")
+        warnings.append(Note(
+            "speed_estimate_ambiguous", detail=f"{60 * f_partner:.1f} r/min chosen from the combination lines of a "
+            f"whirl / whip at {60 * whip_hz:.1f} cpm, but {why}; give speed_rpm or keyphasor_times_s"))
     return _Choice(first, f_partner, f_best, whip_hz=whip_hz, f_partner=f_partner, warnings=warnings)
+
+
+def _ambiguous(warning: str) -> bool:
+    """Whether ``warning`` is an ambiguous-estimate note (by its code, not its words)."""
+    return getattr(warning, "code", None) == "speed_estimate_ambiguous"
 
 
 def _foreign_lines_warning(s: _Spectrum, choice: _Choice) -> str | None:
@@ -360,7 +365,7 @@ def _foreign_lines_warning(s: _Spectrum, choice: _Choice) -> str | None:
         foreign += [g for g in _weak_lines_above(s.power, s.df, s.floor, f, s.c_hi, s.sidebands) if g not in foreign]
     if not foreign:
         return None
-    return (f"{cfg.SPEED_AMBIGUOUS}: {60 * f:.1f} r/min chosen, but the lines at "
+    return Note("speed_estimate_ambiguous", detail=f"{60 * f:.1f} r/min chosen, but the lines at "
             f"{', '.join(f'{60 * g:.0f}' for g in foreign[:4])} cpm are not its harmonics (two independent "
             "frequencies: oil whirl / whip or a sub-harmonic, with the running speed possibly elsewhere); "
             "give speed_rpm or keyphasor_times_s")
@@ -378,34 +383,34 @@ def _comb_stage(s: _Spectrum, families: list[_Family], choice: _Choice) -> tuple
                           if choice.switched is None else (0, 0))
     switch = period_n == 3 and strength == 2        # the only period read as the speed (see _period_n)
     if strength and not switch:
-        warnings.append(
-            f"{cfg.SPEED_AMBIGUOUS}: {60 * f_best:.1f} r/min chosen, but its {period_n}X line stands above its "
+        warnings.append(Note(
+            "speed_estimate_ambiguous", detail=f"{60 * f_best:.1f} r/min chosen, but its {period_n}X line stands above its "
             f"{period_n - 1}X and {period_n + 1}X, as the running speed's 1X does in period-{period_n} motion (then "
             f"{60 * f_best:.1f} cpm is a 1/{period_n}X sub-harmonic); if the machine runs at "
-            f"{60 * period_n * f_best:.1f} r/min give speed_rpm or keyphasor_times_s")
+            f"{60 * period_n * f_best:.1f} r/min give speed_rpm or keyphasor_times_s"))
     if switch:
         # never a sub-harmonic: the comb's 3X and 6X stand out, so f_best is a 1/3X
-        warnings.append(
-            f"{cfg.SPEED_AMBIGUOUS}: {60 * period_n * f_best:.1f} r/min chosen over {60 * f_best:.1f} r/min: the "
+        warnings.append(Note(
+            "speed_estimate_ambiguous", detail=f"{60 * period_n * f_best:.1f} r/min chosen over {60 * f_best:.1f} r/min: the "
             f"lines at {period_n} and {2 * period_n} times {60 * f_best:.1f} cpm stand above their neighbours, the "
             f"signature of period-{period_n} motion (a 1/{period_n}X sub-harmonic with its 2/{period_n}X, "
             f"{period_n + 1}/{period_n}X …); if the machine runs at {60 * f_best:.1f} r/min give speed_rpm or "
-            "keyphasor_times_s")
+            "keyphasor_times_s"))
         f_best = period_n * f_best
     elif rivals and rivals[0].n_present == choice.family.n_present and \
             rivals[0].amp_present >= 0.8 * choice.family.amp_present:
-        warnings.append(
-            f"{cfg.SPEED_AMBIGUOUS}: {60 * f_best:.1f} r/min chosen over {60 * rivals[0].f_hz:.1f} r/min "
-            "(similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong")
+        warnings.append(Note(
+            "speed_estimate_ambiguous", detail=f"{60 * f_best:.1f} r/min chosen over {60 * rivals[0].f_hz:.1f} "
+            "r/min (similar harmonic content); give speed_rpm or keyphasor_times_s if this is wrong"))
     elif double_rival := [c for c in _doubles(families, f_best, choice.family.n_present, df)
                           if _hann_amplitude_at(s.power, c.f_hz, df) > _hann_amplitude_at(s.power, f_best, df)]:
         # period-2 motion (a 1/2X with its 1.5X, 2.5X …) and a machine whose 2X is its largest line
         # give the same spectrum: the larger line at twice the speed explains as many lines
-        warnings.append(
-            f"{cfg.SPEED_AMBIGUOUS}: {60 * f_best:.1f} r/min chosen, but the larger line family at "
+        warnings.append(Note(
+            "speed_estimate_ambiguous", detail=f"{60 * f_best:.1f} r/min chosen, but the larger line family at "
             f"{60 * double_rival[0].f_hz:.1f} cpm explains as many lines: if that is the running speed, the "
             f"{60 * f_best:.1f} cpm line is a 1/2X sub-harmonic (period-2 motion); give speed_rpm or "
-            "keyphasor_times_s")
+            "keyphasor_times_s"))
     return f_best, warnings
 
 
@@ -424,7 +429,7 @@ def _refined_speed(s: _Spectrum, f_best: float, choice: _Choice) -> tuple[float,
     strongest = np.argsort(-np.abs(s.spec[:, k_h]))[:4]       # the channels that carry the line
     f = refine_line_hz(s.x[strongest], fs, h * f_best) / h
     if abs(f - f_best) > 2 * df:
-        return f_best, [f"{cfg.SPEED_NOT_CONVERGED}; using the spectral peak {60 * f_best:.2f} r/min"]
+        return f_best, [Note("speed_not_converged", speed_rpm=60 * f_best)]
     return f, []
 
 
@@ -438,7 +443,7 @@ def _whirling_1x_warning(s: _Spectrum, f: float) -> str | None:
     circ = _circular_fraction(s.spec, k_top)
     if not circ < cfg.SPEED_WHIRL_MAX_BACKWARD:
         return None
-    return (f"{cfg.SPEED_AMBIGUOUS}: {60 * f:.1f} r/min chosen, but its 1X line, the largest, whirls in "
+    return Note("speed_estimate_ambiguous", detail=f"{60 * f:.1f} r/min chosen, but its 1X line, the largest, whirls in "
             f"nearly circular orbits (backward / forward {circ:.3f}), the signature of oil whirl / whip; if the "
             f"machine runs above {60 * f / cfg.SPEED_SUBSYNC_MAX_RATIO:.0f} r/min this is the whip and the running "
             "speed's own line is hidden: give speed_rpm, speed_range_rpm or keyphasor_times_s")
@@ -460,7 +465,7 @@ def _flat_comb_warning(s: _Spectrum, f: float) -> str | None:
     weakest = min(a[1:])
     if not (a[0] > 0 and weakest >= cfg.SPEED_FLAT_COMB_MIN_REL * a[0]):
         return None
-    return (f"{cfg.SPEED_AMBIGUOUS}: {60 * f:.1f} r/min chosen, but its 2X–{order}X lines all lie within "
+    return Note("speed_estimate_ambiguous", detail=f"{60 * f:.1f} r/min chosen, but its 2X–{order}X lines all lie within "
             f"{-20 * np.log10(weakest / a[0]):.0f} dB of its 1X, a comb as flat as a 1/nX sub-harmonic's in period-n "
             f"motion (a running speed's harmonics fall off faster); if the machine runs at a multiple of "
             f"{60 * f:.1f} r/min give speed_rpm or keyphasor_times_s")
@@ -527,17 +532,15 @@ def _estimate_speed_hz(data: np.ndarray, fs: float,
         hidden = _hidden_1x(s.x, s.spec, fs, s.df, s.k_top, f, s.c_lo, s.c_hi)
         if hidden is not None:
             f, note = hidden
-            warnings = [w for w in warnings if not w.startswith(cfg.SPEED_AMBIGUOUS)] + [note]
-    if choice.f_partner is None and not any(w.startswith(cfg.SPEED_AMBIGUOUS) for w in warnings):
+            warnings = [w for w in warnings if not _ambiguous(w)] + [note]
+    if choice.f_partner is None and not any(_ambiguous(w) for w in warnings):
         last = (_whirling_1x_warning(s, f) if choice.switched is None else None) or _flat_comb_warning(s, f)
         if last is not None:
             warnings.append(last)
     k_top = s.k_top
     top_order = k_top * s.df / f
     if abs(top_order - round(top_order)) > 0.05 or round(top_order) == 0:
-        warnings.append(
-            f"the largest spectral line ({60 * k_top * s.df:.1f} cpm = {top_order:.2f}X) is not synchronous: "
-            "non-synchronous vibration dominates; check the speed estimate or give speed_rpm / keyphasor_times_s")
+        warnings.append(Note("non_synchronous_dominant", line_cpm=60 * k_top * s.df, order=top_order))
     return f, warnings
 
 
@@ -576,8 +579,7 @@ def shaft_angle(rec, data: np.ndarray, estimate: tuple[float, list[str]] | None 
             steady = shaft_angle(replace(rec, channels=bare, keyphasor_times_s=None, speed_rpm=rpm_steady), data)
             source = ("speed_rpm" if rec.speed_rpm is not None else "estimated from the signal" if rpm_steady is None
                       else "the sound pulse intervals' period, locked to the signal")
-            note = (f"keyphasor_times_s not used: {fault.describe()}. The orders are tracked at a steady "
-                    f"{steady.speed_rpm:.1f} r/min ({source}), phases relative to the first sample")
+            note = Note("keyphasor_not_used", fault=fault.describe(), speed_rpm=steady.speed_rpm, source=source)
             # a speed read from the sound pulse intervals was not given by the user: say where it came from
             label = KEYPHASOR_INTERVALS if rec.speed_rpm is None and rpm_steady is not None else steady.source
             return replace(steady, source=label, warnings=[note, *steady.warnings])
@@ -591,11 +593,9 @@ def shaft_angle(rec, data: np.ndarray, estimate: tuple[float, list[str]] | None 
             raise _too_slow_sampling(spr_min, fs, 1.0 / float(periods.min()))
         variation = float(np.max(np.abs(periods / periods.mean() - 1.0)))
         if variation > cfg.SPEED_VARIATION_WARN:
-            warnings.append(f"running speed varies by up to {100 * variation:.1f} % between revolutions; "
-                            "orders are tracked revolution by revolution from the keyphasor")
+            warnings.append(Note("speed_varies", variation_pct=100 * variation))
         if rec.speed_rpm is not None and abs(rec.speed_rpm / rpm - 1) > 0.01:
-            warnings.append(f"speed_rpm {rec.speed_rpm:g} disagrees with the keyphasor ({rpm:.2f} r/min); "
-                            "the keyphasor is used")
+            warnings.append(Note("speed_disagrees_keyphasor", given_rpm=rec.speed_rpm, speed_rpm=rpm))
         t = np.arange(n) / fs
         start = int(np.searchsorted(t, kp[0], side="left"))
         stop = int(np.searchsorted(t, kp[-1], side="left"))
@@ -607,9 +607,8 @@ def shaft_angle(rec, data: np.ndarray, estimate: tuple[float, list[str]] | None 
         f_lock = locked_speed_hz(data, fs, f1)
         if f_lock is not None and abs(f_lock / f1 - 1.0) > cfg.SPEED_LOCK_MIN_REL:
             if abs(f_lock / f1 - 1.0) > cfg.SPEED_MISMATCH_WARN:
-                warnings.append(f"speed_rpm {rec.speed_rpm:g} is {100 * (f1 / f_lock - 1):+.2f} % off the signal's "
-                                f"synchronous lines ({60 * f_lock:.2f} r/min): the orders are tracked at the signal's "
-                                "speed")
+                warnings.append(Note("speed_off_signal", given_rpm=rec.speed_rpm, off_pct=100 * (f1 / f_lock - 1),
+                                     speed_rpm=60 * f_lock))
             f1 = f_lock
     else:
         if estimate is not None:
@@ -624,7 +623,7 @@ def shaft_angle(rec, data: np.ndarray, estimate: tuple[float, list[str]] | None 
     if spr < cfg.MIN_SAMPLES_PER_REV or n_revs < cfg.MIN_REVS:
         err = _too_slow_sampling(spr, fs, f1) if spr < cfg.MIN_SAMPLES_PER_REV else \
             _too_short(n / spr, 60 * f1, fs, n, "speed " + source)
-        doubt = next((w for w in warnings if w.startswith(cfg.SPEED_AMBIGUOUS)), None)
+        doubt = next((w for w in warnings if _ambiguous(w)), None)
         if doubt is not None:
             # the limit may be the estimate's fault (a 1/nX read as the speed): say so, not only "record longer"
             raise ValueError(f"{err}. But the running speed was estimated and is in doubt — {doubt}") from None

@@ -21,6 +21,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from rotordiag.core.notes import Note
+
 from . import _config as cfg
 from ._acquisitions import format_acquisitions
 from ._extract import _NAME_INDEX, _SPEED_INDEX, FeatureResult, _bearing_schema, phase_differences
@@ -78,16 +80,15 @@ def extract_by_take(rec: Recording, extract_one: Callable[[Recording], FeatureRe
             _, index = _bearing_schema(b)
             values[index] = fr.values[index]
         details.update(fr.bearings)
-        warnings += [f"the take of {_take_label(group)}: {w}" for w in fr.warnings]
+        warnings += [Note("take_note", take=_take_label(group), note=w) for w in fr.warnings]
 
     revs = np.array([fr.n_revs for fr in results], dtype=float)
     speeds = np.array([fr.speed_rpm for fr in results])
     speed = float(np.sum(speeds * revs) / np.sum(revs))
     values[_SPEED_INDEX] = speed
     if speeds.max() / speeds.min() - 1.0 > cfg.SPEED_VARIATION_WARN:
-        warnings.append("the takes ran at different speeds (" + ", ".join(
-            f"{_take_label(g)}: {s:.1f} r/min" for g, s in zip(groups, speeds)) + "): amplitudes and phases compare "
-            "across takes only at the same speed and load; re-record at one operating state")
+        warnings.append(Note("takes_speeds_differ", speeds=", ".join(
+            f"{_take_label(g)}: {s:.1f} r/min" for g, s in zip(groups, speeds))))
 
     typed = [fr for fr in results if fr.motion_type is not None]
     if typed:
@@ -97,17 +98,15 @@ def extract_by_take(rec: Recording, extract_one: Callable[[Recording], FeatureRe
         for name in _MOTION:
             values[_NAME_INDEX[name]] = shown.values[_NAME_INDEX[name]]
         if len({(fr.motion_type.kind, fr.motion_type.period) for fr in typed}) > 1:
-            warnings.append("the takes show different motion types (" + ", ".join(
-                f"{_take_label(g)}: {_motion_text(fr.motion_type)}" for g, fr in zip(groups, results) if fr.motion_type is not None)
-                + f"): the least regular, {_motion_text(shown.motion_type)}, is reported")
+            warnings.append(Note("takes_motion_differ", motions=", ".join(
+                f"{_take_label(g)}: {_motion_text(fr.motion_type)}" for g, fr in zip(groups, results)
+                if fr.motion_type is not None), shown=_motion_text(shown.motion_type)))
     motion = shown.motion_type if typed else None
 
     referenced = all(fr.phase_reference == "keyphasor" for fr in results)
     unrelated = () if referenced else groups
     if referenced:
-        warnings.append(f"bearings recorded in separate acquisitions ({format_acquisitions(groups)}), each with its "
-                        "keyphasor: every order's phase is referenced to the keyphasor mark, so the phase differences "
-                        "across the takes are measured — provided the machine ran at the same speed and load in each")
+        warnings.append(Note("separate_acquisitions_referenced", groups=format_acquisitions(groups)))
     faulty = " and of the take of ".join(_take_label(g) for g, fr in zip(groups, results)
                                          if fr.phase_reference != "keyphasor")
     warnings += phase_differences(values, details, unrelated, why=(

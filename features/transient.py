@@ -29,6 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rotordiag.core.notes import speed_in_doubt
+
 from . import _config as cfg
 from ._recording import Recording
 from ._speed import estimate_speed_hz
@@ -255,7 +257,7 @@ def track_speed(rec: Recording, *, window_s: float = SPEED_WINDOW_S, hop_s: floa
             doubt[i] = True
             continue
         rpm[i] = 60.0 * f
-        if any(cfg.speed_in_doubt(w) for w in warns):
+        if any(speed_in_doubt(w) for w in warns):
             doubt[i] = True
     ok = np.isfinite(rpm)
     for i in range(starts.size):

@@ -1,18 +1,10 @@
 """Bearings either side of the coupling recorded in separate acquisitions: never a confident verdict.
 
-``features.Recording.acquisitions`` says which bearings were sampled together; between acquisitions the phase
-differences are not measured (``features._acquisitions``). The phase across the coupling (bearings 2 and 3) is
-one the model leans on to tell aligned from slight, so a verdict without it is at best ``uncertain``
-(``separate_acquisitions``), with what to do. The reason also gives the model's two readings of the recording with
-that phase put in: the shaft ends in phase across the coupling (0°, what a healthy rigid coupling shows) and in
-anti-phase (180°, the classic misalignment sign), so that an engineer who knows the phase from another measurement
-knows which applies, and when both agree, that the call does not hinge on it. On docs/robustness.md's clean base set
-(seed 815) read so, 57 of the 58 aligned machines read aligned in phase, and the two readings agree for 131 of the
-240 recordings (88 misaligned ones severe either way).
-
-The phase differences between bearings 1 and 2 or 3 and 4 hardly move the shipped model's calls (the same set, with
-bearing 1 or bearing 4 in a take of its own: the same class, severity and status for 237 of the 240 recordings, the
-Δ estimate within 0.03), so splitting those is only the features' warning.
+Between acquisitions (``features.Recording.acquisitions``) the phase differences are not measured, and the phase
+across the coupling (bearings 2 and 3) is one the model leans on; such a verdict is at best ``uncertain``
+(``separate_acquisitions``). The reason gives the model's two readings with that phase put in — in phase (0°) and
+in anti-phase (180°) — so that an engineer who knows the phase from elsewhere knows which applies. Splitting
+bearings 1-2 or 3-4 is only the features' warning. The measurements behind it: docs/checks.md.
 """
 from __future__ import annotations
 

@@ -1,25 +1,13 @@
 """Which instrumented bearings a verdict reads: the probe sets the model was trained on, and how it does on each.
 
-The shipped model was trained on recordings with probes at some sets of bearings only (``train.toml``,
-``[augment] bearing_sets``: 1-2-3-4, 2-3, 1-2-3, 2-3-4, 2 and 3). A recording with another set is
-outside what it learnt, although no single feature is: on docs/robustness.md's clean base set (seed 815)
-the probes at bearings 1, 3, 4 gave 15 % false alarms and 1, 2, 4 gave 100 %, where the model's own sets
-2-3 and 3 gave 0 % and 8 %. And one of its own sets tells next to nothing: from bearing 2 alone (the
-generator's coupling end, whose heavy journal barely answers a coupling load) it called 94 % of the
-aligned machines misaligned, "uncertain, moderate" — the prior's middle, shown as a severity.
-
-So a recording is read through its **answering set**: the largest of the model's training sets that it has
-(ties: the one trained with the larger weight). The features of the other bearings are left out (treated
-as missing, as when those probes are absent), with a warning that says so; the evidence still shows every
-bearing. A bearing whose 1X alone whirls backward (``features`` sanity ``reverse_whirl``: more often a probe
-order or polarity mistake than the machine) is not read either: with bearing 2's x probe inverted on the base
-set the aligned machines were called misaligned 77 % of the time. No training set within the bearings left →
-``bearing_set_untrained`` (inconclusive). An
-answering set whose held-out figures (:data:`CAPABILITY_PATH`, measured for the shipped model by
-``benchmarks/bench_bearing_sets.py --write``) miss :data:`MAX_FALSE_ALARM_ANY` or :data:`MIN_MACRO_F1` →
-``bearing_set_uninformative`` (inconclusive); one with more than :data:`MAX_FALSE_ALARM` false alarms →
-``bearing_set_weak`` (uncertain: no confident verdict). Models without ``bearing_sets`` in their card's training
-configuration, or bundles without a card, read every bearing, as before.
+A recording is read through its **answering set**: the largest of the model's training probe sets (card:
+``[augment] bearing_sets``) that it has (ties: the larger training weight). The other bearings' features are left
+out (as when those probes are absent), with a warning; the evidence still shows every bearing. A bearing whose 1X
+alone whirls backward (sanity ``reverse_whirl``) is not read either. No training set within the bearings →
+``bearing_set_untrained`` (inconclusive); an answering set whose held-out figures (:data:`CAPABILITY_PATH`) miss
+:data:`MAX_FALSE_ALARM_ANY` or :data:`MIN_MACRO_F1` → ``bearing_set_uninformative`` (inconclusive); more than
+:data:`MAX_FALSE_ALARM` false alarms → ``bearing_set_weak`` (uncertain). Models without ``bearing_sets`` in their
+card read every bearing. The measurements behind it: docs/checks.md.
 """
 from __future__ import annotations
 
@@ -31,6 +19,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from rotordiag.core.notes import Note
 
 from ._patterns import bearing_feature
 from .status import INCONCLUSIVE, UNCERTAIN, Reason
@@ -151,9 +141,10 @@ class BearingPlan:
         fig = (f" (on held-out plants from {set_key(self.answering)}: macro-F1 {f['macro_f1']:.2f}, "
                f"false alarms {f['false_alarm']:.1%})" if f else "")
         doubt = f" ({_said(self.suspect)}: {_BACKWARD})" if self.suspect else ""
-        return [f"{_said(self.left_out)} not read by the model{doubt}: it was trained on the probe sets "
-                f"{self._sets()}, and the largest of them this recording has{' without it' if self.suspect else ''} "
-                f"is {set_key(self.answering)}{fig}; the evidence still shows every bearing"]
+        return [Note("bearings_not_read", detail=(
+            f"{_said(self.left_out)} not read by the model{doubt}: it was trained on the probe sets "
+            f"{self._sets()}, and the largest of them this recording has{' without it' if self.suspect else ''} "
+            f"is {set_key(self.answering)}{fig}; the evidence still shows every bearing"))]
 
     def reasons(self) -> list[Reason]:
         """``bearing_set_untrained`` or ``bearing_set_uninformative`` (inconclusive), ``bearing_set_weak``

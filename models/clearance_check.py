@@ -1,26 +1,10 @@
 """A stated clearance that may be the diametral one, judged by the machine family the model knows.
 
-``clearance_um`` is the radial clearance c. A bearing's clearance is often quoted diametral (2c: the bore minus
-the journal), and a plant engineer who types that in halves every per-clearance feature — the orbit sizes and the
-journal's eccentricity in the bearing. No single feature is then out of range (the training family spans plants
-with half to twice the default clearance). docs/robustness.md, mistakes "clearance stated ×2" on the clean base
-and far sets (seed 815): 53 and 45 of 240 verdicts were ``confident``, 4 of the far ones two bands off (3 healthy
-machines shown moderate misalignment).
-
-The recording read with half the stated clearance is then often more like the training family. Over the confident
-verdicts of the clean base, far and presets sets (seed 815), the OOD score at half the clearance was at most the
-stated clearance's for 42 of 53, 32 of 45 and 26 of 35 slips — all 4 two bands off among them — and for 0 of 115,
-1 of 91 and 2 of 86 recordings whose clearance was right.
-
-So :func:`clearance_reason` reads a ``confident`` verdict's recording once more with half the stated clearance (every
-bearing's, when given per bearing: ``features.with_scale``, the feature row at that clearance — exact,
-no second extraction); when its OOD score is at or below :data:`DIAMETRAL_OOD_RATIO` times the
-recording's own, the verdict gets ``clearance_diametral`` (uncertain), which says what to check. The verdict itself
-stays the one at the clearance given. A verdict that is not confident is not read again: the reason could only
-repeat that it is not to be acted on alone. The mistakes' rows now: 11 and 13 confident, none two bands off. In
-family it costs 11 of the 1 281 confident verdicts of docs/robustness.md's 17 simulated rows (coupling bearings only
-108 → 102, presets 84 → 82, the two 192-revolution rows 1 each); one more pass of the OOD scorer and the classifier
-per confident verdict with a clearance.
+``clearance_um`` is the radial clearance c; one typed in diametral (2c) halves every per-clearance feature without
+putting any out of range. :func:`clearance_reason` reads a ``confident`` verdict's feature row once more at half
+the stated clearance (``features.with_scale``, exact, no second extraction); when its OOD score is at or below
+:data:`DIAMETRAL_OOD_RATIO` times the recording's own, the verdict gets ``clearance_diametral`` (uncertain). The
+verdict stays the one at the clearance given. The measurements behind it: docs/checks.md.
 """
 from __future__ import annotations
 

@@ -1,25 +1,11 @@
 """A verdict that rests on a 1X or 2X common to every probe (electrical pickup), read again without it.
 
-A 2-pole generator runs synchronously with the grid, so mains pickup on the probe cables (a ground loop,
-a shared supply) sits exactly at its 1X (50/60 Hz) and 2X (100/120 Hz): the same amplitude and phase at
-every probe. No shaft orbit looks like that (``features._common_mode``). When it dominates an order, the
-sanity check ``common_mode_1x`` / ``common_mode_2x`` warns (a share of 0.85 over 8 probes, 0.95 over 6;
-held-out machines reach 0.66 and 0.92). A weaker pickup beside the shaft's own 2X still moves the verdict: the
-classifier reads it as a coupling's 2X, and a share of 0.6–0.85 is no proof of pickup on its own.
-
-So :func:`common_mode_reason` reads a recording whose 1X or 2X common share is at least
-:data:`COMMON_MODE_DOUBT_SHARE` once more with that common signal removed from every channel
-(``features.without_common_mode``); when the class differs, the verdict gets ``common_mode``: the call rests on a
-part of the signal that no shaft motion explains, and the message says what the class is without it and what to
-check — ``inconclusive`` when the sanity check found that part dominating (the order is pickup, not shaft: no
-severity from it), else ``uncertain``. When the class is the same either way the pickup does not matter to it,
-and the sanity warning alone keeps the verdict from ``confident``. The verdict itself is the recording's as sent.
-
-docs/robustness.md, row "mains pickup at 2X, 10 µm" (the clean base set, seed 815, a 10 µm 0-pk pickup at 2X on
-every channel): before these checks 50 of 240 verdicts were ``confident``, 9 of them two bands off (8 aligned
-machines shown moderate, a flexible coupling at Δ 0.14 shown severe); with them 25, none two bands off (status 10 / 50 / 40 %;
-42 of the 48 healthy machines ``inconclusive``). In family nothing changes: of 1920 held-out recordings (clean base sets of seeds 815–817, far,
-presets, SNR 15 dB, speed unknown, coupling bearings only) 5 were read twice and none doubted.
+Mains pickup on a grid-synchronous generator's probe cables sits exactly at its 1X / 2X with the same amplitude
+and phase at every probe, which no shaft orbit does (``features._common_mode``). :func:`common_mode_reason` reads a
+recording whose common share is at least :data:`COMMON_MODE_DOUBT_SHARE` once more without that common signal
+(``features.without_common_mode``); when the class differs the verdict gets ``common_mode`` (``inconclusive`` when
+the sanity check found the pickup dominating, else ``uncertain``). The verdict itself is the recording's as sent.
+The measurements behind it: docs/checks.md.
 """
 from __future__ import annotations
 

@@ -1,20 +1,10 @@
 """Bearings numbered from the wrong end, judged by the machine family the model knows.
 
-Bearing 1 is the generator's far end (the turbine side) and 4 the exciter's far end. A plant that numbers its
-bearings from the exciter end sends the same train as 4-3-2-1; no single feature is then out of range, and on
-docs/robustness.md's clean base set (seed 815) 41 of 240 such verdicts were `confident`, 2 of them two bands off
-(macro-F1 0.76 → 0.38). The recording numbered the other way round is then the one that looks like the training
-family: its OOD score was lower for all 240 mirrored recordings (median ratio 0.72), and for 1 of the 240 correctly
-numbered ones (ratio ≥ 0.96, median 1.39).
-
-So ``models.predict.diagnose`` scores a four-bearing recording that is in distribution once more with its features
-renumbered (:func:`mirrored_row`: bearing ``b``'s features read as bearing ``5 − b``'s, the phase differences
-across bearings turned round); when that OOD score is at or below :data:`NUMBERING_OOD_RATIO` times the
-recording's own, :func:`numbering_reason` gives ``bearing_numbering`` (uncertain: never confident), which says what
-to check. The verdict itself stays the one of the numbering given: the model does not renumber the user's
-bearings. Renumbering the feature row, not the recording, costs one more pass of the OOD scorer and the classifier
-(re-extracting the renumbered recording took a third of the service's binary throughput). Swapping only the coupling
-bearings 2 and 3 is not judged: the OOD score hardly moves (median ratio 1.04 on the correct numbering).
+Bearing 1 is the generator's far end and 4 the exciter's; a plant numbering from the exciter end sends the train
+as 4-3-2-1 with no feature out of range. ``models.predict.diagnose`` scores a four-bearing, in-distribution
+recording once more with its feature row renumbered (:func:`mirrored_row`); when that OOD score is at or below
+:data:`NUMBERING_OOD_RATIO` times the recording's own, :func:`numbering_reason` gives ``bearing_numbering``
+(uncertain). The verdict stays the one of the numbering given. The measurements behind it: docs/checks.md.
 """
 from __future__ import annotations
 

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from rotordiag.core.notes import Note
 from rotordiag.features import evidence
 
 from .acquisitions import acquisitions_reason, coupling_phase_rows, coupling_split
@@ -321,17 +322,15 @@ def _model_row(bundle, feature_result) -> _ModelRow:
         model, version = bundle, None
     names = model.feature_names_
     row, missing = feature_vector(names, feature_result)
-    warnings = [str(w) for w in (getattr(feature_result, "warnings", None) or ())]
+    warnings = list(getattr(feature_result, "warnings", None) or ())       # Notes: code, typed values, text
     if len(missing) == len(names):
         raise ValueError(
             "feature_result: none of the model's features are present; "
             "the features were made by a different feature extractor than the model was trained on"
         )
     if missing:
-        warnings.append(
-            f"{len(missing)} model feature(s) not produced by the feature extractor "
-            f"(treated as missing): {missing[:5]}{' …' if len(missing) > 5 else ''}"
-        )
+        warnings.append(Note("model_features_not_produced", n_missing=len(missing),
+                             examples=f"{missing[:5]}{' …' if len(missing) > 5 else ''}"))
     # the probe set the model reads (models.bearing_sets): the other bearings' features left out
     sanity = tuple(getattr(feature_result, "sanity", ()) or ())
     plan = (bearing_plan(bundle, feature_result.bearings,
@@ -370,10 +369,8 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
     never_missing = (~np.isfinite(row)) & (model.feature_nan_rate_ == 0)
     never_missing_names = [n for n, m in zip(names, never_missing) if m and n not in missing]
     if never_missing_names:
-        warnings.append(
-            f"{len(never_missing_names)} feature(s) missing here were always present in training "
-            f"(e.g. {never_missing_names[:3]}); the verdict relies on the others and is less certain"
-        )
+        warnings.append(Note("features_never_missing", n_missing=len(never_missing_names),
+                             examples=str(never_missing_names[:3])))
     X = row[None, :]
     fast = fast_predictor(model)
     proba = fast.predict_proba(X)[0]
@@ -394,16 +391,11 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
     if not ood:
         extra += _numbering_reasons(model, fast, names, row, ood_score, cls)
     if ood_score > 1.0:
-        warnings.append(
-            f"signal unlike the training data (OOD score {ood_score:.2f} > 1): "
-            "treat the verdict with caution"
-        )
+        warnings.append(Note("signal_unlike_training", ood_score=ood_score))
     if findings:
-        warnings.append(
-            f"{len(findings)} feature(s) outside the training data's range "
-            f"({', '.join(f['feature'] for f in findings[:5])}{' …' if len(findings) > 5 else ''}): "
-            "treat the verdict with caution"
-        )
+        warnings.append(Note("features_outside_training", n_outside=len(findings),
+                             examples=f"{', '.join(f['feature'] for f in findings[:5])}"
+                                      f"{' …' if len(findings) > 5 else ''}"))
     if clearance_um is None:
         clearance_um = getattr(feature_result, "clearance_um", None)
     if clearance_um is not None and not (np.isfinite(clearance_um) and clearance_um > 0):

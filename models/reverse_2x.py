@@ -1,23 +1,10 @@
 """A misalignment call whose coupling 2X whirls backward: never confident.
 
-In the machines the model was trained on, a coupling's 2X, and a two-pole rotor's (its asymmetric stiffness under
-gravity), whirls forward: on the held-out plants of docs/robustness.md (clean base, far and preset sets, seed 815)
-the reverse/forward ratio of the 2X orbit at the coupling bearings (``b{n}_2x_rev_fwd_ratio``) has its 99th
-percentile at 1.6–1.9. That is the family's regularity, not a law: a preloaded, flattened orbit can whirl backward,
-and 6 of the 15 misaligned cases of the independent ROSS machines (two of the three designs) are called misaligned
-on a coupling 2X that whirls backward.
-A 2X that is not shaft motion follows no rule at all: electrical pickup with its own phase on each probe cable (a
-ground loop through cables routed apart; pickup in one phase on every probe is ``models.common_mode``'s) makes each
-bearing's 2X orbit an arbitrary ellipse, reverse as often as forward, and the model reads a strong 2X as
-misalignment. At 10 µm such pickup on the clean base set gave 8 healthy machines shown moderate or severe with
-`confident` status.
-
-So a misalignment call whose coupling bearing with a sizeable 2X (at least half the larger coupling bearing's)
-whirls backward with reverse ≥ :data:`REVERSE_2X_MIN_RATIO` × forward is ``uncertain`` (``reverse_2x``): a doubt
-with what to check, never a finding. docs/robustness.md, row "mains pickup at 2X, 10 µm, a phase per cable":
-confident 55 → 35, two bands off 8 → 4. In family it costs 2 of the 592 confident verdicts of the clean, runout,
-SNR 15 dB, coupling-bearings-only, far and preset rows (one runout, one far plant); the ROSS cases it names were
-uncertain already.
+In the training family a coupling's 2X whirls forward; a 2X that is not shaft motion (pickup with its own phase
+on each cable) is reverse as often as forward, and the model reads a strong 2X as misalignment. So a misalignment
+call whose coupling bearing with a sizeable 2X (at least half the larger coupling bearing's) whirls backward with
+reverse ≥ :data:`REVERSE_2X_MIN_RATIO` × forward is ``uncertain`` (``reverse_2x``): a doubt, never a finding.
+The measurements behind it: docs/checks.md.
 """
 from __future__ import annotations
 

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from rotordiag.features import (
-    SPEED_AMBIGUOUS,
     FeatureResult,
+    Note,
     Recording,
     extract_features,
     speed_alternatives_rpm,
@@ -102,12 +102,10 @@ def choose_speed(bundle: Any, recording: Recording, fr: FeatureResult, verdict: 
     if best is None:
         return verdict, fr, choice
     rpm, fr_c, v_c = best
-    note = (f"{SPEED_AMBIGUOUS}: the verdict is given at {rpm:.1f} r/min, not at the estimate {fr.speed_rpm:.1f} r/min. "
-            f"At the estimate the recording was unlike the machines the model was trained on (OOD score "
-            f"{verdict.ood_score:.2f}); of the {len(tried)} other running speeds its spectrum allows, {rpm:.1f} r/min "
-            f"makes it like them (OOD score {v_c.ood_score:.2f}). The speed rests on that judgement, not on the "
-            "signal alone: confirm it (speed_rpm, speed_range_rpm or keyphasor_times_s)")
-    estimator = [f"at the estimate {fr.speed_rpm:.1f} r/min: {w}" for w in fr.warnings if speed_in_doubt(w)]
+    note = Note("speed_chosen_by_model", speed_rpm=rpm, estimate_rpm=fr.speed_rpm, estimate_ood=verdict.ood_score,
+                n_tried=len(tried), chosen_ood=v_c.ood_score)
+    estimator = [Note("speed_doubt_at_estimate", estimate_rpm=fr.speed_rpm, note=w)
+                 for w in fr.warnings if speed_in_doubt(w)]
     noted = with_speed_notes(fr_c, [note, *estimator])      # the chosen reading's features, its notes changed
     fr_c = noted if noted is not None else extract_features(recording, speed_estimate_rpm=rpm,
                                                             speed_notes=[note, *estimator])

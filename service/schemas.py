@@ -8,6 +8,7 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, field_validator
 
 from rotordiag.core.input_bounds import CLEARANCE_RANGE_UM, SAMPLE_RATE_RANGE_HZ, SPEED_RANGE_RPM
+from rotordiag.core.notes import NOTES
 from rotordiag.core.reasons import CATALOGUE, known_code
 from rotordiag.simulator.dataset.spec import DESIGN_MECHANISMS
 
@@ -496,7 +497,9 @@ class DiagnoseResponse(BaseModel):
                                     "synchronous lines within ±1 % —, from the keyphasor, or estimated from the signals).")
     model_version: str = Field(..., description="Registered model version that produced the verdict.")
     bands: dict[str, Any] = Field(..., description="The model's severity bands: `edges` (Δ) and `names`.")
-    warnings: list[str] = Field(..., description="Anything that makes the verdict less certain.")
+    warnings: list[str] = Field(..., description="Anything that makes the verdict less certain: each the message of "
+                                "one code of the warnings catalogue (`rotordiag.core.notes`; docs/pipeline.md's warnings "
+                                "table): " + ", ".join(f"`{c}`" for c in NOTES) + ".")
     asset_probes: AssetProbesSection | None = Field(None, description="With an `asset_id` that has a probe "
                                                     "configuration (PUT /assets/{id}/probes): what of it was used.")
     input_notes: list[str] = Field(default_factory=list, description="What the reader assumed or left out of an "

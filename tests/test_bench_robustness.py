@@ -652,7 +652,7 @@ def test_a_stated_nominal_range_finds_the_1x_beside_a_whirls_2nd_harmonic(case):
     rpm = bench.design("base", 48, 815)[case]["speed_rpm"]
     fr = extract_features(recording(case))
     assert fr.speed_rpm == pytest.approx(rpm, rel=5e-3), fr.warnings
-    assert any("speed estimate ambiguous" in w and "two-line fit" in w for w in fr.warnings), fr.warnings
+    assert any(w.code == "speed_estimate_ambiguous" and "two-line fit" in w.values["detail"] for w in fr.warnings), fr.warnings
     with pytest.raises(ValueError, match="no running speed's 1X could be told apart from it on these 4[0-9] "
                                          "revolutions — record longer"):
         extract_features(recording(42))

@@ -101,8 +101,8 @@ def test_phases_between_takes_are_missing_not_the_delay():
     # every other feature is the recording's own
     other = [i for i, n in enumerate(takes.names) if "_b2_b3_" not in n]
     np.testing.assert_array_equal(takes.values[other], as_one.values[other])
-    said = [w for w in takes.warnings if "separate acquisitions" in w]
-    assert said and "(1,2;3,4)" in said[0] and "bearings 2 and 3 are not measured" in said[0]
+    said = [w for w in takes.warnings if w.code == "separate_acquisitions_unreferenced"]
+    assert said and said[0].values["groups"] == "1,2;3,4" and said[0].values["pairs"] == "bearings 2 and 3"
     coupling = [e for e in evidence(takes) if e.scope == "coupling 2–3"]
     assert len(coupling) == 1 and coupling[0].value.startswith("not measured (bearings 2 and 3 recorded in separate")
     assert "record bearings 2 and 3 together" in coupling[0].meaning

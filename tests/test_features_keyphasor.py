@@ -55,7 +55,7 @@ def test_orders_are_not_tracked_by_a_faulty_train(speed_given):
     assert fr.speed_source == ("given" if speed_given else "keyphasor intervals")
     assert fr.phase_reference == "first sample"
     assert fr.speed_rpm == pytest.approx(RPM, rel=1e-6)
-    assert fr.warnings[0].startswith("keyphasor_times_s not used")
+    assert fr.warnings[0].code == "keyphasor_not_used" and fr.warnings[0].values["speed_rpm"] == fr.speed_rpm
     finding = [f for f in fr.sanity if f.code == "keyphasor_faulty"]
     assert len(finding) == 1 and finding[0].level == "warn" and "notch" in finding[0].message
     for b, comps in DEFAULT_COMPONENTS.items():
@@ -69,7 +69,7 @@ def test_a_faulty_train_without_a_period_falls_back_to_the_signals_speed():
     both = np.sort(np.concatenate([pulses, pulses + 0.37 * 60.0 / RPM]))
     fr = extract_features(make_recording(rpm=RPM, keyphasor_times_s=both))
     assert fr.speed_source == "estimated" and fr.speed_rpm == pytest.approx(RPM, rel=1e-3)
-    assert "estimated from the signal" in fr.warnings[0]
+    assert fr.warnings[0].code == "keyphasor_not_used" and fr.warnings[0].values["source"] == "estimated from the signal"
     assert "keyphasor_faulty" in {f.code for f in fr.sanity}
 
 

@@ -99,5 +99,6 @@ def test_motion_needs_32_revolutions():
     n = int(20 * 5120 / F1)  # 20 revolutions
     fr = extract_features(make_recording(n=n, speed_rpm=RPM))
     assert np.isnan(fr["motion_period"]) and fr.motion_type is None
-    assert any("motion type not determined" in w for w in fr.warnings)
-    assert any("sub-harmonic band features" in w for w in fr.warnings)
+    codes = {w.code: w.values for w in fr.warnings}
+    assert codes["few_revolutions_motion"]["n_revs"] == fr.n_revs < codes["few_revolutions_motion"]["min_revs"]
+    assert codes["few_revolutions_subharmonic"]["resolution_x"] == pytest.approx(1 / fr.n_revs)

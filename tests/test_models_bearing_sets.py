@@ -148,7 +148,8 @@ def test_shipped_model_reads_bearing_3_alone_when_the_probes_are_at_1_3_4():
     full, alone = _shipped_verdict((1, 3, 4), 0.3), _shipped_verdict((3,), 0.3)
     np.testing.assert_allclose(list(full.probabilities.values()), list(alone.probabilities.values()), atol=0.02)
     assert full.model_severity == alone.model_severity
-    assert any(w.startswith("bearings 1 and 4 not read by the model") for w in full.warnings)
+    assert any(w.code == "bearings_not_read" and w.values["detail"].startswith("bearings 1 and 4 not read by the model")
+               for w in full.warnings)
     # bearing 3 alone called 10.4 % of held-out aligned machines misaligned: never confident
     assert [r["code"] for r in full.reasons if r["code"].startswith("bearing_set")] == ["bearing_set_weak"]
     assert full.status == "uncertain"
@@ -186,7 +187,8 @@ def test_shipped_model_leaves_out_a_bearing_with_an_inverted_probe():
     v = diagnose(bundle, fr)
     codes = [r["code"] for r in v.reasons]
     assert "reverse_whirl" in codes and "bearing_set_weak" in codes and v.status == "uncertain"
-    assert any("bearing 2: the 1X whirls backward" in w for w in v.warnings)
+    assert any(w.code == "bearings_not_read" and "bearing 2: the 1X whirls backward" in w.values["detail"]
+               for w in v.warnings)
 
 
 def test_probe_sets_lists_each_training_set_with_its_figures_and_verdict(tmp_path, monkeypatch):

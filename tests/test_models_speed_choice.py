@@ -13,7 +13,7 @@ from types import SimpleNamespace
 import pytest
 
 import rotordiag.models.speed_choice as sc
-from rotordiag.features import SPEED_AMBIGUOUS, extract_features, speed_alternatives_rpm, speed_in_doubt
+from rotordiag.features import Note, extract_features, speed_alternatives_rpm, speed_in_doubt
 
 from .test_features_speed import _whip_recording
 
@@ -64,13 +64,18 @@ def test_alternatives_respect_the_stated_range_and_a_known_speed(whip):
 
 def test_features_at_a_speed_estimated_elsewhere(whip):
     rec, _ = whip
-    fr = extract_features(rec, speed_estimate_rpm=TRUE_RPM, speed_notes=["a note"])
+    note = Note("speed_varies", variation_pct=0.5)
+    fr = extract_features(rec, speed_estimate_rpm=TRUE_RPM, speed_notes=[note])
     assert fr.speed_rpm == TRUE_RPM and fr.speed_source == "estimated"
-    assert fr.warnings[0] == "a note"
+    assert fr.warnings[0] is note or fr.warnings[0] == note
+    with pytest.raises(TypeError, match="speed_notes"):                   # words are no note
+        extract_features(rec, speed_estimate_rpm=TRUE_RPM, speed_notes=["speed estimate ambiguous: a note"])
     # a speed from elsewhere is never the signal's own reading: put in doubt unless a note already does
-    assert fr.warnings[1].startswith(SPEED_AMBIGUOUS) and "speed_estimate_rpm" in fr.warnings[1]
-    doubtful = extract_features(rec, speed_estimate_rpm=TRUE_RPM, speed_notes=[f"{SPEED_AMBIGUOUS}: chosen"])
+    assert fr.warnings[1].code == "speed_estimated_elsewhere" and fr.warnings[1].values == {"speed_rpm": TRUE_RPM}
+    doubtful = extract_features(rec, speed_estimate_rpm=TRUE_RPM,
+                                speed_notes=[Note("speed_estimate_ambiguous", detail="chosen")])
     assert sum(speed_in_doubt(w) for w in doubtful.warnings) == 1
+    assert [w.code for w in doubtful.warnings] == ["speed_estimate_ambiguous"]
     given = extract_features(replace(rec, speed_rpm=2999.0), speed_estimate_rpm=TRUE_RPM)
     assert given.speed_rpm == 2999.0 and given.speed_source == "given"          # a given speed wins
     with pytest.raises(ValueError, match="speed_estimate_rpm"):
@@ -84,11 +89,16 @@ def test_an_out_of_distribution_verdict_at_a_doubtful_estimate_moves_to_the_in_f
     v, fr2, choice = sc.choose_speed(None, rec, fr, diagnose(None, fr))
     assert fr2.speed_rpm == pytest.approx(TRUE_RPM, rel=5e-3) and v.speed_rpm == fr2.speed_rpm
     assert fr2.speed_source == "estimated"
-    assert fr2.warnings[0].startswith(SPEED_AMBIGUOUS) and f"{fr.speed_rpm:.1f} r/min" in fr2.warnings[0]
+    chosen = fr2.warnings[0]
+    assert chosen.code == "speed_chosen_by_model" and speed_in_doubt(chosen)
+    assert chosen.values["estimate_rpm"] == fr.speed_rpm and chosen.values["speed_rpm"] == choice.chosen_rpm
+    assert chosen.values["n_tried"] == len(choice.tried)
     assert choice is not None and choice.chosen_rpm == pytest.approx(TRUE_RPM, rel=5e-3)
     assert choice.estimate_rpm == fr.speed_rpm and len(choice.tried) == len(speed_alternatives_rpm(rec, fr.speed_rpm))
     # the estimator's own doubt is kept, marked as about the estimate
-    assert any(w.startswith(f"at the estimate {fr.speed_rpm:.1f} r/min: {SPEED_AMBIGUOUS}") for w in fr2.warnings)
+    kept = [w for w in fr2.warnings if w.code == "speed_doubt_at_estimate"]
+    assert kept and [w.values["note"] for w in kept] == [w for w in fr.warnings if speed_in_doubt(w)]
+    assert all(w.values["estimate_rpm"] == fr.speed_rpm for w in kept)
 
 
 @pytest.mark.parametrize("case", ["in distribution", "every reading out", "gain too small", "speed given"])
@@ -148,7 +158,8 @@ def test_speed_notes_changed_without_extracting_again_give_the_extracted_result(
     from rotordiag.features import with_speed_notes
 
     rec, _ = whip
-    notes = [f"{SPEED_AMBIGUOUS}: chosen by the model", "at the estimate 1230.0 r/min: a note"]
+    notes = [Note("speed_estimate_ambiguous", detail="chosen by the model"),
+             Note("speed_doubt_at_estimate", estimate_rpm=1230.0, note=Note("speed_not_converged", speed_rpm=1230.0))]
     fr = extract_features(rec, speed_estimate_rpm=TRUE_RPM)
     noted = with_speed_notes(fr, notes)
     again = extract_features(rec, speed_estimate_rpm=TRUE_RPM, speed_notes=notes)

@@ -66,24 +66,40 @@ def test_status_rules():
     assert _assess(row=np.array([1.0]))[0] == UNCERTAIN               # 30× below
     assert _assess(probabilities=[0.5, 0.5, 0, 0])[0] == UNCERTAIN
     assert _assess(class_delta_agree=False)[0] == UNCERTAIN
-    amb = "speed estimate ambiguous: 1200 r/min chosen over 2400 r/min"
+    from rotordiag.core.notes import Note
+
+    amb = Note("speed_estimate_ambiguous", detail="1200 r/min chosen over 2400 r/min")
     assert _assess(speed_source="estimated", warnings=[amb])[1][0].code == "speed_ambiguous"
     assert _assess(speed_source="given", warnings=[amb])[0] == "confident"
 
 
 def test_every_speed_doubt_the_extractor_words_makes_the_verdict_uncertain():
-    """The status reads a doubtful estimated speed through ``features.speed_in_doubt``, whose prefixes the
-    estimator's own warnings are built from (rewording one cannot make a doubtful speed confident)."""
-    from rotordiag.features import SPEED_AMBIGUOUS, SPEED_NOT_CONVERGED, speed_in_doubt
+    """The status reads a doubtful estimated speed by the warning's code (``rotordiag.core.notes``: every ``doubt``
+    code, also inside a take's warning), never by its words: rewording one cannot make a doubtful speed confident,
+    and a text that merely says "ambiguous" makes nothing doubtful."""
+    from rotordiag.core.notes import DOUBT, NOTES, Note
+    from rotordiag.features import speed_in_doubt
 
-    for w in (f"{SPEED_AMBIGUOUS}: 1200.0 r/min chosen over 2400.0 r/min",
-              f"{SPEED_NOT_CONVERGED}; using the spectral peak 1800.00 r/min",
-              f"bearing 2: {SPEED_AMBIGUOUS}: 1200.0 r/min chosen"):
-        assert speed_in_doubt(w)
+    doubt = [Note("speed_estimate_ambiguous", detail="1200.0 r/min chosen over 2400.0 r/min"),
+             Note("speed_not_converged", speed_rpm=1800.0),
+             Note("speed_estimated_elsewhere", speed_rpm=1230.0),
+             Note("speed_chosen_by_model", speed_rpm=1800.0, estimate_rpm=900.0, estimate_ood=4.0, n_tried=3,
+                  chosen_ood=0.5),
+             Note("speed_doubt_at_estimate", estimate_rpm=900.0, note=Note("speed_not_converged", speed_rpm=900.0)),
+             Note("take_note", take="bearings 2, 3", note=Note("speed_not_converged", speed_rpm=900.0))]
+    # every doubt code of the catalogue is exercised here (a new one must be added to this list)
+    assert {w.code for w in doubt[:5]} == {c for c, e in NOTES.items() if e.severity == DOUBT}
+    for w in doubt:
+        assert speed_in_doubt(w), w.code
         status, reasons = _assess(speed_source="estimated", warnings=[w])
         assert status == UNCERTAIN and [r.code for r in reasons] == ["speed_ambiguous"]
-    assert not speed_in_doubt("running speed varies by up to 0.4 % between revolutions")
-    assert _assess(speed_source="estimated", warnings=["only 20 revolutions: motion type not determined"])[0] == "confident"
+        assert reasons[0].message == str(w)
+    calm = [Note("speed_varies", variation_pct=0.4), Note("few_revolutions_motion", n_revs=20, min_revs=32),
+            Note("take_note", take="bearings 2, 3", note=Note("speed_varies", variation_pct=0.4)),
+            "speed estimate ambiguous: 1200.0 r/min chosen"]         # words without a code put nothing in doubt
+    for w in calm:
+        assert not speed_in_doubt(w)
+        assert _assess(speed_source="estimated", warnings=[w])[0] == "confident"
 
 
 def test_shipped_model_never_gives_a_severity_to_an_impossible_recording():

@@ -241,7 +241,7 @@ def test_pictures_are_drawn_at_the_verdicts_speed(client, monkeypatch):
     reading of a doubtful estimate), the page's pictures mark the orders at the verdict's speed."""
     import rotordiag.models.diagnosis as dg
     import rotordiag.models.speed_choice as sc
-    from rotordiag.features import extract_features
+    from rotordiag.features import Note, extract_features
 
     from .test_features_speed import _whip_recording
 
@@ -250,7 +250,7 @@ def test_pictures_are_drawn_at_the_verdicts_speed(client, monkeypatch):
     chosen = 3074.0
 
     def choose(bundle, recording, fr, verdict, **kw):       # stands in for the model's judgement
-        fr2 = extract_features(recording, speed_estimate_rpm=chosen, speed_notes=["speed estimate ambiguous: test"])
+        fr2 = extract_features(recording, speed_estimate_rpm=chosen, speed_notes=[Note("speed_estimate_ambiguous", detail="test")])
         return sc.diagnose(bundle, fr2, clearance_um=kw.get("clearance_um")), fr2, None
 
     monkeypatch.setattr(dg, "choose_speed", choose)
