@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 from sqlalchemy import Text, cast, delete, func, select, update
 
+from .alarms import evaluate
 from .core.db import AssetBaseline, AssetDiagnosis, AssetSettings, Job, ServiceProbe, utcnow
 
 if TYPE_CHECKING:
@@ -26,7 +27,8 @@ def _num(value: Any) -> float | None:
 def store_diagnosis(state: AppState, asset_id: str, plant: str | None, verdict: dict[str, Any],
                     signature: dict[str, Any] | None = None) -> int:
     """Store one verdict for ``asset_id`` (time, verdict, key features, model version, the recording's
-    signature, the comparison with the baseline when the verdict has one); returns the row id."""
+    signature, the comparison with the baseline when the verdict has one) and, in the same transaction, the
+    alarm events it raises or clears (``service.alarms.evaluate``); returns the row id."""
     section = verdict.get("baseline") or {}
     change = {k: v for k, v in section.items() if k != "evidence"} if section.get("compared") else None
     interval = verdict.get("misalignment_interval") or (None, None)
@@ -44,7 +46,11 @@ def store_diagnosis(state: AppState, asset_id: str, plant: str | None, verdict: 
         s.add(row)
         s.flush()
         row_id = int(row.id)
+        events = evaluate(s, state.settings, asset_id, row_id, verdict, row.alarm)
         apply_retention(s, state.settings, asset_id)
+    sender = getattr(state, "webhooks", None)
+    if events and sender is not None:
+        sender.wake()
     return row_id
 
 
