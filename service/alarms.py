@@ -10,7 +10,9 @@ the baseline-change alarm (``service.baseline``). Events are acknowledged by a p
 Each event is queued, in the same transaction, for every webhook that covers its asset
 (``webhook_deliveries``); a background thread (:class:`WebhookSender`) POSTs it, signed with the
 webhook's secret (header :data:`SIGNATURE_HEADER`: ``sha256=`` and the hex HMAC-SHA256 of the body),
-retrying with a doubling wait. A delivery is claimed with a conditional update before it is sent, so two
+retrying with a doubling wait. One webhook gets its events in order: a delivery waits while an earlier one to
+the same webhook is pending or being retried (a ``cleared`` never overtakes its ``raised``); a delivery that
+has used up its tries is marked ``failed`` and the next goes. A delivery is claimed with a conditional update before it is sent, so two
 replicas never send one twice. Nothing of the delivery runs in the request that stores the diagnosis.
 
 No standard zone table (ISO 20816 and the like) is shipped: setpoints are the user's numbers.
@@ -28,7 +30,8 @@ import urllib.error
 import urllib.request
 from typing import TYPE_CHECKING, Any
 
-from sqlalchemy import func, select, update
+from sqlalchemy import exists, func, select, update
+from sqlalchemy.orm import aliased
 
 from .core.db import AlarmEvent, AssetSettings, Webhook, WebhookDelivery, utcnow
 
@@ -252,11 +255,16 @@ class WebhookSender:
                 pass
 
     def send_due(self) -> bool:
-        """Claim one due delivery and send it; False when none was due."""
+        """Claim one due delivery (the oldest unsent one of its webhook) and send it; False when none was
+        due."""
         now = utcnow()
         with self.sessions.begin() as s:
-            due = (((WebhookDelivery.status == "pending") & (WebhookDelivery.next_attempt_at <= now))
-                   | ((WebhookDelivery.status == "sending") & (WebhookDelivery.claim_expires_at < now)))
+            earlier = aliased(WebhookDelivery)
+            blocked = exists().where(earlier.webhook_id == WebhookDelivery.webhook_id,
+                                     earlier.id < WebhookDelivery.id, earlier.status.in_(("pending", "sending")))
+            due = ((((WebhookDelivery.status == "pending") & (WebhookDelivery.next_attempt_at <= now))
+                    | ((WebhookDelivery.status == "sending") & (WebhookDelivery.claim_expires_at < now)))
+                   & ~blocked)
             cand = s.scalar(select(WebhookDelivery.id).where(due).order_by(WebhookDelivery.next_attempt_at,
                                                                          WebhookDelivery.id).limit(1))
             if cand is None:
