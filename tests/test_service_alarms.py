@@ -142,6 +142,7 @@ def test_setpoint_raises_and_clears_delivered_signed_after_a_500(client):
         raised = events[0]
         assert raised["setpoint"] == 5.0 and 5.0 < raised["value"] < 1000.0
         assert raised["diagnosis_id"] == v.json()["diagnosis_id"]
+        assert f'rotordiag_asset_setpoint_level{{asset="{asset}",quantity="x1_um_pp"}} 1.0' in client.get("/metrics").text
         # a second diagnosis at the same level raises nothing new
         client.post("/diagnose", json=_body(asset, seed=1), headers=auth())
         assert len(client.get(f"/assets/{asset}/events").json()["events"]) == 1
@@ -167,6 +168,10 @@ def test_setpoint_raises_and_clears_delivered_signed_after_a_500(client):
         assert r.status_code == 200 and r.json()["acked_at"] and r.json()["ack_note"] == "R. Ortiz: checking 1X"
         assert client.get(f"/assets/{asset}/events?unacked=true").json()["events"] == []
         assert client.post(f"/assets/other/events/{raised['id']}/ack", headers=auth()).status_code == 404
+
+        metrics = client.get("/metrics").text
+        assert f'rotordiag_asset_setpoint_level{{asset="{asset}",quantity="x1_um_pp"}} 0.0' in metrics
+        assert 'rotordiag_webhook_deliveries{status="delivered"}' in metrics
 
         # the test endpoint sends a sample event, marked as a test
         t = client.post(f"/webhooks/{hook_id}/test", headers=auth())
@@ -226,3 +231,15 @@ def test_two_senders_never_send_one_delivery_twice(database_url):
     finally:
         rx.close()
         engine.dispose()
+
+
+def test_the_delivery_queue_is_bounded(tmp_path):
+    """Beyond ``webhook_max_pending`` waiting deliveries a new one is stored as dropped, with the reason."""
+    from rotordiag.service.alarms import enqueue
+
+    sessions = init_db(make_engine(f"sqlite:///{tmp_path / 'q.sqlite3'}"))
+    settings = SimpleNamespace(webhook_max_pending=2)
+    with sessions.begin() as s:
+        got = [enqueue(s, settings, 1, i, {"n": i}).status for i in range(3)]
+        last = s.query(WebhookDelivery).order_by(WebhookDelivery.id.desc()).first()
+        assert got == ["pending", "pending", "dropped"] and "2 deliveries were already waiting" in last.last_error
