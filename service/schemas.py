@@ -331,6 +331,13 @@ class AssetPoint(BaseModel):
     ood: bool | None = Field(None, description="True when the signals looked unlike the training data.")
     model_version: str = Field(..., description="Model version that made the diagnosis.")
     plant: str | None = Field(None, description="Plant label sent with the diagnosis.")
+    recorded_at: dt.datetime | None = Field(None, description="When the recording was made, as given with it (UTC; "
+                                            "null: not given).")
+    trend_time: dt.datetime | None = Field(None, description="Where the point sits on the trend: `recorded_at`, "
+                                           "else `time`; the points are ordered by it.")
+    tags: dict[str, Any] | None = Field(None, description="Operating state at the recording (`load_mw`, "
+                                        "`field_current_a`, temperatures, ...), as given with it.")
+    note: str | None = Field(None, description="Event note given with the recording (e.g. `aligned on ...`).")
     key_features: dict[str, Any] = Field(..., description="Key features of the diagnosis (name -> value, units in name).")
     amplitudes_um_pp: dict[str, float | None] = Field(
         default_factory=dict,

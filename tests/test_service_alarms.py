@@ -243,3 +243,35 @@ def test_the_delivery_queue_is_bounded(tmp_path):
         got = [enqueue(s, settings, 1, i, {"n": i}).status for i in range(3)]
         last = s.query(WebhookDelivery).order_by(WebhookDelivery.id.desc()).first()
         assert got == ["pending", "pending", "dropped"] and "2 deliveries were already waiting" in last.last_error
+
+
+# --- recording time, operating-state tags and event notes (issue 45, item 2) ----------------------------
+
+def test_backfilled_recording_lands_in_its_place_with_tags_and_note(client):
+    asset = "unit-backfill"
+    client.put(f"/assets/{asset}/setpoints", json={"setpoints": {"x1_um_pp": {"alert": 5}}}, headers=auth())
+    late = client.post("/diagnose?recorded_at=2026-06-01T10:00:00Z&tags=load_mw=350;stator_temp_c=71.5",
+                       json=_body(asset), headers=auth())
+    assert late.status_code == 200, late.text
+    early = client.post("/diagnose?recorded_at=2025-01-15T08:00:00%2B01:00&note=aligned on 2025-01-14",
+                        json=_body(asset, seed=1), headers=auth())
+    assert early.status_code == 200, early.text
+    none_given = client.post("/diagnose", json=_body(asset, seed=2), headers=auth()).json()
+    pts = client.get(f"/assets/{asset}/history").json()["points"]
+    # ordered by recording time: the backfilled January 2025 recording first, the one without a time (stored now) last
+    assert [p["id"] for p in pts] == [early.json()["diagnosis_id"], late.json()["diagnosis_id"],
+                                      none_given["diagnosis_id"]]
+    assert pts[0]["trend_time"].startswith("2025-01-15T07:00:00") and pts[0]["note"] == "aligned on 2025-01-14"
+    assert pts[1]["tags"] == {"load_mw": 350.0, "stator_temp_c": 71.5} and pts[2]["recorded_at"] is None
+    since = client.get(f"/assets/{asset}/history?since=2026-01-01T00:00:00Z").json()["points"]
+    assert [p["id"] for p in since] == [p["id"] for p in pts[1:]]
+    # the alarm was raised by the first live recording only: the backfilled one raised and cleared nothing
+    events = client.get(f"/assets/{asset}/events").json()["events"]
+    assert [(e["event"], e["diagnosis_id"]) for e in events] == [("raised", late.json()["diagnosis_id"])]
+
+
+def test_bad_recording_time_and_tags_are_422(client):
+    r = client.post("/diagnose?recorded_at=2999-01-01T00:00:00Z", json=_body("unit-bad"), headers=auth())
+    assert r.status_code == 422 and "in the future" in r.text
+    r = client.post("/diagnose?tags=Load MW=3", json=_body("unit-bad"), headers=auth())
+    assert r.status_code == 422 and "name=value" in r.text

@@ -105,6 +105,11 @@ class AssetDiagnosis(Base):
     # state it gave: True changed, False compared and unchanged, None not compared
     change: Mapped[dict[str, Any] | None] = mapped_column(JSON(none_as_null=True), nullable=True)
     alarm: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
+    # when the recording was made, as the upload gave it (null: not given; the trend then uses created_at), the
+    # operating state it was made at (load_mw, field_current_a, temperatures, ...) and a note ("aligned on ...")
+    recorded_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+    tags: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
+    note: Mapped[str | None] = mapped_column(Text, nullable=True)
 
 
 class AssetBaseline(Base):

@@ -85,7 +85,9 @@ def history(
     points = [AssetPoint(id=r.id, alarm=r.alarm, change=r.change, time=r.created_at, severity=r.severity, misalignment=r.misalignment,
                          misalignment_low=r.misalignment_low, misalignment_high=r.misalignment_high,
                          speed_rpm=r.speed_rpm, ood=r.ood, model_version=r.model_version, plant=r.plant,
-                         key_features=r.key_features, amplitudes_um_pp=_amplitudes(r.verdict)) for r in rows]
+                         key_features=r.key_features, amplitudes_um_pp=_amplitudes(r.verdict),
+                         recorded_at=r.recorded_at, trend_time=r.recorded_at or r.created_at, tags=r.tags,
+                         note=r.note) for r in rows]
     return AssetHistory(asset_id=asset_id, count=len(points), points=points, alarms=alarm_events(rows))
 
 

@@ -657,7 +657,8 @@
     const h = state.history;
     if (!h) return;
     const pts = h.points;
-    const t = pts.map((p) => Date.parse(p.time.endsWith("Z") || /[+-]\d\d:?\d\d$/.test(p.time) ? p.time : p.time + "Z"));
+    // the recording time when the upload gave one (a backfilled recording sits in its place), else the time stored
+    const t = pts.map((p) => { const s = p.trend_time || p.time; return Date.parse(s.endsWith("Z") || /[+-]\d\d:?\d\d$/.test(s) ? s : s + "Z"); });
     let [t0, t1] = extent([t]);
     const padT = Math.max((t1 - t0) * 0.06, 2000);     // at least 2 s either side: points never sit on the frame
     t0 -= padT; t1 += padT;
@@ -769,6 +770,12 @@
       text: `${a.time}: alarm ${a.event}` + (a.quantities.length ? ` (${a.quantities.join(", ")})` : "") +
         ` — diagnosis ${a.diagnosis_id}` }));
     if (!items.length) items.push(el("li", { text: base ? "No alarm raised." : "No baseline: no change alarms." }));
+    // event notes and operating state given with the recordings (POST /diagnose ?note= &tags=)
+    for (const p of ((h && h.points) || []).filter((x) => x.note || (x.tags && Object.keys(x.tags).length))) {
+      const tags = Object.entries(p.tags || {}).map(([k, v]) => `${k.replace(/_/g, " ")} ${v}`).join(", ");
+      items.push(el("li", { class: "note", text: `${p.trend_time || p.time}: ${p.note || ""}` +
+        (tags ? `${p.note ? " — " : ""}${tags}` : "") + ` (diagnosis ${p.id})` }));
+    }
     if (last && last.change) {
       const q = last.change.quantities || {};
       const shown = Object.entries(q).filter(([, x]) => x.value !== null).map(([k, x]) =>
