@@ -349,6 +349,9 @@ class AssetHistory(BaseModel):
     """Trend of an asset's diagnoses, oldest first."""
 
     asset_id: str = Field(..., description="The asset.")
+    site: str | None = Field(None, description="Where it sits (PUT /assets/{id}/hierarchy).")
+    unit: str | None = None
+    train: str | None = None
     count: int = Field(..., description="Number of points returned.")
     points: list[AssetPoint] = Field(..., description="Diagnoses, oldest first.")
     alarms: list[AlarmEvent] = Field(default_factory=list, description="Trend alarms raised and cleared among "
@@ -670,6 +673,28 @@ class SetpointsOut(BaseModel):
     units: dict[str, str] = Field(..., description="Unit of each quantity.")
     levels: dict[str, str] = Field(..., description="The level each alarm quantity is at now (from its latest "
                                    "event; `change` is the baseline-change alarm).")
+
+
+_Label = Annotated[str, StringConstraints(min_length=1, max_length=MAX_LABEL_LEN, strip_whitespace=True)]
+
+
+class HierarchyIn(_Strict):
+    """PUT /assets/{id}/hierarchy: where the asset sits (a field left out or null is cleared)."""
+
+    site: _Label | None = Field(None, description="The plant or site, e.g. `Riverside`.")
+    unit: _Label | None = Field(None, description="The unit at the site, e.g. `unit 3`.")
+    train: _Label | None = Field(None, description="The machine train of the unit, e.g. `generator-exciter`.")
+
+
+class AssetSummary(BaseModel):
+    """One asset in GET /assets."""
+
+    asset_id: str
+    site: str | None = None
+    unit: str | None = None
+    train: str | None = None
+    diagnoses: int = Field(0, description="Stored diagnoses.")
+    latest: dt.datetime | None = Field(None, description="Trend time of its latest stored diagnosis.")
 
 
 class AlarmEventOut(BaseModel):

@@ -281,3 +281,37 @@ def latest_changes(session: Session) -> list[tuple[str, dict[str, Any]]]:
             .where(AssetDiagnosis.change.is_not(None)).group_by(AssetDiagnosis.asset_id).subquery())
     q = select(AssetDiagnosis).join(last, AssetDiagnosis.id == last.c.id)
     return [(r.asset_id, r.change or {}) for r in session.scalars(q)]
+
+
+def get_hierarchy(session: Session, asset_id: str) -> dict[str, str | None]:
+    """Where the asset sits: ``site``, ``unit``, ``train`` (None where not set)."""
+    row = session.get(AssetSettings, asset_id)
+    return {k: getattr(row, k) if row is not None else None for k in ("site", "unit", "train")}
+
+
+def put_hierarchy(state: AppState, asset_id: str, place: dict[str, str | None]) -> None:
+    """Set the asset's site, unit and train (each None clears it)."""
+    with state.sessions.begin() as s:
+        row = s.get(AssetSettings, asset_id)
+        if row is None:
+            row = AssetSettings(asset_id=asset_id, thresholds={})
+            s.add(row)
+        row.site, row.unit, row.train = place.get("site"), place.get("unit"), place.get("train")
+
+
+def list_assets(session: Session, site: str | None = None) -> list[dict[str, Any]]:
+    """Every asset with a stored diagnosis or settings: its place, stored diagnoses and latest trend time,
+    ordered by site, unit, train and id (those without a place last); only ``site``'s when given."""
+    counts = {a: (int(n), t) for a, n, t in session.execute(
+        select(AssetDiagnosis.asset_id, func.count(), func.max(trend_time())).group_by(AssetDiagnosis.asset_id))}
+    places = {r.asset_id: r for r in session.scalars(select(AssetSettings))}
+    out = []
+    for a in sorted(set(counts) | set(places)):
+        p = places.get(a)
+        n, t = counts.get(a, (0, None))
+        row = {"asset_id": a, "site": getattr(p, "site", None), "unit": getattr(p, "unit", None),
+               "train": getattr(p, "train", None), "diagnoses": n, "latest": _aware(t) if t is not None else None}
+        if site is None or row["site"] == site:
+            out.append(row)
+    out.sort(key=lambda r: (r["site"] is None, r["site"] or "", r["unit"] or "", r["train"] or "", r["asset_id"]))
+    return out

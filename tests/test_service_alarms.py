@@ -275,3 +275,22 @@ def test_bad_recording_time_and_tags_are_422(client):
     assert r.status_code == 422 and "in the future" in r.text
     r = client.post("/diagnose?tags=Load MW=3", json=_body("unit-bad"), headers=auth())
     assert r.status_code == 422 and "name=value" in r.text
+
+
+def test_assets_by_site_unit_train(client):
+    key = auth()
+    assert client.post("/diagnose", json=_body("unit-placed"), headers=key).status_code == 200
+    assert client.put("/assets/unit-placed/hierarchy", json={"site": "Riverside"}).status_code == 401
+    r = client.put("/assets/unit-placed/hierarchy", json={"site": "Riverside", "unit": "unit 3",
+                                                             "train": "generator-exciter"}, headers=key)
+    assert r.status_code == 200 and r.json()["unit"] == "unit 3" and r.json()["diagnoses"] == 1
+    client.put("/assets/a-first/hierarchy", json={"site": "Avon", "unit": "unit 1", "train": "gt"}, headers=key)
+    listed = client.get("/assets").json()
+    places = [(a["site"], a["asset_id"]) for a in listed if a["site"] is not None]
+    assert places == [("Avon", "a-first"), ("Riverside", "unit-placed")]        # by site, then unit, train
+    has_site = [a["site"] is not None for a in listed]
+    assert has_site == sorted(has_site, reverse=True)                            # those without a place last
+    assert [a["asset_id"] for a in client.get("/assets?site=Riverside").json()] == ["unit-placed"]
+    h = client.get("/assets/unit-placed/history").json()
+    assert (h["site"], h["unit"], h["train"]) == ("Riverside", "unit 3", "generator-exciter")
+    assert client.put("/assets/x/hierarchy", json={"site": "s" * 200}, headers=key).status_code == 422

@@ -143,6 +143,10 @@ class AssetSettings(Base):
     probes: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
     # alert/danger setpoints on overall pk-pk, 1X, 2X and Δ (PUT /assets/{id}/setpoints; service.alarms)
     setpoints: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
+    # where the asset sits: site → unit → train (PUT /assets/{id}/hierarchy)
+    site: Mapped[str | None] = mapped_column(String(128), nullable=True)
+    unit: Mapped[str | None] = mapped_column(String(128), nullable=True)
+    train: Mapped[str | None] = mapped_column(String(128), nullable=True)
 
 
 class AlarmEvent(Base):

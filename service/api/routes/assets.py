@@ -27,8 +27,10 @@ from ...schemas import (
     AssetHistory,
     AssetId,
     AssetPoint,
+    AssetSummary,
     BaselineOut,
     ErrorOut,
+    HierarchyIn,
     ProbeConfigIn,
     ProbeConfigOut,
     ThresholdsIn,
@@ -37,8 +39,11 @@ from ...store import (
     asset_history,
     delete_baseline,
     get_baseline,
+    get_hierarchy,
     get_probe_config,
     get_thresholds,
+    list_assets,
+    put_hierarchy,
     put_probe_config,
     put_thresholds,
 )
@@ -88,7 +93,9 @@ def history(
                          key_features=r.key_features, amplitudes_um_pp=_amplitudes(r.verdict),
                          recorded_at=r.recorded_at, trend_time=r.recorded_at or r.created_at, tags=r.tags,
                          note=r.note) for r in rows]
-    return AssetHistory(asset_id=asset_id, count=len(points), points=points, alarms=alarm_events(rows))
+    return AssetHistory(asset_id=asset_id, count=len(points), points=points, alarms=alarm_events(rows),
+                        **get_hierarchy(session, asset_id))
+
 
 
 def _amplitudes(verdict: dict | None) -> dict[str, float | None]:
@@ -237,3 +244,18 @@ def delete_asset_probes(asset_id: AssetPath, state: StateDep, session: SessionDe
     if get_probe_config(session, asset_id) is None:
         raise InputError(f"asset {asset_id!r} has no probe configuration", "not_found")
     put_probe_config(state, asset_id, {})
+
+
+@router.get("/assets", response_model=list[AssetSummary], summary="The assets, by site → unit → train")
+def assets_list(session: SessionDep,
+                site: Annotated[str | None, Query(min_length=1, max_length=MAX_LABEL_LEN,
+                                                  description="Only this site's assets.")] = None) -> list[AssetSummary]:
+    return [AssetSummary(**r) for r in list_assets(session, site)]
+
+
+@router.put("/assets/{asset_id}/hierarchy", response_model=AssetSummary, dependencies=[ApiKeyDep, JsonBodyDep],
+            responses=_BASELINE_ERRORS, summary="Set where an asset sits (site → unit → train)")
+def put_asset_hierarchy(asset_id: AssetPath, body: HierarchyIn, state: StateDep, session: SessionDep) -> AssetSummary:
+    put_hierarchy(state, asset_id, body.model_dump())
+    found = [r for r in list_assets(session) if r["asset_id"] == asset_id]
+    return AssetSummary(**found[0])
