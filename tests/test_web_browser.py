@@ -825,7 +825,7 @@ def test_a_daq_export_in_mv_with_columns_mapped_by_name(server, browser, tmp_pat
 
 def test_trend_orders_by_recording_time_and_lists_notes(server, browser, recordings):
     """Two recordings sent out of order (the second backfilled with a note and operating state): the page's
-    trend has the backfilled one first and lists its note and tags in the trend area."""
+    trend has the backfilled one first and lists its note and tags, and the setpoint alarm, in the trend area."""
     import urllib.parse
 
     asset = "web-backfill"
@@ -837,6 +837,10 @@ def test_trend_orders_by_recording_time_and_lists_notes(server, browser, recordi
         with urllib.request.urlopen(req, timeout=120) as r:
             return json.loads(r.read())
 
+    req = urllib.request.Request(f"{server}/assets/{asset}/setpoints", method="PUT", data=json.dumps(
+        {"setpoints": {"x1_um_pp": {"alert": 0.001}}}).encode(),
+        headers={"Content-Type": "application/json", "X-API-Key": "web-test-key"})
+    urllib.request.urlopen(req, timeout=60).close()
     live = post("recorded_at=2026-06-01T10:00:00Z", recordings[0.05])
     back = post(urllib.parse.urlencode({"recorded_at": "2025-01-15T08:00:00Z", "note": "aligned on 2025-01-14",
                                         "tags": "load_mw=350;stator_temp_c=71"}), recordings[0.2])
@@ -850,3 +854,5 @@ def test_trend_orders_by_recording_time_and_lists_notes(server, browser, recordi
     _wait(browser, lambda d: "aligned on 2025-01-14" in d.find_element("id", "trend-alarms").text, 30, "the note")
     text = browser.find_element("id", "trend-alarms").text
     assert "load mw 350" in text and "stator temp c 71" in text and f"diagnosis {back['diagnosis_id']}" in text
+    # the setpoint alarm the live recording raised, not yet acknowledged
+    assert "alert raised: 1X" in text and "(alert setpoint 0.001)" in text and "not acknowledged" in text

@@ -735,6 +735,7 @@
 
   async function loadBaseline(asset, h) {
     const b = await api(`/assets/${encodeURIComponent(asset)}/baseline`);
+    const ev = await api(`/assets/${encodeURIComponent(asset)}/events?limit=50`);
     const base = b.baseline;
     let text;
     if (base) {
@@ -770,6 +771,16 @@
       text: `${a.time}: alarm ${a.event}` + (a.quantities.length ? ` (${a.quantities.join(", ")})` : "") +
         ` — diagnosis ${a.diagnosis_id}` }));
     if (!items.length) items.push(el("li", { text: base ? "No alarm raised." : "No baseline: no change alarms." }));
+    // setpoint and change alarm events (GET /assets/{id}/events, newest first), with their acknowledgement
+    for (const e of (ev && ev.events) || []) {
+      const label = { overall_um_pp: "overall", x1_um_pp: "1X", x2_um_pp: "2X", misalignment: "misalignment Δ" }[e.quantity] || e.quantity;
+      const what = e.quantity === "change" ? "changed since the baseline" : label +
+        (e.value !== null ? ` ${num(e.quantity.endsWith("_um_pp") ? e.value * lengthUnit().k : e.value, 3)}` +
+          (e.quantity.endsWith("_um_pp") ? ` ${lengthUnit().name} pk-pk` : "") : "") +
+        (e.setpoint !== null ? ` (${e.level} setpoint ${num(e.quantity.endsWith("_um_pp") ? e.setpoint * lengthUnit().k : e.setpoint, 3)})` : "");
+      items.push(el("li", { class: `event ${e.event}`, text: `${e.time}: ${e.level} ${e.event}: ${what}` +
+        (e.event === "raised" ? (e.acked_at ? ` — acknowledged ${e.acked_at}${e.ack_note ? " (" + e.ack_note + ")" : ""}` : " — not acknowledged") : "") }));
+    }
     // event notes and operating state given with the recordings (POST /diagnose ?note= &tags=)
     for (const p of ((h && h.points) || []).filter((x) => x.note || (x.tags && Object.keys(x.tags).length))) {
       const tags = Object.entries(p.tags || {}).map(([k, v]) => `${k.replace(/_/g, " ")} ${v}`).join(", ");
