@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
+import re
 from typing import TYPE_CHECKING, Any
 
 from .core.db import AssetBaseline
@@ -86,8 +87,35 @@ def attach_baseline(state: AppState, asset_id: str, verdict: dict[str, Any], sig
     verdict["evidence"] = list(section.pop("evidence", [])) + list(verdict.get("evidence") or [])
 
 
+#: an operating-state tag name (``load_mw``, ``field_current_a``, ``stator_temp_c``: units in the name)
+_TAG_NAME = re.compile(r"^[a-z][a-z0-9_]{0,47}$")
+MAX_TAGS = 32
+
+
+def parse_tags(text: str | None) -> dict[str, float | str]:
+    """Operating-state tags from ``name=value;name=value`` (a number where the value reads as a finite one,
+    else the text, at most 200 characters); ``InputError`` saying what to fix."""
+    out: dict[str, float | str] = {}
+    for part in (text or "").split(";"):
+        if not part.strip():
+            continue
+        name, sep, value = part.partition("=")
+        name, value = name.strip(), value.strip()
+        if not sep or not _TAG_NAME.match(name) or not value or len(value) > 200:
+            raise InputError(f"tags: {part.strip()[:60]!r} is not name=value (a lower-case name with its unit, "
+                             "e.g. load_mw=350;field_current_a=1210;stator_temp_c=71)")
+        try:
+            num = float(value)
+            out[name] = num if math.isfinite(num) else value
+        except ValueError:
+            out[name] = value
+    if len(out) > MAX_TAGS:
+        raise InputError(f"tags: {len(out)} given; at most {MAX_TAGS}")
+    return out
+
+
 def record_verdict(state: AppState, asset_id: str | None, plant: str | None, verdict: dict[str, Any],
-                   store: bool = True) -> int | None:
+                   store: bool = True, meta: dict[str, Any] | None = None) -> int | None:
     """The last step of every diagnosis: take the recording's signature out of the answer and, with an
     ``asset_id``, compare with the asset's baseline and, when ``store`` (the request carried the API key),
     store the diagnosis (its id goes into the answer). The answer says whether it was stored (``stored``,
@@ -101,7 +129,7 @@ def record_verdict(state: AppState, asset_id: str | None, plant: str | None, ver
         verdict["storage_note"] = (f"not stored in the history of asset {asset_id!r}: storing a diagnosis needs the "
                                    "API key in the X-API-Key header; this answer is complete without it")
         return None
-    verdict["diagnosis_id"] = store_diagnosis(state, asset_id, plant, verdict, signature)
+    verdict["diagnosis_id"] = store_diagnosis(state, asset_id, plant, verdict, signature, meta)
     return verdict["diagnosis_id"]
 
 
@@ -182,9 +210,9 @@ def alarm_events(rows: list[Any]) -> list[dict[str, Any]]:
         if r.alarm is None:
             continue
         if r.alarm and not state:
-            events.append({"time": r.created_at, "event": "raised", "diagnosis_id": r.id,
+            events.append({"time": r.recorded_at or r.created_at, "event": "raised", "diagnosis_id": r.id,
                            "quantities": list((r.change or {}).get("exceeded") or [])})
         elif not r.alarm and state:
-            events.append({"time": r.created_at, "event": "cleared", "diagnosis_id": r.id, "quantities": []})
+            events.append({"time": r.recorded_at or r.created_at, "event": "cleared", "diagnosis_id": r.id, "quantities": []})
         state = bool(r.alarm)
     return events

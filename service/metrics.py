@@ -1,7 +1,9 @@
 """Prometheus metrics of this replica: request latency histograms (prometheus-fastapi-instrumentator), the
 replica's name (``rotordiag_replica_info{replica}``), the jobs it runs and has taken over, plus job counts and,
 per asset with a baseline, the latest change against it (``rotordiag_asset_change{asset, quantity}``) and
-its trend alarm (``rotordiag_asset_alarm{asset}``), and per asset the storage its history uses
+its trend alarm (``rotordiag_asset_alarm{asset}``), the level of each setpoint alarm
+(``rotordiag_asset_setpoint_level{asset, quantity}``), webhook deliveries per status
+(``rotordiag_webhook_deliveries{status}``), and per asset the storage its history uses
 (``rotordiag_asset_history_bytes{asset}``, ``rotordiag_asset_history_rows{asset, kind}``).
 
 Each app gets its own ``CollectorRegistry`` so several apps (tests) can live in one process. Request
@@ -66,7 +68,32 @@ def _asset_metrics(state):
         alarm.add_metric([asset], 1.0 if ch.get("changed") else 0.0)
     yield change
     yield alarm
+    yield from _setpoint_metrics(state)
     yield from _history_metrics(state)
+
+
+def _setpoint_metrics(state):
+    """Per asset and setpoint quantity the level it is at (0 normal, 1 alert, 2 danger; ``service.alarms``),
+    and the webhook deliveries per status."""
+    from sqlalchemy import func, select
+
+    from .alarms import CHANGE, LEVELS, current_levels
+    from .core.db import AlarmEvent, WebhookDelivery
+
+    level = GaugeMetricFamily("rotordiag_asset_setpoint_level", "Alarm level per asset and setpoint quantity: "
+                              "0 normal, 1 alert, 2 danger.", labels=["asset", "quantity"])
+    deliveries = GaugeMetricFamily("rotordiag_webhook_deliveries", "Webhook deliveries per status, from the "
+                                   "database.", labels=["status"])
+    with state.sessions() as s:
+        assets = list(s.scalars(select(AlarmEvent.asset_id).distinct()))
+        for asset in assets:
+            for q, lv in current_levels(s, asset).items():
+                if q != CHANGE:
+                    level.add_metric([asset, q], float(LEVELS.index(lv)))
+        for status, n in s.execute(select(WebhookDelivery.status, func.count()).group_by(WebhookDelivery.status)):
+            deliveries.add_metric([status], float(n))
+    yield level
+    yield deliveries
 
 
 #: how long the per-asset storage figures are reused between scrapes, s (they scan the history table)

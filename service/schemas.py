@@ -332,6 +332,13 @@ class AssetPoint(BaseModel):
     ood: bool | None = Field(None, description="True when the signals looked unlike the training data.")
     model_version: str = Field(..., description="Model version that made the diagnosis.")
     plant: str | None = Field(None, description="Plant label sent with the diagnosis.")
+    recorded_at: dt.datetime | None = Field(None, description="When the recording was made, as given with it (UTC; "
+                                            "null: not given).")
+    trend_time: dt.datetime | None = Field(None, description="Where the point sits on the trend: `recorded_at`, "
+                                           "else `time`; the points are ordered by it.")
+    tags: dict[str, Any] | None = Field(None, description="Operating state at the recording (`load_mw`, "
+                                        "`field_current_a`, temperatures, ...), as given with it.")
+    note: str | None = Field(None, description="Event note given with the recording (e.g. `aligned on ...`).")
     key_features: dict[str, Any] = Field(..., description="Key features of the diagnosis (name -> value, units in name).")
     amplitudes_um_pp: dict[str, float | None] = Field(
         default_factory=dict,
@@ -343,6 +350,9 @@ class AssetHistory(BaseModel):
     """Trend of an asset's diagnoses, oldest first."""
 
     asset_id: str = Field(..., description="The asset.")
+    site: str | None = Field(None, description="Where it sits (PUT /assets/{id}/hierarchy).")
+    unit: str | None = None
+    train: str | None = None
     count: int = Field(..., description="Number of points returned.")
     points: list[AssetPoint] = Field(..., description="Diagnoses, oldest first.")
     alarms: list[AlarmEvent] = Field(default_factory=list, description="Trend alarms raised and cleared among "
@@ -645,3 +655,106 @@ class JobList(BaseModel):
 
     count: int = Field(..., description="Number of jobs returned.")
     jobs: list[JobOut] = Field(..., description="Jobs, newest first.")
+
+
+# --- setpoint alarms and webhooks (issue 45, item 3; service.alarms) ---------------------------
+
+class SetpointsIn(_Strict):
+    """PUT /assets/{id}/setpoints."""
+
+    setpoints: dict[str, dict[str, float]] = Field(..., description="Quantity → `{\"alert\": x, \"danger\": y}` "
+                                                   "(either or both): `overall_um_pp`, `x1_um_pp`, `x2_um_pp` "
+                                                   "(µm pk-pk, the largest probe) and `misalignment` (Δ = δ/c); "
+                                                   "`{}` removes them.")
+
+
+class SetpointsOut(BaseModel):
+    """GET/PUT /assets/{id}/setpoints."""
+
+    asset_id: str = Field(..., description="The asset.")
+    setpoints: dict[str, dict[str, float]] = Field(..., description="The setpoints in force (none shipped).")
+    units: dict[str, str] = Field(..., description="Unit of each quantity.")
+    levels: dict[str, str] = Field(..., description="The level each alarm quantity is at now (from its latest "
+                                   "event; `change` is the baseline-change alarm).")
+
+
+_Label = Annotated[str, StringConstraints(min_length=1, max_length=MAX_LABEL_LEN, strip_whitespace=True)]
+
+
+class HierarchyIn(_Strict):
+    """PUT /assets/{id}/hierarchy: where the asset sits (a field left out or null is cleared)."""
+
+    site: _Label | None = Field(None, description="The plant or site, e.g. `Riverside`.")
+    unit: _Label | None = Field(None, description="The unit at the site, e.g. `unit 3`.")
+    train: _Label | None = Field(None, description="The machine train of the unit, e.g. `generator-exciter`.")
+
+
+class AssetSummary(BaseModel):
+    """One asset in GET /assets."""
+
+    asset_id: str
+    site: str | None = None
+    unit: str | None = None
+    train: str | None = None
+    diagnoses: int = Field(0, description="Stored diagnoses.")
+    latest: dt.datetime | None = Field(None, description="Trend time of its latest stored diagnosis.")
+
+
+class AlarmEventOut(BaseModel):
+    """One raised or cleared alarm of an asset."""
+
+    id: int
+    asset_id: str
+    time: str | None = Field(None, description="When the diagnosis that raised or cleared it was stored (UTC).")
+    quantity: str = Field(..., description="`overall_um_pp`, `x1_um_pp`, `x2_um_pp`, `misalignment` or `change`.")
+    unit: str | None = None
+    level: str = Field(..., description="`alert`, `danger`, or `normal` (cleared).")
+    event: str = Field(..., description="`raised` or `cleared`.")
+    value: float | None = None
+    setpoint: float | None = Field(None, description="The setpoint crossed (raised events).")
+    diagnosis_id: int | None = None
+    message: str
+    acked_at: str | None = Field(None, description="When it was acknowledged (null: not yet).")
+    ack_note: str | None = None
+
+
+class AlarmEventsOut(BaseModel):
+    asset_id: str
+    events: list[AlarmEventOut] = Field(..., description="Newest first.")
+
+
+class AckIn(_Strict):
+    note: str | None = Field(None, max_length=2000, description="Who acknowledged and what is being done.")
+
+
+class WebhookIn(_Strict):
+    """POST /webhooks."""
+
+    url: str = Field(..., min_length=8, max_length=2000, pattern=r"^https?://[^\s]+$",
+                     description="http(s) URL the events are POSTed to.")
+    secret: str | None = Field(None, min_length=16, max_length=256, description="Signing key (a random one is made "
+                               "and returned once when not given).")
+    asset_id: str | None = Field(None, min_length=1, max_length=MAX_LABEL_LEN, pattern=r"^[A-Za-z0-9._:-]+$",
+                                 description="Only this asset's events (all assets when not given).")
+
+
+class WebhookOut(BaseModel):
+    id: int
+    url: str
+    asset_id: str | None = None
+    created_at: dt.datetime | None = None
+    secret: str | None = Field(None, description="Only in the answer to POST /webhooks.")
+    signature_header: str = Field(..., description="Header carrying `sha256=` + hex HMAC-SHA256 of the body "
+                                  "with the secret as key.")
+
+
+class DeliveryOut(BaseModel):
+    id: int
+    webhook_id: int
+    event_id: int | None = Field(None, description="null for a test delivery.")
+    status: str = Field(..., description="pending, sending, delivered, failed or dropped.")
+    attempts: int
+    last_error: str | None = None
+    created_at: str | None = None
+    next_attempt_at: str | None = None
+    delivered_at: str | None = None

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from sqlalchemy.engine import Engine
 from sqlalchemy.orm import sessionmaker
 
+from .alarms import WebhookSender
 from .core.config import Settings
 from .core.db import init_db, make_engine
 from .inference import ModelStore
@@ -27,6 +28,7 @@ class AppState:
     jobs: JobManager
     diagnosis_limiter: object = None   # anyio.CapacityLimiter, created on the event loop at first use
     pool: DiagnosisPool | None = None  # diagnosis worker processes (settings.diagnosis_workers > 0)
+    webhooks: WebhookSender | None = None  # sends alarm events to webhooks (service.alarms)
 
     @classmethod
     def start(cls, settings: Settings) -> AppState:
@@ -46,15 +48,21 @@ class AppState:
                                  version=models.active_version(),
                                  memory_bytes=settings.diagnosis_worker_memory_mb * 2**20,
                                  timeout_s=settings.diagnosis_timeout_s)
+        webhooks = WebhookSender(sessions, settings, jobs.replica)
+        webhooks.start()
         log.info("rotordiag service ready: replica=%s data_dir=%s database=%s registry=%s",
                  settings.effective_replica_id, settings.data_dir.resolve(),
                  engine.url.render_as_string(hide_password=True),
                  settings.registry_dir.resolve())
-        return cls(settings=settings, engine=engine, sessions=sessions, models=models, jobs=jobs, pool=pool)
+        return cls(settings=settings, engine=engine, sessions=sessions, models=models, jobs=jobs, pool=pool,
+                   webhooks=webhooks)
 
     def stop(self) -> None:
         """Stop the job threads (running jobs are marked interrupted; at most ``shutdown_timeout_s`` + 10 s),
-        the diagnosis workers (at most 8 s), and close the engine."""
+        the diagnosis workers (at most 8 s), the webhook sender (at most 5 s; what it has not sent stays stored
+        and is sent after the next start), and close the engine."""
+        if self.webhooks is not None:
+            self.webhooks.stop()
         self.jobs.shutdown()
         if self.pool is not None:
             self.pool.shutdown(timeout_s=5.0)

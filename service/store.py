@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 from sqlalchemy import Text, cast, delete, func, select, update
 
+from .alarms import evaluate
 from .core.db import AssetBaseline, AssetDiagnosis, AssetSettings, Job, ServiceProbe, utcnow
 
 if TYPE_CHECKING:
@@ -23,10 +24,19 @@ def _num(value: Any) -> float | None:
         return None
 
 
+def trend_time() -> Any:
+    """The time a stored diagnosis sits at on the trend: when its recording was made, else when it was stored."""
+    return func.coalesce(AssetDiagnosis.recorded_at, AssetDiagnosis.created_at)
+
+
 def store_diagnosis(state: AppState, asset_id: str, plant: str | None, verdict: dict[str, Any],
-                    signature: dict[str, Any] | None = None) -> int:
+                    signature: dict[str, Any] | None = None, meta: dict[str, Any] | None = None) -> int:
     """Store one verdict for ``asset_id`` (time, verdict, key features, model version, the recording's
-    signature, the comparison with the baseline when the verdict has one); returns the row id."""
+    signature, the comparison with the baseline when the verdict has one) and, in the same transaction, the
+    alarm events it raises or clears (``service.alarms.evaluate``); returns the row id. ``meta``: the
+    recording's ``recorded_at``, ``tags`` and ``note`` when given. A backfilled recording (made before the
+    asset's latest stored one) takes its place on the trend but raises and clears no alarm."""
+    meta = meta or {}
     section = verdict.get("baseline") or {}
     change = {k: v for k, v in section.items() if k != "evidence"} if section.get("compared") else None
     interval = verdict.get("misalignment_interval") or (None, None)
@@ -39,12 +49,20 @@ def store_diagnosis(state: AppState, asset_id: str, plant: str | None, verdict: 
         ood=None if verdict.get("ood") is None else bool(verdict.get("ood")),
         verdict=verdict, key_features=dict(verdict.get("key_features") or {}),
         signature=signature, change=change, alarm=None if change is None else bool(change.get("changed")),
+        recorded_at=meta.get("recorded_at"), tags=meta.get("tags") or None, note=meta.get("note") or None,
     )
     with state.sessions.begin() as s:
+        latest = s.scalar(select(func.max(trend_time())).where(AssetDiagnosis.asset_id == asset_id))
         s.add(row)
         s.flush()
         row_id = int(row.id)
+        when = row.recorded_at or row.created_at
+        backfill = latest is not None and when is not None and _aware(when) < _aware(latest)
+        events = [] if backfill else evaluate(s, state.settings, asset_id, row_id, verdict, row.alarm)
         apply_retention(s, state.settings, asset_id)
+    sender = getattr(state, "webhooks", None)
+    if events and sender is not None:
+        sender.wake()
     return row_id
 
 
@@ -97,6 +115,13 @@ def apply_retention(session: Session, settings: Any, asset_id: str) -> tuple[int
         if beyond:
             deleted += _rowcount(session.execute(delete(AssetDiagnosis).where(AssetDiagnosis.id.in_(beyond))))
     return trimmed, deleted
+
+
+def _aware(t: Any) -> dt.datetime:
+    """``t`` as UTC-aware (an aggregate over a ``UTCDateTime`` column comes back naive; SQLite may give text)."""
+    if isinstance(t, str):
+        t = dt.datetime.fromisoformat(t)
+    return t.replace(tzinfo=dt.UTC) if t.tzinfo is None else t.astimezone(dt.UTC)
 
 
 def _rowcount(result: Any) -> int:
@@ -165,13 +190,14 @@ def disk_problem(settings: Any) -> str | None:
 
 
 def asset_history(session: Session, asset_id: str, limit: int, since: dt.datetime | None) -> list[AssetDiagnosis]:
-    """The latest ``limit`` diagnoses of ``asset_id`` (after ``since``), oldest first."""
+    """The latest ``limit`` diagnoses of ``asset_id`` (at or after ``since``) by recording time (the time
+    stored when none was given), oldest first: a backfilled recording lands in its place."""
     q = select(AssetDiagnosis).where(AssetDiagnosis.asset_id == asset_id)
     if since is not None:
         if since.tzinfo is None:
             since = since.replace(tzinfo=dt.UTC)
-        q = q.where(AssetDiagnosis.created_at >= since)
-    q = q.order_by(AssetDiagnosis.created_at.desc(), AssetDiagnosis.id.desc()).limit(limit)
+        q = q.where(trend_time() >= since.astimezone(dt.UTC).replace(tzinfo=None))
+    q = q.order_by(trend_time().desc(), AssetDiagnosis.id.desc()).limit(limit)
     rows = list(session.scalars(q))
     rows.reverse()
     return rows
@@ -264,3 +290,37 @@ def latest_changes(session: Session) -> list[tuple[str, dict[str, Any]]]:
             .where(AssetDiagnosis.change.is_not(None)).group_by(AssetDiagnosis.asset_id).subquery())
     q = select(AssetDiagnosis).join(last, AssetDiagnosis.id == last.c.id)
     return [(r.asset_id, r.change or {}) for r in session.scalars(q)]
+
+
+def get_hierarchy(session: Session, asset_id: str) -> dict[str, str | None]:
+    """Where the asset sits: ``site``, ``unit``, ``train`` (None where not set)."""
+    row = session.get(AssetSettings, asset_id)
+    return {k: getattr(row, k) if row is not None else None for k in ("site", "unit", "train")}
+
+
+def put_hierarchy(state: AppState, asset_id: str, place: dict[str, str | None]) -> None:
+    """Set the asset's site, unit and train (each None clears it)."""
+    with state.sessions.begin() as s:
+        row = s.get(AssetSettings, asset_id)
+        if row is None:
+            row = AssetSettings(asset_id=asset_id, thresholds={})
+            s.add(row)
+        row.site, row.unit, row.train = place.get("site"), place.get("unit"), place.get("train")
+
+
+def list_assets(session: Session, site: str | None = None) -> list[dict[str, Any]]:
+    """Every asset with a stored diagnosis or settings: its place, stored diagnoses and latest trend time,
+    ordered by site, unit, train and id (those without a place last); only ``site``'s when given."""
+    counts = {a: (int(n), t) for a, n, t in session.execute(
+        select(AssetDiagnosis.asset_id, func.count(), func.max(trend_time())).group_by(AssetDiagnosis.asset_id))}
+    places = {r.asset_id: r for r in session.scalars(select(AssetSettings))}
+    out = []
+    for a in sorted(set(counts) | set(places)):
+        p = places.get(a)
+        n, t = counts.get(a, (0, None))
+        row = {"asset_id": a, "site": getattr(p, "site", None), "unit": getattr(p, "unit", None),
+               "train": getattr(p, "train", None), "diagnoses": n, "latest": _aware(t) if t is not None else None}
+        if site is None or row["site"] == site:
+            out.append(row)
+    out.sort(key=lambda r: (r["site"] is None, r["site"] or "", r["unit"] or "", r["train"] or "", r["asset_id"]))
+    return out

@@ -65,7 +65,7 @@ def test_pre_alembic_sqlite_database_is_adopted_with_its_rows(tmp_path):
     engine = make_engine(_old_sqlite(tmp_path / "old.sqlite3"))
     assert current_revision(engine) is None
     sessions = init_db(engine)
-    assert current_revision(engine) == head_revision() == "v0004"
+    assert current_revision(engine) == head_revision() == "v0007"
     _check_reference_rows(sessions)
     init_db(engine)   # a second start changes nothing
     _check_reference_rows(sessions)
@@ -92,7 +92,7 @@ def test_versions_up_and_down_keep_the_rows(database_url):
     migrate(engine, "v0002")
     assert current_revision(engine) == "v0002"
     sessions = init_db(engine)
-    assert current_revision(engine) == "v0004"
+    assert current_revision(engine) == "v0007"
     with sessions() as s:
         job = s.get(Job, "j1")
         assert job is not None and job.params == {"n": 3} and job.progress == 0.5 and job.lease_expires_at is None
@@ -102,9 +102,45 @@ def test_versions_up_and_down_keep_the_rows(database_url):
     with engine.connect() as conn:
         assert conn.execute(text("SELECT status FROM jobs WHERE id = 'j1'")).scalar_one() == "running"
     assert "probes" not in {c["name"] for c in inspect(engine).get_columns("asset_settings")}
-    migrate(engine)
-    assert current_revision(engine) == "v0004"
+    migrate(engine, "v0004")
     assert "probes" in {c["name"] for c in inspect(engine).get_columns("asset_settings")}
+    assert "setpoints" not in {c["name"] for c in inspect(engine).get_columns("asset_settings")}
+    with engine.begin() as conn:   # settings written by version v0004's code
+        conn.execute(text("INSERT INTO asset_settings (asset_id, thresholds, updated_at, probes) VALUES "
+                          "('u1', '{}', '2026-11-01 12:00:00', '{\"units\": \"mil\"}')"))
+    migrate(engine, "v0005")
+    assert current_revision(engine) == "v0005"
+    assert {"alarm_events", "webhooks", "webhook_deliveries"} <= set(inspect(engine).get_table_names())
+    with engine.begin() as conn:   # v0005's code sets the setpoints
+        assert conn.execute(text("SELECT setpoints FROM asset_settings")).scalar_one() is None
+        conn.execute(text("UPDATE asset_settings SET setpoints = '{\"x1_um_pp\": {\"alert\": 75.0}}'"))
+    migrate(engine, "v0004")   # v0005 down: its tables and column go, the row stays
+    assert not {"alarm_events", "webhooks", "webhook_deliveries"} & set(inspect(engine).get_table_names())
+    assert "setpoints" not in {c["name"] for c in inspect(engine).get_columns("asset_settings")}
+    with engine.connect() as conn:
+        assert conn.execute(text("SELECT asset_id FROM asset_settings")).scalar_one() == "u1"
+    migrate(engine)
+    assert current_revision(engine) == "v0007"
+    with sessions.begin() as s:
+        row = s.get(AssetSettings, "u1")
+        assert row is not None and row.probes == {"units": "mil"} and row.setpoints is None
+        row.site, row.setpoints = "Riverside", {"x1_um_pp": {"alert": 75.0}}
+        s.add(AssetDiagnosis(asset_id="u1", model_version="v0001", severity="none", verdict={}, key_features={},
+                             recorded_at=dt.datetime(2025, 3, 2, 8, 0, tzinfo=dt.UTC), tags={"load_mw": 350.0},
+                             note="aligned on 2025-03-01"))
+    with sessions() as s:
+        d = s.scalars(select(AssetDiagnosis).where(AssetDiagnosis.asset_id == "u1")).one()
+        assert d.recorded_at == dt.datetime(2025, 3, 2, 8, 0, tzinfo=dt.UTC) and d.tags == {"load_mw": 350.0}
+        assert s.get(AssetSettings, "u1").site == "Riverside"
+    migrate(engine, "v0006")   # v0007 down: site, unit, train go, the rest stays
+    assert not {"site", "unit", "train"} & {c["name"] for c in inspect(engine).get_columns("asset_settings")}
+    migrate(engine, "v0005")   # v0006 down: the recording time, tags and note go, the rows stay
+    assert not {"recorded_at", "tags", "note"} & {c["name"] for c in inspect(engine).get_columns("asset_diagnoses")}
+    with engine.connect() as conn:
+        assert conn.execute(text("SELECT COUNT(*) FROM asset_diagnoses WHERE asset_id = 'u1'")).scalar_one() == 1
+        assert conn.execute(text("SELECT setpoints FROM asset_settings")).scalar_one() is not None
+    migrate(engine)
+    assert current_revision(engine) == "v0007"
     engine.dispose()
 
 
@@ -148,7 +184,8 @@ def test_copy_sqlite_store_into_postgresql(tmp_path, postgres):
     dst_url = postgres.new_database()
     dst = make_engine(dst_url)
     copied = copy_store(src, dst)
-    assert copied == {"asset_baselines": 1, "asset_diagnoses": 3, "asset_settings": 1, "jobs": 2, "service_probe": 0}
+    assert copied == {"alarm_events": 0, "asset_baselines": 1, "asset_diagnoses": 3, "asset_settings": 1, "jobs": 2,
+                      "service_probe": 0, "webhook_deliveries": 0, "webhooks": 0}
     sessions = init_db(dst)
     _check_reference_rows(sessions)
     with sessions.begin() as s:   # the id sequence continues after the copied rows
@@ -174,6 +211,6 @@ def test_db_copy_command(tmp_path, postgres):
     assert r.exit_code == 0, r.output
     assert "asset_diagnoses: 3 row(s)" in r.output
     r = runner.invoke(app, ["db", "current", "--url", dst])
-    assert r.exit_code == 0 and "database: v0004" in r.output
+    assert r.exit_code == 0 and "database: v0007" in r.output
     r = runner.invoke(app, ["db", "copy", dst, "--from", src])
     assert r.exit_code == 2 and "already holds rows" in r.output

@@ -877,3 +877,38 @@ def test_startup_recording_shows_its_plots_and_an_asset_its_report_link(server, 
     assert d.find_element("tag name", "h1").text == f"rotordiag report — {asset}"
     assert d.execute_script("const i = document.querySelector('img'); return i.complete && i.naturalWidth") > 300
     _screenshot(d, "asset-report-html")
+
+
+def test_trend_orders_by_recording_time_and_lists_notes(server, browser, recordings):
+    """Two recordings sent out of order (the second backfilled with a note and operating state): the page's
+    trend has the backfilled one first and lists its note and tags, and the setpoint alarm, in the trend area."""
+    import urllib.parse
+
+    asset = "web-backfill"
+
+    def post(query: str, rec) -> dict:
+        req = urllib.request.Request(f"{server}/diagnose?{query}", data=json.dumps(
+            {**_json_body(rec), "sample_rate_hz": FS_HZ, "asset_id": asset}).encode(), method="POST",
+            headers={"Content-Type": "application/json", "X-API-Key": "web-test-key"})
+        with urllib.request.urlopen(req, timeout=120) as r:
+            return json.loads(r.read())
+
+    req = urllib.request.Request(f"{server}/assets/{asset}/setpoints", method="PUT", data=json.dumps(
+        {"setpoints": {"x1_um_pp": {"alert": 0.001}}}).encode(),
+        headers={"Content-Type": "application/json", "X-API-Key": "web-test-key"})
+    urllib.request.urlopen(req, timeout=60).close()
+    live = post("recorded_at=2026-06-01T10:00:00Z", recordings[0.05])
+    back = post(urllib.parse.urlencode({"recorded_at": "2025-01-15T08:00:00Z", "note": "aligned on 2025-01-14",
+                                        "tags": "load_mw=350;stator_temp_c=71"}), recordings[0.2])
+    _open(browser, server)
+    browser.find_element("id", "trend-asset").clear()
+    browser.find_element("id", "trend-asset").send_keys(asset)
+    browser.find_element("id", "trend-btn").click()
+    _wait(browser, lambda d: d.find_element("id", "trend-plots").is_displayed(), 60, "the trend")
+    shown = browser.execute_script("return window.rotordiag.state.history")
+    assert [p["id"] for p in shown["points"]] == [back["diagnosis_id"], live["diagnosis_id"]]
+    _wait(browser, lambda d: "aligned on 2025-01-14" in d.find_element("id", "trend-alarms").text, 30, "the note")
+    text = browser.find_element("id", "trend-alarms").text
+    assert "load mw 350" in text and "stator temp c 71" in text and f"diagnosis {back['diagnosis_id']}" in text
+    # the setpoint alarm the live recording raised, not yet acknowledged
+    assert "alert raised: 1X" in text and "(alert setpoint 0.001)" in text and "not acknowledged" in text

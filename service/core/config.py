@@ -125,6 +125,17 @@ class Settings(BaseSettings):
     history_summary_days: float = Field(
         3650.0, ge=0, le=36_500, allow_inf_nan=False,
         description="Days a diagnosis summary is kept before it is deleted; 0: kept for ever.")
+    webhook_max_pending: int = Field(
+        1000, ge=1, le=1_000_000,
+        description="Webhook deliveries waiting to be sent, all webhooks together; an event beyond it is stored "
+        "as `dropped` (the diagnosis is never held up or refused for it).")
+    webhook_max_attempts: int = Field(
+        6, ge=1, le=100, description="Tries of one webhook delivery before it is marked `failed`.")
+    webhook_backoff_s: float = Field(
+        2.0, gt=0, le=3600, allow_inf_nan=False,
+        description="Wait before the second try of a webhook delivery; doubled for each further try (at most 1 h).")
+    webhook_timeout_s: float = Field(
+        10.0, gt=0, le=300, allow_inf_nan=False, description="Time one webhook POST may take.")
     log_level: str = Field("info", description="Log level of the service and uvicorn.")
 
     @field_validator("database_url", "dask_scheduler_address")

@@ -105,6 +105,11 @@ class AssetDiagnosis(Base):
     # state it gave: True changed, False compared and unchanged, None not compared
     change: Mapped[dict[str, Any] | None] = mapped_column(JSON(none_as_null=True), nullable=True)
     alarm: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
+    # when the recording was made, as the upload gave it (null: not given; the trend then uses created_at), the
+    # operating state it was made at (load_mw, field_current_a, temperatures, ...) and a note ("aligned on ...")
+    recorded_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+    tags: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
+    note: Mapped[str | None] = mapped_column(Text, nullable=True)
 
 
 class AssetBaseline(Base):
@@ -136,6 +141,70 @@ class AssetSettings(Base):
     updated_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow, onupdate=utcnow)
     # the asset's probe configuration (PUT /assets/{id}/probes): reader options every upload to it uses
     probes: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
+    # alert/danger setpoints on overall pk-pk, 1X, 2X and Δ (PUT /assets/{id}/setpoints; service.alarms)
+    setpoints: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
+    # where the asset sits: site → unit → train (PUT /assets/{id}/hierarchy)
+    site: Mapped[str | None] = mapped_column(String(128), nullable=True)
+    unit: Mapped[str | None] = mapped_column(String(128), nullable=True)
+    train: Mapped[str | None] = mapped_column(String(128), nullable=True)
+
+
+class AlarmEvent(Base):
+    """A raised or cleared alarm of an asset (a setpoint level or the baseline-change alarm), with its
+    acknowledgement (``service.alarms``)."""
+
+    __tablename__ = "alarm_events"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    asset_id: Mapped[str] = mapped_column(String(128))
+    created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow)
+    quantity: Mapped[str] = mapped_column(String(32))        # overall_um_pp | x1_um_pp | x2_um_pp | misalignment | change
+    level: Mapped[str] = mapped_column(String(16))           # normal | alert | danger
+    event: Mapped[str] = mapped_column(String(16))           # raised | cleared
+    value: Mapped[float | None] = mapped_column(Float, nullable=True)
+    setpoint: Mapped[float | None] = mapped_column(Float, nullable=True)
+    diagnosis_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    message: Mapped[str] = mapped_column(Text, default="")
+    acked_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+    ack_note: Mapped[str | None] = mapped_column(Text, nullable=True)
+
+    __table_args__ = (Index("ix_alarm_events_asset_quantity", "asset_id", "quantity", "id"),)
+
+
+class Webhook(Base):
+    """A receiver of alarm events (``POST /webhooks``): every event of ``asset_id`` (all assets when null)
+    is POSTed to ``url``, signed with ``secret`` (``service.alarms``)."""
+
+    __tablename__ = "webhooks"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    url: Mapped[str] = mapped_column(Text)
+    secret: Mapped[str] = mapped_column(String(256))
+    asset_id: Mapped[str | None] = mapped_column(String(128), nullable=True)
+    created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow)
+
+
+class WebhookDelivery(Base):
+    """One event to send to one webhook and how far its delivery got: ``pending`` (waiting, or retrying at
+    ``next_attempt_at``), ``sending`` (claimed by ``claimed_by`` until ``claim_expires_at``), ``delivered``,
+    ``failed`` (attempts used up) or ``dropped`` (the queue was full)."""
+
+    __tablename__ = "webhook_deliveries"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    webhook_id: Mapped[int] = mapped_column(Integer)
+    event_id: Mapped[int | None] = mapped_column(Integer, nullable=True)   # null: a test delivery
+    payload: Mapped[dict[str, Any]] = mapped_column(JSON)
+    status: Mapped[str] = mapped_column(String(16))
+    attempts: Mapped[int] = mapped_column(Integer, default=0)
+    last_error: Mapped[str | None] = mapped_column(Text, nullable=True)
+    created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow)
+    next_attempt_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow)
+    claimed_by: Mapped[str | None] = mapped_column(String(128), nullable=True)
+    claim_expires_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+    delivered_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+
+    __table_args__ = (Index("ix_webhook_deliveries_status_next", "status", "next_attempt_at"),)
 
 
 class ServiceProbe(Base):

@@ -28,8 +28,10 @@ from ...schemas import (
     AssetHistory,
     AssetId,
     AssetPoint,
+    AssetSummary,
     BaselineOut,
     ErrorOut,
+    HierarchyIn,
     ProbeConfigIn,
     ProbeConfigOut,
     ThresholdsIn,
@@ -38,8 +40,11 @@ from ...store import (
     asset_history,
     delete_baseline,
     get_baseline,
+    get_hierarchy,
     get_probe_config,
     get_thresholds,
+    list_assets,
+    put_hierarchy,
     put_probe_config,
     put_thresholds,
 )
@@ -86,8 +91,12 @@ def history(
     points = [AssetPoint(id=r.id, alarm=r.alarm, change=r.change, time=r.created_at, severity=r.severity, misalignment=r.misalignment,
                          misalignment_low=r.misalignment_low, misalignment_high=r.misalignment_high,
                          speed_rpm=r.speed_rpm, ood=r.ood, model_version=r.model_version, plant=r.plant,
-                         key_features=r.key_features, amplitudes_um_pp=_amplitudes(r.verdict)) for r in rows]
-    return AssetHistory(asset_id=asset_id, count=len(points), points=points, alarms=alarm_events(rows))
+                         key_features=r.key_features, amplitudes_um_pp=_amplitudes(r.verdict),
+                         recorded_at=r.recorded_at, trend_time=r.recorded_at or r.created_at, tags=r.tags,
+                         note=r.note) for r in rows]
+    return AssetHistory(asset_id=asset_id, count=len(points), points=points, alarms=alarm_events(rows),
+                        **get_hierarchy(session, asset_id))
+
 
 
 #: the HTML report is one self-contained page: inline style, figures as data: URIs, no script
@@ -288,3 +297,18 @@ def delete_asset_probes(asset_id: AssetPath, state: StateDep, session: SessionDe
     if get_probe_config(session, asset_id) is None:
         raise InputError(f"asset {asset_id!r} has no probe configuration", "not_found")
     put_probe_config(state, asset_id, {})
+
+
+@router.get("/assets", response_model=list[AssetSummary], summary="The assets, by site → unit → train")
+def assets_list(session: SessionDep,
+                site: Annotated[str | None, Query(min_length=1, max_length=MAX_LABEL_LEN,
+                                                  description="Only this site's assets.")] = None) -> list[AssetSummary]:
+    return [AssetSummary(**r) for r in list_assets(session, site)]
+
+
+@router.put("/assets/{asset_id}/hierarchy", response_model=AssetSummary, dependencies=[ApiKeyDep, JsonBodyDep],
+            responses=_BASELINE_ERRORS, summary="Set where an asset sits (site → unit → train)")
+def put_asset_hierarchy(asset_id: AssetPath, body: HierarchyIn, state: StateDep, session: SessionDep) -> AssetSummary:
+    put_hierarchy(state, asset_id, body.model_dump())
+    found = [r for r in list_assets(session) if r["asset_id"] == asset_id]
+    return AssetSummary(**found[0])

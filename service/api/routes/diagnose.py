@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import asyncio
+import datetime as dt
 import json
 import logging
 from typing import Annotated, Any, Literal
@@ -15,7 +16,7 @@ from sqlalchemy.exc import DatabaseError as SQLAlchemyDatabaseError
 from rotordiag.core.input_bounds import SAMPLE_RATE_RANGE_HZ
 from rotordiag.models.output_units import verdict_in_units
 
-from ...baseline import record_verdict
+from ...baseline import parse_tags, record_verdict
 from ...inference import ModelUnavailable
 from ...parsing import MAX_TAKE_FILES, batch_record, checked, parse_batch, parse_request, recording_from_model
 from ...pool import DiagnoseBody, DiagnoseRecord, ParseBatch
@@ -121,6 +122,13 @@ async def diagnose(
                                                description="Diagnose with this registered version instead of the "
                                                "active one.")] = None,
     output_units: OutputUnitsQuery = "um",
+    recorded_at: Annotated[dt.datetime | None, Query(description="When the recording was made (ISO 8601; UTC when no "
+                                                     "offset): orders the asset's trend, so a backfilled recording "
+                                                     "lands in its place (and raises no alarm).")] = None,
+    tags: Annotated[str | None, Query(max_length=4000, description="Operating state at the recording, stored with "
+                                      "it: `load_mw=350;field_current_a=1210;stator_temp_c=71`.")] = None,
+    note: Annotated[str | None, Query(min_length=1, max_length=2000, description="An event note stored with the "
+                                      "recording, shown on the trend, e.g. `aligned on 2026-03-02`.")] = None,
     slow_roll_sample_rate_hz: Annotated[float | None, Query(
         ge=SAMPLE_RATE_RANGE_HZ[0], le=SAMPLE_RATE_RANGE_HZ[1], allow_inf_nan=False, description="Multipart with `slow_roll_file` only: the slow-roll file's "
         "sample rate, Hz (default: `sample_rate_hz`).")] = None,
@@ -130,14 +138,15 @@ async def diagnose(
 ) -> dict:
     query = dict(asset_id=asset_id, plant=plant, sample_index=sample_index, **reader)
     query.update(slow_roll_sample_rate_hz=slow_roll_sample_rate_hz, slow_roll_keyphasor_times_s=slow_roll_keyphasor_times_s)
+    meta = recording_meta(recorded_at, tags, note)
     verdict, _ = await diagnose_from_request(request, state, query, model_version, slow_roll_allowed=True,
-                                             may_store=writer)
+                                             may_store=writer, meta=meta)
     return verdict_in_units(verdict, output_units)   # stored in µm; answered in the units asked for
 
 
 async def diagnose_from_request(request: Request, state, query: dict[str, Any], version: str | None,
                                 store: bool = True, slow_roll_allowed: bool = False,
-                                may_store: bool = False) -> tuple[dict, str | None]:
+                                may_store: bool = False, meta: dict[str, Any] | None = None) -> tuple[dict, str | None]:
     """Read the body, parse and diagnose it in a worker process (``service.pool``, which bounds the requests
     in flight per worker) or a thread; with ``store``, compare with the asset's baseline and, when
     ``may_store`` (the request carried the API key), store the result here
@@ -161,8 +170,21 @@ async def diagnose_from_request(request: Request, state, query: dict[str, Any], 
                                                         f"{', '.join(probes['overridden_by_upload'])})"
                                                         if probes["overridden_by_upload"] else ""))
     if store:
-        await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store)
+        await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store, meta)
     return verdict, asset_id
+
+
+def recording_meta(recorded_at: dt.datetime | None, tags: str | None, note: str | None) -> dict[str, Any]:
+    """The recording's time, operating-state tags and note as ``store_diagnosis`` takes them; a time in the
+    future (beyond a day of clock skew) or before 1970 is refused."""
+    if recorded_at is not None:
+        if recorded_at.tzinfo is None:
+            recorded_at = recorded_at.replace(tzinfo=dt.UTC)
+        now = dt.datetime.now(dt.UTC)
+        if not (dt.datetime(1970, 1, 1, tzinfo=dt.UTC) <= recorded_at <= now + dt.timedelta(days=1)):
+            raise InputError(f"recorded_at: {recorded_at.isoformat()} is in the future or before 1970; give when "
+                             "the recording was made")
+    return {"recorded_at": recorded_at, "tags": parse_tags(tags), "note": note}
 
 
 def _parse_and_diagnose(state, kind, body, filename, query, slow_roll,

@@ -703,7 +703,8 @@
     const h = state.history;
     if (!h) return;
     const pts = h.points;
-    const t = pts.map((p) => Date.parse(p.time.endsWith("Z") || /[+-]\d\d:?\d\d$/.test(p.time) ? p.time : p.time + "Z"));
+    // the recording time when the upload gave one (a backfilled recording sits in its place), else the time stored
+    const t = pts.map((p) => { const s = p.trend_time || p.time; return Date.parse(s.endsWith("Z") || /[+-]\d\d:?\d\d$/.test(s) ? s : s + "Z"); });
     let [t0, t1] = extent([t]);
     const padT = Math.max((t1 - t0) * 0.06, 2000);     // at least 2 s either side: points never sit on the frame
     t0 -= padT; t1 += padT;
@@ -783,6 +784,7 @@
 
   async function loadBaseline(asset, h) {
     const b = await api(`/assets/${encodeURIComponent(asset)}/baseline`);
+    const ev = await api(`/assets/${encodeURIComponent(asset)}/events?limit=50`);
     const base = b.baseline;
     let text;
     if (base) {
@@ -818,6 +820,22 @@
       text: `${a.time}: alarm ${a.event}` + (a.quantities.length ? ` (${a.quantities.join(", ")})` : "") +
         ` — diagnosis ${a.diagnosis_id}` }));
     if (!items.length) items.push(el("li", { text: base ? "No alarm raised." : "No baseline: no change alarms." }));
+    // setpoint and change alarm events (GET /assets/{id}/events, newest first), with their acknowledgement
+    for (const e of (ev && ev.events) || []) {
+      const label = { overall_um_pp: "overall", x1_um_pp: "1X", x2_um_pp: "2X", misalignment: "misalignment Δ" }[e.quantity] || e.quantity;
+      const what = e.quantity === "change" ? "changed since the baseline" : label +
+        (e.value !== null ? ` ${num(e.quantity.endsWith("_um_pp") ? e.value * lengthUnit().k : e.value, 3)}` +
+          (e.quantity.endsWith("_um_pp") ? ` ${lengthUnit().name} pk-pk` : "") : "") +
+        (e.setpoint !== null ? ` (${e.level} setpoint ${num(e.quantity.endsWith("_um_pp") ? e.setpoint * lengthUnit().k : e.setpoint, 3)})` : "");
+      items.push(el("li", { class: `event ${e.event}`, text: `${e.time}: ${e.level} ${e.event}: ${what}` +
+        (e.event === "raised" ? (e.acked_at ? ` — acknowledged ${e.acked_at}${e.ack_note ? " (" + e.ack_note + ")" : ""}` : " — not acknowledged") : "") }));
+    }
+    // event notes and operating state given with the recordings (POST /diagnose ?note= &tags=)
+    for (const p of ((h && h.points) || []).filter((x) => x.note || (x.tags && Object.keys(x.tags).length))) {
+      const tags = Object.entries(p.tags || {}).map(([k, v]) => `${k.replace(/_/g, " ")} ${v}`).join(", ");
+      items.push(el("li", { class: "note", text: `${p.trend_time || p.time}: ${p.note || ""}` +
+        (tags ? `${p.note ? " — " : ""}${tags}` : "") + ` (diagnosis ${p.id})` }));
+    }
     if (last && last.change) {
       const q = last.change.quantities || {};
       const shown = Object.entries(q).filter(([, x]) => x.value !== null).map(([k, x]) =>
