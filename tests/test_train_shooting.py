@@ -1,15 +1,19 @@
-"""Shooting on the train through the steady-state flow-map interface: the period-1 orbit equals the long
-time response's last revolution; its Floquet multipliers carry the linear stability margin."""
+"""Shooting and continuation on the train through the steady-state flow-map interface: the period-1 orbit
+equals the long time response; its Floquet multipliers and the branch's whirl onset agree with the
+linearisation about the static state."""
 from __future__ import annotations
 
 import importlib.util
 from pathlib import Path
 
 import numpy as np
+import pytest
+from scipy.optimize import brentq
 
-from rotordiag.simulator.train.dynamics import build_kernel, simulate_train
+from rotordiag.simulator.steady.continuation import continue_branch
+from rotordiag.simulator.train.dynamics import build_kernel, linear_stability, simulate_train
 from rotordiag.simulator.train.linear import modes
-from rotordiag.simulator.train.shooting import train_fixed_point
+from rotordiag.simulator.train.shooting import TrainSpeedFamily, train_fixed_point
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
 
@@ -48,3 +52,23 @@ def test_period_one_orbit_by_shooting_equals_the_long_time_response():
     mu = np.abs(fp.multipliers).max()
     assert fp.stability == "stable" and mu < 1
     np.testing.assert_allclose(mu, mu_lin, rtol=1e-3)
+
+
+@pytest.mark.slow
+def test_continuation_over_speed_finds_the_whirl_onset_at_the_linear_stability_threshold():
+    """The period-1 branch of the bench machine from 3200 r/min upward loses stability by a Neimark–Sacker
+    bifurcation (a pair of multipliers leaving the unit circle: the whirl onset) where the least log
+    decrement of the static linearisation crosses zero (found here by root-finding on the eigenvalues)."""
+    train = _machine()
+    fam = TrainSpeedFamily(train)
+    start = 3200.0
+    fp = train_fixed_point(fam.at(start).kernel, start)
+    assert fp.converged
+    br = continue_branch(fam, fp.x, start, p_min=3000.0, p_max=4000.0, ds=0.05, ds_max=0.1, tol=1e-10,
+                         max_points=12)
+    ns = [b for b in br.bifurcations if b.kind == "neimark_sacker"]
+    assert len(ns) == 1 and ns[0].located
+    threshold = brentq(lambda s: linear_stability(build_kernel(train, s, 12), s)[0], 3000.0, 4000.0, xtol=0.01)
+    assert ns[0].parameter == pytest.approx(threshold, rel=5e-3)
+    assert (br.max_multiplier[br.values < threshold - 50] < 1).all()
+    assert (br.max_multiplier[br.values > threshold + 50] > 1).all()

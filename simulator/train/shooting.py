@@ -14,10 +14,11 @@ import math
 import numpy as np
 
 from ..steady import FixedPoint, MapEval, find_fixed_point
-from .dynamics import Kernel, _integrate_etd, etd_matrices, initial_state
-from .model import TrainError
+from .dynamics import Kernel, _integrate_etd, build_kernel, etd_matrices, initial_state
+from .fe import Assembly, assemble
+from .model import Train, TrainError
 
-__all__ = ["TrainMap", "train_fixed_point"]
+__all__ = ["TrainMap", "TrainSpeedFamily", "train_fixed_point"]
 
 
 class TrainMap:
@@ -80,3 +81,31 @@ def train_fixed_point(kernel: Kernel, speed_rpm: float, n_periods: int = 1, *, s
     pmap = TrainMap(kernel, speed_rpm, steps_per_rev)
     start = initial_state(kernel, speed_rpm) if x0 is None else np.asarray(x0, dtype=float)
     return find_fixed_point(pmap, start, n_periods, tol=tol_m)
+
+
+class TrainSpeedFamily:
+    """The train's maps over running speed, for ``steady.continuation.continue_branch`` (parameter
+    ``speed_rpm``, scaled by ``scale_rpm``); a kernel (reduction, static state, ETD matrices) per speed,
+    kept for the last ``cache`` speeds."""
+
+    parameter = "speed_rpm"
+
+    def __init__(self, train: Train | Assembly, *, n_modes: int = 12, steps_per_rev: int = 64,
+                 scale_rpm: float = 1000.0, cache: int = 8):
+        self.assembly = train if isinstance(train, Assembly) else assemble(train)
+        self.n_modes = int(n_modes)
+        self.steps_per_rev = int(steps_per_rev)
+        self.scale = float(scale_rpm)
+        self._cache: dict[float, TrainMap] = {}
+        self._keep = int(cache)
+
+    def at(self, value: float) -> TrainMap:
+        speed = float(value)
+        if not (math.isfinite(speed) and speed > 0):
+            raise TrainError(f"speed_rpm must be positive (got {speed!r})")
+        if speed not in self._cache:
+            if len(self._cache) >= self._keep:
+                self._cache.pop(next(iter(self._cache)))
+            kern = build_kernel(self.assembly, speed, self.n_modes)
+            self._cache[speed] = TrainMap(kern, speed, self.steps_per_rev)
+        return self._cache[speed]
