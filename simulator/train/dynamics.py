@@ -44,6 +44,7 @@ _D = np.array([-12715105075 / 11282082432, 0, 87487479700 / 32700410799, -106907
                701980252875 / 199316789632, -1453857185 / 822651844, 69997945 / 29380423])
 
 STATUS = ("ok", "contact", "diverged")
+_ADAPTIVE_LEVELS = 13  # step-doubling ETD: 1, 2, …, 4096 steps per sample interval
 
 
 @njit(**NUMBA_OPTIONS)
@@ -203,25 +204,76 @@ def _remainder(t, s, n, Lb, f, args_tuple, out):
 
 
 @njit(**NUMBA_OPTIONS)
+def _etd_step(u, t, h, n, Lb, E, E2, P1h, F1, F2, F3, args_tuple, W, out):
+    """One ETDRK4 step (Cox & Matthews 2002) of s' = L s + N(t, s) from ``u`` at ``t`` into ``out``;
+    E = e^{hL}, E2 = e^{hL/2}, P1h = (h/2)·φ1(hL/2)[:, n:], F1..F3 = h·(φ1 − 3φ2 + 4φ3, φ2 − 2φ3,
+    −φ2 + 4φ3)(hL)[:, n:] (only the lower half of N is non-zero); ``W`` (9, 2n) is workspace."""
+    m = 2 * n
+    f = W[0]
+    Nu = W[1, :n]
+    Na = W[2, :n]
+    Nb = W[3, :n]
+    Nc = W[4, :n]
+    tmpn = W[5, :n]
+    Eu = W[6]
+    b = W[7]
+    tmp = W[8]
+    a = out  # ``out`` holds the first stage, then the result
+    _remainder(t, u, n, Lb, f, args_tuple, Nu)
+    _mv(E2, u, Eu)
+    _mv(P1h, Nu, tmp)
+    for i in range(m):
+        a[i] = Eu[i] + tmp[i]
+    _remainder(t + 0.5 * h, a, n, Lb, f, args_tuple, Na)
+    _mv(P1h, Na, tmp)
+    for i in range(m):
+        b[i] = Eu[i] + tmp[i]
+    _remainder(t + 0.5 * h, b, n, Lb, f, args_tuple, Nb)
+    _mv(E2, a, Eu)  # c, stored in Eu (no longer needed)
+    for i in range(n):
+        tmpn[i] = 2.0 * Nb[i] - Nu[i]
+    _mv(P1h, tmpn, tmp)
+    for i in range(m):
+        Eu[i] += tmp[i]
+    _remainder(t + h, Eu, n, Lb, f, args_tuple, Nc)
+    _mv(E, u, a)
+    _mv(F1, Nu, tmp)
+    for i in range(m):
+        a[i] += tmp[i]
+    for i in range(n):
+        tmpn[i] = Na[i] + Nb[i]
+    _mv(F2, tmpn, tmp)
+    for i in range(m):
+        a[i] += 2.0 * tmp[i]
+    _mv(F3, Nc, tmp)
+    for i in range(m):
+        out[i] = a[i] + tmp[i]
+
+
+@njit(**NUMBA_OPTIONS)
+def _check(u, sup, centres, clear, codes):
+    """0 when the state is finite and every plain journal inside ε < 0.999, 1 contact, 2 diverged."""
+    for i in range(u.shape[0]):
+        if not math.isfinite(u[i]):
+            return 2
+    for bb in range(sup.shape[0]):
+        j = sup[bb]
+        ex = (u[j] - centres[bb, 0]) / clear[bb]
+        ey = (u[j + 1] - centres[bb, 1]) / clear[bb]
+        if ex * ex + ey * ey >= 0.999 * 0.999 and codes[bb] == BEARING_PLAIN:
+            return 1
+    return 0
+
+
+@njit(**NUMBA_OPTIONS)
 def _integrate_etd(s0, h, n_steps, grid_every, grid_first, grid, n, Lb, E, E2, P1h, F1, F2, F3, args_tuple,
                    sup, centres, clear, codes):
-    """Fixed-step ETDRK4 (Cox & Matthews 2002) for s' = L s + N(t, s), L the train linearised at its static
-    state; E = e^{hL}, E2 = e^{hL/2}, P1h = (h/2)·φ1(hL/2)[:, n:], F1..F3 = h·(φ1 − 3φ2 + 4φ3, φ2 − 2φ3,
-    −φ2 + 4φ3)(hL)[:, n:] (only the lower half of N is non-zero). Grid rows every ``grid_every`` steps from
-    step ``grid_first``. Returns status (0 ok, 1 contact, 2 diverged), the final state and the step count."""
+    """Fixed-step ETDRK4 (:func:`_etd_step`). Grid rows every ``grid_every`` steps from step ``grid_first``.
+    Returns status (0 ok, 1 contact, 2 diverged), the final state and the step count."""
     m = 2 * n
     u = s0.copy()
-    f = np.empty(m)
-    Nu = np.empty(n)
-    Na = np.empty(n)
-    Nb = np.empty(n)
-    Nc = np.empty(n)
-    Eu = np.empty(m)
-    a = np.empty(m)
-    b = np.empty(m)
-    c = np.empty(m)
-    tmp = np.empty(m)
-    tmpn = np.empty(n)
+    v = np.empty(m)
+    W = np.empty((9, m))
     ng = 0
     status = 0
     k = 0
@@ -231,48 +283,82 @@ def _integrate_etd(s0, h, n_steps, grid_every, grid_first, grid, n, Lb, E, E2, P
             ng += 1
         if k == n_steps:
             break
-        t = k * h
-        _remainder(t, u, n, Lb, f, args_tuple, Nu)
-        _mv(E2, u, Eu)
-        _mv(P1h, Nu, tmp)
-        for i in range(m):
-            a[i] = Eu[i] + tmp[i]
-        _remainder(t + 0.5 * h, a, n, Lb, f, args_tuple, Na)
-        _mv(P1h, Na, tmp)
-        for i in range(m):
-            b[i] = Eu[i] + tmp[i]
-        _remainder(t + 0.5 * h, b, n, Lb, f, args_tuple, Nb)
-        _mv(E2, a, c)
-        for i in range(n):
-            tmpn[i] = 2.0 * Nb[i] - Nu[i]
-        _mv(P1h, tmpn, tmp)
-        for i in range(m):
-            c[i] += tmp[i]
-        _remainder(t + h, c, n, Lb, f, args_tuple, Nc)
-        _mv(E, u, a)
-        _mv(F1, Nu, tmp)
-        for i in range(m):
-            a[i] += tmp[i]
-        for i in range(n):
-            tmpn[i] = Na[i] + Nb[i]
-        _mv(F2, tmpn, tmp)
-        for i in range(m):
-            a[i] += 2.0 * tmp[i]
-        _mv(F3, Nc, tmp)
-        for i in range(m):
-            u[i] = a[i] + tmp[i]
-        for i in range(m):
-            if not math.isfinite(u[i]):
-                status = 2
-        for bb in range(sup.shape[0]):
-            j = sup[bb]
-            ex = (u[j] - centres[bb, 0]) / clear[bb]
-            ey = (u[j + 1] - centres[bb, 1]) / clear[bb]
-            if ex * ex + ey * ey >= 0.999 * 0.999 and codes[bb] == BEARING_PLAIN:
-                status = 1
+        _etd_step(u, k * h, h, n, Lb, E, E2, P1h, F1, F2, F3, args_tuple, W, v)
+        u[:] = v
+        status = _check(u, sup, centres, clear, codes)
         if status != 0:
             break
     return status, u, k
+
+
+@njit(**NUMBA_OPTIONS)
+def _etd_span(u, t, dt, level, n, Lb, Es, E2s, P1hs, F1s, F2s, F3s, args_tuple, W, v, out):
+    """2**level ETDRK4 steps of dt / 2**level from ``u`` at ``t`` into ``out``."""
+    k_steps = 1 << level
+    h = dt / k_steps
+    out[:] = u
+    for k in range(k_steps):
+        _etd_step(out, t + k * h, h, n, Lb, Es[level], E2s[level], P1hs[level], F1s[level], F2s[level],
+                  F3s[level], args_tuple, W, v)
+        out[:] = v
+
+
+@njit(**NUMBA_OPTIONS)
+def _integrate_etd_adaptive(s0, dt, n_intervals, grid_first, grid, level0, n, Lb, Es, E2s, P1hs, F1s, F2s, F3s,
+                            rtol, scale, args_tuple, sup, centres, clear, codes):
+    """ETDRK4 with step-doubling error control over the sample intervals of length ``dt``: each interval
+    is integrated with 2**l and 2**(l+1) steps; the difference (the coarse solution's local error, 16×
+    the fine one's for a fourth-order method) must be ≤ 1 in the weighted RMS norm
+    |Δ|/(rtol·(scale + |s|)); the finer solution is kept. l rises until the test passes (status 3 when
+    the finest level available fails) and falls by one after an interval passing with a 32× margin.
+    Grid rows at the interval ends from interval ``grid_first``. Returns status (0 ok, 1 contact,
+    2 diverged, 3 tolerance not met), final state, steps taken, the largest level used."""
+    m = 2 * n
+    n_levels = Es.shape[0]
+    u = s0.copy()
+    coarse = np.empty(m)
+    fine = np.empty(m)
+    v = np.empty(m)
+    W = np.empty((9, m))
+    level = min(level0, n_levels - 2)
+    ng = 0
+    status = 0
+    steps = 0
+    lmax = level
+    for k in range(n_intervals + 1):
+        if k >= grid_first and ng < grid.shape[0]:
+            grid[ng] = u
+            ng += 1
+        if k == n_intervals:
+            break
+        t = k * dt
+        _etd_span(u, t, dt, level, n, Lb, Es, E2s, P1hs, F1s, F2s, F3s, args_tuple, W, v, coarse)
+        steps += 1 << level
+        while True:
+            _etd_span(u, t, dt, level + 1, n, Lb, Es, E2s, P1hs, F1s, F2s, F3s, args_tuple, W, v, fine)
+            steps += 1 << (level + 1)
+            err = 0.0
+            for i in range(m):
+                sc = rtol * (scale[i] + max(abs(fine[i]), abs(u[i])))
+                err += ((fine[i] - coarse[i]) / sc) ** 2
+            err = math.sqrt(err / m)
+            if err <= 1.0:
+                break
+            if level + 2 >= n_levels:
+                status = 3 if math.isfinite(err) else 2
+                break
+            level += 1
+            coarse[:] = fine
+        if level + 1 > lmax:
+            lmax = level + 1
+        u[:] = fine
+        if status == 0:
+            status = _check(u, sup, centres, clear, codes)
+        if status != 0:
+            break
+        if err < 1.0 / 32.0 and level > 0:
+            level -= 1
+    return status, u, steps, lmax
 
 
 @dataclass
@@ -281,7 +367,8 @@ class TrainRun:
 
     ``journal_m`` (n, n_bearings, 2): each journal relative to its bearing housing, DC included (what a
     pair of x/y proximity probes reads); ``keyphasor_s``: times of the once-per-revolution mark
-    (t·Ω ≡ 0 mod 2π, the unbalance angles' reference).
+    (t·Ω ≡ 0 mod 2π, the unbalance angles' reference). ``log_decrement``: the least-damped mode's about
+    the static state (≤ 0: beyond the linear stability threshold, said in ``message``).
     """
 
     time_s: np.ndarray
@@ -299,6 +386,8 @@ class TrainRun:
     inputs: dict = field(default_factory=dict)
     states: np.ndarray | None = None
     basis: np.ndarray | None = None
+    log_decrement: float = math.nan
+    message: str = ""
 
     def node_m(self, node: int) -> np.ndarray:
         """(x, y) of any node of the full model at the samples, m (needs ``record_state=True``)."""
@@ -329,6 +418,21 @@ class Kernel:
     static_q: np.ndarray | None = None
     journal_m: np.ndarray | None = None
     etd: dict = field(default_factory=dict)
+    stability: tuple[float, float] | None = None
+
+
+def linear_stability(kern: Kernel, speed_rpm: float) -> tuple[float, float]:
+    """Log decrement and frequency (Hz) of the least-damped oscillating mode of the reduced train
+    linearised at its static state (bearings by their coefficients there): a log decrement ≤ 0 puts the
+    speed beyond the linear stability threshold (oil whirl/whip grows from the static state)."""
+    if kern.stability is None:
+        _ensure_static(kern, speed_rpm)
+        lam = np.linalg.eigvals(_linear_operator(kern))
+        osc = lam[lam.imag > 1e-6]
+        logdec = -2 * math.pi * osc.real / osc.imag
+        k = int(np.argmin(logdec))
+        kern.stability = (float(logdec[k]), float(osc[k].imag / (2 * math.pi)))
+    return kern.stability
 
 
 def _linear_operator(kern: Kernel) -> np.ndarray:
@@ -448,10 +552,15 @@ def simulate_train(train: Train | Assembly | Reduced | Kernel, speed_rpm: float,
     keeps the reduced states at the samples (``TrainRun.node_m`` reads any node from them).
 
     ``method``: ``"etd"`` (default) integrates with fixed-step exponential Runge–Kutta (ETDRK4, the stiff
-    linearised film and shaft taken exactly, ``steps_per_sample`` steps between samples) and falls back to
-    ``"dopri"`` — adaptive Dormand–Prince 5(4) at ``rtol``/``atol_m`` — if it diverges; ``"dopri"`` alone on
-    request. The oil-film damping on the light journal DOFs makes the explicit method take several
-    hundred steps per revolution for stability alone (eigenvalues of −2·10⁴…−10⁵ s⁻¹)."""
+    linearised film and shaft taken exactly, ``steps_per_sample`` steps between samples) where the static
+    state is linearly stable, and with ``"dopri"`` — adaptive Dormand–Prince 5(4) at ``rtol``/``atol_m`` —
+    where it is not (in whip the orbit leaves the static neighbourhood: the fixed step's error grows and the
+    film's stiffness there is far from the frozen linearisation's); ``"etd"`` falls back to ``"dopri"`` if it
+    diverges. ``"etd_adaptive"`` (on request) is ETDRK4 with step-doubling error control over each sample
+    interval at ``rtol``/``atol_m`` (1 to 4096 steps per sample); it meets the tolerance near the static
+    state and hands over to ``"dopri"`` (said in ``message``) when it cannot. The oil-film damping on the light journal DOFs makes the explicit method take several
+    hundred steps per revolution for stability alone (eigenvalues of −2·10⁴…−10⁵ s⁻¹). A speed beyond the
+    linear stability threshold (least log decrement ≤ 0) is said in ``TrainRun.message``."""
     t0 = time.perf_counter()
     if not (np.isfinite(speed_rpm) and speed_rpm > 0):
         raise TrainError(f"speed_rpm must be positive (got {speed_rpm!r})")
@@ -466,11 +575,42 @@ def simulate_train(train: Train | Assembly | Reduced | Kernel, speed_rpm: float,
     t_end = (transient_revs + record_revs) * T_rev
     n_samples = record_revs * samples_per_rev
     grid = np.full((n_samples, s0.shape[0]), np.nan)
-    if method not in ("etd", "dopri"):
-        raise TrainError(f"method must be 'etd' or 'dopri' (got {method!r})")
+    if method not in ("etd", "etd_adaptive", "dopri"):
+        raise TrainError(f"method must be 'etd', 'etd_adaptive' or 'dopri' (got {method!r})")
     if steps_per_sample < 1:
         raise TrainError("steps_per_sample must be ≥ 1")
+    if not (np.isfinite(rtol) and 0 < rtol < 1 and np.isfinite(atol_m) and atol_m > 0):
+        raise TrainError(f"rtol must be in (0, 1) and atol_m positive (got {rtol!r}, {atol_m!r})")
+    logdec, f_mode = linear_stability(kern, speed_rpm)
+    message = ""
+    if logdec <= 0:
+        message = (f"{speed_rpm:.0f} r/min is beyond the linear stability threshold: the least-damped mode "
+                   f"({f_mode:.1f} Hz) has log decrement {logdec:.3f} ≤ 0 about the static state, so a "
+                   "whirl/whip grows from it; the response is a self-excited orbit, not the forced one")
+        if method == "etd":  # the frozen linearisation no longer holds: explicit error-controlled steps
+            method = "dopri"
     status = 2
+    max_sps = 0  # the most steps per sample interval the ETD integrators took (0: Dormand–Prince)
+    if method == "etd_adaptive":
+        dt = T_rev / samples_per_rev
+        levels = [etd_matrices(kern, dt / 2 ** lv) for lv in range(_ADAPTIVE_LEVELS)]
+        Lb = levels[0][0]
+        Es, E2s, P1hs, F1s, F2s, F3s = (np.stack([lv[k] for lv in levels]) for k in range(1, 7))
+        nr = kern.red.n
+        scale = np.concatenate([np.full(nr, atol_m / rtol), np.full(nr, atol_m * w / rtol)])
+        level0 = max(0, min(_ADAPTIVE_LEVELS - 2, int(round(math.log2(steps_per_sample)))))
+        status, s, nacc, lmax = _integrate_etd_adaptive(
+            s0.copy(), dt, (transient_revs + record_revs) * samples_per_rev, transient_revs * samples_per_rev,
+            grid, level0, nr, Lb, Es, E2s, P1hs, F1s, F2s, F3s, rtol, scale, kern.args[1:], kern.args[10],
+            kern.args[11], kern.clear, kern.args[12])
+        nrej, nfev, max_sps = 0, 4 * int(nacc), 2 ** int(lmax)
+        if status == 3:
+            message = (message + "; " if message else "") + (
+                f"the time step's error control did not meet rtol={rtol:g} at {2 ** (_ADAPTIVE_LEVELS - 1)} "
+                "steps per sample: retried with Dormand–Prince")
+            status = 2
+        if status == 2:
+            grid[:] = np.nan
     if method == "etd":
         _ensure_static(kern, speed_rpm)
         h = T_rev / (samples_per_rev * steps_per_sample)
@@ -480,11 +620,12 @@ def simulate_train(train: Train | Assembly | Reduced | Kernel, speed_rpm: float,
         status, s, nacc = _integrate_etd(s0.copy(), h, n_steps, steps_per_sample, grid_first, grid, kern.red.n, Lb,
                                          E, E2, P1h, F1, F2, F3, kern.args[1:], kern.args[10], kern.args[11],
                                          kern.clear, kern.args[12])
-        nrej, nfev = 0, 4 * int(nacc)
+        nrej, nfev, max_sps = 0, 4 * int(nacc), steps_per_sample
         if status == 2:
             grid[:] = np.nan
     if status == 2:
         method = "dopri"
+        max_sps = 0
         status, _, s, nacc, nrej, nfev, _ = _integrate(
             s0.copy(), t_end, T_rev / 200, rtol, atol_m, T_rev / samples_per_rev, transient_revs * T_rev, grid,
             MAX_STEPS_PER_REV * (transient_revs + record_revs), *kern.args, kern.clear, _A, _C, _E, _D)
@@ -500,5 +641,6 @@ def simulate_train(train: Train | Assembly | Reduced | Kernel, speed_rpm: float,
                     inputs={"speed_rpm": float(speed_rpm), "transient_revs": transient_revs,
                             "record_revs": record_revs, "samples_per_rev": samples_per_rev, "n_modes": n_modes,
                             "rtol": rtol, "atol_m": atol_m, "method": method,
-                            "steps_per_sample": steps_per_sample},
-                    states=grid if record_state else None, basis=red.T if record_state else None)
+                            "steps_per_sample": steps_per_sample, "max_steps_per_sample": max_sps},
+                    states=grid if record_state else None, basis=red.T if record_state else None,
+                    log_decrement=logdec, message=message)
