@@ -351,8 +351,8 @@ class AssetHistory(BaseModel):
 
     asset_id: str = Field(..., description="The asset.")
     site: str | None = Field(None, description="Where it sits (PUT /assets/{id}/hierarchy).")
-    unit: str | None = None
-    train: str | None = None
+    unit: str | None = Field(None, description="Its unit at the site.")
+    train: str | None = Field(None, description="Its machine train.")
     count: int = Field(..., description="Number of points returned.")
     points: list[AssetPoint] = Field(..., description="Diagnoses, oldest first.")
     alarms: list[AlarmEvent] = Field(default_factory=list, description="Trend alarms raised and cleared among "
@@ -692,10 +692,10 @@ class HierarchyIn(_Strict):
 class AssetSummary(BaseModel):
     """One asset in GET /assets."""
 
-    asset_id: str
-    site: str | None = None
-    unit: str | None = None
-    train: str | None = None
+    asset_id: str = Field(..., description="The asset.")
+    site: str | None = Field(None, description="Its plant or site.")
+    unit: str | None = Field(None, description="Its unit at the site.")
+    train: str | None = Field(None, description="Its machine train.")
     diagnoses: int = Field(0, description="Stored diagnoses.")
     latest: dt.datetime | None = Field(None, description="Trend time of its latest stored diagnosis.")
 
@@ -703,27 +703,31 @@ class AssetSummary(BaseModel):
 class AlarmEventOut(BaseModel):
     """One raised or cleared alarm of an asset."""
 
-    id: int
-    asset_id: str
+    id: int = Field(..., description="The event's id (for `POST …/events/{id}/ack`).")
+    asset_id: str = Field(..., description="The asset.")
     time: str | None = Field(None, description="When the diagnosis that raised or cleared it was stored (UTC).")
     quantity: str = Field(..., description="`overall_um_pp`, `x1_um_pp`, `x2_um_pp`, `misalignment` or `change`.")
-    unit: str | None = None
+    unit: str | None = Field(None, description="Unit of `value` and `setpoint` (`um_pp`, or none for Δ).")
     level: str = Field(..., description="`alert`, `danger`, or `normal` (cleared).")
     event: str = Field(..., description="`raised` or `cleared`.")
-    value: float | None = None
+    value: float | None = Field(None, description="The quantity's value in the diagnosis that raised or cleared it.")
     setpoint: float | None = Field(None, description="The setpoint crossed (raised events).")
-    diagnosis_id: int | None = None
-    message: str
+    diagnosis_id: int | None = Field(None, description="The stored diagnosis that raised or cleared it.")
+    message: str = Field(..., description="What happened, in words.")
     acked_at: str | None = Field(None, description="When it was acknowledged (null: not yet).")
-    ack_note: str | None = None
+    ack_note: str | None = Field(None, description="The note given with the acknowledgement.")
 
 
 class AlarmEventsOut(BaseModel):
-    asset_id: str
+    """GET /assets/{id}/events."""
+
+    asset_id: str = Field(..., description="The asset.")
     events: list[AlarmEventOut] = Field(..., description="Newest first.")
 
 
 class AckIn(_Strict):
+    """POST /assets/{id}/events/{event_id}/ack."""
+
     note: str | None = Field(None, max_length=2000, description="Who acknowledged and what is being done.")
 
 
@@ -739,22 +743,26 @@ class WebhookIn(_Strict):
 
 
 class WebhookOut(BaseModel):
-    id: int
-    url: str
-    asset_id: str | None = None
-    created_at: dt.datetime | None = None
+    """A webhook (POST/GET /webhooks)."""
+
+    id: int = Field(..., description="The webhook's id.")
+    url: str = Field(..., description="Where the events are POSTed.")
+    asset_id: str | None = Field(None, description="Only this asset's events (null: all assets).")
+    created_at: dt.datetime | None = Field(None, description="When it was added (UTC).")
     secret: str | None = Field(None, description="Only in the answer to POST /webhooks.")
     signature_header: str = Field(..., description="Header carrying `sha256=` + hex HMAC-SHA256 of the body "
                                   "with the secret as key.")
 
 
 class DeliveryOut(BaseModel):
-    id: int
-    webhook_id: int
+    """One delivery of an event to a webhook (GET /webhooks/{id}/deliveries)."""
+
+    id: int = Field(..., description="The delivery's id (header `X-Rotordiag-Delivery`).")
+    webhook_id: int = Field(..., description="The webhook.")
     event_id: int | None = Field(None, description="null for a test delivery.")
     status: str = Field(..., description="pending, sending, delivered, failed or dropped.")
-    attempts: int
-    last_error: str | None = None
-    created_at: str | None = None
-    next_attempt_at: str | None = None
-    delivered_at: str | None = None
+    attempts: int = Field(..., description="Attempts made so far.")
+    last_error: str | None = Field(None, description="What the last failed attempt got.")
+    created_at: str | None = Field(None, description="When the delivery was queued (UTC).")
+    next_attempt_at: str | None = Field(None, description="When it is tried next (UTC).")
+    delivered_at: str | None = Field(None, description="When a 2xx answer came (UTC).")
