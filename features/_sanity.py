@@ -25,6 +25,8 @@ from typing import cast
 
 import numpy as np
 
+from rotordiag.core.notes import Length as L
+from rotordiag.core.notes import Measured as M
 from rotordiag.core.reasons import FAIL, WARN, require_code
 
 from ._common_mode import COMMON_MODE_MIN_PROBES, CommonMode, common_mode
@@ -122,9 +124,9 @@ def _channel_checks(rec: Recording) -> list[SanityFinding]:
                                      "the channel order", ch.bearing))
             continue
         if ptp <= 1e-9 * scale:
-            out.append(SanityFinding("flat_channel", FAIL, f"{where}: the signal is constant ({d[0]:.6g} µm) — probe "
+            out.append(SanityFinding("flat_channel", FAIL, M.of(f"{where}: the signal is constant (", L(float(d[0]), ".6g"), ") — probe "
                                      "disconnected or saturated, or the DC gap recorded without its AC part; "
-                                     "check the probe, its driver and the acquisition channel", ch.bearing))
+                                     "check the probe, its driver and the acquisition channel"), ch.bearing))
             continue
         lo, hi = float(d.min()), float(d.max())
         tol = 1e-9 * scale
@@ -140,16 +142,16 @@ def _channel_checks(rec: Recording) -> list[SanityFinding]:
                 if stretch is not None:
                     fs = rec.sample_rate_hz
                     out.append(SanityFinding(
-                        "dropout", FAIL, f"{where}: the signal holds {hi if at == 'maximum' else lo:.6g} µm for "
+                        "dropout", FAIL, M.of(f"{where}: the signal holds ", L(hi if at == "maximum" else lo, ".6g"), " for "
                         f"{1e3 * (stretch[1] - stretch[0]) / fs:.0f} ms in one stretch ({stretch[0] / fs:.3f}–"
                         f"{stretch[1] / fs:.3f} s) — a dropout (a loose connector or cable, the acquisition losing "
                         "samples), not motion; check the connection and send a record without it (cut it out, or "
-                        "record again)", ch.bearing))
+                        "record again)"), ch.bearing))
                     continue
                 out.append(SanityFinding(
-                    "clipped_channel", FAIL, f"{where}: {100 * frac:.1f} % of the samples sit at the channel's {at} "
-                    f"({hi if at == 'maximum' else lo:.6g} µm) — the signal is clipped (probe outside its linear "
-                    "range, driver or ADC saturated); check the probe gap voltage and the input range", ch.bearing))
+                    "clipped_channel", FAIL, M.of(f"{where}: {100 * frac:.1f} % of the samples sit at the channel's {at} (",
+                         L(hi if at == "maximum" else lo, ".6g"), ") — the signal is clipped (probe outside its "
+                         "linear range, driver or ADC saturated); check the probe gap voltage and the input range"), ch.bearing))
     return out
 
 
@@ -209,10 +211,10 @@ def _spike_finding(rec: Recording, b: int, x: np.ndarray, y: np.ndarray, limit: 
     t = ", ".join(f"{i / rec.sample_rate_hz:.4g}" for i in bad[:5]) + (" …" if bad.size > 5 else "")
     return SanityFinding(
         "spike", WARN,
-        f"bearing {b}: {bad.size} isolated sample(s) (at t = {t} s) stand far off the rest of the record and make "
-        f"the motion {ptp:.4g} µm pk-pk; without them it is {rest:.4g} µm pk-pk, inside the clearance. A glitch — "
-        "electrical noise, a loose connector, a scratch or a dropout — not shaft motion: check the probe's cable "
-        "and connector, or cut those samples out", b)
+        M.of(f"bearing {b}: {bad.size} isolated sample(s) (at t = {t} s) stand far off the rest of the record and "
+             "make the motion ", L(ptp, ".4g"), " pk-pk; without them it is ", L(rest, ".4g"), " pk-pk, inside the "
+             "clearance. A glitch — electrical noise, a loose connector, a scratch or a dropout — not shaft motion: "
+             "check the probe's cable and connector, or cut those samples out"), b)
 
 
 def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
@@ -230,27 +232,27 @@ def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
         if spike is not None:
             out.append(spike)
         elif beyond and ptp > limit:
-            allowance = (f" (allowing {noise_pp:.3g} µm pk-pk for the probes' noise)"
-                         if noise_pp > 0.01 * 2 * c else "")
+            allowance = ((" (allowing ", L(noise_pp), " pk-pk for the probes' noise)")
+                         if noise_pp > 0.01 * 2 * c else ())
             out.append(SanityFinding(
                 "orbit_exceeds_clearance", FAIL,
-                f"bearing {b}: the motion is {ptp:.4g} µm pk-pk, {ptp / (2 * c):.1f}× the diametral clearance "
-                f"2c = {2 * c:.4g} µm{allowance} — a journal cannot move that far inside its bearing. Check the "
-                f"units (data declared in {units_txt!r}; µm read as mils is ×25.4), the probe sensitivity "
-                "(e.g. 7.87 mV/µm) and clearance_um (radial, in µm)", b))
+                M.of(f"bearing {b}: the motion is ", L(ptp, ".4g"), f" pk-pk, {ptp / (2 * c):.1f}× the diametral "
+                     "clearance 2c = ", L(2 * c, ".4g"), *allowance, " — a journal cannot move that far inside its "
+                     f"bearing. Check the units (data declared in {units_txt!r}; µm read as mils is ×25.4), the "
+                     "probe sensitivity (e.g. 7.87 mV/µm) and clearance_um (radial, in µm)"), b))
         elif ptp > PROBE_RANGE_UM:
             out.append(SanityFinding(
                 "orbit_exceeds_probe_range", FAIL,
-                f"bearing {b}: the motion is {ptp:.4g} µm pk-pk, beyond the linear range of a proximity probe "
-                f"({PROBE_RANGE_UM:g} µm) — check the units (data declared in {units_txt!r}) and the probe "
-                "sensitivity", b))
+                M.of(f"bearing {b}: the motion is ", L(ptp, ".4g"), " pk-pk, beyond the linear range of a "
+                     "proximity probe (", L(PROBE_RANGE_UM, "g"), f") — check the units (data declared in "
+                     f"{units_txt!r}) and the probe sensitivity"), b))
         mean = np.array(det.mean_um)
         r = float(np.hypot(*mean))
         if r > MAX_DC_UM:
             out.append(SanityFinding(
                 "dc_implausible", FAIL,
-                f"bearing {b}: the mean probe reading is {r:.4g} µm ({r / 1000:.3g} mm) from zero — no proximity "
-                f"probe reads such a gap; check the units (declared {units_txt!r}) and the scale factor", b))
+                M.of(f"bearing {b}: the mean probe reading is ", L(r, ".4g"), " from zero — no proximity "
+                     f"probe reads such a gap; check the units (declared {units_txt!r}) and the scale factor"), b))
     return out
 
 
@@ -354,12 +356,12 @@ def _common_mode_checks(fr) -> list[SanityFinding]:
                   "4-pole one)")
         out.append(SanityFinding(
             f"common_mode_{k}x", WARN,
-            f"the {k}X is one signal common to every probe ({cm.amp_um_pp:.3g} µm pk-pk at {cm.phase_lag_deg:.0f}° on "
-            f"all {cm.n_probes} probes of bearings {', '.join(map(str, cm.bearings))}; {100 * cm.share:.1f} % of the "
-            f"{k}X power): a shaft's {k}X orbit differs between probe directions and from bearing to bearing, so this "
-            f"is no shaft motion but electrical — {source}: a ground loop or a shared supply — or the probe mountings "
-            "vibrating together. Check the probe cabling and grounding (a probe at a fixed target reads the pickup "
-            "alone) and re-record"))
+            M.of(f"the {k}X is one signal common to every probe (", L(cm.amp_um_pp), f" pk-pk at "
+                 f"{cm.phase_lag_deg:.0f}° on all {cm.n_probes} probes of bearings {', '.join(map(str, cm.bearings))}; "
+                 f"{100 * cm.share:.1f} % of the {k}X power): a shaft's {k}X orbit differs between probe directions "
+                 f"and from bearing to bearing, so this is no shaft motion but electrical — {source}: a ground loop "
+                 "or a shared supply — or the probe mountings vibrating together. Check the probe cabling and "
+                 "grounding (a probe at a fixed target reads the pickup alone) and re-record")))
     return out
 
 

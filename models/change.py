@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from rotordiag.core.notes import Length, Measured
+
 __all__ = ["ChangeRule", "THRESHOLDS_PATH", "QUANTITIES", "fit_thresholds", "shipped_rule", "assess_change", "compare",
            "load_baseline_file", "format_change", "UNITS", "repeatability_thresholds", "REPEAT_MIN", "REPEAT_MARGIN",
            "REPEAT_FLOOR", "REPEAT_QUANTITIES", "thresholds_from_spread"]
@@ -314,10 +316,23 @@ def assess_change(result: Any, rule: ChangeRule) -> dict[str, Any]:
     return {"compared": True, "changed": bool(exceeded), "exceeded": exceeded, "quantities": out}
 
 
-def _fmt(v: float | None, unit: str) -> str:
-    if v is None:
-        return "not measured"
-    return f"{v:.3g} µm" + (" pk-pk" if unit == "µm pk-pk" else "") if unit.startswith("µm") else f"{v:+.3g}"
+def _measured_change(info: dict[str, Any]) -> Measured:
+    """A change item's value as a typed text: lengths carried in µm (rendered in mil at the edge)."""
+    is_length = info["unit"].startswith("µm")
+    pp = " pk-pk" if info["unit"] == "µm pk-pk" else ""
+    values: dict[str, Any] = {"value": Length(info["value"]) if is_length else f"{info['value']:+.3g}"}
+    template = "{value}" + pp
+    if info["value_per_c"] is not None and is_length:
+        template += " = {per_c:.3g} c"
+        values["per_c"] = info["value_per_c"]
+    if info["bearing"] is not None:
+        template += " at bearing {bearing}"
+        values["bearing"] = info["bearing"]
+    thr = info["threshold"]
+    if thr is not None:
+        template += " (alarm above {threshold}" + pp + ")"
+        values["threshold"] = Length(thr) if is_length else f"{thr:+.3g}"
+    return Measured(template, **values)
 
 
 _MEANING = {
@@ -374,12 +389,7 @@ def compare(signature_now: dict[str, Any], baseline: dict[str, Any] | None, rule
     for q, info in verdict["quantities"].items():
         if info["value"] is None:
             continue
-        thr = info["threshold"]
-        value = _fmt(info["value"], info["unit"])
-        if info["value_per_c"] is not None and info["unit"].startswith("µm"):
-            value += f" = {info['value_per_c']:.3g} c"
-        value += f" at bearing {info['bearing']}" if info["bearing"] is not None else ""
-        value += f" (alarm above {_fmt(thr, info['unit'])})" if thr is not None else ""
+        value = _measured_change(info)
         meaning = ("CHANGED: " if info["exceeded"] else "within the re-recording spread: ") + _MEANING[q]
         evidence.append({"scope": "change since baseline", "name": q.replace("_", " "), "value": value,
                          "meaning": meaning, "number": info["value"]})

@@ -8,8 +8,10 @@ verdict stays the one at the clearance given. The measurements behind it: docs/c
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
+from rotordiag.core.notes import Length, Measured
 from rotordiag.features import FeatureResult, Recording, with_scale
 
 from .status import CONFIDENT, UNCERTAIN, Reason
@@ -48,11 +50,13 @@ def clearance_reason(bundle: Any, recording: Recording, fr: FeatureResult, verdi
     if not ratio <= DIAMETRAL_OOD_RATIO:
         return None
     stated = recording.clearance_um
-    said = (f"{stated:g} µm" if not isinstance(stated, dict)
-            else ", ".join(f"bearing {b}: {c:g} µm" for b, c in sorted(stated.items())))
+    said: list[str | Length] = (
+        [x for k, (b, c) in enumerate(sorted(stated.items())) for x in ((", " if k else "") + f"bearing {b}: ",
+                                                                       Length(float(c), "g"))]
+        if isinstance(stated, Mapping) else [Length(float(stated), "g")])
     return Reason(
         "clearance_diametral", UNCERTAIN,
-        f"with half the stated clearance ({said}) the recording is markedly more like the machines the model was "
-        f"trained on (OOD score {ood_half:.2f} against {verdict.ood_score:.2f}); there it would be "
-        f"{class_half!r}. clearance_um is the radial clearance c, half the diametral one (bore minus "
-        "journal): check which one was given")
+        Measured.of("with half the stated clearance (", *said, ") the recording is markedly more like the machines "
+                    f"the model was trained on (OOD score {ood_half:.2f} against {verdict.ood_score:.2f}); there it "
+                    f"would be {class_half!r}. clearance_um is the radial clearance c, half the diametral one (bore "
+                    "minus journal): check which one was given"))

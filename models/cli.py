@@ -269,16 +269,15 @@ def register(app: typer.Typer) -> None:
                 full.append({"file": str(path), "error": str(exc)})
                 continue
             section = compare(sig, base, rule) if rule is not None else None
-            rows.append(verdict_row(path, verdict, res, output_units))
-            full.append(verdict_json(path, verdict, res, output_units))
+            rows.append(verdict_row(path, verdict, res, output_units, baseline=section))
+            full.append(verdict_json(path, verdict, res, output_units, baseline=section))
             if section is not None:
                 rows[-1].update({"baseline_compared": section["compared"], "baseline_changed": section["changed"],
                                  "baseline_exceeded": " ".join(section["exceeded"])})
-                full[-1]["baseline"] = section
             if out is None and not as_json:
                 if len(jobs) > 1:
                     typer.echo(f"== {path}")
-                typer.echo(format_verdict(verdict, output_units))
+                typer.echo(format_verdict(verdict, output_units, baseline=section))
                 if section is not None:
                     typer.echo(format_change(section))
                 for note in res.notes:

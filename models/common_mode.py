@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from rotordiag.core.notes import Length, Measured
 from rotordiag.features import (
     COMMON_MODE_NOTABLE_SHARE,
     FeatureResult,
@@ -58,13 +59,15 @@ def common_mode_reason(bundle: Any, recording: Recording, fr: FeatureResult, ver
     if other == verdict.model_severity:
         return None
     dominant = [f.code for f in fr.sanity if f.code in ("common_mode_1x", "common_mode_2x")]
-    what = "; ".join(f"{cm.order}X: {cm.amp_um_pp:.3g} µm pk-pk at {cm.phase_lag_deg:.0f}°, {100 * cm.share:.0f} % of "
-                     f"its power over {cm.n_probes} probes" for cm in found)
+    what = [x for k, cm in enumerate(found)
+            for x in (("; " if k else "") + f"{cm.order}X: ", Length(cm.amp_um_pp), f" pk-pk at {cm.phase_lag_deg:.0f}°, "
+                      f"{100 * cm.share:.0f} % of its power over {cm.n_probes} probes")]
     return Reason(
         "common_mode", INCONCLUSIVE if dominant else UNCERTAIN,
-        f"most of the {' and '.join(f'{cm.order}X' for cm in found)} is one signal common to every probe ({what}); a "
-        f"shaft's orbit differs from probe to probe and bearing to bearing, so that part is likely electrical pickup "
-        f"(mains at the running frequency or twice it on a grid-synchronous generator) or the probe mountings "
-        f"vibrating together. Without it the class is {other!r}, not {verdict.model_severity!r}: check the probe "
-        "cabling and grounding (a probe at a fixed target reads the pickup alone) before acting on this verdict"
-        + (f" ({' and '.join(dominant)}: that part dominates, so no severity is given)" if dominant else ""))
+        Measured.of(f"most of the {' and '.join(f'{cm.order}X' for cm in found)} is one signal common to every probe (",
+                    *what, "); a shaft's orbit differs from probe to probe and bearing to bearing, so that part is "
+                    "likely electrical pickup (mains at the running frequency or twice it on a grid-synchronous "
+                    "generator) or the probe mountings vibrating together. Without it the class is "
+                    f"{other!r}, not {verdict.model_severity!r}: check the probe cabling and grounding (a probe at a "
+                    "fixed target reads the pickup alone) before acting on this verdict"
+                    + (f" ({' and '.join(dominant)}: that part dominates, so no severity is given)" if dominant else "")))

@@ -174,12 +174,19 @@ def diagnose_read(bundle: Any, res: ReadResult, slow_roll: Any = None) -> tuple[
     return verdict, res, signature(fr)
 
 
-def verdict_row(path: Path, verdict: Any, res: ReadResult, output_units: str = "um") -> dict[str, Any]:
-    """One row of the verdict table: the file, the verdict, lengths in ``output_units`` (µm or mil)."""
+def verdict_row(path: Path, verdict: Any, res: ReadResult, output_units: str = "um",
+                baseline: dict[str, Any] | None = None) -> dict[str, Any]:
+    """One row of the verdict table: the file, the headline, the verdict, lengths in ``output_units`` (µm or mil)."""
+    from rotordiag.core.notes import Note
+
+    from .headline import headline
+
     d = verdict.to_dict()
     um_to(None, output_units)  # checks the name
     u = "mil" if output_units.strip().lower().startswith("mil") else "um"
-    row: dict[str, Any] = {"file": str(path), "format": res.format, "severity": d["severity"],
+    head = headline(d, baseline=baseline, units=u)
+    row: dict[str, Any] = {"file": str(path), "format": res.format, "action": head.action, "urgency": head.urgency,
+                           "headline": head.text, "severity": d["severity"] if head.show_severity else None,
                            "misalignment": d["misalignment"],
                            "status": d.get("status"),
                            "misalignment_lo": (d.get("misalignment_interval") or [None, None])[0],
@@ -191,19 +198,24 @@ def verdict_row(path: Path, verdict: Any, res: ReadResult, output_units: str = "
     row.update({f"p_{k}": v for k, v in d["probabilities"].items()})
     row.update({"speed_rpm": d.get("speed_rpm"), "motion_type": d.get("motion_type"), "ood": d.get("ood"),
                 "ood_score": d.get("ood_score"), "model_version": d.get("model_version"),
-                "warnings": " | ".join(d.get("warnings") or []), "notes": " | ".join(res.notes),
+                "warnings": " | ".join(w.render(u) if isinstance(w, Note) else w for w in d.get("warnings") or []),
+                "notes": " | ".join(res.notes),
                 "truth_misalignment": (res.truth or {}).get("misalignment")})
     return row
 
 
-def verdict_json(path: Path, verdict: Any, res: ReadResult, output_units: str = "um") -> dict[str, Any]:
-    """The verdict as JSON (``Verdict.to_dict``) with the file, its format, the reader's notes and the
-    dataset truth, its lengths in ``output_units`` (:func:`rotordiag.models.output_units.verdict_in_units`,
-    the same conversion as the API's ``output_units``: ``offset_mil``, ``…_mil_pp``, evidence in mils)."""
+def verdict_json(path: Path, verdict: Any, res: ReadResult, output_units: str = "um",
+                 baseline: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The verdict as JSON (``Verdict.to_dict``) with the file, its format, the reader's notes, the
+    dataset truth and the ``baseline`` comparison when there is one, its lengths in ``output_units``
+    (:func:`rotordiag.models.output_units.verdict_in_units`, the same conversion and headline as the API's)."""
     from .output_units import verdict_in_units
 
+    vd = verdict.to_dict()
+    if baseline is not None:
+        vd["baseline"] = baseline
     d: dict[str, Any] = {"file": str(path), "format": res.format,
-                         **verdict_in_units(verdict.to_dict(), output_units), "notes": res.notes}
+                         **verdict_in_units(vd, output_units), "notes": res.notes}
     if res.truth:
         d["truth"] = res.truth
     return d

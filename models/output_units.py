@@ -4,31 +4,23 @@ The verdict is computed in µm (:func:`rotordiag.models.predict.diagnose`); this
 finished verdict dict into ``units`` without recomputing anything: every µm-named field is
 renamed and converted (:func:`rotordiag.core.units.lengths_in`: ``offset_um`` →
 ``offset_mil``, ``b2_1x_major_um_pp`` → ``b2_1x_major_mil_pp``), the top features' values
-and references follow their renamed feature, and the evidence texts and warnings are rendered
-again from their typed values (:class:`rotordiag.core.notes.Measured`, :class:`~rotordiag.core.notes.Note`:
-lengths carried as numbers in µm). Peak-to-peak vs 0-peak stays in the names (``_pp``).
-
-A text that has lost its types (an answer validated by the API schema before conversion, as the batch route
-does, or one read back as JSON) is converted by :func:`_mils_text`, the one place a µm amount is read from a
-sentence; it goes when the API schema carries the typed values.
+and references follow their renamed feature, the baseline comparison's quantities are converted by their
+stated unit, and the evidence texts and warnings are rendered again from their typed values
+(:class:`rotordiag.core.notes.Measured`, :class:`~rotordiag.core.notes.Note`: lengths carried as numbers in µm) —
+never by reading a number out of a sentence. The headline (:mod:`rotordiag.models.headline`) is made here too, in
+the same units, so that every door opens its answer with it. Peak-to-peak vs 0-peak stays in the names (``_pp``).
 """
 from __future__ import annotations
 
 import copy
-import re
 from typing import Any
 
 from rotordiag.core.notes import Measured, Note
 from rotordiag.core.units import UM_PER_MIL, lengths_in, um_to
 
+from .headline import headline_dict
+
 __all__ = ["verdict_in_units"]
-
-#: a number followed by µm in an evidence text ("42.1 µm pk-pk", "mean x 3.2 µm")
-_UM_AMOUNT = re.compile(r"(-?\d+(?:\.\d+)?(?:e[-+]?\d+)?) µm")
-
-
-def _mils_text(text: str) -> str:
-    return _UM_AMOUNT.sub(lambda m: f"{float(m.group(1)) / UM_PER_MIL:.3g} mil", text)
 
 
 def verdict_in_units(verdict: dict[str, Any], units: str) -> dict[str, Any]:
@@ -52,8 +44,9 @@ def verdict_in_units(verdict: dict[str, Any], units: str) -> dict[str, Any]:
     """
     um_to(None, units)
     key_units = "mil" if units.strip().lower().startswith("mil") else "um"
+    head = headline_dict(verdict, units=key_units) if "status" in verdict else None
     if key_units == "um":
-        return {**verdict, "output_units": "um"}
+        return {**verdict, "output_units": "um", **({"headline": head} if head else {})}
     out = lengths_in(copy.deepcopy(verdict), "mil")
     for item in out.get("top_features") or []:
         name = item.get("name")
@@ -67,11 +60,20 @@ def verdict_in_units(verdict: dict[str, Any], units: str) -> dict[str, Any]:
             if ev.get("number") is not None and text.leads_with_length:
                 ev["number"] = ev["number"] / UM_PER_MIL
             ev["value"] = text.render("mil")
-        elif isinstance(text, str) and _UM_AMOUNT.search(text):        # untyped (see the module's docstring)
-            if ev.get("number") is not None and re.match(r"\s*-?[\d.]+(?:e[-+]?\d+)? µm", text):
-                ev["number"] = ev["number"] / UM_PER_MIL
-            ev["value"] = _mils_text(text)
+    for r in out.get("reasons") or []:
+        if isinstance(r, dict) and isinstance(r.get("message"), Measured):
+            r["message"] = r["message"].render("mil")
     if out.get("warnings"):
         out["warnings"] = [w.render("mil") if isinstance(w, Note) else w for w in out["warnings"]]
+    base = out.get("baseline")
+    if isinstance(base, dict):
+        for q in (base.get("quantities") or {}).values():
+            if isinstance(q, dict) and str(q.get("unit", "")).startswith("µm"):
+                for k in ("value", "threshold", "alert", "danger"):
+                    if isinstance(q.get(k), int | float):
+                        q[k] = q[k] / UM_PER_MIL
+                q["unit"] = "mil" + str(q["unit"])[2:]
+    if head:
+        out["headline"] = head
     out["output_units"] = "mil"
     return out

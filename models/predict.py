@@ -453,17 +453,21 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
     )
 
 
-def format_verdict(v: Verdict, output_units: str = "um") -> str:
+def format_verdict(v: Verdict, output_units: str = "um", *, baseline: dict | None = None) -> str:
     """Human-readable multi-line text of a verdict (for the CLI); every length in ``output_units`` (um | mil):
     the offset, the µm-named features (renamed ``…_mil_pp``, values and ranges converted) and the evidence
-    texts, as the API's ``output_units`` (:func:`rotordiag.models.output_units.verdict_in_units`)."""
+    texts, as the API's ``output_units`` (:func:`rotordiag.models.output_units.verdict_in_units`). The first line
+    is the headline (:mod:`rotordiag.models.headline`, with the ``baseline`` comparison when there is one); a
+    recording whose measurement is in doubt shows no severity."""
     import copy
 
     from rotordiag.core.units import lengths_in, um_to
 
+    from .headline import headline
     from .output_units import verdict_in_units
 
     unit = "mil" if output_units.strip().lower().startswith("mil") else "µm"
+    unit_key = "mil" if unit == "mil" else "um"
     scale = float(um_to(1.0, "mil" if unit == "mil" else "um"))
 
     def named(name: str, *values: Any) -> tuple[str, list[Any]]:
@@ -472,11 +476,17 @@ def format_verdict(v: Verdict, output_units: str = "um") -> str:
         return new, converted
 
     evidence = verdict_in_units({"evidence": copy.deepcopy(v.evidence)}, output_units)["evidence"]
-    lines = [f"status: {v.status}"]
+    head = headline({"status": v.status, "severity": v.severity, "reasons": v.reasons,
+                     "motion_type": v.motion_type, "offset_um": v.offset_um}, baseline=baseline, units=unit_key)
+    lines = [f"WHAT TO DO: {head.text}  [{head.action.replace('_', ' ')}; urgency: {head.urgency.replace('_', ' ')}]",
+             f"status: {v.status}"]
     for r in v.reasons:
         lines.append(f"  {r['status']}: {r['message']}")
-    lines.append(f"severity: {v.severity}" + ("  (no severity: see the reasons and the evidence)"
-                                              if v.status == INCONCLUSIVE else ""))
+    if not head.show_severity:
+        lines.append("severity: not given (the measurement is in doubt: see the reasons)")
+    else:
+        lines.append(f"severity: {v.severity}" + ("  (no severity: see the reasons and the evidence)"
+                                                  if v.status == INCONCLUSIVE else ""))
     lines.append("probabilities: " + ", ".join(f"{k} {p:.2f}" for k, p in v.probabilities.items()))
     lo, hi = v.misalignment_interval
     if v.misalignment is not None and lo is not None and hi is not None:

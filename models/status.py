@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 
 from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, short_bearing_attitude_deg
+from rotordiag.core.notes import Length, Measured
 from rotordiag.core.reasons import INCONCLUSIVE, UNCERTAIN, code_info, require_code
 from rotordiag.features import speed_in_doubt
 
@@ -269,18 +270,20 @@ def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray,
     b, v, m = max(ratios, key=lambda t: abs(np.log(max(t[1], 1e-300) / t[2])))
     if v <= 0:                       # no 1X vibration at all (all-zero or flat probes): as far below as can be
         return [Reason("scale", INCONCLUSIVE,
-                       f"no 1X vibration at bearing {b} (0 µm pk-pk) where the training data's typical is {m:.3g} µm: "
-                       "check that the probes are connected and the data are not all zeros")]
+                       Measured.of(f"no 1X vibration at bearing {b} (", Length(0.0), " pk-pk) where the training "
+                                   "data's typical is ", Length(m), ": check that the probes are connected and the "
+                                   "data are not all zeros"))]
     factor = m / v if v < m else v / m
     if factor < policy.scale_uncertain:
         return []
     status = INCONCLUSIVE if factor >= policy.scale_inconclusive else UNCERTAIN
     side = "below" if v < m else "above"
     return [Reason("scale", status,
-                   f"1X vibration at bearing {b} is {v:.3g} µm pk-pk, {factor:.0f}× {side} the training data's typical "
-                   f"{m:.3g} µm: the model has not seen machines vibrating like this"
-                   + (" — check the units (µm vs mils ×25.4) and the probe sensitivity" if side == "above" else
-                      " — a different machine design or a very smooth-running one; read the evidence instead"))]
+                   Measured.of(f"1X vibration at bearing {b} is ", Length(v), f" pk-pk, {factor:.0f}× {side} the "
+                               "training data's typical ", Length(m), ": the model has not seen machines vibrating "
+                               "like this" + (" — check the units (µm vs mils ×25.4) and the probe sensitivity"
+                                              if side == "above" else " — a different machine design or a very "
+                                              "smooth-running one; read the evidence instead")))]
 
 
 _ORDER_AMP = re.compile(r"b(\d+)_(\d)x_major_(um_pp|pp_per_c)")
@@ -317,9 +320,12 @@ def describe_feature(name: str) -> tuple[str, str]:
     return name, ""
 
 
-def _num(v: float, unit: str = "") -> str:
+def _num(v: float, unit: str = "") -> tuple[str | Length, ...]:
+    """A value with its unit as pieces of a :meth:`Measured.of` text (a length in µm kept typed)."""
+    if unit.startswith("µm"):
+        return (Length(v), unit[2:])
     text = f"{round(v) + 0:+d}" if unit == "°" else f"{v:.3g}"
-    return f"{text}{unit}" if unit == "°" else (f"{text} {unit}" if unit else text)
+    return (f"{text}{unit}" if unit == "°" else (f"{text} {unit}" if unit else text),)
 
 
 def envelope_reasons(findings: Sequence[dict], *, max_reasons: int = 3,
@@ -336,24 +342,26 @@ def envelope_reasons(findings: Sequence[dict], *, max_reasons: int = 3,
         side, factor = f["side"], f.get("factor")
         bound = f["train_min"] if side == "below" else f["train_max"]
         how = f"{factor:.0f}× " if factor is not None and factor >= 2 else ""
-        text = (f"{words} is {_num(f['value'], unit)}, {how}{side} anything in the training data "
-                f"({'min' if side == 'below' else 'max'} {_num(bound, unit)}; training range "
-                f"{_num(f['train_min'], '°' if unit == '°' else '')} … {_num(f['train_max'], unit)}): ")
+        parts: list[str | Length] = [
+            f"{words} is ", *_num(f["value"], unit), f", {how}{side} anything in the training data "
+            f"({'min' if side == 'below' else 'max'} ", *_num(bound, unit), "; training range ",
+            *(_num(f["train_min"], unit) if unit.startswith("µm") else _num(f["train_min"], "°" if unit == "°" else "")),
+            " … ", *_num(f["train_max"], unit), "): "]
         name = str(f["feature"])
         if "_attitude_" in name:
-            text += ("the shaft does not sit where a plain oil-film journal bearing puts it — bearings of another "
+            text = ("the shaft does not sit where a plain oil-film journal bearing puts it — bearings of another "
                      "type (tilting-pad, rolling-element), or the DC gaps, probe angles or rotation direction are "
                      "wrong; the model knows plain journal bearings only")
         elif "um_pp" in name and side == "above":
-            text += "check the units (µm vs mils ×25.4) and the probe sensitivity; the model has not seen this"
+            text = "check the units (µm vs mils ×25.4) and the probe sensitivity; the model has not seen this"
         elif "per_c" in name:
-            text += "check the stated bearing clearance, or a machine unlike the training family"
+            text = "check the stated bearing clearance, or a machine unlike the training family"
         else:
-            text += "a machine or measurement unlike the training family; the model has not seen this"
+            text = "a machine or measurement unlike the training family; the model has not seen this"
         if k == max_reasons - 1 and len(findings) > max_reasons:
             text += f" (and {len(findings) - max_reasons} more feature(s) outside the training range)"
         status = INCONCLUSIVE if factor is not None and factor >= policy.scale_inconclusive else UNCERTAIN
-        out.append(Reason("outside_training", status, text))
+        out.append(Reason("outside_training", status, Measured.of(*parts, text)))
     return out
 
 

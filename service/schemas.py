@@ -10,6 +10,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstra
 from rotordiag.core.input_bounds import CLEARANCE_RANGE_UM, SAMPLE_RATE_RANGE_HZ, SPEED_RANGE_RPM
 from rotordiag.core.notes import NOTES
 from rotordiag.core.reasons import CATALOGUE, known_code
+from rotordiag.models.headline import ACTIONS, URGENCIES
 from rotordiag.simulator.dataset.spec import DESIGN_MECHANISMS
 
 #: Bounds on what one request may carry (the body-size middleware bounds the bytes as well).
@@ -453,10 +454,27 @@ class EvidenceOut(BaseModel):
     number: float | None = Field(None, description="The main number (µm pk-pk, ratio, degrees or eccentricity ratio).")
 
 
+class HeadlineOut(BaseModel):
+    """What to do about the machine, in one sentence (``models.headline``)."""
+
+    action: Literal[tuple(ACTIONS)] = Field(  # type: ignore[valid-type]
+        ..., description="What to do: " + "; ".join(f"`{k}` — {v}" for k, v in ACTIONS.items()) + ".")
+    urgency: Literal[URGENCIES] = Field(  # type: ignore[valid-type]
+        ..., description="How soon: `none`, `before_acting` (check before reading the verdict), `routine`, "
+        "`next_outage`, `soon`.")
+    text: str = Field(..., description="The sentence, lengths in the answer's `output_units`.")
+    show_severity: bool = Field(True, description="False when the measurement itself is in doubt (units or "
+                                "physics checks failed, or no verdict): then no severity is to be shown.")
+
+
 class DiagnoseResponse(BaseModel):
     """The verdict of the active (or requested) model, from ``models.predict.diagnose``."""
 
     model_config = ConfigDict(protected_namespaces=())
+
+    headline: HeadlineOut | None = Field(None, description="Opens every answer: what to do about the machine and "
+                                         "how urgent, made from the status, the band, the reasons and the baseline "
+                                         "comparison (docs/pipeline.md, the headline rules).")
 
     status: Literal["confident", "uncertain", "inconclusive"] = Field(
         "confident", description="`inconclusive`: a physics sanity check failed or the recording is far outside what "

@@ -38,9 +38,11 @@ def test_lengths_in_renames_and_converts_every_micrometre_field():
 
 
 def test_evidence_texts_and_top_features_follow():
+    from rotordiag.core.notes import Length, Measured
+
     v = {"top_features": [{"name": "b3_y_direct_um_pp", "value": 254.0, "reference": 127.0, "contribution": 0.4}],
-         "evidence": [{"scope": "bearing 3", "name": "1X y", "value": "42.1 µm pk-pk ∠ 137°", "meaning": "",
-                       "number": 42.1},
+         "evidence": [{"scope": "bearing 3", "name": "1X y", "value": Measured.of(Length(42.1), " pk-pk ∠ 137°"),
+                       "meaning": "", "number": 42.1},
                       {"scope": "coupling 2–3", "name": "2X/1X", "value": "0.54", "meaning": "", "number": 0.54}]}
     out = verdict_in_units(v, "mil")
     assert out["top_features"][0] == {"name": "b3_y_direct_mil_pp", "value": pytest.approx(10.0),

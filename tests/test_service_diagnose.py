@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 
 import numpy as np
 import pytest
@@ -381,8 +382,15 @@ def test_verdict_status_reasons_and_evidence(client, rec):
     assert sum(v["probabilities"].values()) == pytest.approx(1.0)         # still available for audit
     codes = [r["code"] for r in v["reasons"]]
     assert codes[0] == "orbit_exceeds_clearance" and "units" in v["reasons"][0]["message"]
+    assert v["headline"]["action"] == "check_measurement" and v["headline"]["show_severity"] is False
     batch = client.post("/diagnose/batch", json={"records": [body]}).json()
     assert batch["items"][0]["result"]["status"] == "inconclusive"
+    assert batch["items"][0]["result"]["headline"] == v["headline"]
+    # in mils, every length of the batch answer is rendered from its typed value (no µm amount left)
+    mil = client.post("/diagnose/batch?output_units=mil", json={"records": [body]}).json()["items"][0]["result"]
+    text = json.dumps(mil, ensure_ascii=False)
+    assert mil["output_units"] == "mil" and not re.findall(r"\d µm", text), re.findall(r".{50}\d µm", text)
+    assert mil["reasons"][0]["message"] != v["reasons"][0]["message"] and " mil" in mil["reasons"][0]["message"]
 
 
 def test_slow_roll_without_keyphasor_is_a_422(client, rec):

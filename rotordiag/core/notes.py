@@ -76,6 +76,19 @@ class Measured(str):
         """The text with its lengths in ``units`` (``"um"`` or ``"mil"``)."""
         return self.template.format(**_rendered(self.values, units))
 
+    @classmethod
+    def of(cls, *parts: str | Length) -> Measured:
+        """A text from its pieces in order: plain text and :class:`Length` values (``Measured.of("bearing 3 is ",
+        Length(42.0), " pk-pk")``) — for messages assembled piece by piece."""
+        template, values = [], {}
+        for k, part in enumerate(parts):
+            if isinstance(part, Length):
+                template.append(f"{{v{k}}}")
+                values[f"v{k}"] = part
+            else:
+                template.append(str(part).replace("{", "{{").replace("}", "}}"))
+        return cls("".join(template), **values)
+
     @property
     def leads_with_length(self) -> bool:
         """Whether the text begins with a length (then an evidence item's ``number`` is that length)."""

@@ -223,11 +223,10 @@ async def diagnose_batch(request: Request, state: StateDep, writer: MayStoreDep,
         _check_batch_size(len(records), cap)
         items = await anyio.to_thread.run_sync(_batch_sync, state, records, model_version, writer,
                                                limiter=diagnosis_limiter(state))
-    if output_units != "um":
-        for it in items:
-            if it.result is not None:
-                it.result = DiagnoseResponse.model_validate(verdict_in_units(it.result.model_dump(), output_units))
-    return {"count": len(items), "n_ok": sum(it.status_code == 200 for it in items), "items": items}
+    answered = [it if isinstance(it, BatchItem) else BatchItem(index=it[0], status_code=200,
+                                                               result=verdict_in_units(it[1], output_units))
+                for it in items]
+    return {"count": len(answered), "n_ok": sum(it.status_code == 200 for it in answered), "items": answered}
 
 
 def _check_batch_size(n: int, cap: int) -> None:
@@ -236,7 +235,10 @@ def _check_batch_size(n: int, cap: int) -> None:
                          "(ROTORDIAG_MAX_BATCH_RECORDS); split the batch")
 
 
-async def _batch_item(state, i: int, record: dict[str, Any], version: str | None, may_store: bool) -> BatchItem:
+async def _batch_item(state, i: int, record: dict[str, Any], version: str | None,
+                      may_store: bool) -> BatchItem | tuple[int, dict]:
+    """One record's answer: a ``BatchItem`` with its error, or ``(index, verdict)`` in µm (converted to the
+    request's units from its typed values before validation)."""
     try:
         _, verdict, asset_id, plant = await in_worker(state, DiagnoseRecord(record, version))
     except InputError as exc:
@@ -248,22 +250,23 @@ async def _batch_item(state, i: int, record: dict[str, Any], version: str | None
     except RuntimeError:                     # a bug on this record (logged by the pool): the others still answered
         return BatchItem(index=i, status_code=500, error=_RECORD_FAILED)
     await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store)
-    return BatchItem(index=i, status_code=200, result=verdict)
+    return i, verdict
 
 
 #: a batch record's error when the server failed on it (the cause is in the server log)
 _RECORD_FAILED = "the server failed on this record (an internal error, logged); the other records were answered"
 
 
-def _batch_sync(state, records: list[dict[str, Any]], model_version: str | None, may_store: bool) -> list[BatchItem]:
-    items: list[BatchItem] = []
+def _batch_sync(state, records: list[dict[str, Any]], model_version: str | None,
+                may_store: bool) -> list[BatchItem | tuple[int, dict]]:
+    items: list[BatchItem | tuple[int, dict]] = []
     for i, raw in enumerate(records):
         try:
             rec = batch_record(raw)
             recording = checked(recording_from_model, rec)
             verdict = _diagnose_sync(state, recording, model_version)
             record_verdict(state, rec.asset_id, rec.plant, verdict, may_store)
-            items.append(BatchItem(index=i, status_code=200, result=verdict))
+            items.append((i, verdict))
         except InputError as exc:
             items.append(BatchItem(index=i, status_code=STATUS_OF_KIND[exc.kind], error=str(exc)))
         except RequestInvalid as exc:

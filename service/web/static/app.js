@@ -466,8 +466,19 @@
     inconclusive: "Inconclusive: no severity is given. Read the reasons (what to check) and the measured evidence.",
   };
 
+  // the headline's urgency as the engineer reads it (models.headline)
+  const URGENCY_TEXT = { none: "no action", before_acting: "before acting", routine: "routine",
+    next_outage: "at the next outage", soon: "soon" };
+
   function renderVerdict(v) {
     const status = v.status || "confident";
+    const head = v.headline || null;
+    const hl = $("verdict-headline");
+    hl.textContent = head ? `What to do (${URGENCY_TEXT[head.urgency] || head.urgency}): ${head.text}` : "";
+    hl.className = "headline " + (head ? head.urgency : "");
+    show(hl, Boolean(head));
+    // a recording whose measurement is in doubt (units or physics checks) shows no severity at all
+    const noSeverity = head ? !head.show_severity : false;
     const st = $("verdict-status");
     st.textContent = STATUS_TEXT[status] || status;
     st.className = "status " + status;
@@ -480,8 +491,9 @@
     const ev = $("verdict-evidence").tBodies[0];
     ev.replaceChildren(...(v.evidence || []).map((e) => el("tr", {}, el("td", { text: e.scope }), el("td", { text: e.name }),
       el("td", { text: e.value }), el("td", { text: e.meaning }))));
-    const inconclusive = status === "inconclusive";
-    // an inconclusive verdict shows no severity badge, no Δ and no class probabilities: only the evidence
+    const inconclusive = status === "inconclusive" || noSeverity;
+    // an inconclusive verdict, or one whose measurement is in doubt, shows no severity badge, no Δ and no class
+    // probabilities: only the evidence
     show($("verdict-severity-row"), !inconclusive);
     show($("verdict-delta-row"), !inconclusive);
     show($("verdict-offset-row"), !inconclusive);
