@@ -11,7 +11,7 @@ features). Each is scored on the robustness report's recordings (``bench_robustn
 seeds 815 and 816, the far plants of seed 815 and the ``clearance unknown`` recordings of seed 815,
 simulated or read from ``--cache``): the Δ estimate's mean absolute error on each mechanism's
 misaligned cases and the classifier's macro-F1 per mechanism. The shipped model is scored beside them.
-It answers what a per-mechanism F1 target asks for (docs/models.md, "What would a rigid macro-F1 of
+It answers what a per-mechanism F1 target asks for (docs/models-history.md, "What would a rigid macro-F1 of
 0.95 take?"). Several minutes per variant on two cores.
 """
 from __future__ import annotations

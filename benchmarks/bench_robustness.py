@@ -199,7 +199,7 @@ CONDITIONS: tuple[Condition, ...] = (
                    "(not one of the issue's rows)"),
     Condition("bearings 2 and 3 swapped", coupling_bearings_swapped=True, same_recordings_as="clean",
               what="the clean recordings with bearing 2's probes sent as bearing 3's and 3's as 2's (cables mixed up at "
-                   "the coupling); no check tells it: a known limit (docs/models.md, stop 39) (not one of the issue's "
+                   "the coupling); no check tells it: a known limit (docs/models-history.md, stop 39) (not one of the issue's "
                    "rows)"),
     Condition("bearings 3–4 in a second take, not stated", second_take_ms=(2.0, 20.0), same_recordings_as="clean",
               what="the clean recordings with bearings 3 and 4 taken U(2, 20) ms after 1 and 2 (a second acquisition) "
@@ -417,7 +417,7 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
 def across_coupling(fr) -> tuple[float, float]:
     """The coupling-end journals relative to each other, r_b2 − r_b3, per clearance: the static offset
     |mean(r_b2) − mean(r_b3)| / c (NaN unless both means are journal positions, ``b?_centre_x_per_c``) and the
-    radius |F_1(b2) − F_1(b3)| / c of their relative forward 1X circle. Not a model feature (docs/models.md,
+    radius |F_1(b2) − F_1(b3)| / c of their relative forward 1X circle. Not a model feature (docs/models-history.md,
     "What the simulator lets a feature read exactly"): the report's transfer check (:func:`transfer_section`)."""
     from rotordiag.models.status import journals_apart_c
 
@@ -780,7 +780,7 @@ def transfer_section(clean: list[Outcome], ross: list[Outcome] | None) -> list[s
            "|mean(r_b2) − mean(r_b3)| / c for `offset` (and a settled `pin`), the radius of their relative forward "
            "1X circle for `rigid`. On a real train the two journals sit a span apart, each at its own eccentricity "
            "in its own bearing, so neither is zero on a healthy machine. Neither is a model feature "
-           "(docs/models.md, \"What the simulator lets a feature read exactly\"); the shipped model reconstructs "
+           "(docs/models-history.md, \"What the simulator lets a feature read exactly\"); the shipped model reconstructs "
            "part of them from the per-bearing vectors and centre positions, which is how `rigid` and `offset` "
            "reach their simulated F1 — the clean-rigid and far-rigid targets are targets on this identity. "
            "The row \"coupling journals apart\" above measures what it costs on a healthy train whose journals sit "

@@ -766,7 +766,7 @@ class MisalignmentModel(BaseEstimator):
         ``regressor_no_clearance_`` on every row with the clearance features blanked. Each
         recording is answered by the pair of its case (:meth:`clearance_stated`). One model
         for both cases loses accuracy on the recordings that state the clearance
-        (docs/models.md, the clearance-dropout variants of ``bench_learning_curve``).
+        (docs/models-history.md, the clearance-dropout variants of ``bench_learning_curve``).
     random_state : int, default=0
         Seed of the ``clearance_dropout`` rows.
 
@@ -876,7 +876,7 @@ class MisalignmentModel(BaseEstimator):
         centreline as well, and that pair never saw it missing. A recording whose DC part is no position — a raw
         probe gap (more than 1.5 c from the probes' zero), or channels whose mean was removed — has it missing: on
         the robustness base set with a 1000 µm gap in every channel and the clearance stated, the clearance-stated
-        classifier called 71 % of the aligned machines misaligned (docs/models.md, stop 36). Such a recording is
+        classifier called 71 % of the aligned machines misaligned (docs/models-history.md, stop 36). Such a recording is
         answered by the pair trained without any clearance feature, which never relied on the centreline."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         cols = getattr(self, "clearance_columns_", None)
