@@ -198,7 +198,7 @@ def test_shipped_model_does_not_rule_out_an_offset_without_the_clearance():
     assert with_c.model_severity == without.model_severity == "aligned"
     assert "offset_not_assessed" not in [r["code"] for r in with_c.reasons]
     assert without.status != "confident" and "offset_not_assessed" in [r["code"] for r in without.reasons]
-    # the shipped model answers each case with its own pair (docs/models.md, "Missing clearance")
+    # the shipped model answers each case with its own pair (docs/models.md, "A pair per clearance case")
     model = bundle.model
     assert model.clearance_heads and model.classifier_no_clearance_ is not None
     for clearance, clf in ((350.0, model.classifier_), (None, model.classifier_no_clearance_)):
