@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .headline import headline_dict
+
 __all__ = ["ReportContent", "build_report", "report_bytes", "transient_summary", "write_report", "summary_lines"]
 
 
@@ -104,7 +106,10 @@ def summary_lines(c: ReportContent) -> list[tuple[str, str]]:
     if v is None:
         out.append(("t", c.verdict_note or "no steady recording: no verdict"))
     else:
-        out.append(("t", f"status: {v.get('status')}    severity: {v.get('severity')}"))
+        head = v.get("headline") or headline_dict(v)
+        out.append(("t", f"WHAT TO DO ({head['urgency'].replace('_', ' ')}): {head['text']}"))
+        severity = v.get("severity") if head.get("show_severity", True) else "not given (the measurement is in doubt)"
+        out.append(("t", f"status: {v.get('status')}    severity: {severity}"))
         lo, hi = (v.get("misalignment_interval") or [None, None])[:2]
         out.append(("t", f"misalignment Δ = δ/c: {_fmt(v.get('misalignment'))} (interval {_fmt(lo)} – {_fmt(hi)})"))
         if v.get("offset_um") is not None:

@@ -91,6 +91,7 @@ def test_write_report_holds_what_it_is_given(tmp_path: Path):
     plt.close(fig)
     html = page.read_text(encoding="utf-8")
     assert "T &lt;1&gt;" in html and "&lt;not&gt;" in html          # escaped, not injected
+    assert "WHAT TO DO (before acting): confirm before acting: the model reads moderate misalignment" in html
     for text in ("status: uncertain", "severity: moderate", "0.310 (interval 0.200 – 0.400)", "bearing 2 · 2X/1X",
                  "Trend (2 stored diagnoses)", "2026-02-01 10:00: inconclusive"):
         assert text in html, text
