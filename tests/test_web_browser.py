@@ -313,6 +313,24 @@ def test_inconclusive_verdict_shows_no_severity_only_reasons_and_evidence(server
     assert len(d.find_elements("css selector", "#verdict-evidence tbody tr")) == len(page["evidence"]) > 0
 
 
+def test_volts_read_as_micrometres_show_what_to_do_and_no_severity(server, browser, recordings, tmp_path):
+    """The issue's case: a probe's volts (7.87 V/mm, −10 V gap) sent as µm. The model still has a class, but the
+    page opens with the headline "check the measurement first" and shows no severity badge at all."""
+    data = recordings[0.2] * 7.87e-3 - 10.0
+    _open(browser, server)
+    _submit_file(browser, _write_csv(tmp_path / "volts.csv", data), sample_rate=str(FS_HZ))
+    d = browser
+    v = d.execute_script("return window.rotordiag.state.verdict")
+    assert v["headline"]["action"] == "check_measurement" and v["headline"]["show_severity"] is False
+    assert v["severity"] != "inconclusive"                    # the model called a class: the page must not show it
+    shown = d.find_element("id", "verdict-headline")
+    assert shown.is_displayed() and shown.text.startswith("What to do (before acting): check the measurement first")
+    assert not d.find_element("id", "verdict-severity-row").is_displayed()
+    assert d.find_element("id", "verdict-severity").text == ""
+    assert d.find_element("id", "verdict-status").text.startswith("Measurement in doubt: no severity is shown")
+    _screenshot(d, "volts_as_um")
+
+
 def test_a_doubtful_estimated_speed_is_marked_in_doubt(server, browser, tmp_path):
     """No speed given, an oil whip 60 times the 1X: the estimated speed is in doubt (``speed_ambiguous``), and the
     page says so beside the speed, not only in the reasons; the pictures are drawn at the verdict's speed."""

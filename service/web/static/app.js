@@ -470,6 +470,13 @@
   const URGENCY_TEXT = { none: "no action", before_acting: "before acting", routine: "routine",
     next_outage: "at the next outage", soon: "soon" };
 
+  // an uncertain verdict whose measurement is in doubt shows no severity: its banner says so
+  function noSeverityText(status, head) {
+    if (!head || head.show_severity || status === "inconclusive") return "";
+    return "Measurement in doubt: no severity is shown until the units and the probes are checked. " +
+      "The reasons below say what to check.";
+  }
+
   function renderVerdict(v) {
     const status = v.status || "confident";
     const head = v.headline || null;
@@ -480,7 +487,7 @@
     // a recording whose measurement is in doubt (units or physics checks) shows no severity at all
     const noSeverity = head ? !head.show_severity : false;
     const st = $("verdict-status");
-    st.textContent = STATUS_TEXT[status] || status;
+    st.textContent = noSeverityText(status, head) || STATUS_TEXT[status] || status;
     st.className = "status " + status;
     const reasons = v.reasons || [];
     // the message says what was found in this recording; the action (the reasons catalogue's, the same for every
