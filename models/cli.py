@@ -152,7 +152,7 @@ def register(app: typer.Typer) -> None:
                 opts = example_options(name)
                 typer.echo(f"  {name:<26s} {describe_example(name)}"
                            + (f" (sidecar: {', '.join(f'{k}={v}' for k, v in opts.items())})" if opts else ""))
-            typer.echo("try: rotordiag diagnose <folder above>/misaligned.csv, or rotordiag examples --copy-to DIR")
+            typer.echo("try: rotordiag diagnose <folder above>/moderate.csv, or rotordiag examples --copy-to DIR")
             return
         try:
             written = copy_examples(copy_to, names)

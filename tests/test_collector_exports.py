@@ -36,7 +36,7 @@ LAYOUT_TEXT = ",".join(f"{b}@{a:g}" for b, a in LAYOUT)
 @pytest.fixture(scope="module")
 def reference():
     """The shipped severe example (µm, b1@45 … b4@135): what every export below holds."""
-    rec = read_recording(example_path("misaligned.csv")).recording
+    rec = read_recording(example_path("whirl.csv")).recording
     return rec, np.stack([c.data for c in rec.channels])
 
 
@@ -204,7 +204,7 @@ def _same_verdict(a, b):
 
 
 def test_cli_gives_each_export_the_verdict_of_the_um_file(registry, exports):
-    ref = _cli_json(registry, example_path("misaligned.csv"), "--channels", LAYOUT_TEXT, "--units", "um")
+    ref = _cli_json(registry, example_path("whirl.csv"), "--channels", LAYOUT_TEXT, "--units", "um")
     for key, (path, channel_map, stated) in exports.items():
         extra = [x for k, v in stated.items() for x in (f"--{k.replace('_', '-')}", v)]
         got = _cli_json(registry, path, "--channels", channel_map, *extra)
@@ -218,7 +218,7 @@ def test_http_gives_each_export_the_verdict_of_the_um_file(tmp_path, registry, e
         bearings = ",".join(str(b) for b, _ in LAYOUT)
         angles = ",".join(f"{a:g}" for _, a in LAYOUT)
         r = c.post("/diagnose", params={"units": "um", "bearings": bearings, "angles_deg": angles},
-                   files={"file": ("misaligned.csv", example_path("misaligned.csv").read_bytes())})
+                   files={"file": ("whirl.csv", example_path("whirl.csv").read_bytes())})
         assert r.status_code == 200, r.text
         ref = r.json()
         for key, (path, channel_map, stated) in exports.items():

@@ -31,18 +31,18 @@ def _csv(header, table, fmt="%.6g") -> bytes:
 
 @pytest.fixture(scope="module")
 def example():
-    res = read_recording(example_path("misaligned.csv"))
+    res = read_recording(example_path("whirl.csv"))
     return res.recording
 
 
 def test_examples_are_small_and_all_formats_agree(example):
     names = list_examples()
-    assert {"aligned.csv", "misaligned.csv", "misaligned_2560hz.npy", "aligned.h5", "misaligned.h5"} <= set(names)
+    assert {"aligned.csv", "whirl.csv", "whirl_2560hz.npy", "aligned.h5", "whirl.h5"} <= set(names)
     for n in names:
         assert example_path(n).stat().st_size < 400_000
-    h5 = read_recording(example_path("misaligned.h5")).recording
-    npy = read_recording(example_path("misaligned_2560hz.npy"), options=ReadOptions(sample_rate_hz=2560)).recording
-    uff = read_recording(example_path("misaligned.uff")).recording
+    h5 = read_recording(example_path("whirl.h5")).recording
+    npy = read_recording(example_path("whirl_2560hz.npy"), options=ReadOptions(sample_rate_hz=2560)).recording
+    uff = read_recording(example_path("whirl.uff")).recording
     for other in (h5, npy, uff):
         assert other.sample_rate_hz == pytest.approx(example.sample_rate_hz, rel=1e-7)
         assert [(c.bearing, c.angle_deg) for c in other.channels] == [(c.bearing, c.angle_deg) for c in example.channels]

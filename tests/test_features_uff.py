@@ -46,8 +46,8 @@ def test_uff_written_by_simulate_reads_back_exactly(tmp_path):
 
 
 def test_shipped_uff_example_gives_the_csv_examples_recording():
-    uff = read_recording(example_path("misaligned.uff")).recording
-    csv = read_recording(example_path("misaligned.csv")).recording
+    uff = read_recording(example_path("whirl.uff")).recording
+    csv = read_recording(example_path("whirl.csv")).recording
     assert uff.sample_rate_hz == pytest.approx(csv.sample_rate_hz, rel=1e-7)
     for a, b in zip(uff.channels, csv.channels):
         np.testing.assert_allclose(a.data, b.data, atol=6e-4)   # the CSV keeps 3 decimals

@@ -38,11 +38,11 @@ def test_examples_lists_every_shipped_recording_where_it_is():
 
 
 def test_examples_copy_to_a_folder_then_diagnose_reads_them(tmp_path):
-    res = CliRunner().invoke(cli_app, ["examples", "--copy-to", str(tmp_path / "ex"), "misaligned_2560hz.npy"])
+    res = CliRunner().invoke(cli_app, ["examples", "--copy-to", str(tmp_path / "ex"), "whirl_2560hz.npy"])
     assert res.exit_code == 0, res.output
-    assert sorted(p.name for p in (tmp_path / "ex").iterdir()) == ["misaligned_2560hz.json", "misaligned_2560hz.npy"]
-    assert (tmp_path / "ex" / "misaligned_2560hz.npy").read_bytes() == example_path("misaligned_2560hz.npy").read_bytes()
-    again = CliRunner().invoke(cli_app, ["examples", "--copy-to", str(tmp_path / "ex"), "misaligned_2560hz.npy"])
+    assert sorted(p.name for p in (tmp_path / "ex").iterdir()) == ["whirl_2560hz.json", "whirl_2560hz.npy"]
+    assert (tmp_path / "ex" / "whirl_2560hz.npy").read_bytes() == example_path("whirl_2560hz.npy").read_bytes()
+    again = CliRunner().invoke(cli_app, ["examples", "--copy-to", str(tmp_path / "ex"), "whirl_2560hz.npy"])
     assert again.exit_code == 2 and "already there" in again.output
     bad = CliRunner().invoke(cli_app, ["examples", "--copy-to", str(tmp_path / "ex2"), "nope.csv"])
     assert bad.exit_code == 2 and "no example recording 'nope.csv'; the examples are" in bad.output

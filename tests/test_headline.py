@@ -127,9 +127,42 @@ def test_the_cli_opens_with_the_headline(tmp_path):
     from rotordiag.cli import app
     from rotordiag.features.examples import example_path
 
-    r = CliRunner().invoke(app, ["diagnose", str(example_path("misaligned.csv")), "--output-units", "mil"])
+    r = CliRunner().invoke(app, ["diagnose", str(example_path("whirl.csv")), "--output-units", "mil"])
     assert r.exit_code == 0, r.output
     first = r.output.splitlines()[0]
     assert first.startswith("WHAT TO DO: ") and "urgency:" in first
-    r = CliRunner().invoke(app, ["diagnose", str(example_path("misaligned.csv")), "--json"])
+    r = CliRunner().invoke(app, ["diagnose", str(example_path("whirl.csv")), "--json"])
     assert json.loads(r.output)["headline"]["action"] in ACTIONS
+
+
+@pytest.mark.parametrize(("name", "band", "action"), [
+    ("aligned.csv", "aligned", "none"), ("aligned.h5", "aligned", "none"), ("slight.csv", "slight", "watch"),
+    ("moderate.csv", "moderate", "plan_alignment"), ("severe.csv", "severe", "align_soon"),
+])
+def test_each_steady_shipped_example_gets_its_band_confidently(name, band, action):
+    """The shipped examples are clean, steady cases of each state: with their sidecar (the clearance) the shipped
+    model gives each its band, confident, and the headline its action."""
+    from rotordiag.features import extract_features
+    from rotordiag.features.examples import example_options, example_path
+    from rotordiag.features.reader import ReadOptions, read_recording
+    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.registry import shipped_registry_dir
+
+    opts = example_options(name)
+    assert opts.get("clearance_um") == 350
+    rec = read_recording(example_path(name), options=ReadOptions(**opts)).recording
+    v = diagnose(load_bundle(shipped_registry_dir()), extract_features(rec), clearance_um=350.0).to_dict()
+    assert (v["status"], v["severity"], v["motion_type"]) == ("confident", band, "period-1"), v["reasons"]
+    assert verdict_in_units(v, "um")["headline"]["action"] == action
+
+
+def test_the_whirl_example_is_labelled_and_says_so():
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+    from rotordiag.features.examples import describe_example, example_path
+
+    assert "whirl" in describe_example("whirl.csv")
+    r = CliRunner().invoke(app, ["diagnose", "--json", str(example_path("whirl.csv"))])
+    v = json.loads(r.output)
+    assert v["motion_type"] == "quasi-periodic" and v["headline"]["action"] == "investigate_whirl"

@@ -39,7 +39,7 @@ def test_plots_cli_writes_the_pngs_and_names_the_peaks(startup_csv: Path, tmp_pa
 @pytest.mark.slow
 def test_report_pdf_and_html_hold_the_verdict_evidence_and_plots(startup_csv: Path, tmp_path: Path):
     out = tmp_path / "rep" / "report.pdf"
-    r = CliRunner().invoke(app, ["report", str(EXAMPLES / "misaligned.csv"), "--startup", str(startup_csv),
+    r = CliRunner().invoke(app, ["report", str(EXAMPLES / "whirl.csv"), "--startup", str(startup_csv),
                                  "--out", str(out), "--title", "unit 3 coupling"])
     assert r.exit_code == 0, r.output
     pdf = out.read_bytes()

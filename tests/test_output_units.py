@@ -62,7 +62,7 @@ def client(tmp_path_factory):
 
 
 def _post(client, units: str | None) -> dict:
-    path = example_path("misaligned.csv")
+    path = example_path("whirl.csv")
     q = "clearance_um=350" + (f"&output_units={units}" if units else "")
     r = client.post(f"/diagnose?{q}", files={"file": (path.name, path.read_bytes())})
     assert r.status_code == 200, r.text
@@ -85,7 +85,7 @@ def test_api_answers_in_mils_and_the_cli_agrees(client, tmp_path):
     assert not any("µm" in e["value"] for e in mil["evidence"])
     # the CLI's --output-units mil gives the same offset
     out = tmp_path / "v.json"
-    res = CliRunner().invoke(cli_app, ["diagnose", str(example_path("misaligned.csv")), "--clearance-um", "350",
+    res = CliRunner().invoke(cli_app, ["diagnose", str(example_path("whirl.csv")), "--clearance-um", "350",
                                        "--output-units", "mil", "--out", str(out)])
     assert res.exit_code == 0, res.output
     row = json.loads(out.read_text())[0]
@@ -97,7 +97,7 @@ def test_cli_text_in_mils_converts_every_length_not_only_the_offset(tmp_path):
     any µm-named feature are in mils, each the µm text's number / 25.4 (issue 45: only the offset was)."""
     from rotordiag.models.predict import FeatureContribution, Verdict, format_verdict
 
-    args = ["diagnose", str(example_path("misaligned.csv")), "--clearance-um", "350"]
+    args = ["diagnose", str(example_path("whirl.csv")), "--clearance-um", "350"]
     um = CliRunner().invoke(cli_app, args)
     mil = CliRunner().invoke(cli_app, [*args, "--output-units", "mil"])
     assert um.exit_code == 0 and mil.exit_code == 0, um.output + mil.output
@@ -130,6 +130,6 @@ def test_cli_text_in_mils_converts_every_length_not_only_the_offset(tmp_path):
 
 
 def test_unknown_output_units_is_a_422_that_names_the_choices(client):
-    path = example_path("misaligned.csv")
+    path = example_path("whirl.csv")
     r = client.post("/diagnose?output_units=inch", files={"file": (path.name, path.read_bytes())})
     assert r.status_code == 422 and "um" in r.text and "mil" in r.text

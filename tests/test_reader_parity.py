@@ -34,9 +34,9 @@ def client(tmp_path_factory, registry):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     d = tmp_path_factory.mktemp("files")
-    for name in ("misaligned.csv", "misaligned_2560hz.npy", "misaligned.h5", "aligned.h5", "misaligned.uff"):
+    for name in ("whirl.csv", "whirl_2560hz.npy", "whirl.h5", "aligned.h5", "whirl.uff"):
         shutil.copy(example_path(name), d / name)
-    (d / "misaligned_2560hz.json").write_text(json.dumps({"sample_rate_hz": 2560}))    # the NPY's sidecar
+    (d / "whirl_2560hz.json").write_text(json.dumps({"sample_rate_hz": 2560}))    # the NPY's sidecar
     rec = read_recording(example_path("aligned.csv")).recording
     (d / "aligned_rec.json").write_text(json.dumps({"sample_rate_hz": rec.sample_rate_hz, "channels": [
         {"bearing": c.bearing, "angle_deg": c.angle_deg, "units": "um", "data": c.data.tolist()}
@@ -44,9 +44,9 @@ def files(tmp_path_factory):
     return d
 
 
-CASES = [("misaligned.csv", {}), ("misaligned_2560hz.npy", {"sample_rate_hz": 2560}), ("misaligned.h5", {}),
+CASES = [("whirl.csv", {}), ("whirl_2560hz.npy", {"sample_rate_hz": 2560}), ("whirl.h5", {}),
          ("aligned.h5", {}), ("aligned_rec.json", {}),
-         ("misaligned.uff", {})]
+         ("whirl.uff", {})]
 
 
 def _same(a, b):
@@ -96,16 +96,16 @@ def test_cli_batch_table_over_a_folder_with_a_broken_file(files, registry, tmp_p
     rows = {r["file"].rsplit("/", 1)[-1]: r for r in json.loads(out.read_text())}
     assert "not a number" in rows["broken.csv"]["error"]
     assert rows["aligned.h5"]["severity"] == "aligned" and rows["aligned.h5"]["status"] == "confident"
-    assert not (rows["misaligned.h5"]["severity"] == "aligned" and rows["misaligned.h5"]["status"] == "confident")
-    r = rows["misaligned.h5"]
+    assert not (rows["whirl.h5"]["severity"] == "aligned" and rows["whirl.h5"]["status"] == "confident")
+    r = rows["whirl.h5"]
     assert r["offset_mil"] == pytest.approx(350 * r["misalignment"] / 25.4)
-    assert "misaligned_2560hz.json" not in rows                    # a sidecar is not a recording
+    assert "whirl_2560hz.json" not in rows                    # a sidecar is not a recording
     (files / "broken.csv").unlink()
 
 
 @pytest.mark.parametrize("args, needle", [
     (["aligned.h5", "--channels", "1@45,9@135"], "--channels"),
-    (["misaligned_2560hz.npy", "--units", "V"], "sensitivity"),
+    (["whirl_2560hz.npy", "--units", "V"], "sensitivity"),
     (["aligned.h5", "--rotation", "left"], "rotation"),
     (["nothing.csv"], "no such file"),
 ])

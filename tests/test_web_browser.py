@@ -513,8 +513,8 @@ def test_try_an_example_recording(server, browser):
     assert not browser.find_element("id", "file-fields").is_displayed()
     _wait(browser, lambda d: len(d.find_elements("css selector", "#example option")) >= 6, 30, "the example list")
     names = [o.get_attribute("value") for o in browser.find_elements("css selector", "#example option")]
-    assert {"aligned.csv", "misaligned.csv", "misaligned_2560hz.npy", "misaligned.h5", "misaligned.uff"} <= set(names)
-    for name in ("aligned.csv", "misaligned_2560hz.npy"):
+    assert {"aligned.csv", "whirl.csv", "whirl_2560hz.npy", "whirl.h5", "whirl.uff"} <= set(names)
+    for name in ("aligned.csv", "whirl_2560hz.npy"):
         Select(browser.find_element("id", "example")).select_by_value(name)
         browser.execute_script("document.body.dataset.state = 'submitted'")
         browser.find_element("id", "diagnose-btn").click()
@@ -545,7 +545,7 @@ def test_lengths_in_mils(server, browser):
     _open(browser, server)
     browser.find_element("css selector", "input[name=source][value=example]").click()
     _wait(browser, lambda d: len(d.find_elements("css selector", "#example option")) >= 6, 30, "the example list")
-    Select(browser.find_element("id", "example")).select_by_value("misaligned.csv")
+    Select(browser.find_element("id", "example")).select_by_value("whirl.csv")
     Select(browser.find_element("id", "length-units")).select_by_value("mil")
     clearance = browser.find_element("id", "clearance")
     clearance.clear()
@@ -821,7 +821,7 @@ def test_a_daq_export_in_mv_with_columns_mapped_by_name(server, browser, tmp_pat
     from rotordiag.features.reader import read_recording
     from tests.collector_exports import DAQ_SENSITIVITY, GAP_V, mapping, write_daq_csv
 
-    rec = read_recording(example_path("misaligned.csv")).recording
+    rec = read_recording(example_path("whirl.csv")).recording
     path = tmp_path / "daq.csv"
     names = write_daq_csv(path, np.stack([c.data for c in rec.channels]), rec.sample_rate_hz)
     _open(browser, server)
