@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from rotordiag.core.notes import Length, Measured
+from rotordiag.core.timefmt import readable_time
 
 __all__ = ["ChangeRule", "THRESHOLDS_PATH", "QUANTITIES", "fit_thresholds", "shipped_rule", "assess_change", "compare",
            "load_baseline_file", "format_change", "UNITS", "repeatability_thresholds", "REPEAT_MIN", "REPEAT_MARGIN",
@@ -335,6 +336,10 @@ def _measured_change(info: dict[str, Any]) -> Measured:
     return Measured(template, **values)
 
 
+#: the change quantities in words (answers, the page, the report, the headline)
+CHANGE_NAMES = {"1x_change": "1X vector change", "2x_change": "2X vector change", "dc_shift": "centreline shift",
+                "orbit_ellipticity_change": "orbit ellipticity change", "orbit_2x_1x_change": "orbit 2X/1X change"}
+
 _MEANING = {
     "1x_change": "1X vector change (amplitude and phase): unbalance, bow, rub, or the 1X part of misalignment",
     "2x_change": "2X vector change: misalignment preload (the classic signature), or a crack",
@@ -380,7 +385,7 @@ def compare(signature_now: dict[str, Any], baseline: dict[str, Any] | None, rule
     head = {k: baseline.get(k) for k in ("set_at", "speed_rpm", "model_version", "source")}
     d = res.to_dict()
     if not res.comparable:
-        msg = (f"not compared with the baseline of {baseline.get('set_at')}: {res.notes[0]}; record at the "
+        msg = (f"not compared with the baseline of {readable_time(baseline.get('set_at'))}: {res.notes[0]}; record at the "
                "baseline's operating condition, or set a baseline at this one")
         return {**head, "used": False, "compared": False, "changed": None, "exceeded": [], "quantities": {},
                 "values": {}, "notes": list(res.notes), "evidence": [], "message": msg,
@@ -391,13 +396,14 @@ def compare(signature_now: dict[str, Any], baseline: dict[str, Any] | None, rule
             continue
         value = _measured_change(info)
         meaning = ("CHANGED: " if info["exceeded"] else "within the re-recording spread: ") + _MEANING[q]
-        evidence.append({"scope": "change since baseline", "name": q.replace("_", " "), "value": value,
+        evidence.append({"scope": "change since baseline", "name": CHANGE_NAMES.get(q, q), "value": value,
                          "meaning": meaning, "number": info["value"]})
+    when = readable_time(baseline.get("set_at"))
     if verdict["changed"]:
-        msg = (f"changed since the baseline of {baseline.get('set_at')}: " + ", ".join(verdict["exceeded"])
+        msg = (f"changed since the baseline of {when}: " + ", ".join(CHANGE_NAMES.get(q, q) for q in verdict["exceeded"])
                + " above the alarm thresholds")
     else:
-        msg = f"no change beyond the alarm thresholds since the baseline of {baseline.get('set_at')}"
+        msg = f"no change beyond the alarm thresholds since the baseline of {when}"
     notes = list(d["notes"])
     rep = rule.source.get("repeatability")
     if rep:

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import Any, Final, Literal
 
 from rotordiag.core.reasons import INCONCLUSIVE, SANITY, code_info, known_code
+from rotordiag.core.timefmt import readable_time
 from rotordiag.core.units import um_to
 
 __all__ = ["ACTIONS", "URGENCIES", "UNITS_CODES", "Headline", "headline", "headline_dict"]
@@ -97,9 +98,11 @@ def _offset_clause(f: _Facts) -> str:
 
 
 def _change_clause(f: _Facts) -> str:
-    what = ", ".join(x.replace("_", " ") for x in f.baseline_exceeded) or "the signature"
-    when = f" of {f.baseline_set_at[:10]}" if f.baseline_set_at else ""
-    return f"{what} changed since the baseline{when}"
+    from .change import CHANGE_NAMES
+
+    what = " and ".join(CHANGE_NAMES.get(x, x.replace("_", " ")) for x in f.baseline_exceeded) or "the signature"
+    when = f" of {readable_time(f.baseline_set_at)}" if f.baseline_set_at else ""
+    return f"the {what} changed since the baseline{when}"
 
 
 def _first_action(codes: tuple[str, ...]) -> str:

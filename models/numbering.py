@@ -84,6 +84,7 @@ def numbering_reason(ood_score: float, other_ood_score: float, call: str, other_
         return None
     return Reason("bearing_numbering", UNCERTAIN,
                   f"numbered the other way round (bearing b read as 5 − b) the recording is more like the machines the "
-                  f"model knows (OOD score {other_ood_score:.2f} against {ood_score:.2f} as given; called {other_call} "
-                  f"instead of {call}): check the numbering — bearing 1 is the generator's far end (the turbine side), "
+                  f"model knows (OOD score {other_ood_score:.2f} against {ood_score:.2f} as given; "
+                  + (f"called {other_call} instead of {call}" if other_call != call else f"called {call} either way")
+                  + "): check the numbering — bearing 1 is the generator's far end (the turbine side), "
                   "2 its coupling end, 3 the exciter's coupling end and 4 its far end")

@@ -70,15 +70,17 @@ def thresholds_origin(session: Session, asset_id: str, row: AssetBaseline | None
             for k in shipped_rule().thresholds}
 
 
-def attach_baseline(state: AppState, asset_id: str, verdict: dict[str, Any], signature: dict[str, Any] | None) -> None:
-    """Put the ``baseline`` section into ``verdict`` (in place) and the change items into its evidence."""
+def attach_baseline(state: AppState, asset_id: str, verdict: dict[str, Any], signature: dict[str, Any] | None,
+                    storing: bool = False) -> None:
+    """Put the ``baseline`` section into ``verdict`` (in place) and the change items into its evidence
+    (``storing``: this recording is about to be stored, so the hint counts it)."""
     from rotordiag.models.change import compare
 
     with state.sessions() as s:
         row = get_baseline(s, asset_id)
         rule = rule_for(s, asset_id, row)
         base = baseline_dict(row) if row is not None else None
-        hint = "" if row is not None else _auto_hint(s, asset_id)
+        hint = "" if row is not None else _auto_hint(s, asset_id, storing and signature is not None)
     if signature is None:
         section = compare({"bearings": []}, None, rule, asset_hint=hint)
     else:
@@ -123,7 +125,7 @@ def record_verdict(state: AppState, asset_id: str | None, plant: str | None, ver
     signature = verdict.pop("signature", None)
     if asset_id is None:
         return None
-    attach_baseline(state, asset_id, verdict, signature)
+    attach_baseline(state, asset_id, verdict, signature, storing=store)
     verdict["stored"] = store
     if not store:
         verdict["storage_note"] = (f"not stored in the history of asset {asset_id!r}: storing a diagnosis needs the "
@@ -133,10 +135,14 @@ def record_verdict(state: AppState, asset_id: str | None, plant: str | None, ver
     return verdict["diagnosis_id"]
 
 
-def _auto_hint(session: Session, asset_id: str) -> str:
-    n = len(first_diagnoses(session, asset_id, AUTO_N))
+def _auto_hint(session: Session, asset_id: str, this_one_stored: bool = False) -> str:
+    """How to set a baseline, with the count of stored recordings — this one included when it is being stored
+    (the hint is written before the answer is stored)."""
+    n = min(AUTO_N, len(first_diagnoses(session, asset_id, AUTO_N)) + int(this_one_stored))
     return (f"; set one with POST /assets/{asset_id}/baseline (a recording, ?diagnosis_id=, or ?auto=true once "
-            f"{AUTO_N} recordings at one operating condition are stored: {n} so far)")
+            f"{AUTO_N} recordings at one operating condition are stored: {n} with this one)" if this_one_stored else
+            f"; set one with POST /assets/{asset_id}/baseline (a recording, ?diagnosis_id=, or ?auto=true once "
+            f"{AUTO_N} recordings at one operating condition are stored: {n} stored)")
 
 
 def from_diagnosis(state: AppState, asset_id: str, diagnosis_id: int, source: str = "diagnosis") -> dict[str, Any]:

@@ -68,7 +68,7 @@ def test_the_offset_is_said_in_the_users_units_and_the_change_by_its_readable_na
     assert "about 40 µm" in headline(_v(severity="slight", offset_um=40.0)).text
     changed = headline(_v(baseline={"compared": True, "changed": True, "exceeded": ["2x_change", "dc_shift"],
                                     "set_at": "2026-03-02T10:00:00"}))
-    assert "2x change, dc shift changed since the baseline of 2026-03-02" in changed.text
+    assert "the 2X vector change and centreline shift changed since the baseline of 2026-03-02 10:00 UTC" in changed.text
     assert "_" not in changed.text
 
 
@@ -166,3 +166,12 @@ def test_the_whirl_example_is_labelled_and_says_so():
     r = CliRunner().invoke(app, ["diagnose", "--json", str(example_path("whirl.csv"))])
     v = json.loads(r.output)
     assert v["motion_type"] == "quasi-periodic" and v["headline"]["action"] == "investigate_whirl"
+
+
+def test_timestamps_are_readable():
+    from rotordiag.core.timefmt import readable_time
+
+    assert readable_time("2026-03-02T10:00:00.123456") == "2026-03-02 10:00 UTC"
+    assert readable_time("2026-03-02T11:00:00+01:00") == "2026-03-02 10:00 UTC"
+    assert readable_time("2026-03-02T10:00:00Z") == "2026-03-02 10:00 UTC"
+    assert readable_time("not a time") == "not a time" and readable_time(None) == "—"

@@ -47,6 +47,8 @@ def test_the_numbering_is_doubted_only_when_the_other_one_is_markedly_more_like_
     assert r is not None and r.code == "bearing_numbering" and r.status == "uncertain"
     assert "bearing 1 is the generator's far end" in r.message and "called aligned instead of moderate" in r.message
     assert numbering_reason(0.6, 0.58, "moderate", "aligned") is None
+    same = numbering_reason(0.6, 0.3, "slight", "slight")                  # was "called slight instead of slight"
+    assert same is not None and "instead of" not in same.message and "called slight either way" in same.message
     assert numbering_reason(0.0, 0.0, "aligned", "aligned") is None
 
 

@@ -79,7 +79,7 @@ def test_no_baseline_then_a_baseline_then_change_alarm_fires_and_clears(client):
     assert sec["changed"] is True and "dc_shift" in sec["exceeded"], sec
     assert sec["quantities"]["dc_shift"]["bearing"] == 3
     assert sec["quantities"]["dc_shift"]["value"] == pytest.approx(60.0, abs=2.0)
-    assert any(e["scope"] == "change since baseline" and e["name"] == "dc shift" for e in shifted["evidence"])
+    assert any(e["scope"] == "change since baseline" and e["name"] == "centreline shift" for e in shifted["evidence"])
     metrics = client.get("/metrics").text
     assert f'rotordiag_asset_change{{asset="{asset}",quantity="dc_shift_um"}}' in metrics
     assert f'rotordiag_asset_alarm{{asset="{asset}"}} 1.0' in metrics
@@ -125,10 +125,14 @@ def test_a_recording_at_another_speed_is_not_compared(client):
 def test_automatic_baseline_from_the_first_recordings_at_one_speed(client):
     asset = "unit-auto"
     for seed in range(2):
-        client.post("/diagnose", json=_body(asset, seed=seed), headers=auth())
+        v = client.post("/diagnose", json=_body(asset, seed=seed), headers=auth()).json()
+        assert f"{seed + 1} with this one" in v["baseline"]["message"]       # the count includes this recording
     r = client.post(f"/assets/{asset}/baseline?auto=true", headers=auth())
     assert r.status_code == 409 and "needs 3" in r.json()["detail"]
-    client.post("/diagnose", json=_body(asset, seed=2), headers=auth())
+    anon = client.post("/diagnose", json=_body(asset, seed=9)).json()         # not stored: not counted
+    assert "2 stored" in anon["baseline"]["message"]
+    v = client.post("/diagnose", json=_body(asset, seed=2), headers=auth()).json()
+    assert "3 with this one" in v["baseline"]["message"]                      # was "2 so far" after the third
     prop = client.get(f"/assets/{asset}/baseline").json()["proposal"]
     assert len(prop["diagnosis_ids"]) == 3 and prop["speed_rpm"] == pytest.approx(SPEED_RPM, rel=1e-3)
     r = client.post(f"/assets/{asset}/baseline?auto=true", headers=auth())
@@ -235,7 +239,7 @@ def test_cli_sets_shows_and_uses_a_baseline(tmp_path, monkeypatch, registry_src)
     assert json.loads(res.output)["baseline"]["source"] == "recording"
     res = run(app, ["diagnose", str(shifted), "--baseline", str(saved), "--registry", str(registry_src)])
     assert res.exit_code == 0, res.output
-    assert "baseline: changed since the baseline" in res.output and "dc shift" in res.output
+    assert "baseline: changed since the baseline" in res.output and "centreline shift" in res.output
     res = run(app, ["diagnose", str(rec), "--baseline", str(saved), "--registry", str(registry_src), "--json"])
     assert json.loads(res.output)["baseline"]["changed"] is False
     assert run(app, ["baseline", "clear", "unit-cli"]).exit_code == 0

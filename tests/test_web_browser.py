@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import signal
 import socket
@@ -22,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rotordiag.core.timefmt import readable_time
 from tests.service_util import probe_signals_um, two_takes, write_takes_csv
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -595,18 +597,24 @@ def test_baseline_and_change_are_shown(server, browser, recordings, tmp_path):
                  sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM), key="web-test-key")
     box = browser.find_element("id", "verdict-baseline")
     assert box.is_displayed()
-    assert f"Baseline of {base['set_at']} used" in box.text and "changed since the baseline" in box.text
+    set_at = readable_time(base["set_at"])
+    assert f"Baseline of {set_at} used" in box.text and "changed since the baseline" in box.text
+    assert "_change" not in box.text and "dc_shift" not in box.text and re.fullmatch(r"\d{4}-\d\d-\d\d \d\d:\d\d UTC", set_at)
     assert "changed" in box.get_attribute("class").split()
     rows = browser.find_elements("css selector", "#verdict-evidence tbody tr")
     assert any(r.text.startswith("change since baseline") and "CHANGED" in r.text for r in rows)
     _wait(browser, lambda d: d.find_element("id", "trend-baseline-box").is_displayed(), 30, "the baseline in the trend")
     trend = browser.find_element("id", "trend-baseline").text
-    assert "from diagnosis" in trend and "Alarm thresholds of this asset edited: orbit 2x 1x change" in trend, trend
+    assert "from diagnosis" in trend and "Alarm thresholds of this asset edited: orbit 2X/1X change" in trend, trend
     assert "the others shipped" in trend, trend
     alarms = browser.find_element("id", "trend-alarms").text
     status, history = _get(f"{server}/assets/{asset}/history")
     assert history["alarms"][0]["event"] == "raised"
-    assert f"alarm raised ({', '.join(history['alarms'][0]['quantities'])})" in alarms
+    names = {"1x_change": "1X vector change", "2x_change": "2X vector change", "dc_shift": "centreline shift",
+             "orbit_ellipticity_change": "orbit ellipticity change", "orbit_2x_1x_change": "orbit 2X/1X change"}
+    assert f"alarm raised ({', '.join(names[q] for q in history['alarms'][0]['quantities'])})" in alarms
+    assert f"{readable_time(history['alarms'][0]['time'])}: alarm raised" in alarms
+    assert " 1\n" not in alarms + "\n" and not re.search(r"\d 1(;|$)", alarms, re.M)   # no "0.313 1"
     _screenshot(browser, "baseline-changed")
 
 

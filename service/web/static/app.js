@@ -559,12 +559,28 @@
     show($("verdict"), true);
   }
 
+  // change quantities and timestamps as an engineer reads them (models.change.CHANGE_NAMES, core.timefmt)
+  const CHANGE_NAMES = { "1x_change": "1X vector change", "2x_change": "2X vector change", dc_shift: "centreline shift",
+    orbit_ellipticity_change: "orbit ellipticity change", orbit_2x_1x_change: "orbit 2X/1X change" };
+  const changeName = (k) => CHANGE_NAMES[k] || k.replace(/_/g, " ");
+  function when(s) {
+    if (!s) return "—";
+    const t = Date.parse(/Z$|[+-]\d\d:?\d\d$/.test(s) ? s : s + "Z");
+    return Number.isFinite(t) ? new Date(t).toISOString().slice(0, 16).replace("T", " ") + " UTC" : s;
+  }
+  // a change quantity's value in the page's length units (µm-valued ones) or as a plain number
+  function changeValue(x, v) {
+    if (v === null || v === undefined) return "—";
+    return String(x.unit || "").startsWith("µm") ? `${num(v * lengthUnit().k, 3)} ${lengthUnit().name}${x.unit.slice(2)}`
+      : num(v, 3);
+  }
+
   // the answer's baseline section: whether the asset's baseline was used, its date, what changed
   function renderBaselineSection(b) {
     const box = $("verdict-baseline");
     if (!b) { show(box, false); return; }
     box.className = "baseline " + (b.changed ? "changed" : (b.used ? "unchanged" : "none"));
-    const parts = [b.used ? `Baseline of ${b.set_at} used (${b.source}, ${fixed(b.speed_rpm, 0)} r/min).` :
+    const parts = [b.used ? `Baseline of ${when(b.set_at)} used (${b.source}, ${fixed(b.speed_rpm, 0)} r/min).` :
       "No baseline used."];
     parts.push(plainWords(b.message));
     if (state.verdict && state.verdict.storage_note) parts.push(plainWords(state.verdict.storage_note) + ".");
@@ -807,16 +823,16 @@
     const base = b.baseline;
     let text;
     if (base) {
-      text = `Set ${base.set_at} from ${base.source} (diagnoses ${base.diagnosis_ids.join(", ")}), ` +
+      text = `Set ${when(base.set_at)} from ${base.source} (diagnoses ${base.diagnosis_ids.join(", ")}), ` +
         `${fixed(base.speed_rpm, 0)} r/min (recordings within ±5 % are compared), model ${base.model_version}.`;
       const origin = b.thresholds_origin || {};
       const words = (k) => {
         const v = b.thresholds[k];
-        if (v === null) return `${k.replace(/_/g, " ")} off`;
+        if (v === null) return `${changeName(k)} off`;
         const m = /^(1x|2x)_change_um_pp$/.exec(k);
         if (m) return `${m[1].toUpperCase()} vector change ${num(v * lengthUnit().k, 3)} ${lengthUnit().name} pk-pk`;
         if (k === "dc_shift_um") return `centreline shift ${num(v * lengthUnit().k, 3)} ${lengthUnit().name}`;
-        return `${k.replace(/_/g, " ")} ${num(v, 3)}`;
+        return `${changeName(k)} ${num(v, 3)}`;
       };
       // a repeatability threshold replaces its per-clearance twin (null): the twin is not listed
       const own = Object.keys(origin).filter((k) => origin[k] === "repeatability" && b.thresholds[k] !== null);
@@ -836,7 +852,7 @@
     const alarms = (h && h.alarms) || [];
     const last = h && h.points.length ? h.points[h.points.length - 1] : null;
     const items = alarms.map((a) => el("li", { class: a.event,
-      text: `${a.time}: alarm ${a.event}` + (a.quantities.length ? ` (${a.quantities.join(", ")})` : "") +
+      text: `${when(a.time)}: alarm ${a.event}` + (a.quantities.length ? ` (${a.quantities.map(changeName).join(", ")})` : "") +
         ` — diagnosis ${a.diagnosis_id}` }));
     if (!items.length) items.push(el("li", { text: base ? "No alarm raised." : "No baseline: no change alarms." }));
     // setpoint and change alarm events (GET /assets/{id}/events, newest first), with their acknowledgement
@@ -846,19 +862,19 @@
         (e.value !== null ? ` ${num(e.quantity.endsWith("_um_pp") ? e.value * lengthUnit().k : e.value, 3)}` +
           (e.quantity.endsWith("_um_pp") ? ` ${lengthUnit().name} pk-pk` : "") : "") +
         (e.setpoint !== null ? ` (${e.level} setpoint ${num(e.quantity.endsWith("_um_pp") ? e.setpoint * lengthUnit().k : e.setpoint, 3)})` : "");
-      items.push(el("li", { class: `event ${e.event}`, text: `${e.time}: ${e.level} ${e.event}: ${what}` +
-        (e.event === "raised" ? (e.acked_at ? ` — acknowledged ${e.acked_at}${e.ack_note ? " (" + e.ack_note + ")" : ""}` : " — not acknowledged") : "") }));
+      items.push(el("li", { class: `event ${e.event}`, text: `${when(e.time)}: ${e.level} ${e.event}: ${what}` +
+        (e.event === "raised" ? (e.acked_at ? ` — acknowledged ${when(e.acked_at)}${e.ack_note ? " (" + e.ack_note + ")" : ""}` : " — not acknowledged") : "") }));
     }
     // event notes and operating state given with the recordings (POST /diagnose ?note= &tags=)
     for (const p of ((h && h.points) || []).filter((x) => x.note || (x.tags && Object.keys(x.tags).length))) {
       const tags = Object.entries(p.tags || {}).map(([k, v]) => `${k.replace(/_/g, " ")} ${v}`).join(", ");
-      items.push(el("li", { class: "note", text: `${p.trend_time || p.time}: ${p.note || ""}` +
+      items.push(el("li", { class: "note", text: `${when(p.trend_time || p.time)}: ${p.note || ""}` +
         (tags ? `${p.note ? " — " : ""}${tags}` : "") + ` (diagnosis ${p.id})` }));
     }
     if (last && last.change) {
       const q = last.change.quantities || {};
       const shown = Object.entries(q).filter(([, x]) => x.value !== null).map(([k, x]) =>
-        `${k.replace(/_/g, " ")} ${num(x.value, 3)} ${x.unit}${x.exceeded ? " (over " + num(x.threshold, 3) + ")" : ""}`);
+        `${changeName(k)} ${changeValue(x, x.value)}${x.exceeded ? " (over " + changeValue(x, x.threshold) + ")" : ""}`);
       items.push(el("li", { class: "latest", text: `Latest change: ${shown.join("; ")}` }));
     }
     $("trend-alarms").replaceChildren(...items);
