@@ -13,9 +13,11 @@ def readable_time(value: str | dt.datetime | None) -> str:
         return "—"
     if isinstance(value, str):
         try:
-            value = dt.datetime.fromisoformat(value.strip().replace("Z", "+00:00"))
+            when = dt.datetime.fromisoformat(value.strip().replace("Z", "+00:00"))
         except ValueError:
             return value
-    if value.tzinfo is not None:
-        value = value.astimezone(dt.UTC)
-    return value.strftime("%Y-%m-%d %H:%M UTC")
+    else:
+        when = value
+    if when.tzinfo is not None:
+        when = when.astimezone(dt.UTC)
+    return when.strftime("%Y-%m-%d %H:%M UTC")
