@@ -99,11 +99,21 @@ def verdict_quantities(verdict: dict[str, Any]) -> dict[str, float]:
     return out
 
 
-def level_of(value: float, levels: dict[str, float]) -> tuple[str, float | None]:
-    """``(level, setpoint crossed)`` of ``value``: at or above danger, at or above alert, or normal."""
+#: hysteresis: a raised level clears only when the value falls this fraction below its setpoint, so a value
+#: wandering around a setpoint (noise, load) does not raise and clear an alarm on every recording
+CLEAR_BELOW_FRAC = 0.05
+
+
+def level_of(value: float, levels: dict[str, float], held: str = "normal") -> tuple[str, float | None]:
+    """``(level, setpoint)`` of ``value``: at or above danger, at or above alert, or normal — where a level
+    ``held`` (the asset's present one) is kept down to :data:`CLEAR_BELOW_FRAC` below its setpoint."""
+    rank = LEVELS.index(held) if held in LEVELS else 0
     for lv in ("danger", "alert"):
-        if lv in levels and value >= levels[lv]:
-            return lv, levels[lv]
+        if lv not in levels:
+            continue
+        sp = levels[lv]
+        if value >= sp or (rank >= LEVELS.index(lv) and value >= sp * (1.0 - CLEAR_BELOW_FRAC)):
+            return lv, sp
     return "normal", None
 
 
@@ -141,11 +151,13 @@ def evaluate(session: Session, settings: Any, asset_id: str, diagnosis_id: int, 
     for q, levels in setpoints.items():
         if q not in values:
             continue
-        lv, sp = level_of(values[q], levels)
+        lv, sp = level_of(values[q], levels, have.get(q, "normal"))
         if lv != have.get(q, "normal"):
             what, unit = QUANTITIES[q]
-            text = (f"{asset_id}: {what} {values[q]:.4g} {unit} at or above the {lv} setpoint {sp:g}" if sp is not None
-                    else f"{asset_id}: {what} {values[q]:.4g} {unit}, back below its setpoints")
+            unit_text = "" if unit == "1" else f" {unit}"
+            text = (f"{asset_id}: {what} {values[q]:.4g}{unit_text} at the {lv} level (setpoint {sp:g}{unit_text})"
+                    if sp is not None else f"{asset_id}: {what} {values[q]:.4g}{unit_text}, back below its setpoints "
+                    f"(by more than {100 * CLEAR_BELOW_FRAC:.0f} %)")
             new.append((q, lv, values[q], sp, text))
     if change_alarm is not None:
         lv = "alert" if change_alarm else "normal"

@@ -87,6 +87,13 @@ def test_levels_and_quantities_of_a_verdict():
     assert level_of(50.0, levels) == ("alert", 50.0)
     assert level_of(120.0, levels) == ("danger", 90.0)
     assert level_of(120.0, {"alert": 50.0}) == ("alert", 50.0)
+    # hysteresis: a raised level holds down to 5 % below its setpoint, then clears (no chatter around a setpoint)
+    assert level_of(48.0, levels, "alert") == ("alert", 50.0)
+    assert level_of(47.4, levels, "alert") == ("normal", None)
+    assert level_of(86.0, levels, "danger") == ("danger", 90.0)
+    assert level_of(85.0, levels, "danger") == ("alert", 50.0)
+    assert level_of(48.0, levels, "danger") == ("alert", 50.0)
+    assert level_of(48.0, levels, "normal") == ("normal", None)
     verdict = {"misalignment": 0.2, "bearings": [
         {"bearing": 1, "features": {"b1_x_direct_um_pp": 30.0, "b1_y_direct_um_pp": 41.0, "b1_x_1x_amp_um_pp": 20.0,
                                     "b1_y_1x_amp_um_pp": 12.0, "b1_x_2x_amp_um_pp": 3.0}},
