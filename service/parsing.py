@@ -21,6 +21,7 @@ from .schemas import (
     MAX_POINTS,
     MAX_RECORD_VALUES,
     BatchEnvelope,
+    BatchRecord,
     DiagnoseRequest,
     RecordingIn,
 )
@@ -217,10 +218,10 @@ def parse_batch(body: bytes) -> list[dict[str, Any]]:
     return _validated_json(BatchEnvelope, body, MAX_BATCH_VALUES).records
 
 
-def batch_record(record: dict[str, Any]) -> DiagnoseRequest:
-    """One record of a batch validated as a ``DiagnoseRequest`` (:class:`RequestInvalid` naming its fields)."""
+def batch_record(record: dict[str, Any]) -> BatchRecord:
+    """One record of a batch validated as a ``BatchRecord`` (:class:`RequestInvalid` naming its fields)."""
     try:
-        return DiagnoseRequest.model_validate(record)
+        return BatchRecord.model_validate(record)
     except ValidationError as exc:
         raise RequestInvalid(validation_detail(exc, ("record",))) from None
 

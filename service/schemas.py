@@ -146,10 +146,26 @@ class DiagnoseRequest(RecordingIn):
         ]}]})
 
 
+class BatchRecord(DiagnoseRequest):
+    """One record of POST /diagnose/batch: a recording as for POST /diagnose, with what the query parameters of a
+    single upload say about it (each record can be a different recording of a different time)."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+    recorded_at: str | None = Field(None, min_length=10, max_length=40,
+                                    description="When the recording was made (ISO 8601; UTC when no offset): orders "
+                                    "the asset's trend, so a backfilled recording lands in its place.",
+                                    examples=["2025-01-14T10:00:00Z"])
+    tags: str | None = Field(None, max_length=4000, description="Operating state at the recording: "
+                             "`load_mw=350;field_current_a=1210;stator_temp_c=71`.")
+    note: str | None = Field(None, min_length=1, max_length=2000,
+                             description="An event note stored with the recording, e.g. `aligned on 2026-03-02`.")
+
+
 class BatchRequest(_Strict):
     """Body of POST /diagnose/batch."""
 
-    records: list[DiagnoseRequest] = Field(..., min_length=1, max_length=10_000,
+    records: list[BatchRecord] = Field(..., min_length=1, max_length=10_000,
                                            description="Recordings to diagnose (the server caps the count; "
                                            "see ROTORDIAG_MAX_BATCH_RECORDS).")
 

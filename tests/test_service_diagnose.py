@@ -279,6 +279,24 @@ def test_batch_reports_each_record(client, rec):
     assert r.status_code == 422 and "at most 4" in r.json()["detail"]
 
 
+def test_batch_records_carry_their_time_tags_and_note(client, rec):
+    """A batch of backfilled recordings: each record's recorded_at orders the trend, its tags and note are stored;
+    a time that is not ISO 8601 is that record's 422, not the batch's."""
+    fs, channels = rec
+    asset = "unit-batch-time"
+    recs = [dict(diagnose_json(fs, channels, speed_rpm=1800.0, asset_id=asset), recorded_at=when, **extra)
+            for when, extra in (("2025-03-01T10:00:00Z", {"note": "after the outage"}),
+                                ("2025-01-14T08:30:00+01:00", {"tags": "load_mw=350;stator_temp_c=71"}))]
+    bad = dict(diagnose_json(fs, channels, speed_rpm=1800.0, asset_id=asset), recorded_at="14 Jan 2025")
+    out = client.post("/diagnose/batch", json={"records": [*recs, bad]}, headers=auth()).json()
+    assert [it["status_code"] for it in out["items"]] == [200, 200, 422]
+    assert "ISO 8601" in out["items"][2]["error"]
+    pts = client.get(f"/assets/{asset}/history").json()["points"]
+    assert [p.get("note") for p in pts] == [None, "after the outage"]                 # ordered by recording time
+    assert pts[0]["tags"] == {"load_mw": 350.0, "stator_temp_c": 71.0}
+    assert pts[0]["trend_time"].startswith("2025-01-14T07:30") and pts[1]["trend_time"].startswith("2025-03-01T10:00")
+
+
 def test_asset_history_trend(client, rec):
     fs, channels = rec
     for _ in range(3):

@@ -249,8 +249,23 @@ async def _batch_item(state, i: int, record: dict[str, Any], version: str | None
         return BatchItem(index=i, status_code=exc.status_code, error=str(exc.detail))
     except RuntimeError:                     # a bug on this record (logged by the pool): the others still answered
         return BatchItem(index=i, status_code=500, error=_RECORD_FAILED)
-    await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store)
+    try:
+        meta = record_meta(record)
+    except InputError as exc:
+        return BatchItem(index=i, status_code=STATUS_OF_KIND[exc.kind], error=str(exc))
+    await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store, meta)
     return i, verdict
+
+
+def record_meta(record: dict[str, Any]) -> dict[str, Any]:
+    """A batch record's time, tags and note (validated by the worker as a ``BatchRecord``) as ``recording_meta``
+    gives them; ``InputError`` for a time that is not ISO 8601."""
+    when = record.get("recorded_at")
+    try:
+        at = dt.datetime.fromisoformat(when.replace("Z", "+00:00")) if isinstance(when, str) else None
+    except ValueError:
+        raise InputError(f"recorded_at: {when!r} is not an ISO 8601 time (e.g. 2025-01-14T10:00:00Z)") from None
+    return recording_meta(at, record.get("tags"), record.get("note"))
 
 
 #: a batch record's error when the server failed on it (the cause is in the server log)
@@ -264,8 +279,9 @@ def _batch_sync(state, records: list[dict[str, Any]], model_version: str | None,
         try:
             rec = batch_record(raw)
             recording = checked(recording_from_model, rec)
+            meta = record_meta(raw)
             verdict = _diagnose_sync(state, recording, model_version)
-            record_verdict(state, rec.asset_id, rec.plant, verdict, may_store)
+            record_verdict(state, rec.asset_id, rec.plant, verdict, may_store, meta)
             items.append((i, verdict))
         except InputError as exc:
             items.append(BatchItem(index=i, status_code=STATUS_OF_KIND[exc.kind], error=str(exc)))
