@@ -193,6 +193,9 @@ class Recording:
         recorded bearing must be in a group. None (default), or one group: all channels sampled together.
         With more than one group, ``keyphasor_times_s`` takes one pulse train per acquisition: one train cannot
         reference two takes.
+    recorded_at : str, optional
+        When the recording was made (ISO 8601; no offset means UTC), as the file's header gives it: orders an
+        asset's trend. Not used by the diagnosis.
     """
 
     sample_rate_hz: float
@@ -203,6 +206,7 @@ class Recording:
     speed_range_rpm: tuple[float, float] | None = None
     dc_removed: bool = False
     acquisitions: Sequence[Sequence[int]] | str | None = None
+    recorded_at: str | None = None
 
     def __post_init__(self) -> None:
         fs = check_range(self.sample_rate_hz, "Recording.sample_rate_hz", SAMPLE_RATE_RANGE_HZ, "Hz",

@@ -108,6 +108,39 @@ _NAME_UNIT_RE = re.compile(r"^(.*?)\s*[(\[]\s*([^()\[\]]+?)\s*[)\]]\s*$")
 _META_INTERVAL_KEYS = ("delta_x", "sample interval", "sample_interval_s", "dt")
 _META_RATE_KEYS = ("sample rate", "sampling rate", "sample_rate", "sample_rate_hz", "sampling frequency", "fs",
                    "sample rate (hz)", "sampling rate (hz)", "sample frequency")
+#: header lines that give when the recording was made (a LabVIEW .lvm header has ``Date`` and ``Time`` lines)
+_META_WHEN_KEYS = ("recorded at", "recorded_at", "recorded", "recording time", "start time", "start_time",
+                   "timestamp", "acquisition time", "trigger time", "date/time", "datetime", "measurement time")
+_META_DATE_KEYS = ("date", "start date", "recording date")
+_META_CLOCK_KEYS = ("time", "start clock", "time of day")
+_WHEN_FORMATS = ("%Y-%m-%d %H:%M:%S.%f", "%Y-%m-%d %H:%M:%S", "%Y-%m-%d %H:%M", "%Y/%m/%d %H:%M:%S.%f",
+                 "%Y/%m/%d %H:%M:%S", "%Y/%m/%d %H:%M", "%d.%m.%Y %H:%M:%S", "%d.%m.%Y %H:%M", "%d-%b-%y %H:%M:%S",
+                 "%d-%b-%Y %H:%M:%S", "%m/%d/%Y %H:%M:%S", "%m/%d/%Y %I:%M:%S %p")
+
+
+def parse_recorded_at(text: str) -> str | None:
+    """When a recording was made, from a header's text: ISO 8601 or a collector's common spellings
+    (``2026/03/02 10:00:00.5``, ``02.03.2026 10:00``, ``02-Mar-26 10:00:00``); ISO 8601 back (an offset kept, none
+    meaning UTC), or None when the text is no such time. A day-first/month-first ambiguity (``03/02/2026``) is
+    read month first (US collectors' exports) only in the ``m/d/Y`` spellings."""
+    import datetime as dt
+
+    t = " ".join(re.sub(r"(\d)T(\d)", r"\1 \2", str(text).strip()).split())
+    if not t or len(t) > 60:
+        return None
+    t = re.sub(r"(:\d\d\.\d{6})\d+", r"\1", t)          # LabVIEW writes 7 decimals of a second
+    try:
+        return dt.datetime.fromisoformat(t.replace("Z", "+00:00")).isoformat()
+    except ValueError:
+        pass
+    for fmt in _WHEN_FORMATS:
+        try:
+            return dt.datetime.strptime(t, fmt).isoformat()
+        except ValueError:
+            continue
+    return None
+
+
 _META_UNIT_KEYS = ("units", "unit", "y_unit_label", "engineering units", "eu")
 _KP_COLUMNS = ("kp", "keyphasor", "kph", "keyphasor_v")
 _LAYOUT_RE = re.compile(r"^\s*b?([1-4])\s*@\s*(-?\d+(?:\.\d*)?)\s*$", re.IGNORECASE)
@@ -482,6 +515,22 @@ def _metadata(lines: list[list[str]]) -> dict[str, Any]:
             units = {input_unit(v) for v in values}
             if len(units) == 1 and None not in units:
                 out["header_units"] = (units.pop(), cells[0].strip())
+        elif key in _META_WHEN_KEYS and "recorded_at" not in out:
+            when = parse_recorded_at(" ".join(values))
+            if when is not None:
+                out["recorded_at"] = (when, cells[0].strip())
+        elif key in _META_DATE_KEYS:
+            when = parse_recorded_at(values[0]) if ":" in values[0] else None
+            if when is not None:
+                out.setdefault("recorded_at", (when, cells[0].strip()))
+            else:
+                out["date_text"] = values[0]
+        elif key in _META_CLOCK_KEYS:
+            out["clock_text"] = values[0]
+    if "recorded_at" not in out and "date_text" in out:
+        when = parse_recorded_at(f"{out['date_text']} {out.get('clock_text', '00:00:00')}")
+        if when is not None:
+            out["recorded_at"] = (when, "Date" + (" and Time" if "clock_text" in out else ""))
     return out
 
 
@@ -561,6 +610,9 @@ def _read_csv(data: bytes, opts: ReadOptions, limits: ReadLimits, notes: list[st
     if "header_units" in meta:
         info["units"], line = meta["header_units"]
         notes.append(f"units {info['units']} from the header line {line!r}")
+    if "recorded_at" in meta:
+        info["recorded_at"], line = meta["recorded_at"]
+        notes.append(f"recorded at {info['recorded_at']} (the header's {line!r})")
     return _named_columns(header, table, opts, info, what="the CSV file", units_row=meta["units_row"], notes=notes)
 
 
@@ -668,11 +720,14 @@ _UFF_UNITS = {"um": "um", "µm": "um", "micron": "um", "microns": "um", "microme
               "mil": "mil", "mils": "mil", "v": "V", "volt": "V", "volts": "V", "mv": "mV"}
 
 
-def _decode_uff(data: bytes | Path, limits: ReadLimits) -> tuple[list[str], np.ndarray, float, str | None, list[str]]:
+def _decode_uff(data: bytes | Path, limits: ReadLimits
+                ) -> tuple[list[str], np.ndarray, float, str | None, list[str], str | None]:
     """Time histories of a universal file (type-58 records) with pyuff; runs in the sandbox.
 
     Returns channel names (ID line 1, else node and direction), the points × channels table,
-    the sample rate, the common ordinate unit (``None`` when unlabelled or mixed) and notes.
+    the sample rate, the common ordinate unit (``None`` when unlabelled or mixed), notes, and when the
+    records were made (ID line 3, the record's date and time by the format's convention, when every record
+    gives the same one).
     """
     import tempfile
 
@@ -738,7 +793,9 @@ def _decode_uff(data: bytes | Path, limits: ReadLimits) -> tuple[list[str], np.n
     notes = [f"UFF 58: {len(columns)} time records; sample interval {incs[0]:.6g} s in the header -> "
              f"{rate_hz:.10g} Hz"]
     unit = units.pop() if len(units) == 1 else None
-    return names, np.stack(columns, axis=1), rate_hz, unit, notes
+    whens = {parse_recorded_at(str(d.get("id3", ""))) for d in sets}
+    when = whens.pop() if len(whens) == 1 else None
+    return names, np.stack(columns, axis=1), rate_hz, unit, notes, when
 
 
 def _simplest_rate(interval_s: float) -> float:
@@ -760,10 +817,13 @@ def _simplest_rate(interval_s: float) -> float:
 
 def _read_uff(data: bytes | Path, opts: ReadOptions, limits: ReadLimits, notes: list[str]) -> tuple[np.ndarray, dict]:
     memory = limits.hdf5_memory_bytes or 3 * limits.max_hdf5_bytes + 256 * 2**20
-    names, table, rate_hz, unit, uff_notes = call_isolated(
+    names, table, rate_hz, unit, uff_notes, when = call_isolated(
         _decode_uff, data, limits, memory_bytes=memory, timeout_s=limits.hdf5_timeout_s, what="the universal file")
     notes.extend(uff_notes)
     info: dict[str, Any] = {"sample_rate_hz": rate_hz}
+    if when is not None:
+        info["recorded_at"] = when
+        notes.append(f"recorded at {when} (the UFF records' ID line 3)")
     if unit is not None:
         info["units"] = unit
     return _named_columns(names, table, opts, info, what="the UFF file", notes=notes)
@@ -818,6 +878,11 @@ def _decode_hdf5(data: bytes | Path, opts: ReadOptions, limits: ReadLimits) -> t
                 for key in ("sample_rate_hz", "units", "waveform_units", "speed_rpm", "clearance_um"):
                     if key in src:
                         info["units" if key == "waveform_units" else key] = _attr(src[key])
+                for key in ("recorded_at", "start_time", "timestamp"):
+                    if key in src and "recorded_at" not in info:
+                        when = parse_recorded_at(str(_attr(src[key])))
+                        if when is not None:
+                            info["recorded_at"] = when
             ch = f.get("channels")
             if isinstance(ch, h5py.Dataset) and ch.dtype.names and {"bearing", "angle_deg"} <= set(ch.dtype.names):
                 if ch.shape[0] <= limits.max_channels:
@@ -1002,7 +1067,8 @@ def _assemble(arr: np.ndarray, info: dict[str, Any], opts: ReadOptions, limits: 
                     clearance_um=clearance,
                     speed_range_rpm=None if speed_range is None else parse_speed_range(speed_range),
                     dc_removed=dc_removed,
-                    acquisitions=opts.acquisitions if opts.acquisitions is not None else info.get("acquisitions"))
+                    acquisitions=opts.acquisitions if opts.acquisitions is not None else info.get("acquisitions"),
+                    recorded_at=info.get("recorded_at"))
     return ReadResult(recording=rec, format=fmt, notes=notes, truth=info.get("truth"))
 
 

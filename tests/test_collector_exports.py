@@ -294,3 +294,70 @@ def test_an_assets_probe_configuration_is_used_by_every_upload_and_said_so(tmp_p
         assert c.get("/assets/unit-3/probes").status_code == 404
         r = c.post("/diagnose", params={"asset_id": "unit-3"}, files=body)
         assert r.status_code == 422 and "are neither a time column" in r.json()["detail"]
+
+
+@pytest.mark.parametrize(("key", "when"), [("labview_lvm", "2026-11-28T04:10:03.123456"),
+                                           ("collector_metadata_block", "2026-11-28T04:10:03"),
+                                           ("daq_csv_ms_unit_row", None)])
+def test_the_recording_time_is_read_from_the_exports_header(exports, key, when):
+    """A LabVIEW .lvm header's Date and Time lines, a collector's 'Date:' line; the DAQ CSV carries none."""
+    path, cmap, stated = exports[key]
+    res = read_recording(path, options=ReadOptions(channels=parse_channel_map(cmap),
+                                                   sensitivity_v_per_mm=stated.get("sensitivity"),
+                                                   gap_voltage_v=stated.get("gap_voltage_v")))
+    assert res.recording.recorded_at == when
+    assert any("recorded at" in n for n in res.notes) == (when is not None)
+
+
+@pytest.mark.parametrize(("text", "iso"), [
+    ("2026/03/02 10:00:00.5", "2026-03-02T10:00:00.500000"), ("02.03.2026 10:00", "2026-03-02T10:00:00"),
+    ("02-Mar-26 10:00:00", "2026-03-02T10:00:00"), ("2026-03-02T10:00:00Z", "2026-03-02T10:00:00+00:00"),
+    ("OCT run 7", None), ("", None)])
+def test_recording_time_spellings(text, iso):
+    from rotordiag.features.reader import parse_recorded_at
+
+    assert parse_recorded_at(text) == iso
+
+
+def test_hdf5_and_uff_recording_times(tmp_path, reference):
+    """An HDF5 file's ``recorded_at`` attribute and the UFF 58 records' ID line 3 give the recording time."""
+    import h5py
+    import pyuff
+
+    rec, data = reference
+    h5 = tmp_path / "r.h5"
+    with h5py.File(h5, "w") as f:
+        f.create_dataset("waveforms", data=data)
+        f.attrs["sample_rate_hz"] = rec.sample_rate_hz
+        f.attrs["recorded_at"] = "2025-01-14T08:30:00Z"
+    assert read_recording(h5).recording.recorded_at == "2025-01-14T08:30:00+00:00"
+    uff = tmp_path / "r.uff"
+    sets = [{"type": 58, "func_type": 1, "rsp_node": 1, "rsp_dir": 1, "ref_dir": 1, "ref_node": 1,
+             "data": data[k].astype(float), "x": np.arange(data.shape[1]) / rec.sample_rate_hz,
+             "id1": f"b{b}@{a:g}", "id2": "", "id3": "14-Jan-25 08:30:00", "id4": "", "id5": "",
+             "rsp_ent_name": "probe", "ref_ent_name": "probe", "abscissa_spacing": 1,
+             "abscissa_spec_data_type": 17, "ordinate_spec_data_type": 8, "ordinate_axis_units_lab": "um",
+             "orddenom_spec_data_type": 13, "z_axis_spec_data_type": 0}
+            for k, (b, a) in enumerate(LAYOUT)]
+    pyuff.UFF(str(uff)).write_sets(sets, mode="overwrite")
+    assert read_recording(uff).recording.recorded_at == "2025-01-14T08:30:00"
+
+
+def test_an_uploads_recording_time_from_its_file_orders_the_trend(tmp_path, registry, exports):
+    """The LabVIEW export's header time becomes the stored recording time (said in input_notes); a given
+    recorded_at wins; an anonymous upload is answered without storing."""
+    from tests.service_util import auth
+
+    path, channel_map, stated = exports["labview_lvm"]
+    app = create_app(make_settings(tmp_path, shipped_registry_dir=registry))
+    with TestClient(app) as c:
+        params = {"channel_map": channel_map, **stated, "asset_id": "unit-lvm"}
+        r = c.post("/diagnose", params=params, files={"file": (path.name, path.read_bytes())}, headers=auth())
+        assert r.status_code == 200, r.text
+        assert "recording time 2026-11-28 04:10 UTC from the file (give recorded_at to override it)" \
+            in r.json()["input_notes"]
+        r = c.post("/diagnose", params={**params, "recorded_at": "2025-06-01T12:00:00Z"},
+                   files={"file": (path.name, path.read_bytes())}, headers=auth())
+        assert r.status_code == 200 and not any("from the file" in n for n in r.json()["input_notes"])
+        pts = c.get("/assets/unit-lvm/history").json()["points"]
+        assert [p["trend_time"][:16] for p in pts] == ["2025-06-01T12:00", "2026-11-28T04:10"]

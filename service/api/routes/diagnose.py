@@ -14,6 +14,7 @@ from fastapi.concurrency import run_in_threadpool
 from sqlalchemy.exc import DatabaseError as SQLAlchemyDatabaseError
 
 from rotordiag.core.input_bounds import SAMPLE_RATE_RANGE_HZ
+from rotordiag.core.timefmt import readable_time
 from rotordiag.models.output_units import verdict_in_units
 
 from ...baseline import parse_tags, record_verdict
@@ -169,6 +170,14 @@ async def diagnose_from_request(request: Request, state, query: dict[str, Any], 
                                                      + (f" (given with this upload instead: "
                                                         f"{', '.join(probes['overridden_by_upload'])})"
                                                         if probes["overridden_by_upload"] else ""))
+    in_file = verdict.pop("recorded_at_in_file", None)
+    if in_file and meta is not None and meta.get("recorded_at") is None:
+        try:
+            meta = {**meta, "recorded_at": recording_meta(dt.datetime.fromisoformat(in_file), None, None)["recorded_at"]}
+            verdict.setdefault("input_notes", []).append(f"recording time {readable_time(in_file)} from the file "
+                                                         "(give recorded_at to override it)")
+        except (InputError, ValueError) as exc:
+            verdict.setdefault("input_notes", []).append(f"the file's recording time {in_file!r} is not used: {exc}")
     if store:
         await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store, meta)
     return verdict, asset_id
@@ -190,7 +199,8 @@ def recording_meta(recorded_at: dt.datetime | None, tags: str | None, note: str 
 def _parse_and_diagnose(state, kind, body, filename, query, slow_roll,
                         model_version) -> tuple[dict, str | None, str | None]:
     recording, asset_id, plant, notes = parse_request(kind, body, filename, query, slow_roll)
-    return {**_diagnose_sync(state, recording, model_version), "input_notes": notes}, asset_id, plant
+    return ({**_diagnose_sync(state, recording, model_version), "input_notes": notes,
+             "recorded_at_in_file": recording.recorded_at}, asset_id, plant)
 
 
 _BATCH_BODY = {"requestBody": {"required": True, "content": {
