@@ -938,3 +938,37 @@ def test_trend_orders_by_recording_time_and_lists_notes(server, browser, recordi
     assert "load mw 350" in text and "stator temp c 71" in text and f"diagnosis {back['diagnosis_id']}" in text
     # the setpoint alarm the live recording raised, not yet acknowledged
     assert "alert raised: 1X" in text and "(alert setpoint 0.001)" in text and "not acknowledged" in text
+
+
+def test_an_upload_with_its_time_state_and_note_and_the_asset_tree(server, browser, recordings, tmp_path):
+    """The upload form's recording time, operating state and note are stored with the diagnosis (the trend lists
+    them at that time); the asset is then placed site → unit → train from the trend area and shows in the tree."""
+    asset = "web-tree-1"
+    _open(browser, server)
+    d = browser
+    for field, value in (("tags", "load_mw=320;stator_temp_c=68"), ("note", "after the March outage")):
+        d.find_element("id", field).clear()
+        d.find_element("id", field).send_keys(value)
+    d.execute_script("document.getElementById('recorded-at').value = '2025-03-04T09:15:00'")
+    _submit_file(d, _write_csv(tmp_path / "t.csv", recordings[0.05]), asset=asset, sample_rate=str(FS_HZ),
+                 clearance=str(CLEARANCE_UM), key="web-test-key")
+    status, history = _get(f"{server}/assets/{asset}/history")
+    p = history["points"][-1]
+    assert p["trend_time"].startswith("2025-03-04T09:15") and p["note"] == "after the March outage"
+    assert p["tags"] == {"load_mw": 320.0, "stator_temp_c": 68.0}
+    d.find_element("id", "trend-asset").clear()
+    d.find_element("id", "trend-asset").send_keys(asset)
+    d.find_element("css selector", "#assets-box summary").click()
+    for field, value in (("hier-site", "Riverside"), ("hier-unit", "unit 3"), ("hier-train", "generator-exciter"),
+                         ("hier-key", "web-test-key")):
+        d.find_element("id", field).send_keys(value)
+    d.find_element("id", "hier-btn").click()
+    _wait(d, lambda dr: "Riverside → unit 3 → generator-exciter" in dr.find_element("id", "assets-tree").text, 30,
+          "the asset in the tree")
+    tree = d.find_element("id", "assets-tree").text
+    assert f"{asset} (1 recording, latest 2025-03-04 09:15 UTC)" in tree, tree
+    d.find_element("css selector", f"button[data-asset='{asset}']").click()
+    _wait(d, lambda dr: "after the March outage" in dr.find_element("id", "trend-alarms").text, 60, "the trend's note")
+    assert "2025-03-04 09:15 UTC: after the March outage — load mw 320, stator temp c 68" in \
+        d.find_element("id", "trend-alarms").text
+    _screenshot(d, "asset_tree")

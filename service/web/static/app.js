@@ -615,7 +615,11 @@
       if (!("asset_id" in body) && formValue("asset")) body.asset_id = formValue("asset");
       const json = JSON.stringify(body);
       const opts = () => ({ method: "POST", headers: { "Content-Type": "application/json", ...keyHeader() }, body: json });
-      return { diagnose: [`/diagnose?output_units=${$("length-units").value}`, opts()], plot: ["/ui/plot-data", opts()],
+      const dq = new URLSearchParams({ output_units: $("length-units").value });
+      if (formValue("recorded-at") !== null) dq.set("recorded_at", formValue("recorded-at") + "Z");
+      if (formValue("tags") !== null) dq.set("tags", formValue("tags"));
+      if (formValue("note") !== null) dq.set("note", formValue("note"));
+      return { diagnose: [`/diagnose?${dq}`, opts()], plot: ["/ui/plot-data", opts()],
         transient: [`/ui/transient-plots?output_units=${$("length-units").value}`, opts()], asset: body.asset_id || null };
     }
     let files = Array.from($("file").files);
@@ -638,6 +642,10 @@
     const asset = formValue("asset");
     if (asset) q.set("asset_id", asset);       // the plots too are read with the asset's probe configuration
     const qp = new URLSearchParams(q);
+    // what is stored with the recording (the diagnosis only): its time (UTC), operating state and an event note
+    if (formValue("recorded-at") !== null) q.set("recorded_at", formValue("recorded-at") + "Z");
+    if (formValue("tags") !== null) q.set("tags", formValue("tags"));
+    if (formValue("note") !== null) q.set("note", formValue("note"));
     q.set("output_units", $("length-units").value);
     const opts = () => { const fd = new FormData(); for (const f of files) fd.append("file", f, f.name); return { method: "POST", body: fd, headers: keyHeader() }; };
     const qt = new URLSearchParams(qp);
@@ -766,6 +774,51 @@
       const [, top] = extent(series.map((s) => s.y));
       drawPlot($(`trend-${k}`), { x: { label: xlab, min: t0, max: t1, time: true },
         y: { label: `${k.toUpperCase()} orbit major axis, ${lengthUnit().name} pk-pk`, min: 0, max: top > 0 ? top * 1.15 : 1 }, series });
+    }
+  }
+
+  // the assets grouped site → unit → train (GET /assets); a click shows an asset's trend
+  async function loadAssets() {
+    setError($("hier-error"), "");
+    try {
+      const assets = await api("/assets");
+      const groups = new Map();
+      for (const a of assets) {
+        const key = [a.site || "(no site)", a.unit || "(no unit)", a.train || "(no train)"].join(" → ");
+        if (!groups.has(key)) groups.set(key, []);
+        groups.get(key).push(a);
+      }
+      const items = [...groups.entries()].sort(([x], [y]) => x.localeCompare(y)).map(([key, list]) =>
+        el("li", {}, el("span", { class: "where", text: key + ": " }), ...list.map((a) => {
+          const b = el("button", { type: "button", class: "linklike", "data-asset": a.asset_id,
+            text: `${a.asset_id} (${a.diagnoses} recording${a.diagnoses === 1 ? "" : "s"}` +
+              (a.latest ? `, latest ${when(a.latest)}` : "") + ")" });
+          b.addEventListener("click", () => { $("trend-asset").value = a.asset_id; loadTrend(a.asset_id); });
+          return b;
+        })));
+      if (!items.length) items.push(el("li", { text: "No asset yet: a diagnosis stored with an asset id makes one." }));
+      $("assets-tree").replaceChildren(...items);
+    } catch (exc) {
+      setError($("hier-error"), plainWords(exc.message));
+    }
+  }
+
+  async function onHierarchy(ev) {
+    ev.preventDefault();
+    setError($("hier-error"), "");
+    const asset = $("trend-asset").value.trim();
+    if (!asset) { setError($("hier-error"), "Type the asset id above first."); return; }
+    const body = {};
+    for (const [k, id] of [["site", "hier-site"], ["unit", "hier-unit"], ["train", "hier-train"]]) {
+      const v = $(id).value.trim();
+      if (v) body[k] = v;
+    }
+    try {
+      await api(`/assets/${encodeURIComponent(asset)}/hierarchy`, { method: "PUT", body: JSON.stringify(body),
+        headers: { "Content-Type": "application/json", "X-API-Key": $("hier-key").value } });
+      await loadAssets();
+    } catch (exc) {
+      setError($("hier-error"), plainWords(exc.message));
     }
   }
 
@@ -966,6 +1019,8 @@
     for (const id of ["show-raw", "show-1x", "show-2x", "show-1x2x", "spectrum-scale"]) $(id).addEventListener("change", renderPlots);
     $("length-units").addEventListener("change", () => { renderPlots(); renderTrend(); });
     $("trend-form").addEventListener("submit", (ev) => { ev.preventDefault(); loadTrend($("trend-asset").value.trim()); });
+    $("assets-box").addEventListener("toggle", () => { if ($("assets-box").open) loadAssets(); });
+    $("hierarchy-form").addEventListener("submit", onHierarchy);
     $("baseline-form").addEventListener("submit", (ev) => ev.preventDefault());
     $("baseline-latest-btn").addEventListener("click", () => setBaseline("latest"));
     $("baseline-auto-btn").addEventListener("click", () => setBaseline("auto"));
