@@ -101,17 +101,18 @@ def _document_auth(app: FastAPI, settings: Settings) -> None:
     by ``BatchRequest``."""
     from fastapi.openapi.utils import get_openapi
 
-    from .schemas import BatchRequest
+    from .schemas import BatchRequest, DiagnoseRequest
 
     def openapi() -> dict:
         if app.openapi_schema is None:
             schema = get_openapi(title=app.title, version=app.version, description=app.description,
                                  routes=app.routes, tags=app.openapi_tags)
             components = schema.setdefault("components", {}).setdefault("schemas", {})
-            extra = BatchRequest.model_json_schema(ref_template="#/components/schemas/{model}")
-            for name, sub in extra.pop("$defs", {}).items():
-                components.setdefault(name, sub)
-            components.setdefault("BatchRequest", extra)
+            for model in (DiagnoseRequest, BatchRequest):     # bodies read raw (parsed in a worker)
+                extra = model.model_json_schema(ref_template="#/components/schemas/{model}")
+                for name, sub in extra.pop("$defs", {}).items():
+                    components.setdefault(name, sub)
+                components.setdefault(model.__name__, extra)
             if not settings.diagnose_requires_key:
                 for path in ("/diagnose", "/diagnose/batch"):
                     op = schema["paths"].get(path, {}).get("post", {})

@@ -136,7 +136,8 @@ def options_from_query(query: dict[str, Any]) -> Any:
 PROBE_CONFIG_GROUPS: dict[str, tuple[str, ...]] = {
     "layout": ("channel_map", "bearings", "angles_deg"), "units": ("units",),
     "sensitivity": ("sensitivity", "sensitivity_v_per_mm"), "gap_voltage": ("gap_voltage_v",),
-    "keyphasor": ("keyphasor_channel",)}
+    "keyphasor": ("keyphasor_channel",), "rotation": ("rotation", "viewed_from"), "clearance": ("clearance_um",),
+    "speed_band": ("speed_range_rpm",), "model": ("model_version",)}
 PROBE_CONFIG_KEYS = tuple(k for keys in PROBE_CONFIG_GROUPS.values() for k in keys)
 
 
@@ -147,7 +148,7 @@ def check_probe_config(config: dict[str, Any]) -> None:
     unknown = sorted(set(config) - set(PROBE_CONFIG_KEYS))
     if unknown:
         raise InputError(f"probe configuration: unknown field(s) {unknown}; allowed: {list(PROBE_CONFIG_KEYS)}")
-    options_from_query(dict(config))
+    options_from_query({k: v for k, v in config.items() if k != "model_version"})
     if config.get("units") is not None and input_unit(str(config["units"])) is None:
         raise InputError(f"probe configuration: units {config['units']!r}: use one of {list(INPUT_UNITS)}")
     for key in ("sensitivity", "sensitivity_v_per_mm"):

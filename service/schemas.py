@@ -312,6 +312,16 @@ class ProbeConfigIn(_Strict):
                                     "states it, `200 mV/mil`, `7.87 V/mm`, `7.87 mV/um`.")
     gap_voltage_v: float | None = Field(None, ge=-100, le=100, description="For V/mV: the DC gap voltage, V.")
     keyphasor_channel: str | None = Field(None, min_length=1, max_length=64, description="The keyphasor column.")
+    rotation: Literal["ccw", "cw"] | None = Field(None, description="Shaft rotation seen from `viewed_from`.")
+    viewed_from: Literal["driver", "non-driver"] | None = Field(None, description="The end the angles and the "
+                                                                 "rotation are seen from.")
+    clearance_um: float | None = Field(None, ge=CLEARANCE_RANGE_UM[0], le=CLEARANCE_RANGE_UM[1],
+                                       description="Radial bearing clearance c, µm (not the diametral one).")
+    speed_range_rpm: str | None = Field(None, min_length=3, max_length=40, description="The machine's speed band "
+                                        "around its rated speed, `lo,hi` r/min (e.g. `2950,3050`): where the "
+                                        "running speed is looked for when an upload gives none.")
+    model_version: str | None = Field(None, min_length=1, max_length=128, description="The registered model "
+                                      "version this asset's uploads are diagnosed with (default: the active one).")
 
 
 class ProbeConfigOut(BaseModel):

@@ -256,7 +256,7 @@ def test_an_assets_probe_configuration_is_used_by_every_upload_and_said_so(tmp_p
         for bad, needle in (({"channel_map": "1@45,1@135"}, "COLUMN=b<bearing>@<angle>"),
                             ({"units": "inch"}, "units 'inch'"), ({"sensitivity": "200 mV"}, "probe sensitivity"),
                             ({"bearings": "1,1", "angles_deg": "45"}, "1 values for 2 bearings"),
-                            ({"rotation": "cw"}, "rotation")):
+                            ({"rotation": "clockwise"}, "rotation")):
             r = c.put("/assets/unit-3/probes", json=bad, headers=auth())
             assert r.status_code == 422, (bad, r.text)
             assert needle in str(r.json()["detail"]), r.text
@@ -361,3 +361,30 @@ def test_an_uploads_recording_time_from_its_file_orders_the_trend(tmp_path, regi
         assert r.status_code == 200 and not any("from the file" in n for n in r.json()["input_notes"])
         pts = c.get("/assets/unit-lvm/history").json()["points"]
         assert [p["trend_time"][:16] for p in pts] == ["2025-06-01T12:00", "2026-11-28T04:10"]
+
+
+def test_an_asset_also_keeps_its_rotation_clearance_speed_band_and_model(tmp_path, registry, exports):
+    """Set up once: the asset's rotation, clearance, speed band and model version are used by every upload (the
+    answer says so), and an upload's own value wins for its group; a version not registered is a 4xx."""
+    from tests.service_util import auth
+
+    path, channel_map, stated = exports["daq_csv_ms_unit_row"]
+    body = {"file": (path.name, path.read_bytes())}
+    app = create_app(make_settings(tmp_path, shipped_registry_dir=registry))
+    with TestClient(app) as c:
+        version = c.get("/models").json()["versions"][0]["version"]
+        config = {"channel_map": channel_map, "units": "mV", "sensitivity": stated["sensitivity"],
+                  "gap_voltage_v": stated["gap_voltage_v"], "rotation": "ccw", "viewed_from": "driver",
+                  "clearance_um": 350.0, "speed_range_rpm": "1750,1850", "model_version": version}
+        r = c.put("/assets/unit-9/probes", json=config, headers=auth())
+        assert r.status_code == 200, r.text
+        v = c.post("/diagnose", params={"asset_id": "unit-9"}, files=body).json()
+        assert v["asset_probes"]["used"] == config and v["model_version"] == version
+        assert v["offset_um"] is not None                  # the stored clearance turned Δ into µm
+        assert 1750 <= v["speed_rpm"] <= 1850
+        v = c.post("/diagnose", params={"asset_id": "unit-9", "clearance_um": 175.0}, files=body).json()
+        assert v["asset_probes"]["overridden_by_upload"] == ["clearance"]
+        r = c.put("/assets/unit-9/probes", json={**config, "clearance_um": -3}, headers=auth())
+        assert r.status_code == 422
+        r = c.put("/assets/unit-9/probes", json={**config, "model_version": "v9999"}, headers=auth())
+        assert r.status_code == 404 and "GET /models" in r.json()["detail"]

@@ -53,11 +53,13 @@ def reader_query(
         "CSV/UFF upload only: each probe column's bearing and angle by column name, `COLUMN=b<bearing>@<angle>` "
         "separated by `;` (`GEN DE X=b2@45;GEN DE Y=b2@135`); the file's other columns (besides the time and "
         "keyphasor) are left out and the answer's notes name them. Instead of `bearings`/`angles_deg`."))] = None,
-    rotation: Annotated[Literal["ccw", "cw"], Query(description=(
+    rotation: Annotated[Literal["ccw", "cw"] | None, Query(description=(
         "Shaft rotation seen from the driver end; with `viewed_from` it decides whether the probe angles "
-        "are mirrored so that a mirrored installation is not read as reverse whirl."))] = "ccw",
-    viewed_from: Annotated[Literal["driver", "non-driver"], Query(description=(
-        "End of the machine the probe angles are measured from."))] = "driver",
+        "are mirrored so that a mirrored installation is not read as reverse whirl. Default: the asset's "
+        "configuration, else `ccw`."))] = None,
+    viewed_from: Annotated[Literal["driver", "non-driver"] | None, Query(description=(
+        "End of the machine the probe angles are measured from. Default: the asset's configuration, else "
+        "`driver`."))] = None,
     keyphasor_channel: Annotated[str | None, Query(max_length=64, description=(
         "Raw keyphasor pulse channel: CSV column name or row index (default: a CSV column named kp/keyphasor); with "
         "`acquisitions`, one per acquisition separated by semicolons (`kp_a;kp_b`)."))] = None,

@@ -51,6 +51,7 @@ from ...store import (
 from ..deps import (
     ApiKeyDep,
     JsonBodyDep,
+    ModelsDep,
     SessionDep,
     StateDep,
 )
@@ -278,13 +279,20 @@ def get_asset_probes(asset_id: AssetPath, session: SessionDep) -> ProbeConfigOut
             description="The column mapping (or layout in file order), units, probe sensitivity, gap voltage and "
             "keyphasor column of the asset's probes, stored once: every binary or multipart upload with this "
             "`asset_id` (POST /diagnose, POST /assets/{id}/baseline) is read with them and its answer says so "
-            "(`asset_probes`, `input_notes`). An upload's own query parameters win, group by group (`layout`: "
-            "channel_map/bearings/angles_deg; `units`; `sensitivity`; `gap_voltage`; `keyphasor`). `{}` removes it.")
-def put_asset_probes(asset_id: AssetPath, body: ProbeConfigIn, state: StateDep, session: SessionDep) -> ProbeConfigOut:
+            "(`asset_probes`, `input_notes`); likewise the rotation and viewing end, the clearance, the speed band "
+            "around the rated speed and the model version its uploads are diagnosed with. An upload's own query "
+            "parameters win, group by group (`layout`: channel_map/bearings/angles_deg; `units`; `sensitivity`; "
+            "`gap_voltage`; `keyphasor`; `rotation`: rotation/viewed_from; `clearance`; `speed_band`; `model`). "
+            "`{}` removes it.")
+def put_asset_probes(asset_id: AssetPath, body: ProbeConfigIn, state: StateDep, session: SessionDep,
+                     models: ModelsDep) -> ProbeConfigOut:
     from ...parsing import check_probe_config
 
     probes = body.model_dump(exclude_none=True)
     check_probe_config(probes)
+    if probes.get("model_version") is not None and probes["model_version"] not in models.registry.versions():
+        raise InputError(f"model_version {probes['model_version']!r} is not registered; GET /models lists the "
+                         "versions", "not_found")
     put_probe_config(state, asset_id, probes)
     if not probes:
         return ProbeConfigOut(asset_id=asset_id, probes={}, updated_at=None)

@@ -155,7 +155,8 @@ async def diagnose_from_request(request: Request, state, query: dict[str, Any], 
     kind, body, filename, slow_roll = await read_body(request, slow_roll=slow_roll_allowed)
     probes = None
     if kind != "json" and query.get("asset_id"):    # a JSON body states its channels itself
-        query, probes = await run_in_threadpool(asset_probes_query, state, query)
+        query, probes = await run_in_threadpool(asset_probes_query, state, {**query, "model_version": version})
+        version = query.pop("model_version", None)  # the upload's, else the asset's, else the active model
     if state.pool is not None:
         _, verdict, asset_id, plant = await in_worker(state, DiagnoseBody(kind, body, filename, query, slow_roll, version))
     else:
