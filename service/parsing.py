@@ -137,8 +137,21 @@ PROBE_CONFIG_GROUPS: dict[str, tuple[str, ...]] = {
     "layout": ("channel_map", "bearings", "angles_deg"), "units": ("units",),
     "sensitivity": ("sensitivity", "sensitivity_v_per_mm"), "gap_voltage": ("gap_voltage_v",),
     "keyphasor": ("keyphasor_channel",), "rotation": ("rotation", "viewed_from"), "clearance": ("clearance_um",),
-    "speed_band": ("speed_range_rpm",), "model": ("model_version",)}
+    "speed_band": ("speed_range_rpm",), "model": ("model_version",), "plant_model": ("plant_model",)}
 PROBE_CONFIG_KEYS = tuple(k for keys in PROBE_CONFIG_GROUPS.values() for k in keys)
+
+
+def plant_of_model(name: str) -> Any:
+    """The lumped plant of an asset's plant model: ``default`` (MODEL.md's) or a preset's shaft line reduced
+    (``simulator.shaftline.preset``); InputError naming the choices."""
+    from rotordiag.simulator import Plant
+    from rotordiag.simulator.shaftline import PRESETS, preset, to_plant
+
+    if name == "default":
+        return Plant.default()
+    if name not in PRESETS:
+        raise InputError(f"plant_model {name!r}: use default or a preset: {', '.join(sorted(PRESETS))}")
+    return to_plant(preset(name))
 
 
 def check_probe_config(config: dict[str, Any]) -> None:
@@ -148,7 +161,9 @@ def check_probe_config(config: dict[str, Any]) -> None:
     unknown = sorted(set(config) - set(PROBE_CONFIG_KEYS))
     if unknown:
         raise InputError(f"probe configuration: unknown field(s) {unknown}; allowed: {list(PROBE_CONFIG_KEYS)}")
-    options_from_query({k: v for k, v in config.items() if k != "model_version"})
+    options_from_query({k: v for k, v in config.items() if k not in ("model_version", "plant_model")})
+    if config.get("plant_model") is not None:
+        plant_of_model(str(config["plant_model"]))
     if config.get("units") is not None and input_unit(str(config["units"])) is None:
         raise InputError(f"probe configuration: units {config['units']!r}: use one of {list(INPUT_UNITS)}")
     for key in ("sensitivity", "sensitivity_v_per_mm"):

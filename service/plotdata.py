@@ -218,7 +218,7 @@ def plot_data(recording: Recording, feature_result: Any = None) -> dict[str, Any
 TRANSIENT_PNG_DPI = 80
 
 
-def transient_plots(recording: Recording, units: str = "um") -> dict[str, Any]:
+def transient_plots(recording: Recording, units: str = "um", plant: Any = None) -> dict[str, Any]:
     """A start-up or coast-down recording's plots as the page shows them: ``features.transient.track_orders``
     and ``features.plots.transient_figures`` (Bode, polar, cascade and full spectrum per bearing, centreline,
     orbits) rendered to PNG (base64), with the run's summary (``models.report.transient_summary``: kind, speed
@@ -234,7 +234,7 @@ def transient_plots(recording: Recording, units: str = "um") -> dict[str, Any]:
     from rotordiag.models.report import transient_summary
 
     track = track_orders(recording)
-    figs = transient_figures(recording, track, units=units)
+    figs = transient_figures(recording, track, units=units, plant=plant)   # with a plant model: its Campbell too
     try:
         figures = []
         for name, fig in figs.items():

@@ -265,10 +265,14 @@ class PlotBody(WorkerCall):
 def _transient(kind: str, body: Body, filename: str, query: dict[str, Any], units: str) -> tuple:
     """Parse a start-up / coast-down recording and render its plots (:func:`service.plotdata.transient_plots`):
     ``("ok", data)`` or an error tuple."""
-    from .parsing import parse_body
+    from .parsing import parse_body, plant_of_model
     from .plotdata import transient_plots
 
-    return _tagged(lambda: ("ok", transient_plots(parse_body(kind, body, filename, query)[0], units)))
+    def run() -> tuple:
+        plant = plant_of_model(str(query["plant_model"])) if query.get("plant_model") else None
+        return ("ok", transient_plots(parse_body(kind, body, filename, query)[0], units, plant=plant))
+
+    return _tagged(run)
 
 
 @dataclass(frozen=True)

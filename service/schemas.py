@@ -322,6 +322,10 @@ class ProbeConfigIn(_Strict):
                                         "running speed is looked for when an upload gives none.")
     model_version: str | None = Field(None, min_length=1, max_length=128, description="The registered model "
                                       "version this asset's uploads are diagnosed with (default: the active one).")
+    plant_model: str | None = Field(None, min_length=1, max_length=64, description="The asset's plant model: a "
+                                    "preset of `rotordiag plant` (`gen50_2pole`, `gen200_2pole`, `gen600_2pole`, "
+                                    "`gen600_4pole`) or `default` (MODEL.md's plant); its Campbell diagram is drawn "
+                                    "under the asset's start-up plots.")
 
 
 class ProbeConfigOut(BaseModel):

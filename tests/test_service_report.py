@@ -155,6 +155,27 @@ def test_transient_plots_of_a_runup_show_the_plots_and_the_critical_speed(client
     assert "pk-pk" in t["conventions"] and "phase lag" in t["conventions"]
 
 
+@pytest.mark.parametrize("which", ["pooled", "plain"])
+def test_an_assets_plant_model_draws_its_campbell_under_the_startup_plots(clients, runup_csv, which):
+    """The asset's configuration names its plant model: its start-up plots then carry the Campbell diagram of that
+    model; an unknown plant model is refused when it is stored, naming the choices."""
+    from tests.service_util import auth
+
+    pooled, plain, _ = clients
+    c = pooled if which == "pooled" else plain
+    asset = f"unit-campbell-{which}"
+    r = c.put(f"/assets/{asset}/probes", json={"plant_model": "gen200_2pole"}, headers=auth())
+    assert r.status_code == 200, r.text
+    bad = c.put(f"/assets/{asset}/probes", json={"plant_model": "gen999"}, headers=auth())
+    assert bad.status_code == 422 and "gen200_2pole" in bad.json()["detail"]
+    body = {"file": ("runup.csv", runup_csv.read_bytes())}
+    with_model = c.post("/ui/transient-plots", params={"asset_id": asset}, files=body)
+    assert with_model.status_code == 200, with_model.text
+    assert "campbell" in [f["name"] for f in with_model.json()["figures"]]
+    without = c.post("/ui/transient-plots", files=body).json()
+    assert "campbell" not in [f["name"] for f in without["figures"]]
+
+
 def test_transient_plots_refuse_a_keyphasor_that_drops_out_and_a_broken_file(clients, runup_csv):
     pooled, plain, _ = clients
     a = np.loadtxt(runup_csv, delimiter=",", skiprows=1)

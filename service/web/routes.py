@@ -120,9 +120,11 @@ async def _reader_query(request: Request, state: Any, reader: dict[str, Any], sa
     return query
 
 
-def _transient_sync(recording: Any, units: str) -> dict[str, Any]:
+def _transient_sync(recording: Any, units: str, plant_model: str | None = None) -> dict[str, Any]:
+    from ..parsing import plant_of_model
+
     try:
-        return transient_plots(recording, units)
+        return transient_plots(recording, units, plant=plant_of_model(plant_model) if plant_model else None)
     except ValueError as exc:  # the features package's messages (speed reverses, keyphasor drops out, ...)
         raise InputError(str(exc)) from None
 
@@ -144,4 +146,4 @@ async def transient(
     return await recording_answer(
         request, state, query,
         lambda kind, body, filename, q: TransientPlots(kind, body, filename, q, output_units),
-        lambda recording: _transient_sync(recording, output_units))
+        lambda recording: _transient_sync(recording, output_units, query.get("plant_model")))
