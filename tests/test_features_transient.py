@@ -284,3 +284,27 @@ def test_a_whirl_beside_1x_is_not_read_as_a_1x_peak():
     assert any(n.startswith("1X not readable") for n in tr.notes)
     pk = tr.peaks(1)
     assert pk and all(abs(q["speed_rpm"] / 1500.0 - 1) < 0.01 for q in pk)
+
+
+def test_cascade_scales_keep_the_small_lines_and_say_how():
+    """dB: a line 1000× (60 dB) below the largest is at the floor, one 10× (20 dB) below at 2/3 of the height;
+    per row: every trace reaches full height; the plot states the scale; an unknown scale is refused."""
+    from rotordiag.features.plots import _cascade_heights, waterfall_figure
+
+    a = np.array([[1000.0, 1.0, 100.0], [10.0, 0.01, 1.0]])
+    h, words = _cascade_heights(a, "db")
+    assert h[0, 0] == pytest.approx(1.0) and h[0, 1] == pytest.approx(0.0) and h[0, 2] == pytest.approx(2 / 3)
+    assert h[1, 0] == pytest.approx(1 / 3) and "dB" in words
+    h, _ = _cascade_heights(a, "row")
+    assert h.max(axis=1) == pytest.approx([1.0, 1.0]) and h[1, 2] == pytest.approx(0.1)
+    h, _ = _cascade_heights(a, "linear")
+    assert h[1, 0] == pytest.approx(0.01)
+    with pytest.raises(ValueError, match="cascade scale 'log' is not one of"):
+        _cascade_heights(a, "log")
+    rec, _, _ = _synthetic(dur_s=6.0, rpm1=1300.0)
+    wf = T.waterfall(rec, T.track_orders(rec), 0)
+    fig = waterfall_figure(wf, scale="row")
+    assert "each trace to its own largest line" in fig.axes[0].get_ylabel() + fig.axes[0].get_title()
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
