@@ -308,3 +308,50 @@ def test_cascade_scales_keep_the_small_lines_and_say_how():
     import matplotlib.pyplot as plt
 
     plt.close(fig)
+
+
+def _huge_npy(path: Path) -> Path:
+    """An NPY file whose header announces 8 channels × 10⁸ samples (3.2 GB) but which holds 64 bytes."""
+    from numpy.lib import format as npformat
+
+    buf = io.BytesIO()
+    npformat.write_array_header_1_0(buf, {"descr": "<f4", "fortran_order": False, "shape": (8, 10**8)})
+    buf.write(np.zeros(16, np.float32).tobytes())
+    path.write_bytes(buf.getvalue())
+    return path
+
+
+def test_plots_cli_refuses_a_1e8_sample_file_and_writes_nothing(tmp_path: Path):
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    p = _huge_npy(tmp_path / "huge.npy")
+    out = tmp_path / "png"
+    r = CliRunner().invoke(app, ["plots", str(p), "--sample-rate-hz", "25600", "--keyphasor-channel", "7",
+                                 "--out-dir", str(out)])
+    assert r.exit_code == 2, r.output
+    assert "(8, 100000000)" in r.output and "accepted" in r.output
+    assert not out.exists()
+
+
+def test_plots_cli_refuses_a_keyphasor_gap_mid_run_and_writes_nothing(tmp_path: Path):
+    """Pulses missing for a stretch in the middle of the run, then back: exit 2 with where, no PNG."""
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+    from rotordiag.simulator.cli import write_probes
+
+    rec, _, _ = _synthetic(dur_s=8.0, rpm1=1300.0)
+    t, _, kp, _ = _ramp(900.0, 1300.0, 8.0)
+    sig = np.zeros(t.size)
+    n = kp.size
+    for tk in np.r_[kp[1: n // 2], kp[n // 2 + 3:]]:      # three pulses missing half-way
+        sig[(t >= tk) & (t < tk + 0.004)] = -1.0
+    path = tmp_path / "gap.csv"
+    write_probes(path, np.array([c.data for c in rec.channels]), LAYOUT, FS, keyphasor_signal=sig)
+    out = tmp_path / "png"
+    r = CliRunner().invoke(app, ["plots", str(path), "--out-dir", str(out)])
+    assert r.exit_code == 2, r.output
+    assert "keyphasor drops out: the pulse interval at t = " in r.output
+    assert not out.exists()

@@ -171,6 +171,20 @@ def test_transient_plots_refuse_a_keyphasor_that_drops_out_and_a_broken_file(cli
         assert r.status_code == 422
 
 
+def test_transient_plots_refuse_a_1e8_sample_file_with_a_4xx_saying_why(clients, tmp_path):
+    """A 10⁸-sample NPY (its header says 8 × 10⁸ float32, 3.2 GB; the file is 200 bytes): refused before it is
+    read, with the size, through both service paths."""
+    from tests.test_features_transient import _huge_npy
+
+    body = _huge_npy(tmp_path / "huge.npy").read_bytes()
+    pooled, plain, _ = clients
+    for c in (pooled, plain):
+        r = c.post("/ui/transient-plots", params={"sample_rate_hz": 25600, "keyphasor_channel": 7},
+                   files={"file": ("huge.npy", body)})
+        assert 400 <= r.status_code < 500, r.text
+        assert "(8, 100000000)" in r.json()["detail"], r.text
+
+
 def test_report_shows_the_latest_full_verdict_when_retention_trimmed_the_last(clients):
     from sqlalchemy import update
 
