@@ -241,8 +241,8 @@ class TransientResult:
         Sample times from the profile's start (uniform at ``sample_rate_hz``).
     speed_rpm : ndarray, shape (n,)
         The profile's speed at the samples.
-    journal_displacements_m : ndarray, shape (n, 4, 2)
-        Journals of bearings 1..4 relative to their bearing centres (x horizontal, y vertical up): what a DC-coupled
+    journal_displacements_m : ndarray, shape (n, n_bearings, 2)
+        Journals of bearings 1..4 (a train: all its bearings) relative to their bearing centres (x horizontal, y vertical up): what a DC-coupled
         probe pair sees, static position included.
     keyphasor_times_s : ndarray
         Once-per-revolution mark (τ ≡ 0 mod 2π: the generator unbalance along +x) inside the record.
@@ -274,8 +274,8 @@ class TransientResult:
         d = self.journal_displacements_m * 1e6
         out = np.empty((len(channels), d.shape[0]))
         for c, (b, angle) in enumerate(channels):
-            if int(b) not in (1, 2, 3, 4):
-                raise ValueError(f"channels: bearing must be 1–4, got {b!r}")
+            if not 1 <= int(b) <= d.shape[1]:
+                raise ValueError(f"channels: bearing must be 1–{d.shape[1]}, got {b!r}")
             out[c] = project_on_probe(d[:, int(b) - 1, 0], d[:, int(b) - 1, 1], float(angle))
         if math.isfinite(snr_db):
             rng = np.random.default_rng(seed)
