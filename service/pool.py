@@ -261,13 +261,14 @@ class PlotBody(WorkerCall):
         return _plot(self.kind, self.body, self.filename, self.query)
 
 
-def _transient(kind: str, body: Body, filename: str, query: dict[str, Any], units: str) -> tuple:
+def _transient(kind: str, body: Body, filename: str, query: dict[str, Any], units: str,
+               cascade_scale: str = "db") -> tuple:
     """Parse a start-up / coast-down recording and render its plots (:func:`service.plotdata.transient_plots`):
     ``("ok", data)`` or an error tuple."""
     from .parsing import parse_body
     from .plotdata import transient_plots
 
-    return _tagged(lambda: ("ok", transient_plots(parse_body(kind, body, filename, query)[0], units)))
+    return _tagged(lambda: ("ok", transient_plots(parse_body(kind, body, filename, query)[0], units, cascade_scale)))
 
 
 @dataclass(frozen=True)
@@ -279,9 +280,10 @@ class TransientPlots(WorkerCall):
     filename: str
     query: dict[str, Any]
     units: str
+    cascade_scale: str = "db"
 
     def run(self) -> tuple:
-        return _transient(self.kind, self.body, self.filename, self.query, self.units)
+        return _transient(self.kind, self.body, self.filename, self.query, self.units, self.cascade_scale)
 
 
 @dataclass(frozen=True)
