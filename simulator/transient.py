@@ -402,8 +402,10 @@ def simulate_transient(
         what = "a journal reached its bushing" if status == "contact" else "the integration diverged"
         message = (f"{what} at t = {stop_t:.3f} s ({float(profile.speed_rpm(np.array([stop_t]))[0]):.0f} r/min); "
                    "samples up to that point are kept")
+    own = isinstance(plant, Plant)  # a model built behind VariableSpeedModel describes itself (or not at all)
     inputs = dict(profile={"times_s": list(profile.times_s), "speeds_rpm": list(profile.speeds_rpm)},
-                  misalignment=float(misalignment), unbalance=float(unbalance), sample_rate_hz=fs,
+                  misalignment=float(misalignment) if own else None, unbalance=float(unbalance) if own else None,
+                  model=None if own or not hasattr(model, "describe") else model.describe(), sample_rate_hz=fs,
                   settle_revs=settle_revs, rtol=rtol, atol=atol, tau_at_t0=tau_zero,
                   plant=plant.to_dict() if isinstance(plant, Plant) else None,
                   **{k: (float(v) if isinstance(v, (int, float)) else v) for k, v in kwargs.items()})

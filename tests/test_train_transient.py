@@ -128,3 +128,17 @@ def test_unbalanced_puts_the_unbalance_where_asked(gen200):
     with pytest.raises(TrainError, match="station"):
         unbalanced(gen200, 0.1, station=10**6)
     assert math.isclose(unbalanced(gen200, 0.1, rotor=1).rotors[1].unbalances[-1].amount_kg_m, 0.1)
+
+
+def test_a_train_run_records_the_train_not_the_paper_models_inputs(gen200):
+    from rotordiag.simulator.train.transient import TrainTransientModel, train_channels
+
+    res = simulate_transient(TrainTransientModel(gen200), SpeedProfile.linear(1450, 1500, 0.3), settle_revs=2)
+    assert res.ok and res.inputs["misalignment"] is None and res.inputs["unbalance"] is None
+    m = res.inputs["model"]
+    assert m["kind"] == "shaft train" and len(m["bearings"]) == 4
+    assert {"station": gen200.rotors[0].n_stations // 2, "amount_kg_m": 0.2}.items() <= m["unbalances"][-1].items()
+    w = res.probe_waveforms_um(train_channels(4))
+    assert w.shape == (8, res.time_s.size)
+    with pytest.raises(ValueError, match="bearing must be 1–4"):
+        res.probe_waveforms_um(((5, 45.0),))

@@ -87,6 +87,7 @@ class TrainTransientModel:
             raise TrainError(f"train must be a Train, got {type(train).__name__}")
         self.train = train
         self.reduced = reduce(assemble(train), n_modes)
+        self.n_modes = int(n_modes)
         self.rtol = float(rtol)
         self.atol_m = float(atol_m)
         asm = self.reduced.assembly
@@ -95,6 +96,15 @@ class TrainTransientModel:
         self.n_bearings = len(asm.bearings)
         self.n_state = 2 * self.reduced.n
         self.bearing_names = [s.name or f"B{k + 1}" for k, (_, s) in enumerate(train.supports())]
+
+    def describe(self) -> dict:
+        """What a run's ``inputs`` record of the train: rotors, bearings and their centres, unbalances, reduction."""
+        return {"kind": "shaft train", "rotors": [r.name for r in self.train.rotors], "bearings": self.bearing_names,
+                "bearing_centres_m": self.reduced.assembly.support_centres_m.tolist(),
+                "clearances_m": self.clearances_m.tolist(),
+                "unbalances": [{"rotor": r.name, "station": u.station, "amount_kg_m": u.amount_kg_m,
+                                "angle_rad": u.angle_rad} for r in self.train.rotors for u in r.unbalances],
+                "n_modes": self.n_modes, "rtol": self.rtol, "atol_m": self.atol_m}
 
     def at_speed(self, speed_rpm: float) -> _TrainAtSpeed:
         return _TrainAtSpeed(build_kernel(self.reduced, speed_rpm), speed_rpm, self.rtol, self.atol_m)
