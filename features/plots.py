@@ -133,9 +133,34 @@ def polar_figure(track: OrderTrack, probes: list[int] | None = None, order: int 
     return fig
 
 
-def waterfall_figure(wf: Waterfall, max_order: float = 3.5, title: str = "", units: str = "um") -> Any:
+CASCADE_SCALES = ("linear", "db", "row")
+"""Trace heights of a cascade: ``linear`` (∝ amplitude, one scale for the plot), ``db`` (dB below the plot's largest
+line, the bottom ``CASCADE_DB_RANGE`` dB shown), ``row`` (each trace scaled to its own largest line)."""
+CASCADE_DB_RANGE = 60.0
+
+
+def _cascade_heights(a: np.ndarray, scale: str) -> tuple[np.ndarray, str]:
+    """Trace heights in [0, 1] (1 = six rows of height) for amplitudes ``a`` (rows × frequencies), and the words
+    that say on the plot what the height means."""
+    if scale not in CASCADE_SCALES:
+        raise ValueError(f"cascade scale {scale!r} is not one of {', '.join(CASCADE_SCALES)}")
+    top = max(float(a.max()), 1e-12)
+    if scale == "linear":
+        return a / top, "height ∝ amplitude"
+    if scale == "db":
+        db = 20.0 * np.log10(np.maximum(a, top * 1e-12) / top)
+        return np.clip((db + CASCADE_DB_RANGE) / CASCADE_DB_RANGE, 0.0, 1.0), \
+            f"height: dB below the largest line ({CASCADE_DB_RANGE:.0f} dB shown)"
+    row_top = np.maximum(a.max(axis=1, keepdims=True), 1e-12)
+    return a / row_top, "height: each trace to its own largest line"
+
+
+def waterfall_figure(wf: Waterfall, max_order: float = 3.5, title: str = "", units: str = "um",
+                     scale: str = "db") -> Any:
     """A cascade: each window's spectrum drawn at its speed, with the 1X and 2X (and −1X for a full spectrum)
-    lines; amplitude µm (or mil) pk-pk (scaled to the largest line)."""
+    lines; amplitude µm (or mil) pk-pk. ``scale`` (:data:`CASCADE_SCALES`, stated on the plot): the default ``db``
+    keeps the low-speed lines visible beside a whip line hundreds of times larger; ``row`` shows each speed's shape
+    alone; ``linear`` the amplitudes on one scale."""
     plt = _plt()
     f_u, u = _units(units)
     fig, ax = plt.subplots(figsize=(9, 7))
@@ -143,15 +168,16 @@ def waterfall_figure(wf: Waterfall, max_order: float = 3.5, title: str = "", uni
     sel = (np.abs(wf.frequencies_hz) <= f_hi) if wf.full else (wf.frequencies_hz <= f_hi)
     f = wf.frequencies_hz[sel]
     a = wf.amp_um_pp[:, sel] * f_u
+    heights, meaning = _cascade_heights(a, scale)
     step = np.median(np.diff(wf.speed_rpm)) if wf.speed_rpm.size > 1 else 1.0
-    scale = abs(step) * 6.0 / max(float(a.max()), 1e-12)
+    span = abs(step) * 6.0
     from matplotlib.collections import PolyCollection
 
     # the highest speed first, so each lower (nearer) trace hides what lies behind it
     order_idx = np.argsort(wf.speed_rpm)[::-1]
     verts = []
     for i in order_idx:
-        top = wf.speed_rpm[i] + a[i] * scale
+        top = wf.speed_rpm[i] + heights[i] * span
         verts.append(np.column_stack([np.r_[f, f[::-1]], np.r_[top, np.full(f.size, wf.speed_rpm[i])]]))
     ax.add_collection(PolyCollection(verts, facecolors="white", edgecolors="C0", linewidths=0.6))
     ax.set_xlim(f.min(), f.max())
@@ -166,14 +192,16 @@ def waterfall_figure(wf: Waterfall, max_order: float = 3.5, title: str = "", uni
         ax.text(0.98, 0.98, "forward →", transform=ax.transAxes, ha="right", va="top")
         ax.text(0.02, 0.98, "← reverse", transform=ax.transAxes, ha="left", va="top")
     ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("speed (r/min); trace height ∝ amplitude")
+    ax.set_ylabel(f"speed (r/min); trace {meaning}", fontsize=9)
     ax.legend(loc="lower right", fontsize=8)
     peak = float(a.max())
+    what = {"linear": f" = {span:.0f} r/min of height", "db": f" = 0 dB = {span:.0f} r/min of height",
+            "row": "; each trace to its own largest line"}[scale]
     ax.set_title(title or f"{'Full-spectrum cascade' if wf.full else 'Waterfall'} — {wf.label} "
-                 f"(largest line {peak:.{2 if units == 'mil' else 1}f} {u} pk-pk = {6 * abs(step):.0f} r/min of height)")
+                 f"(largest line {peak:.{2 if units == 'mil' else 1}f} {u} pk-pk{what})", fontsize=11)
     fig.subplots_adjust(left=0.08, right=0.95, bottom=0.10, top=0.93, hspace=0.35, wspace=0.35)
-    _footer(fig, "Hann window; x + jy: forward whirl (+x → +y) at positive frequencies" if wf.full else "Hann window",
-            units)
+    base = "Hann window; x + jy: forward whirl (+x → +y) at positive frequencies" if wf.full else "Hann window"
+    _footer(fig, base, units)
     return fig
 
 
@@ -265,18 +293,22 @@ def campbell_figure(speeds_rpm: np.ndarray, frequencies_hz: np.ndarray, damping_
 
 
 def transient_figures(rec: Any, track: OrderTrack, *, orbit_speeds_rpm: list[float] | None = None,
-                      plant: Any = None, centreline_reference: str = "as recorded", units: str = "um") -> dict[str, Any]:
+                      plant: Any = None, centreline_reference: str = "as recorded", units: str = "um",
+                      cascade_scale: str = "db") -> dict[str, Any]:
     """Every plot of a start-up or coast-down as {name: Figure}: ``bode``, ``polar`` (keyphasor only),
     ``waterfall_b<bearing>`` (first probe of each bearing), ``full_spectrum_b<bearing>``, ``centreline`` (DC-coupled
-    only), ``orbits``, ``campbell`` (with ``plant``: the plant model's Campbell over the run's speeds)."""
+    only), ``orbits``, ``campbell`` (with ``plant``: the plant model's Campbell over the run's speeds);
+    ``cascade_scale`` is the cascades' trace height (:data:`CASCADE_SCALES`)."""
     _units(units)
+    _cascade_heights(np.zeros((1, 1)), cascade_scale)
     figs: dict[str, Any] = {"bode": bode_figure(track, units=units)}
     if track.phase_referenced:
         figs["polar"] = polar_figure(track, units=units)
     for b in rec.bearings:
         first = next(i for i, c in enumerate(rec.channels) if c.bearing == b)
-        figs[f"waterfall_b{b}"] = waterfall_figure(waterfall(rec, track, first), units=units)
-        figs[f"full_spectrum_b{b}"] = waterfall_figure(full_spectrum(rec, track, b), units=units)
+        figs[f"waterfall_b{b}"] = waterfall_figure(waterfall(rec, track, first), units=units, scale=cascade_scale)
+        figs[f"full_spectrum_b{b}"] = waterfall_figure(full_spectrum(rec, track, b), units=units,
+                                                           scale=cascade_scale)
     if not rec.dc_removed:
         figs["centreline"] = centreline_figure(centreline(rec, track, reference=centreline_reference), units=units)
     keep = ~track.in_doubt

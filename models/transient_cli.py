@@ -63,6 +63,7 @@ def register(app: typer.Typer) -> None:
         campbell: bool = typer.Option(False, "--campbell", help="Campbell diagram of the default plant (MODEL.md) when no --plant is given."),
         centreline_reference: str = typer.Option("as recorded", "--centreline-reference", help="'as recorded' (the probes' zero: the bearing centre for rotordiag's recordings) | 'slow roll at the bottom'."),
         output_units: str = typer.Option("um", "--output-units", help="Lengths on the plots: um | mil."),
+        cascade_scale: str = typer.Option("db", "--cascade-scale", help="Trace height of the waterfall and full-spectrum cascades: db (dB below the largest line, 60 dB shown) | row (each trace to its own largest line) | linear (one scale: a whip line dwarfs the low speeds)."),
         as_json: bool = typer.Option(False, "--json", help="Print the tracked 1X/2X peaks and the files as JSON."),
     ) -> None:
         """Bode, polar, waterfall, full spectrum, centreline, orbit and Campbell plots of a start-up or coast-down."""
@@ -83,7 +84,8 @@ def register(app: typer.Typer) -> None:
 
                 pl = Plant.from_file(plant) if plant is not None else Plant.default()
             figs = transient_figures(res.recording, track, orbit_speeds_rpm=parse_speeds(orbit_speeds), plant=pl,
-                                     centreline_reference=centreline_reference, units=output_units)
+                                     centreline_reference=centreline_reference, units=output_units,
+                                     cascade_scale=cascade_scale)
             paths = save_figures(figs, out_dir)
         except ValueError as exc:
             _fail(f"{file}: {exc}")

@@ -278,6 +278,29 @@ def asset_report_data(asset_id: str) -> dict:
     return out
 
 
+def _startup_evidence(verdict: dict | None, recording, track, baseline) -> tuple[dict | None, list[str]]:
+    """The start-up beside the steady verdict (``models.startup_check``): its evidence entries as report notes and,
+    for an "aligned" call on a start-up that changed since the baseline, the ``startup_changed`` reason added to the
+    verdict (a confident verdict becomes uncertain; the band is never changed)."""
+    from rotordiag.features.transient import centreline, track_orders
+    from rotordiag.models.startup_check import startup_evidence, startup_reasons
+
+    def evidence(rec, tr):
+        return startup_evidence(tr, None if rec.dc_removed else centreline(rec, tr))
+
+    base = evidence(baseline, track_orders(baseline)) if baseline is not None else None
+    call = verdict is not None and verdict.get("severity") not in ("aligned", "inconclusive", None)
+    entries, reasons = startup_reasons({"startup": evidence(recording, track), "baseline": base,
+                                        "misaligned_call": call})
+    notes = [f"start-up evidence ({e['effect']}): {e['text']}" for e in entries]
+    if verdict is not None and reasons:
+        verdict = dict(verdict)
+        verdict["reasons"] = list(verdict.get("reasons") or []) + [r.to_dict() for r in reasons]
+        if verdict.get("status") == "confident":
+            verdict["status"] = "uncertain"
+    return verdict, notes
+
+
 def _register_report(app: typer.Typer) -> None:
     """``rotordiag report``: a PDF and an HTML page to hand on."""
 
@@ -296,6 +319,9 @@ def _register_report(app: typer.Typer) -> None:
         keyphasor_channel: Optional[str] = typer.Option(None, "--keyphasor-channel", help="Raw keyphasor channel (column or index)."),
         clearance_um: Optional[float] = typer.Option(None, "--clearance-um", help="Radial bearing clearance, µm."),
         plant: Optional[Path] = typer.Option(None, "--plant", help="Plant file: adds its Campbell diagram."),
+        baseline_startup: Optional[Path] = typer.Option(None, "--baseline-startup", help="The asset's baseline "
+                                                        "start-up (same layout): --startup is compared with it, its "
+                                                        "coupling-end centreline rise as evidence beside the verdict."),
         title: Optional[str] = typer.Option(None, "--title", help="Report title."),
     ) -> None:
         """Write a report (PDF + HTML): the verdict with its status, reasons and evidence, the start-up plots, the trend."""
@@ -349,6 +375,16 @@ def _register_report(app: typer.Typer) -> None:
                 figs = transient_figures(sres.recording, track, plant=pl)
                 recs.append({"file": str(startup), "role": "start-up", "format": sres.format, "notes": sres.notes})
             notes: list[str] = []
+            if baseline_startup is not None:
+                if startup is None:
+                    raise ValueError("--baseline-startup needs --startup (the start-up to compare with it)")
+                bres = read_transient(baseline_startup, given)
+                recs.append({"file": str(baseline_startup), "role": "baseline start-up", "format": bres.format,
+                             "notes": bres.notes})
+            if startup is not None:
+                verdict, more = _startup_evidence(verdict, sres.recording, track,
+                                                  bres.recording if baseline_startup is not None else None)
+                notes += more
             if asset is not None:
                 stored = asset_report_data(asset)
                 history = stored["history"]

@@ -218,11 +218,13 @@ def plot_data(recording: Recording, feature_result: Any = None) -> dict[str, Any
 TRANSIENT_PNG_DPI = 80
 
 
-def transient_plots(recording: Recording, units: str = "um", plant: Any = None) -> dict[str, Any]:
+def transient_plots(recording: Recording, units: str = "um", cascade_scale: str = "db",
+                    plant: Any = None) -> dict[str, Any]:
     """A start-up or coast-down recording's plots as the page shows them: ``features.transient.track_orders``
     and ``features.plots.transient_figures`` (Bode, polar, cascade and full spectrum per bearing, centreline,
     orbits) rendered to PNG (base64), with the run's summary (``models.report.transient_summary``: kind, speed
-    range and source, 1X/2X peaks, conventions, notes). ``units``: ``"um"`` or ``"mil"``. Raises ValueError
+    range and source, 1X/2X peaks, conventions, notes). ``units``: ``"um"`` or ``"mil"``; ``cascade_scale``: the
+    cascades' trace height (``features.plots.CASCADE_SCALES``). Raises ValueError
     (the features package's message) for a recording that cannot be tracked."""
     import base64
     import io
@@ -234,7 +236,8 @@ def transient_plots(recording: Recording, units: str = "um", plant: Any = None) 
     from rotordiag.models.report import transient_summary
 
     track = track_orders(recording)
-    figs = transient_figures(recording, track, units=units, plant=plant)   # with a plant model: its Campbell too
+    figs = transient_figures(recording, track, units=units, cascade_scale=cascade_scale,
+                             plant=plant)                       # with a plant model: its Campbell too
     try:
         figures = []
         for name, fig in figs.items():
@@ -245,4 +248,4 @@ def transient_plots(recording: Recording, units: str = "um", plant: Any = None) 
     finally:
         for fig in figs.values():
             plt.close(fig)
-    return {**transient_summary(track), "units": units, "figures": figures}
+    return {**transient_summary(track), "units": units, "cascade_scale": cascade_scale, "figures": figures}

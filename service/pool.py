@@ -262,7 +262,8 @@ class PlotBody(WorkerCall):
         return _plot(self.kind, self.body, self.filename, self.query)
 
 
-def _transient(kind: str, body: Body, filename: str, query: dict[str, Any], units: str) -> tuple:
+def _transient(kind: str, body: Body, filename: str, query: dict[str, Any], units: str,
+               cascade_scale: str = "db") -> tuple:
     """Parse a start-up / coast-down recording and render its plots (:func:`service.plotdata.transient_plots`):
     ``("ok", data)`` or an error tuple."""
     from .parsing import parse_body, plant_of_model
@@ -270,7 +271,7 @@ def _transient(kind: str, body: Body, filename: str, query: dict[str, Any], unit
 
     def run() -> tuple:
         plant = plant_of_model(str(query["plant_model"])) if query.get("plant_model") else None
-        return ("ok", transient_plots(parse_body(kind, body, filename, query)[0], units, plant=plant))
+        return ("ok", transient_plots(parse_body(kind, body, filename, query)[0], units, cascade_scale, plant=plant))
 
     return _tagged(run)
 
@@ -284,9 +285,10 @@ class TransientPlots(WorkerCall):
     filename: str
     query: dict[str, Any]
     units: str
+    cascade_scale: str = "db"
 
     def run(self) -> tuple:
-        return _transient(self.kind, self.body, self.filename, self.query, self.units)
+        return _transient(self.kind, self.body, self.filename, self.query, self.units, self.cascade_scale)
 
 
 @dataclass(frozen=True)

@@ -27,6 +27,28 @@ def load_plant(path: Optional[Path]):
         raise typer.BadParameter(str(exc), param_hint="--plant") from None
 
 
+def _shaftline(file: Optional[Path], preset: Optional[str]):
+    """The :class:`~rotordiag.simulator.shaftline.ShaftLine` of a file or a named preset (exactly one given)."""
+    from rotordiag.simulator import shaftline as sl
+
+    if (file is None) == (preset is None):
+        raise typer.BadParameter("give a shaft-line file or a preset name, not both", param_hint="--train")
+    try:
+        return sl.ShaftLine.from_file(file) if file is not None else sl.preset(preset)  # type: ignore[arg-type]
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc)) from None
+
+
+def _shaftline_train(file: Optional[Path], preset: Optional[str], line: Any = None):
+    """The finite-element :class:`~rotordiag.simulator.train.Train` of a shaft-line file or preset."""
+    from rotordiag.simulator.train.shaftline import train_from_shaftline
+
+    try:
+        return train_from_shaftline(line if line is not None else _shaftline(file, preset))
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc)) from None
+
+
 def _summary(res) -> dict:
     from rotordiag.simulator.simulate import order_amplitudes
 
@@ -320,19 +342,52 @@ def register(app: typer.Typer) -> None:
         seed: int = typer.Option(0, "--seed", help="Seed of the probe noise."),
         out: Path = typer.Option(..., "--out", help="Probe file: .csv (with a kp keyphasor column), .npy/.h5 (the "
                                                     "keyphasor as the last channel, index 8) or .uff."),
+        train: Optional[str] = typer.Option(None, "--train", help="Run a finite-element shaft train instead of the "
+                                                                  "paper's model: a preset (gen50_2pole, gen200_2pole, "
+                                                                  "gen600_2pole, gen600_4pole)."),
+        shaftline: Optional[Path] = typer.Option(None, "--shaftline", help="Run the finite-element train of this "
+                                                                           "shaft-line TOML (examples/shaftline_200mw.toml)."),
+        offset_um: float = typer.Option(0.0, "--offset-um", help="A train's parallel offset at its first coupling, µm "
+                                                                 "(downward; --misalignment is the paper model's)."),
+        unbalance_kg_m: float = typer.Option(0.2, "--unbalance-kg-m", help="A train's unbalance at the middle of "
+                                                                           "its first rotor, kg·m, along +x at the "
+                                                                           "keyphasor mark (--unbalance is the paper "
+                                                                           "model's)."),
     ) -> None:
-        """Simulate a run-up or coast-down of the paper's model and write what 8 probes and a keyphasor record."""
+        """Simulate a run-up or coast-down of the paper's model (or of a shaft train: --train / --shaftline) and
+        write what its probes (x/y at 45° and 135° at every bearing) and a keyphasor record."""
         import math
 
-        from rotordiag.simulator.transient import SpeedProfile, simulate_transient
+        from rotordiag.simulator.transient import DEFAULT_CHANNELS, SpeedProfile, simulate_transient
 
-        pl = load_plant(plant)
+        model: Any
+        channels = DEFAULT_CHANNELS
+        if train is not None or shaftline is not None:
+            from rotordiag.simulator.train import TrainError
+            from rotordiag.simulator.train import misaligned as train_misaligned
+            from rotordiag.simulator.train.transient import TrainTransientModel, train_channels, unbalanced
+
+            if misalignment or plant is not None:
+                raise typer.BadParameter("--misalignment and --plant are the paper model's; a train takes "
+                                         "--offset-um", param_hint="--train")
+            tr = _shaftline_train(shaftline, train)
+            try:
+                if offset_um:
+                    tr = train_misaligned(tr, offset_m=offset_um * 1e-6)
+                model = TrainTransientModel(unbalanced(tr, unbalance_kg_m))
+            except (TrainError, ValueError) as exc:
+                raise typer.BadParameter(str(exc), param_hint="--offset-um") from None
+            channels = train_channels(model.n_bearings)
+            clearance_um = model.clearance_m * 1e6
+        else:
+            model = load_plant(plant)
+            clearance_um = model.clearance_m * 1e6
         try:
             prof = SpeedProfile.parse(profile)
-            res = simulate_transient(pl, prof, misalignment, unbalance, mechanism=mechanism,
+            res = simulate_transient(model, prof, misalignment, unbalance, mechanism=mechanism,
                                      sample_rate_hz=sample_rate_hz, settle_revs=settle_revs,
                                      offset_angle_rad=math.radians(offset_angle_deg))
-            w = res.probe_waveforms_um(snr_db=snr_db, seed=seed)
+            w = res.probe_waveforms_um(channels, snr_db=snr_db, seed=seed)
         except ValueError as exc:
             raise typer.BadParameter(str(exc)) from None
         typer.echo(f"{prof.kind} {prof.speeds_rpm[0]:g} → {prof.speeds_rpm[-1]:g} r/min in {prof.duration_s:g} s: "
@@ -340,18 +395,17 @@ def register(app: typer.Typer) -> None:
                    f"{res.keyphasor_times_s.size} keyphasor pulses, {res.wall_time_s:.1f} s", err=True)
         if res.time_s.size < 16:
             raise typer.BadParameter("the run stopped before it recorded anything; nothing written")
-        from .transient import DEFAULT_CHANNELS
-
         tmp = out.with_name(f".{out.name}.part{out.suffix}")
         try:
-            write_probes(tmp, w, DEFAULT_CHANNELS, sample_rate_hz, clearance_um=pl.clearance_m * 1e6,
+            write_probes(tmp, w, channels, sample_rate_hz, clearance_um=clearance_um,
                          keyphasor_signal=res.keyphasor_signal())
             tmp.replace(out)
         except ValueError as exc:
             raise typer.BadParameter(str(exc), param_hint="--out") from None
         finally:
             tmp.unlink(missing_ok=True)
-        typer.echo(f"wrote {out} (8 probes + keyphasor × {w.shape[1]} samples at {sample_rate_hz:g} Hz, µm)", err=True)
+        typer.echo(f"wrote {out} ({len(channels)} probes + keyphasor × {w.shape[1]} samples at {sample_rate_hz:g} Hz, "
+                   "µm)", err=True)
 
     plant_app = typer.Typer(help="Build plant files.", no_args_is_help=True)
     app.add_typer(plant_app, name="plant")
@@ -372,7 +426,6 @@ def register(app: typer.Typer) -> None:
         first two critical speeds of the beam model and of the lumped plant (the reduction's check)."""
         from rotordiag.simulator import shaftline as sl
         from rotordiag.simulator.train import TrainError, static_state
-        from rotordiag.simulator.train.shaftline import train_from_shaftline
         from rotordiag.simulator.train.stability import stability
 
         if (file is None) == (preset is None):
@@ -380,11 +433,8 @@ def register(app: typer.Typer) -> None:
         if out is None and speed_rpm is None:
             raise typer.BadParameter("give --out (the lumped plant) and/or --speed-rpm (check the train)",
                                      param_hint="--out")
-        try:
-            line = sl.ShaftLine.from_file(file) if file is not None else sl.preset(preset)  # type: ignore[arg-type]
-            train = train_from_shaftline(line)
-        except ValueError as exc:
-            raise typer.BadParameter(str(exc)) from None
+        line = _shaftline(file, preset)
+        train = _shaftline_train(file, preset, line)
         if speed_rpm is not None:
             try:
                 st = static_state(train, speed_rpm)

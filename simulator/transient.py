@@ -241,8 +241,8 @@ class TransientResult:
         Sample times from the profile's start (uniform at ``sample_rate_hz``).
     speed_rpm : ndarray, shape (n,)
         The profile's speed at the samples.
-    journal_displacements_m : ndarray, shape (n, 4, 2)
-        Journals of bearings 1..4 relative to their bearing centres (x horizontal, y vertical up): what a DC-coupled
+    journal_displacements_m : ndarray, shape (n, n_bearings, 2)
+        Journals of bearings 1..4 (a train: all its bearings) relative to their bearing centres (x horizontal, y vertical up): what a DC-coupled
         probe pair sees, static position included.
     keyphasor_times_s : ndarray
         Once-per-revolution mark (τ ≡ 0 mod 2π: the generator unbalance along +x) inside the record.
@@ -274,8 +274,8 @@ class TransientResult:
         d = self.journal_displacements_m * 1e6
         out = np.empty((len(channels), d.shape[0]))
         for c, (b, angle) in enumerate(channels):
-            if int(b) not in (1, 2, 3, 4):
-                raise ValueError(f"channels: bearing must be 1–4, got {b!r}")
+            if not 1 <= int(b) <= d.shape[1]:
+                raise ValueError(f"channels: bearing must be 1–{d.shape[1]}, got {b!r}")
             out[c] = project_on_probe(d[:, int(b) - 1, 0], d[:, int(b) - 1, 1], float(angle))
         if math.isfinite(snr_db):
             rng = np.random.default_rng(seed)
@@ -402,8 +402,10 @@ def simulate_transient(
         what = "a journal reached its bushing" if status == "contact" else "the integration diverged"
         message = (f"{what} at t = {stop_t:.3f} s ({float(profile.speed_rpm(np.array([stop_t]))[0]):.0f} r/min); "
                    "samples up to that point are kept")
+    own = isinstance(plant, Plant)  # a model built behind VariableSpeedModel describes itself (or not at all)
     inputs = dict(profile={"times_s": list(profile.times_s), "speeds_rpm": list(profile.speeds_rpm)},
-                  misalignment=float(misalignment), unbalance=float(unbalance), sample_rate_hz=fs,
+                  misalignment=float(misalignment) if own else None, unbalance=float(unbalance) if own else None,
+                  model=None if own or not hasattr(model, "describe") else model.describe(), sample_rate_hz=fs,
                   settle_revs=settle_revs, rtol=rtol, atol=atol, tau_at_t0=tau_zero,
                   plant=plant.to_dict() if isinstance(plant, Plant) else None,
                   **{k: (float(v) if isinstance(v, (int, float)) else v) for k, v in kwargs.items()})

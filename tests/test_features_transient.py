@@ -284,3 +284,74 @@ def test_a_whirl_beside_1x_is_not_read_as_a_1x_peak():
     assert any(n.startswith("1X not readable") for n in tr.notes)
     pk = tr.peaks(1)
     assert pk and all(abs(q["speed_rpm"] / 1500.0 - 1) < 0.01 for q in pk)
+
+
+def test_cascade_scales_keep_the_small_lines_and_say_how():
+    """dB: a line 1000× (60 dB) below the largest is at the floor, one 10× (20 dB) below at 2/3 of the height;
+    per row: every trace reaches full height; the plot states the scale; an unknown scale is refused."""
+    from rotordiag.features.plots import _cascade_heights, waterfall_figure
+
+    a = np.array([[1000.0, 1.0, 100.0], [10.0, 0.01, 1.0]])
+    h, words = _cascade_heights(a, "db")
+    assert h[0, 0] == pytest.approx(1.0) and h[0, 1] == pytest.approx(0.0) and h[0, 2] == pytest.approx(2 / 3)
+    assert h[1, 0] == pytest.approx(1 / 3) and "dB" in words
+    h, _ = _cascade_heights(a, "row")
+    assert h.max(axis=1) == pytest.approx([1.0, 1.0]) and h[1, 2] == pytest.approx(0.1)
+    h, _ = _cascade_heights(a, "linear")
+    assert h[1, 0] == pytest.approx(0.01)
+    with pytest.raises(ValueError, match="cascade scale 'log' is not one of"):
+        _cascade_heights(a, "log")
+    rec, _, _ = _synthetic(dur_s=6.0, rpm1=1300.0)
+    wf = T.waterfall(rec, T.track_orders(rec), 0)
+    fig = waterfall_figure(wf, scale="row")
+    assert "each trace to its own largest line" in fig.axes[0].get_ylabel() + fig.axes[0].get_title()
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+
+
+def _huge_npy(path: Path) -> Path:
+    """An NPY file whose header announces 8 channels × 10⁸ samples (3.2 GB) but which holds 64 bytes."""
+    from numpy.lib import format as npformat
+
+    buf = io.BytesIO()
+    npformat.write_array_header_1_0(buf, {"descr": "<f4", "fortran_order": False, "shape": (8, 10**8)})
+    buf.write(np.zeros(16, np.float32).tobytes())
+    path.write_bytes(buf.getvalue())
+    return path
+
+
+def test_plots_cli_refuses_a_1e8_sample_file_and_writes_nothing(tmp_path: Path):
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    p = _huge_npy(tmp_path / "huge.npy")
+    out = tmp_path / "png"
+    r = CliRunner().invoke(app, ["plots", str(p), "--sample-rate-hz", "25600", "--keyphasor-channel", "7",
+                                 "--out-dir", str(out)])
+    assert r.exit_code == 2, r.output
+    assert "(8, 100000000)" in r.output and "accepted" in r.output
+    assert not out.exists()
+
+
+def test_plots_cli_refuses_a_keyphasor_gap_mid_run_and_writes_nothing(tmp_path: Path):
+    """Pulses missing for a stretch in the middle of the run, then back: exit 2 with where, no PNG."""
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+    from rotordiag.simulator.cli import write_probes
+
+    rec, _, _ = _synthetic(dur_s=8.0, rpm1=1300.0)
+    t, _, kp, _ = _ramp(900.0, 1300.0, 8.0)
+    sig = np.zeros(t.size)
+    n = kp.size
+    for tk in np.r_[kp[1: n // 2], kp[n // 2 + 3:]]:      # three pulses missing half-way
+        sig[(t >= tk) & (t < tk + 0.004)] = -1.0
+    path = tmp_path / "gap.csv"
+    write_probes(path, np.array([c.data for c in rec.channels]), LAYOUT, FS, keyphasor_signal=sig)
+    out = tmp_path / "png"
+    r = CliRunner().invoke(app, ["plots", str(path), "--out-dir", str(out)])
+    assert r.exit_code == 2, r.output
+    assert "keyphasor drops out: the pulse interval at t = " in r.output
+    assert not out.exists()

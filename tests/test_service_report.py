@@ -192,6 +192,34 @@ def test_transient_plots_refuse_a_keyphasor_that_drops_out_and_a_broken_file(cli
         assert r.status_code == 422
 
 
+def test_transient_plots_take_the_cascade_scale_and_say_it(clients, runup_csv):
+    _, plain, _ = clients
+    r = plain.post("/ui/transient-plots", params={"cascade_scale": "row"},
+                   files={"file": ("runup.csv", runup_csv.read_bytes())})
+    assert r.status_code == 200, r.text
+    t = r.json()
+    assert t["cascade_scale"] == "row"
+    cascades = [f for f in t["figures"] if f["name"].startswith(("waterfall", "full_spectrum"))]
+    assert cascades and all("each trace to its own largest line" in f["title"] for f in cascades)
+    r = plain.post("/ui/transient-plots", params={"cascade_scale": "log"},
+                   files={"file": ("runup.csv", runup_csv.read_bytes())})
+    assert r.status_code == 422, r.text
+
+
+def test_transient_plots_refuse_a_1e8_sample_file_with_a_4xx_saying_why(clients, tmp_path):
+    """A 10⁸-sample NPY (its header says 8 × 10⁸ float32, 3.2 GB; the file is 200 bytes): refused before it is
+    read, with the size, through both service paths."""
+    from tests.test_features_transient import _huge_npy
+
+    body = _huge_npy(tmp_path / "huge.npy").read_bytes()
+    pooled, plain, _ = clients
+    for c in (pooled, plain):
+        r = c.post("/ui/transient-plots", params={"sample_rate_hz": 25600, "keyphasor_channel": 7},
+                   files={"file": ("huge.npy", body)})
+        assert 400 <= r.status_code < 500, r.text
+        assert "(8, 100000000)" in r.json()["detail"], r.text
+
+
 def test_report_shows_the_latest_full_verdict_when_retention_trimmed_the_last(clients):
     from sqlalchemy import update
 

@@ -158,6 +158,9 @@ _ENTRIES = (
              "machine's 2X/1X"),
     CodeInfo("reverse_2x", REASON, _U, "a misalignment call on a coupling 2X that whirls backward",
              "check the probe wiring and pickup; compare with this machine's baseline"),
+    CodeInfo("startup_changed", REASON, _U, "called aligned, but the start-up's coupling-end centreline rise "
+             "changed since the asset's baseline start-up",
+             "compare the two start-ups' Bode and centreline plots before accepting the verdict"),
     CodeInfo("clearance_diametral", REASON, _U, "half the stated clearance makes the recording markedly more like the "
              "training machines", "check that clearance_um is the radial clearance (half the diametral one)"),
     CodeInfo("common_mode", REASON, _UI, "without the part of the 1X / 2X common to every probe the class differs "

@@ -120,11 +120,13 @@ async def _reader_query(request: Request, state: Any, reader: dict[str, Any], sa
     return query
 
 
-def _transient_sync(recording: Any, units: str, plant_model: str | None = None) -> dict[str, Any]:
+def _transient_sync(recording: Any, units: str, cascade_scale: str = "db",
+                    plant_model: str | None = None) -> dict[str, Any]:
     from ..parsing import plant_of_model
 
     try:
-        return transient_plots(recording, units, plant=plant_of_model(plant_model) if plant_model else None)
+        return transient_plots(recording, units, cascade_scale,
+                               plant=plant_of_model(plant_model) if plant_model else None)
     except ValueError as exc:  # the features package's messages (speed reverses, keyphasor drops out, ...)
         raise InputError(str(exc)) from None
 
@@ -137,13 +139,17 @@ async def transient(
     sample_index: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
     asset_id: Annotated[str | None, Query(min_length=1, max_length=128, pattern=r"^[A-Za-z0-9._:-]+$")] = None,
     output_units: Annotated[Literal["um", "mil"], Query()] = "um",
+    cascade_scale: Annotated[Literal["db", "row", "linear"], Query(
+        description="Trace height of the cascades: dB below the largest line (60 dB shown), each trace to its own "
+                    "largest line, or one linear scale (a whip line dwarfs the low speeds)")] = "db",
 ) -> dict[str, Any]:
     """A start-up or coast-down recording sent as to ``POST /diagnose``, order-tracked (``features.transient``)
     and plotted (``features.plots``): Bode, polar, cascade and full spectrum of each bearing, centreline, orbits,
-    as PNG (base64) with the run's summary (``service.plotdata.transient_plots``). Nothing is stored. In a
+    as PNG (base64) with the run's summary (``service.plotdata.transient_plots``); ``cascade_scale`` as
+    ``rotordiag plots --cascade-scale``. Nothing is stored. In a
     diagnosis worker (memory and time limits), or with no workers in a thread of the server, as /ui/plot-data."""
     query = await _reader_query(request, state, reader, sample_index, asset_id)
     return await recording_answer(
         request, state, query,
-        lambda kind, body, filename, q: TransientPlots(kind, body, filename, q, output_units),
-        lambda recording: _transient_sync(recording, output_units, query.get("plant_model")))
+        lambda kind, body, filename, q: TransientPlots(kind, body, filename, q, output_units, cascade_scale),
+        lambda recording: _transient_sync(recording, output_units, cascade_scale, query.get("plant_model")))

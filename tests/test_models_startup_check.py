@@ -1,0 +1,105 @@
+"""A start-up as evidence beside the steady verdict (models.startup_check): entries, and a doubt never a band."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rotordiag.features import transient as T
+from rotordiag.models.startup_check import (
+    CRITICAL_MOVED_FRACTION,
+    StartupEvidence,
+    compare_startups,
+    startup_evidence,
+    startup_reasons,
+)
+from rotordiag.models.status import UNCERTAIN
+from tests.test_features_transient import _synthetic
+
+
+def _ev(crit_rpm: float = 1500.0, half_rise_rpm: float = 1200.0, top=(10.0, 60.0)) -> StartupEvidence:
+    return StartupEvidence({(2, 45.0): crit_rpm, (3, 45.0): crit_rpm}, {2: half_rise_rpm, 3: half_rise_rpm},
+                           {2: top, 3: top}, {2: 300.0, 3: 300.0}, (300.0, 2000.0))
+
+
+def test_no_baseline_gives_entries_and_no_reason():
+    entries, reasons = startup_reasons({"startup": _ev(), "baseline": None, "misaligned_call": False})
+    assert not reasons
+    assert [e["code"] for e in entries] == ["startup_criticals", "startup_no_baseline"]
+    assert "b2@45 1500 r/min" in entries[0]["text"]
+
+
+def test_an_unchanged_start_up_adds_no_doubt():
+    small = 1500.0 * (1 + 0.5 * CRITICAL_MOVED_FRACTION)
+    entries, reasons = startup_reasons({"startup": _ev(crit_rpm=small), "baseline": _ev(), "misaligned_call": False})
+    assert not reasons and entries[-1]["code"] == "startup_unchanged"
+
+
+def test_a_moved_critical_alone_is_an_entry_not_a_doubt():
+    entries, reasons = startup_reasons({"startup": _ev(crit_rpm=1400.0), "baseline": _ev(), "misaligned_call": False})
+    assert not reasons
+    moved = [e for e in entries if e["code"] == "startup_criticals_moved"]
+    assert moved and "moved from 1500 to 1400 r/min (-7 %)" in moved[0]["text"] and moved[0]["effect"] == "none"
+
+
+@pytest.mark.parametrize("now, what", [
+    (dict(half_rise_rpm=1500.0), "half its centreline rise at 1500 r/min against 1200"),
+    (dict(top=(10.0, 100.0)), "13 % of its clearance away"),          # |Δ| 40 µm of a 300 µm clearance
+])
+def test_a_changed_start_up_doubts_an_aligned_call_and_supports_a_misaligned_one(now, what):
+    ctx = {"startup": _ev(**now), "baseline": _ev()}
+    entries, reasons = startup_reasons({**ctx, "misaligned_call": False})
+    assert len(reasons) == 1 and reasons[0].code == "startup_changed" and reasons[0].status == UNCERTAIN
+    assert what in reasons[0].message
+    assert entries[-1]["effect"] == "doubts"
+    entries, reasons = startup_reasons({**ctx, "misaligned_call": True})
+    assert not reasons and entries[-1]["effect"] == "supports" and what in entries[-1]["text"]
+
+
+def test_evidence_of_a_tracked_run_reads_its_critical_and_its_rise():
+    """The synthetic run's 1X resonance is at 1500 r/min (ζ 0.05) and its centreline rises linearly with speed: the
+    critical is found there, and the half-rise speed is the middle of the run."""
+    rec, _, _ = _synthetic(rpm0=900.0, rpm1=2100.0, dur_s=20.0)
+    tr = T.track_orders(rec)
+    ev = startup_evidence(tr, T.centreline(rec, tr))
+    assert ev.criticals and all(abs(s - 1500.0) < 0.05 * 1500.0 for s in ev.criticals.values())
+    for b, s in ev.half_rise_rpm.items():
+        assert abs(s - 1500.0) < 60.0, (b, s)
+    same = compare_startups(ev, ev)
+    assert all(v[2] == 0.0 for v in same["critical_shift"].values())
+    assert all(v == 0.0 for v in same["top_change_per_clearance"].values())
+    assert np.isfinite(ev.speed_range_rpm).all()
+
+
+def test_report_cli_adds_the_start_up_doubt_to_an_aligned_call(tmp_path):
+    """`rotordiag report steady --startup now --baseline-startup base`: the run-up at Δ 0.15 against the plant's Δ 0
+    baseline run-up (the coupling-end centreline rises later) puts ``startup_changed`` on the steady Δ 0 recording's
+    "aligned" verdict, whose band stays "aligned"; with the baseline as the start-up, no doubt."""
+    import html as _html
+
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    run = CliRunner()
+    base, now, steady = tmp_path / "base.csv", tmp_path / "now.csv", tmp_path / "steady.csv"
+    for path, delta in ((base, "0"), (now, "0.15")):
+        r = run.invoke(app, ["runup", "--profile", "300:2000:17", "--misalignment", delta, "--settle-revs", "100",
+                             "--out", str(path)])
+        assert r.exit_code == 0, r.output
+    r = run.invoke(app, ["simulate", "--speed-rpm", "1950", "--misalignment", "0", "--record-revs", "80",
+                         "--probes-out", str(steady), "--probe-sample-rate-hz", "2560"])
+    assert r.exit_code == 0, r.output
+    texts = {}
+    for name, startup in (("changed", now), ("same", base)):
+        out = tmp_path / f"{name}.pdf"
+        r = run.invoke(app, ["report", str(steady), "--startup", str(startup), "--baseline-startup", str(base),
+                             "--out", str(out), "--clearance-um", "350"])
+        assert r.exit_code == 0, r.output
+        texts[name] = _html.unescape(out.with_suffix(".html").read_text())
+    doubt = "called aligned, but the start-up changed since the asset's baseline start-up: bearing"
+    assert doubt in texts["changed"] and "start-up evidence (doubts)" in texts["changed"]
+    assert "status: uncertain" in texts["changed"] and "severity: aligned" in texts["changed"]
+    assert doubt not in texts["same"] and "start-up evidence (doubts)" not in texts["same"]
+    r = run.invoke(app, ["report", str(steady), "--baseline-startup", str(base), "--out", str(tmp_path / "x.pdf")])
+    assert r.exit_code == 2 and "--baseline-startup needs --startup" in r.output
+    assert not (tmp_path / "x.pdf").exists()
