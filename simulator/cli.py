@@ -243,13 +243,62 @@ def _plot(res, path: Path) -> None:
     plt.close(fig)
 
 
+def _simulate_train(tr: Any, speed_rpm: float, *, probes_out: Optional[Path], as_json: bool, **kw: Any) -> None:
+    """``simulate --train``: the train's steady recording (``simulator.train.recording``), its summary per
+    bearing and, with ``probes_out``, its probes and keyphasor written as for the paper model (nothing half-written)."""
+    import numpy as np
+
+    from rotordiag.simulator.train import TrainError
+    from rotordiag.simulator.train.recording import train_recording
+    from rotordiag.simulator.transient import keyphasor_pulse_signal
+
+    try:
+        rec = train_recording(tr, speed_rpm, **kw)
+    except (TrainError, ValueError) as exc:
+        raise typer.BadParameter(str(exc)) from None
+    for w in rec.warnings:
+        typer.secho(f"warning: {w}", fg=typer.colors.YELLOW, err=True)
+    rows = []
+    for b, cl in sorted(rec.clearance_um.items()):
+        pair = [k for k, (bb, _) in enumerate(rec.channels) if bb == b]
+        w = rec.waveforms_um[pair]
+        rows.append({"bearing": b, "clearance_um": cl, "dc_um": [round(float(v), 2) for v in w.mean(axis=1)],
+                     "pk_pk_um": [round(float(v), 2) for v in np.ptp(w, axis=1)]})
+    summary = {"speed_rpm": rec.speed_rpm, "inputs": rec.inputs, "warnings": rec.warnings, "bearings": rows,
+               "wall_time_s": round(rec.run.wall_time_s, 3)}
+    if as_json:
+        typer.echo(json.dumps(summary, indent=2))
+    else:
+        typer.echo(f"train at {rec.speed_rpm:g} r/min: {rec.run.wall_time_s:.2f} s; least log decrement "
+                   f"{rec.inputs['log_decrement']:.3f}")
+        typer.echo(f"{'bearing':>7} {'c µm':>7} {'DC 45° µm':>10} {'DC 135° µm':>11} {'pk-pk 45°':>10} {'pk-pk 135°':>11}")
+        for r in rows:
+            typer.echo(f"{r['bearing']:>7} {r['clearance_um']:7.0f} {r['dc_um'][0]:10.1f} {r['dc_um'][1]:11.1f} "
+                       f"{r['pk_pk_um'][0]:10.1f} {r['pk_pk_um'][1]:11.1f}")
+    if probes_out is not None:
+        tmp = probes_out.with_name(f".{probes_out.name}.part{probes_out.suffix}")
+        try:
+            write_probes(tmp, rec.waveforms_um, rec.channels, rec.sample_rate_hz, speed_rpm=rec.speed_rpm,
+                         clearance_um=min(rec.clearance_um.values()),
+                         keyphasor_signal=keyphasor_pulse_signal(rec.time_s, rec.sample_rate_hz, rec.keyphasor_times_s))
+            tmp.replace(probes_out)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--probes-out") from None
+        finally:
+            tmp.unlink(missing_ok=True)
+        typer.echo(f"wrote {probes_out} ({len(rec.channels)} probes + keyphasor × {rec.waveforms_um.shape[1]} "
+                   f"samples at {rec.sample_rate_hz:g} Hz, µm)", err=True)
+
+
 def register(app: typer.Typer) -> None:
     """Add ``simulate`` and ``modal`` to the ``rotordiag`` app."""
 
     @app.command()
     def simulate(
         speed_rpm: float = typer.Option(..., help="Running speed, r/min (100–6000)."),
-        misalignment: float = typer.Option(..., help="Non-dimensional parallel misalignment Δ = δ/c (0–0.9)."),
+        misalignment: Optional[float] = typer.Option(None, help="Non-dimensional parallel misalignment Δ = δ/c "
+                                                     "(0–0.9) of the paper's model (required for it; a train takes "
+                                                     "--offset-um)."),
         unbalance: float = typer.Option(0.05, help="Non-dimensional generator unbalance A = a/c (0–0.5)."),
         mechanism: str = typer.Option("pin", help=MECHANISM_HELP),
         plant: Optional[Path] = typer.Option(None, help="Plant file (TOML or JSON); default MODEL.md's plant."),
@@ -275,12 +324,36 @@ def register(app: typer.Typer) -> None:
         snr_db: float = typer.Option(40.0, "--snr-db", help="Probe noise of --probes-out: signal-to-noise ratio, dB (inf: none)."),
         runout_um: float = typer.Option(0.0, "--runout-um", min=0, help="1X mechanical/electrical runout of --probes-out, µm."),
         seed: int = typer.Option(0, "--seed", help="Seed of the --probes-out noise and runout phases."),
+        train: Optional[str] = typer.Option(None, "--train", help="Simulate a finite-element shaft train instead of "
+                                            "the paper's model: a preset name (gen50_2pole, gen200_2pole, "
+                                            "gen600_2pole, gen600_4pole)."),
+        shaftline: Optional[Path] = typer.Option(None, "--shaftline", help="Simulate the finite-element train of "
+                                                 "this shaft-line file (TOML/JSON)."),
+        offset_um: float = typer.Option(0.0, "--offset-um", help="A train's parallel offset at the coupling, µm, "
+                                        "along --offset-angle-deg (-90 = the exciter low), set by moving the "
+                                        "exciter's bearings."),
+        unbalance_kg_m: float = typer.Option(0.2, "--unbalance-kg-m", help="A train's unbalance at the middle of "
+                                             "the generator, kg·m, at the keyphasor mark."),
     ) -> None:
-        """Simulate one operating point and summarise the journal vibration."""
+        """Simulate one operating point and summarise the journal vibration: the paper's model, or a shaft
+        train (--train / --shaftline: misaligned by --offset-um and --angular-misalignment-mrad)."""
         import math
 
         from rotordiag.simulator import simulate as run
 
+        if train is not None or shaftline is not None:
+            if misalignment is not None or plant is not None:
+                raise typer.BadParameter("--misalignment and --plant are the paper model's; a train takes "
+                                         "--offset-um and --angular-misalignment-mrad", param_hint="--train")
+            _simulate_train(_shaftline_train(shaftline, train), speed_rpm, offset_um=offset_um,
+                            angular_mrad=angular_misalignment_mrad, direction_deg=offset_angle_deg,
+                            unbalance_kg_m=unbalance_kg_m, transient_revs=min(transient_revs, 320),
+                            record_revs=record_revs, samples_per_rev=samples_per_rev, snr_db=snr_db, seed=seed,
+                            probes_out=probes_out, as_json=as_json)
+            return
+        if misalignment is None:
+            raise typer.BadParameter("give --misalignment (Δ = δ/c) for the paper's model, or --train/--shaftline",
+                                     param_hint="--misalignment")
         pl = load_plant(plant)
         try:
             res = run(pl, speed_rpm, misalignment, unbalance, mechanism=mechanism,

@@ -287,20 +287,27 @@ class TransientResult:
         """A keyphasor probe's signal (0 with a −1 notch at each mark lasting ``notch_fraction`` of a revolution),
         its falling edges ramped over two samples so that a halfway-threshold crossing interpolates to the mark's
         exact time (what ``features.reader.keyphasor_times_from_pulses`` reads)."""
-        t = self.time_s
-        fs = self.sample_rate_hz
-        kp = self.keyphasor_times_s
-        sig = np.zeros(t.size)
-        if kp.size == 0:
-            return sig
-        periods = np.diff(kp, append=kp[-1] + (kp[-1] - kp[-2] if kp.size > 1 else 1.0))
-        k = np.searchsorted(kp, t + 1.0 / fs, side="right") - 1  # the mark at or just after each sample
-        valid = k >= 0
-        k = np.clip(k, 0, kp.size - 1)
-        since = t - kp[k]
-        edge = np.clip(0.5 * since * fs + 0.5, 0.0, 1.0)  # linear over the two samples around the mark
-        sig = -np.where(valid & (since < notch_fraction * periods[k]), edge, 0.0)
-        return sig
+        return keyphasor_pulse_signal(self.time_s, self.sample_rate_hz, self.keyphasor_times_s, notch_fraction)
+
+
+def keyphasor_pulse_signal(time_s: np.ndarray, sample_rate_hz: float, keyphasor_times_s: np.ndarray,
+                           notch_fraction: float = 0.1) -> np.ndarray:
+    """A keyphasor probe's signal at the sample times ``time_s``: 0 with a −1 notch at each mark of
+    ``keyphasor_times_s`` lasting ``notch_fraction`` of a revolution, its falling edges ramped over two samples so
+    that a halfway-threshold crossing interpolates to the mark's exact time (what
+    ``features.reader.keyphasor_times_from_pulses`` reads)."""
+    t = np.asarray(time_s, dtype=float)
+    fs = float(sample_rate_hz)
+    kp = np.asarray(keyphasor_times_s, dtype=float)
+    if kp.size == 0:
+        return np.zeros(t.size)
+    periods = np.diff(kp, append=kp[-1] + (kp[-1] - kp[-2] if kp.size > 1 else 1.0))
+    k = np.searchsorted(kp, t + 1.0 / fs, side="right") - 1  # the mark at or just after each sample
+    valid = k >= 0
+    k = np.clip(k, 0, kp.size - 1)
+    since = t - kp[k]
+    edge = np.clip(0.5 * since * fs + 0.5, 0.0, 1.0)  # linear over the two samples around the mark
+    return -np.where(valid & (since < notch_fraction * periods[k]), edge, 0.0)
 
 
 def simulate_transient(

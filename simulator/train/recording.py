@@ -1,0 +1,98 @@
+"""A shaft train's steady recording as its probes read it: the train misaligned by moving the exciter's bearings,
+unbalanced, simulated at one speed (:func:`~rotordiag.simulator.train.dynamics.simulate_train`), its probes with
+measurement noise, and a keyphasor — what ``rotordiag simulate --train`` writes, in the layout the features read."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .dynamics import TrainRun, simulate_train
+from .model import Train, TrainError, misaligned
+from .probes import train_probes
+from .stability import stability
+from .transient import unbalanced
+
+__all__ = ["TrainRecording", "train_recording"]
+
+
+@dataclass(frozen=True)
+class TrainRecording:
+    """Probe waveforms (µm, DC included, noise added) at every bearing's 45°/135° pair, with the record's
+    keyphasor times; ``warnings`` say what the user should know (a speed beyond the stability threshold);
+    ``inputs`` records what made it (for a file's metadata and a dataset's parameters)."""
+
+    waveforms_um: np.ndarray
+    channels: tuple[tuple[int, float], ...]
+    sample_rate_hz: float
+    keyphasor_times_s: np.ndarray
+    speed_rpm: float
+    clearance_um: dict[int, float]
+    run: TrainRun
+    warnings: list[str] = field(default_factory=list)
+    inputs: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def time_s(self) -> np.ndarray:
+        return np.arange(self.waveforms_um.shape[1]) / self.sample_rate_hz
+
+
+def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, angular_mrad: float = 0.0,
+                    direction_deg: float = -90.0, unbalance_kg_m: float = 0.2, transient_revs: int = 320,
+                    record_revs: int = 48, samples_per_rev: int = 128, snr_db: float = 40.0,
+                    seed: int = 0) -> TrainRecording:
+    """The steady recording of ``train`` at ``speed_rpm``.
+
+    Parameters
+    ----------
+    offset_um, angular_mrad, direction_deg
+        Parallel offset (µm) and angular offset (mrad) between the shaft lines at the first coupling, both
+        along ``direction_deg`` (from +x toward +y; −90 = the exciter low), set by moving the exciter's bearings
+        (:func:`~rotordiag.simulator.train.model.misaligned`).
+    unbalance_kg_m
+        Unbalance at the middle of the generator, along the keyphasor mark (a shaft line carries none of its own).
+    snr_db
+        White measurement noise per probe: its rms is the probe's AC rms over 10^(snr/20) (``inf``: none); drawn
+        with ``seed``.
+
+    Raises
+    ------
+    TrainError
+        Bad input, saying what to fix — among them an offset that puts a journal outside its clearance at rest
+        (the static state names the bearing).
+    """
+    if not (math.isfinite(speed_rpm) and speed_rpm > 0):
+        raise TrainError(f"speed_rpm must be a positive number of r/min (got {speed_rpm!r})")
+    for name, v in (("offset_um", offset_um), ("angular_mrad", angular_mrad), ("direction_deg", direction_deg)):
+        if not math.isfinite(v):
+            raise TrainError(f"{name} must be a finite number (got {v!r})")
+    if not (snr_db > 0 or snr_db == math.inf):
+        raise TrainError(f"snr_db must be positive (inf: no noise), got {snr_db!r}")
+    tr = misaligned(train, offset_m=offset_um * 1e-6, angle_rad=angular_mrad * 1e-3,
+                    direction_rad=math.radians(direction_deg)) if (offset_um or angular_mrad) else train
+    tr = unbalanced(tr, unbalance_kg_m)
+    warnings = []
+    log_dec = stability(tr, speed_rpm).log_decrement   # its static state refuses a journal outside its clearance
+    if log_dec <= 0:
+        warnings.append(f"{speed_rpm:g} r/min is beyond this train's stability threshold (least-damped mode's "
+                        f"logarithmic decrement {log_dec:.3f} ≤ 0): expect oil whirl or whip, not a forced response")
+    run = simulate_train(tr, speed_rpm, transient_revs=transient_revs, record_revs=record_revs,
+                         samples_per_rev=samples_per_rev)
+    if run.status != "ok":
+        raise TrainError(f"the simulation ended as {run.status!r} ({getattr(run, 'message', '')}); nothing recorded")
+    probes = train_probes(run)
+    wave = probes.waveforms_um.copy()
+    if snr_db != math.inf:
+        rng = np.random.default_rng(seed)
+        ac_rms = np.sqrt(np.mean((wave - wave.mean(axis=1, keepdims=True)) ** 2, axis=1, keepdims=True))
+        wave = wave + rng.standard_normal(wave.shape) * ac_rms / 10 ** (snr_db / 20)
+    inputs = {"speed_rpm": float(speed_rpm), "offset_um": float(offset_um), "angular_mrad": float(angular_mrad),
+              "direction_deg": float(direction_deg), "unbalance_kg_m": float(unbalance_kg_m),
+              "transient_revs": int(transient_revs), "record_revs": int(record_revs),
+              "samples_per_rev": int(samples_per_rev), "snr_db": float(snr_db), "seed": int(seed),
+              "log_decrement": log_dec}
+    return TrainRecording(waveforms_um=wave, channels=probes.channels, sample_rate_hz=probes.sample_rate_hz,
+                          keyphasor_times_s=probes.keyphasor_times_s, speed_rpm=float(speed_rpm),
+                          clearance_um=probes.clearance_um, run=run, warnings=warnings, inputs=inputs)
