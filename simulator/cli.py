@@ -256,14 +256,14 @@ def _simulate_train(tr: Any, speed_rpm: float, *, probes_out: Optional[Path], as
         rec = train_recording(tr, speed_rpm, **kw)
     except (TrainError, ValueError) as exc:
         raise typer.BadParameter(str(exc)) from None
-    for w in rec.warnings:
-        typer.secho(f"warning: {w}", fg=typer.colors.YELLOW, err=True)
-    rows = []
+    for note in rec.warnings:
+        typer.secho(f"warning: {note}", fg=typer.colors.YELLOW, err=True)
+    rows: list[dict[str, Any]] = []
     for b, cl in sorted(rec.clearance_um.items()):
         pair = [k for k, (bb, _) in enumerate(rec.channels) if bb == b]
-        w = rec.waveforms_um[pair]
-        rows.append({"bearing": b, "clearance_um": cl, "dc_um": [round(float(v), 2) for v in w.mean(axis=1)],
-                     "pk_pk_um": [round(float(v), 2) for v in np.ptp(w, axis=1)]})
+        wave = rec.waveforms_um[pair]
+        rows.append({"bearing": b, "clearance_um": cl, "dc_um": [round(float(v), 2) for v in wave.mean(axis=1)],
+                     "pk_pk_um": [round(float(v), 2) for v in np.ptp(wave, axis=1)]})
     summary = {"speed_rpm": rec.speed_rpm, "inputs": rec.inputs, "warnings": rec.warnings, "bearings": rows,
                "wall_time_s": round(rec.run.wall_time_s, 3)}
     if as_json:
