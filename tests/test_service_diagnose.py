@@ -704,3 +704,22 @@ def test_acquisitions_through_json_binary_and_the_cli(client, rec, registry_src,
     cli = cli[0] if isinstance(cli, list) else cli
     assert cli["probabilities"] == pytest.approx(j["probabilities"], rel=1e-9, abs=1e-12)
     assert "separate_acquisitions" in [r["code"] for r in cli["reasons"]]
+
+
+def test_rollback_by_one_call(tmp_path, registry_src):
+    """POST /models/rollback returns to the version active before (the registry's history), needs the key, and
+    says so when there is nothing to return to (409)."""
+    import shutil
+
+    reg = tmp_path / "registry"
+    shutil.copytree(registry_src, reg)
+    first = (reg / "active").read_text().strip()
+    shutil.copytree(reg / first, reg / "v0002")
+    app = create_app(make_settings(tmp_path / "svc", shipped_registry_dir=reg))
+    with TestClient(app) as c:
+        assert c.post("/models/rollback").status_code == 401
+        assert c.post("/models/v0002/activate", headers=auth()).json()["active"] == "v0002"
+        r = c.post("/models/rollback", headers=auth())
+        assert r.status_code == 200 and r.json()["active"] == first
+        r = c.post("/models/rollback", headers=auth())
+        assert r.status_code == 409 and "no rollback" in r.json()["detail"]
