@@ -3,12 +3,14 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional
 
 import typer
 
 MECHANISM_HELP = ("Coupling model: pin (the paper's holonomic constraint), rigid (rotating coupling eccentricity), "
                   "offset (stationary shaft-line offset), flexible (offset across a flexible coupling, 2X reaction).")
+TRAIN_HELP = "A preset shaft train: gen50_2pole, gen200_2pole, gen600_2pole, gen600_4pole (the finite-element train)."
+SHAFTLINE_HELP = "A shaft-line TOML file (examples/shaftline_200mw.toml) built as a finite-element train."
 WORKERS_HELP = "Local Dask worker processes (default: all usable CPUs; 0 = run in this process, no Dask)."
 SCHEDULER_HELP = "Address of an existing Dask scheduler, e.g. tcp://host:8786 (instead of a local cluster)."
 
@@ -111,6 +113,115 @@ def register(app: typer.Typer) -> None:
             axes[0, 0].set_title(f"{fixed}, A = {unbalance:g}, {mechanism}", fontsize=9)
             if rows == 2:
                 plot_lle(axes[1, 0], sweep)
+            fig.tight_layout()
+            fig.savefig(plot, dpi=110)
+            plt.close(fig)
+            typer.echo(f"wrote {plot}", err=True)
+
+    @app.command()
+    def campbell(
+        train: Optional[str] = typer.Option(None, help=TRAIN_HELP),
+        shaftline: Optional[Path] = typer.Option(None, help=SHAFTLINE_HELP),
+        plant: Optional[Path] = typer.Option(None, help="Paper-model plant file (TOML or JSON) instead of a train; "
+                                                        "neither: MODEL.md's plant."),
+        from_: float = typer.Option(300.0, "--from", help="Lowest speed, r/min."),
+        to: Optional[float] = typer.Option(None, help="Highest speed, r/min (default: 1.3 × rated, or 4000)."),
+        points: int = typer.Option(24, help="Number of speeds (2–200; a static solution and an eigenproblem each)."),
+        n_modes: int = typer.Option(8, "--modes", help="Modes per speed, lowest first (train: 1–40)."),
+        speed_rpm: Optional[float] = typer.Option(
+            None, help="Speed of the stability margin (default: the preset's rated speed, else the top speed)."),
+        plot: Optional[Path] = typer.Option(None, help="Write the Campbell diagram (PNG)."),
+        as_json: bool = typer.Option(False, "--json", help="Print the table as JSON."),
+    ) -> None:
+        """Campbell diagram of a shaft train (--train/--shaftline) or the paper model (--plant): damped modes
+        against speed, the 1X/2X critical speeds with their half-power widths, and the stability margin
+        (log decrement of the least-damped mode)."""
+        import math
+
+        import numpy as np
+
+        if points < 2 or points > 200:
+            raise typer.BadParameter("give 2 to 200 points", param_hint="--points")
+        if plot is not None and not plot.parent.exists():
+            raise typer.BadParameter(f"directory {plot.parent} does not exist", param_hint="--plot")
+        rated = None
+        log_decrements = None
+        try:
+            if train is not None or shaftline is not None:
+                if plant is not None:
+                    raise typer.BadParameter("give a train (--train/--shaftline) or --plant, not both",
+                                             param_hint="--plant")
+                from rotordiag.simulator.train.campbell import train_campbell
+                from rotordiag.simulator.train.shaftline import shaftline_of, train_from_shaftline
+                from rotordiag.simulator.train.stability import stability
+
+                line, rated = shaftline_of(train, shaftline)
+                tr = train_from_shaftline(line)
+                top = to if to is not None else (1.3 * rated if rated else 4000.0)
+                if not (math.isfinite(top) and top > from_ > 0):
+                    raise typer.BadParameter(f"need 0 < --from < --to (got {from_:g}, {top:g})", param_hint="--to")
+                tc = train_campbell(tr, np.linspace(from_, top, points), n_modes)
+                data, log_decrements = tc.data, tc.log_decrements
+                crit = tc.critical_speeds((1, 2))
+                at = speed_rpm if speed_rpm is not None else (rated if rated else top)
+                marg = stability(tr, at)
+                margin: dict[str, Any] = dict(speed_rpm=at, log_decrement=marg.log_decrement, frequency_hz=marg.frequency_hz,
+                              forward=marg.forward, stable=marg.stable)
+                what = train if train is not None else str(shaftline)
+            else:
+                from rotordiag.simulator import modal as run_modal
+                from rotordiag.simulator.campbell import campbell as paper_campbell
+                from rotordiag.simulator.campbell import critical_speeds
+                from rotordiag.simulator.cli import load_plant
+
+                pl = load_plant(plant)
+                top = to if to is not None else 4000.0
+                data = paper_campbell(pl, np.linspace(from_, top, points))
+                crit = critical_speeds(data, (1, 2))
+                at = speed_rpm if speed_rpm is not None else top
+                res = run_modal(pl, at)
+                i = int(np.argmin(res.damping_ratios))
+                z = float(res.damping_ratios[i])
+                margin = dict(speed_rpm=at, log_decrement=2 * math.pi * z / math.sqrt(max(1 - z * z, 1e-12)),
+                              frequency_hz=float(res.frequencies_hz[i]), forward=None, stable=bool(res.stable))
+                what = str(plant) if plant is not None else "MODEL.md plant"
+        except ValueError as exc:
+            _fail(str(exc))
+        rows = [dict(order=c.order, speed_rpm=c.speed_rpm, frequency_hz=c.frequency_hz, damping_ratio=c.damping_ratio,
+                     amplification_factor=c.amplification_factor, half_power_width_rpm=c.half_power_width_rpm)
+                for c in crit]
+        if as_json:
+            out = dict(source=what, speeds_rpm=data.speeds_rpm.tolist(),
+                       frequencies_hz=[[None if not np.isfinite(v) else float(v) for v in r] for r in data.frequencies_hz],
+                       damping_ratios=[[None if not np.isfinite(v) else float(v) for v in r] for r in data.damping_ratios],
+                       critical_speeds=rows, stability_margin=margin)
+            if log_decrements is not None:
+                out["log_decrements"] = [[None if not np.isfinite(v) else float(v) for v in r] for r in log_decrements]
+            typer.echo(json.dumps(out, indent=1))
+        else:
+            typer.echo(f"{what}: {points} speeds {from_:g}–{data.speeds_rpm[-1]:g} r/min")
+            typer.echo(f"{'order':>5} {'speed (r/min)':>13} {'f (Hz)':>8} {'ζ':>6} {'AF':>5} {'half-power width (r/min)':>25}")
+            for r in rows:
+                typer.echo(f"{r['order']:>4}X {r['speed_rpm']:13.0f} {r['frequency_hz']:8.2f} {r['damping_ratio']:6.3f} "
+                           f"{r['amplification_factor']:5.1f} {r['half_power_width_rpm']:25.0f}")
+            if not rows:
+                typer.echo("  no critical speed with AF ≥ 2.5 in this range")
+            state = "stable" if margin["stable"] else "UNSTABLE (beyond the stability threshold)"
+            typer.echo(f"stability margin at {margin['speed_rpm']:g} r/min: log decrement {margin['log_decrement']:.3f} "
+                       f"of the least-damped mode ({margin['frequency_hz']:.1f} Hz), {state}")
+        if plot is not None:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+
+            from rotordiag.simulator.analysis.figures import plot_campbell
+
+            fig, ax = plt.subplots(figsize=(8, 5.5))
+            sc = plot_campbell(ax, data, crit, title=f"Campbell diagram: {what} (linearised about the static state); "
+                                                    f"δ = {margin['log_decrement']:.3f} at {margin['speed_rpm']:g} r/min")
+            if sc is not None:
+                fig.colorbar(sc, ax=ax, label="damping ratio ζ (< 0: unstable)")
             fig.tight_layout()
             fig.savefig(plot, dpi=110)
             plt.close(fig)

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
     from ..params import Plant
 
-__all__ = ["plot_bifurcation", "plot_lle", "plot_orbit", "plot_spectrum", "plot_amplitudes", "motion_windows",
+__all__ = ["plot_bifurcation", "plot_campbell", "plot_lle", "plot_orbit", "plot_spectrum", "plot_amplitudes", "motion_windows",
            "FigureSettings", "QUICK", "FULL", "paper_figures"]
 
 COLOURS = {0.0: "tab:red", 0.02: "black", 0.10: "tab:blue", 0.20: "tab:green"}
@@ -126,6 +126,35 @@ def plot_amplitudes(axes: Sequence[Axes], curves: dict[float, SweepResult]) -> N
         ax.grid(alpha=0.3)
         ax.set_yscale("log")
     axes[0].legend(fontsize=7)
+
+
+def plot_campbell(ax: Axes, data: Any, criticals: Sequence[Any] = (), *, title: str = "") -> Any:
+    """Campbell diagram on ``ax``: damped natural frequencies of ``data`` (a ``simulator.campbell.CampbellData``)
+    against speed, coloured by damping ratio (blue damped, red near or below zero), the 1X and 2X lines and
+    the ``criticals`` (○, ``CriticalSpeed``); returns the scatter for a colour bar."""
+    sp = data.speeds_rpm
+    sc = None
+    for m in range(data.frequencies_hz.shape[1]):
+        ok = np.isfinite(data.frequencies_hz[:, m])
+        sc = ax.scatter(sp[ok], data.frequencies_hz[ok, m], c=np.clip(data.damping_ratios[ok, m], -0.05, 0.3), s=10,
+                        cmap="coolwarm_r", vmin=-0.05, vmax=0.3)
+    for k, style in ((1, "k-"), (2, "k--")):
+        ax.plot(sp, k * sp / 60.0, style, lw=0.8, label=f"{k}X")
+    for c in criticals:
+        ax.plot(c.speed_rpm, c.frequency_hz, "o", mfc="none", mec="k", ms=9)
+    if criticals:
+        ax.plot([], [], "o", mfc="none", mec="k", label="critical speed (AF ≥ 2.5)")
+    finite = data.frequencies_hz[np.isfinite(data.frequencies_hz)]
+    top = float(finite.max()) * 1.05 if finite.size else 2.6 * sp.max() / 60.0
+    ax.set_ylim(0, min(top, 2.6 * sp.max() / 60.0))
+    ax.set_xlim(0, sp.max())
+    ax.set_xlabel("speed (r/min)")
+    ax.set_ylabel("damped natural frequency (Hz)")
+    ax.legend(fontsize=8, loc="upper left")
+    ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(title, fontsize=9)
+    return sc
 
 
 def motion_windows(sweep: SweepResult) -> list[dict]:
