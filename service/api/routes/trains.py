@@ -61,7 +61,7 @@ def _summary(body: TrainSummaryRequest) -> TrainSummaryOut:
     except InputError:
         raise
     except (ValueError, TypeError, ArithmeticError) as exc:
-        raise InputError(f"the shaft line cannot be used: {exc}") from None
+        raise InputError(f"shaft line: {exc}") from None
     out = asdict(s)
     return TrainSummaryOut(source=body.preset or "shaftline", rated_speed_rpm=rated, **out)
 
