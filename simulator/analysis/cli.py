@@ -55,11 +55,20 @@ def register(app: typer.Typer) -> None:
         workers: Optional[int] = typer.Option(None, help=WORKERS_HELP),
         scheduler: Optional[str] = typer.Option(None, help=SCHEDULER_HELP),
         progress: bool = typer.Option(True, help="Show a progress bar."),
+        train: Optional[str] = typer.Option(None, help=TRAIN_HELP + " --over speed; --out a JSON file."),
+        shaftline: Optional[Path] = typer.Option(None, help=SHAFTLINE_HELP),
+        unbalance_kg_m: float = typer.Option(0.0, help="Train: generator unbalance, kg·m, at its heaviest body mass."),
     ) -> None:
-        """Bifurcation diagram: Poincaré points of X = x/c against speed or misalignment."""
+        """Bifurcation diagram: Poincaré points of X = x/c against speed or misalignment; for a shaft train
+        (--train/--shaftline) the amplitude–speed curves (1X, 2X at each bearing) and Poincaré points."""
         import numpy as np
 
         from rotordiag.simulator.cli import load_plant
+
+        if train is not None or shaftline is not None:
+            _train_bifurcate(train, shaftline, over, from_, to, points, unbalance_kg_m, transient_revs, record_revs,
+                             out, plot)
+            return
 
         if over not in ("speed", "misalignment"):
             raise typer.BadParameter("must be 'speed' or 'misalignment'", param_hint="--over")
@@ -230,7 +239,7 @@ def register(app: typer.Typer) -> None:
     @app.command()
     def lyapunov(
         speed_rpm: float = typer.Option(..., help="Running speed, r/min (100–6000)."),
-        misalignment: float = typer.Option(..., help="Δ = δ/c (0–0.9)."),
+        misalignment: Optional[float] = typer.Option(None, help="Δ = δ/c (0–0.9); paper model only (required there)."),
         unbalance: float = typer.Option(0.05, help="Generator unbalance A = a/c (0–0.5)."),
         mechanism: str = typer.Option("pin", help=MECHANISM_HELP),
         revs: int = typer.Option(150, help="Revolutions averaged (Benettin, renormalised once per revolution)."),
@@ -240,10 +249,20 @@ def register(app: typer.Typer) -> None:
         plant: Optional[Path] = typer.Option(None, help="Plant file (TOML or JSON)."),
         plot: Optional[Path] = typer.Option(None, help="Write the convergence history (PNG)."),
         as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
+        train: Optional[str] = typer.Option(None, help=TRAIN_HELP),
+        shaftline: Optional[Path] = typer.Option(None, help=SHAFTLINE_HELP),
+        unbalance_kg_m: float = typer.Option(0.0, help="Train: generator unbalance, kg·m, at its heaviest body mass."),
     ) -> None:
-        """Largest Lyapunov exponent and motion type at one operating point."""
+        """Largest Lyapunov exponent and motion type at one operating point (the paper model, or a shaft
+        train with --train/--shaftline)."""
         import numpy as np
         from tqdm.auto import tqdm
+
+        if train is not None or shaftline is not None:
+            _train_lyapunov(train, shaftline, speed_rpm, unbalance_kg_m, revs, transient_revs, seed, plot, as_json)
+            return
+        if misalignment is None:
+            raise typer.BadParameter("the paper model needs --misalignment", param_hint="--misalignment")
 
         from rotordiag.simulator import simulate
         from rotordiag.simulator.analysis import FlowMapError, classify_motion
@@ -394,3 +413,124 @@ def register(app: typer.Typer) -> None:
         except OSError as exc:
             _fail(f"could not reach the Dask scheduler: {exc}")
         typer.echo(f"wrote {len(summary['files'])} figures to {out} in {summary['wall_time_s']:.0f} s")
+
+
+def _train_of(preset: Optional[str], shaftline: Optional[Path], unbalance_kg_m: float):
+    """The finite-element train of a preset or a shaft-line file, with the generator unbalance added."""
+    from rotordiag.simulator.analysis.train import with_unbalance
+    from rotordiag.simulator.train.shaftline import shaftline_of, train_from_shaftline
+
+    try:
+        line, rated = shaftline_of(preset, shaftline)
+        return with_unbalance(train_from_shaftline(line), unbalance_kg_m), rated
+    except ValueError as exc:
+        _fail(str(exc))
+        raise  # unreachable: _fail exits
+
+
+def _train_lyapunov(preset, shaftline, speed_rpm: float, unbalance_kg_m: float, revs: int, transient_revs: int,
+                    seed: int, plot: Optional[Path], as_json: bool) -> None:
+    from rotordiag.simulator.analysis.train import train_lyapunov
+
+    if revs < 10:
+        raise typer.BadParameter("need at least 10 revolutions", param_hint="--revs")
+    if plot is not None and not plot.parent.exists():
+        raise typer.BadParameter(f"directory {plot.parent} does not exist", param_hint="--plot")
+    tr, _ = _train_of(preset, shaftline, unbalance_kg_m)
+    try:
+        lle, _ = train_lyapunov(tr, speed_rpm, n_revs=revs, transient_revs=transient_revs, seed=seed)
+    except ValueError as exc:
+        _fail(str(exc))
+    except RuntimeError as exc:  # FlowMapError
+        _fail(str(exc))
+    lo, hi = lle.lle_per_interval - 3 * lle.stderr_per_interval, lle.lle_per_interval + 3 * lle.stderr_per_interval
+    motion = ("periodic (attracting: negative exponent)" if hi < 0 else
+              "chaotic (positive exponent)" if lo > 0 else "near-zero exponent: quasi-periodic or whirl limit cycle")
+    summary = dict(source=preset or str(shaftline), speed_rpm=speed_rpm, unbalance_kg_m=unbalance_kg_m,
+                   lle_per_rev=lle.lle_per_interval, lle_per_s=lle.lle_per_s, stderr_per_rev=lle.stderr_per_interval,
+                   revs=lle.n_intervals, motion=motion)
+    if as_json:
+        typer.echo(json.dumps(summary, indent=2))
+    else:
+        typer.echo(f"LLE = {lle.lle_per_interval:+.5f} ± {lle.stderr_per_interval:.5f} per revolution "
+                   f"= {lle.lle_per_s:+.4f} per second ({lle.n_intervals} revolutions)")
+        typer.echo(f"motion: {motion}")
+    if plot is not None:
+        import matplotlib
+        import numpy as np
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(6, 3.5))
+        ax.plot(np.arange(1, lle.n_intervals + 1), lle.history_per_interval, c="black")
+        ax.axhline(0, c="0.5", lw=0.8)
+        ax.set_xlabel("revolutions averaged")
+        ax.set_ylabel("running LLE estimate (1/rev)")
+        ax.set_title(f"{summary['source']}, {speed_rpm:g} r/min, unbalance {unbalance_kg_m:g} kg·m", fontsize=9)
+        ax.grid(alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(plot, dpi=110)
+        plt.close(fig)
+        typer.echo(f"wrote {plot}", err=True)
+
+
+def _train_bifurcate(preset, shaftline, over: str, from_: float, to: float, points: int, unbalance_kg_m: float,
+                     transient_revs: int, record_revs: int, out: Optional[Path], plot: Optional[Path]) -> None:
+    import numpy as np
+
+    from rotordiag.simulator.analysis.train import half_power_band, train_speed_sweep
+
+    if over != "speed":
+        raise typer.BadParameter("a train is swept over speed only (misalignment: move its bearings)",
+                                 param_hint="--over")
+    if points < 2 or points > 200:
+        raise typer.BadParameter("give 2 to 200 points", param_hint="--points")
+    if not (0 < from_ < to):
+        raise typer.BadParameter(f"need 0 < --from < --to (got {from_:g}, {to:g})", param_hint="--to")
+    if out is not None and out.suffix.lower() != ".json":
+        raise typer.BadParameter("a train's sweep is written as JSON: give --out FILE.json", param_hint="--out")
+    for path, hint in ((plot, "--plot"), (out, "--out")):
+        if path is not None and not path.parent.exists():
+            raise typer.BadParameter(f"directory {path.parent} does not exist", param_hint=hint)
+    tr, _ = _train_of(preset, shaftline, unbalance_kg_m)
+    try:
+        sw = train_speed_sweep(tr, np.linspace(from_, to, points), transient_revs=transient_revs,
+                               record_revs=max(record_revs, 2))
+    except ValueError as exc:
+        _fail(str(exc))
+    names = sw.bearing_names
+    typer.echo(f"{'speed (r/min)':>13}  " + "  ".join(f"{n + ' 1X':>8} {n + ' 2X':>8}" for n in names) + "  (µm pk-pk)")
+    for i, s in enumerate(sw.speeds_rpm):
+        cells = "  ".join(f"{sw.amp_1x_um_pp[i, b]:8.1f} {sw.amp_2x_um_pp[i, b]:8.1f}" for b in range(len(names)))
+        flag = "" if sw.status[i] == "ok" else f"  {sw.status[i]}"
+        typer.echo(f"{s:13.1f}  {cells}{flag}")
+    bands = {}
+    if unbalance_kg_m > 0 and np.isfinite(sw.amp_1x_um_pp).any():
+        for b, n in enumerate(names):
+            pk, lo, hi = half_power_band(sw.speeds_rpm, sw.amp_1x_um_pp[:, b])
+            bands[n] = dict(peak_rpm=pk, half_power_lo_rpm=lo, half_power_hi_rpm=hi)
+            typer.echo(f"{n}: 1X peak at {pk:.0f} r/min, half-power band {lo:.0f}–{hi:.0f} r/min")
+    if out is not None:
+        def rows(a):
+            return [[None if not np.isfinite(v) else float(v) for v in r] for r in a]
+
+        out.write_text(json.dumps(dict(source=preset or str(shaftline), unbalance_kg_m=unbalance_kg_m,
+                                       speeds_rpm=sw.speeds_rpm.tolist(), bearings=names,
+                                       amp_1x_um_pp=rows(sw.amp_1x_um_pp), amp_2x_um_pp=rows(sw.amp_2x_um_pp),
+                                       half_power=bands, status=sw.status), indent=1))
+        typer.echo(f"wrote {out}", err=True)
+    if plot is not None:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from rotordiag.simulator.analysis.figures import plot_train_sweep
+
+        fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+        plot_train_sweep(axes, sw, title=f"{preset or shaftline}, unbalance {unbalance_kg_m:g} kg·m")
+        fig.tight_layout()
+        fig.savefig(plot, dpi=110)
+        plt.close(fig)
+        typer.echo(f"wrote {plot}", err=True)

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
     from ..params import Plant
 
-__all__ = ["plot_bifurcation", "plot_campbell", "plot_lle", "plot_orbit", "plot_spectrum", "plot_amplitudes", "motion_windows",
+__all__ = ["plot_bifurcation", "plot_campbell", "plot_train_sweep", "plot_lle", "plot_orbit", "plot_spectrum", "plot_amplitudes", "motion_windows",
            "FigureSettings", "QUICK", "FULL", "paper_figures"]
 
 COLOURS = {0.0: "tab:red", 0.02: "black", 0.10: "tab:blue", 0.20: "tab:green"}
@@ -155,6 +155,29 @@ def plot_campbell(ax: Axes, data: Any, criticals: Sequence[Any] = (), *, title: 
     if title:
         ax.set_title(title, fontsize=9)
     return sc
+
+
+def plot_train_sweep(axes: Sequence[Axes], sweep: Any, *, title: str = "") -> None:
+    """A train's speed sweep (``analysis.train.TrainSweep``) on two axes: the Poincaré points (journal x
+    relative to its bearing, once per revolution) of each bearing, and its 1X (solid) and 2X (dashed)
+    amplitudes, µm pk-pk, against speed."""
+    colours = ["#1f5fa8", "#d9480f", "#2b8a3e", "#862e9c", "#555555", "#b5a300"]
+    ax0, ax1 = axes[0], axes[1]
+    n_rev = sweep.poincare_um.shape[1]
+    for b, name in enumerate(sweep.bearing_names):
+        c = colours[b % len(colours)]
+        ax0.plot(np.repeat(sweep.speeds_rpm, n_rev), sweep.poincare_um[:, :, b, 0].ravel(), ".", ms=2, c=c, label=name)
+        ax1.plot(sweep.speeds_rpm, sweep.amp_1x_um_pp[:, b], "-o", ms=3, c=c, label=f"{name} 1X")
+        ax1.plot(sweep.speeds_rpm, sweep.amp_2x_um_pp[:, b], "--", c=c, lw=1, label=f"{name} 2X")
+    ax0.set_ylabel("journal x, once per rev (µm)")
+    ax0.legend(fontsize=7, ncol=4, loc="best")
+    ax0.grid(alpha=0.3)
+    ax1.set_xlabel("speed (r/min)")
+    ax1.set_ylabel("amplitude (µm pk-pk)")
+    ax1.legend(fontsize=7, ncol=4, loc="best")
+    ax1.grid(alpha=0.3)
+    if title:
+        ax0.set_title(title, fontsize=9)
 
 
 def motion_windows(sweep: SweepResult) -> list[dict]:
