@@ -97,3 +97,47 @@ def test_train_commands_refuse_what_they_cannot_do(tmp_path):
     assert r.exit_code == 2 and "unknown shaft-line preset" in r.output
     r = run(app, ["lyapunov", "--speed-rpm", "3000"])
     assert r.exit_code == 2 and "--misalignment" in r.output
+
+
+@pytest.mark.slow
+def test_whirling_train_has_a_near_zero_exponent():
+    """The bench machine (plain films) at 4300 r/min, beyond its stability threshold (3842 r/min, the
+    continuation test's Neimark–Sacker point): after 300 revolutions it whips (orbit ≈ 1.8 c pk-pk) and its
+    largest exponent is near zero (a limit cycle / torus: neutral along the flow), an order of magnitude
+    smaller than the stable train's (−0.064 per revolution above). Measured: −0.0070 ± 0.0039 per rev."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "bench_train", Path(__file__).resolve().parents[1] / "benchmarks" / "bench_train.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    train = bench.plain_train(bench._ref())
+    lle, state = train_lyapunov(train, 4300.0, n_revs=60, transient_revs=300)
+    assert abs(lle.lle_per_interval) < 0.02, lle
+
+
+@pytest.mark.slow
+def test_train_figures_show_what_the_static_state_and_the_two_pole_rotor_predict(tmp_path):
+    """``rotordiag figures --train``: four PNGs and a summary; the centreline's mean journal positions at a
+    speed against the Newton static state there (time integration vs. the static solution, within 5 % of the
+    clearance), every orbit inside its clearance, and the two-pole generator's gravity 2X present."""
+    from rotordiag.simulator.train import static_state
+
+    r = CliRunner().invoke(app, ["figures", "--train", "gen200_2pole", "--quick", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    names = {"train_orbits.png", "train_spectra.png", "train_centreline.png", "train_amplitude_speed.png"}
+    assert names <= {p.name for p in tmp_path.iterdir()}
+    assert all((tmp_path / n).stat().st_size > 10_000 for n in names)
+    s = json.loads((tmp_path / "train_summary.json").read_text())
+    assert s["status"] == "ok" and s["speed_rpm"] == 3000.0
+    assert min(s["amp_2x_um_pp"][:2]) > 1.0  # gravity 2X of the asymmetric body at the generator bearings
+
+    from rotordiag.simulator.analysis.train import train_speed_sweep
+
+    train = with_unbalance(train_from_shaftline(shaftline_of("gen200_2pole")[0]), 0.5)
+    sw = train_speed_sweep(train, [2000.0], transient_revs=120, record_revs=8)
+    st = static_state(train, 2000.0)
+    c_um = sw.clearance_um
+    assert np.all(np.abs(sw.centre_um[0] - st.journal_m * 1e6).max(axis=-1) < 0.05 * c_um)
+    assert np.all(np.hypot(sw.poincare_um[0, :, :, 0], sw.poincare_um[0, :, :, 1]) < c_um)

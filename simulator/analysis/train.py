@@ -99,6 +99,10 @@ class TrainSweep:
         1X and 2X amplitude, µm pk-pk (the larger of the x and y directions).
     poincare_um : ndarray (n_speeds, record_revs, n_bearings, 2)
         Journal position relative to its bearing, once per revolution (t ≡ 0 mod T), µm.
+    centre_um : ndarray (n_speeds, n_bearings, 2)
+        Mean journal position relative to its bearing over the record (the shaft centreline), µm.
+    clearance_um : ndarray (n_bearings,)
+        Each bearing's radial clearance, µm.
     status : list of str
         The integrator's status at each speed (``ok`` or why not; NaN rows where not).
     """
@@ -108,6 +112,8 @@ class TrainSweep:
     amp_1x_um_pp: np.ndarray
     amp_2x_um_pp: np.ndarray
     poincare_um: np.ndarray
+    centre_um: np.ndarray
+    clearance_um: np.ndarray
     status: list
 
 
@@ -138,6 +144,8 @@ def train_speed_sweep(train: Train | Assembly, speeds_rpm: Sequence[float] | np.
     a1 = np.full((sp.size, nb), np.nan)
     a2 = np.full((sp.size, nb), np.nan)
     pc = np.full((sp.size, record_revs, nb, 2), np.nan)
+    cen = np.full((sp.size, nb, 2), np.nan)
+    clear = np.full(nb, np.nan)
     status: list[str] = []
     names: list = []
     for i, s in enumerate(sp):
@@ -150,9 +158,11 @@ def train_speed_sweep(train: Train | Assembly, speeds_rpm: Sequence[float] | np.
             a1[i] = order_amplitude_pp(j, samples_per_rev, 1).max(axis=-1)
             a2[i] = order_amplitude_pp(j, samples_per_rev, 2).max(axis=-1)
             pc[i] = j[::samples_per_rev]
+            cen[i] = j.mean(axis=0)
+        clear = np.asarray(run.clearance_m, dtype=float) * 1e6
         if progress is not None:
             progress(1)
-    return TrainSweep(sp, names, a1, a2, pc, status)
+    return TrainSweep(sp, names, a1, a2, pc, cen, clear, status)
 
 
 def half_power_band(speeds_rpm: np.ndarray, amp: np.ndarray) -> tuple[float, float, float]:
