@@ -912,4 +912,3 @@ def test_trend_orders_by_recording_time_and_lists_notes(server, browser, recordi
     assert "load mw 350" in text and "stator temp c 71" in text and f"diagnosis {back['diagnosis_id']}" in text
     # the setpoint alarm the live recording raised, not yet acknowledged
     assert "alert raised: 1X" in text and "(alert setpoint 0.001)" in text and "not acknowledged" in text
-
