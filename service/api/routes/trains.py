@@ -60,7 +60,7 @@ def _summary(body: TrainSummaryRequest) -> TrainSummaryOut:
         s = train_summary(train_from_shaftline(line), float(speed))  # type: ignore[arg-type]
     except InputError:
         raise
-    except (ValueError, TypeError, ArithmeticError) as exc:
+    except (ValueError, TypeError, ArithmeticError, LookupError, AttributeError) as exc:
         raise InputError(f"shaft line: {exc}") from None
     out = asdict(s)
     return TrainSummaryOut(source=body.preset or "shaftline", rated_speed_rpm=rated, **out)
