@@ -16,7 +16,7 @@ from rotordiag.core.version import __version__
 
 from .api.auth import ApiKeyGate
 from .api.errors import install_error_handlers
-from .api.routes import alarms, assets, diagnose, health, jobs, models
+from .api.routes import alarms, assets, diagnose, health, jobs, models, trains
 from .api.routes.docs import install_docs
 from .api.routing import RelativeSlashRedirect
 from .core.config import Settings
@@ -75,12 +75,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             {"name": "jobs", "description": "Dataset generation and retraining jobs (run on Dask)."},
             {"name": "models", "description": "Model registry: list and activate versions."},
             {"name": "assets", "description": "Per-asset diagnosis history."},
+            {"name": "trains", "description": "Shaft trains: presets, static bearing loads, stability margin."},
             {"name": "health", "description": "Liveness for orchestration."},
         ],
     )
     app.state.settings = settings
     install_error_handlers(app)
-    for router in (diagnose.router, jobs.router, models.router, assets.router, alarms.router, health.router):
+    for router in (diagnose.router, jobs.router, models.router, assets.router, alarms.router, trains.router,
+                   health.router):
         app.include_router(router)
     app.include_router(web_router)  # the web page at / (issue 7; service/web, docs/web.md)
     install_docs(app)

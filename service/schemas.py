@@ -814,3 +814,77 @@ class DeliveryOut(BaseModel):
     created_at: str | None = Field(None, description="When the delivery was queued (UTC).")
     next_attempt_at: str | None = Field(None, description="When it is tried next (UTC).")
     delivered_at: str | None = Field(None, description="When a 2xx answer came (UTC).")
+
+
+# --- shaft trains ---------------------------------------------------------------------------
+
+#: the largest shaft-line TOML text POST /trains/summary reads (a real shaft line is a few kB)
+MAX_SHAFTLINE_TOML_CHARS = 100_000
+
+
+class TrainSummaryRequest(_Strict):
+    """Body of POST /trains/summary: one shaft train (a preset, a shaft-line table or a shaft-line TOML text)
+    and the speed of its static state and stability margin."""
+
+    preset: str | None = Field(None, max_length=64, description="A preset machine: one of GET /trains/presets.",
+                               examples=["gen200_2pole"])
+    shaftline: dict[str, Any] | None = Field(
+        None, description="A shaft line as tables (the TOML of `rotordiag plant from-shaftline`, e.g. "
+        "examples/shaftline_200mw.toml, as JSON): `generator`, `exciter`, `bearings`, `coupling`, ...")
+    shaftline_toml: str | None = Field(
+        None, max_length=MAX_SHAFTLINE_TOML_CHARS,
+        description="The same shaft line as the text of its TOML file (what the web page uploads).")
+    speed_rpm: float | None = Field(
+        None, ge=SPEED_RANGE_RPM[0], le=SPEED_RANGE_RPM[1], allow_inf_nan=False,
+        description="Running speed of the summary, r/min; default the preset's rated speed (required for a "
+        "shaft line, which carries none).")
+
+
+class TrainPreset(BaseModel):
+    """A preset machine of the shaft-train model."""
+
+    name: str = Field(..., description="Preset name for `preset` in POST /trains/summary and `--train`.")
+    rated_speed_rpm: list[float] = Field(..., description="Its rated speeds, r/min (50 Hz and 60 Hz grids).")
+
+
+class TrainRotorOut(BaseModel):
+    """One rotor of the train."""
+
+    name: str = Field(..., description="`generator` or `exciter`.")
+    n_stations: int = Field(..., description="Finite-element stations of the rotor.")
+    length_m: float = Field(..., description="Rotor length, flange and overhangs included, m.")
+    mass_kg: float = Field(..., description="Shaft and body masses, kg.")
+    n_bearings: int = Field(..., description="Bearings under this rotor (2, or 1 for an overhung exciter).")
+
+
+class TrainBearingOut(BaseModel):
+    """One bearing at the train's static state (gravity and bearing positions, the oil films at speed)."""
+
+    name: str = Field(..., description="B1, B2 (generator), B3, B4 (exciter), from the generator's free end.")
+    rotor: str = Field(..., description="The rotor it carries.")
+    type: str = Field(..., description="Bearing model (e.g. TiltingPadBearing, EllipticalBearing, ShortBearing).")
+    z_m: float = Field(..., description="Axial position from bearing 1, m.")
+    load_vertical_kn: float = Field(..., description="Vertical force of the journal on the bearing, kN "
+                                    "(+ up: a bearing carrying its share of the weight reads negative).")
+    load_horizontal_kn: float = Field(..., description="Horizontal force of the journal on the bearing, kN (+x).")
+    eccentricity: float = Field(..., description="Journal eccentricity |e|/c in its clearance (1: touching).")
+    attitude_angle_deg: float = Field(..., description="Angle from the load to the journal's displacement, "
+                                      "degrees, positive in the direction of rotation.")
+
+
+class TrainSummaryOut(BaseModel):
+    """A train's stations, bearings at their static state and stability margin at `speed_rpm`."""
+
+    source: str = Field(..., description="The preset name, or `shaftline` for an uploaded shaft line.")
+    speed_rpm: float = Field(..., description="Speed of the static state and the margin, r/min.")
+    rated_speed_rpm: float | None = Field(None, description="The preset's rated speed, r/min (null for a file).")
+    n_stations: int = Field(..., description="Finite-element stations of the whole train.")
+    coupling: str = Field(..., description="Coupling type between the rotors (`rigid` or `flexible`).")
+    rotors: list[TrainRotorOut] = Field(..., description="The rotors, generator first.")
+    bearings: list[TrainBearingOut] = Field(..., description="Every bearing, in train order.")
+    log_decrement: float = Field(..., description="Stability margin: logarithmic decrement of the least-damped "
+                                 "mode (API 684); ≤ 0 is an unstable train (oil whirl/whip).")
+    mode_frequency_hz: float = Field(..., description="Damped frequency of that mode, Hz.")
+    mode_forward: bool = Field(..., description="Whether that mode whirls forward (with the rotation).")
+    stable: bool = Field(..., description="log_decrement > 0.")
+    warning: str | None = Field(None, description="Why the speed is beyond the stability threshold, when it is.")

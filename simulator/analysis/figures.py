@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
     from ..params import Plant
 
-__all__ = ["plot_bifurcation", "plot_lle", "plot_orbit", "plot_spectrum", "plot_amplitudes", "motion_windows",
+__all__ = ["plot_bifurcation", "plot_campbell", "plot_train_sweep", "train_figures", "plot_lle", "plot_orbit", "plot_spectrum", "plot_amplitudes", "motion_windows",
            "FigureSettings", "QUICK", "FULL", "paper_figures"]
 
 COLOURS = {0.0: "tab:red", 0.02: "black", 0.10: "tab:blue", 0.20: "tab:green"}
@@ -126,6 +126,168 @@ def plot_amplitudes(axes: Sequence[Axes], curves: dict[float, SweepResult]) -> N
         ax.grid(alpha=0.3)
         ax.set_yscale("log")
     axes[0].legend(fontsize=7)
+
+
+def plot_campbell(ax: Axes, data: Any, criticals: Sequence[Any] = (), *, title: str = "") -> Any:
+    """Campbell diagram on ``ax``: damped natural frequencies of ``data`` (a ``simulator.campbell.CampbellData``)
+    against speed, coloured by damping ratio (blue damped, red near or below zero), the 1X and 2X lines and
+    the ``criticals`` (○, ``CriticalSpeed``); returns the scatter for a colour bar."""
+    sp = data.speeds_rpm
+    sc = None
+    for m in range(data.frequencies_hz.shape[1]):
+        ok = np.isfinite(data.frequencies_hz[:, m])
+        sc = ax.scatter(sp[ok], data.frequencies_hz[ok, m], c=np.clip(data.damping_ratios[ok, m], -0.05, 0.3), s=10,
+                        cmap="coolwarm_r", vmin=-0.05, vmax=0.3)
+    for k, style in ((1, "k-"), (2, "k--")):
+        ax.plot(sp, k * sp / 60.0, style, lw=0.8, label=f"{k}X")
+    for c in criticals:
+        ax.plot(c.speed_rpm, c.frequency_hz, "o", mfc="none", mec="k", ms=9)
+    if criticals:
+        ax.plot([], [], "o", mfc="none", mec="k", label="critical speed (AF ≥ 2.5)")
+    finite = data.frequencies_hz[np.isfinite(data.frequencies_hz)]
+    top = float(finite.max()) * 1.05 if finite.size else 2.6 * sp.max() / 60.0
+    ax.set_ylim(0, min(top, 2.6 * sp.max() / 60.0))
+    ax.set_xlim(0, sp.max())
+    ax.set_xlabel("speed (r/min)")
+    ax.set_ylabel("damped natural frequency (Hz)")
+    ax.legend(fontsize=8, loc="upper left")
+    ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(title, fontsize=9)
+    return sc
+
+
+def plot_train_sweep(axes: Sequence[Axes], sweep: Any, *, title: str = "") -> None:
+    """A train's speed sweep (``analysis.train.TrainSweep``) on two axes: the Poincaré points (journal x
+    relative to its bearing, once per revolution) of each bearing, and its 1X (solid) and 2X (dashed)
+    amplitudes, µm pk-pk, against speed."""
+    colours = ["#1f5fa8", "#d9480f", "#2b8a3e", "#862e9c", "#555555", "#b5a300"]
+    ax0, ax1 = axes[0], axes[1]
+    n_rev = sweep.poincare_um.shape[1]
+    for b, name in enumerate(sweep.bearing_names):
+        c = colours[b % len(colours)]
+        ax0.plot(np.repeat(sweep.speeds_rpm, n_rev), sweep.poincare_um[:, :, b, 0].ravel(), ".", ms=2, c=c, label=name)
+        ax1.plot(sweep.speeds_rpm, sweep.amp_1x_um_pp[:, b], "-o", ms=3, c=c, label=f"{name} 1X")
+        ax1.plot(sweep.speeds_rpm, sweep.amp_2x_um_pp[:, b], "--", c=c, lw=1, label=f"{name} 2X")
+    ax0.set_ylabel("journal x, once per rev (µm)")
+    ax0.legend(fontsize=7, ncol=4, loc="best")
+    ax0.grid(alpha=0.3)
+    ax1.set_xlabel("speed (r/min)")
+    ax1.set_ylabel("amplitude (µm pk-pk)")
+    ax1.legend(fontsize=7, ncol=4, loc="best")
+    ax1.grid(alpha=0.3)
+    if title:
+        ax0.set_title(title, fontsize=9)
+
+
+def train_figures(out_dir: str | Path, train: Any, *, name: str, speed_rpm: float, speeds_rpm: Sequence[float] | np.ndarray,
+                  transient_revs: int = 320, record_revs: int = 32, samples_per_rev: int = 64) -> dict:
+    """A shaft train's figure set in ``out_dir``: ``train_orbits.png`` (each bearing's orbit at ``speed_rpm``
+    in its clearance circle, DC included), ``train_spectra.png`` (x and y probe spectra at each bearing, in
+    orders of running speed), ``train_centreline.png`` (each journal's mean position over ``speeds_rpm`` in
+    its clearance circle) and ``train_amplitude_speed.png`` (Poincaré points, 1X and 2X over ``speeds_rpm``);
+    returns a summary (files, the run's status, 1X/2X per bearing at ``speed_rpm``)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..train.dynamics import simulate_train
+    from .train import order_amplitude_pp, train_speed_sweep
+
+    start = time.perf_counter()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    run = simulate_train(train, speed_rpm, transient_revs=transient_revs, record_revs=record_revs,
+                         samples_per_rev=samples_per_rev)
+    if not run.ok:
+        raise ValueError(f"the run at {speed_rpm:g} r/min did not reach a steady state: {run.status} {run.message}")
+    j = run.journal_m * 1e6
+    clear = np.asarray(run.clearance_m, dtype=float) * 1e6
+    names = list(run.bearing_names)
+    nb = len(names)
+    files = []
+    circle = np.linspace(0, 2 * np.pi, 361)
+
+    fig, axes = plt.subplots(1, nb, figsize=(3.2 * nb, 3.6), squeeze=False)
+    for b in range(nb):
+        ax = axes[0, b]
+        ax.plot(clear[b] * np.cos(circle), clear[b] * np.sin(circle), c="0.6", lw=0.8)
+        ax.plot(j[:, b, 0], j[:, b, 1], c="#1f5fa8", lw=0.8)
+        ax.plot(j[::samples_per_rev, b, 0], j[::samples_per_rev, b, 1], "o", c="#d9480f", ms=3)
+        ax.plot(0, 0, "+", c="k")
+        ax.set_aspect("equal")
+        ax.set_title(f"{names[b]} (c = {clear[b]:.0f} µm)", fontsize=9)
+        ax.set_xlabel("x (µm)")
+        if b == 0:
+            ax.set_ylabel("y (µm, up)")
+        ax.grid(alpha=0.3)
+    fig.suptitle(f"{name}: journal orbits at {speed_rpm:g} r/min in the clearance circle (dot: once per rev)",
+                 fontsize=10)
+    fig.tight_layout()
+    files.append(out / "train_orbits.png")
+    fig.savefig(files[-1], dpi=100)
+    plt.close(fig)
+
+    n = j.shape[0]
+    orders = np.fft.rfftfreq(n, d=1.0 / samples_per_rev)
+    fig, axes = plt.subplots(nb, 1, figsize=(8, 2.0 * nb + 0.6), sharex=True, squeeze=False)
+    for b in range(nb):
+        ax = axes[b, 0]
+        for k, (lab, c) in enumerate((("x", "#1f5fa8"), ("y", "#c2255c"))):
+            sig = j[:, b, k] - j[:, b, k].mean()
+            amp = 2 * 2 * np.abs(np.fft.rfft(sig)) / n
+            ax.plot(orders, amp, c=c, lw=0.9, label=f"{lab} probe")
+        ax.set_xlim(0, 4)
+        ax.set_ylabel(f"{names[b]} (µm pk-pk)", fontsize=8)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[-1, 0].set_xlabel("frequency / running speed (order)")
+    axes[0, 0].set_title(f"{name}: spectra at the bearings, {speed_rpm:g} r/min (DC removed)", fontsize=10)
+    fig.tight_layout()
+    files.append(out / "train_spectra.png")
+    fig.savefig(files[-1], dpi=100)
+    plt.close(fig)
+
+    sw = train_speed_sweep(train, speeds_rpm, transient_revs=transient_revs, record_revs=max(8, record_revs // 2),
+                           samples_per_rev=samples_per_rev)
+    fig, axes = plt.subplots(1, nb, figsize=(3.2 * nb, 3.8), squeeze=False)
+    for b in range(nb):
+        ax = axes[0, b]
+        ax.plot(clear[b] * np.cos(circle), clear[b] * np.sin(circle), c="0.6", lw=0.8)
+        ok = np.isfinite(sw.centre_um[:, b, 0])
+        ax.plot(sw.centre_um[ok, b, 0], sw.centre_um[ok, b, 1], "-o", ms=3, c="#2b8a3e")
+        for s, (x, y) in zip(sw.speeds_rpm[ok][[0, -1]], sw.centre_um[ok, b][[0, -1]], strict=True):
+            ax.annotate(f"{s:.0f}", (x, y), fontsize=7, xytext=(3, 3), textcoords="offset points")
+        ax.plot(0, 0, "+", c="k")
+        ax.set_aspect("equal")
+        ax.set_title(f"{names[b]} (c = {clear[b]:.0f} µm)", fontsize=9)
+        ax.set_xlabel("x (µm)")
+        if b == 0:
+            ax.set_ylabel("y (µm, up)")
+        ax.grid(alpha=0.3)
+    fig.suptitle(f"{name}: shaft centreline in the clearance circle, {sw.speeds_rpm[0]:.0f}–{sw.speeds_rpm[-1]:.0f} "
+                 "r/min (labels: r/min)", fontsize=10)
+    fig.tight_layout()
+    files.append(out / "train_centreline.png")
+    fig.savefig(files[-1], dpi=100)
+    plt.close(fig)
+
+    fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+    plot_train_sweep(axes, sw, title=f"{name}: amplitude against speed")
+    fig.tight_layout()
+    files.append(out / "train_amplitude_speed.png")
+    fig.savefig(files[-1], dpi=100)
+    plt.close(fig)
+
+    summary = dict(name=name, speed_rpm=speed_rpm, status=run.status, message=run.message,
+                   bearings=names, clearance_um=clear.tolist(),
+                   amp_1x_um_pp=order_amplitude_pp(j, samples_per_rev, 1).max(axis=-1).tolist(),
+                   amp_2x_um_pp=order_amplitude_pp(j, samples_per_rev, 2).max(axis=-1).tolist(),
+                   sweep_speeds_rpm=sw.speeds_rpm.tolist(), sweep_status=sw.status,
+                   files=[f.name for f in files], wall_time_s=time.perf_counter() - start)
+    (out / "train_summary.json").write_text(json.dumps(summary, indent=1))
+    return summary
 
 
 def motion_windows(sweep: SweepResult) -> list[dict]:

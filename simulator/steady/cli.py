@@ -38,11 +38,20 @@ def register(app: typer.Typer) -> None:
         out: Path = typer.Option(..., help="Branches (HDF5)."),
         plot: Optional[Path] = typer.Option(None, help="Bifurcation diagram (PNG)."),
         workers: Optional[int] = typer.Option(0, help="Workers of the brute-force sweep (0: this process)."),
+        train: Optional[str] = typer.Option(None, help="A preset shaft train (gen50_2pole, gen200_2pole, gen600_2pole, "
+                                                       "gen600_4pole) instead of the paper model: --over speed; "
+                                                       "--out a JSON file."),
+        shaftline: Optional[Path] = typer.Option(None, help="A shaft-line TOML built as a finite-element train "
+                                                           "(as --train)."),
     ) -> None:
         """Follow periodic orbits (shooting + pseudo-arclength) and mark folds, period doublings and tori."""
         import numpy as np
 
         from rotordiag.simulator.cli import load_plant
+
+        if train is not None or shaftline is not None:
+            _train_continue(train, shaftline, over, from_, to, max_points, ds, ds_max, lo, hi, out, plot)
+            return
 
         if over not in ("speed", "misalignment"):
             raise typer.BadParameter("must be 'speed' or 'misalignment'", param_hint="--over")
@@ -99,3 +108,98 @@ def register(app: typer.Typer) -> None:
             typer.echo(f"wrote {out} and {plot}")
         else:
             typer.echo(f"wrote {out}")
+
+
+def _fail(message: str) -> None:
+    typer.secho(f"error: {message}", fg=typer.colors.RED, err=True)
+    raise typer.Exit(code=2)
+
+
+def _train_continue(preset: Optional[str], shaftline: Optional[Path], over: str, from_: float, to: float,
+                    max_points: int, ds: float, ds_max: float, lo: Optional[float], hi: Optional[float], out: Path,
+                    plot: Optional[Path]) -> None:
+    """``continue --train/--shaftline``: the train's period-1 orbit at --from by shooting (its Floquet
+    multipliers printed), then its branch over speed to --to with the bifurcations found on it."""
+    import json
+    import math
+
+    import numpy as np
+
+    from rotordiag.simulator.steady.continuation import continue_branch
+    from rotordiag.simulator.train.shaftline import shaftline_of, train_from_shaftline
+    from rotordiag.simulator.train.shooting import TrainSpeedFamily, train_fixed_point
+
+    if over != "speed":
+        raise typer.BadParameter("a train is continued over speed only (misalignment: move its bearings and "
+                                 "run again)", param_hint="--over")
+    if out.suffix.lower() != ".json":
+        raise typer.BadParameter("a train's branch is written as JSON: give --out FILE.json", param_hint="--out")
+    for path, hint in ((plot, "--plot"), (out, "--out")):
+        if path is not None and not path.parent.exists():
+            raise typer.BadParameter(f"directory {path.parent} does not exist", param_hint=hint)
+    if not (math.isfinite(from_) and math.isfinite(to) and from_ > 0 and to > 0 and from_ != to):
+        raise typer.BadParameter("--from and --to must be positive speeds that differ", param_hint="--to")
+    p_lo = min(from_, to) if lo is None else lo
+    p_hi = max(from_, to) if hi is None else hi
+    try:
+        line, _ = shaftline_of(preset, shaftline)
+        fam = TrainSpeedFamily(train_from_shaftline(line))
+        fp = train_fixed_point(fam.at(from_).kernel, from_)
+        if not fp.converged:
+            _fail(f"no period-1 orbit found by shooting at {from_:g} r/min ({fp.status}, residual "
+                  f"{fp.residual:.2e}): the train may whirl there; start below its stability threshold "
+                  "(rotordiag campbell gives the margin)")
+        br = continue_branch(fam, fp.x, from_, p_min=p_lo, p_max=p_hi, direction=1 if to > from_ else -1, ds=ds,
+                             ds_max=ds_max, tol=1e-10, max_points=max_points)
+    except ValueError as exc:
+        _fail(str(exc))
+    period_s = 60.0 / from_
+    mu = fp.multipliers
+    typer.echo(f"period-1 orbit at {from_:g} r/min: {fp.stability}, residual {fp.residual:.1e}; Floquet multipliers "
+               "(largest first; |μ| < 1 stable):")
+    for m in mu[:6]:
+        typer.echo(f"  |μ| = {abs(m):.5f}  arg = {math.degrees(math.atan2(m.imag, m.real)):+8.2f}°  "
+                   f"(decay rate {math.log(max(abs(m), 1e-300)) / period_s:+.3f} 1/s)")
+    events = ", ".join(f"{b.label} at {b.parameter:.6g} r/min{'' if b.located else ' (bracketed)'}"
+                       for b in br.bifurcations) or "none"
+    typer.echo(f"period-1 branch: {len(br.points)} points, {br.values.min():.6g}–{br.values.max():.6g} r/min; "
+               f"bifurcations: {events}; {br.message}")
+    typer.echo(f"{'speed (r/min)':>13} {'max |μ|':>9}  stability")
+    for p in br.points:
+        typer.echo(f"{p.parameter:13.1f} {float(np.abs(p.multipliers).max()):9.5f}  {p.stability}")
+
+    def cplx(v) -> list[list[float]]:
+        return [[float(z.real), float(z.imag)] for z in v]
+
+    data = {"source": preset or str(shaftline), "parameter": "speed_rpm",
+            "start": {"speed_rpm": from_, "stability": fp.stability, "residual": float(fp.residual),
+                      "multipliers": cplx(mu)},
+            "points": [{"speed_rpm": float(p.parameter), "stability": p.stability,
+                        "max_multiplier": float(np.abs(p.multipliers).max()), "multipliers": cplx(p.multipliers)}
+                       for p in br.points],
+            "bifurcations": [{"kind": b.kind, "label": b.label, "speed_rpm": float(b.parameter), "located": b.located,
+                              "multipliers": cplx(b.multipliers)} for b in br.bifurcations],
+            "message": br.message}
+    out.write_text(json.dumps(data, indent=1))
+    if plot is not None:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(7, 4))
+        ax.plot(br.values, br.max_multiplier, "o-", c="black", ms=3, label="period-1 orbit")
+        ax.axhline(1.0, c="0.5", lw=0.8)
+        for b in br.bifurcations:
+            ax.axvline(b.parameter, c="C3", ls="--", lw=1)
+            ax.text(b.parameter, ax.get_ylim()[1], f" {b.label}", color="C3", va="top", fontsize=8, rotation=90)
+        ax.set_xlabel("speed (r/min)")
+        ax.set_ylabel("largest Floquet multiplier |μ|")
+        ax.set_title(f"{data['source']}: period-1 branch (> 1: unstable)", fontsize=9)
+        ax.grid(alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(plot, dpi=110)
+        plt.close(fig)
+        typer.echo(f"wrote {out} and {plot}")
+    else:
+        typer.echo(f"wrote {out}")

@@ -19,6 +19,7 @@ directly, with no lumped reduction:
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -120,3 +121,17 @@ def train_from_shaftline(line: ShaftLine, *, max_element_m: float = 0.3) -> Trai
                        angular_damping_n_m_s_rad=line.coupling_angular_damping_n_m_s_rad)
     w1 = 2 * math.pi * reduce_rotor(line.generator, line.material).first_pinned_hz
     return Train((gen, exc), (cpl,), rayleigh_stiffness_s=2 * line.damping_ratio / w1)
+
+
+def shaftline_of(preset: str | None = None, path: str | Path | None = None) -> tuple[ShaftLine, float | None]:
+    """The shaft line of a preset name or a shaft-line TOML file (exactly one), and its rated speed (r/min;
+    a preset's first, None for a file); a ``ValueError`` saying what to fix otherwise."""
+    from ..shaftline import PRESETS
+    from ..shaftline import preset as named
+
+    if (preset is None) == (path is None):
+        raise ValueError("give either a preset name or a shaft-line file, not both or neither")
+    if preset is not None:
+        line = named(preset)
+        return line, float(PRESETS[preset]["rated_speed_rpm"][0])
+    return ShaftLine.from_file(path), None  # type: ignore[arg-type]

@@ -16,7 +16,7 @@ import numpy as np
 from .fe import Assembly, assemble
 from .linear import bearing_coefficients, modes
 from .model import Train, TrainError
-from .static import static_state
+from .static import StaticState, static_state
 
 
 def reduced_coefficients(brg, x_m: float, y_m: float, speed_rad_s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -41,11 +41,13 @@ class Stability:
         return self.log_decrement > 0.0
 
 
-def stability(train: Train | Assembly, speed_rpm: float, *, max_frequency_hz: float | None = None) -> Stability:
+def stability(train: Train | Assembly, speed_rpm: float, *, max_frequency_hz: float | None = None,
+              static: StaticState | None = None) -> Stability:
     """The least-damped mode of the train at ``speed_rpm`` (modes up to ``max_frequency_hz``, default
-    4× running speed: the shaft modes a film can drive, not the stiff local modes of a fine mesh)."""
+    4× running speed: the shaft modes a film can drive, not the stiff local modes of a fine mesh), linearised
+    about ``static`` (solved here unless given)."""
     asm = train if isinstance(train, Assembly) else assemble(train)
-    st = static_state(asm, speed_rpm)
+    st = static if static is not None else static_state(asm, speed_rpm)
     m = modes(asm, speed_rpm, st, coefficients=reduced_coefficients)
     top = 4 * speed_rpm / 60.0 if max_frequency_hz is None else max_frequency_hz
     keep = m.frequency_hz <= top

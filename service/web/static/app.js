@@ -59,7 +59,7 @@
     return t.replace(/\b([a-z]+(?:_[a-z]+)+)=?/g, (m, name) => FIELD_WORDS[name] || m);
   }
 
-  function errorText(status, body) {
+  function errorText(status, body, what422) {
     let d = body && body.detail !== undefined ? body.detail : body;
     if (Array.isArray(d)) {
       d = d.map((e) => {
@@ -74,12 +74,12 @@
     }
     const what = {
       400: "The request is malformed", 404: "Not found", 413: "The upload is too large for this server",
-      415: "Unsupported file or content type", 422: "The recording cannot be used", 503: "The service cannot diagnose right now",
+      415: "Unsupported file or content type", 422: what422 || "The recording cannot be used", 503: "The service cannot diagnose right now",
     }[status] || `The service answered HTTP ${status}`;
     return `${what}: ${d}`;
   }
 
-  async function api(path, options) {
+  async function api(path, options, what422) {
     let resp;
     try {
       resp = await fetch(path, options);
@@ -89,7 +89,7 @@
     const text = await resp.text();
     let body = null;
     try { body = text ? JSON.parse(text) : null; } catch (_) { body = text.slice(0, 500); }
-    if (!resp.ok) { const e = new Error(errorText(resp.status, body)); e.status = resp.status; throw e; }
+    if (!resp.ok) { const e = new Error(errorText(resp.status, body, what422)); e.status = resp.status; throw e; }
     return body;
   }
 
@@ -1005,6 +1005,69 @@
     }
   }
 
+  // ---- plant: shaft train ------------------------------------------------------------------------
+  async function loadTrainPresets() {
+    try {
+      const list = await api("/trains/presets");
+      state.trainPresets = list;
+      $("plant-preset").replaceChildren(...list.map((p) => el("option", { value: p.name,
+        text: `${p.name} (rated ${p.rated_speed_rpm.join(" / ")} r/min)` })));
+      $("plant-preset").value = list.some((p) => p.name === "gen200_2pole") ? "gen200_2pole" : (list[0] || {}).name || "";
+    } catch (exc) {
+      setError($("plant-error"), `Presets unavailable: ${exc.message}`);
+    }
+  }
+  function renderTrainSummary(s) {
+    const rotors = s.rotors.map((r) => `${r.name} ${fixed(r.length_m, 2)} m, ${fixed(r.mass_kg / 1000, 1)} t, ` +
+      `${r.n_bearings} bearing${r.n_bearings === 1 ? "" : "s"}`).join("; ");
+    $("plant-info").textContent = `${s.source}: ${s.n_stations} stations, ${s.coupling} coupling; ${rotors}.`;
+    const m = $("plant-margin");
+    m.textContent = `At ${fixed(s.speed_rpm, 0)} r/min: log decrement ${fixed(s.log_decrement, 3)} of the least-damped ` +
+      `mode (${fixed(s.mode_frequency_hz, 1)} Hz, ${s.mode_forward ? "forward" : "backward"}) — ` +
+      (s.stable ? "stable." : `UNSTABLE. ${s.warning || ""}`);
+    m.classList.toggle("bad", !s.stable);
+    const tb = $("plant-bearings").tBodies[0];
+    tb.replaceChildren(...s.bearings.map((b) => el("tr", { "data-bearing": b.name },
+      el("th", { scope: "row", text: b.name }), el("td", { text: b.rotor }), el("td", { text: b.type }),
+      el("td", { text: fixed(b.z_m, 2) }), el("td", { text: fixed(b.load_vertical_kn, 1) }),
+      el("td", { text: fixed(b.load_horizontal_kn, 1) }), el("td", { text: fixed(b.eccentricity, 2) }),
+      el("td", { text: fixed(b.attitude_angle_deg, 1) }))));
+    show($("plant-result"), true);
+  }
+  async function onTrainSummary(ev) {
+    ev.preventDefault();
+    setError($("plant-error"), "");
+    show($("plant-result"), false);
+    document.body.dataset.plant = "busy";
+    const source = document.querySelector("input[name=plant_source]:checked").value;
+    const body = {};
+    const speed = $("plant-speed").value.trim();
+    if (speed) body.speed_rpm = Number(speed);
+    if (source === "preset") {
+      body.preset = $("plant-preset").value;
+    } else {
+      const f = $("plant-file").files[0];
+      const refuse = (text) => { setError($("plant-error"), text); document.body.dataset.plant = "error"; };
+      if (!f) { refuse("Choose a shaft-line file (TOML) first."); return; }
+      if (f.size > 100000) { refuse(`The file is ${f.size} bytes; a shaft line is at most 100000.`); return; }
+      if (!speed) { refuse("Give the speed (r/min): a shaft-line file carries no rated speed."); return; }
+      body.shaftline_toml = await f.text();
+    }
+    $("plant-btn").disabled = true;
+    document.body.dataset.plant = "busy";
+    try {
+      renderTrainSummary(await api("/trains/summary", { method: "POST",
+        headers: { "Content-Type": "application/json", ...keyHeader() }, body: JSON.stringify(body) },
+        "The shaft train cannot be used"));
+      document.body.dataset.plant = "done";
+    } catch (exc) {
+      setError($("plant-error"), exc.message);
+      document.body.dataset.plant = "error";
+    } finally {
+      $("plant-btn").disabled = false;
+    }
+  }
+
   // ---- wiring -------------------------------------------------------------------------------------
   document.addEventListener("DOMContentLoaded", () => {
     document.body.dataset.state = "idle";
@@ -1027,6 +1090,12 @@
     loadHealth();
     loadModels();
     loadExamples();
+    document.querySelectorAll("input[name=plant_source]").forEach((r) => r.addEventListener("change", () => {
+      const file = document.querySelector("input[name=plant_source]:checked").value === "file";
+      show($("plant-file-fields"), file); show($("plant-preset-fields"), !file);
+    }));
+    $("plant-form").addEventListener("submit", onTrainSummary);
+    loadTrainPresets();
   });
 
   // for the end-to-end tests and the console
