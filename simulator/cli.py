@@ -29,14 +29,12 @@ def load_plant(path: Optional[Path]):
 
 def _shaftline(file: Optional[Path], preset: Optional[str]):
     """The :class:`~rotordiag.simulator.shaftline.ShaftLine` of a file or a named preset (exactly one given)."""
-    from rotordiag.simulator import shaftline as sl
+    from rotordiag.simulator.train.shaftline import shaftline_of
 
-    if (file is None) == (preset is None):
-        raise typer.BadParameter("give a shaft-line file or a preset name, not both", param_hint="--train")
     try:
-        return sl.ShaftLine.from_file(file) if file is not None else sl.preset(preset)  # type: ignore[arg-type]
+        return shaftline_of(preset, file)[0]
     except ValueError as exc:
-        raise typer.BadParameter(str(exc)) from None
+        raise typer.BadParameter(str(exc), param_hint="--train") from None
 
 
 def _shaftline_train(file: Optional[Path], preset: Optional[str], line: Any = None):

@@ -20,7 +20,8 @@ import numpy as np
 
 from ..train.dynamics import build_kernel, simulate_train
 from ..train.fe import Assembly, assemble
-from ..train.model import Train, TrainError, Unbalance
+from ..train.model import Train, TrainError
+from ..train.transient import unbalanced
 from .lyapunov import FlowMapError, LyapunovResult, largest_lyapunov
 from .lyapunov import _batch_stderr as batch_stderr
 
@@ -33,17 +34,12 @@ MAX_SWEEP_POINTS = 200
 def with_unbalance(train: Train, amount_kg_m: float, angle_deg: float = 0.0, rotor: int = 0) -> Train:
     """``train`` with an unbalance ``amount_kg_m`` (kg·m) at ``angle_deg`` added to rotor ``rotor``, at the
     station of its heaviest disk or body mass (its mid station when it has none): what a shaft-line preset,
-    which carries no unbalance, needs for a 1X response."""
-    if not (math.isfinite(amount_kg_m) and 0 <= amount_kg_m <= 100):
-        raise TrainError(f"unbalance must be within 0..100 kg·m (got {amount_kg_m!r})")
-    if not 0 <= rotor < len(train.rotors):
-        raise TrainError(f"rotor must be 0..{len(train.rotors) - 1}")
-    if amount_kg_m == 0:
+    which carries no unbalance, needs for a 1X response (``simulator.train.transient.unbalanced``)."""
+    if amount_kg_m == 0 and 0 <= rotor < len(train.rotors):
         return train
-    r = train.rotors[rotor]
-    station = max(r.disks, key=lambda d: d.mass_kg).station if r.disks else r.n_stations // 2
-    new = replace(r, unbalances=r.unbalances + (Unbalance(station, amount_kg_m, math.radians(angle_deg)),))
-    return replace(train, rotors=tuple(new if k == rotor else x for k, x in enumerate(train.rotors)))
+    r = train.rotors[rotor] if 0 <= rotor < len(train.rotors) else None
+    station = max(r.disks, key=lambda d: d.mass_kg).station if r is not None and r.disks else None
+    return unbalanced(train, amount_kg_m, rotor=rotor, station=station, angle_rad=math.radians(angle_deg))
 
 
 def train_lyapunov(train: Train | Assembly, speed_rpm: float, *, n_revs: int = 150, transient_revs: int = 300,

@@ -129,7 +129,7 @@ def unbalanced(train: Train, amount_kg_m: float, *, rotor: int = 0, station: int
     station), along +x at t = 0 (the keyphasor mark) turned by ``angle_rad``. A shaft line's train carries no
     unbalance of its own, and without one a run-up has no 1X to show."""
     if not (math.isfinite(amount_kg_m) and 0.0 <= amount_kg_m <= 100.0):
-        raise TrainError(f"unbalance amount_kg_m must be in [0, 100] kg·m, got {amount_kg_m!r}")
+        raise TrainError(f"unbalance amount_kg_m must be within 0..100 kg·m, got {amount_kg_m!r}")
     if not 0 <= rotor < len(train.rotors):
         raise TrainError(f"rotor must be 0..{len(train.rotors) - 1}, got {rotor!r}")
     r = train.rotors[rotor]
