@@ -675,6 +675,13 @@ class RetrainRequest(_Strict):
                    "bearings": {"diameter_m": [0.45, 0.45, 0.25, 0.25], "length_m": [0.35, 0.35, 0.15, 0.15],
                                 "clearance_m": 0.00035},
                    "coupling": {"type": "flexible", "stiffness_n_m": 1.0e8}}])
+    preset: str | None = Field(None, min_length=1, max_length=64,
+                               description="A rated-machine preset by name (`gen50_2pole`, `gen200_2pole`, "
+                               "`gen600_2pole`, `gen600_4pole`) instead of `shaftline`: its shaft line and its rated "
+                               "speeds.", examples=["gen600_4pole"])
+    rated_speed_rpm: float | None = Field(None, ge=100, le=6000, allow_inf_nan=False,
+                                          description="The plant's rated speed, r/min: the default sweep trains at "
+                                          "0.8–1.05 × it (a preset gives its own); without it 1200–2200 r/min.")
     sweep: dict[str, Any] = Field(
         default_factory=dict,
         description="Dataset spec tables (`design`, `operating`, `measurement`, `simulation`, `plant.perturb`, "

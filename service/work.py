@@ -170,17 +170,34 @@ def prepare_dataset_job(body: Any, settings: Settings) -> dict[str, Any]:
     return {"spec_toml": text, "spec_hash": resolved.spec_hash, "name": body.name}
 
 
+def _retrain_plant_line(body: Any) -> tuple[dict[str, Any] | None, list[float]]:
+    """The shaft-line tables of a retrain request (its ``shaftline``, or its ``preset``'s) and the rated speeds
+    its default sweep follows (``rated_speed_rpm``, else the preset's; none: the default range)."""
+    from rotordiag.simulator.shaftline import PRESETS
+
+    if body.preset is not None and body.shaftline is not None:
+        raise InputError("preset and shaftline: give the plant one way, a preset name or the shaft-line tables")
+    rated = [float(body.rated_speed_rpm)] if body.rated_speed_rpm is not None else []
+    if body.preset is None:
+        return body.shaftline, rated
+    if body.preset not in PRESETS:
+        raise InputError(f"preset {body.preset!r} is not known; the presets: {', '.join(sorted(PRESETS))}")
+    tables = {k: v for k, v in PRESETS[body.preset].items() if k != "rated_speed_rpm"}
+    return tables, rated or [float(v) for v in PRESETS[body.preset]["rated_speed_rpm"]]
+
+
 def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
     """Validate a POST /models/retrain body (plant, sweep, training options, field data)."""
     from rotordiag.models.config import TrainConfig
     from rotordiag.simulator import Plant
 
     base = Plant.default()
-    if body.shaftline is not None:
+    line_tables, rated = _retrain_plant_line(body)
+    if line_tables is not None:
         from rotordiag.simulator import shaftline
 
         try:
-            base = shaftline.to_plant(shaftline.ShaftLine.from_dict(body.shaftline))
+            base = shaftline.to_plant(shaftline.ShaftLine.from_dict(line_tables))
         except (TypeError, ValueError, OverflowError, ZeroDivisionError, FloatingPointError) as exc:
             raise InputError(f"shaftline: {exc}") from None
     _check_plant_types(body.plant, base)
@@ -194,13 +211,17 @@ def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
         if extra:
             raise InputError(f"sweep.plant: only {' and '.join(sorted(RETRAIN_SWEEP_PLANT_KEYS))} may be given "
                              "here; put plant values in `plant` and a shaft-line description in `shaftline`")
-    spec = deep_merge(RETRAIN_DEFAULT_SWEEP, sweep, whole=("mechanism",))   # a mechanism table is a whole mix
+    defaults = RETRAIN_DEFAULT_SWEEP
+    if rated:                                       # the default sweep follows the plant's rated speed(s)
+        lo, hi = max(100.0, 0.8 * min(rated)), min(6000.0, 1.05 * max(rated))
+        defaults = deep_merge(defaults, {"operating": {"speed_rpm": {"min": lo, "max": hi}}})
+    spec = deep_merge(defaults, sweep, whole=("mechanism",))   # a mechanism table is a whole mix
     spec.setdefault("plant", {})["set"] = {k: v for k, v in plant.to_dict().items() if k in body.plant} \
         if body.plant else {}
     if not spec["plant"]["set"]:
         del spec["plant"]["set"]
-    if body.shaftline is not None:
-        spec["plant"]["shaftline"] = body.shaftline
+    if line_tables is not None:
+        spec["plant"]["shaftline"] = line_tables
     text = _spec_toml_from_dict(spec)
     resolved = _validate_spec_text(text)
     _check_training_numbers(body.training)
@@ -217,7 +238,7 @@ def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
                 recording_from_model(rec.recording)
             except ValueError as exc:
                 raise InputError(f"field_data[{i}].recording: {exc}") from None
-    return {"plant": body.plant, "shaftline": body.shaftline is not None, "spec_toml": text,
+    return {"plant": body.plant, "shaftline": line_tables is not None, "preset": body.preset, "spec_toml": text,
             "spec_hash": resolved.spec_hash,
             "training": train_cfg.to_dict(), "field_data": field, "activate": body.activate}
 

@@ -34,6 +34,34 @@ def test_retrain_builds_its_sweep_on_the_shaftline_plant_with_overrides(tmp_path
     assert params["spec_hash"] == resolved.spec_hash and params["shaftline"] is True
 
 
+def test_retrain_takes_a_preset_by_name_and_its_sweep_follows_the_rated_speed(tmp_path):
+    """A preset by name (the API refused it before) gives its shaft line, and the default sweep trains around its
+    rated speeds (0.8–1.05 ×), not at 1200–2200 r/min; a given rated speed does the same; the user's own speed range
+    still wins; an unknown preset, or a preset with a shaft line, is a 4xx saying what to fix."""
+    from rotordiag.service.errors import InputError
+    from rotordiag.simulator.shaftline import preset, to_plant
+
+    params = prepare_retrain_job(RetrainRequest.model_validate({"preset": "gen600_4pole"}), make_settings(tmp_path))
+    resolved = parse_spec(params["spec_toml"])
+    assert resolved.base_plant == to_plant(preset("gen600_4pole")) and params["preset"] == "gen600_4pole"
+    sp = resolved.spec.operating.speed_rpm
+    assert (sp.min, sp.max) == (pytest.approx(0.8 * 1500), pytest.approx(1.05 * 1800))
+    rated = parse_spec(prepare_retrain_job(RetrainRequest.model_validate({"shaftline": _line(), "rated_speed_rpm": 3000}),
+                                           make_settings(tmp_path))["spec_toml"]).spec.operating.speed_rpm
+    assert (rated.min, rated.max) == (pytest.approx(2400), pytest.approx(3150))
+    own = parse_spec(prepare_retrain_job(RetrainRequest.model_validate(
+        {"preset": "gen200_2pole", "sweep": {"operating": {"speed_rpm": {"min": 2900, "max": 3100}}}}),
+        make_settings(tmp_path))["spec_toml"]).spec.operating.speed_rpm
+    assert (own.min, own.max) == (2900, 3100)
+    plain = parse_spec(prepare_retrain_job(RetrainRequest.model_validate({}), make_settings(tmp_path))["spec_toml"])
+    assert (plain.spec.operating.speed_rpm.min, plain.spec.operating.speed_rpm.max) == (1200, 2200)
+    with pytest.raises(InputError, match="gen200_2pole"):
+        prepare_retrain_job(RetrainRequest.model_validate({"preset": "gen999"}), make_settings(tmp_path))
+    with pytest.raises(InputError, match="one way"):
+        prepare_retrain_job(RetrainRequest.model_validate({"preset": "gen200_2pole", "shaftline": _line()}),
+                            make_settings(tmp_path))
+
+
 def test_retrain_trains_on_the_shipped_recipe_with_the_requests_overrides(tmp_path):
     """A plant's retraining gets the shipped model's train.toml (physics priors, clearance heads, OOD and
     envelope features, measurement augmentation), not the library defaults, which have none of them;
