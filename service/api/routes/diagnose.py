@@ -170,7 +170,10 @@ async def diagnose_from_request(request: Request, state, query: dict[str, Any], 
                                                         f"{', '.join(probes['overridden_by_upload'])})"
                                                         if probes["overridden_by_upload"] else ""))
     if store:
-        await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store, meta)
+        if asset_id is None:            # no database to touch: no hand-over to a thread
+            record_verdict(state, None, plant, verdict, may_store, meta)
+        else:
+            await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store, meta)
     return verdict, asset_id
 
 
