@@ -75,10 +75,9 @@ SPIKE_MAX_FRACTION = 0.005
 COMMON_MODE_ORDERS = (1, 2)
 #: the share of an order's power across the probes that one signal common to all explains
 #: (``features._common_mode.common_mode_share``) from which the order is no shaft motion, by the number of probes
-#: judged (at least ``COMMON_MODE_MIN_PROBES``, on both sides of the coupling). ``benchmarks/bench_common_mode.py``
-#: on held-out simulated plants (base sets of seeds 815–817, far and presets sets; clean, runout, SNR 15 dB, gain
-#: mismatch; 19 000 six- and 3 500–3 900 eight-probe readings per order): the largest share over 8 probes was
-#: 0.59 at 1X and 0.66 at 2X, over 6 probes 0.92 at 1X (99.9 %: 0.61) and 0.73 at 2X
+#: judged (at least ``COMMON_MODE_MIN_PROBES``, on both sides of the coupling): above every share a shaft's own
+#: motion reached on held-out simulated plants (docs/features.md, "Measurements behind the speed estimate's
+#: thresholds")
 COMMON_MODE_MIN_SHARE: dict[int, float] = {COMMON_MODE_MIN_PROBES: 0.95, 8: 0.85}
 
 
