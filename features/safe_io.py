@@ -360,10 +360,37 @@ def count_json_values(data: bytes, max_values: int, max_array: int | None = None
         raise UnsafeFileError(f"JSON holds more than {max_values} values; send a shorter recording (fewer samples "
                               "per channel), split a batch, or send an NPY array")
     if max_array is not None and len(data) > 4 * max_array:      # shorter text cannot hold a longer array
-        for m in _INNER_ARRAY.finditer(data):
-            if m.end() - m.start() > 2 * max_array and data.count(b",", m.start(), m.end()) >= max_array:
+        for start, end in _inner_arrays(data):
+            if end - start > 2 * max_array and data.count(b",", start, end) >= max_array:
                 raise UnsafeFileError(f"a JSON array holds more than {max_array} values; at most {max_array} "
                                       "samples per channel are accepted: send a shorter recording")
+
+
+#: text with at most this many brackets has its innermost arrays found by ``bytes.find`` (else the regex)
+_FEW_BRACKETS = 1024
+
+
+def _inner_arrays(data: bytes) -> list[tuple[int, int]]:
+    """(start, end) of every innermost array of JSON text: the matches of :data:`_INNER_ARRAY`, a ``[`` whose next
+    bracket is a ``]``. A recording holds a handful of brackets around a megabyte of numbers, which the regular
+    expression walks byte by byte (3.4 ms for the benchmark's 1.3 MB); ``bytes.find`` jumps from bracket to
+    bracket. Text with many brackets takes the regular expression (the same matches)."""
+    opening, closing = _positions(data, b"["), _positions(data, b"]")
+    if opening is None or closing is None:
+        return [(m.start(), m.end()) for m in _INNER_ARRAY.finditer(data)]
+    marks = sorted(opening + closing)
+    return [(i, j + 1) for i, j in zip(marks, marks[1:]) if data[i] == 0x5B and data[j] == 0x5D]
+
+
+def _positions(data: bytes, byte: bytes) -> list[int] | None:
+    """Every index of ``byte`` in ``data``; None when there are more than ``_FEW_BRACKETS``."""
+    out, i = [], data.find(byte)
+    while i >= 0:
+        if len(out) == _FEW_BRACKETS:
+            return None
+        out.append(i)
+        i = data.find(byte, i + 1)
+    return out
 
 
 def loads_json_finite(data: bytes | str, *, max_values: int | None = None) -> Any:

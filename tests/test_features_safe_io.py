@@ -313,3 +313,16 @@ def test_overflow_spelling_test_agrees_with_the_regular_expression(text):
         assert _may_overflow(raw)
     long = raw + b"," + b"7" * 300
     assert _may_overflow(long)
+
+
+@given(st.text(alphabet='[]{},1 "', max_size=200))
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_innermost_arrays_found_by_find_are_the_regular_expressions_matches(text):
+    """``count_json_values``' innermost arrays, found bracket to bracket with ``bytes.find``, are the matches of
+    ``\\[[^\\[\\]]*\\]``; text with more brackets than ``_FEW_BRACKETS`` takes the regular expression."""
+    import re
+
+    from rotordiag.features.safe_io import _FEW_BRACKETS, _inner_arrays
+
+    for raw in (text.encode(), text.encode() + b"[" * (_FEW_BRACKETS + 1) + b"]"):
+        assert _inner_arrays(raw) == [(m.start(), m.end()) for m in re.finditer(rb"\[[^\[\]]*\]", raw)]
