@@ -384,7 +384,8 @@ def _inner_arrays(data: bytes) -> list[tuple[int, int]]:
 
 def _positions(data: bytes, byte: bytes) -> list[int] | None:
     """Every index of ``byte`` in ``data``; None when there are more than ``_FEW_BRACKETS``."""
-    out, i = [], data.find(byte)
+    out: list[int] = []
+    i = data.find(byte)
     while i >= 0:
         if len(out) == _FEW_BRACKETS:
             return None
