@@ -87,6 +87,7 @@ from ._config import (
 from ._evidence import EvidenceItem, evidence
 from ._extract import BearingDetail, FeatureResult
 from ._extraction import extract_features, with_speed_notes
+from ._lines import LINE_CLASSES, running_speed_line
 from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
 from ._orbit import OrbitShape
 from ._recording import ProbeChannel, Recording, parse_speed_range
@@ -106,4 +107,5 @@ __all__ = [
     "Note", "speed_in_doubt", "speed_alternatives_rpm",
     "CommonMode", "common_mode", "common_mode_share", "without_common_mode", "with_scale", "COMMON_MODE_NOTABLE_SHARE",
     "parse_acquisitions", "parse_keyphasor_takes", "format_acquisitions", "split_pairs",
+    "running_speed_line", "LINE_CLASSES",
 ]

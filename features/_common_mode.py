@@ -29,8 +29,8 @@ __all__ = ["CommonMode", "common_mode", "common_mode_share", "without_common_mod
 #: probes' bisector, in phase at both coupling-end journals)
 COMMON_MODE_MIN_PROBES = 6
 #: a share from which the common part is worth a look: shown in the evidence, and the verdict is read again without
-#: it (``models.common_mode``). ``benchmarks/bench_common_mode.py`` on held-out simulated plants: 99.9 % of the
-#: shares were below 0.56–0.61 over 8 probes and 0.61–0.67 over 6 (about one recording in 1000 reaches it)
+#: it (``models.common_mode``); about one recording in 1000 of a healthy shaft reaches it (docs/features.md,
+#: "Measurements behind the speed estimate's thresholds")
 COMMON_MODE_NOTABLE_SHARE = 0.6
 
 

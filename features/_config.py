@@ -61,8 +61,8 @@ SPEED_ALTERNATIVE_MIN_SEPARATION = 0.005
 #: a harmonic counts as present when its amplitude is at least this fraction of the largest line
 SPEED_HARMONIC_MIN_REL = 0.01
 #: a candidate speed's m-th harmonic line may lie m times this many FFT bins from m × the candidate (its
-#: interpolated peak's error grows m-fold), at most ``SPEED_HARMONIC_MAX_TOL_BINS`` (bench_robustness base
-#: sets at 48 revolutions, seeds 815 / 816: 218 / 214 → 220 / 219 within 0.5 %; bench_speed seed 15 184 → 182)
+#: interpolated peak's error grows m-fold), at most ``SPEED_HARMONIC_MAX_TOL_BINS`` (measured: docs/features.md,
+#: "Measurements behind the speed estimate's thresholds")
 SPEED_HARMONIC_TOL_BINS = 0.5
 SPEED_HARMONIC_MAX_TOL_BINS = 1.0
 #: a best-ranked line family below this fraction of a higher family's frequency may be a
@@ -72,9 +72,7 @@ SPEED_SUBSYNC_MAX_RATIO = 0.55
 #: (oil whirl / whip lines are not locked to the running speed)
 SPEED_INTEGER_RATIO_TOL = 2e-3
 #: … and whose own line's orbits are not nearly straight lines: backward / forward circular component at
-#: most this (a combination line of the whirl with the running speed beats in a flat orbit; bench_speed
-#: seeds 15, 16 and the bench_robustness base set, seed 815: every one of the 17 families above 0.5 that
-#: the rule took for the running speed was wrong, the 85 correct ones were at 0.002–0.445)
+#: most this (a combination line of the whirl with the running speed beats in a flat orbit; docs/features.md)
 SPEED_RUNNING_MAX_BACKWARD = 0.5
 #: a spectral peak that is not a harmonic of the chosen speed makes the estimate "ambiguous" when
 #: its power is this many times the median spectrum (noise alone: probability 2^-30) …
@@ -96,39 +94,33 @@ SPEED_PARTNER_CLEAR_SNR = 100.0
 #: at least this fraction of the best
 SPEED_PARTNER_RIVAL_REL = 0.8
 #: … and a candidate running speed must explain at least this many combination lines (Ω ± kω,
-#: 2Ω − kω, k ≠ 0): with one, the true 1X read as a whirl finds a spurious partner (bench_speed
-#: seed 15: every partner with a single combination line was wrong, 7 of 7)
+#: 2Ω − kω, k ≠ 0): with one, the true 1X read as a whirl finds a spurious partner (docs/features.md)
 SPEED_PARTNER_MIN_COMBINATIONS = 2
 #: a line family is read as a whirl / whip whose running speed is sought among its combination lines
-#: only when its orbits are at most this elliptical (backward / forward; bench_robustness sets, seed
-#: 815: every one of the eleven partner searches from a line above 0.2 gave a wrong speed, where the
-#: line was the running speed's own 1X; correct partners came from lines at 0.001–0.157)
+#: only when its orbits are at most this elliptical (backward / forward): a flatter line is the running
+#: speed's own 1X, not a whirl (docs/features.md)
 SPEED_PARTNER_MAX_BACKWARD = 0.2
 #: the estimate is "ambiguous" when its 1X is the largest line and the orbits there are nearly
 #: circular: the median over bearings of backward / forward circular component (or its inverse)
-#: below this (default plant, bench_speed seed 15: where the largest line is a whip, median 0.004,
-#: 0.031–0.042 on the two that a tighter 0.03 left silently wrong; where it is 1X, 0.0875 and above)
+#: below this (a whip's orbits are near circles, a 1X's flatter; docs/features.md)
 SPEED_WHIRL_MAX_BACKWARD = 0.1
 #: a line family with a family at twice its frequency (as many harmonics present) is taken for a
 #: half-speed whirl / sub-harmonic, and the double family for the running speed, when its orbits are
-#: this circular (backward / forward; bench_robustness sets, seed 815: 0.002–0.150 where the double
-#: was the running speed or the nearer to it, 0.166–0.614 where the line was the running speed's 1X)
+#: this circular (backward / forward; docs/features.md)
 SPEED_HALF_WHIRL_MAX_BACKWARD = 0.15
 #: ... and regardless of its orbits when its line is below this fraction of the double family's
-#: (amplitude; bench_robustness sets: a flexible coupling's 2X reached 12× the 1X, 22 dB)
+#: (amplitude: a flexible coupling's 2X can be many times its 1X; docs/features.md)
 SPEED_HALF_MAX_REL = 0.03
 #: the comb of a line family reads as period-3 motion (features._families._period_n) only when its 3X
-#: holds at least … at most this fraction of its 1X (amplitude; bench_robustness base sets, seeds 815 and
-#: 816: 0.35 and 0.18 on the two period-3 recordings, 0.59–2.9 where a 3X comb peak was a machine's own 3X)
+#: holds at least … at most this fraction of its 1X (amplitude: a machine's own 3X is larger; docs/features.md)
 SPEED_PERIOD3_MIN_REL = 0.1
 SPEED_PERIOD3_MAX_REL = 0.5
 #: … tried for period-n motion up to this n (features._families._period_n)
 SPEED_PERIOD_MAX_N = 8
 #: a running speed's harmonics fall off, a 1/nX sub-harmonic's comb (its k/nX lines) stays flat: the estimate is
 #: flagged (features._speed._flat_comb_warning) when its 2X … this order are all lines of their own, each at least
-#: SPEED_FLAT_COMB_MIN_REL of its 1X (amplitude, −30 dB). bench_robustness base sets (seeds 815–817, 48–192
-#: revolutions) and bench_speed seeds 15 / 16, 2500 estimates: the weakest of 2X–6X lay at −14.5 … −32.2 dB on 17
-#: wrong ones (14 read at a 1/nX; one silent: period 7 at 1/7X, −16.7 dB) and at most −34.6 dB on every right one
+#: SPEED_FLAT_COMB_MIN_REL of its 1X (amplitude, −30 dB: between the wrong estimates' combs and the right ones';
+#: docs/features.md, "Measurements behind the speed estimate's thresholds")
 SPEED_FLAT_COMB_ORDER = 6
 SPEED_FLAT_COMB_MIN_REL = 10 ** (-30 / 20)
 #: the running speed's 1X hidden in the main lobe of an oil whirl's 2nd harmonic (features._families._hidden_running_line)

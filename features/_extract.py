@@ -293,8 +293,8 @@ def _given_speed_mismatch(seg: np.ndarray, mean: np.ndarray, fs: float, f1: floa
     (``_speed_lock.locked_speed_hz`` at that reading, within ``SPEED_CHECK_LOCK_REL``: a sample rate or a speed
     that is off moves every synchronous line alike), or, with no second line to confirm it, when no
     sub-synchronous line outgrows the 1X (:func:`_whirl_dominates`): a whirl's 2nd harmonic in the 1X's main lobe
-    pulls the 1X reading alone. At the right speed the unconfirmed check warned on 39 of 240 clean base-set
-    recordings, every one a whirl record."""
+    pulls the 1X reading alone (without that test the check warned on whirl records at the right speed;
+    docs/features.md, "Measurements behind the speed estimate's thresholds")."""
     mag2 = np.abs(coeffs[:, :3]) ** 2
     power = mag2.sum(axis=0)
     h = int(np.argmax(power)) + 1

@@ -48,10 +48,8 @@ def _above_subsynchronous(x: np.ndarray, spec: np.ndarray, fs: float, df: float,
     lines above the noise times their summed amplitude. The whirl's combination lines with the
     running speed (2Ω − ω, Ω ± ω: mixing products, weaker than the 1X that makes them) build
     families too, and on a long record with a low noise floor one of them can show three lines
-    above the noise where the running speed shows two (1X and 2X) at ten times the amplitude:
-    counting lines first read 22 of 2020 recordings at such a line (bench_robustness base sets,
-    seeds 815 / 816, at 48, 96 and 192 revolutions; bench_speed seeds 15 / 16), none the other
-    way. Families at an exact
+    above the noise where the running speed shows two (1X and 2X) at ten times the amplitude,
+    so the evidence is weighed by amplitude, not by counting lines (docs/features.md). Families at an exact
     integer ratio (a 2X-dominated signal, or period-n motion) are left to the ranking, and so are
     families whose own line beats in a nearly flat orbit (backward / forward above
     ``SPEED_RUNNING_MAX_BACKWARD``: a combination line of the whirl with the running speed).
@@ -130,13 +128,8 @@ def _period_n(power: np.ndarray, logp: np.ndarray, df: float, f: float, level: f
     n = 3 is tried first and returned at either strength. Then n = 4 … ``SPEED_PERIOD_MAX_N``, only at
     strength 2 and with every line f … nf present (period-n motion fills the comb with its
     sub-harmonics k/nX): a flexible coupling's comb peaks at 4X and 8X as well, so these are reported
-    for a warning, never to change the speed (the caller's choice). Else (0, 0).
-
-    Measured: bench_robustness sets, seeds 815 and 816: the two period-3 recordings read at the 1/3X
-    had 3f at 0.35 and 0.18 of f, the 6f peak on the first; four recordings read right with a 3X comb
-    peak had 3f at 0.59–2.9 of f; 11 flexible couplings of 480 recordings have the 4f and 8f peaks.
-    bench_speed seed 15 at 192 revolutions: period-4 and period-8 motion read silently at the 1/4X and
-    1/8X (4f at 0.27 and 8f at 0.19 of f, both with the 2nf peak).
+    for a warning, never to change the speed (the caller's choice). Else (0, 0). The strengths' bounds and
+    the recordings they were set on: docs/features.md, "Measurements behind the speed estimate's thresholds".
     """
     a = [0.0] * (2 * cfg.SPEED_PERIOD_MAX_N + 2)
     known = 0

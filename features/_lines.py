@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from . import _config as cfg
-from ._spectrum import hann
+from ._spectrum import fast_length, hann
 
-__all__ = ["refine_line_hz"]
+__all__ = ["refine_line_hz", "running_speed_line", "LINE_CLASSES"]
 
 
 def _hann_amplitude_at(power: np.ndarray, f: float, df: float) -> float:
@@ -203,3 +203,32 @@ def _circular_fraction(spec: np.ndarray, k: int) -> float:
     if not np.any(big > 0):
         return float("nan")
     return float(np.median(np.minimum(fwd, bwd)[big > 0] / big[big > 0]))
+
+
+#: how the running speed's own 1X line shows in a recording (:func:`running_speed_line`)
+LINE_CLASSES = ("separate", "merged", "below noise")
+
+
+def running_speed_line(waveforms_um: np.ndarray, fs_hz: float, speed_rpm: float) -> str:
+    """How the true running speed's 1X line shows in the summed Hann spectrum the estimator searches.
+
+    ``"separate"``: a local maximum within half a bin of the true 1X, at least ``SPEED_LINE_MIN_SNR``
+    times the median spectrum (what any spectral estimator needs to find it); ``"merged"``: the 1X bins
+    stand above the noise, but inside the main lobe of a neighbouring line (oil whip locked near half the
+    speed puts its 2nd harmonic there) — not resolvable at this record length; ``"below noise"``: the
+    1X bins are under ``SPEED_LINE_MIN_SNR`` times the median (the speed is not in the signal's 1X).
+    """
+    x = waveforms_um - waveforms_um.mean(axis=1, keepdims=True)
+    n = x.shape[1]
+    n_fft = fast_length(n)
+    power = np.sum(np.abs(np.fft.rfft(x * hann(n), n=n_fft, axis=-1)) ** 2, axis=0)
+    df = fs_hz / n_fft
+    floor = float(np.median(power[3:int(0.45 * fs_hz / df)]))
+    k_true = speed_rpm / 60.0 / df
+    k0 = int(round(k_true))
+    level = cfg.SPEED_LINE_MIN_SNR * floor
+    peaks = [k for k in (k0 - 1, k0, k0 + 1) if power[k] >= power[k - 1] and power[k] > power[k + 1]
+             and abs(k - k_true) <= 0.5 + 1e-9]
+    if peaks and power[peaks[0]] >= level:
+        return "separate"
+    return "merged" if power[k0 - 1:k0 + 2].max() >= level else "below noise"

@@ -77,10 +77,9 @@ SPIKE_MAX_FRACTION = 0.005
 COMMON_MODE_ORDERS = (1, 2)
 #: the share of an order's power across the probes that one signal common to all explains
 #: (``features._common_mode.common_mode_share``) from which the order is no shaft motion, by the number of probes
-#: judged (at least ``COMMON_MODE_MIN_PROBES``, on both sides of the coupling). ``benchmarks/bench_common_mode.py``
-#: on held-out simulated plants (base sets of seeds 815–817, far and presets sets; clean, runout, SNR 15 dB, gain
-#: mismatch; 19 000 six- and 3 500–3 900 eight-probe readings per order): the largest share over 8 probes was
-#: 0.59 at 1X and 0.66 at 2X, over 6 probes 0.92 at 1X (99.9 %: 0.61) and 0.73 at 2X
+#: judged (at least ``COMMON_MODE_MIN_PROBES``, on both sides of the coupling): above every share a shaft's own
+#: motion reached on held-out simulated plants (docs/features.md, "Measurements behind the speed estimate's
+#: thresholds")
 COMMON_MODE_MIN_SHARE: dict[int, float] = {COMMON_MODE_MIN_PROBES: 0.95, 8: 0.85}
 
 
@@ -113,12 +112,22 @@ class SanityFinding:
 
 def _channel_checks(rec: Recording) -> list[SanityFinding]:
     out: list[SanityFinding] = []
-    for ch in rec.channels:
-        d = ch.data_um
+    # every channel's extremes and the share of its samples at them, in one pass over all channels (the same
+    # floats as channel by channel: min, max and counts are exact; |d|'s maximum is max(max d, −min d))
+    data = np.stack([ch.data_um for ch in rec.channels])
+    lows, highs = data.min(axis=1), data.max(axis=1)
+    scales = np.maximum(np.maximum(highs, -lows), 1.0)
+    tols = 1e-9 * scales
+    n = data.shape[1]
+    at_low = np.count_nonzero(data <= (lows + tols)[:, None], axis=1) / n
+    at_high = np.count_nonzero(data >= (highs - tols)[:, None], axis=1) / n
+    for i, ch in enumerate(rec.channels):
+        d = data[i]
         where = f"bearing {ch.bearing} probe at {ch.angle_deg:g}°"
-        ptp = float(np.ptp(d))
-        scale = max(float(np.max(np.abs(d))), 1.0)
-        if not np.any(d):
+        lo, hi = float(lows[i]), float(highs[i])
+        ptp = hi - lo
+        scale = float(scales[i])
+        if lo == 0 and hi == 0:
             out.append(SanityFinding("zero_channel", FAIL, f"{where}: every sample is 0 — the channel is not "
                                      "connected, not recorded or mapped to the wrong column; check the wiring and "
                                      "the channel order", ch.bearing))
@@ -128,16 +137,15 @@ def _channel_checks(rec: Recording) -> list[SanityFinding]:
                                      "disconnected or saturated, or the DC gap recorded without its AC part; "
                                      "check the probe, its driver and the acquisition channel"), ch.bearing))
             continue
-        lo, hi = float(d.min()), float(d.max())
-        tol = 1e-9 * scale
-        frac = max(float(np.mean(d <= lo + tol)), float(np.mean(d >= hi - tol)))
+        tol = float(tols[i])
+        frac = max(float(at_low[i]), float(at_high[i]))
         if frac >= CLIP_MIN_FRACTION:
             levels = np.unique(d)
             q = float(np.min(np.diff(levels))) if levels.size > 1 else ptp
             # fraction of a sine's samples within one quantisation step of its peak: arccos(1 − 2q/ptp)/π
             expected = float(np.arccos(max(-1.0, 1.0 - 2.0 * q / ptp)) / np.pi)
             if frac > CLIP_EXCESS * expected:
-                at = "maximum" if np.mean(d >= hi - tol) >= np.mean(d <= lo + tol) else "minimum"
+                at = "maximum" if at_high[i] >= at_low[i] else "minimum"
                 stretch = _one_stretch(d >= hi - tol if at == "maximum" else d <= lo + tol)
                 if stretch is not None:
                     fs = rec.sample_rate_hz

@@ -330,8 +330,7 @@ def _whirl_stage(s: _Spectrum, families: list[_Family], only_partner: bool) -> _
     shifted = [p for p in partners[1:] if abs(abs(p[0] - om) - whip_hz) <= 2 * cfg.SPEED_PARTNER_TOL_BINS * df
                and p[3] > r1]
     # a lattice that leaves more of the record's lines unexplained than it explains (a score ≤ 0) is no evidence
-    # (held-out seed 817: a 1X on the skirt of the whirl's 2nd harmonic, read at 1.95 times the speed from two
-    # combination lines, score −5.7, without a word; the other 35 of 222 partner estimates at ≤ 0 were flagged)
+    # (docs/features.md, "Measurements behind the speed estimate's thresholds")
     unexplained = not score > 0
     if weak_1x or close or shifted or unexplained:
         why = (f"its own 1X line is {'not seen' if r1 == 0 else f'only {10 * np.log10(r1):.0f} dB above the noise'}"

@@ -210,18 +210,16 @@ MAX_ARRAY_VALUES = max(MAX_POINTS, MAX_KEYPHASOR_PULSES)
 def _validated_json(model: Any, body: bytes, max_values: int) -> Any:
     """``model`` validated from a JSON body; a body that may hold more than ``max_values`` values (413, counted
     before anything is decoded) and non-finite numbers (422) refused first, saying so."""
-    from rotordiag.features.safe_io import UnsafeFileError, count_json_values, loads_json_finite
+    from rotordiag.features.safe_io import UnsafeFileError, check_json_finite, count_json_values
 
     try:
         count_json_values(body, max_values, MAX_ARRAY_VALUES)
     except UnsafeFileError as exc:
         raise InputError(str(exc), "too_large") from None
     try:
-        loads_json_finite(body)
+        check_json_finite(body)                # malformed JSON passes: pydantic reports it with its location
     except UnsafeFileError as exc:
         raise InputError(str(exc)) from None
-    except (ValueError, UnicodeDecodeError):
-        pass                                   # pydantic reports malformed JSON with its location
     try:
         return model.model_validate_json(body)
     except ValidationError as exc:

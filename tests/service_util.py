@@ -143,17 +143,51 @@ def build_tiny_registry(root, n_plants=3, seed=0):
     return reg, version
 
 
+def _source_hash():  # noqa: ANN202 - a hashlib object
+    """SHA-256 over the source of the features and models packages and this file."""
+    import hashlib
+
+    repo = Path(__file__).resolve().parent.parent
+    h = hashlib.sha256()
+    for pkg in ("features", "models"):
+        for f in sorted((repo / pkg).glob("*.py")):
+            h.update(f.name.encode() + f.read_bytes())
+    h.update(Path(__file__).read_bytes())
+    return h
+
+
 def shipped_registry_usable() -> bool:
-    """The repository ships ``models/default_registry`` and its active model runs with this code."""
+    """The repository ships ``models/default_registry`` and its active model runs with this code.
+
+    Loading the model takes 1-2 s, and test modules ask at collection (``test_service_fuzz.py`` builds its app
+    there): a positive answer is remembered under ``test-artifacts/`` (git-ignored), keyed by the model file, the
+    features and models source and the versions of the libraries that load it, so any change asks again.
+    """
+    from importlib.metadata import version
+
     from rotordiag.service.core.config import SHIPPED_REGISTRY_DIR
     from rotordiag.service.inference import ModelStore, ModelUnavailable
 
-    if not (SHIPPED_REGISTRY_DIR / "active").is_file():
+    active = SHIPPED_REGISTRY_DIR / "active"
+    if not active.is_file():
         return False
+    h = _source_hash()
+    model_file = SHIPPED_REGISTRY_DIR / active.read_text().strip() / "model.skops"
+    try:
+        h.update(model_file.read_bytes())
+    except OSError:
+        return False
+    for lib in ("numpy", "scipy", "scikit-learn", "skops"):
+        h.update(f"{lib}={version(lib)}".encode())
+    marker = Path(__file__).resolve().parent.parent / "test-artifacts" / f"shipped_usable-{h.hexdigest()[:16]}"
+    if marker.is_file():
+        return True
     try:
         ModelStore(SHIPPED_REGISTRY_DIR).load()
     except ModelUnavailable:
         return False
+    marker.parent.mkdir(parents=True, exist_ok=True)
+    marker.touch()
     return True
 
 
@@ -165,18 +199,12 @@ def shipped_or_tiny_registry(tmp_root=None):
     The tiny registry is built once and cached under ``test-artifacts/`` (git-ignored), keyed by
     the source of the features and models packages, so it is rebuilt whenever either changes.
     """
-    import hashlib
-
     from rotordiag.service.core.config import SHIPPED_REGISTRY_DIR
 
     if shipped_registry_usable():
         return SHIPPED_REGISTRY_DIR
     repo = Path(__file__).resolve().parent.parent
-    h = hashlib.sha256()
-    for pkg in ("features", "models"):
-        for f in sorted((repo / pkg).glob("*.py")):
-            h.update(f.name.encode() + f.read_bytes())
-    h.update(Path(__file__).read_bytes())
+    h = _source_hash()
     root = repo / "test-artifacts" / f"tiny_registry-{h.hexdigest()[:16]}"
     if not (root / "active").is_file():
         import shutil

@@ -1,7 +1,8 @@
-"""The robustness benchmark's condition generators and the ROSS validation set (issue 15, items 7–8).
+"""The robustness report's condition generators (``rotordiag.models.robustness``) and the ROSS validation set
+(issue 15, items 7–8).
 
-Loads ``benchmarks/bench_robustness.py`` and ``benchmarks/ross_validation.py`` by path (they are
-scripts, not packages). Only the regeneration check needs ROSS (the ``[validation]`` extra) and
+The conditions and the scoring are the package's (``benchmarks/bench_robustness.py`` writes the report from them);
+``benchmarks/ross_validation.py`` is loaded by path (a script, not a package). Only the regeneration check needs ROSS (the ``[validation]`` extra) and
 skips without it; everything else reads the cached set with NumPy.
 """
 from __future__ import annotations
@@ -13,6 +14,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
+from rotordiag.features import running_speed_line
+from rotordiag.models import robustness as bench
 
 BENCH = Path(__file__).resolve().parent.parent / "benchmarks"
 
@@ -28,7 +32,6 @@ def _load(name: str):
     return mod
 
 
-bench = _load("bench_robustness")
 rv = _load("ross_validation")
 
 SPEED_RPM = 2400.0          # 40 Hz: 64 samples per revolution at 2560 Hz, 48 whole revolutions
@@ -154,7 +157,8 @@ def test_shipped_model_shows_no_ross_misalignment_with_a_clear_coupling_2x_as_al
     root = BENCH.parent / "models" / "default_registry"
     if not (root / "active").exists():
         pytest.skip("no shipped registry in this checkout")
-    outs = bench.run_ross(load_bundle(root), rv.DEFAULT_PATH)
+    outs = bench.run_ross(load_bundle(root), rv.load_ross_set(rv.DEFAULT_PATH, sample_rate_hz=bench.FS_HZ,
+                                                               revs=bench.REVS))
     assert len(outs) == 24 and all(o.ood for o in outs)
     strong = [o for o in outs if o.delta > 0 and o.ratio >= 1.0]
     assert len(strong) >= 10
@@ -236,16 +240,15 @@ def test_ood_summary_counts_which_check_flagged():
 def test_running_speed_line_classes():
     """The benches' observability of the true 1X: a separate line, merged into a neighbour's main lobe, or
     below the noise (the breakdown of the speed-estimate accuracy)."""
-    bs = _load("bench_speed")
     fs, n, rpm = 2560.0, 3072, 2400.0                     # 0.83 Hz bins; 1X at 40 Hz
     t = np.arange(n) / fs
     noise = np.random.default_rng(2).normal(0.0, 0.05, (8, n))
     one_x = np.cos(2 * np.pi * rpm / 60 * t)
-    assert bs.running_speed_line(noise + one_x, fs, rpm) == "separate"
+    assert running_speed_line(noise + one_x, fs, rpm) == "separate"
     # oil whip's 2nd harmonic 0.6 bins below the 1X and 100 times stronger: no peak of its own
     whip2 = 100 * np.cos(2 * np.pi * (rpm / 60 - 0.5) * t)
-    assert bs.running_speed_line(noise + one_x + whip2, fs, rpm) == "merged"
-    assert bs.running_speed_line(noise + 0.001 * one_x, fs, rpm) == "below noise"
+    assert running_speed_line(noise + one_x + whip2, fs, rpm) == "merged"
+    assert running_speed_line(noise + 0.001 * one_x, fs, rpm) == "below noise"
 
 
 def test_f1_of_delta_error_falls_with_the_error():

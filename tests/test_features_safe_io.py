@@ -270,3 +270,59 @@ def test_fuzz_json_never_returns_non_finite(value):
         assert not _all_finite(value)
         return
     assert _all_finite(value) and out == value
+
+
+_UNSAFE_OR_NOT = [b'{"a": [1.5, -2e-7, 3]}', b'[NaN]', b'{"x": -Infinity}', b'[1e999]', b'[1E+0400]', b'[2e308]',
+                  b'[1e308]', b'[1e0099]', b'[' + b'9' * 310 + b']', b'[' + b'9' * 299 + b']', b'["NaN as text"]',
+                  b'["e999"]', b'[1,2', b'\xff\xfe[\x001\x00]\x00', b'[\xff]', b'[' * 70 + b']' * 70,
+                  '{"a": [1.0, 2.0]}'.encode("utf-16"), b'{"plant": "caf\xc3\xa9", "v": [1e-5, 2.5]}']
+
+
+@pytest.mark.parametrize("text", _UNSAFE_OR_NOT)
+def test_check_json_finite_refuses_what_loads_json_finite_refuses(text):
+    """The check without decoding (``check_json_finite``, before pydantic decodes a body) refuses exactly the texts
+    the decoding check refuses, with the same message; malformed JSON passes both (its decoder reports it)."""
+    from rotordiag.features.safe_io import check_json_finite
+
+    try:
+        loads_json_finite(text)
+        expected = None
+    except UnsafeFileError as exc:
+        expected = str(exc)
+    except ValueError:
+        expected = None
+    if expected is None:
+        check_json_finite(text)
+    else:
+        with pytest.raises(UnsafeFileError) as got:
+            check_json_finite(text)
+        assert str(got.value) == expected
+
+
+@given(st.text(alphabet="0123456789eE+-.,[] ", max_size=400))
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_overflow_spelling_test_agrees_with_the_regular_expression(text):
+    """``_may_overflow`` (substring searches on the marked text) finds every spelling the plain regular
+    expression ``[eE][+]?0*[1-9][0-9]{2,}|[0-9]{300}`` finds."""
+    import re
+
+    from rotordiag.features.safe_io import _may_overflow
+
+    raw = text.encode()
+    if re.search(rb"[eE][+]?0*[1-9][0-9]{2,}|[0-9]{300}", raw):
+        assert _may_overflow(raw)
+    long = raw + b"," + b"7" * 300
+    assert _may_overflow(long)
+
+
+@given(st.text(alphabet='[]{},1 "', max_size=200))
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_innermost_arrays_found_by_find_are_the_regular_expressions_matches(text):
+    """``count_json_values``' innermost arrays, found bracket to bracket with ``bytes.find``, are the matches of
+    ``\\[[^\\[\\]]*\\]``; text with more brackets than ``_FEW_BRACKETS`` takes the regular expression."""
+    import re
+
+    from rotordiag.features.safe_io import _FEW_BRACKETS, _inner_arrays
+
+    for raw in (text.encode(), text.encode() + b"[" * (_FEW_BRACKETS + 1) + b"]"):
+        assert _inner_arrays(raw) == [(m.start(), m.end()) for m in re.finditer(rb"\[[^\[\]]*\]", raw)]

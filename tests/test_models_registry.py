@@ -5,7 +5,6 @@ import json
 
 import numpy as np
 import pytest
-import skops.io as sio
 from threadpoolctl import threadpool_limits
 
 from rotordiag.models.config import TrainConfig
@@ -98,6 +97,8 @@ def test_unknown_version_and_empty_registry_errors(tmp_path, fitted):
 
 
 def test_untrusted_types_are_refused(tmp_path):
+    import skops.io as sio  # here, not at collection (0.9 s of import)
+
     p = tmp_path / "evil.skops"
     sio.dump({"payload": NotAModel()}, p)
     with pytest.raises(RegistryError, match="outside the trusted list"):

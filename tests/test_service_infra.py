@@ -139,6 +139,25 @@ def test_metrics_exposes_latency_histogram_and_job_counts(client):
     assert 'handler="/jobs"' in text
 
 
+def test_metrics_handler_label_is_the_route_template_on_repeated_requests(client):
+    """The handler label (the route's template, remembered per path by service.metrics) is the same on the first
+    and later requests, for a templated route and for both methods of one path; an unknown path keeps its own."""
+    from rotordiag.service.metrics import _CachedHandlerMiddleware
+
+    assert any(m.cls is _CachedHandlerMiddleware for m in client.app.user_middleware)
+    for _ in range(3):
+        client.get("/jobs/no-such-job")
+        client.get("/jobs/another-id")
+        client.get("/jobs")
+    client.get("/no/such/route")
+    text = client.get("/metrics").text
+    counts = [line for line in text.splitlines() if line.startswith("http_requests_total{")]
+    assert any('handler="/jobs/{job_id}"' in line and 'status="404"' in line and line.endswith(" 6.0")
+               for line in counts), counts
+    assert any('handler="/jobs"' in line and line.endswith(" 3.0") for line in counts), counts
+    assert not any("no-such-job" in line or "another-id" in line for line in counts)
+
+
 def test_two_apps_in_one_process_have_separate_metrics(tmp_path):
     a = create_app(make_settings(tmp_path / "a"))
     b = create_app(make_settings(tmp_path / "b"))

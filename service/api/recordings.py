@@ -32,7 +32,7 @@ __all__ = ["reader_query", "ReaderQueryDep", "JSON_TYPES", "NPY_TYPES", "media_t
            "recording_answer", "diagnosis_limiter", "read_json_bounded"]
 
 
-def reader_query(
+async def reader_query(
     sample_rate_hz: SampleRateQuery = None,
     speed_rpm: SpeedQuery = None,
     speed_range_rpm: SpeedRangeQuery = None,

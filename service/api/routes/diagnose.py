@@ -180,7 +180,10 @@ async def diagnose_from_request(request: Request, state, query: dict[str, Any], 
         except (InputError, ValueError) as exc:
             verdict.setdefault("input_notes", []).append(f"the file's recording time {in_file!r} is not used: {exc}")
     if store:
-        await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store, meta)
+        if asset_id is None:            # no database to touch: no hand-over to a thread
+            record_verdict(state, None, plant, verdict, may_store, meta)
+        else:
+            await run_in_threadpool(record_verdict, state, asset_id, plant, verdict, may_store, meta)
     return verdict, asset_id
 
 
