@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 PINNED = Path(__file__).with_name("features_pinned.npz")
-EXAMPLES = ("aligned.csv", "misaligned.csv", "misaligned.h5", "misaligned.uff")
+EXAMPLES = ("aligned.csv", "whirl.csv", "whirl.h5", "whirl.uff")
 _LAYOUT = [(b, a) for b in (1, 2, 3, 4) for a in (45.0, 135.0)]
 
 
