@@ -294,29 +294,8 @@ def register(app: typer.Typer) -> None:
                        lle_per_rev=lle.lle_per_interval, lle_per_s=lle.lle_per_s,
                        stderr_per_rev=lle.stderr_per_interval, revs=lle.n_intervals, motion=motion.label,
                        evidence=motion.evidence)
-        if as_json:
-            typer.echo(json.dumps(summary, indent=2))
-        else:
-            typer.echo(f"LLE = {lle.lle_per_interval:+.5f} ± {lle.stderr_per_interval:.5f} per revolution "
-                       f"= {lle.lle_per_s:+.4f} per second ({lle.n_intervals} revolutions)")
-            typer.echo(f"motion: {motion.label} ({motion.evidence})")
-        if plot is not None:
-            import matplotlib
-
-            matplotlib.use("Agg")
-            import matplotlib.pyplot as plt
-
-            fig, ax = plt.subplots(figsize=(6, 3.5))
-            ax.plot(np.arange(1, lle.n_intervals + 1), lle.history_per_interval, c="black")
-            ax.axhline(0, c="0.5", lw=0.8)
-            ax.set_xlabel("revolutions averaged")
-            ax.set_ylabel("running LLE estimate (1/rev)")
-            ax.set_title(f"{speed_rpm:g} r/min, Δ = {misalignment:g}, A = {unbalance:g}", fontsize=9)
-            ax.grid(alpha=0.3)
-            fig.tight_layout()
-            fig.savefig(plot, dpi=110)
-            plt.close(fig)
-            typer.echo(f"wrote {plot}", err=True)
+        _report_lle(lle, summary, f"{motion.label} ({motion.evidence})", as_json, plot,
+                    f"{speed_rpm:g} r/min, Δ = {misalignment:g}, A = {unbalance:g}")
 
     @app.command()
     def mechanisms(
@@ -478,6 +457,12 @@ def _train_lyapunov(preset, shaftline, speed_rpm: float, unbalance_kg_m: float, 
     summary = dict(source=preset or str(shaftline), speed_rpm=speed_rpm, unbalance_kg_m=unbalance_kg_m,
                    lle_per_rev=lle.lle_per_interval, lle_per_s=lle.lle_per_s, stderr_per_rev=lle.stderr_per_interval,
                    revs=lle.n_intervals, motion=motion)
+    _report_lle(lle, summary, motion, as_json, plot,
+                f"{summary['source']}, {speed_rpm:g} r/min, unbalance {unbalance_kg_m:g} kg·m")
+
+
+def _report_lle(lle: Any, summary: dict, motion: str, as_json: bool, plot: Optional[Path], title: str) -> None:
+    """The ``lyapunov`` command's answer: the summary (JSON or two lines) and the running estimate's PNG."""
     if as_json:
         typer.echo(json.dumps(summary, indent=2))
     else:
@@ -496,7 +481,7 @@ def _train_lyapunov(preset, shaftline, speed_rpm: float, unbalance_kg_m: float, 
         ax.axhline(0, c="0.5", lw=0.8)
         ax.set_xlabel("revolutions averaged")
         ax.set_ylabel("running LLE estimate (1/rev)")
-        ax.set_title(f"{summary['source']}, {speed_rpm:g} r/min, unbalance {unbalance_kg_m:g} kg·m", fontsize=9)
+        ax.set_title(title, fontsize=9)
         ax.grid(alpha=0.3)
         fig.tight_layout()
         fig.savefig(plot, dpi=110)
