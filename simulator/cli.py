@@ -130,6 +130,19 @@ def probe_recording(res, sample_rate_hz: float, snr_db: float, runout_um: float,
 
 def write_probes(path: Path, waveforms_um, channels, sample_rate_hz: float, *, speed_rpm: float | None = None,
                  clearance_um: float | None = None, keyphasor_signal=None) -> None:
+    """:func:`_write_probes_now` into a temporary file beside ``path``, renamed into place when complete: a
+    failed write leaves nothing half-written (``ValueError`` says why)."""
+    tmp = path.with_name(f".{path.name}.part{path.suffix}")
+    try:
+        _write_probes_now(tmp, waveforms_um, channels, sample_rate_hz, speed_rpm=speed_rpm, clearance_um=clearance_um,
+                          keyphasor_signal=keyphasor_signal)
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def _write_probes_now(path: Path, waveforms_um, channels, sample_rate_hz: float, *, speed_rpm: float | None = None,
+                 clearance_um: float | None = None, keyphasor_signal=None) -> None:
     """Write probe waveforms (µm) as .csv (``time_s`` then ``b<bearing>@<angle>`` columns, times to
     6 significant digits as DAQ exports print them), .npy (channels × points), .h5 (``waveforms``,
     ``channels`` table, ``sample_rate_hz`` / ``units`` / ``speed_rpm`` / ``clearance_um`` attributes) or
@@ -274,16 +287,12 @@ def _simulate_train(tr: Any, speed_rpm: float, *, probes_out: Optional[Path], as
             typer.echo(f"{r['bearing']:>7} {r['clearance_um']:7.0f} {r['dc_um'][0]:10.1f} {r['dc_um'][1]:11.1f} "
                        f"{r['pk_pk_um'][0]:10.1f} {r['pk_pk_um'][1]:11.1f}")
     if probes_out is not None:
-        tmp = probes_out.with_name(f".{probes_out.name}.part{probes_out.suffix}")
         try:
-            write_probes(tmp, rec.waveforms_um, rec.channels, rec.sample_rate_hz, speed_rpm=rec.speed_rpm,
+            write_probes(probes_out, rec.waveforms_um, rec.channels, rec.sample_rate_hz, speed_rpm=rec.speed_rpm,
                          clearance_um=min(rec.clearance_um.values()),
                          keyphasor_signal=keyphasor_pulse_signal(rec.time_s, rec.sample_rate_hz, rec.keyphasor_times_s))
-            tmp.replace(probes_out)
         except ValueError as exc:
             raise typer.BadParameter(str(exc), param_hint="--probes-out") from None
-        finally:
-            tmp.unlink(missing_ok=True)
         typer.echo(f"wrote {probes_out} ({len(rec.channels)} probes + keyphasor × {rec.waveforms_um.shape[1]} "
                    f"samples at {rec.sample_rate_hz:g} Hz, µm)", err=True)
 
@@ -466,15 +475,11 @@ def register(app: typer.Typer) -> None:
                    f"{res.keyphasor_times_s.size} keyphasor pulses, {res.wall_time_s:.1f} s", err=True)
         if res.time_s.size < 16:
             raise typer.BadParameter("the run stopped before it recorded anything; nothing written")
-        tmp = out.with_name(f".{out.name}.part{out.suffix}")
         try:
-            write_probes(tmp, w, channels, sample_rate_hz, clearance_um=clearance_um,
+            write_probes(out, w, channels, sample_rate_hz, clearance_um=clearance_um,
                          keyphasor_signal=res.keyphasor_signal())
-            tmp.replace(out)
         except ValueError as exc:
             raise typer.BadParameter(str(exc), param_hint="--out") from None
-        finally:
-            tmp.unlink(missing_ok=True)
         typer.echo(f"wrote {out} ({len(channels)} probes + keyphasor × {w.shape[1]} samples at {sample_rate_hz:g} Hz, "
                    "µm)", err=True)
 

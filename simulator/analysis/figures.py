@@ -31,6 +31,17 @@ __all__ = ["plot_bifurcation", "plot_campbell", "plot_train_sweep", "train_figur
 COLOURS = {0.0: "tab:red", 0.02: "black", 0.10: "tab:blue", 0.20: "tab:green"}
 
 
+def _clearance_axes(ax: Any, b: int, names: Any, clear: Any) -> None:
+    """One bearing's panel of a clearance-circle figure: the bearing centre, equal axes, its name and clearance."""
+    ax.plot(0, 0, "+", c="k")
+    ax.set_aspect("equal")
+    ax.set_title(f"{names[b]} (c = {clear[b]:.0f} µm)", fontsize=9)
+    ax.set_xlabel("x (µm)")
+    if b == 0:
+        ax.set_ylabel("y (µm, up)")
+    ax.grid(alpha=0.3)
+
+
 def _colour(delta: float, default: str = "black") -> str:
     for k, v in COLOURS.items():
         if abs(k - delta) < 1e-12:
@@ -215,13 +226,7 @@ def train_figures(out_dir: str | Path, train: Any, *, name: str, speed_rpm: floa
         ax.plot(clear[b] * np.cos(circle), clear[b] * np.sin(circle), c="0.6", lw=0.8)
         ax.plot(j[:, b, 0], j[:, b, 1], c="#1f5fa8", lw=0.8)
         ax.plot(j[::samples_per_rev, b, 0], j[::samples_per_rev, b, 1], "o", c="#d9480f", ms=3)
-        ax.plot(0, 0, "+", c="k")
-        ax.set_aspect("equal")
-        ax.set_title(f"{names[b]} (c = {clear[b]:.0f} µm)", fontsize=9)
-        ax.set_xlabel("x (µm)")
-        if b == 0:
-            ax.set_ylabel("y (µm, up)")
-        ax.grid(alpha=0.3)
+        _clearance_axes(ax, b, names, clear)
     fig.suptitle(f"{name}: journal orbits at {speed_rpm:g} r/min in the clearance circle (dot: once per rev)",
                  fontsize=10)
     fig.tight_layout()
@@ -259,13 +264,7 @@ def train_figures(out_dir: str | Path, train: Any, *, name: str, speed_rpm: floa
         ax.plot(sw.centre_um[ok, b, 0], sw.centre_um[ok, b, 1], "-o", ms=3, c="#2b8a3e")
         for s, (x, y) in zip(sw.speeds_rpm[ok][[0, -1]], sw.centre_um[ok, b][[0, -1]], strict=True):
             ax.annotate(f"{s:.0f}", (x, y), fontsize=7, xytext=(3, 3), textcoords="offset points")
-        ax.plot(0, 0, "+", c="k")
-        ax.set_aspect("equal")
-        ax.set_title(f"{names[b]} (c = {clear[b]:.0f} µm)", fontsize=9)
-        ax.set_xlabel("x (µm)")
-        if b == 0:
-            ax.set_ylabel("y (µm, up)")
-        ax.grid(alpha=0.3)
+        _clearance_axes(ax, b, names, clear)
     fig.suptitle(f"{name}: shaft centreline in the clearance circle, {sw.speeds_rpm[0]:.0f}–{sw.speeds_rpm[-1]:.0f} "
                  "r/min (labels: r/min)", fontsize=10)
     fig.tight_layout()
