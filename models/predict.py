@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from rotordiag.core.notes import Note
+from rotordiag.core.notes import Measured, Note
 from rotordiag.features import evidence
 
 from .acquisitions import acquisitions_reason, coupling_phase_rows, coupling_split
@@ -481,7 +481,8 @@ def format_verdict(v: Verdict, output_units: str = "um", *, baseline: dict | Non
     lines = [f"WHAT TO DO: {head.text}  [{head.action.replace('_', ' ')}; urgency: {head.urgency.replace('_', ' ')}]",
              f"status: {v.status}"]
     for r in v.reasons:
-        lines.append(f"  {r['status']}: {r['message']}")
+        msg = r["message"]
+        lines.append(f"  {r['status']}: {msg.render(unit_key) if isinstance(msg, Measured) else msg}")
     if not head.show_severity:
         lines.append("severity: not given (the measurement is in doubt: see the reasons)")
     else:
@@ -518,7 +519,7 @@ def format_verdict(v: Verdict, output_units: str = "um", *, baseline: dict | Non
     if v.model_version:
         lines.append(f"model: {v.model_version}")
     for w in v.warnings:
-        lines.append(f"warning: {w}")
+        lines.append(f"warning: {w.render(unit_key) if isinstance(w, Note) else w}")
     if evidence:
         lines.append("evidence (measured, independent of the model):")
         for e in evidence:

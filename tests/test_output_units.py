@@ -109,6 +109,8 @@ def test_cli_text_in_mils_converts_every_length_not_only_the_offset(tmp_path):
     mil_amounts = [float(x) for x in re.findall(r"(-?\d+(?:\.\d+)?) mil", section(mil.stdout))]
     assert um_amounts and "µm" not in section(mil.stdout)
     assert mil_amounts == pytest.approx([x / MIL for x in um_amounts], rel=5e-3)   # 3 significant digits
+    # every length of the whole text, the reasons and warnings included: no µm amount left in the mil text
+    assert not re.findall(r"\d µm", mil.stdout), re.findall(r".{50}\d µm.{10}", mil.stdout)
     # a µm-named feature among the top features and a training range: renamed and converted
     verdict = json.loads(CliRunner().invoke(cli_app, [*args, "--json"]).stdout)
 
@@ -123,6 +125,17 @@ def test_cli_text_in_mils_converts_every_length_not_only_the_offset(tmp_path):
     assert re.search(r"b2_1x_major_mil_pp\s+2 +\(typical 1\)", text), text
     assert "b3_x_direct_mil_pp = 10 (training 0.1 … 5)" in text
     assert "_um_pp" not in text
+    # typed reason and warning texts are rendered in mil too (a sentence is never parsed)
+    from rotordiag.core.notes import Length, Measured, Note
+    from rotordiag.models.status import Reason
+
+    fields.update(reasons=[Reason("scale", "uncertain", Measured.of("1X at bearing 3 is ", Length(254.0),
+                                                                    " pk-pk")).to_dict()],
+                  warnings=[Note("motion_not_classified", orbit=Length(25.4))])
+    text = format_verdict(Verdict(**fields), "mil")
+    typed = [ln for ln in text.splitlines() if ln.startswith(("  uncertain:", "warning:"))]
+    assert "  uncertain: 1X at bearing 3 is 10 mil pk-pk" in typed and any("(1 mil)" in ln for ln in typed), text
+    assert not any(re.search(r"\d µm", ln) for ln in typed)   # (the evidence here came back from JSON: untyped)
     # an inconclusive verdict with the clearance given does not ask for the clearance (issue 45)
     fields.update(misalignment=None, offset_um=None, offset_interval_um=None, status="inconclusive")
     text = format_verdict(Verdict(**fields), "um")
