@@ -75,7 +75,7 @@ def main(argv=None) -> int:
     ap.add_argument("--write", action="store_true", help="write models/default/bearing_sets.json")
     args = ap.parse_args(argv)
 
-    from rotordiag.models import bearing_sets as bs
+    from rotordiag.models.checks import bearing_sets as bs
     from rotordiag.models.predict import ModelBundle, load_bundle
 
     t0 = time.perf_counter()

@@ -101,7 +101,7 @@ def with_pickup(n: int, seed: int) -> dict[tuple[int, float], list[float]]:
 
 def main(argv: list[str] | None = None) -> int:
     from rotordiag.features._sanity import COMMON_MODE_MIN_SHARE
-    from rotordiag.models.common_mode import COMMON_MODE_DOUBT_SHARE
+    from rotordiag.models.checks.common_mode import COMMON_MODE_DOUBT_SHARE
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=48)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotordiag.models import bearing_sets as bs
+from rotordiag.models.checks import bearing_sets as bs
 from rotordiag.models.status import INCONCLUSIVE
 
 ROOT = Path(__file__).resolve().parent.parent
