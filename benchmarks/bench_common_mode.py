@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/bench_common_mode.py [--n 48] [--seeds 815,816,817]
 
 The thresholds of ``features._sanity.COMMON_MODE_MIN_SHARE`` (the sanity checks ``common_mode_1x`` /
-``common_mode_2x``) and ``models.common_mode.COMMON_MODE_DOUBT_SHARE`` (the verdict read again without the common
+``common_mode_2x``) and ``models.checks.common_mode.COMMON_MODE_DOUBT_SHARE`` (the verdict read again without the common
 signal) are set from this. In family: docs/robustness.md's simulated sets (held-out plants; base sets of
 ``--seeds``, the far and presets sets of the first seed) under the clean, runout, SNR 15 dB and gain-mismatch
 conditions; for each recording ``features.common_mode`` over every probe set of 6 or 8 probes that spans the

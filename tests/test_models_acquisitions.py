@@ -1,4 +1,4 @@
-"""Bearings either side of the coupling recorded in separate acquisitions (models.acquisitions): never confident."""
+"""Bearings either side of the coupling recorded in separate acquisitions (models.checks.acquisitions): never confident."""
 from __future__ import annotations
 
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""Bearings numbered from the other end (models.numbering)."""
+"""Bearings numbered from the other end (models.checks.numbering)."""
 from __future__ import annotations
 
 import dataclasses

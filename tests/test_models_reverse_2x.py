@@ -1,4 +1,4 @@
-"""A misalignment call on a coupling 2X that whirls backward (models.reverse_2x): never confident."""
+"""A misalignment call on a coupling 2X that whirls backward (models.checks.reverse_2x): never confident."""
 from __future__ import annotations
 
 from pathlib import Path
