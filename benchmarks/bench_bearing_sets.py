@@ -1,4 +1,4 @@
-"""The shipped model per probe set: which instrumented bearings a verdict can be read from (models.bearing_sets).
+"""The shipped model per probe set: which instrumented bearings a verdict can be read from (models.checks.bearing_sets).
 
     .venv/bin/python benchmarks/bench_bearing_sets.py [--n 48] [--calibrate 816,817] [--seed 815] [--write]
 
@@ -6,11 +6,11 @@ Measures, on docs/robustness.md's clean base sets (held-out plants; ``bench_robu
 model's class from each of its training probe sets alone (``train.toml`` ``[augment] bearing_sets``):
 macro-F1 over the bands (all mechanisms) and the false-alarm rate on aligned machines, over the
 ``--calibrate`` seeds. ``--write`` stores them in ``models/default/bearing_sets.json``, the table
-``models.bearing_sets`` gates on (a set with more than ``MAX_FALSE_ALARM_ANY`` false alarms or a macro-F1 below
+``models.checks.bearing_sets`` gates on (a set with more than ``MAX_FALSE_ALARM_ANY`` false alarms or a macro-F1 below
 ``MIN_MACRO_F1`` gives no severity; one with more than ``MAX_FALSE_ALARM`` no confident verdict).
 
 Then, on the ``--seed`` set (not used for the table), every one of the 15 probe sets a four-bearing train can
-have: the model's class from the bearings given (what the verdict read before models.bearing_sets), the set the
+have: the model's class from the bearings given (what the verdict read before models.checks.bearing_sets), the set the
 verdict reads now, and what the user is shown — the status shares, and the aligned machines shown with a
 misalignment severity (``uncertain`` or ``confident``), next to the classifier's own false-alarm rate.
 """
@@ -75,7 +75,7 @@ def main(argv=None) -> int:
     ap.add_argument("--write", action="store_true", help="write models/default/bearing_sets.json")
     args = ap.parse_args(argv)
 
-    from rotordiag.models import bearing_sets as bs
+    from rotordiag.models.checks import bearing_sets as bs
     from rotordiag.models.predict import ModelBundle, load_bundle
 
     t0 = time.perf_counter()
@@ -115,7 +115,7 @@ def main(argv=None) -> int:
         print(f"wrote {bs.CAPABILITY_PATH.relative_to(ROOT)}")
 
     cases, waves = clean_waveforms(args.n, args.seed, args.cache)
-    # the verdict before models.bearing_sets: the same model, read from every bearing given (a card without
+    # the verdict before models.checks.bearing_sets: the same model, read from every bearing given (a card without
     # training probe sets)
     before_bundle = ModelBundle(model=bundle.model, card={}, version=bundle.version)
     print(f"\nevery probe set on the base set of seed {args.seed} ({len(cases)} plants, clean), before (the model "

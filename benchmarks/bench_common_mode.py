@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/bench_common_mode.py [--n 48] [--seeds 815,816,817]
 
 The thresholds of ``features._sanity.COMMON_MODE_MIN_SHARE`` (the sanity checks ``common_mode_1x`` /
-``common_mode_2x``) and ``models.common_mode.COMMON_MODE_DOUBT_SHARE`` (the verdict read again without the common
+``common_mode_2x``) and ``models.checks.common_mode.COMMON_MODE_DOUBT_SHARE`` (the verdict read again without the common
 signal) are set from this. In family: docs/robustness.md's simulated sets (held-out plants; base sets of
 ``--seeds``, the far and presets sets of the first seed) under the clean, runout, SNR 15 dB and gain-mismatch
 conditions; for each recording ``features.common_mode`` over every probe set of 6 or 8 probes that spans the
@@ -101,7 +101,7 @@ def with_pickup(n: int, seed: int) -> dict[tuple[int, float], list[float]]:
 
 def main(argv: list[str] | None = None) -> int:
     from rotordiag.features._sanity import COMMON_MODE_MIN_SHARE
-    from rotordiag.models.common_mode import COMMON_MODE_DOUBT_SHARE
+    from rotordiag.models.checks.common_mode import COMMON_MODE_DOUBT_SHARE
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=48)

@@ -11,7 +11,7 @@ and to the 2X/1X rule of thumb alike.
 :func:`common_mode` measures the share of an order's power that one common signal explains over the
 probes whose order stands out of the noise; ``features._sanity`` fails a recording on it, and
 :func:`without_common_mode` gives the recording with the common signal removed, for a caller that
-reads it both ways (``models.common_mode``).
+reads it both ways (``models.checks.common_mode``).
 """
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ __all__ = ["CommonMode", "common_mode", "common_mode_share", "without_common_mod
 #: probes' bisector, in phase at both coupling-end journals)
 COMMON_MODE_MIN_PROBES = 6
 #: a share from which the common part is worth a look: shown in the evidence, and the verdict is read again without
-#: it (``models.common_mode``); about one recording in 1000 of a healthy shaft reaches it (docs/features.md,
+#: it (``models.checks.common_mode``); about one recording in 1000 of a healthy shaft reaches it (docs/features.md,
 #: "Measurements behind the speed estimate's thresholds")
 COMMON_MODE_NOTABLE_SHARE = 0.6
 

@@ -7,7 +7,7 @@ the shaft-centreline position ``centre_*_per_c`` is NaN when its eccentricity ex
 probe gap, not a position in the bearing); everything else — ratios, phases, orders, shares, the motion type, the
 phase-noise gate — is scale-free. So the features at ``length_factor ×`` the numbers and ``clearance_factor × c``
 follow from those at hand exactly; a test checks them against a second extraction. Used to ask whether a stated
-clearance may be the diametral one, or the numbers half what they should be (``models.clearance_check``).
+clearance may be the diametral one, or the numbers half what they should be (``models.checks.clearance_check``).
 """
 from __future__ import annotations
 

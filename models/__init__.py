@@ -9,9 +9,9 @@ models.predict
 models.diagnosis
     ``diagnose_recording(bundle, recording) -> (Verdict, FeatureResult)``: features, verdict, a
     doubtful estimated speed judged by the model (``models.speed_choice.choose_speed``) and the doubts
-    that read the recording again (``models.common_mode``, ``models.clearance_check``) — what every
+    that read the recording again (``models.checks.common_mode``, ``models.checks.clearance_check``) — what every
     caller that starts from a recording uses.
-models.bearing_sets, models.numbering, models.acquisitions
+models.checks.bearing_sets, models.checks.numbering, models.checks.acquisitions
     Which probe set a verdict reads; bearings numbered from the other end; the coupling's bearings
     recorded in separate takes.
 models.registry

@@ -21,11 +21,11 @@ from threadpoolctl import threadpool_limits
 from rotordiag.core.notes import Measured, Note
 from rotordiag.features import evidence
 
-from .acquisitions import acquisitions_reason, coupling_phase_rows, coupling_split
-from .bearing_sets import bearing_plan, leave_out_bearings
-from .numbering import has_every_bearing, mirrored_row, numbering_reason
+from .checks.acquisitions import acquisitions_reason, coupling_phase_rows, coupling_split
+from .checks.bearing_sets import bearing_plan, leave_out_bearings
+from .checks.numbering import has_every_bearing, mirrored_row, numbering_reason
+from .checks.reverse_2x import reverse_2x_reason
 from .registry import Registry
-from .reverse_2x import reverse_2x_reason
 from .status import (
     DEFAULT_POLICY,
     INCONCLUSIVE,
@@ -244,7 +244,7 @@ def diagnose(
         Number of contributing features reported.
     extra_reasons : sequence of models.status.Reason
         Reasons found outside the feature row, by a caller that has the recording
-        (``models.common_mode``, ``models.clearance_check``); they count in the status like the others.
+        (``models.checks.common_mode``, ``models.checks.clearance_check``); they count in the status like the others.
 
     Returns
     -------
@@ -288,7 +288,7 @@ def _one_position_call(model, fast, names: Sequence[str], row: np.ndarray) -> in
 
 
 def _numbering_reasons(model, fast, names, row: np.ndarray, ood_score: float, cls: int) -> list:
-    """``bearing_numbering`` (models.numbering) for a four-bearing row that is markedly more like the training family
+    """``bearing_numbering`` (models.checks.numbering) for a four-bearing row that is markedly more like the training family
     numbered from the other end: one more OOD and class pass, on the renumbered row."""
     if not has_every_bearing(names, row):
         return []
@@ -315,7 +315,7 @@ class _ModelRow:
 
 def _model_row(bundle, feature_result) -> _ModelRow:
     """The model's feature row of ``feature_result``, with the bearings outside the answering probe set left out
-    (models.bearing_sets), and the warnings that go with it."""
+    (models.checks.bearing_sets), and the warnings that go with it."""
     if isinstance(bundle, ModelBundle):
         model, version = bundle.model, bundle.version
     else:
@@ -331,7 +331,7 @@ def _model_row(bundle, feature_result) -> _ModelRow:
     if missing:
         warnings.append(Note("model_features_not_produced", n_missing=len(missing),
                              examples=f"{missing[:5]}{' …' if len(missing) > 5 else ''}"))
-    # the probe set the model reads (models.bearing_sets): the other bearings' features left out
+    # the probe set the model reads (models.checks.bearing_sets): the other bearings' features left out
     sanity = tuple(getattr(feature_result, "sanity", ()) or ())
     plan = (bearing_plan(bundle, feature_result.bearings,
                          suspect=[f.bearing for f in sanity if f.code == "reverse_whirl" and f.bearing is not None])
@@ -345,7 +345,7 @@ def _model_row(bundle, feature_result) -> _ModelRow:
 
 def ood_score_and_class(bundle: ModelBundle | Any, feature_result) -> tuple[float, str]:
     """The kNN OOD score and the classifier's class of a feature result, as :func:`diagnose` computes them, and
-    nothing else: for a second reading of a recording (``models.clearance_check``, ``models.common_mode``) at a
+    nothing else: for a second reading of a recording (``models.checks.clearance_check``, ``models.checks.common_mode``) at a
     fraction of a verdict's cost.
     """
     m = _model_row(bundle, feature_result)

@@ -9,7 +9,7 @@
   family the model is not trusted against the physics; a misaligned machine of another design called
   "aligned"), or the probes' bearings hold none of the model's training probe sets, or only one it tells
   misalignment poorly from on held-out plants (``bearing_set_untrained``, ``bearing_set_uninformative``:
-  :mod:`models.bearing_sets`). No severity is given.
+  :mod:`models.checks.bearing_sets`). No severity is given.
 - ``uncertain``: a sanity warning, OOD score above 1, a feature outside the training range
   (``outside_training``: which feature, its value and the training range, in plain words;
   inconclusive when ``SCALE_INCONCLUSIVE`` times beyond it), vibration ``SCALE_UNCERTAIN`` times
@@ -30,9 +30,9 @@
   too large); or every journal's attitude angle more than ``FRAME_OFFSET_DEG`` off a plain short bearing's, on one
   side (``centreline_frame_turned``: probes not at the angles given, or bearings unlike plain cylindrical ones);
   or a probe set the model tells misalignment from with more than 10 % false alarms
-  (``bearing_set_weak``, :mod:`models.bearing_sets`); or bearings 2 and 3 recorded in separate acquisitions
-  (``separate_acquisitions``, :mod:`models.acquisitions`: no phase across the coupling); or a misalignment call
-  on a coupling 2X that whirls backward (``reverse_2x``, :mod:`models.reverse_2x`).
+  (``bearing_set_weak``, :mod:`models.checks.bearing_sets`); or bearings 2 and 3 recorded in separate acquisitions
+  (``separate_acquisitions``, :mod:`models.checks.acquisitions`: no phase across the coupling); or a misalignment call
+  on a coupling 2X that whirls backward (``reverse_2x``, :mod:`models.checks.reverse_2x`).
 - ``confident``: none of these.
 
 Class and Δ are consistent by construction (:func:`consistent_estimate`): the severity is
@@ -483,8 +483,8 @@ class RecordingChecks:
     envelope : sequence of dict
         ``MisalignmentModel.envelope_findings`` of this row: features outside the training range.
     extra : sequence of Reason
-        Reasons found outside this module: ``models.bearing_sets`` (a probe set the model was not trained on, or
-        one it tells little from) and ``models.numbering`` (bearings numbered from the other end).
+        Reasons found outside this module: ``models.checks.bearing_sets`` (a probe set the model was not trained on, or
+        one it tells little from) and ``models.checks.numbering`` (bearings numbered from the other end).
     """
 
     names: Sequence[str]

@@ -81,7 +81,7 @@ class ModelStore:
 
     def versions(self) -> list[dict[str, Any]]:
         """Cards of every registered version, oldest first, with an ``active`` flag."""
-        from rotordiag.models.bearing_sets import probe_sets
+        from rotordiag.models.checks.bearing_sets import probe_sets
         from rotordiag.models.registry import RegistryError
 
         out = []

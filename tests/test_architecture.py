@@ -283,6 +283,30 @@ def test_no_climbs_inside_the_service():
     assert not bad, "climbs:\n" + "\n".join(bad)
 
 
+#: what a check (``models/checks/``) must not import: the predictor and the modules that call the checks
+CHECKS_MUST_NOT_IMPORT = ("rotordiag.models.predict", "rotordiag.models.pipeline", "rotordiag.models.diagnosis",
+                          "rotordiag.models.speed_choice")
+
+
+def _check_climbs() -> list[str]:
+    bad = []
+    for path in _package_sources():
+        module = _module_name(path)
+        if module.startswith("rotordiag.models.checks"):
+            bad += [f"{module}:{line} imports {t}" for line, t in _runtime_imports(path, module)
+                    if t.startswith(CHECKS_MUST_NOT_IMPORT)]
+    return bad
+
+
+def test_the_checks_do_not_import_the_predictor():
+    """A check (``models/checks/*``) is given what it needs (features, the verdict, a scorer callable) and never
+    imports the predictor or the pipeline that calls it (issue 43, item 1), not even from inside a function."""
+    names = {_module_name(p) for p in _package_sources()}
+    assert {"rotordiag.models.checks.common_mode", "rotordiag.models.checks.numbering"} <= names
+    bad = _check_climbs()
+    assert not bad, "checks importing the predictor:\n" + "\n".join(bad)
+
+
 def test_features_classify_motion_without_the_analysis_sweeps():
     """``rotordiag.features`` uses the simulator's motion classifier, which loads no analysis sweeps."""
     import subprocess

@@ -1,4 +1,4 @@
-"""Bearings either side of the coupling recorded in separate acquisitions (models.acquisitions): never confident."""
+"""Bearings either side of the coupling recorded in separate acquisitions (models.checks.acquisitions): never confident."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -68,7 +68,7 @@ def test_the_reason_reads_the_recording_at_both_coupling_phases(bundle):
     """With the coupling's phase not measured, the reason gives the model's class with the shaft ends in phase (0°)
     and in anti-phase (180°) across the coupling — the healthy plant reads aligned in phase, the severely misaligned
     one the same either way — and those readings are the classifier's own on rows with that phase put in."""
-    from rotordiag.models.acquisitions import COUPLING_PHASES_DEG, coupling_phase_rows
+    from rotordiag.models.checks.acquisitions import COUPLING_PHASES_DEG, coupling_phase_rows
     from rotordiag.models.diagnosis import diagnose_recording
     from rotordiag.models.predict import _model_row, fast_predictor
 

@@ -1,4 +1,4 @@
-"""Which probe set a verdict reads (models.bearing_sets): the model's training sets, and its figures on each."""
+"""Which probe set a verdict reads (models.checks.bearing_sets): the model's training sets, and its figures on each."""
 from __future__ import annotations
 
 import hashlib
@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotordiag.models import bearing_sets as bs
+from rotordiag.models.checks import bearing_sets as bs
 from rotordiag.models.status import INCONCLUSIVE
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -126,7 +126,7 @@ def _shipped_verdict(bearings, misalignment=0.0, *, plan=True):
     if not (REGISTRY / "active").exists():
         pytest.skip("no shipped registry in this checkout")
     bundle = load_bundle(REGISTRY)
-    if not plan:                                    # every bearing read, as before models.bearing_sets
+    if not plan:                                    # every bearing read, as before models.checks.bearing_sets
         bundle = ModelBundle(model=bundle.model, card={}, version=bundle.version)
     fs, ch = simulated_channels(misalignment=misalignment)
     rec = Recording(fs, [ProbeChannel(b, a, "um", d) for b, a, d in ch if b in bearings], speed_rpm=1800.0,

@@ -1,4 +1,4 @@
-"""A stated clearance that may be the diametral one (models.clearance_check)."""
+"""A stated clearance that may be the diametral one (models.checks.clearance_check)."""
 from __future__ import annotations
 
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""Bearings numbered from the other end (models.numbering)."""
+"""Bearings numbered from the other end (models.checks.numbering)."""
 from __future__ import annotations
 
 import dataclasses
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rotordiag.features import ProbeChannel, Recording, extract_features
-from rotordiag.models.numbering import NUMBERING_OOD_RATIO, has_every_bearing, mirrored_row, numbering_reason
+from rotordiag.models.checks.numbering import NUMBERING_OOD_RATIO, has_every_bearing, mirrored_row, numbering_reason
 
 REGISTRY = Path(__file__).resolve().parent.parent / "models" / "default_registry"
 

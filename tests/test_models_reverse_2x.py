@@ -1,4 +1,4 @@
-"""A misalignment call on a coupling 2X that whirls backward (models.reverse_2x): never confident."""
+"""A misalignment call on a coupling 2X that whirls backward (models.checks.reverse_2x): never confident."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rotordiag.features import ProbeChannel, Recording
-from rotordiag.models.reverse_2x import REVERSE_2X_MIN_RATIO, coupling_reverse_2x, reverse_2x_reason
+from rotordiag.models.checks.reverse_2x import REVERSE_2X_MIN_RATIO, coupling_reverse_2x, reverse_2x_reason
 
 REGISTRY = Path(__file__).resolve().parent.parent / "models" / "default_registry"
 NAMES = ["b2_2x_major_um_pp", "b2_2x_rev_fwd_ratio", "b3_2x_major_um_pp", "b3_2x_rev_fwd_ratio"]

@@ -337,7 +337,7 @@ def test_models_list_says_which_probe_sets_the_model_reads(client):
 
 
 def test_probes_at_the_outboard_bearings_alone_give_no_severity_and_say_what_to_add(client, rec):
-    """rotordiag.models.bearing_sets: no probe set of the model's training lies within bearings 1 and 4 (200, not 4xx: the
+    """rotordiag.models.checks.bearing_sets: no probe set of the model's training lies within bearings 1 and 4 (200, not 4xx: the
     recording is valid; the verdict says why it cannot judge it)."""
     fs, channels = rec
     outboard = [(b, a, d) for b, a, d in channels if b in (1, 4)]

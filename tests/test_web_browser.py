@@ -778,7 +778,7 @@ def test_takes_saved_as_separate_files(server, browser, recordings, tmp_path):
 
 
 def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_path):
-    """rotordiag.models.bearing_sets on the page: probes at 1, 3, 4 are read from bearing 3 (a warning says so, the evidence
+    """rotordiag.models.checks.bearing_sets on the page: probes at 1, 3, 4 are read from bearing 3 (a warning says so, the evidence
     keeps every bearing, never confident); probes at 1 and 4 alone give no severity and say what to add."""
     data = recordings[0.2]
     d = browser

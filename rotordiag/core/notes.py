@@ -226,7 +226,7 @@ _ENTRIES = (
              "without a keyphasor reference: phase differences across them are not measured",
              "record the bearings in one acquisition or with a keyphasor", "bearings recorded in separate "
              "acquisitions ({groups}): the phase differences between {pairs} are not measured ({why})"),
-    # --- the model side (models.predict, models.bearing_sets) ---
+    # --- the model side (models.predict, models.checks.bearing_sets) ---
     NoteInfo("model_features_not_produced", CAUTION, "features the model reads were not produced by the feature "
              "extractor (treated as missing)", "use the feature extractor the model was trained with",
              "{n_missing} model feature(s) not produced by the feature extractor (treated as missing): "

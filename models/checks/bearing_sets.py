@@ -22,14 +22,14 @@ import numpy as np
 
 from rotordiag.core.notes import Note
 
-from ._patterns import bearing_feature
-from .status import INCONCLUSIVE, UNCERTAIN, Reason
+from .._patterns import bearing_feature
+from ..status import INCONCLUSIVE, UNCERTAIN, Reason
 
 __all__ = ["CAPABILITY_PATH", "MAX_FALSE_ALARM", "MAX_FALSE_ALARM_ANY", "MIN_MACRO_F1", "BearingPlan", "answering_set", "bearing_plan",
            "set_key", "trained_sets", "load_capability", "leave_out_bearings", "probe_sets"]
 
 #: held-out figures of the shipped model per probe set (``benchmarks/bench_bearing_sets.py --write``)
-CAPABILITY_PATH = Path(__file__).resolve().parent / "default" / "bearing_sets.json"
+CAPABILITY_PATH = Path(__file__).resolve().parent.parent / "default" / "bearing_sets.json"
 #: an answering set whose held-out false-alarm rate (aligned machines called misaligned) exceeds this gives no
 #: confident verdict (issue 15's bound on every condition): ``bearing_set_weak``, uncertain
 MAX_FALSE_ALARM = 0.10

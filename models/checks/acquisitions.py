@@ -16,7 +16,7 @@ import numpy as np
 from rotordiag.core.conventions import COUPLING_BEARINGS
 from rotordiag.features import format_acquisitions, split_pairs
 
-from .status import UNCERTAIN, Reason
+from ..status import UNCERTAIN, Reason
 
 __all__ = ["COUPLING_PHASES_DEG", "coupling_split", "coupling_phase_rows", "acquisitions_reason"]
 

@@ -15,8 +15,8 @@ import numpy as np
 
 from rotordiag.core.conventions import wrap_deg
 
-from ._patterns import bearing_feature
-from .status import UNCERTAIN, Reason
+from .._patterns import bearing_feature
+from ..status import UNCERTAIN, Reason
 
 __all__ = ["NUMBERING_OOD_RATIO", "mirrored_row", "numbering_reason", "has_every_bearing"]
 

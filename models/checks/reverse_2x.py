@@ -14,7 +14,7 @@ import numpy as np
 
 from rotordiag.core.conventions import COUPLING_BEARINGS
 
-from .status import UNCERTAIN, Reason
+from ..status import UNCERTAIN, Reason
 
 __all__ = ["REVERSE_2X_MIN_RATIO", "REVERSE_2X_MIN_SHARE", "coupling_reverse_2x", "reverse_2x_reason"]
 

@@ -14,7 +14,8 @@ from typing import Any
 from rotordiag.core.notes import Length, Measured
 from rotordiag.features import FeatureResult, Recording, with_scale
 
-from .status import CONFIDENT, UNCERTAIN, Reason
+from ..status import CONFIDENT, UNCERTAIN, Reason
+from . import Scorer
 
 __all__ = ["DIAMETRAL_OOD_RATIO", "clearance_reason"]
 
@@ -25,25 +26,25 @@ __all__ = ["DIAMETRAL_OOD_RATIO", "clearance_reason"]
 DIAMETRAL_OOD_RATIO = 1.0
 
 
-def clearance_reason(bundle: Any, recording: Recording, fr: FeatureResult, verdict: Any) -> Reason | None:
+def clearance_reason(score: Scorer, recording: Recording, fr: FeatureResult, verdict: Any) -> Reason | None:
     """``clearance_diametral`` when half the stated clearance makes a confident verdict's recording markedly more
     like the training family, else None.
 
     Parameters
     ----------
-    bundle : models.ModelBundle or fitted model
+    score : callable
+        A recording's features to (OOD score, class) with the active model (``models.predict.ood_score_and_class``
+        bound to the bundle): given, so that this check does not import the predictor.
     recording : features.Recording
         The recording as sent; judged only when it states a clearance.
     fr : features.FeatureResult
         Its features (the speed the verdict was given at).
     verdict : models.Verdict
     """
-    from .predict import ood_score_and_class
-
     if getattr(verdict, "status", None) != CONFIDENT or recording.clearance_um is None:
         return None
     try:
-        ood_half, class_half = ood_score_and_class(bundle, with_scale(fr, clearance_factor=0.5))
+        ood_half, class_half = score(with_scale(fr, clearance_factor=0.5))
     except ValueError:
         return None
     ratio = ood_half / verdict.ood_score if verdict.ood_score > 0 else float("inf")

@@ -21,7 +21,8 @@ from rotordiag.features import (
     without_common_mode,
 )
 
-from .status import INCONCLUSIVE, UNCERTAIN, Reason
+from ..status import INCONCLUSIVE, UNCERTAIN, Reason
+from . import Scorer
 
 __all__ = ["COMMON_MODE_DOUBT_SHARE", "common_mode_reason"]
 
@@ -31,12 +32,14 @@ COMMON_MODE_DOUBT_SHARE = COMMON_MODE_NOTABLE_SHARE
 _ORDERS = (1, 2)
 
 
-def common_mode_reason(bundle: Any, recording: Recording, fr: FeatureResult, verdict: Any) -> Reason | None:
+def common_mode_reason(score: Scorer, recording: Recording, fr: FeatureResult, verdict: Any) -> Reason | None:
     """``common_mode`` when the verdict's class changes with the common 1X / 2X removed, else None.
 
     Parameters
     ----------
-    bundle : models.ModelBundle or fitted model
+    score : callable
+        A recording's features to (OOD score, class) with the active model (``models.predict.ood_score_and_class``
+        bound to the bundle): given, so that this check does not import the predictor.
     recording : features.Recording
         The recording as sent.
     fr : features.FeatureResult
@@ -44,8 +47,6 @@ def common_mode_reason(bundle: Any, recording: Recording, fr: FeatureResult, ver
     verdict : models.Verdict
         Its verdict; an inconclusive one is not read again.
     """
-    from .predict import ood_score_and_class
-
     found = [cm for k in _ORDERS if (cm := common_mode(fr, k)) is not None and cm.share >= COMMON_MODE_DOUBT_SHARE]
     if not found or verdict.status == INCONCLUSIVE or verdict.model_severity is None:
         return None
@@ -53,7 +54,7 @@ def common_mode_reason(bundle: Any, recording: Recording, fr: FeatureResult, ver
         clean = without_common_mode(recording, fr, found)
         fr_clean = extract_features(clean, speed_estimate_rpm=fr.speed_rpm if fr.speed_source == "estimated" else None,
                                     speed_notes=list(fr.warnings))
-        _, other = ood_score_and_class(bundle, fr_clean)
+        _, other = score(fr_clean)
     except ValueError:
         return None
     if other == verdict.model_severity:

@@ -1,0 +1,58 @@
+"""The shipped examples' verdicts pinned: a refactor of the verdict path (issue 43: one pipeline, checks in one
+folder) must not change them silently.
+
+The values were recorded on main before the refactor (``rotordiag diagnose`` path: read, features, verdict with
+the shipped model v0001). A change here is a change of behaviour: explain it in the commit, then update the pin.
+The same recording in four formats (CSV, HDF5, UFF, NPY) must give the same verdict; the mil rendering is the µm
+value over 25.4 (an independent unit check).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from rotordiag.features.examples import example_path
+from rotordiag.models.diagnose_files import diagnose_one, load_options, verdict_json
+from tests.service_util import shipped_registry_usable
+
+pytestmark = pytest.mark.skipif(not shipped_registry_usable(), reason="no usable shipped model registry")
+
+_ALIGNED = dict(severity="aligned", status="uncertain",
+                codes=["far_band_probability", "far_band_interval", "offset_not_assessed"],
+                misalignment=0.049999999999999996, misalignment_model=0.15688416447453915)
+_MISALIGNED = dict(severity="severe", status="uncertain",
+                   codes=["no_sync_signal", "speed_ambiguous", "far_band_interval"],
+                   misalignment=0.4252658411388842, misalignment_model=0.4252658411388842)
+PINNED = {"aligned.csv": _ALIGNED, "aligned.h5": _ALIGNED, "whirl.csv": _MISALIGNED,
+          "whirl.h5": _MISALIGNED, "whirl.uff": _MISALIGNED, "whirl_2560hz.npy": _MISALIGNED}
+
+
+@pytest.fixture(scope="module")
+def bundle():
+    from rotordiag.models.predict import load_bundle
+    from rotordiag.service.core.config import SHIPPED_REGISTRY_DIR
+
+    return load_bundle(SHIPPED_REGISTRY_DIR)
+
+
+@pytest.mark.parametrize("name", sorted(PINNED))
+def test_shipped_example_verdict_pinned(bundle, name):
+    path = example_path(name)
+    opts = load_options(path, None, {"sample_rate_hz": 2560} if path.suffix == ".npy" else {})
+    verdict, res, _ = diagnose_one(bundle, path, opts)
+    want = PINNED[name]
+    assert verdict.model_version == "v0001"
+    assert verdict.severity == want["severity"]
+    assert verdict.status == want["status"]
+    assert [r["code"] for r in verdict.reasons] == want["codes"]
+    assert verdict.misalignment == pytest.approx(want["misalignment"], abs=1e-9)
+    assert verdict.misalignment_model == pytest.approx(want["misalignment_model"], abs=1e-9)
+    assert verdict.speed_source == "estimated"
+    assert verdict.speed_rpm == pytest.approx(1800.0, abs=0.1)
+    um = verdict_json(Path(name), verdict, res, "um")
+    mil = verdict_json(Path(name), verdict, res, "mil")
+    if um["offset_um"] is None:
+        assert mil.get("offset_mil") is None
+    else:
+        assert mil["offset_mil"] == pytest.approx(um["offset_um"] / 25.4, rel=1e-12)
