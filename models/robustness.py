@@ -68,7 +68,7 @@ class Condition:
     #: (bearing, probe index) whose signal is inverted: a probe wired or configured with the wrong polarity (or the
     #: x/y order swapped), which turns that bearing's 1X backward (``features`` sanity ``reverse_whirl``)
     inverted_probe: tuple[int, int] | None = None
-    #: the user numbers the bearings from the exciter end: bearing b is sent as 5 − b (models.checks.numbering)
+    #: the user numbers the bearings from the exciter end: bearing b is sent as 5 − b (rotordiag.models.checks.numbering)
     numbered_from_exciter: bool = False
     #: the probes of bearings 2 and 3 sent as each other's (a cable mix-up at the coupling)
     coupling_bearings_swapped: bool = False
@@ -76,7 +76,7 @@ class Condition:
     #: after the measurement's draws): a ground loop on a grid-synchronous generator (features._common_mode)
     pickup: tuple[int, float] | None = None
     #: the pickup with its own phase on each channel (drawn the same way): a ground loop through cables routed apart,
-    #: which no common-mode check sees (models.checks.reverse_2x)
+    #: which no common-mode check sees (rotordiag.models.checks.reverse_2x)
     pickup_per_channel: bool = False
     #: a keyphasor is sent, faulty: ``"missing"`` = every 5th pulse missing (a worn notch, the trigger level
     #: marginal), ``"second edge"`` = an extra pulse 0.37 revolution after each one; the recordings are measured at a
@@ -140,11 +140,11 @@ CONDITIONS: tuple[Condition, ...] = (
                    "centreline (not one of the issue's rows)"),
     Condition("bearing 2's x probe inverted", inverted_probe=(2, 0), same_recordings_as="clean",
               what="the clean recordings with bearing 2's 45° probe inverted (wrong polarity, or the x/y order "
-                   "swapped): its 1X whirls backward; the verdict leaves bearing 2 out (models.checks.bearing_sets) "
+                   "swapped): its 1X whirls backward; the verdict leaves bearing 2 out (rotordiag.models.checks.bearing_sets) "
                    "(not one of the issue's rows)"),
     Condition("bearings numbered 4-3-2-1", numbered_from_exciter=True, same_recordings_as="clean",
               what="the clean recordings with the bearings numbered from the exciter end (bearing b sent as 5 − b); "
-                   "models.checks.numbering doubts the numbering when the other one is markedly more like the training "
+                   "rotordiag.models.checks.numbering doubts the numbering when the other one is markedly more like the training "
                    "family (not one of the issue's rows)"),
     Condition("keyphasor, every 5th pulse missing", keyphasor_fault="missing",
               what="the base set's machines at a steady speed with a keyphasor whose every 5th pulse is missing: the "
@@ -161,13 +161,13 @@ CONDITIONS: tuple[Condition, ...] = (
     Condition("mains pickup at 2X, 10 µm", pickup=(2, 10.0), same_recordings_as="clean",
               what="the clean recordings with a 10 µm (0-pk) signal at twice the running frequency added to every "
                    "channel in one phase: mains pickup (a ground loop) on a grid-synchronous 2-pole generator, "
-                   "100/120 Hz; the sanity check common_mode_2x and the common_mode doubt (models.checks.common_mode) "
+                   "100/120 Hz; the sanity check common_mode_2x and the common_mode doubt (rotordiag.models.checks.common_mode) "
                    "(not one of the issue's rows)"),
     Condition("mains pickup at 2X, 10 µm, a phase per cable", pickup=(2, 10.0), pickup_per_channel=True,
               same_recordings_as="clean",
               what="the clean recordings with a 10 µm (0-pk) signal at twice the running frequency added to each "
                    "channel with a phase of its own: pickup through cables routed apart, which no common-mode check "
-                   "sees; a misalignment call whose coupling 2X whirls backward is doubted (models.checks.reverse_2x) "
+                   "sees; a misalignment call whose coupling 2X whirls backward is doubted (rotordiag.models.checks.reverse_2x) "
                    "(not one of the issue's rows)"),
     Condition("bearings 2 and 3 swapped", coupling_bearings_swapped=True, same_recordings_as="clean",
               what="the clean recordings with bearing 2's probes sent as bearing 3's and 3's as 2's (cables mixed up at "
@@ -180,7 +180,7 @@ CONDITIONS: tuple[Condition, ...] = (
     Condition("bearings 3–4 in a second take, stated", second_take_ms=(2.0, 20.0), acquisitions="1,2;3,4",
               same_recordings_as="clean",
               what="the same recordings with `acquisitions` = 1,2;3,4: the phases between the takes are not "
-                   "measured and the verdict says so (models.checks.acquisitions) (not one of the issue's rows)"),
+                   "measured and the verdict says so (rotordiag.models.checks.acquisitions) (not one of the issue's rows)"),
     Condition("bearings 3–4 in a second take, a keyphasor per take", second_take_ms=(2.0, 20.0),
               acquisitions="1,2;3,4", keyphasor_per_take=True,
               what="the base set's machines at a steady speed, bearings 3 and 4 taken U(2, 20) ms after 1 and 2, each "
