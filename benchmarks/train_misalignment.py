@@ -100,9 +100,9 @@ def dynamic_sweep(name: str, coupling: str, fractions=FRACTIONS) -> list[dict]:
             except TrainError as exc:
                 rows.append({"coupling": coupling, "dir": where, "frac": f, "error": str(exc)[:80]})
                 continue
-            one, two = _orders_pp(rec.waveforms_um, RECORD_REVS)
+            one, two = _orders_pp(rec.probes.waveforms_um, RECORD_REVS)
             rows.append({"coupling": coupling, "dir": where, "frac": f, "one_x": one, "two_x": two,
-                         "channels": rec.channels, "wave": rec.waveforms_um, "s": time.perf_counter() - t0,
+                         "channels": rec.probes.channels, "wave": rec.probes.waveforms_um, "s": time.perf_counter() - t0,
                          "log_dec": rec.inputs["log_decrement"]})
     return rows
 

@@ -269,18 +269,19 @@ def _simulate_train(tr: Any, speed_rpm: float, *, probes_out: Optional[Path], as
         raise typer.BadParameter(str(exc)) from None
     for note in rec.warnings:
         typer.secho(f"warning: {note}", fg=typer.colors.YELLOW, err=True)
+    p = rec.probes
     rows: list[dict[str, Any]] = []
-    for b, cl in sorted(rec.clearance_um.items()):
-        pair = [k for k, (bb, _) in enumerate(rec.channels) if bb == b]
-        wave = rec.waveforms_um[pair]
+    for b, cl in sorted(p.clearance_um.items()):
+        pair = [k for k, (bb, _) in enumerate(p.channels) if bb == b]
+        wave = p.waveforms_um[pair]
         rows.append({"bearing": b, "clearance_um": cl, "dc_um": [round(float(v), 2) for v in wave.mean(axis=1)],
                      "pk_pk_um": [round(float(v), 2) for v in np.ptp(wave, axis=1)]})
-    summary = {"speed_rpm": rec.speed_rpm, "inputs": rec.inputs, "warnings": rec.warnings, "bearings": rows,
+    summary = {"speed_rpm": p.speed_rpm, "inputs": rec.inputs, "warnings": rec.warnings, "bearings": rows,
                "wall_time_s": round(rec.run.wall_time_s, 3)}
     if as_json:
         typer.echo(json.dumps(summary, indent=2))
     else:
-        typer.echo(f"train at {rec.speed_rpm:g} r/min: {rec.run.wall_time_s:.2f} s; least log decrement "
+        typer.echo(f"train at {p.speed_rpm:g} r/min: {rec.run.wall_time_s:.2f} s; least log decrement "
                    f"{rec.inputs['log_decrement']:.3f}")
         typer.echo(f"{'bearing':>7} {'c µm':>7} {'DC 45° µm':>10} {'DC 135° µm':>11} {'pk-pk 45°':>10} {'pk-pk 135°':>11}")
         for r in rows:
@@ -288,13 +289,13 @@ def _simulate_train(tr: Any, speed_rpm: float, *, probes_out: Optional[Path], as
                        f"{r['pk_pk_um'][0]:10.1f} {r['pk_pk_um'][1]:11.1f}")
     if probes_out is not None:
         try:
-            write_probes(probes_out, rec.waveforms_um, rec.channels, rec.sample_rate_hz, speed_rpm=rec.speed_rpm,
-                         clearance_um=min(rec.clearance_um.values()),
-                         keyphasor_signal=keyphasor_pulse_signal(rec.time_s, rec.sample_rate_hz, rec.keyphasor_times_s))
+            write_probes(probes_out, p.waveforms_um, p.channels, p.sample_rate_hz, speed_rpm=p.speed_rpm,
+                         clearance_um=min(p.clearance_um.values()),
+                         keyphasor_signal=keyphasor_pulse_signal(rec.time_s, p.sample_rate_hz, p.keyphasor_times_s))
         except ValueError as exc:
             raise typer.BadParameter(str(exc), param_hint="--probes-out") from None
-        typer.echo(f"wrote {probes_out} ({len(rec.channels)} probes + keyphasor × {rec.waveforms_um.shape[1]} "
-                   f"samples at {rec.sample_rate_hz:g} Hz, µm)", err=True)
+        typer.echo(f"wrote {probes_out} ({len(p.channels)} probes + keyphasor × {p.waveforms_um.shape[1]} "
+                   f"samples at {p.sample_rate_hz:g} Hz, µm)", err=True)
 
 
 def register(app: typer.Typer) -> None:

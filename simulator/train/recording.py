@@ -4,14 +4,14 @@ measurement noise, and a keyphasor — what ``rotordiag simulate --train`` write
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from .dynamics import TrainRun, simulate_train
 from .model import Train, TrainError, misaligned
-from .probes import train_probes
+from .probes import TrainProbes, train_probes
 from .stability import stability
 from .transient import unbalanced
 
@@ -20,23 +20,19 @@ __all__ = ["TrainRecording", "train_recording"]
 
 @dataclass(frozen=True)
 class TrainRecording:
-    """Probe waveforms (µm, DC included, noise added) at every bearing's 45°/135° pair, with the record's
-    keyphasor times; ``warnings`` say what the user should know (a speed beyond the stability threshold);
-    ``inputs`` records what made it (for a file's metadata and a dataset's parameters)."""
+    """A train's steady recording: its ``probes`` (:class:`~rotordiag.simulator.train.probes.TrainProbes`, noise
+    added; µm, DC included, every bearing's 45°/135° pair, the keyphasor times), the ``run`` they come from,
+    ``warnings`` for the user (a speed beyond the stability threshold), and the ``inputs`` that made it (for a file's
+    metadata and a dataset's parameters)."""
 
-    waveforms_um: np.ndarray
-    channels: tuple[tuple[int, float], ...]
-    sample_rate_hz: float
-    keyphasor_times_s: np.ndarray
-    speed_rpm: float
-    clearance_um: dict[int, float]
+    probes: TrainProbes
     run: TrainRun
     warnings: list[str] = field(default_factory=list)
     inputs: dict[str, Any] = field(default_factory=dict)
 
     @property
     def time_s(self) -> np.ndarray:
-        return np.arange(self.waveforms_um.shape[1]) / self.sample_rate_hz
+        return np.arange(self.probes.waveforms_um.shape[1]) / self.probes.sample_rate_hz
 
 
 def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, angular_mrad: float = 0.0,
@@ -93,6 +89,4 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
               "transient_revs": int(transient_revs), "record_revs": int(record_revs),
               "samples_per_rev": int(samples_per_rev), "snr_db": float(snr_db), "seed": int(seed),
               "log_decrement": log_dec}
-    return TrainRecording(waveforms_um=wave, channels=probes.channels, sample_rate_hz=probes.sample_rate_hz,
-                          keyphasor_times_s=probes.keyphasor_times_s, speed_rpm=float(speed_rpm),
-                          clearance_um=probes.clearance_um, run=run, warnings=warnings, inputs=inputs)
+    return TrainRecording(probes=replace(probes, waveforms_um=wave), run=run, warnings=warnings, inputs=inputs)
