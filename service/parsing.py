@@ -137,17 +137,24 @@ PROBE_CONFIG_GROUPS: dict[str, tuple[str, ...]] = {
     "layout": ("channel_map", "bearings", "angles_deg"), "units": ("units",),
     "sensitivity": ("sensitivity", "sensitivity_v_per_mm"), "gap_voltage": ("gap_voltage_v",),
     "keyphasor": ("keyphasor_channel",), "rotation": ("rotation", "viewed_from"), "clearance": ("clearance_um",),
-    "speed_band": ("speed_range_rpm",), "model": ("model_version",), "plant_model": ("plant_model",)}
+    "speed_band": ("speed_range_rpm",), "model": ("model_version",), "plant_model": ("plant_model", "plant_shaftline")}
 PROBE_CONFIG_KEYS = tuple(k for keys in PROBE_CONFIG_GROUPS.values() for k in keys)
 
 
-def plant_of_model(name: str) -> Any:
-    """The lumped plant of an asset's plant model: ``default`` (MODEL.md's) or a preset's shaft line reduced
-    (``simulator.shaftline.preset``); InputError naming the choices."""
+def plant_of_model(name: str | None, shaftline: dict[str, Any] | None = None) -> Any:
+    """The lumped plant of an asset's plant model: ``default`` (MODEL.md's), a preset's shaft line, or the asset's
+    own shaft-line tables, reduced (``simulator.shaftline.to_plant``); InputError saying what to fix."""
     from rotordiag.simulator import Plant
-    from rotordiag.simulator.shaftline import PRESETS, preset, to_plant
+    from rotordiag.simulator.shaftline import PRESETS, ShaftLine, preset, to_plant
 
-    if name == "default":
+    if name is not None and shaftline is not None:
+        raise InputError("plant_model and plant_shaftline: give the asset's plant one way")
+    if shaftline is not None:
+        try:
+            return to_plant(ShaftLine.from_dict(shaftline))
+        except (TypeError, ValueError, OverflowError, ZeroDivisionError, FloatingPointError) as exc:
+            raise InputError(f"plant_shaftline: {exc}") from None
+    if name is None or name == "default":
         return Plant.default()
     if name not in PRESETS:
         raise InputError(f"plant_model {name!r}: use default or a preset: {', '.join(sorted(PRESETS))}")
@@ -161,9 +168,9 @@ def check_probe_config(config: dict[str, Any]) -> None:
     unknown = sorted(set(config) - set(PROBE_CONFIG_KEYS))
     if unknown:
         raise InputError(f"probe configuration: unknown field(s) {unknown}; allowed: {list(PROBE_CONFIG_KEYS)}")
-    options_from_query({k: v for k, v in config.items() if k not in ("model_version", "plant_model")})
-    if config.get("plant_model") is not None:
-        plant_of_model(str(config["plant_model"]))
+    options_from_query({k: v for k, v in config.items() if k not in ("model_version", "plant_model", "plant_shaftline")})
+    if config.get("plant_model") is not None or config.get("plant_shaftline") is not None:
+        plant_of_model(config.get("plant_model"), config.get("plant_shaftline"))
     if config.get("units") is not None and input_unit(str(config["units"])) is None:
         raise InputError(f"probe configuration: units {config['units']!r}: use one of {list(INPUT_UNITS)}")
     for key in ("sensitivity", "sensitivity_v_per_mm"):

@@ -270,7 +270,8 @@ def _transient(kind: str, body: Body, filename: str, query: dict[str, Any], unit
     from .plotdata import transient_plots
 
     def run() -> tuple:
-        plant = plant_of_model(str(query["plant_model"])) if query.get("plant_model") else None
+        plant = (plant_of_model(query.get("plant_model"), query.get("plant_shaftline"))
+                 if query.get("plant_model") or query.get("plant_shaftline") else None)
         return ("ok", transient_plots(parse_body(kind, body, filename, query)[0], units, cascade_scale, plant=plant))
 
     return _tagged(run)

@@ -326,6 +326,9 @@ class ProbeConfigIn(_Strict):
                                     "preset of `rotordiag plant` (`gen50_2pole`, `gen200_2pole`, `gen600_2pole`, "
                                     "`gen600_4pole`) or `default` (MODEL.md's plant); its Campbell diagram is drawn "
                                     "under the asset's start-up plots.")
+    plant_shaftline: dict[str, Any] | None = Field(None, description="Instead of `plant_model`: the asset's shaft "
+                                                   "line, the tables of `rotordiag plant from-shaftline` (as the "
+                                                   "retrain job's `shaftline`).")
 
 
 class ProbeConfigOut(BaseModel):

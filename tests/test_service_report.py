@@ -174,6 +174,17 @@ def test_an_assets_plant_model_draws_its_campbell_under_the_startup_plots(client
     assert "campbell" in [f["name"] for f in with_model.json()["figures"]]
     without = c.post("/ui/transient-plots", files=body).json()
     assert "campbell" not in [f["name"] for f in without["figures"]]
+    # the asset's own shaft line instead of a preset (the tables of examples/shaftline_200mw.toml)
+    import tomllib
+
+    tables = tomllib.loads((Path(__file__).resolve().parents[1] / "examples" / "shaftline_200mw.toml").read_text())
+    r = c.put(f"/assets/{asset}/probes", json={"plant_shaftline": tables}, headers=auth())
+    assert r.status_code == 200, r.text
+    own = c.post("/ui/transient-plots", params={"asset_id": asset}, files=body)
+    assert own.status_code == 200 and "campbell" in [f["name"] for f in own.json()["figures"]]
+    both = c.put(f"/assets/{asset}/probes", json={"plant_model": "default", "plant_shaftline": tables},
+                 headers=auth())
+    assert both.status_code == 422 and "one way" in both.json()["detail"]
 
 
 def test_transient_plots_refuse_a_keyphasor_that_drops_out_and_a_broken_file(clients, runup_csv):

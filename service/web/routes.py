@@ -120,13 +120,14 @@ async def _reader_query(request: Request, state: Any, reader: dict[str, Any], sa
     return query
 
 
-def _transient_sync(recording: Any, units: str, cascade_scale: str = "db",
-                    plant_model: str | None = None) -> dict[str, Any]:
+def _transient_sync(recording: Any, units: str, cascade_scale: str = "db", plant_model: str | None = None,
+                    plant_shaftline: dict | None = None) -> dict[str, Any]:
     from ..parsing import plant_of_model
 
     try:
         return transient_plots(recording, units, cascade_scale,
-                               plant=plant_of_model(plant_model) if plant_model else None)
+                               plant=plant_of_model(plant_model, plant_shaftline)
+                               if plant_model or plant_shaftline else None)
     except ValueError as exc:  # the features package's messages (speed reverses, keyphasor drops out, ...)
         raise InputError(str(exc)) from None
 
@@ -152,4 +153,5 @@ async def transient(
     return await recording_answer(
         request, state, query,
         lambda kind, body, filename, q: TransientPlots(kind, body, filename, q, output_units, cascade_scale),
-        lambda recording: _transient_sync(recording, output_units, cascade_scale, query.get("plant_model")))
+        lambda recording: _transient_sync(recording, output_units, cascade_scale, query.get("plant_model"),
+                                          query.get("plant_shaftline")))
