@@ -2,6 +2,7 @@
 POST /jobs/{id}/cancel."""
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, Path, Query
@@ -34,13 +35,33 @@ def _out(job) -> JobOut:
     return JobOut.model_validate(job, from_attributes=True)
 
 
+async def _created(jobs, kind: str, params: dict[str, Any]) -> JobCreated:
+    """Submit a prepared job (in a thread: it writes the database) and answer where to follow it."""
+    job = await run_in_threadpool(_submit, jobs, kind, params)
+    return JobCreated(id=job.id, status=job.status, url=f"/jobs/{job.id}")
+
+
+def _found(job_id: str, job) -> JobOut:
+    """``job`` as the API shows it, a 404 naming ``job_id`` when there is none."""
+    if job is None:
+        raise InputError(f"no job with id {job_id!r}", "not_found")
+    return _out(job)
+
+
+def _acted(action: Callable[[str], Any], job_id: str) -> JobOut:
+    """``action(job_id)`` (resume, cancel): a 409 with the job store's reason when the job's state refuses it."""
+    try:
+        job = action(job_id)
+    except ValueError as exc:
+        raise InputError(str(exc), "conflict") from None
+    return _found(job_id, job)
+
+
 @router.post("/datasets", status_code=202, response_model=JobCreated, dependencies=[ApiKeyDep, JsonBodyDep],
              responses={**_AUTH, 422: {"model": ErrorOut, "description": "Invalid spec; `detail` names the key."}},
              summary="Generate a labelled dataset from a sweep spec (job)")
 async def create_dataset(body: DatasetJobRequest, jobs: JobsDep) -> JobCreated:
-    params = await run_in_threadpool(prepare_dataset_job, body, jobs.settings)
-    job = await run_in_threadpool(_submit, jobs, "dataset", params)
-    return JobCreated(id=job.id, status=job.status, url=f"/jobs/{job.id}")
+    return await _created(jobs, "dataset", await run_in_threadpool(prepare_dataset_job, body, jobs.settings))
 
 
 @router.post("/models/retrain", status_code=202, response_model=JobCreated, dependencies=[ApiKeyDep, JsonBodyDep],
@@ -48,9 +69,7 @@ async def create_dataset(body: DatasetJobRequest, jobs: JobsDep) -> JobCreated:
              responses={**_AUTH, 422: {"model": ErrorOut, "description": "Invalid plant, sweep or training options."}},
              summary="Retrain the model for a plant (job)")
 async def create_retrain(body: RetrainRequest, jobs: JobsDep) -> JobCreated:
-    params = await run_in_threadpool(prepare_retrain_job, body, jobs.settings)
-    job = await run_in_threadpool(_submit, jobs, "retrain", params)
-    return JobCreated(id=job.id, status=job.status, url=f"/jobs/{job.id}")
+    return await _created(jobs, "retrain", await run_in_threadpool(prepare_retrain_job, body, jobs.settings))
 
 
 @router.get("/jobs", response_model=JobList, summary="Recent jobs")
@@ -63,23 +82,14 @@ def list_jobs(jobs: JobsDep, limit: Annotated[int, Query(ge=1, le=1000)] = 100,
 @router.get("/jobs/{job_id}", response_model=JobOut, responses={404: {"model": ErrorOut}},
             summary="A job's status, progress and result")
 def get_job(job_id: _JobId, jobs: JobsDep) -> JobOut:
-    job = jobs.get(job_id)
-    if job is None:
-        raise InputError(f"no job with id {job_id!r}", "not_found")
-    return _out(job)
+    return _found(job_id, jobs.get(job_id))
 
 
 @router.post("/jobs/{job_id}/resume", response_model=JobOut, dependencies=[ApiKeyDep],
              responses={**_AUTH, 404: {"model": ErrorOut}, 409: {"model": ErrorOut, "description": "Not resumable."}},
              summary="Resume an interrupted (or failed) job")
 def resume_job(job_id: _JobId, jobs: JobsDep) -> JobOut:
-    try:
-        job = jobs.resume(job_id)
-    except ValueError as exc:
-        raise InputError(str(exc), "conflict") from None
-    if job is None:
-        raise InputError(f"no job with id {job_id!r}", "not_found")
-    return _out(job)
+    return _acted(jobs.resume, job_id)
 
 
 @router.post("/jobs/{job_id}/cancel", response_model=JobOut, dependencies=[ApiKeyDep],
@@ -91,10 +101,4 @@ def resume_job(job_id: _JobId, jobs: JobsDep) -> JobOut:
              "its thread has ended (at most 10 s). A cancelled job keeps its finished work: "
              "POST /jobs/{id}/resume continues it.")
 def cancel_job(job_id: _JobId, jobs: JobsDep) -> JobOut:
-    try:
-        job = jobs.cancel(job_id)
-    except ValueError as exc:
-        raise InputError(str(exc), "conflict") from None
-    if job is None:
-        raise InputError(f"no job with id {job_id!r}", "not_found")
-    return _out(job)
+    return _acted(jobs.cancel, job_id)
