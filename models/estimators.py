@@ -250,10 +250,10 @@ class ConformalIntervalRegressor(RegressorMixin, BaseEstimator):
     point estimate and clipped below at ``lower_bound`` (Δ ≥ 0), neither of which can
     lower the coverage.
 
-    (Conformalised quantile regression was the first choice, but boosted quantile models
-    at α/2 cannot leave a target with many exact ties at its lower end — Δ = 0 for every
-    aligned machine: every gradient is equal, no split has any gain, and the 5 % quantile
-    stays 0 for every row, giving uninformative intervals.)
+    (Not conformalised quantile regression: boosted quantile models at α/2 cannot leave a
+    target with many exact ties at its lower end — Δ = 0 for every aligned machine: every
+    gradient is equal, no split has any gain, and the lower quantile stays 0 for every row,
+    giving uninformative intervals.)
 
     Parameters
     ----------
@@ -874,10 +874,10 @@ class MisalignmentModel(BaseEstimator):
 
         The simulator's DC readings are journal positions, so wherever training stated the clearance it had the
         centreline as well, and that pair never saw it missing. A recording whose DC part is no position — a raw
-        probe gap (more than 1.5 c from the probes' zero), or channels whose mean was removed — has it missing: on
-        the robustness base set with a 1000 µm gap in every channel and the clearance stated, the clearance-stated
-        classifier called 71 % of the aligned machines misaligned (docs/models-history.md, stop 36). Such a recording is
-        answered by the pair trained without any clearance feature, which never relied on the centreline."""
+        probe gap (more than 1.5 c from the probes' zero), or channels whose mean was removed — has it missing, and
+        the clearance-stated pair reads it as a journal far off centre (false alarms; docs/models.md). Such a
+        recording is answered by the pair trained without any clearance feature, which never relied on the
+        centreline."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         cols = getattr(self, "clearance_columns_", None)
         if cols is None or not cols.any():

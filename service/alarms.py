@@ -33,6 +33,8 @@ from typing import TYPE_CHECKING, Any
 from sqlalchemy import exists, func, select, update
 from sqlalchemy.orm import aliased
 
+from rotordiag.core.timefmt import iso_utc
+
 from .core.db import AlarmEvent, AssetSettings, Webhook, WebhookDelivery, utcnow
 
 if TYPE_CHECKING:
@@ -182,24 +184,16 @@ def evaluate(session: Session, settings: Any, asset_id: str, diagnosis_id: int, 
 
 def event_dict(ev: AlarmEvent) -> dict[str, Any]:
     """The API (and webhook) form of an event."""
-    return {"id": ev.id, "asset_id": ev.asset_id, "time": _iso(ev.created_at), "quantity": ev.quantity,
+    return {"id": ev.id, "asset_id": ev.asset_id, "time": iso_utc(ev.created_at), "quantity": ev.quantity,
             "unit": QUANTITIES[ev.quantity][1] if ev.quantity in QUANTITIES else None,
             "level": ev.level, "event": ev.event, "value": ev.value, "setpoint": ev.setpoint,
-            "diagnosis_id": ev.diagnosis_id, "message": ev.message, "acked_at": _iso(ev.acked_at),
+            "diagnosis_id": ev.diagnosis_id, "message": ev.message, "acked_at": iso_utc(ev.acked_at),
             "ack_note": ev.ack_note}
 
 
 def event_payload(ev: AlarmEvent, *, test: bool = False) -> dict[str, Any]:
     """The JSON body a webhook receives for ``ev``."""
     return {"type": "rotordiag.alarm", "test": test, "event": event_dict(ev)}
-
-
-def _iso(t: dt.datetime | None) -> str | None:
-    if t is None:
-        return None
-    if t.tzinfo is None:
-        t = t.replace(tzinfo=dt.UTC)
-    return t.isoformat().replace("+00:00", "Z")
 
 
 def enqueue(session: Session, settings: Any, webhook_id: int, event_id: int | None,
@@ -224,9 +218,9 @@ def sign(secret: str, body: bytes) -> str:
 
 def delivery_dict(d: WebhookDelivery) -> dict[str, Any]:
     return {"id": d.id, "webhook_id": d.webhook_id, "event_id": d.event_id, "status": d.status,
-            "attempts": d.attempts, "last_error": d.last_error, "created_at": _iso(d.created_at),
-            "next_attempt_at": _iso(d.next_attempt_at) if d.status == "pending" else None,
-            "delivered_at": _iso(d.delivered_at)}
+            "attempts": d.attempts, "last_error": d.last_error, "created_at": iso_utc(d.created_at),
+            "next_attempt_at": iso_utc(d.next_attempt_at) if d.status == "pending" else None,
+            "delivered_at": iso_utc(d.delivered_at)}
 
 
 class WebhookSender:

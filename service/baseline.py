@@ -12,10 +12,11 @@ median speed).
 """
 from __future__ import annotations
 
-import datetime as dt
 import math
 import re
 from typing import TYPE_CHECKING, Any
+
+from rotordiag.core.timefmt import iso_utc
 
 from .core.db import AssetBaseline
 from .errors import InputError
@@ -27,18 +28,9 @@ if TYPE_CHECKING:
     from .state import AppState
 
 
-
-def _iso(t: dt.datetime | None) -> str | None:
-    if t is None:
-        return None
-    if t.tzinfo is None:
-        t = t.replace(tzinfo=dt.UTC)
-    return t.isoformat().replace("+00:00", "Z")
-
-
 def baseline_dict(row: AssetBaseline, *, with_signature: bool = True) -> dict[str, Any]:
     """The API form of a stored baseline (what ``models.change.compare`` takes, plus its provenance)."""
-    out: dict[str, Any] = {"asset_id": row.asset_id, "set_at": _iso(row.created_at), "recorded_at": _iso(row.recorded_at),
+    out: dict[str, Any] = {"asset_id": row.asset_id, "set_at": iso_utc(row.created_at), "recorded_at": iso_utc(row.recorded_at),
            "source": row.source, "diagnosis_ids": list(row.diagnosis_ids or []), "speed_rpm": row.speed_rpm,
            "model_version": row.model_version}
     if with_signature:

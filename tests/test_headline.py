@@ -175,3 +175,16 @@ def test_timestamps_are_readable():
     assert readable_time("2026-03-02T11:00:00+01:00") == "2026-03-02 10:00 UTC"
     assert readable_time("2026-03-02T10:00:00Z") == "2026-03-02 10:00 UTC"
     assert readable_time("not a time") == "not a time" and readable_time(None) == "—"
+
+
+def test_api_timestamps_are_iso_8601_with_utc_as_z():
+    """The service stores naive UTC; the API writes it ISO 8601 with ``Z`` (RFC 3339), an aware time as given."""
+    import datetime as dt
+
+    from rotordiag.core.timefmt import iso_utc
+
+    assert iso_utc(dt.datetime(2026, 3, 2, 10, 0, 0)) == "2026-03-02T10:00:00Z"
+    assert iso_utc(dt.datetime(2026, 3, 2, 10, 0, 0, 123456, tzinfo=dt.UTC)) == "2026-03-02T10:00:00.123456Z"
+    plus_one = dt.timezone(dt.timedelta(hours=1))
+    assert iso_utc(dt.datetime(2026, 3, 2, 11, 0, tzinfo=plus_one)) == "2026-03-02T11:00:00+01:00"
+    assert iso_utc(None) is None

@@ -184,6 +184,23 @@ def test_openapi_documents_units_and_bodies(client):
             assert prop.get("description"), f"{name}.{field} has no description"
 
 
+
+def test_routes_document_their_key_and_body_errors_one_way(client):
+    """``api.errors.error_responses``: a JSON route's 400/415, a keyed route's 401/403 (saying when the key is
+    needed), and what the route itself adds; no body, no 400/415."""
+    from rotordiag.service.api.errors import error_responses
+
+    doc = error_responses({422: "bad"}, key="diagnose", body="json")
+    assert sorted(doc) == [400, 401, 403, 415, 422] and doc[422]["description"] == "bad"
+    assert "ROTORDIAG_DIAGNOSE_REQUIRES_KEY" in doc[401]["description"]
+    assert sorted(error_responses({404: "none"}, key="always")) == [401, 403, 404]
+    paths = client.get("/openapi.json").json()["paths"]
+    cancel = paths["/jobs/{job_id}/cancel"]["post"]["responses"]
+    assert {"401", "403", "404", "409"} <= cancel.keys() and not {"400", "415"} & cancel.keys()
+    assert paths["/jobs/{job_id}"]["get"]["responses"]["404"]["description"] == "No job with this id."
+    for path, method in (("/diagnose", "post"), ("/assets/{asset_id}/baseline", "post")):
+        assert "NPY" in paths[path][method]["responses"]["415"]["description"]
+
 # --- jobs: persistence, interruption, resume --------------------------------------------------------------
 
 class _Gate:

@@ -13,6 +13,7 @@ from rotordiag.simulator.train import (
     Disk,
     Material,
     Rotor,
+    ShaftElement,
     Support,
     Train,
     TrainError,
@@ -235,6 +236,69 @@ def test_campbell_forward_modes_stiffen_with_speed_on_a_disk_heavy_train():
 def test_bad_trains_say_what_to_fix(make, needle):
     with pytest.raises(TrainError, match=needle):
         make(two_rotor_train())
+
+
+_B = iso(1e9)
+_NAN = float("nan")
+
+
+@pytest.mark.parametrize("make, field, value", [
+    (lambda: Material(young_pa=-2e11), "Material young_pa", "-200000000000.0"),
+    (lambda: Material(density_kg_m3="7810"), "Material density_kg_m3", "'7810'"),
+    (lambda: ShaftElement(0.0, 0.3), "ShaftElement length_m", "0.0"),
+    (lambda: ShaftElement(0.5, _NAN), "ShaftElement outer_diameter_m", "nan"),
+    (lambda: ShaftElement(0.5, 0.3, -0.1), "ShaftElement inner_diameter_m", "-0.1"),
+    (lambda: ShaftElement(0.5, 0.3, 0.3), "ShaftElement inner_diameter_m", "0.3"),
+    (lambda: ShaftElement(0.5, 0.3, 0.0, 0.5), "ShaftElement asymmetry", "0.5"),
+    (lambda: ShaftElement(0.5, 0.3, 0.0, True), "ShaftElement asymmetry", "True"),
+    (lambda: Disk(2, -500.0), "Disk at station 2 mass_kg", "-500.0"),
+    (lambda: Disk(2, 500.0, float("inf")), "Disk at station 2 polar_kg_m2", "inf"),
+    (lambda: Disk(2, 500.0, 1.0, None), "Disk at station 2 transverse_kg_m2", "None"),
+    (lambda: Disk(-1, 500.0), "Disk station", "-1"),
+    (lambda: Disk(1.5, 500.0), "Disk station", "1.5"),
+    (lambda: Support(True, _B), "Support station", "True"),
+    (lambda: Support(1, _B, centre_x_m=_NAN, name="B1"), "Support 'B1' at station 1 centre_x_m", "nan"),
+    (lambda: Support(1, _B, centre_y_m="0"), "Support at station 1 centre_y_m", "'0'"),
+    (lambda: Support(1, object()), "Support at station 1 bearing clearance_m", "None"),
+    (lambda: Support(1, _B, name=3), "Support name", "3"),
+    (lambda: Unbalance(4, -0.1), "Unbalance at station 4 amount_kg_m", "-0.1"),
+    (lambda: Unbalance(4, 0.1, _NAN), "Unbalance at station 4 angle_rad", "nan"),
+    (lambda: Coupling("gear"), "Coupling kind", "'gear'"),
+    (lambda: Coupling("rigid", lateral_damping_n_s_m=-1.0), "Coupling lateral_damping_n_s_m", "-1.0"),
+    (lambda: Coupling("rigid", kinematic_phase_rad=_NAN), "Coupling kinematic_phase_rad", "nan"),
+    (lambda: Coupling("flexible"), "Coupling (flexible) lateral_stiffness_n_m", "0.0"),
+    (lambda: Rotor("r", uniform_elements(1.0, 0.3, 2), supports=(Support(0, _B),), stiff_axis_rad=_NAN),
+     "rotor 'r' stiff_axis_rad", "nan"),
+    (lambda: Rotor("r", ((1.0, 0.3),), supports=(Support(0, _B),)), "rotor 'r' elements", "(1.0, 0.3)"),
+    (lambda: Rotor("r", uniform_elements(1.0, 0.3, 2), disks=[(1, 500.0)], supports=(Support(0, _B),)),
+     "rotor 'r' disks", "(1, 500.0)"),
+    (lambda: Rotor("r", uniform_elements(1.0, 0.3, 2), supports=(Support(0, _B),), material="steel"),
+     "rotor 'r' material", "'steel'"),
+    (lambda: Rotor(None, uniform_elements(1.0, 0.3, 2), supports=(Support(0, _B),)), "Rotor name", "None"),
+    (lambda: Train((two_rotor_train().rotors[0],), gravity_m_s2=-9.81), "Train gravity_m_s2", "-9.81"),
+    (lambda: Train((two_rotor_train().rotors[0],), internal_damping_s="1e-4"), "Train internal_damping_s", "'1e-4'"),
+    (lambda: Train(two_rotor_train().rotors, ("rigid",)), "Train couplings", "'rigid'"),
+    (lambda: uniform_elements(1.0, 0.3, 2.0), "a segment", "n=2.0"),
+])
+def test_every_part_of_a_train_refuses_a_bad_field_naming_the_part_the_field_and_the_value(make, field, value):
+    """One way of validating: each part refuses a wrong value — out of range, not finite, not a number at all,
+    a bool — when it is built, always a TrainError (a ValueError) whose message names the field and the value."""
+    with pytest.raises(TrainError) as err:
+        make()
+    msg = str(err.value)
+    assert msg.startswith(field) and value in msg, msg
+
+
+def test_good_parts_build_and_keep_their_values():
+    """The checks refuse nothing a valid train holds: numpy scalars and ints are numbers, a zero bore and
+    asymmetry, a station at 0 and a negative angle are all fine."""
+    d = Disk(np.int64(0), np.float64(500.0), 0, 0.0)
+    u = Unbalance(3, 0.0, -math.pi)
+    assert (d.station, d.mass_kg, u.angle_rad) == (0, 500.0, -math.pi)
+    r = Rotor("r", uniform_elements(1.0, 0.3, 4, asymmetry=0.49), disks=(d,), supports=(Support(0, _B), Support(4, _B)),
+              unbalances=(u,), stiff_axis_rad=-1.0)
+    t = Train((r,))
+    assert t.rotors[0] is r and t.gravity_m_s2 == 9.81
 
 
 def test_a_journal_pushed_outside_its_clearance_is_refused_with_the_bearing_named():

@@ -220,6 +220,18 @@ def test_bad_recordings_get_a_message_not_a_5xx(client, case, status, needle):
     assert needle in (detail if isinstance(detail, str) else str(detail)), detail
 
 
+@pytest.mark.parametrize("path", ["/ui/plot-data", "/ui/transient-plots"])
+@pytest.mark.parametrize("asset_id, needle", [("..", "may not be '.' or '..'"), ("unit 3", "only letters, digits"),
+                                               ("", "at least 1 character")])
+def test_the_pages_asset_id_is_checked_as_diagnose_checks_it(client, path, asset_id, needle):
+    """The page's uploads take /diagnose's asset identifier (``schemas.AssetId``): a 422 saying what to change."""
+    r = _post_csv(client, _probes(), asset_id=asset_id) if path == "/ui/plot-data" else \
+        client.post(path, params={"sample_rate_hz": FS, "bearings": "2,2", "asset_id": asset_id},
+                    files={"file": ("rec.csv", _csv(_probes()), "text/csv")})
+    assert r.status_code == 422, r.text
+    assert needle in str(r.json()["detail"]), r.json()
+
+
 # --- helpers ------------------------------------------------------------------------------------------
 
 def test_spectrum_helpers_and_bin_reduction():

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import datetime as dt
 
-__all__ = ["readable_time"]
+__all__ = ["iso_utc", "readable_time"]
 
 
 def readable_time(value: str | dt.datetime | None) -> str:
@@ -21,3 +21,13 @@ def readable_time(value: str | dt.datetime | None) -> str:
     if when.tzinfo is not None:
         when = when.astimezone(dt.UTC)
     return when.strftime("%Y-%m-%d %H:%M UTC")
+
+
+def iso_utc(value: dt.datetime | None) -> str | None:
+    """``value`` as the API writes times: ISO 8601, a naive datetime read as UTC (as the service stores it) and
+    UTC written ``Z`` (``2026-03-02T10:00:00Z``); None stays None."""
+    if value is None:
+        return None
+    if value.tzinfo is None:
+        value = value.replace(tzinfo=dt.UTC)
+    return value.isoformat().replace("+00:00", "Z")

@@ -19,12 +19,45 @@ from pydantic import ValidationError
 from sqlalchemy.exc import DatabaseError as SQLAlchemyDatabaseError
 
 from ..errors import InputError, RequestInvalid, validation_detail
+from ..schemas import ErrorOut
 
 log = logging.getLogger("rotordiag.service")
 
 #: HTTP status of each kind of client mistake (:class:`service.errors.InputError`)
 STATUS_OF_KIND = {"invalid": 422, "malformed": 400, "unsupported_type": 415, "not_found": 404, "conflict": 409,
                   "too_large": 413}
+
+
+#: how a route says which API key it needs (``error_responses(key=...)``): always, or only when
+#: ROTORDIAG_DIAGNOSE_REQUIRES_KEY (the diagnosis routes)
+_KEY_WHEN = {"always": "", "diagnose": " (only when ROTORDIAG_DIAGNOSE_REQUIRES_KEY)"}
+#: what a route's body may be (``error_responses(body=...)``) as its 415 says it
+_BODY_TYPES = {"json": "The body is not application/json.",
+               "recording": "Content-Type is not JSON, NPY (application/octet-stream) or multipart."}
+
+
+def error_responses(described: dict[int, str] | None = None, *, key: str | None = None,
+                    body: str | None = None) -> dict[int | str, dict[str, Any]]:
+    """A route's documented error answers (its ``responses=``), every one an ``ErrorOut``.
+
+    Parameters
+    ----------
+    described : dict of int to str
+        Status → what it means on this route (404, 409, 422, ...).
+    key : {"always", "diagnose"}, optional
+        The route needs the API key always, or only when ROTORDIAG_DIAGNOSE_REQUIRES_KEY: its 401 and 403.
+    body : {"json", "recording"}, optional
+        The route reads a JSON body, or a recording as /diagnose does: its 400 (cannot be decoded) and 415.
+    """
+    out: dict[int, str] = {}
+    if body is not None:
+        out[400] = "The body cannot be decoded (e.g. JSON that is not UTF-8)."
+        out[415] = _BODY_TYPES[body]
+    if key is not None:
+        out[401] = f"No X-API-Key header{_KEY_WHEN[key]}."
+        out[403] = f"Wrong API key{_KEY_WHEN[key]}."
+    out.update(described or {})
+    return {code: {"model": ErrorOut, "description": out[code]} for code in sorted(out)}
 
 
 def raise_worker_error(answer: Any, *, version_given: bool = False) -> NoReturn:

@@ -25,6 +25,12 @@ from ..api.recordings import ReaderQueryDep, recording_answer  # same body forms
 from ..errors import InputError
 from ..plotdata import plot_data, transient_plots
 from ..pool import PlotBody, TransientPlots
+from ..schemas import AssetId
+
+#: the page's upload queries: the recording's index in an HDF5 dataset file, and the asset whose probe
+#: configuration reads it (the same identifier and checks as /diagnose's)
+_SampleIndex = Annotated[int, Query(ge=0, le=10_000_000)]
+_AssetQuery = Annotated[AssetId | None, Query()]
 
 #: the page's files, installed with the package (found through importlib.resources)
 STATIC_DIR = Path(str(files("rotordiag.service.web.static")))
@@ -91,8 +97,8 @@ async def plot(
     request: Request,
     state: StateDep,
     reader: ReaderQueryDep,
-    sample_index: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
-    asset_id: Annotated[str | None, Query(min_length=1, max_length=128, pattern=r"^[A-Za-z0-9._:-]+$")] = None,
+    sample_index: _SampleIndex = 0,
+    asset_id: _AssetQuery = None,
 ) -> dict[str, Any]:
     """Orbit and spectrum arrays of a recording sent as to ``POST /diagnose`` (see ``service.plotdata``);
     with ``asset_id``, read with the asset's probe configuration as /diagnose reads it (nothing is stored).
@@ -137,8 +143,8 @@ async def transient(
     request: Request,
     state: StateDep,
     reader: ReaderQueryDep,
-    sample_index: Annotated[int, Query(ge=0, le=10_000_000)] = 0,
-    asset_id: Annotated[str | None, Query(min_length=1, max_length=128, pattern=r"^[A-Za-z0-9._:-]+$")] = None,
+    sample_index: _SampleIndex = 0,
+    asset_id: _AssetQuery = None,
     output_units: Annotated[Literal["um", "mil"], Query()] = "um",
     cascade_scale: Annotated[Literal["db", "row", "linear"], Query(
         description="Trace height of the cascades: dB below the largest line (60 dB shown), each trace to its own "

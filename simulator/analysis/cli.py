@@ -20,6 +20,26 @@ def _fail(message: str) -> None:
     raise typer.Exit(code=2)
 
 
+def _pyplot() -> Any:
+    """matplotlib's pyplot on the file-only Agg backend, imported when a command draws (the CLI starts fast)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _write_png(fig: Any, path: Path) -> None:
+    """Lay ``fig`` out, write it to ``path`` (110 dpi), close it and say where on stderr."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    typer.echo(f"wrote {path}", err=True)
+
+
 def _run_opts(workers: Optional[int], scheduler: Optional[str]) -> dict:
     if workers is not None and scheduler is not None:
         raise typer.BadParameter("give either --workers or --scheduler, not both", param_hint="--workers")
@@ -108,10 +128,7 @@ def register(app: typer.Typer) -> None:
             sweep.to_hdf5(out)
             typer.echo(f"wrote {out}", err=True)
         if plot is not None:
-            import matplotlib
-
-            matplotlib.use("Agg")
-            import matplotlib.pyplot as plt
+            plt = _pyplot()
 
             from rotordiag.simulator.analysis.figures import plot_bifurcation, plot_lle
 
@@ -122,10 +139,7 @@ def register(app: typer.Typer) -> None:
             axes[0, 0].set_title(f"{fixed}, A = {unbalance:g}, {mechanism}", fontsize=9)
             if rows == 2:
                 plot_lle(axes[1, 0], sweep)
-            fig.tight_layout()
-            fig.savefig(plot, dpi=110)
-            plt.close(fig)
-            typer.echo(f"wrote {plot}", err=True)
+            _write_png(fig, plot)
 
     @app.command()
     def campbell(
@@ -219,10 +233,7 @@ def register(app: typer.Typer) -> None:
             typer.echo(f"stability margin at {margin['speed_rpm']:g} r/min: log decrement {margin['log_decrement']:.3f} "
                        f"of the least-damped mode ({margin['frequency_hz']:.1f} Hz), {state}")
         if plot is not None:
-            import matplotlib
-
-            matplotlib.use("Agg")
-            import matplotlib.pyplot as plt
+            plt = _pyplot()
 
             from rotordiag.simulator.analysis.figures import plot_campbell
 
@@ -231,10 +242,7 @@ def register(app: typer.Typer) -> None:
                                                     f"δ = {margin['log_decrement']:.3f} at {margin['speed_rpm']:g} r/min")
             if sc is not None:
                 fig.colorbar(sc, ax=ax, label="damping ratio ζ (< 0: unstable)")
-            fig.tight_layout()
-            fig.savefig(plot, dpi=110)
-            plt.close(fig)
-            typer.echo(f"wrote {plot}", err=True)
+            _write_png(fig, plot)
 
     @app.command()
     def lyapunov(
@@ -470,11 +478,9 @@ def _report_lle(lle: Any, summary: dict, motion: str, as_json: bool, plot: Optio
                    f"= {lle.lle_per_s:+.4f} per second ({lle.n_intervals} revolutions)")
         typer.echo(f"motion: {motion}")
     if plot is not None:
-        import matplotlib
         import numpy as np
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        plt = _pyplot()
 
         fig, ax = plt.subplots(figsize=(6, 3.5))
         ax.plot(np.arange(1, lle.n_intervals + 1), lle.history_per_interval, c="black")
@@ -483,10 +489,7 @@ def _report_lle(lle: Any, summary: dict, motion: str, as_json: bool, plot: Optio
         ax.set_ylabel("running LLE estimate (1/rev)")
         ax.set_title(title, fontsize=9)
         ax.grid(alpha=0.3)
-        fig.tight_layout()
-        fig.savefig(plot, dpi=110)
-        plt.close(fig)
-        typer.echo(f"wrote {plot}", err=True)
+        _write_png(fig, plot)
 
 
 def _train_bifurcate(preset, shaftline, over: str, from_: float, to: float, points: int, unbalance_kg_m: float,
@@ -535,16 +538,10 @@ def _train_bifurcate(preset, shaftline, over: str, from_: float, to: float, poin
                                        half_power=bands, status=sw.status), indent=1))
         typer.echo(f"wrote {out}", err=True)
     if plot is not None:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        plt = _pyplot()
 
         from rotordiag.simulator.analysis.figures import plot_train_sweep
 
         fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
         plot_train_sweep(axes, sw, title=f"{preset or shaftline}, unbalance {unbalance_kg_m:g} kg·m")
-        fig.tight_layout()
-        fig.savefig(plot, dpi=110)
-        plt.close(fig)
-        typer.echo(f"wrote {plot}", err=True)
+        _write_png(fig, plot)

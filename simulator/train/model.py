@@ -5,12 +5,16 @@ vertical up; the shaft spins about +z (from +x toward +y). Every rotor's station
 its coupling-free end (the first rotor) or from its coupling flange (the rotors after it); the
 coupling joins the last station of rotor i to the first station of rotor i + 1. Bearing centres are
 given per bearing (``centre_x_m``, ``centre_y_m``), so a misalignment is a set of bearing positions.
-All quantities are SI.
+All quantities are SI. Every part checks its own fields when it is built (``__post_init__``), a
+:class:`TrainError` naming the part, the field and the value; a rotor and the train check how their parts
+fit together.
 """
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from numbers import Integral, Real
 from typing import Any, Protocol
 
 import numpy as np
@@ -21,6 +25,39 @@ COUPLING_KINDS = ("rigid", "flexible")
 
 class TrainError(ValueError):
     """A train description that cannot be built; the message says what to fix."""
+
+
+#: what each rule of :func:`_check_fields` allows, and how its message says it
+_RULES: dict[str, tuple[Callable[[float], bool], str]] = {
+    "finite": (lambda v: True, "a finite number"),
+    "positive": (lambda v: v > 0, "a positive finite number"),
+    "non_negative": (lambda v: v >= 0, "zero or a positive finite number"),
+    "asymmetry": (lambda v: 0 <= v < 0.5, "a number in [0, 0.5)"),
+}
+
+
+def _check_number(value: object, what: str, rule: str) -> None:
+    """Refuse ``value`` (named ``what`` in the message) unless it is a real finite number ``rule`` allows."""
+    ok, says = _RULES[rule]
+    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value) or not ok(float(value)):
+        raise TrainError(f"{what} must be {says} (got {value!r})")
+
+
+def _check_fields(item: object, where: str, **rules: str) -> None:
+    """Every field ``name=rule`` of ``item``: one way of validating a train's parts (each in its
+    ``__post_init__``), a :class:`TrainError` naming ``where``, the field and the value."""
+    for name, rule in rules.items():
+        _check_number(getattr(item, name), f"{where} {name}", rule)
+
+
+def _check_station(item: Disk | Support | Unbalance) -> str:
+    """Refuse a station that is not a whole number ≥ 0; return how messages name the part."""
+    name = getattr(item, "name", "")
+    where = type(item).__name__ + (f" {name!r}" if name else "")
+    st = item.station
+    if isinstance(st, bool) or not isinstance(st, Integral) or st < 0:
+        raise TrainError(f"{where} station must be a whole number ≥ 0, a station of its rotor (got {st!r})")
+    return f"{where} at station {st}"
 
 
 class Bearing(Protocol):
@@ -41,6 +78,9 @@ class Material:
     young_pa: float = 2.11e11
     shear_pa: float = 8.12e10
     density_kg_m3: float = 7810.0
+
+    def __post_init__(self) -> None:
+        _check_fields(self, "Material", young_pa="positive", shear_pa="positive", density_kg_m3="positive")
 
     @property
     def poisson(self) -> float:
@@ -63,6 +103,13 @@ class ShaftElement:
     inner_diameter_m: float = 0.0
     asymmetry: float = 0.0
 
+    def __post_init__(self) -> None:
+        _check_fields(self, "ShaftElement", length_m="positive", outer_diameter_m="positive",
+                      inner_diameter_m="non_negative", asymmetry="asymmetry")
+        if self.inner_diameter_m >= self.outer_diameter_m:
+            raise TrainError(f"ShaftElement inner_diameter_m must be smaller than outer_diameter_m "
+                             f"(got {self.inner_diameter_m!r} ≥ {self.outer_diameter_m!r}): the bore is inside the shaft")
+
 
 @dataclass(frozen=True)
 class Disk:
@@ -72,6 +119,10 @@ class Disk:
     mass_kg: float
     polar_kg_m2: float = 0.0
     transverse_kg_m2: float = 0.0
+
+    def __post_init__(self) -> None:
+        _check_fields(self, _check_station(self), mass_kg="positive", polar_kg_m2="non_negative",
+                      transverse_kg_m2="non_negative")
 
 
 @dataclass(frozen=True)
@@ -84,6 +135,13 @@ class Support:
     centre_y_m: float = 0.0
     name: str = ""
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str):
+            raise TrainError(f"Support name must be a string (got {self.name!r})")
+        where = _check_station(self)
+        _check_fields(self, where, centre_x_m="finite", centre_y_m="finite")
+        _check_number(getattr(self.bearing, "clearance_m", None), f"{where} bearing clearance_m", "positive")
+
 
 @dataclass(frozen=True)
 class Unbalance:
@@ -93,6 +151,9 @@ class Unbalance:
     station: int
     amount_kg_m: float
     angle_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        _check_fields(self, _check_station(self), amount_kg_m="non_negative", angle_rad="finite")
 
 
 @dataclass(frozen=True)
@@ -109,6 +170,9 @@ class Rotor:
     unbalances: tuple[Unbalance, ...] = ()
     material: Material = STEEL
     stiff_axis_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        _check_rotor(self)
 
     @property
     def n_stations(self) -> int:
@@ -143,6 +207,16 @@ class Coupling:
     kinematic_phase_rad: float = 0.0
     kinematic_direction_rad: float = 0.0
 
+    def __post_init__(self) -> None:
+        if not (isinstance(self.kind, str) and self.kind in COUPLING_KINDS):
+            raise TrainError(f"Coupling kind must be one of {COUPLING_KINDS} (got {self.kind!r})")
+        _check_fields(self, "Coupling", lateral_stiffness_n_m="non_negative", angular_stiffness_n_m_rad="non_negative",
+                      lateral_damping_n_s_m="non_negative", angular_damping_n_m_s_rad="non_negative",
+                      kinematic_offset_m="non_negative", kinematic_phase_rad="finite",
+                      kinematic_direction_rad="finite")
+        if self.kind == "flexible":
+            _check_fields(self, "Coupling (flexible)", lateral_stiffness_n_m="positive")
+
 
 @dataclass(frozen=True)
 class Train:
@@ -176,80 +250,61 @@ class Train:
         return np.array([z0[i] + self.rotors[i].station_z_m()[s.station] for i, s in self.supports()])
 
 
-def _positive(value: float, what: str) -> None:
-    if not (np.isfinite(value) and value > 0):
-        raise TrainError(f"{what} must be a positive finite number (got {value!r})")
+def _parts(owner: object, where: str, field: str, cls: type) -> tuple:
+    """``owner.field`` as a tuple of ``cls``, or a :class:`TrainError` naming what else it holds."""
+    items = getattr(owner, field)
+    if not isinstance(items, tuple | list):
+        raise TrainError(f"{where} {field} must be a tuple of {cls.__name__} (got {items!r})")
+    for x in items:
+        if not isinstance(x, cls):
+            raise TrainError(f"{where} {field} must hold {cls.__name__} objects (got {x!r})")
+    return tuple(items)
 
 
-def _non_negative(value: float, what: str) -> None:
-    if not (np.isfinite(value) and value >= 0):
-        raise TrainError(f"{what} must be zero or a positive finite number (got {value!r})")
+def _check_rotor(r: Rotor) -> None:
+    """A rotor's parts (each checked its own fields when built) and how they sit on its shaft."""
+    if not isinstance(r.name, str):
+        raise TrainError(f"Rotor name must be a string (got {r.name!r})")
+    where = f"rotor {r.name!r}"
+    if not isinstance(r.material, Material):
+        raise TrainError(f"{where} material must be a Material (got {r.material!r})")
+    _check_fields(r, where, stiff_axis_rad="finite")
+    if not _parts(r, where, "elements", ShaftElement):
+        raise TrainError(f"{where} has no shaft elements: give at least one (length, diameter)")
+    n = r.n_stations
+    parts = [(item, "disk") for item in _parts(r, where, "disks", Disk)] + \
+        [(item, "bearing") for item in _parts(r, where, "supports", Support)] + \
+        [(item, "unbalance") for item in _parts(r, where, "unbalances", Unbalance)]
+    for item, label in parts:
+        if item.station >= n:
+            raise TrainError(f"{where}: a {label} at station {item.station} is beyond the shaft "
+                             f"(stations 0..{n - 1}); put it on the shaft or lengthen the rotor")
+    if not r.supports:
+        raise TrainError(f"{where} has no bearing: every rotor needs at least one bearing under it "
+                         f"(two, or one when it is overhung on a rigid coupling)")
+    stations = [s.station for s in r.supports]
+    if len(set(stations)) != len(stations):
+        raise TrainError(f"{where}: two bearings at the same station {stations}; give each its own station")
 
 
 def validate(train: Train) -> None:
-    """Check a train: every message names the rotor or item and what to change."""
-    if not train.rotors:
+    """Check a train as a whole (its rotors and couplings checked themselves when built): every message
+    names the rotor or coupling and what to change."""
+    rotors = _parts(train, "Train", "rotors", Rotor)
+    couplings = _parts(train, "Train", "couplings", Coupling)
+    if not rotors:
         raise TrainError("a train needs at least one rotor")
-    if len(train.couplings) != len(train.rotors) - 1:
-        raise TrainError(f"{len(train.rotors)} rotors need {len(train.rotors) - 1} coupling(s), "
-                         f"one between each pair (got {len(train.couplings)})")
-    _non_negative(train.gravity_m_s2, "gravity_m_s2")
-    _non_negative(train.internal_damping_s, "internal_damping_s")
-    _non_negative(train.rayleigh_mass_1_s, "rayleigh_mass_1_s")
-    _non_negative(train.rayleigh_stiffness_s, "rayleigh_stiffness_s")
-    for r in train.rotors:
-        where = f"rotor {r.name!r}"
-        if not r.elements:
-            raise TrainError(f"{where} has no shaft elements: give at least one (length, diameter)")
-        for k, e in enumerate(r.elements):
-            _positive(e.length_m, f"{where} element {k} length_m")
-            _positive(e.outer_diameter_m, f"{where} element {k} outer_diameter_m")
-            _non_negative(e.inner_diameter_m, f"{where} element {k} inner_diameter_m")
-            if e.inner_diameter_m >= e.outer_diameter_m:
-                raise TrainError(f"{where} element {k}: the bore ({e.inner_diameter_m} m) must be smaller than "
-                                 f"the outer diameter ({e.outer_diameter_m} m)")
-            if not (0.0 <= e.asymmetry < 0.5):
-                raise TrainError(f"{where} element {k}: asymmetry must be in [0, 0.5) (got {e.asymmetry})")
-        _positive(r.material.young_pa, f"{where} material young_pa")
-        _positive(r.material.shear_pa, f"{where} material shear_pa")
-        _positive(r.material.density_kg_m3, f"{where} material density_kg_m3")
-        n = r.n_stations
-        for item, label in [(d, "disk") for d in r.disks] + [(s, "bearing") for s in r.supports] + \
-                [(u, "unbalance") for u in r.unbalances]:
-            if not (isinstance(item.station, int | np.integer) and 0 <= item.station < n):
-                raise TrainError(f"{where}: a {label} at station {item.station} is beyond the shaft "
-                                 f"(stations 0..{n - 1}); put it on the shaft or lengthen the rotor")
-        for d in r.disks:
-            _positive(d.mass_kg, f"{where} disk at station {d.station} mass_kg")
-            _non_negative(d.polar_kg_m2, f"{where} disk at station {d.station} polar_kg_m2")
-            _non_negative(d.transverse_kg_m2, f"{where} disk at station {d.station} transverse_kg_m2")
-        for u in r.unbalances:
-            _non_negative(u.amount_kg_m, f"{where} unbalance at station {u.station} amount_kg_m")
-        if not r.supports:
-            raise TrainError(f"{where} has no bearing: every rotor needs at least one bearing under it "
-                             f"(two, or one when it is overhung on a rigid coupling)")
-        stations = [s.station for s in r.supports]
-        if len(set(stations)) != len(stations):
-            raise TrainError(f"{where}: two bearings at the same station {stations}; give each its own station")
-        for s in r.supports:
-            for attr in ("clearance_m",):
-                _positive(float(getattr(s.bearing, attr)), f"{where} bearing at station {s.station} {attr}")
-            if not (np.isfinite(s.centre_x_m) and np.isfinite(s.centre_y_m)):
-                raise TrainError(f"{where} bearing at station {s.station}: centre position must be finite")
-    for i, c in enumerate(train.couplings):
-        if c.kind not in COUPLING_KINDS:
-            raise TrainError(f"coupling {i}: kind must be one of {COUPLING_KINDS} (got {c.kind!r})")
-        for name in ("lateral_stiffness_n_m", "angular_stiffness_n_m_rad", "lateral_damping_n_s_m",
-                     "angular_damping_n_m_s_rad", "kinematic_offset_m"):
-            _non_negative(getattr(c, name), f"coupling {i} {name}")
-        if c.kind == "flexible":
-            _positive(c.lateral_stiffness_n_m, f"coupling {i} (flexible) lateral_stiffness_n_m")
-    for i, r in enumerate(train.rotors):
+    if len(couplings) != len(rotors) - 1:
+        raise TrainError(f"{len(rotors)} rotors need {len(rotors) - 1} coupling(s), "
+                         f"one between each pair (got {len(couplings)})")
+    _check_fields(train, "Train", gravity_m_s2="non_negative", internal_damping_s="non_negative",
+                  rayleigh_mass_1_s="non_negative", rayleigh_stiffness_s="non_negative")
+    for i, r in enumerate(rotors):
         if len(r.supports) == 1:
-            rigid_neighbour = (i > 0 and train.couplings[i - 1].kind == "rigid") or \
-                (i < len(train.couplings) and train.couplings[i].kind == "rigid")
-            flex_neighbour = (i > 0 and train.couplings[i - 1].angular_stiffness_n_m_rad > 0) or \
-                (i < len(train.couplings) and train.couplings[i].angular_stiffness_n_m_rad > 0)
+            rigid_neighbour = (i > 0 and couplings[i - 1].kind == "rigid") or \
+                (i < len(couplings) and couplings[i].kind == "rigid")
+            flex_neighbour = (i > 0 and couplings[i - 1].angular_stiffness_n_m_rad > 0) or \
+                (i < len(couplings) and couplings[i].angular_stiffness_n_m_rad > 0)
             if not (rigid_neighbour or flex_neighbour):
                 raise TrainError(f"rotor {r.name!r} has one bearing and no coupling that can carry a moment: "
                                  f"give it a second bearing or couple it rigidly (or with angular stiffness)")
@@ -294,7 +349,7 @@ def bearing_moved(train: Train, rotor: int, index: int, dx_m: float = 0.0, dy_m:
 def uniform_elements(length_m: float, diameter_m: float, n: int, asymmetry: float = 0.0,
                      inner_diameter_m: float = 0.0) -> tuple[ShaftElement, ...]:
     """``n`` equal elements of one section over ``length_m``."""
-    if n < 1:
-        raise TrainError(f"a segment needs at least one element (got {n})")
-    _positive(length_m, "segment length_m")
+    if isinstance(n, bool) or not isinstance(n, Integral) or n < 1:
+        raise TrainError(f"a segment needs at least one element (got n={n!r})")
+    _check_number(length_m, "segment length_m", "positive")
     return tuple(ShaftElement(length_m / n, diameter_m, inner_diameter_m, asymmetry) for _ in range(n))

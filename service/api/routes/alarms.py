@@ -26,26 +26,19 @@ from ...schemas import (
     AlarmEventOut,
     AlarmEventsOut,
     DeliveryOut,
-    ErrorOut,
     SetpointsIn,
     SetpointsOut,
     WebhookIn,
     WebhookOut,
 )
 from ..deps import ApiKeyDep, JsonBodyDep, SessionDep, StateDep
-from ..errors import InputError
+from ..errors import InputError, error_responses
 from .assets import AssetPath
 
 router = APIRouter(tags=["assets"])
 
-_ERRORS: dict[int | str, dict] = {
-    400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
-    401: {"model": ErrorOut, "description": "No X-API-Key header."},
-    403: {"model": ErrorOut, "description": "Wrong API key."},
-    404: {"model": ErrorOut, "description": "No such event or webhook."},
-    415: {"model": ErrorOut, "description": "The body is not application/json."},
-    422: {"model": ErrorOut, "description": "The body is not valid; `detail` says what to fix."},
-}
+_ERRORS = error_responses({404: "No such event or webhook.", 422: "The body is not valid; `detail` says what to fix."},
+                          key="always", body="json")
 IdPath = Annotated[int, Path(ge=1, le=2**31 - 1)]
 
 

@@ -55,7 +55,7 @@ from ..deps import (
     SessionDep,
     StateDep,
 )
-from ..errors import InputError
+from ..errors import InputError, error_responses
 from ..recordings import ReaderQueryDep, diagnosis_limiter, in_worker
 
 router = APIRouter(tags=["assets"])
@@ -163,17 +163,12 @@ def _amplitudes(verdict: dict | None) -> dict[str, float | None]:
     return out
 
 
-_BASELINE_ERRORS: dict[int | str, dict] = {
-    400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
-    401: {"model": ErrorOut, "description": "No X-API-Key header."},
-    403: {"model": ErrorOut, "description": "Wrong API key."},
-    404: {"model": ErrorOut, "description": "No such diagnosis of this asset / no baseline to delete."},
-    409: {"model": ErrorOut, "description": "No automatic baseline possible (too few recordings, or not at one "
-          "operating condition), or the diagnosis keeps no signature."},
-    413: {"model": ErrorOut, "description": "Body over the size limit."},
-    415: {"model": ErrorOut, "description": "Content-Type is not JSON, NPY or multipart."},
-    422: {"model": ErrorOut, "description": "The recording cannot be diagnosed; `detail` says what to fix."},
-}
+_BASELINE_ERRORS = error_responses({
+    404: "No such diagnosis of this asset / no baseline to delete.",
+    409: "No automatic baseline possible (too few recordings, or not at one operating condition), or the diagnosis "
+         "keeps no signature.",
+    413: "Body over the size limit.",
+    422: "The recording cannot be diagnosed; `detail` says what to fix."}, key="always", body="recording")
 
 
 @router.get("/assets/{asset_id}/baseline", response_model=AssetBaselineOut, summary="An asset's baseline")

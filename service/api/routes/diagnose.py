@@ -21,7 +21,7 @@ from ...baseline import parse_tags, record_verdict
 from ...inference import ModelUnavailable
 from ...parsing import MAX_TAKE_FILES, batch_record, checked, parse_batch, parse_request, recording_from_model
 from ...pool import DiagnoseBody, DiagnoseRecord, ParseBatch
-from ...schemas import MAX_BATCH_VALUES, MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse, ErrorOut
+from ...schemas import MAX_BATCH_VALUES, MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse
 from ..deps import (
     DiagnoseKeyDep,
     JsonBodyDep,
@@ -29,7 +29,7 @@ from ..deps import (
     ModelsDep,
     StateDep,
 )
-from ..errors import STATUS_OF_KIND, InputError, RequestInvalid
+from ..errors import STATUS_OF_KIND, InputError, RequestInvalid, error_responses
 from ..recordings import ReaderQueryDep, asset_probes_query, diagnosis_limiter, in_worker, read_body, read_json_bounded
 from ..routing import FiniteJSONRoute
 
@@ -37,16 +37,10 @@ router = APIRouter(tags=["diagnose"], route_class=FiniteJSONRoute)
 log = logging.getLogger("rotordiag.service")
 
 
-_ERRORS: dict[int | str, dict[str, Any]] = {
-    400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
-    401: {"model": ErrorOut, "description": "No X-API-Key header (only when ROTORDIAG_DIAGNOSE_REQUIRES_KEY)."},
-    403: {"model": ErrorOut, "description": "Wrong API key (only when ROTORDIAG_DIAGNOSE_REQUIRES_KEY)."},
-    404: {"model": ErrorOut, "description": "`model_version` is not registered."},
-    413: {"model": ErrorOut, "description": "Body over the size limit (ROTORDIAG_MAX_BODY_BYTES)."},
-    415: {"model": ErrorOut, "description": "Content-Type is not JSON, NPY (application/octet-stream) or multipart."},
-    422: {"model": ErrorOut, "description": "The recording cannot be diagnosed; `detail` says what to fix."},
-    503: {"model": ErrorOut, "description": "No model is available on the server."},
-}
+_ERRORS = error_responses({404: "`model_version` is not registered.",
+                           413: "Body over the size limit (ROTORDIAG_MAX_BODY_BYTES).",
+                           422: "The recording cannot be diagnosed; `detail` says what to fix.",
+                           503: "No model is available on the server."}, key="diagnose", body="recording")
 
 _BINARY_BODY = {
     "requestBody": {

@@ -3,27 +3,21 @@ from __future__ import annotations
 
 import tomllib
 from dataclasses import asdict
-from typing import Any
 
 from fastapi import APIRouter
 from fastapi.concurrency import run_in_threadpool
 
 from ...errors import InputError
-from ...schemas import ErrorOut, TrainPreset, TrainSummaryOut, TrainSummaryRequest
+from ...schemas import TrainPreset, TrainSummaryOut, TrainSummaryRequest
 from ..deps import DiagnoseKeyDep, JsonBodyDep
+from ..errors import error_responses
 from ..routing import FiniteJSONRoute
 
 router = APIRouter(tags=["trains"], route_class=FiniteJSONRoute)
 
-_ERRORS: dict[int | str, dict[str, Any]] = {
-    400: {"model": ErrorOut, "description": "The body cannot be decoded (e.g. JSON that is not UTF-8)."},
-    401: {"model": ErrorOut, "description": "No X-API-Key header (only when ROTORDIAG_DIAGNOSE_REQUIRES_KEY)."},
-    403: {"model": ErrorOut, "description": "Wrong API key (only when ROTORDIAG_DIAGNOSE_REQUIRES_KEY)."},
-    415: {"model": ErrorOut, "description": "The body is not application/json."},
-    422: {"model": ErrorOut, "description": "Not exactly one of preset/shaftline/shaftline_toml, an unknown preset, "
-                                            "invalid TOML or a shaft line the model cannot build or rest on its "
-                                            "bearings; `detail` says what to fix."},
-}
+_ERRORS = error_responses({422: "Not exactly one of preset/shaftline/shaftline_toml, an unknown preset, invalid TOML "
+                                 "or a shaft line the model cannot build or rest on its bearings; `detail` says what "
+                                 "to fix."}, key="diagnose", body="json")
 
 
 @router.get("/trains/presets", response_model=list[TrainPreset], summary="Preset shaft trains")
