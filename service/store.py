@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 from sqlalchemy import Text, cast, delete, func, select, update
 
 from .alarms import evaluate
-from .core.db import AssetBaseline, AssetDiagnosis, AssetSettings, Job, ServiceProbe, utcnow
+from .core.db import AssetBaseline, AssetBaselineRecording, AssetDiagnosis, AssetSettings, Job, ServiceProbe, utcnow
 
 if TYPE_CHECKING:
     from sqlalchemy.orm import Session
@@ -229,24 +229,38 @@ def get_baseline(session: Session, asset_id: str) -> AssetBaseline | None:
     return session.get(AssetBaseline, asset_id)
 
 
-def put_baseline(state: AppState, row: AssetBaseline) -> AssetBaseline:
-    """Store ``row`` as the asset's baseline, replacing any previous one."""
+def baseline_recordings(session: Session, asset_id: str) -> list[AssetBaselineRecording]:
+    """The recordings the asset's baseline is made of, in the order they were added (empty: no baseline, or one
+    set before v0008 whose recordings' signatures were no longer kept)."""
+    q = (select(AssetBaselineRecording).where(AssetBaselineRecording.asset_id == asset_id)
+         .order_by(AssetBaselineRecording.added_at, AssetBaselineRecording.diagnosis_id))
+    return list(session.scalars(q))
+
+
+def put_baseline(state: AppState, row: AssetBaseline,
+                 recordings: list[AssetBaselineRecording] | None = None) -> AssetBaseline:
+    """Store ``row`` as the asset's baseline and ``recordings`` as what it is made of, replacing any previous
+    baseline and its recordings, in one transaction."""
     with state.sessions.begin() as s:
         old = s.get(AssetBaseline, row.asset_id)
         if old is not None:
             s.delete(old)
-            s.flush()
+        s.execute(delete(AssetBaselineRecording).where(AssetBaselineRecording.asset_id == row.asset_id))
+        s.flush()
         s.add(row)
+        for r in recordings or []:
+            s.add(r)
     return row
 
 
 def delete_baseline(state: AppState, asset_id: str) -> bool:
-    """Remove the asset's baseline; False when it had none."""
+    """Remove the asset's baseline and its recordings' rows; False when it had none."""
     with state.sessions.begin() as s:
         old = s.get(AssetBaseline, asset_id)
         if old is None:
             return False
         s.delete(old)
+        s.execute(delete(AssetBaselineRecording).where(AssetBaselineRecording.asset_id == asset_id))
     return True
 
 

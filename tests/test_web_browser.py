@@ -657,6 +657,20 @@ def test_baseline_is_set_from_the_page(server, browser, recordings):
     status, b = _get(f"{server}/assets/{asset}/baseline")
     _, h = _get(f"{server}/assets/{asset}/history")
     assert b["baseline"]["source"] == "diagnosis" and b["baseline"]["diagnosis_ids"] == [h["points"][-1]["id"]]
+    text = browser.find_element("id", "trend-baseline").text
+    assert "made of 1 recording" in text and "shipped, fleet-wide ones — this baseline has 1 recording" in text, text
+    # adding the latest diagnosis again: the service refuses it (already in the baseline), in its words
+    browser.find_element("id", "baseline-add-btn").click()
+    _wait(browser, lambda d: "already in the baseline" in d.find_element("id", "baseline-error").text, 20,
+          "the refusal to add a recording twice")
+    # the first stored recording added: a baseline of 2, still the fleet-wide thresholds
+    req = urllib.request.Request(f"{server}/assets/{asset}/baseline/recordings?diagnosis_id={h['points'][0]['id']}",
+                                 method="POST", headers={"X-API-Key": "web-test-key"})
+    with urllib.request.urlopen(req, timeout=60) as r:
+        assert json.loads(r.read())["n_recordings"] == 2
+    browser.find_element("id", "trend-btn").click()
+    _wait(browser, lambda d: "made of 2 recordings" in d.find_element("id", "trend-baseline").text, 30,
+          "the baseline of 2 recordings")
 
 
 def test_speed_range_field(server, browser, recordings, tmp_path):
