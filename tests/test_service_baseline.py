@@ -357,3 +357,17 @@ def test_cli_adds_and_removes_baseline_recordings(tmp_path, monkeypatch, registr
     assert res.exit_code == 0 and "made of 2 recording(s)" in res.output and "fleet-wide" in res.output
     res = run(app, ["baseline", "remove", "unit-cli2", "--diagnosis-id", str(ids[1])])
     assert res.exit_code == 2 and "is not a recording of the baseline" in res.output
+
+
+def test_openapi_documents_the_baseline_recording_routes(client):
+    spec = client.get("/openapi.json").json()
+    add = spec["paths"]["/assets/{asset_id}/baseline/recordings"]["post"]
+    rm = spec["paths"]["/assets/{asset_id}/baseline/recordings/{diagnosis_id}"]["delete"]
+    for op in (add, rm):
+        assert {"200", "400", "401", "403", "404", "409", "415", "422"} <= op["responses"].keys()
+    assert set(add["requestBody"]["content"]) == {"application/json", "application/octet-stream", "multipart/form-data"}
+    schemas = spec["components"]["schemas"]
+    basis = schemas["ThresholdsBasisOut"]["properties"]
+    assert basis["basis"]["enum"] == ["own", "fleet"] and "too_few_recordings" in basis["reason"]["enum"]
+    assert {"n_recordings", "recordings", "thresholds_basis"} <= schemas["BaselineOut"]["properties"].keys()
+    assert "thresholds_basis" in schemas["BaselineSectionOut"]["properties"]
