@@ -90,21 +90,21 @@ def _build(asset_id: str, source: str, members: list[AssetBaselineRecording]) ->
                          repeatability=repeatability_thresholds(sigs))
 
 
-def _same_condition(speeds: list[float | None], ids: list[int]) -> None:
-    """``InputError`` (409) unless every speed is known and within ``features.SPEED_BAND_FRAC`` of their median."""
+def _same_condition(speeds: list[float | None], ids: list[int], what: str, fix: str) -> None:
+    """``InputError`` (409) unless every speed is known and within ``features.SPEED_BAND_FRAC`` of their median
+    (``what``: the recordings, in words; ``fix``: what to do instead)."""
     from rotordiag.features import SPEED_BAND_FRAC
 
     if any(v is None or not math.isfinite(v) for v in speeds):
-        raise InputError("every recording of a baseline needs its speed; one has none", "conflict")
+        raise InputError(f"{what} need the speed of every recording; one has none", "conflict")
     vals = [float(v) for v in speeds]   # type: ignore[arg-type]
     med = sorted(vals)[len(vals) // 2]
     far = [(i, v) for i, v in zip(ids, vals) if abs(v / med - 1.0) > SPEED_BAND_FRAC]
     if far:
         raise InputError(
-            "the baseline's recordings would not be at one operating condition: speeds "
-            + ", ".join(f"{v:.0f}" for v in vals) + f" r/min (diagnoses {', '.join(str(i) for i, _ in far)} more "
-            f"than ±{100 * SPEED_BAND_FRAC:g} % from the median {med:.0f}); record at the baseline's condition or "
-            "set a new baseline", "conflict")
+            f"{what} are not at one operating condition: speeds " + ", ".join(f"{v:.0f}" for v in vals)
+            + f" r/min (diagnoses {', '.join(str(i) for i, _ in far)} more than ±{100 * SPEED_BAND_FRAC:g} % from "
+            f"the median {med:.0f}); {fix}", "conflict")
 
 
 def add_recording(state: AppState, asset_id: str, diagnosis_id: int) -> dict[str, Any]:
@@ -136,7 +136,9 @@ def add_recording(state: AppState, asset_id: str, diagnosis_id: int) -> dict[str
             raise InputError(f"diagnosis {diagnosis_id} is already in the baseline of asset {asset_id!r}", "conflict")
         fresh = [*(_copy(m) for m in members), _member(asset_id, d)]
         source = row.source if row is not None else "recording"
-    _same_condition([m.speed_rpm for m in fresh], [m.diagnosis_id for m in fresh])
+    _same_condition([m.speed_rpm for m in fresh], [m.diagnosis_id for m in fresh],
+                    f"the baseline's recordings with diagnosis {diagnosis_id}",
+                    "record at the baseline's operating condition, or set a new baseline")
     put_baseline(state, _build(asset_id, source, fresh), fresh)
     return _stored(state, asset_id)
 
@@ -307,23 +309,15 @@ def propose(session: Session, asset_id: str, n: int = AUTO_N) -> dict[str, Any]:
         ``conflict`` when fewer than ``n`` are stored, or when their speeds spread wider than the band
         (the message names the speeds).
     """
-    from rotordiag.features import SPEED_BAND_FRAC, average_signatures
+    from rotordiag.features import average_signatures
 
     rows = first_diagnoses(session, asset_id, n)
     if len(rows) < n:
         raise InputError(f"asset {asset_id!r} has {len(rows)} stored recording(s) with a signature; an automatic "
                          f"baseline needs {n} (POST /diagnose with asset_id, or set one from a recording)", "conflict")
-    if any(r.speed_rpm is None or not math.isfinite(r.speed_rpm) for r in rows):
-        raise InputError("an automatic baseline needs the speed of every recording; one has none", "conflict")
-    speeds = [float(r.speed_rpm or 0.0) for r in rows]
-    med = sorted(speeds)[len(speeds) // 2]
-    far = [(r.id, v) for r, v in zip(rows, speeds) if abs(v / med - 1.0) > SPEED_BAND_FRAC]
-    if far:
-        raise InputError(
-            f"the first {n} recordings of asset {asset_id!r} are not at one operating condition: speeds "
-            + ", ".join(f"{v:.0f}" for v in speeds) + f" r/min (diagnoses {', '.join(str(i) for i, _ in far)} "
-            f"more than ±{100 * SPEED_BAND_FRAC:g} % from the median {med:.0f}); set the baseline from a recording "
-            "or a diagnosis id instead", "conflict")
+    _same_condition([r.speed_rpm for r in rows], [r.id for r in rows],
+                    f"the first {n} recordings of asset {asset_id!r}",
+                    "set the baseline from a recording or a diagnosis id instead")
     from rotordiag.models.change import repeatability_thresholds
 
     sigs = [r.signature or {} for r in rows]

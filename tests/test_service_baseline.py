@@ -288,7 +288,7 @@ def test_a_baseline_grows_recording_by_recording_and_its_own_thresholds_follow(c
     assert r.status_code == 409 and "already in the baseline" in r.json()["detail"]
     fast = client.post("/diagnose", json=_body(asset, speed_rpm=2100.0, seed=45), headers=auth()).json()["diagnosis_id"]
     r = client.post(f"/assets/{asset}/baseline/recordings?diagnosis_id={fast}", headers=auth())
-    assert r.status_code == 409 and "not be at one operating condition" in r.json()["detail"]
+    assert r.status_code == 409 and "not at one operating condition" in r.json()["detail"]
     assert client.post(f"/assets/{asset}/baseline/recordings?diagnosis_id=999999", headers=auth()).status_code == 404
     r = client.post(f"/assets/{asset}/baseline/recordings", headers=auth())
     assert r.status_code == 422 and "send a recording" in r.json()["detail"]
