@@ -156,7 +156,8 @@ def evaluate(name: str, rated_rpm: float, draws: int, seed: int) -> dict:
         res = change_features(clean[int(sims["healthy_ref"][i])], clean[i])
         moved[i] = (res.largest("dc_shift_um")[0], res.largest("2x_change_um_pp")[0])
     shipped = shipped_rule()
-    fa = {"own": [], "shipped": []}
+    fa: dict[str, list[bool]] = {"own": [], "shipped": []}
+    fa_by: dict[str, dict[str, int]] = {"own": {}, "shipped": {}}
     det: dict[tuple[str, float], list[bool]] = {}
     own_th: list[dict] = []
     n_fleet = 0
@@ -172,12 +173,15 @@ def evaluate(name: str, rated_rpm: float, draws: int, seed: int) -> dict:
         for i in [h for h in healthy if h not in base_runs]:
             res = change_features(base, m.signature(i, rng))
             for k, rule in rules.items():
-                fa[k].append(bool(assess_change(res, rule)["changed"]))
+                verdict = assess_change(res, rule)
+                fa[k].append(bool(verdict["changed"]))
+                for q in verdict["exceeded"]:
+                    fa_by[k][q] = fa_by[k].get(q, 0) + 1
         for i in misaligned:
             res = change_features(base, m.signature(i, rng))
             for k, rule in rules.items():
                 det.setdefault((k, float(sims["offset_um"][i])), []).append(bool(assess_change(res, rule)["changed"]))
-    return {"name": name, "rated_rpm": rated_rpm, "sims": sims, "moved": moved, "fa": fa, "det": det,
+    return {"name": name, "rated_rpm": rated_rpm, "sims": sims, "moved": moved, "fa": fa, "fa_by": fa_by, "det": det,
             "own_th": own_th, "n_fleet": n_fleet, "draws": draws, "misaligned": misaligned}
 
 
@@ -196,14 +200,16 @@ def table(results: list[dict]) -> str:
             lines.append(f"| {r['name']} @ {r['rated_rpm']:.0f} r/min | {off:g} µm | {min(mv):.2f}–{max(mv):.2f} | "
                          f"{min(x2):.2f}–{max(x2):.2f} | {_rate(r['det'][('own', off)])} | "
                          f"{_rate(r['det'][('shipped', off)])} |")
+        by = {k: ", ".join(f"{q} {n}" for q, n in sorted(v.items(), key=lambda kv: -kv[1])) for k, v in r["fa_by"].items()}
         lines.append(f"| {r['name']} @ {r['rated_rpm']:.0f} r/min | healthy re-recordings (false alarms) | – | – | "
-                     f"{_rate(r['fa']['own'])} | {_rate(r['fa']['shipped'])} |")
+                     f"{_rate(r['fa']['own'])}{' — ' + by['own'] if by['own'] else ''} | "
+                     f"{_rate(r['fa']['shipped'])}{' — ' + by['shipped'] if by['shipped'] else ''} |")
     lines.append("")
     lines.append("Thresholds: shipped (fleet-wide) centreline shift > "
                  f"{sh['dc_shift_um']:.2g} µm and > {sh['dc_shift_per_c']:.2g} c, 2X vector change > "
                  f"{sh['2x_change_um_pp']:.3g} µm pk-pk, 1X > {sh['1x_change_um_pp']:.3g} µm pk-pk. Own (median over "
                  "the baselines drawn): " + "; ".join(
-                     f"{r['name']}: centreline {np.median([t['dc_shift_um'] for t in r['own_th']]):.2g} µm, 2X "
+                     f"{r['name']} @ {r['rated_rpm']:.0f} r/min: centreline {np.median([t['dc_shift_um'] for t in r['own_th']]):.2g} µm, 2X "
                      f"{np.median([t['2x_change_um_pp'] for t in r['own_th']]):.2g} µm pk-pk, 1X "
                      f"{np.median([t['1x_change_um_pp'] for t in r['own_th']]):.2g} µm pk-pk "
                      f"({r['draws'] - r['n_fleet']}/{r['draws']} baselines with own thresholds)"
