@@ -326,7 +326,8 @@ class AssetBaselineOut(BaseModel):
     edited_thresholds: dict[str, float | None] = Field(..., description="This asset's edits of them.")
     thresholds_origin: dict[str, str] = Field(
         default_factory=dict, description="Where each threshold in force comes from: `shipped` "
-        "(models/default/change_thresholds.json), `repeatability` (this asset's automatic baseline) or `edited`.")
+        "(models/default/change_thresholds.json), `repeatability` (this asset's own, from its baseline of ≥ 3 "
+        "recordings) or `edited`.")
 
 
 class ThresholdsIn(_Strict):

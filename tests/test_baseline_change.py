@@ -235,6 +235,17 @@ def test_a_baseline_file_carries_its_repeatability_thresholds(tmp_path):
         ["change_thresholds_own"]
 
 
+def test_three_identical_recordings_give_the_floors_not_zero_thresholds():
+    """No spread at all (the same recording three times) leaves each threshold at its floor, a probe system's
+    resolution: a zero threshold would alarm on any re-recording."""
+    from rotordiag.models.change import REPEAT_FLOOR, repeatability_thresholds
+
+    s = _sig(seed=90)
+    rep = repeatability_thresholds([s, s, s])
+    assert rep is not None and all(v < 1e-9 for v in rep["spread"].values())
+    assert {k: v for k, v in rep["thresholds"].items() if v is not None} == REPEAT_FLOOR
+
+
 def test_thresholds_basis_says_own_or_fleet_and_why():
     """Own thresholds need 3 recordings at one operating condition with something measured; otherwise the fleet-wide
     ones, with the reason as a code and a typed warning — and the comparison then uses the shipped thresholds."""
