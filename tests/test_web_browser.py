@@ -599,6 +599,7 @@ def test_baseline_and_change_are_shown(server, browser, recordings, tmp_path):
     assert box.is_displayed()
     set_at = readable_time(base["set_at"])
     assert f"Baseline of {set_at} used" in box.text and "changed since the baseline" in box.text
+    assert "Alarm thresholds: the fleet-wide ones (1 baseline recording;" in box.text, box.text
     assert "_change" not in box.text and "dc_shift" not in box.text and re.fullmatch(r"\d{4}-\d\d-\d\d \d\d:\d\d UTC", set_at)
     assert "changed" in box.get_attribute("class").split()
     rows = browser.find_elements("css selector", "#verdict-evidence tbody tr")

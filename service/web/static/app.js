@@ -583,6 +583,14 @@
     const parts = [b.used ? `Baseline of ${when(b.set_at)} used (${b.source}, ${fixed(b.speed_rpm, 0)} r/min).` :
       "No baseline used."];
     parts.push(plainWords(b.message));
+    const basis = b.used ? b.thresholds_basis : null;
+    if (basis) {
+      const n = basis.n_recordings;
+      parts.push(basis.basis === "own" ?
+        `Alarm thresholds: this asset's own, from how much its ${n} baseline recordings differ.` :
+        `Alarm thresholds: the fleet-wide ones (${n} baseline recording${n === 1 ? "" : "s"}; ${basis.needed} at one ` +
+        "speed set this asset's own): a change of a few µm on a small machine stays under them.");
+    }
     if (state.verdict && state.verdict.storage_note) parts.push(plainWords(state.verdict.storage_note) + ".");
     box.textContent = parts.join(" ");
     show(box, true);
