@@ -27,6 +27,7 @@ from .store import (
     get_diagnosis,
     get_thresholds,
     put_baseline,
+    replace_baseline,
     store_diagnosis,
 )
 
@@ -117,7 +118,8 @@ def add_recording(state: AppState, asset_id: str, diagnosis_id: int) -> dict[str
         ``not_found`` for a diagnosis the asset lacks; ``conflict`` when it keeps no signature, is already in
         the baseline, is not at the baseline's operating condition, or the baseline predates per-recording storage.
     """
-    with state.sessions() as s:
+    with state.sessions.begin() as s:   # read, check and rewrite in one transaction, the baseline row locked
+        row = get_baseline(s, asset_id, lock=True)
         d = get_diagnosis(s, asset_id, diagnosis_id)
         if d is None:
             raise InputError(f"asset {asset_id!r} has no stored diagnosis {diagnosis_id}; GET "
@@ -126,7 +128,6 @@ def add_recording(state: AppState, asset_id: str, diagnosis_id: int) -> dict[str
             raise InputError(f"diagnosis {diagnosis_id} keeps no signature (stored before baselines existed, or only "
                              "its summary is kept past the history's retention); send its recording instead",
                              "conflict")
-        row = get_baseline(s, asset_id)
         members = baseline_recordings(s, asset_id)
         if row is not None and not members:
             raise InputError(f"the baseline of asset {asset_id!r} was set before its recordings were kept one by one "
@@ -135,11 +136,10 @@ def add_recording(state: AppState, asset_id: str, diagnosis_id: int) -> dict[str
         if any(m.diagnosis_id == diagnosis_id for m in members):
             raise InputError(f"diagnosis {diagnosis_id} is already in the baseline of asset {asset_id!r}", "conflict")
         fresh = [*(_copy(m) for m in members), _member(asset_id, d)]
-        source = row.source if row is not None else "recording"
-    _same_condition([m.speed_rpm for m in fresh], [m.diagnosis_id for m in fresh],
-                    f"the baseline's recordings with diagnosis {diagnosis_id}",
-                    "record at the baseline's operating condition, or set a new baseline")
-    put_baseline(state, _build(asset_id, source, fresh), fresh)
+        _same_condition([m.speed_rpm for m in fresh], [m.diagnosis_id for m in fresh],
+                        f"the baseline's recordings with diagnosis {diagnosis_id}",
+                        "record at the baseline's operating condition, or set a new baseline")
+        replace_baseline(s, _build(asset_id, row.source if row is not None else "recording", fresh), fresh)
     return _stored(state, asset_id)
 
 
@@ -153,8 +153,8 @@ def remove_recording(state: AppState, asset_id: str, diagnosis_id: int) -> dict[
         ``not_found`` when it is not one of the baseline's recordings (or there is no baseline); ``conflict``
         for the last one (DELETE the baseline instead).
     """
-    with state.sessions() as s:
-        row = get_baseline(s, asset_id)
+    with state.sessions.begin() as s:   # read, check and rewrite in one transaction, the baseline row locked
+        row = get_baseline(s, asset_id, lock=True)
         members = baseline_recordings(s, asset_id)
         if row is None or not any(m.diagnosis_id == diagnosis_id for m in members):
             ids = [m.diagnosis_id for m in members]
@@ -165,8 +165,7 @@ def remove_recording(state: AppState, asset_id: str, diagnosis_id: int) -> dict[
             raise InputError(f"diagnosis {diagnosis_id} is the baseline's only recording; DELETE "
                              f"/assets/{asset_id}/baseline removes the baseline", "conflict")
         fresh = [_copy(m) for m in members if m.diagnosis_id != diagnosis_id]
-        source = row.source
-    put_baseline(state, _build(asset_id, source, fresh), fresh)
+        replace_baseline(s, _build(asset_id, row.source, fresh), fresh)
     return _stored(state, asset_id)
 
 

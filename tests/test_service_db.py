@@ -256,3 +256,46 @@ def test_db_copy_command(tmp_path, postgres):
     assert r.exit_code == 0 and "database: v0008" in r.output
     r = runner.invoke(app, ["db", "copy", dst, "--from", src])
     assert r.exit_code == 2 and "already holds rows" in r.output
+
+
+def test_baseline_recordings_added_and_removed_on_each_backend(database_url):
+    """Adding and removing baseline recordings through service.baseline on SQLite and PostgreSQL: the asset's own
+    thresholds appear at 3 recordings and go at 2; on PostgreSQL two recordings added at once are both kept (the
+    baseline row is locked while it is rewritten)."""
+    from types import SimpleNamespace
+
+    from rotordiag.service.baseline import add_recording, remove_recording
+    from tests.test_baseline_change import _sig
+
+    engine = make_engine(database_url)
+    sessions = init_db(engine)
+    with sessions.begin() as s:
+        for i in range(1, 6):
+            s.add(AssetDiagnosis(id=i, asset_id="u9", model_version="v0001", severity="aligned", verdict={},
+                                 key_features={}, speed_rpm=1800.0, signature=_sig(seed=100 + i)))
+    state = SimpleNamespace(sessions=sessions, settings=None)
+    assert add_recording(state, "u9", 1)["thresholds_basis"]["reason"] == "too_few_recordings"
+    add_recording(state, "u9", 2)
+    b = add_recording(state, "u9", 3)
+    assert b["diagnosis_ids"] == [1, 2, 3] and b["repeatability"]["n_recordings"] == 3
+    b = remove_recording(state, "u9", 2)
+    assert b["diagnosis_ids"] == [1, 3] and b["repeatability"] is None and b["thresholds_basis"]["basis"] == "fleet"
+    if engine.dialect.name == "postgresql":
+        errors: list[BaseException] = []
+
+        def add(i: int) -> None:
+            try:
+                add_recording(state, "u9", i)
+            except BaseException as exc:  # noqa: BLE001 - reported below
+                errors.append(exc)
+
+        threads = [threading.Thread(target=add, args=(i,)) for i in (4, 5)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(60)
+        assert errors == []
+        with sessions() as s:
+            assert sorted(s.get(AssetBaseline, "u9").diagnosis_ids) == [1, 3, 4, 5]
+            assert s.scalar(select(func.count()).select_from(AssetBaselineRecording)) == 4
+    engine.dispose()
