@@ -26,12 +26,13 @@ from typing import Any
 
 import numpy as np
 
-from rotordiag.core.notes import Length, Measured
+from rotordiag.core.notes import Length, Measured, Note
 from rotordiag.core.timefmt import readable_time
 
 __all__ = ["ChangeRule", "THRESHOLDS_PATH", "QUANTITIES", "fit_thresholds", "shipped_rule", "assess_change", "compare",
            "load_baseline_file", "format_change", "UNITS", "repeatability_thresholds", "REPEAT_MIN", "REPEAT_MARGIN",
-           "REPEAT_FLOOR", "REPEAT_QUANTITIES", "thresholds_from_spread"]
+           "REPEAT_FLOOR", "REPEAT_QUANTITIES", "thresholds_from_spread", "thresholds_basis", "BASIS_REASONS",
+           "basis_note"]
 
 THRESHOLDS_PATH = Path(__file__).resolve().parent / "default" / "change_thresholds.json"
 
@@ -286,6 +287,56 @@ def thresholds_from_spread(spread: dict[str, float], *, margin: float = REPEAT_M
     return thresholds
 
 
+#: why a baseline's change thresholds are what they are (``thresholds_basis(...)["reason"]``)
+BASIS_REASONS = {
+    "own_repeatability": "the asset's own, from the spread of its baseline recordings",
+    "too_few_recordings": f"fleet-wide: the baseline has fewer than {REPEAT_MIN} recordings",
+    "recordings_not_comparable": "fleet-wide: the baseline's recordings are more than 10 % apart in speed, or one "
+                                 "has no speed",
+    "nothing_measured": "fleet-wide: the baseline's recordings carry no 1X/2X phase (no keyphasor) and no "
+                        "centreline, so their spread cannot be measured",
+}
+
+
+def thresholds_basis(baseline: dict[str, Any]) -> dict[str, Any]:
+    """Whether a stored baseline's 1X, 2X and centreline thresholds are the asset's own or the fleet-wide ones.
+
+    Parameters
+    ----------
+    baseline : dict
+        The stored baseline (``service.baseline.baseline_dict``, or a baseline file): its ``repeatability``
+        (:func:`repeatability_thresholds`' result or None) and ``n_recordings`` (else ``diagnosis_ids``' length).
+
+    Returns
+    -------
+    dict
+        ``basis`` (``"own"`` or ``"fleet"``), ``reason`` (a key of :data:`BASIS_REASONS`), ``n_recordings``,
+        ``needed`` (:data:`REPEAT_MIN`) and, for ``own``, the ``margin``.
+    """
+    rep = baseline.get("repeatability") or None
+    n = baseline.get("n_recordings") or (rep or {}).get("n_recordings") or len(baseline.get("diagnosis_ids") or ()) or 1
+    out: dict[str, Any] = {"n_recordings": int(n), "needed": REPEAT_MIN}
+    if rep and rep.get("thresholds"):
+        return {"basis": "own", "reason": "own_repeatability", **out, "margin": float(rep.get("margin", REPEAT_MARGIN))}
+    reason = ("too_few_recordings" if n < REPEAT_MIN else "recordings_not_comparable" if rep is None
+              else "nothing_measured")
+    return {"basis": "fleet", "reason": reason, **out}
+
+
+def basis_note(basis: dict[str, Any]) -> Note:
+    """The answer's typed note saying where the change thresholds come from (:func:`thresholds_basis`)."""
+    if basis["basis"] == "own":
+        return Note("change_thresholds_own", n_recordings=basis["n_recordings"], margin=basis["margin"])
+    n = basis["n_recordings"]
+    why = {"too_few_recordings": f"this asset's baseline has {n} recording{'s' if n != 1 else ''}, its own "
+                                 f"repeatability needs {basis['needed']} at one operating condition",
+           "recordings_not_comparable": f"this asset's {n} baseline recordings are not at one operating condition "
+                                        "(more than 10 % apart in speed)",
+           "nothing_measured": f"this asset's {n} baseline recordings carry no 1X/2X phase (no keyphasor) and no "
+                               "centreline"}[basis["reason"]]
+    return Note("change_thresholds_fleet", why=why)
+
+
 def assess_change(result: Any, rule: ChangeRule) -> dict[str, Any]:
     """The change verdict of a ``features.ChangeResult`` under ``rule``.
 
@@ -370,19 +421,23 @@ def compare(signature_now: dict[str, Any], baseline: dict[str, Any] | None, rule
     dict
         ``used`` (a comparison was made), ``set_at``, ``speed_rpm``, ``model_version``, ``source``,
         ``compared``, ``message``, ``changed`` (None when not compared), ``exceeded``, ``quantities``,
-        ``values`` (every change feature), ``speed_change_frac``, ``notes`` and ``evidence`` (items in the
-        evidence section's form, scope ``"change since baseline"``).
+        ``values`` (every change feature), ``speed_change_frac``, ``thresholds_basis``
+        (:func:`thresholds_basis`; None without a baseline), ``notes`` (typed: the last one says whether the
+        thresholds are the asset's own or the fleet-wide ones) and ``evidence`` (items in the evidence section's
+        form, scope ``"change since baseline"``).
     """
     from rotordiag.features import change_features
 
     if baseline is None:
         return {"used": False, "compared": False, "changed": None, "exceeded": [], "quantities": {}, "values": {},
                 "notes": [], "evidence": [], "set_at": None, "speed_rpm": None, "model_version": None,
-                "source": None, "speed_change_frac": None,
+                "source": None, "speed_change_frac": None, "thresholds_basis": None,
                 "message": "no baseline for this asset: the verdict is the present state only" + asset_hint}
     res = change_features(baseline["signature"], signature_now)
     verdict = assess_change(res, rule)
-    head = {k: baseline.get(k) for k in ("set_at", "speed_rpm", "model_version", "source")}
+    basis = thresholds_basis(baseline)
+    head = {**{k: baseline.get(k) for k in ("set_at", "speed_rpm", "model_version", "source")},
+            "thresholds_basis": basis}
     d = res.to_dict()
     if not res.comparable:
         msg = (f"not compared with the baseline of {readable_time(baseline.get('set_at'))}: {res.notes[0]}; record at the "
@@ -404,11 +459,7 @@ def compare(signature_now: dict[str, Any], baseline: dict[str, Any] | None, rule
                + " above the alarm thresholds")
     else:
         msg = f"no change beyond the alarm thresholds since the baseline of {when}"
-    notes = list(d["notes"])
-    rep = rule.source.get("repeatability")
-    if rep:
-        notes.append(f"1X, 2X and centreline thresholds from this asset's own repeatability ({rep.get('n_recordings')} "
-                     f"baseline recordings, {rep.get('margin'):g} × their largest difference from each other)")
+    notes = [*d["notes"], basis_note(basis)]
     return {**head, "used": True, "compared": True, "changed": verdict["changed"], "exceeded": verdict["exceeded"],
             "quantities": verdict["quantities"], "values": d["values"], "notes": notes, "evidence": evidence,
             "message": msg, "speed_change_frac": d["speed_change_frac"]}

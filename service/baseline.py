@@ -18,9 +18,19 @@ from typing import TYPE_CHECKING, Any
 
 from rotordiag.core.timefmt import iso_utc
 
-from .core.db import AssetBaseline
+from .core.db import AssetBaseline, AssetBaselineRecording, utcnow
 from .errors import InputError
-from .store import AUTO_N, first_diagnoses, get_baseline, get_diagnosis, get_thresholds, put_baseline, store_diagnosis
+from .store import (
+    AUTO_N,
+    baseline_recordings,
+    first_diagnoses,
+    get_baseline,
+    get_diagnosis,
+    get_thresholds,
+    put_baseline,
+    replace_baseline,
+    store_diagnosis,
+)
 
 if TYPE_CHECKING:
     from sqlalchemy.orm import Session
@@ -28,15 +38,142 @@ if TYPE_CHECKING:
     from .state import AppState
 
 
-def baseline_dict(row: AssetBaseline, *, with_signature: bool = True) -> dict[str, Any]:
-    """The API form of a stored baseline (what ``models.change.compare`` takes, plus its provenance)."""
+def baseline_dict(row: AssetBaseline, *, with_signature: bool = True,
+                  recordings: list[AssetBaselineRecording] | None = None) -> dict[str, Any]:
+    """The API form of a stored baseline (what ``models.change.compare`` takes, plus its provenance): with
+    ``recordings`` (its rows, :func:`service.store.baseline_recordings`) each one's id, speed and times, and
+    where its change thresholds come from (``thresholds_basis``, ``models.change.thresholds_basis``)."""
+    from rotordiag.models.change import thresholds_basis
+
     out: dict[str, Any] = {"asset_id": row.asset_id, "set_at": iso_utc(row.created_at), "recorded_at": iso_utc(row.recorded_at),
            "source": row.source, "diagnosis_ids": list(row.diagnosis_ids or []), "speed_rpm": row.speed_rpm,
            "model_version": row.model_version}
     if with_signature:
         out["signature"] = row.signature
     out["repeatability"] = row.repeatability
+    out["n_recordings"] = len(out["diagnosis_ids"]) or 1
+    if recordings is not None:
+        out["recordings"] = [{"diagnosis_id": r.diagnosis_id, "speed_rpm": r.speed_rpm,
+                              "recorded_at": iso_utc(r.recorded_at), "added_at": iso_utc(r.added_at)} for r in recordings]
+    out["thresholds_basis"] = thresholds_basis(out)
     return out
+
+
+def _member(asset_id: str, d: Any) -> AssetBaselineRecording:
+    """The baseline-recording row of a stored diagnosis ``d`` (its signature copied)."""
+    return AssetBaselineRecording(asset_id=asset_id, diagnosis_id=d.id, added_at=utcnow(),
+                                  recorded_at=d.recorded_at or d.created_at,
+                                  speed_rpm=d.speed_rpm, model_version=d.model_version, signature=d.signature)
+
+
+def _build(asset_id: str, source: str, members: list[AssetBaselineRecording]) -> AssetBaseline:
+    """A baseline made of ``members``: one recording as it is; several averaged as vectors
+    (``features.average_signatures``) with their repeatability thresholds (``models.change.
+    repeatability_thresholds``; None for fewer than ``REPEAT_MIN`` or recordings not at one operating condition)."""
+    from rotordiag.features import average_signatures
+    from rotordiag.models.change import repeatability_thresholds
+
+    sigs = [m.signature or {} for m in members]
+    sig = sigs[0] if len(sigs) == 1 else average_signatures(sigs)
+    times = [m.recorded_at for m in members if m.recorded_at is not None]
+    return AssetBaseline(asset_id=asset_id, source=source, diagnosis_ids=[m.diagnosis_id for m in members],
+                         recorded_at=max(times) if times else None,
+                         speed_rpm=sig.get("speed_rpm", members[0].speed_rpm) if len(sigs) > 1 else members[0].speed_rpm,
+                         model_version=sorted({m.model_version for m in members})[-1], signature=sig,
+                         repeatability=repeatability_thresholds(sigs))
+
+
+def _same_condition(speeds: list[float | None], ids: list[int], what: str, fix: str) -> None:
+    """``InputError`` (409) unless every speed is known and within ``features.SPEED_BAND_FRAC`` of their median
+    (``what``: the recordings, in words; ``fix``: what to do instead)."""
+    from rotordiag.features import SPEED_BAND_FRAC
+
+    if any(v is None or not math.isfinite(v) for v in speeds):
+        raise InputError(f"{what} need the speed of every recording; one has none", "conflict")
+    vals = [float(v) for v in speeds]   # type: ignore[arg-type]
+    med = sorted(vals)[len(vals) // 2]
+    far = [(i, v) for i, v in zip(ids, vals) if abs(v / med - 1.0) > SPEED_BAND_FRAC]
+    if far:
+        raise InputError(
+            f"{what} are not at one operating condition: speeds " + ", ".join(f"{v:.0f}" for v in vals)
+            + f" r/min (diagnoses {', '.join(str(i) for i, _ in far)} more than ±{100 * SPEED_BAND_FRAC:g} % from "
+            f"the median {med:.0f}); {fix}", "conflict")
+
+
+def add_recording(state: AppState, asset_id: str, diagnosis_id: int) -> dict[str, Any]:
+    """Add the stored diagnosis ``diagnosis_id`` to the asset's baseline (making one when it has none) and recompute
+    the baseline and its own thresholds.
+
+    Raises
+    ------
+    InputError
+        ``not_found`` for a diagnosis the asset lacks; ``conflict`` when it keeps no signature, is already in
+        the baseline, is not at the baseline's operating condition, or the baseline predates per-recording storage.
+    """
+    with state.sessions.begin() as s:   # read, check and rewrite in one transaction, the baseline row locked
+        row = get_baseline(s, asset_id, lock=True)
+        d = get_diagnosis(s, asset_id, diagnosis_id)
+        if d is None:
+            raise InputError(f"asset {asset_id!r} has no stored diagnosis {diagnosis_id}; GET "
+                             f"/assets/{asset_id}/history lists its diagnoses with their ids", "not_found")
+        if d.signature is None:
+            raise InputError(f"diagnosis {diagnosis_id} keeps no signature (stored before baselines existed, or only "
+                             "its summary is kept past the history's retention); send its recording instead",
+                             "conflict")
+        members = baseline_recordings(s, asset_id)
+        if row is not None and not members:
+            raise InputError(f"the baseline of asset {asset_id!r} was set before its recordings were kept one by one "
+                             "and its recordings' signatures are gone; set a new baseline (POST "
+                             f"/assets/{asset_id}/baseline)", "conflict")
+        if any(m.diagnosis_id == diagnosis_id for m in members):
+            raise InputError(f"diagnosis {diagnosis_id} is already in the baseline of asset {asset_id!r}", "conflict")
+        fresh = [*(_copy(m) for m in members), _member(asset_id, d)]
+        _same_condition([m.speed_rpm for m in fresh], [m.diagnosis_id for m in fresh],
+                        f"the baseline's recordings with diagnosis {diagnosis_id}",
+                        "record at the baseline's operating condition, or set a new baseline")
+        replace_baseline(s, _build(asset_id, row.source if row is not None else "recording", fresh), fresh)
+    return _stored(state, asset_id)
+
+
+def remove_recording(state: AppState, asset_id: str, diagnosis_id: int) -> dict[str, Any]:
+    """Take the recording ``diagnosis_id`` out of the asset's baseline and recompute it (its own thresholds go
+    back to the fleet-wide ones below ``models.change.REPEAT_MIN`` recordings).
+
+    Raises
+    ------
+    InputError
+        ``not_found`` when it is not one of the baseline's recordings (or there is no baseline); ``conflict``
+        for the last one (DELETE the baseline instead).
+    """
+    with state.sessions.begin() as s:   # read, check and rewrite in one transaction, the baseline row locked
+        row = get_baseline(s, asset_id, lock=True)
+        members = baseline_recordings(s, asset_id)
+        if row is None or not any(m.diagnosis_id == diagnosis_id for m in members):
+            ids = [m.diagnosis_id for m in members]
+            raise InputError(f"diagnosis {diagnosis_id} is not a recording of the baseline of asset {asset_id!r}"
+                             + (f" (its recordings: {ids})" if ids else " (it has no baseline made of recordings)"),
+                             "not_found")
+        if len(members) == 1:
+            raise InputError(f"diagnosis {diagnosis_id} is the baseline's only recording; DELETE "
+                             f"/assets/{asset_id}/baseline removes the baseline", "conflict")
+        fresh = [_copy(m) for m in members if m.diagnosis_id != diagnosis_id]
+        replace_baseline(s, _build(asset_id, row.source, fresh), fresh)
+    return _stored(state, asset_id)
+
+
+def _copy(m: AssetBaselineRecording) -> AssetBaselineRecording:
+    """A new (transient) row with ``m``'s values, to be written again with the rebuilt baseline."""
+    return AssetBaselineRecording(asset_id=m.asset_id, diagnosis_id=m.diagnosis_id, added_at=m.added_at,
+                                  recorded_at=m.recorded_at, speed_rpm=m.speed_rpm, model_version=m.model_version,
+                                  signature=m.signature)
+
+
+def _stored(state: AppState, asset_id: str) -> dict[str, Any]:
+    """The asset's stored baseline in its API form, with its recordings."""
+    with state.sessions() as s:
+        row = get_baseline(s, asset_id)
+        assert row is not None
+        return baseline_dict(row, recordings=baseline_recordings(s, asset_id))
 
 
 def rule_for(session: Session, asset_id: str, row: AssetBaseline | None = None):
@@ -148,9 +285,9 @@ def from_diagnosis(state: AppState, asset_id: str, diagnosis_id: int, source: st
             raise InputError(f"diagnosis {diagnosis_id} keeps no signature (it was stored before baselines existed, "
                              "or only its summary is kept past the history's retention); send its recording to "
                              "this endpoint instead", "conflict")
-        row = AssetBaseline(asset_id=asset_id, source=source, diagnosis_ids=[d.id], recorded_at=d.created_at,
-                            speed_rpm=d.speed_rpm, model_version=d.model_version, signature=d.signature)
-    return baseline_dict(put_baseline(state, row))
+        member = _member(asset_id, d)
+    put_baseline(state, _build(asset_id, source, [member]), [member])
+    return _stored(state, asset_id)
 
 
 def propose(session: Session, asset_id: str, n: int = AUTO_N) -> dict[str, Any]:
@@ -163,40 +300,31 @@ def propose(session: Session, asset_id: str, n: int = AUTO_N) -> dict[str, Any]:
         ``conflict`` when fewer than ``n`` are stored, or when their speeds spread wider than the band
         (the message names the speeds).
     """
-    from rotordiag.features import SPEED_BAND_FRAC, average_signatures
+    from rotordiag.features import average_signatures
 
     rows = first_diagnoses(session, asset_id, n)
     if len(rows) < n:
         raise InputError(f"asset {asset_id!r} has {len(rows)} stored recording(s) with a signature; an automatic "
                          f"baseline needs {n} (POST /diagnose with asset_id, or set one from a recording)", "conflict")
-    if any(r.speed_rpm is None or not math.isfinite(r.speed_rpm) for r in rows):
-        raise InputError("an automatic baseline needs the speed of every recording; one has none", "conflict")
-    speeds = [float(r.speed_rpm or 0.0) for r in rows]
-    med = sorted(speeds)[len(speeds) // 2]
-    far = [(r.id, v) for r, v in zip(rows, speeds) if abs(v / med - 1.0) > SPEED_BAND_FRAC]
-    if far:
-        raise InputError(
-            f"the first {n} recordings of asset {asset_id!r} are not at one operating condition: speeds "
-            + ", ".join(f"{v:.0f}" for v in speeds) + f" r/min (diagnoses {', '.join(str(i) for i, _ in far)} "
-            f"more than ±{100 * SPEED_BAND_FRAC:g} % from the median {med:.0f}); set the baseline from a recording "
-            "or a diagnosis id instead", "conflict")
+    _same_condition([r.speed_rpm for r in rows], [r.id for r in rows],
+                    f"the first {n} recordings of asset {asset_id!r}",
+                    "set the baseline from a recording or a diagnosis id instead")
     from rotordiag.models.change import repeatability_thresholds
 
     sigs = [r.signature or {} for r in rows]
     sig = average_signatures(sigs)
     versions = sorted({r.model_version for r in rows})
     return {"diagnosis_ids": [r.id for r in rows], "recorded_at": rows[-1].created_at, "speed_rpm": sig["speed_rpm"],
-            "model_version": versions[-1], "signature": sig, "repeatability": repeatability_thresholds(sigs)}
+            "model_version": versions[-1], "signature": sig, "repeatability": repeatability_thresholds(sigs),
+            "members": [_member(asset_id, r) for r in rows]}
 
 
 def set_auto(state: AppState, asset_id: str, n: int = AUTO_N) -> dict[str, Any]:
-    """Set the automatic proposal as the asset's baseline."""
+    """Set the automatic proposal as the asset's baseline (its recordings kept one by one)."""
     with state.sessions() as s:
         p = propose(s, asset_id, n)
-    row = AssetBaseline(asset_id=asset_id, source="auto", diagnosis_ids=p["diagnosis_ids"],
-                        recorded_at=p["recorded_at"], speed_rpm=p["speed_rpm"], model_version=p["model_version"],
-                        signature=p["signature"], repeatability=p["repeatability"])
-    return baseline_dict(put_baseline(state, row))
+    put_baseline(state, _build(asset_id, "auto", p["members"]), p["members"])
+    return _stored(state, asset_id)
 
 
 def alarm_events(rows: list[Any]) -> list[dict[str, Any]]:

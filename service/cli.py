@@ -122,10 +122,10 @@ def _register_db(app: typer.Typer) -> None:
 
 
 def _register_baseline(app: typer.Typer) -> None:
-    """``rotordiag baseline show|set|clear ASSET``: the asset baselines of the service's database."""
+    """``rotordiag baseline show|set|add|remove|clear ASSET``: the asset baselines of the service's database."""
     baseline_app = typer.Typer(help="Asset baselines in the service's database (ROTORDIAG_* settings, as "
                                "`rotordiag serve`): show, set (from a recording, a stored diagnosis or the first "
-                               "recordings), clear.", no_args_is_help=True)
+                               "recordings), add or remove a recording, clear.", no_args_is_help=True)
     app.add_typer(baseline_app, name="baseline")
 
     def _open():
@@ -155,12 +155,13 @@ def _register_baseline(app: typer.Typer) -> None:
 
         from rotordiag.service.baseline import baseline_dict, propose, rule_for, thresholds_origin
         from rotordiag.service.errors import InputError
-        from rotordiag.service.store import get_baseline, get_thresholds
+        from rotordiag.service.store import baseline_recordings, get_baseline, get_thresholds
 
         state, _ = _open()
         with state.sessions() as s:
             row = get_baseline(s, asset_id)
-            out: dict = {"asset_id": asset_id, "baseline": baseline_dict(row) if row is not None else None,
+            out: dict = {"asset_id": asset_id, "baseline": baseline_dict(row, recordings=baseline_recordings(s, asset_id))
+                         if row is not None else None,
                          "thresholds": rule_for(s, asset_id, row).thresholds,
                          "edited_thresholds": get_thresholds(s, asset_id),
                          "thresholds_origin": thresholds_origin(s, asset_id, row)}
@@ -183,6 +184,7 @@ def _register_baseline(app: typer.Typer) -> None:
             speed = "unknown" if b["speed_rpm"] is None else f"{b['speed_rpm']:.0f} r/min"
             typer.echo(f"asset {asset_id}: baseline set {b['set_at']} from {b['source']} (diagnoses "
                        f"{b['diagnosis_ids']}), speed {speed} (compared within ±5 %), model {b['model_version']}")
+            typer.echo(_basis_line(b))
         origin = out["thresholds_origin"]
         typer.echo("  alarm thresholds: " + ", ".join(
             f"{k} {v:.3g}" + ("" if origin.get(k) == "shipped" else f" ({origin.get(k)})")
@@ -203,7 +205,7 @@ def _register_baseline(app: typer.Typer) -> None:
         channels: Optional[str] = typer.Option(None, "--channels", help="BEARING@ANGLE list, as `rotordiag diagnose`."),
     ) -> None:
         """Set (or replace) an asset's baseline: from a recording, --diagnosis-id or --auto."""
-        from rotordiag.service.baseline import from_diagnosis, record_verdict, set_auto
+        from rotordiag.service.baseline import from_diagnosis, set_auto
         from rotordiag.service.errors import InputError
 
         if sum([recording is not None, diagnosis_id is not None, auto]) != 1:
@@ -215,18 +217,10 @@ def _register_baseline(app: typer.Typer) -> None:
             elif auto:
                 b = set_auto(state, asset_id, n)  # type: ignore[arg-type]
             else:
-                from rotordiag.features.reader import read_recording
-                from rotordiag.models.diagnose_files import CLI_LIMITS, load_options
-                from rotordiag.service.inference import ModelStore
-
                 assert recording is not None
-                opts = load_options(recording, None, {"sample_rate_hz": sample_rate_hz, "units": units,
-                                                      "speed_rpm": speed_rpm, "clearance_um": clearance_um,
-                                                      "channels": channels})
-                rec = read_recording(recording, options=opts, limits=CLI_LIMITS).recording
-                verdict = ModelStore.open(settings).diagnose(rec)
-                did = record_verdict(state, asset_id, None, verdict)  # type: ignore[arg-type]
-                assert did is not None
+                did = _store_recording(state, settings, asset_id, recording, {
+                    "sample_rate_hz": sample_rate_hz, "units": units, "speed_rpm": speed_rpm,
+                    "clearance_um": clearance_um, "channels": channels})
                 b = from_diagnosis(state, asset_id, did, "recording")  # type: ignore[arg-type]
         except InputError as exc:
             _fail(str(exc))
@@ -235,6 +229,79 @@ def _register_baseline(app: typer.Typer) -> None:
         typer.echo(f"asset {asset_id}: baseline set from {b['source']} (diagnoses {b['diagnosis_ids']}), speed "
                    f"{b['speed_rpm']:.0f} r/min, model {b['model_version']}" if b["speed_rpm"] is not None else
                    f"asset {asset_id}: baseline set from {b['source']} (diagnoses {b['diagnosis_ids']})")
+        typer.echo(_basis_line(b))
+
+    def _store_recording(state, settings, asset_id: str, recording: Path, given: dict) -> int:
+        """Diagnose ``recording`` with the active model and store it in the asset's history; its diagnosis id."""
+        from rotordiag.features.reader import read_recording
+        from rotordiag.models.diagnose_files import CLI_LIMITS, load_options
+        from rotordiag.service.baseline import record_verdict
+        from rotordiag.service.inference import ModelStore
+
+        opts = load_options(recording, None, given)
+        rec = read_recording(recording, options=opts, limits=CLI_LIMITS).recording
+        verdict = ModelStore.open(settings).diagnose(rec)
+        did = record_verdict(state, asset_id, None, verdict)
+        assert did is not None
+        return did
+
+    def _basis_line(b: dict) -> str:
+        """Where the baseline's change thresholds come from, in words."""
+        from rotordiag.models.change import basis_note
+
+        return f"  change thresholds: {basis_note(b['thresholds_basis'])}"
+
+    @baseline_app.command("add")
+    def add(
+        asset_id: str = typer.Argument(..., help="The asset."),
+        recording: Optional[Path] = typer.Argument(None, help="A recording of the unchanged machine at the "
+                                                   "baseline's operating condition (as `rotordiag diagnose` reads)."),
+        diagnosis_id: Optional[int] = typer.Option(None, "--diagnosis-id", help="A stored diagnosis of the asset."),
+        sample_rate_hz: Optional[float] = typer.Option(None, "--sample-rate-hz"),
+        units: Optional[str] = typer.Option(None, "--units"),
+        speed_rpm: Optional[float] = typer.Option(None, "--speed-rpm"),
+        clearance_um: Optional[float] = typer.Option(None, "--clearance-um"),
+        channels: Optional[str] = typer.Option(None, "--channels", help="BEARING@ANGLE list, as `rotordiag diagnose`."),
+    ) -> None:
+        """Add a recording to an asset's baseline (POST /assets/{id}/baseline/recordings): from 3 recordings its
+        change thresholds are the asset's own."""
+        from rotordiag.service.baseline import add_recording
+        from rotordiag.service.errors import InputError
+
+        if (recording is None) == (diagnosis_id is None):
+            _fail("give exactly one of a RECORDING or --diagnosis-id")
+        state, settings = _open()
+        try:
+            if diagnosis_id is None:
+                assert recording is not None
+                diagnosis_id = _store_recording(state, settings, asset_id, recording, {
+                    "sample_rate_hz": sample_rate_hz, "units": units, "speed_rpm": speed_rpm,
+                    "clearance_um": clearance_um, "channels": channels})
+            b = add_recording(state, asset_id, diagnosis_id)  # type: ignore[arg-type]
+        except InputError as exc:
+            _fail(str(exc))
+        except ValueError as exc:
+            _fail(f"{recording}: {exc}")
+        typer.echo(f"asset {asset_id}: diagnosis {diagnosis_id} added; the baseline is made of "
+                   f"{b['n_recordings']} recording(s) (diagnoses {b['diagnosis_ids']})")
+        typer.echo(_basis_line(b))
+
+    @baseline_app.command("remove")
+    def remove(asset_id: str = typer.Argument(..., help="The asset."),
+               diagnosis_id: int = typer.Option(..., "--diagnosis-id", help="The baseline recording to take out.")
+               ) -> None:
+        """Take a recording out of an asset's baseline (DELETE /assets/{id}/baseline/recordings/{diagnosis_id})."""
+        from rotordiag.service.baseline import remove_recording
+        from rotordiag.service.errors import InputError
+
+        state, _ = _open()
+        try:
+            b = remove_recording(state, asset_id, diagnosis_id)  # type: ignore[arg-type]
+        except InputError as exc:
+            _fail(str(exc))
+        typer.echo(f"asset {asset_id}: diagnosis {diagnosis_id} removed; the baseline is made of "
+                   f"{b['n_recordings']} recording(s) (diagnoses {b['diagnosis_ids']})")
+        typer.echo(_basis_line(b))
 
     @baseline_app.command("clear")
     def clear(asset_id: str = typer.Argument(..., help="The asset.")) -> None:

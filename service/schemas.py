@@ -227,6 +227,32 @@ class ChangeQuantityOut(BaseModel):
     exceeded: bool = Field(..., description="Over the threshold(s).")
 
 
+class ThresholdsBasisOut(BaseModel):
+    """Whether an asset's 1X, 2X and centreline change thresholds are its own or the fleet-wide ones."""
+
+    basis: Literal["own", "fleet"] = Field(..., description="`own`: set from the spread of the asset's baseline "
+                                           "recordings (k × their largest leave-one-out difference, at least a "
+                                           "probe system's resolution); `fleet`: the shipped thresholds, fitted on "
+                                           "simulated machines of many sizes.")
+    reason: Literal["own_repeatability", "too_few_recordings", "recordings_not_comparable", "nothing_measured"] = Field(
+        ..., description="Why (`models.change.BASIS_REASONS`): `too_few_recordings` below `needed`; "
+        "`recordings_not_comparable` when they are more than 10 % apart in speed; `nothing_measured` when they carry "
+        "no 1X/2X phase (no keyphasor) and no centreline.")
+    n_recordings: int = Field(..., description="Recordings the baseline is made of.")
+    needed: int = Field(..., description="Recordings at one operating condition the asset's own thresholds need.")
+    margin: float | None = Field(None, description="With `own`: the factor k on the largest difference between the "
+                                 "baseline's recordings.")
+
+
+class BaselineRecordingOut(BaseModel):
+    """One recording an asset's baseline is made of."""
+
+    diagnosis_id: int = Field(..., description="The stored diagnosis (GET /assets/{id}/history).")
+    speed_rpm: float | None = Field(None, description="Its speed, r/min.")
+    recorded_at: str | None = Field(None, description="When it was recorded (UTC; when stored, if not given).")
+    added_at: str | None = Field(None, description="When it was added to the baseline (UTC).")
+
+
 class BaselineSectionOut(BaseModel):
     """Whether a baseline was used for this answer, and what changed since it."""
 
@@ -245,7 +271,12 @@ class BaselineSectionOut(BaseModel):
     values: dict[str, float | None] = Field(default_factory=dict, description="Every change feature "
                                             "(features.change_features: per bearing and probe direction).")
     speed_change_frac: float | None = Field(None, description="speed / baseline speed − 1.")
-    notes: list[str] = Field(default_factory=list, description="Why some change quantities are missing.")
+    thresholds_basis: ThresholdsBasisOut | None = Field(
+        None, description="Whether the 1X, 2X and centreline thresholds are the asset's own (≥ 3 baseline "
+        "recordings) or the fleet-wide ones, and why (null: no baseline).")
+    notes: list[str] = Field(default_factory=list, description="Why some change quantities are missing, and where "
+                             "the thresholds come from (warning codes `change_thresholds_own` / "
+                             "`change_thresholds_fleet`).")
 
 
 class AlarmEvent(BaseModel):
@@ -272,9 +303,16 @@ class BaselineOut(BaseModel):
     signature: dict[str, Any] | None = Field(None, description="The 1X/2X vectors, centreline and orbit shape per "
                                              "bearing (features.signature).")
     repeatability: dict[str, Any] | None = Field(
-        None, description="For a baseline of ≥ 3 recordings (`auto`): the asset's own 1X, 2X and centreline "
-        "thresholds from how much those recordings differ from each other (`thresholds`, `spread`, "
-        "`n_recordings`, `margin`); they replace the shipped ones for this asset. Null otherwise.")
+        None, description="For a baseline of ≥ 3 recordings at one operating condition: the asset's own 1X, 2X and "
+        "centreline thresholds from how much those recordings differ from each other (`thresholds`, `spread`, "
+        "`n_recordings`, `margin`); they replace the shipped ones for this asset. Null otherwise. Recomputed "
+        "whenever a recording is added to or removed from the baseline.")
+    n_recordings: int = Field(1, description="Recordings the baseline is made of (averaged as vectors).")
+    recordings: list[BaselineRecordingOut] | None = Field(
+        None, description="Those recordings (add: POST /assets/{id}/baseline/recordings, remove: DELETE "
+        "/assets/{id}/baseline/recordings/{diagnosis_id}); empty for a baseline set before they were kept one by one.")
+    thresholds_basis: ThresholdsBasisOut | None = Field(
+        None, description="Whether its change thresholds are the asset's own or the fleet-wide ones, and why.")
 
 
 class AssetBaselineOut(BaseModel):
@@ -288,7 +326,8 @@ class AssetBaselineOut(BaseModel):
     edited_thresholds: dict[str, float | None] = Field(..., description="This asset's edits of them.")
     thresholds_origin: dict[str, str] = Field(
         default_factory=dict, description="Where each threshold in force comes from: `shipped` "
-        "(models/default/change_thresholds.json), `repeatability` (this asset's automatic baseline) or `edited`.")
+        "(models/default/change_thresholds.json), `repeatability` (this asset's own, from its baseline of ≥ 3 "
+        "recordings) or `edited`.")
 
 
 class ThresholdsIn(_Strict):

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 from sqlalchemy import Text, cast, delete, func, select, update
 
 from .alarms import evaluate
-from .core.db import AssetBaseline, AssetDiagnosis, AssetSettings, Job, ServiceProbe, utcnow
+from .core.db import AssetBaseline, AssetBaselineRecording, AssetDiagnosis, AssetSettings, Job, ServiceProbe, utcnow
 
 if TYPE_CHECKING:
     from sqlalchemy.orm import Session
@@ -225,28 +225,62 @@ def first_diagnoses(session: Session, asset_id: str, limit: int) -> list[AssetDi
     return list(session.scalars(q))
 
 
-def get_baseline(session: Session, asset_id: str) -> AssetBaseline | None:
+def get_baseline(session: Session, asset_id: str, *, lock: bool = False) -> AssetBaseline | None:
+    """The asset's baseline row; ``lock``: held until the transaction ends (PostgreSQL ``FOR UPDATE``; SQLite
+    serialises writers itself), so a read-modify-write of the baseline cannot lose a concurrent one."""
+    if lock:
+        return session.scalars(select(AssetBaseline).where(AssetBaseline.asset_id == asset_id)
+                               .with_for_update()).first()
     return session.get(AssetBaseline, asset_id)
 
 
-def put_baseline(state: AppState, row: AssetBaseline) -> AssetBaseline:
-    """Store ``row`` as the asset's baseline, replacing any previous one."""
-    with state.sessions.begin() as s:
-        old = s.get(AssetBaseline, row.asset_id)
-        if old is not None:
-            s.delete(old)
-            s.flush()
-        s.add(row)
+def baseline_recordings(session: Session, asset_id: str) -> list[AssetBaselineRecording]:
+    """The recordings the asset's baseline is made of, in the order they were added (empty: no baseline, or one
+    set before v0008 whose recordings' signatures were no longer kept)."""
+    q = (select(AssetBaselineRecording).where(AssetBaselineRecording.asset_id == asset_id)
+         .order_by(AssetBaselineRecording.added_at, AssetBaselineRecording.diagnosis_id))
+    return list(session.scalars(q))
+
+
+#: the columns of a baseline that a replacement writes (the asset id stays)
+_BASELINE_VALUES = ("source", "diagnosis_ids", "recorded_at", "speed_rpm", "model_version", "signature", "repeatability")
+
+
+def replace_baseline(session: Session, row: AssetBaseline, recordings: list[AssetBaselineRecording]) -> AssetBaseline:
+    """In ``session``'s transaction: ``row`` becomes the asset's baseline and ``recordings`` what it is made of,
+    replacing any previous baseline and its recordings. An existing baseline row is updated in place (not deleted
+    and inserted again), so a transaction waiting on its lock (:func:`get_baseline` ``lock``) reads the new one."""
+    for m in baseline_recordings(session, row.asset_id):
+        session.delete(m)
+    old = session.get(AssetBaseline, row.asset_id)
+    if old is None:
+        session.add(row)
+    else:
+        for name in _BASELINE_VALUES:
+            setattr(old, name, getattr(row, name))
+        old.created_at = utcnow()
+        row = old
+    session.flush()
+    session.add_all(recordings)
     return row
 
 
+def put_baseline(state: AppState, row: AssetBaseline,
+                 recordings: list[AssetBaselineRecording] | None = None) -> AssetBaseline:
+    """Store ``row`` as the asset's baseline and ``recordings`` as what it is made of, replacing any previous
+    baseline and its recordings, in one transaction; returns the stored row."""
+    with state.sessions.begin() as s:
+        return replace_baseline(s, row, list(recordings or []))
+
+
 def delete_baseline(state: AppState, asset_id: str) -> bool:
-    """Remove the asset's baseline; False when it had none."""
+    """Remove the asset's baseline and its recordings' rows; False when it had none."""
     with state.sessions.begin() as s:
         old = s.get(AssetBaseline, asset_id)
         if old is None:
             return False
         s.delete(old)
+        s.execute(delete(AssetBaselineRecording).where(AssetBaselineRecording.asset_id == asset_id))
     return True
 
 

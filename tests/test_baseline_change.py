@@ -229,5 +229,44 @@ def test_a_baseline_file_carries_its_repeatability_thresholds(tmp_path):
                                                                "repeatability": rep}, "edited_thresholds": {}}))
     _, rule = load_baseline_file(path)
     assert rule.thresholds["dc_shift_um"] == pytest.approx(rep["thresholds"]["dc_shift_um"])
-    section = compare(sigs[0], {"signature": average_signatures(sigs), "set_at": "x"}, rule)
-    assert any("own repeatability" in n for n in section["notes"])
+    section = compare(sigs[0], {"signature": average_signatures(sigs), "set_at": "x", "repeatability": rep}, rule)
+    assert section["thresholds_basis"]["basis"] == "own"
+    assert [n.code for n in section["notes"] if getattr(n, "code", "").startswith("change_thresholds")] == \
+        ["change_thresholds_own"]
+
+
+def test_three_identical_recordings_give_the_floors_not_zero_thresholds():
+    """No spread at all (the same recording three times) leaves each threshold at its floor, a probe system's
+    resolution: a zero threshold would alarm on any re-recording."""
+    from rotordiag.models.change import REPEAT_FLOOR, repeatability_thresholds
+
+    s = _sig(seed=90)
+    rep = repeatability_thresholds([s, s, s])
+    assert rep is not None and all(v < 1e-9 for v in rep["spread"].values())
+    assert {k: v for k, v in rep["thresholds"].items() if v is not None} == REPEAT_FLOOR
+
+
+def test_thresholds_basis_says_own_or_fleet_and_why():
+    """Own thresholds need 3 recordings at one operating condition with something measured; otherwise the fleet-wide
+    ones, with the reason as a code and a typed warning — and the comparison then uses the shipped thresholds."""
+    from rotordiag.models.change import REPEAT_MIN, basis_note, repeatability_thresholds, thresholds_basis
+
+    sigs = [_sig(seed=80 + i) for i in range(3)]
+    rep = repeatability_thresholds(sigs)
+    assert thresholds_basis({"diagnosis_ids": [1, 2, 3], "repeatability": rep}) == {
+        "basis": "own", "reason": "own_repeatability", "n_recordings": 3, "needed": REPEAT_MIN, "margin": 4.0}
+    one = thresholds_basis({"diagnosis_ids": [7], "repeatability": None})
+    assert (one["basis"], one["reason"], one["n_recordings"]) == ("fleet", "too_few_recordings", 1)
+    note = basis_note(one)
+    assert note.code == "change_thresholds_fleet" and note.severity == "caution"
+    assert "baseline has 1 recording, its own repeatability needs 3" in note
+    far = thresholds_basis({"diagnosis_ids": [1, 2, 3], "repeatability": None})
+    assert far["reason"] == "recordings_not_comparable" and "not at one operating condition" in basis_note(far)
+    blind = thresholds_basis({"n_recordings": 4, "repeatability": {"thresholds": {}, "n_recordings": 4}})
+    assert blind["reason"] == "nothing_measured" and blind["n_recordings"] == 4
+    # a one-recording baseline's comparison: the shipped thresholds, and the answer's last note says so
+    section = compare(sigs[0], {"signature": sigs[1], "set_at": "x", "diagnosis_ids": [5]}, shipped_rule())
+    assert section["thresholds_basis"]["reason"] == "too_few_recordings"
+    assert section["notes"][-1].code == "change_thresholds_fleet"
+    assert section["quantities"]["dc_shift"]["threshold"] == shipped_rule().thresholds["dc_shift_um"]
+    assert compare(sigs[0], None, shipped_rule())["thresholds_basis"] is None

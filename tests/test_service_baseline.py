@@ -245,3 +245,129 @@ def test_cli_sets_shows_and_uses_a_baseline(tmp_path, monkeypatch, registry_src)
     assert run(app, ["baseline", "clear", "unit-cli"]).exit_code == 0
     res = run(app, ["baseline", "clear", "unit-cli"])
     assert res.exit_code == 2 and "has no baseline" in res.output
+
+
+def test_a_baseline_grows_recording_by_recording_and_its_own_thresholds_follow(client):
+    """One recording: fleet-wide thresholds, and the answer says so (typed note, reason code); a 2 µm journal
+    shift at bearing 3 — under the shipped 6 µm — passes unseen. Three recordings (added one by one, from a body and
+    from a stored diagnosis): the asset's own thresholds, and the same shift is detected. Removing one goes back."""
+    from rotordiag.models.change import shipped_rule
+
+    asset = "unit-grow"
+    assert client.post(f"/assets/{asset}/baseline/recordings?diagnosis_id=1").status_code == 401
+    b = client.post(f"/assets/{asset}/baseline", json=_body(asset, seed=40), headers=auth()).json()
+    assert b["n_recordings"] == 1 and len(b["recordings"]) == 1
+    assert b["thresholds_basis"] == {"basis": "fleet", "reason": "too_few_recordings", "n_recordings": 1,
+                                     "needed": 3, "margin": None}
+    sec = client.post("/diagnose", json=_body(asset, dc_shift_um=2.0, seed=41), headers=auth()).json()
+    base = sec["baseline"]
+    assert base["compared"] and not base["changed"], base
+    assert base["thresholds_basis"]["basis"] == "fleet"
+    assert any(n.startswith("fleet-wide change thresholds: this asset's baseline has 1 recording") for n in base["notes"])
+    assert base["quantities"]["dc_shift"]["threshold"] == shipped_rule().thresholds["dc_shift_um"]
+
+    r = client.post(f"/assets/{asset}/baseline/recordings", json=_body(asset, seed=42), headers=auth())
+    assert r.status_code == 200, r.text
+    assert r.json()["n_recordings"] == 2 and r.json()["thresholds_basis"]["basis"] == "fleet"
+    later = client.post("/diagnose", json=_body(asset, seed=43), headers=auth()).json()["diagnosis_id"]
+    r = client.post(f"/assets/{asset}/baseline/recordings?diagnosis_id={later}", headers=auth())
+    assert r.status_code == 200, r.text
+    b3 = r.json()
+    assert b3["n_recordings"] == 3 and [x["diagnosis_id"] for x in b3["recordings"]] == b3["diagnosis_ids"]
+    assert b3["diagnosis_ids"][-1] == later and b3["repeatability"]["n_recordings"] == 3
+    assert b3["thresholds_basis"]["basis"] == "own" and b3["thresholds_basis"]["margin"] == 4.0
+    got = client.get(f"/assets/{asset}/baseline").json()
+    assert got["thresholds_origin"]["dc_shift_um"] == "repeatability" and got["baseline"]["n_recordings"] == 3
+    assert got["thresholds"]["dc_shift_um"] < 2.0
+    moved = client.post("/diagnose", json=_body(asset, dc_shift_um=2.0, seed=44), headers=auth()).json()["baseline"]
+    assert moved["changed"] and "dc_shift" in moved["exceeded"], moved
+    assert moved["thresholds_basis"]["reason"] == "own_repeatability"
+    assert any("own repeatability (3 baseline recordings" in n for n in moved["notes"])
+
+    r = client.post(f"/assets/{asset}/baseline/recordings?diagnosis_id={later}", headers=auth())
+    assert r.status_code == 409 and "already in the baseline" in r.json()["detail"]
+    fast = client.post("/diagnose", json=_body(asset, speed_rpm=2100.0, seed=45), headers=auth()).json()["diagnosis_id"]
+    r = client.post(f"/assets/{asset}/baseline/recordings?diagnosis_id={fast}", headers=auth())
+    assert r.status_code == 409 and "not at one operating condition" in r.json()["detail"]
+    assert client.post(f"/assets/{asset}/baseline/recordings?diagnosis_id=999999", headers=auth()).status_code == 404
+    r = client.post(f"/assets/{asset}/baseline/recordings", headers=auth())
+    assert r.status_code == 422 and "send a recording" in r.json()["detail"]
+
+    r = client.delete(f"/assets/{asset}/baseline/recordings/{later}", headers=auth())
+    assert r.status_code == 200, r.text
+    b2 = r.json()
+    assert later not in b2["diagnosis_ids"] and b2["n_recordings"] == 2 and b2["repeatability"] is None
+    assert b2["thresholds_basis"]["basis"] == "fleet"
+    got = client.get(f"/assets/{asset}/baseline").json()
+    assert got["thresholds_origin"]["dc_shift_um"] == "shipped"
+    again = client.post("/diagnose", json=_body(asset, dc_shift_um=2.0, seed=46), headers=auth()).json()["baseline"]
+    assert not again["changed"]
+    assert client.delete(f"/assets/{asset}/baseline/recordings/{later}", headers=auth()).status_code == 404
+    first, second = b2["diagnosis_ids"]
+    assert client.delete(f"/assets/{asset}/baseline/recordings/{second}", headers=auth()).status_code == 200
+    r = client.delete(f"/assets/{asset}/baseline/recordings/{first}", headers=auth())
+    assert r.status_code == 409 and "only recording" in r.json()["detail"]
+    assert client.delete(f"/assets/{asset}/baseline/recordings/{first}").status_code == 401
+
+
+def test_an_automatic_baseline_keeps_its_recordings_and_drops_to_fleet_thresholds_when_one_goes(client):
+    asset = "unit-auto-rm"
+    for seed in range(3):
+        client.post("/diagnose", json=_body(asset, seed=60 + seed), headers=auth())
+    b = client.post(f"/assets/{asset}/baseline?auto=true", headers=auth()).json()
+    assert b["source"] == "auto" and len(b["recordings"]) == 3 and b["thresholds_basis"]["basis"] == "own"
+    r = client.delete(f"/assets/{asset}/baseline/recordings/{b['diagnosis_ids'][0]}", headers=auth()).json()
+    assert r["diagnosis_ids"] == b["diagnosis_ids"][1:] and r["thresholds_basis"]["reason"] == "too_few_recordings"
+    assert r["speed_rpm"] == pytest.approx(SPEED_RPM, rel=1e-3)
+
+
+def test_cli_adds_and_removes_baseline_recordings(tmp_path, monkeypatch, registry_src):
+    """`rotordiag baseline add|remove` on the service database: three recordings give the asset's own thresholds
+    (said in words), removing one goes back to the fleet-wide ones; mistakes exit 2 with what to fix."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    monkeypatch.setenv("ROTORDIAG_DATA_DIR", str(tmp_path / "data"))
+    monkeypatch.setenv("ROTORDIAG_SHIPPED_REGISTRY_DIR", str(registry_src))
+    files = []
+    for seed in range(3):
+        f = tmp_path / f"take{seed}.json"
+        f.write_text(json.dumps(_body(seed=70 + seed)))
+        files.append(f)
+    run = CliRunner().invoke
+    res = run(app, ["baseline", "add", "unit-cli2"])
+    assert res.exit_code == 2 and "exactly one" in res.output
+    res = run(app, ["baseline", "add", "unit-cli2", str(files[0])])
+    assert res.exit_code == 0, res.output
+    assert "made of 1 recording(s)" in res.output and "fleet-wide change thresholds" in res.output
+    for f in files[1:]:
+        res = run(app, ["baseline", "add", "unit-cli2", str(f)])
+        assert res.exit_code == 0, res.output
+    assert "made of 3 recording(s)" in res.output and "own repeatability (3 baseline recordings" in res.output
+    shown = json.loads(run(app, ["baseline", "show", "unit-cli2", "--json"]).output)
+    ids = shown["baseline"]["diagnosis_ids"]
+    assert len(ids) == 3 and shown["thresholds_origin"]["dc_shift_um"] == "repeatability"
+    assert [r["diagnosis_id"] for r in shown["baseline"]["recordings"]] == ids
+    res = run(app, ["baseline", "add", "unit-cli2", "--diagnosis-id", str(ids[0])])
+    assert res.exit_code == 2 and "already in the baseline" in res.output
+    res = run(app, ["baseline", "remove", "unit-cli2", "--diagnosis-id", str(ids[1])])
+    assert res.exit_code == 0 and "made of 2 recording(s)" in res.output and "fleet-wide" in res.output
+    res = run(app, ["baseline", "remove", "unit-cli2", "--diagnosis-id", str(ids[1])])
+    assert res.exit_code == 2 and "is not a recording of the baseline" in res.output
+
+
+def test_openapi_documents_the_baseline_recording_routes(client):
+    spec = client.get("/openapi.json").json()
+    add = spec["paths"]["/assets/{asset_id}/baseline/recordings"]["post"]
+    rm = spec["paths"]["/assets/{asset_id}/baseline/recordings/{diagnosis_id}"]["delete"]
+    for op in (add, rm):
+        assert {"200", "400", "401", "403", "404", "409", "415", "422"} <= op["responses"].keys()
+    assert set(add["requestBody"]["content"]) == {"application/json", "application/octet-stream", "multipart/form-data"}
+    schemas = spec["components"]["schemas"]
+    basis = schemas["ThresholdsBasisOut"]["properties"]
+    assert basis["basis"]["enum"] == ["own", "fleet"] and "too_few_recordings" in basis["reason"]["enum"]
+    assert {"n_recordings", "recordings", "thresholds_basis"} <= schemas["BaselineOut"]["properties"].keys()
+    assert "thresholds_basis" in schemas["BaselineSectionOut"]["properties"]

@@ -14,6 +14,7 @@ from sqlalchemy import func, inspect, select, text
 
 from rotordiag.service.core.db import (
     AssetBaseline,
+    AssetBaselineRecording,
     AssetDiagnosis,
     AssetSettings,
     Base,
@@ -59,13 +60,18 @@ def _check_reference_rows(sessions) -> None:
         assert base is not None and base.diagnosis_ids == [1, 2] and base.signature == {"x1_amp_um_pp": 40.0}
         settings = s.get(AssetSettings, "unit-7")
         assert settings is not None and settings.thresholds == {"x1_amp_rel": 0.3}
+        # v0008 gave the baseline its recordings, each with its diagnosis's own signature
+        members = list(s.scalars(select(AssetBaselineRecording).order_by(AssetBaselineRecording.diagnosis_id)))
+        assert [(m.asset_id, m.diagnosis_id) for m in members] == [("unit-7", 1), ("unit-7", 2)]
+        assert [m.signature for m in members] == [{"x1_amp_um_pp": 40.0}, {"x1_amp_um_pp": 41.0}]
+        assert [m.speed_rpm for m in members] == [1800.0, 1800.0] and members[0].model_version == "v0001"
 
 
 def test_pre_alembic_sqlite_database_is_adopted_with_its_rows(tmp_path):
     engine = make_engine(_old_sqlite(tmp_path / "old.sqlite3"))
     assert current_revision(engine) is None
     sessions = init_db(engine)
-    assert current_revision(engine) == head_revision() == "v0007"
+    assert current_revision(engine) == head_revision() == "v0008"
     _check_reference_rows(sessions)
     init_db(engine)   # a second start changes nothing
     _check_reference_rows(sessions)
@@ -92,7 +98,7 @@ def test_versions_up_and_down_keep_the_rows(database_url):
     migrate(engine, "v0002")
     assert current_revision(engine) == "v0002"
     sessions = init_db(engine)
-    assert current_revision(engine) == "v0007"
+    assert current_revision(engine) == "v0008"
     with sessions() as s:
         job = s.get(Job, "j1")
         assert job is not None and job.params == {"n": 3} and job.progress == 0.5 and job.lease_expires_at is None
@@ -120,7 +126,7 @@ def test_versions_up_and_down_keep_the_rows(database_url):
     with engine.connect() as conn:
         assert conn.execute(text("SELECT asset_id FROM asset_settings")).scalar_one() == "u1"
     migrate(engine)
-    assert current_revision(engine) == "v0007"
+    assert current_revision(engine) == "v0008"
     with sessions.begin() as s:
         row = s.get(AssetSettings, "u1")
         assert row is not None and row.probes == {"units": "mil"} and row.setpoints is None
@@ -140,7 +146,42 @@ def test_versions_up_and_down_keep_the_rows(database_url):
         assert conn.execute(text("SELECT COUNT(*) FROM asset_diagnoses WHERE asset_id = 'u1'")).scalar_one() == 1
         assert conn.execute(text("SELECT setpoints FROM asset_settings")).scalar_one() is not None
     migrate(engine)
-    assert current_revision(engine) == "v0007"
+    assert current_revision(engine) == "v0008"
+    engine.dispose()
+
+
+def test_v0008_baseline_recordings_up_and_down(database_url):
+    """v0008 gives each baseline its recordings (a one-recording baseline its own signature; a baseline of several
+    only when every recording still keeps its signature), goes down with the baselines kept, and up again."""
+    engine = make_engine(database_url)
+    migrate(engine, "v0007")
+    with engine.begin() as conn:   # rows written by version v0007's code
+        for i, (asset, sig) in enumerate([("a1", '{"speed_rpm": 3000.0}'), ("a2", '{"speed_rpm": 3001.0}'),
+                                          ("a2", '{"speed_rpm": 3002.0}'), ("a3", None), ("a3", '{"s": 1}')], 1):
+            conn.execute(text("INSERT INTO asset_diagnoses (id, asset_id, created_at, model_version, severity, "
+                              "speed_rpm, verdict, key_features, signature) VALUES (:i, :a, '2026-11-02 10:00:00', "
+                              "'v0002', 'aligned', 3000.0, '{}', '{}', :sig)"), {"i": i, "a": asset, "sig": sig})
+        for asset, ids, sig in (("a1", "[1]", '{"avg": 1}'), ("a2", "[2, 3]", '{"avg": 2}'),
+                                ("a3", "[4, 5]", '{"avg": 3}'), ("a4", "[99]", '{"avg": 4}')):
+            conn.execute(text("INSERT INTO asset_baselines (asset_id, created_at, source, diagnosis_ids, speed_rpm, "
+                              "model_version, signature) VALUES (:a, '2026-11-02 11:00:00', 'auto', :ids, 3000.0, "
+                              "'v0002', :sig)"), {"a": asset, "ids": ids, "sig": sig})
+    migrate(engine, "v0008")
+    sessions = init_db(engine)
+    with sessions() as s:
+        got = {(m.asset_id, m.diagnosis_id): m.signature for m in s.scalars(select(AssetBaselineRecording))}
+    # a1 and a4: one recording, the baseline's signature (a4's diagnosis is gone); a2: both diagnoses' own;
+    # a3: one signature trimmed, so none (the baseline keeps working from its average)
+    assert got == {("a1", 1): {"avg": 1}, ("a2", 2): {"speed_rpm": 3001.0}, ("a2", 3): {"speed_rpm": 3002.0},
+                   ("a4", 99): {"avg": 4}}
+    migrate(engine, "v0007")
+    assert "asset_baseline_recordings" not in inspect(engine).get_table_names()
+    with engine.connect() as conn:
+        assert conn.execute(text("SELECT COUNT(*) FROM asset_baselines")).scalar_one() == 4
+    migrate(engine)
+    assert current_revision(engine) == "v0008"
+    with sessions() as s:
+        assert s.scalar(select(func.count()).select_from(AssetBaselineRecording)) == 4
     engine.dispose()
 
 
@@ -184,7 +225,8 @@ def test_copy_sqlite_store_into_postgresql(tmp_path, postgres):
     dst_url = postgres.new_database()
     dst = make_engine(dst_url)
     copied = copy_store(src, dst)
-    assert copied == {"alarm_events": 0, "asset_baselines": 1, "asset_diagnoses": 3, "asset_settings": 1, "jobs": 2,
+    assert copied == {"alarm_events": 0, "asset_baseline_recordings": 2, "asset_baselines": 1, "asset_diagnoses": 3,
+                      "asset_settings": 1, "jobs": 2,
                       "service_probe": 0, "webhook_deliveries": 0, "webhooks": 0}
     sessions = init_db(dst)
     _check_reference_rows(sessions)
@@ -211,6 +253,49 @@ def test_db_copy_command(tmp_path, postgres):
     assert r.exit_code == 0, r.output
     assert "asset_diagnoses: 3 row(s)" in r.output
     r = runner.invoke(app, ["db", "current", "--url", dst])
-    assert r.exit_code == 0 and "database: v0007" in r.output
+    assert r.exit_code == 0 and "database: v0008" in r.output
     r = runner.invoke(app, ["db", "copy", dst, "--from", src])
     assert r.exit_code == 2 and "already holds rows" in r.output
+
+
+def test_baseline_recordings_added_and_removed_on_each_backend(database_url):
+    """Adding and removing baseline recordings through service.baseline on SQLite and PostgreSQL: the asset's own
+    thresholds appear at 3 recordings and go at 2; on PostgreSQL two recordings added at once are both kept (the
+    baseline row is locked while it is rewritten)."""
+    from types import SimpleNamespace
+
+    from rotordiag.service.baseline import add_recording, remove_recording
+    from tests.test_baseline_change import _sig
+
+    engine = make_engine(database_url)
+    sessions = init_db(engine)
+    with sessions.begin() as s:
+        for i in range(1, 6):
+            s.add(AssetDiagnosis(id=i, asset_id="u9", model_version="v0001", severity="aligned", verdict={},
+                                 key_features={}, speed_rpm=1800.0, signature=_sig(seed=100 + i)))
+    state = SimpleNamespace(sessions=sessions, settings=None)
+    assert add_recording(state, "u9", 1)["thresholds_basis"]["reason"] == "too_few_recordings"
+    add_recording(state, "u9", 2)
+    b = add_recording(state, "u9", 3)
+    assert b["diagnosis_ids"] == [1, 2, 3] and b["repeatability"]["n_recordings"] == 3
+    b = remove_recording(state, "u9", 2)
+    assert b["diagnosis_ids"] == [1, 3] and b["repeatability"] is None and b["thresholds_basis"]["basis"] == "fleet"
+    if engine.dialect.name == "postgresql":
+        errors: list[BaseException] = []
+
+        def add(i: int) -> None:
+            try:
+                add_recording(state, "u9", i)
+            except BaseException as exc:  # noqa: BLE001 - reported below
+                errors.append(exc)
+
+        threads = [threading.Thread(target=add, args=(i,)) for i in (4, 5)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(60)
+        assert errors == []
+        with sessions() as s:
+            assert sorted(s.get(AssetBaseline, "u9").diagnosis_ids) == [1, 3, 4, 5]
+            assert s.scalar(select(func.count()).select_from(AssetBaselineRecording)) == 4
+    engine.dispose()

@@ -599,6 +599,7 @@ def test_baseline_and_change_are_shown(server, browser, recordings, tmp_path):
     assert box.is_displayed()
     set_at = readable_time(base["set_at"])
     assert f"Baseline of {set_at} used" in box.text and "changed since the baseline" in box.text
+    assert "Alarm thresholds: the fleet-wide ones (1 baseline recording;" in box.text, box.text
     assert "_change" not in box.text and "dc_shift" not in box.text and re.fullmatch(r"\d{4}-\d\d-\d\d \d\d:\d\d UTC", set_at)
     assert "changed" in box.get_attribute("class").split()
     rows = browser.find_elements("css selector", "#verdict-evidence tbody tr")
@@ -657,6 +658,20 @@ def test_baseline_is_set_from_the_page(server, browser, recordings):
     status, b = _get(f"{server}/assets/{asset}/baseline")
     _, h = _get(f"{server}/assets/{asset}/history")
     assert b["baseline"]["source"] == "diagnosis" and b["baseline"]["diagnosis_ids"] == [h["points"][-1]["id"]]
+    text = browser.find_element("id", "trend-baseline").text
+    assert "made of 1 recording" in text and "shipped, fleet-wide ones — this baseline has 1 recording" in text, text
+    # adding the latest diagnosis again: the service refuses it (already in the baseline), in its words
+    browser.find_element("id", "baseline-add-btn").click()
+    _wait(browser, lambda d: "already in the baseline" in d.find_element("id", "baseline-error").text, 20,
+          "the refusal to add a recording twice")
+    # the first stored recording added: a baseline of 2, still the fleet-wide thresholds
+    req = urllib.request.Request(f"{server}/assets/{asset}/baseline/recordings?diagnosis_id={h['points'][0]['id']}",
+                                 method="POST", headers={"X-API-Key": "web-test-key"})
+    with urllib.request.urlopen(req, timeout=60) as r:
+        assert json.loads(r.read())["n_recordings"] == 2
+    browser.find_element("id", "trend-btn").click()
+    _wait(browser, lambda d: "made of 2 recordings" in d.find_element("id", "trend-baseline").text, 30,
+          "the baseline of 2 recordings")
 
 
 def test_speed_range_field(server, browser, recordings, tmp_path):

@@ -243,6 +243,17 @@ _ENTRIES = (
              "({examples}): treat the verdict with caution"),
     NoteInfo("bearings_not_read", INFO, "bearings outside the model's probe set were left out of the model's "
              "reading (the evidence still shows them)", "none", "{detail}"),
+    # --- the change since an asset's baseline (models.change.compare) ---
+    NoteInfo("change_thresholds_own", INFO, "the 1X, 2X and centreline change thresholds are this asset's own, set "
+             "from how much its baseline recordings differ from each other",
+             "take the baseline's recordings across the operating band you compare in (load, temperature)",
+             "1X, 2X and centreline thresholds from this asset's own repeatability ({n_recordings} baseline "
+             "recordings, {margin:g} × their largest difference from each other)"),
+    NoteInfo("change_thresholds_fleet", CAUTION, "the change thresholds are the fleet-wide ones, set on simulated "
+             "machines of many sizes: a small machine's change of a few µm (a coupling offset moving its journals) "
+             "stays under them", "add recordings of the unchanged machine at this operating condition to the "
+             "baseline (POST /assets/{id}/baseline/recordings) until it has 3",
+             "fleet-wide change thresholds: {why}; a change of a few µm on a small machine stays under them"),
 )
 
 #: every warning code, in the order above

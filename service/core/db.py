@@ -130,6 +130,22 @@ class AssetBaseline(Base):
     repeatability: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
 
 
+class AssetBaselineRecording(Base):
+    """One recording an asset's baseline is made of (v0008): its own signature, kept whatever the history's
+    retention does to the diagnosis, so the baseline's average and its repeatability thresholds can be
+    recomputed when a recording is added or removed (``service.baseline``)."""
+
+    __tablename__ = "asset_baseline_recordings"
+
+    asset_id: Mapped[str] = mapped_column(String(128), primary_key=True)
+    diagnosis_id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=False)
+    added_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow)
+    recorded_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+    speed_rpm: Mapped[float | None] = mapped_column(Float, nullable=True)
+    model_version: Mapped[str] = mapped_column(String(128))
+    signature: Mapped[dict[str, Any]] = mapped_column(JSON)
+
+
 class AssetSettings(Base):
     """Per-asset alarm thresholds on the change (overrides of ``models.change``'s shipped ones) and probe
     configuration (``service.parsing.with_probe_config``)."""

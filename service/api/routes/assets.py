@@ -13,11 +13,13 @@ from pydantic import BeforeValidator
 
 from ...baseline import (
     AUTO_N,
+    add_recording,
     alarm_events,
     baseline_dict,
     from_diagnosis,
     propose,
     record_verdict,
+    remove_recording,
     rule_for,
     set_auto,
     thresholds_origin,
@@ -38,6 +40,7 @@ from ...schemas import (
 )
 from ...store import (
     asset_history,
+    baseline_recordings,
     delete_baseline,
     get_baseline,
     get_hierarchy,
@@ -184,8 +187,9 @@ def get_asset_baseline(asset_id: AssetPath, session: SessionDep) -> AssetBaselin
                         "how": f"POST /assets/{asset_id}/baseline?auto=true"}
         except InputError as exc:
             proposal = {"reason": str(exc)}
+    base = baseline_dict(row, recordings=baseline_recordings(session, asset_id)) if row is not None else None
     return AssetBaselineOut(asset_id=asset_id,
-                            baseline=BaselineOut(**baseline_dict(row)) if row is not None else None,
+                            baseline=BaselineOut(**base) if base is not None else None,
                             proposal=proposal, thresholds=rule_for(session, asset_id, row).thresholds,
                             edited_thresholds=get_thresholds(session, asset_id),
                             thresholds_origin=thresholds_origin(session, asset_id, row))
@@ -229,6 +233,55 @@ async def set_asset_baseline(
     did = await run_in_threadpool(record_verdict, state, asset_id, None, verdict)
     assert did is not None
     return await run_in_threadpool(from_diagnosis, state, asset_id, did, "recording")
+
+
+_RECORDING_BODY = {"requestBody": {"required": False, "content": {
+    "application/json": {"schema": {"$ref": "#/components/schemas/DiagnoseRequest"}},
+    "application/octet-stream": {"schema": {"type": "string", "format": "binary"}},
+    "multipart/form-data": {"schema": {"type": "object", "properties": {"file": {"type": "string", "format": "binary"}}}}}}}
+
+
+@router.post(
+    "/assets/{asset_id}/baseline/recordings", response_model=BaselineOut, responses=_BASELINE_ERRORS,
+    dependencies=[ApiKeyDep], summary="Add a recording to an asset's baseline",
+    description="Another recording of the unchanged machine at the baseline's operating condition (within ±5 % of "
+    "its speed): `?diagnosis_id=N` (a stored diagnosis of the asset) or a recording in the body, as for POST "
+    "/diagnose (diagnosed and stored first). The baseline becomes the vector average of its recordings; from 3 "
+    "recordings its 1X, 2X and centreline thresholds are the asset's own, from how much they differ from each "
+    "other (`thresholds_basis`). Without a baseline, this one recording starts it. 409: a recording already in "
+    "it, at another speed, or keeping no signature.",
+    openapi_extra=_RECORDING_BODY,
+)
+async def add_baseline_recording(
+    request: Request, asset_id: AssetPath, state: StateDep, reader: ReaderQueryDep,
+    diagnosis_id: Annotated[int | None, Query(ge=1, le=2**63 - 1, description="Add this stored diagnosis.")] = None,
+) -> dict:
+    if diagnosis_id is None:
+        if not request.headers.get("content-type"):
+            raise InputError("send a recording in the body (as for POST /diagnose), or use ?diagnosis_id=")
+        from .diagnose import diagnose_from_request
+
+        query = dict(asset_id=asset_id, plant=None, sample_index=0, **reader)
+        verdict, body_asset = await diagnose_from_request(request, state, query, None, store=False)
+        if body_asset is not None and body_asset != asset_id:
+            raise InputError(f"the body's asset_id {body_asset!r} is not the asset of the path ({asset_id!r})")
+        verdict.pop("baseline", None)
+        diagnosis_id = await run_in_threadpool(record_verdict, state, asset_id, None, verdict)
+        assert diagnosis_id is not None
+    return await run_in_threadpool(add_recording, state, asset_id, diagnosis_id)
+
+
+@router.delete(
+    "/assets/{asset_id}/baseline/recordings/{diagnosis_id}", response_model=BaselineOut, responses=_BASELINE_ERRORS,
+    dependencies=[ApiKeyDep], summary="Remove a recording from an asset's baseline",
+    description="The baseline is recomputed from the others, its own thresholds too (below 3 recordings it goes "
+    "back to the fleet-wide ones: `thresholds_basis`). The diagnosis stays in the history. 404: not one of the "
+    "baseline's recordings; 409: its last one (DELETE /assets/{id}/baseline).")
+def delete_baseline_recording(
+    asset_id: AssetPath, state: StateDep,
+    diagnosis_id: Annotated[int, Path(ge=1, le=2**63 - 1, description="The stored diagnosis to take out.")],
+) -> dict:
+    return remove_recording(state, asset_id, diagnosis_id)
 
 
 @router.delete("/assets/{asset_id}/baseline", status_code=204, dependencies=[ApiKeyDep],

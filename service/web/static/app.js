@@ -583,6 +583,14 @@
     const parts = [b.used ? `Baseline of ${when(b.set_at)} used (${b.source}, ${fixed(b.speed_rpm, 0)} r/min).` :
       "No baseline used."];
     parts.push(plainWords(b.message));
+    const basis = b.used ? b.thresholds_basis : null;
+    if (basis) {
+      const n = basis.n_recordings;
+      parts.push(basis.basis === "own" ?
+        `Alarm thresholds: this asset's own, from how much its ${n} baseline recordings differ.` :
+        `Alarm thresholds: the fleet-wide ones (${n} baseline recording${n === 1 ? "" : "s"}; ${basis.needed} at one ` +
+        "speed set this asset's own): a change of a few µm on a small machine stays under them.");
+    }
     if (state.verdict && state.verdict.storage_note) parts.push(plainWords(state.verdict.storage_note) + ".");
     box.textContent = parts.join(" ");
     show(box, true);
@@ -855,15 +863,17 @@
     const key = $("baseline-key").value;
     if (!key) { setError($("baseline-error"), "Type the API key: setting a baseline changes the asset's alarms."); return; }
     let query = "auto=true";
-    if (how === "latest") {
+    let path = "baseline";
+    if (how === "latest" || how === "add") {
       const last = h.points.length ? h.points[h.points.length - 1] : null;
       if (!last || last.id === null || last.id === undefined) {
         setError($("baseline-error"), "This asset has no stored diagnosis to make the baseline."); return;
       }
       query = `diagnosis_id=${last.id}`;
+      if (how === "add") path = "baseline/recordings";
     }
     try {
-      await api(`/assets/${encodeURIComponent(asset)}/baseline?${query}`, { method: "POST", headers: { "X-API-Key": key } });
+      await api(`/assets/${encodeURIComponent(asset)}/${path}?${query}`, { method: "POST", headers: { "X-API-Key": key } });
       await loadTrend(asset);
     } catch (exc) {
       setError($("baseline-error"), plainWords(exc.message));
@@ -876,8 +886,11 @@
     const base = b.baseline;
     let text;
     if (base) {
-      text = `Set ${when(base.set_at)} from ${base.source} (diagnoses ${base.diagnosis_ids.join(", ")}), ` +
+      const n = base.n_recordings || base.diagnosis_ids.length;
+      text = `Set ${when(base.set_at)} from ${base.source}, made of ${n} recording${n === 1 ? "" : "s"} ` +
+        `(diagnoses ${base.diagnosis_ids.join(", ")}), ` +
         `${fixed(base.speed_rpm, 0)} r/min (recordings within ±5 % are compared), model ${base.model_version}.`;
+      const basis = base.thresholds_basis || {};
       const origin = b.thresholds_origin || {};
       const words = (k) => {
         const v = b.thresholds[k];
@@ -893,8 +906,14 @@
       const parts = [];
       if (own.length) parts.push("from its baseline recordings' repeatability: " + own.map(words).join(", "));
       if (edited.length) parts.push("edited: " + edited.map(words).join(", "));
+      const why = {
+        too_few_recordings: `this baseline has ${n} recording${n === 1 ? "" : "s"}; ${basis.needed || 3} at one speed set this asset's own (add the latest diagnosis, or the automatic baseline)`,
+        recordings_not_comparable: "this baseline's recordings are more than 10 % apart in speed",
+        nothing_measured: "this baseline's recordings carry no 1X/2X phase (no keyphasor) and no centreline",
+      }[basis.reason];
       text += parts.length ? ` Alarm thresholds of this asset ${parts.join("; ")}; the others shipped.` :
-        " Alarm thresholds: the shipped ones (a baseline of 3 recordings, ?auto=true, sets this asset's own).";
+        " Alarm thresholds: the shipped, fleet-wide ones" + (why ? ` — ${why}` : "") +
+        ": a change of a few µm on a small machine stays under them.";
     } else if (b.proposal && b.proposal.diagnosis_ids) {
       text = `None set. Automatic proposal: diagnoses ${b.proposal.diagnosis_ids.join(", ")} at ` +
         `${fixed(b.proposal.speed_rpm, 0)} r/min (${b.proposal.how}).`;
@@ -1087,6 +1106,7 @@
     $("baseline-form").addEventListener("submit", (ev) => ev.preventDefault());
     $("baseline-latest-btn").addEventListener("click", () => setBaseline("latest"));
     $("baseline-auto-btn").addEventListener("click", () => setBaseline("auto"));
+    $("baseline-add-btn").addEventListener("click", () => setBaseline("add"));
     loadHealth();
     loadModels();
     loadExamples();
