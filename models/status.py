@@ -538,7 +538,7 @@ class ModelCall:
         ``static_offset_only`` (uncertain).
     """
 
-    probabilities: Sequence[float]
+    probabilities: Sequence[float] | np.ndarray
     class_delta_agree: bool
     call_index: int | None = None
     band_names: Sequence[str] = ()

@@ -1,8 +1,8 @@
 """The model store: the service's registry, the loaded active model, and one diagnosis call.
 
-The verdict itself is the models package's (``models.predict.diagnose``) on the
-features package's feature vector (``features.extract_features``); this module
-only caches loaded models per version and turns a request into those calls.
+The verdict itself is the models package's (``models.pipeline.diagnose_recording``: features, model scores,
+checks, status, verdict); this module only caches loaded models per version and turns a request into that call
+(in a diagnosis worker process, ``service.pool``, sent as a typed ``WorkerCall``).
 """
 from __future__ import annotations
 
@@ -194,10 +194,10 @@ class ModelStore:
     @staticmethod
     def _verdict(bundle: Any, recording: Any, fr: Any = None) -> tuple[Any, Any]:
         """The verdict and the features it was computed from: ``features.extract_features`` (unless ``fr``,
-        the recording's features, is given), then ``models.diagnosis.diagnose_recording`` (the verdict and a
+        the recording's features, is given), then ``models.pipeline.diagnose_recording`` (the verdict and a
         doubtful estimated speed judged by the model)."""
         from rotordiag.features import extract_features
-        from rotordiag.models.diagnosis import diagnose_recording
+        from rotordiag.models.pipeline import diagnose_recording
 
         if fr is None:
             fr = extract_features(recording)
@@ -213,7 +213,7 @@ class ModelStore:
     def plot_features(self, recording: Any) -> Any:
         """The features the web page's pictures are drawn from: those of the verdict (:meth:`diagnose`, the
         active model), so that the pictures mark the orders at the verdict's speed. Only an estimated speed in
-        doubt can differ from the features package's own (``models.speed_choice``): for any other the model is
+        doubt can differ from the features package's own (``models.checks.speed_choice``): for any other the model is
         not run; nor when no model can be loaded."""
         from rotordiag.features import extract_features, speed_in_doubt
 

@@ -105,7 +105,8 @@ def test_every_speed_doubt_the_extractor_words_makes_the_verdict_uncertain():
 def test_shipped_model_never_gives_a_severity_to_an_impossible_recording():
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, format_verdict
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import format_verdict
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()
@@ -182,7 +183,8 @@ def test_shipped_model_does_not_rule_out_an_offset_without_the_clearance():
     without it the same recording is called aligned but not confidently, and the reason says what to give."""
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, feature_vector
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import feature_vector
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()
@@ -288,7 +290,7 @@ def test_shipped_model_flags_one_bearing_scaled_down_and_names_it():
     training range of 0.04–1280 µm — plants of the family vibrate that little there.)"""
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose
+    from rotordiag.models.pipeline import diagnose
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()
@@ -318,7 +320,7 @@ def test_shipped_verdict_checks_the_regressors_own_interval():
     from rotordiag.features import extract_features
     from rotordiag.features.examples import example_path
     from rotordiag.features.reader import ReadOptions, read_recording
-    from rotordiag.models.predict import diagnose
+    from rotordiag.models.pipeline import diagnose
     from rotordiag.models.status import interval_far_bands
 
     bundle = _shipped_bundle()
@@ -379,7 +381,7 @@ def test_shipped_model_does_not_confidently_alarm_on_coupling_journals_apart():
     lighter load) or 0.25 c aside: no confident misalignment verdict; the unshifted recording is untouched."""
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose
+    from rotordiag.models.pipeline import diagnose
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()
@@ -452,7 +454,8 @@ def test_a_stated_clearance_without_the_centreline_is_answered_by_the_pair_that_
     called 71 % of aligned machines misaligned on such recordings; the no-clearance pair answers them."""
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, feature_vector
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import feature_vector
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()
@@ -500,7 +503,7 @@ def test_every_journal_near_its_bearing_centre_is_not_confident():
 def test_shipped_model_is_not_confident_on_numbers_ten_times_too_small():
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose
+    from rotordiag.models.pipeline import diagnose
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()

@@ -17,8 +17,9 @@ from rotordiag.core.conventions import wrap_deg
 
 from .._patterns import bearing_feature
 from ..status import UNCERTAIN, Reason
+from . import CheckContext
 
-__all__ = ["NUMBERING_OOD_RATIO", "mirrored_row", "numbering_reason", "has_every_bearing"]
+__all__ = ["NUMBERING_OOD_RATIO", "mirrored_row", "numbering_reason", "has_every_bearing", "numbering_check"]
 
 #: the other numbering's OOD score at or below this fraction of the recording's own → ``bearing_numbering``
 #: (correctly numbered clean base-set recordings, seed 815: the ratio's lowest value 0.963, 1st percentile 1.04)
@@ -88,3 +89,13 @@ def numbering_reason(ood_score: float, other_ood_score: float, call: str, other_
                   + (f"called {other_call} instead of {call}" if other_call != call else f"called {call} either way")
                   + "): check the numbering — bearing 1 is the generator's far end (the turbine side), "
                   "2 its coupling end, 3 the exciter's coupling end and 4 its far end")
+
+
+def numbering_check(ctx: CheckContext) -> list[Reason]:
+    """``bearing_numbering`` for an in-distribution four-bearing row that is markedly more like the training family
+    numbered from the other end: one more class and OOD pass, on the renumbered row (:func:`mirrored_row`)."""
+    if ctx.ood or not has_every_bearing(ctx.names, ctx.row):
+        return []
+    other = mirrored_row(ctx.names, ctx.row)[None, :]
+    reason = numbering_reason(ctx.ood_score, float(ctx.ood_of(other)[0]), ctx.call, ctx.classes_of(other)[0])
+    return [reason] if reason is not None else []
