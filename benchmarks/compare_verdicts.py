@@ -6,7 +6,7 @@ seed ``--seed``, speed 1500–3600 r/min, Δ 0–0.6, unbalance 0.02–0.1, rigi
 clearance 350 µm). Each recording is diagnosed with the shipped model through the verdict path
 (``models.pipeline.diagnose_recording`` when it exists, else ``models.diagnosis.diagnose_recording``) and its
 ``Verdict.to_dict()`` written in µm and in mil (``models.output_units.verdict_in_units``), with the number of
-feature extractions and model scorings (kNN OOD passes) it took and its time (median of ``--repeat``).
+feature extractions, model scorings (kNN OOD passes) and whole verdicts it took and its time (median of ``--repeat``).
 
 Usage::
 
@@ -115,10 +115,21 @@ class Counter:
             return ood(model, X)
 
         compiled.CompiledModel.ood_ratio = counted_ood
+        self.verdicts = 0                  # whole verdicts made: predict._diagnose before the pipeline, verdict_of after
+        for modname, attr in (("rotordiag.models.predict", "_diagnose"), ("rotordiag.models.pipeline", "verdict_of")):
+            mod = sys.modules.get(modname)
+            if mod is not None and hasattr(mod, attr):
+                setattr(mod, attr, self._counting(getattr(mod, attr)))
+
+    def _counting(self, fn):
+        def counted(*a, **k):
+            self.verdicts += 1
+            return fn(*a, **k)
+        return counted
 
     def reset(self) -> tuple[int, int]:
         got = (self.extractions, self.scorings)
-        self.extractions = self.scorings = 0
+        self.extractions = self.scorings = self.verdicts = 0
         return got
 
 
@@ -145,15 +156,15 @@ def run(args) -> None:
             t0 = time.perf_counter()
             verdict, fr = diagnose_recording(bundle, rec, clearance_um=clearance)
             times.append(time.perf_counter() - t0)
-        n_ext, n_score = counter.extractions, counter.scorings      # of the last repeat
+        n_ext, n_score, n_verdicts = counter.extractions, counter.scorings, counter.verdicts   # of the last repeat
         d = verdict.to_dict()
         out["recordings"][name] = {
             "um": json.loads(json.dumps(verdict_in_units(d, "um"), default=str, allow_nan=True)),
             "mil": json.loads(json.dumps(verdict_in_units(d, "mil"), default=str, allow_nan=True)),
-            "extractions": n_ext, "scorings": n_score, "ms": 1e3 * float(np.median(times)),
+            "extractions": n_ext, "scorings": n_score, "verdicts": n_verdicts, "ms": 1e3 * float(np.median(times)),
             "speed_source": fr.speed_source, "speed_rpm": fr.speed_rpm}
         print(f"{name:18s} {verdict.status:12s} {verdict.severity:12s} ood {verdict.ood_score:6.2f} "
-              f"extractions {n_ext:2d} scorings {n_score:2d} {1e3 * np.median(times):7.1f} ms")
+              f"extractions {n_ext:2d} scorings {n_score:2d} verdicts {n_verdicts:2d} {1e3 * np.median(times):7.1f} ms")
     Path(args.out).write_text(json.dumps(out, indent=1, sort_keys=True, default=str))
 
 
@@ -169,6 +180,7 @@ def compare(a: str, b: str) -> int:
         bad += not same
         print(f"{name:18s} {'identical' if same else 'DIFFERENT'}  extractions {ra['extractions']} → "
               f"{rb and rb['extractions']}, scorings {ra['scorings']} → {rb and rb['scorings']}, "
+              f"verdicts {ra.get('verdicts')} → {rb and rb.get('verdicts')}, "
               f"{ra['ms']:.1f} → {rb and rb['ms']:.1f} ms")
     print(f"{A['path']} → {B['path']}: {len(A['recordings']) - bad} of {len(A['recordings'])} verdicts identical "
           "(to_dict JSON in µm and mil)")

@@ -14,7 +14,7 @@ Three components, each a scikit-learn estimator that passes
   quantile of the training points' leave-one-out distances.
 
 :class:`MisalignmentModel` bundles the three with the severity bands and the feature
-names; it is the one object the registry stores and :func:`models.predict.diagnose` uses.
+names; it is the one object the registry stores and :func:`models.pipeline.diagnose_recording` uses.
 """
 from __future__ import annotations
 

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class ModelBundle:
-    """A loaded model with its card (what :func:`diagnose` needs)."""
+    """A loaded model with its card (what ``models.pipeline.diagnose_recording`` needs)."""
 
     model: Any                 # fitted models.estimators.MisalignmentModel
     card: dict

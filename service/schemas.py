@@ -501,7 +501,7 @@ class HeadlineOut(BaseModel):
 
 
 class DiagnoseResponse(BaseModel):
-    """The verdict of the active (or requested) model, from ``models.predict.diagnose``."""
+    """The verdict of the active (or requested) model, from ``models.pipeline.diagnose_recording``."""
 
     model_config = ConfigDict(protected_namespaces=())
 

@@ -1,7 +1,7 @@
 """Bearings numbered from the wrong end, judged by the machine family the model knows.
 
 Bearing 1 is the generator's far end and 4 the exciter's; a plant numbering from the exciter end sends the train
-as 4-3-2-1 with no feature out of range. ``models.predict.diagnose`` scores a four-bearing, in-distribution
+as 4-3-2-1 with no feature out of range. :func:`numbering_check` scores a four-bearing, in-distribution
 recording once more with its feature row renumbered (:func:`mirrored_row`); when that OOD score is at or below
 :data:`NUMBERING_OOD_RATIO` times the recording's own, :func:`numbering_reason` gives ``bearing_numbering``
 (uncertain). The verdict stays the one of the numbering given. The measurements behind it: docs/checks.md.
