@@ -13,6 +13,7 @@ import weakref
 from collections.abc import Sequence
 from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field, fields, is_dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -129,9 +130,10 @@ def _code(warning: object) -> str:
 
 def _copied(v: Any) -> Any:
     """A deep copy of a verdict field as :func:`dataclasses.asdict` makes it (dataclasses to dicts, containers
-    copied with their types), for the few types a verdict holds."""
+    copied with their types), for the few types a verdict holds. Strings are values: a warning (``Note``) or a
+    measured text (``Measured``), ``str`` subclasses with their typed values, is kept as it is, not rebuilt."""
     t = type(v)
-    if t is float or t is str or t is int or t is bool or v is None:
+    if t is float or t is str or t is int or t is bool or v is None or isinstance(v, str):
         return v
     if t is list:
         return [_copied(x) for x in v]
@@ -150,10 +152,23 @@ def feature_vector(names: Sequence[str], feature_result) -> tuple[np.ndarray, li
     ``feature_result`` needs ``names`` and ``values`` (a ``features.FeatureResult``).
     Returns the row and the list of model features the result did not provide.
     """
-    got = dict(zip(tuple(feature_result.names), np.asarray(feature_result.values, dtype=float)))
-    row = np.array([got.get(n, np.nan) for n in names], dtype=float)
-    missing = [n for n in names if n not in got]
-    return row, missing
+    values = np.asarray(feature_result.values, dtype=float)
+    have, cols, missing = _columns_of(tuple(names), tuple(feature_result.names), len(values))
+    row = np.full(len(have), np.nan)
+    row[have] = values[cols]
+    return row, list(missing)
+
+
+@lru_cache(maxsize=16)
+def _columns_of(names: tuple[str, ...], given: tuple[str, ...], n_values: int
+                ) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Where each of the model's ``names`` is among a feature result's ``given`` names (the first ``n_values`` of them;
+    a repeated name: its last place): the mask of those found, their columns, the names not found. Made once per
+    pair of name lists (every recording of one extractor has the same)."""
+    index = {n: i for i, n in enumerate(given[:n_values])}
+    have = np.array([n in index for n in names], dtype=bool)
+    cols = np.array([index[n] for n in names if n in index], dtype=np.intp)
+    return have, cols, tuple(n for n in names if n not in index)
 
 
 def _motion_type(feature_result) -> str | None:

@@ -53,6 +53,7 @@ from rotordiag.core.notes import Length, Measured
 from rotordiag.core.reasons import INCONCLUSIVE, UNCERTAIN, code_info, require_code
 from rotordiag.features import speed_in_doubt
 
+from ._patterns import name_index
 from .baselines import DEFAULT_RULE_CUTS, RuleOfThumb
 
 __all__ = ["Reason", "RecordingChecks", "ModelCall", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
@@ -206,7 +207,7 @@ def _near_centre_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
                           ) -> list[Reason]:
     """``journals_near_centre`` when all four bearings' centrelines are read and every journal sits within
     :data:`NEAR_CENTRE_MAX_ECC` of its bearing centre."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     cols = [index.get(f"b{b}_centre_ecc_per_c") for b in (1, 2, 3, 4)]
     if any(j is None for j in cols):
         return []
@@ -228,7 +229,7 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
     by more than :data:`FRAME_OFFSET_DEG` beyond a plain short journal bearing's at the same eccentricity, every one
     on the same side: the probes' frame as given is turned (wrong ``angle_deg``), or the bearings are no plain
     cylindrical ones (the ROSS set's linear bearings, tilting pads: the journal near the load line)."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     bearings, xye = [], []
     for b in range(1, 10):
         cols = [index.get(f"b{b}_centre_{k}_per_c") for k in ("x", "y", "ecc")]
@@ -258,7 +259,7 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
 
 def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray,
                    policy: DecisionPolicy = DEFAULT_POLICY) -> list[Reason]:
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     ratios = []
     for b in COUPLING_BEARINGS:
         j = index.get(f"b{b}_1x_major_um_pp")
@@ -367,9 +368,9 @@ def envelope_reasons(findings: Sequence[dict], *, max_reasons: int = 3,
 
 def coupling_2x_1x(names: Sequence[str], row: np.ndarray) -> float:
     """The largest 2X/1X amplitude ratio of the coupling bearings' probes (NaN when none is measured)."""
-    vals = [float(row[i]) for i, n in enumerate(names)
-            if any(n in (f"b{b}_x_2x_1x_ratio", f"b{b}_y_2x_1x_ratio") for b in COUPLING_BEARINGS)]
-    vals = [v for v in vals if np.isfinite(v)]
+    index = name_index(names)
+    cols = [index[n] for b in COUPLING_BEARINGS for n in (f"b{b}_x_2x_1x_ratio", f"b{b}_y_2x_1x_ratio") if n in index]
+    vals = [v for v in (float(row[j]) for j in cols) if np.isfinite(v)]
     return max(vals) if vals else float("nan")
 
 
@@ -399,7 +400,7 @@ CENTRELINE_FEATURES = ("centre_x_per_c", "centre_y_per_c", "centre_ecc_per_c")
 def journals_apart_c(names: Sequence[str], row: np.ndarray) -> tuple[float, float] | None:
     """Bearing 3's static journal position minus bearing 2's (x, y), in clearances; None when either is not
     measured."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     cols = [index.get(f"b{b}_centre_{d}_per_c") for b in COUPLING_BEARINGS[::-1] for d in "xy"]
     if any(j is None or not np.isfinite(row[j]) for j in cols):
         return None
@@ -416,7 +417,7 @@ def journals_at_one_position(names: Sequence[str], row: np.ndarray) -> np.ndarra
     journal sits by its own load, and a DC gap referenced to the wrong zero reads the same. The model's call on
     these rows says whether the call rests on that offset (docs/robustness.md, transfer check). None when
     either coupling bearing's centreline is not measured (no clearance, raw gaps, bearing absent)."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     found = {b: [index.get(f"b{b}_{q}") for q in CENTRELINE_FEATURES] for b in COUPLING_BEARINGS}
     if any(j is None or not np.isfinite(row[j]) for js in found.values() for j in js):
         return None

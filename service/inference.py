@@ -196,14 +196,16 @@ class ModelStore:
         """The verdict and the features it was computed from: ``features.extract_features`` (unless ``fr``,
         the recording's features, is given), then ``models.pipeline.diagnose_recording`` (the verdict and a
         doubtful estimated speed judged by the model)."""
+        import numpy as np
+
         from rotordiag.features import extract_features
         from rotordiag.models.pipeline import diagnose_recording
 
         if fr is None:
             fr = extract_features(recording)
-        overflowed = [k for k, v in fr.as_dict().items() if isinstance(v, float) and math.isinf(v)]
-        if overflowed:
-            raise ValueError(f"the waveforms are too large to analyse ({overflowed[0]} overflows); check the units: "
+        overflowed = np.flatnonzero(np.isinf(np.asarray(fr.values, dtype=float)))
+        if overflowed.size:
+            raise ValueError(f"the waveforms are too large to analyse ({fr.names[overflowed[0]]} overflows); check the units: "
                              "`data` is in `units` (um by default), and a proximity probe reads at most a few "
                              "thousand µm")
         clearance = getattr(recording, "clearance_um", None)
@@ -249,7 +251,6 @@ def _check_usable(model: Any, version: str) -> None:
 def _clean(v: Any) -> Any:
     """JSON-able copy: dataclasses/arrays to dicts/lists, non-finite floats to ``None``."""
     import dataclasses
-    import math
 
     import numpy as np
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from rotordiag.core.conventions import wrap_deg
 
-from .._patterns import bearing_feature
+from .._patterns import bearing_feature, name_index
 from ..status import UNCERTAIN, Reason
 from . import CheckContext
 
@@ -29,7 +29,7 @@ _BEARINGS = (1, 2, 3, 4)
 
 def has_every_bearing(names: Sequence[str], row: np.ndarray) -> bool:
     """Whether the row carries the 1X of all four bearings (``b{n}_1x_major_um_pp``)."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     cols = [index.get(f"b{b}_1x_major_um_pp") for b in _BEARINGS]
     return all(j is not None and np.isfinite(row[j]) for j in cols)
 

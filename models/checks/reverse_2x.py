@@ -14,6 +14,7 @@ import numpy as np
 
 from rotordiag.core.conventions import COUPLING_BEARINGS
 
+from .._patterns import name_index
 from ..status import UNCERTAIN, Reason
 from . import CheckContext
 
@@ -30,7 +31,7 @@ REVERSE_2X_MIN_SHARE = 0.5
 def coupling_reverse_2x(names: Sequence[str], row: np.ndarray) -> tuple[int, float] | None:
     """The coupling bearing whose sizeable 2X whirls backward the most and its reverse/forward ratio, when that
     ratio is at least :data:`REVERSE_2X_MIN_RATIO`; else None (also when the 2X is not measured)."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     major: dict[int, float] = {}
     ratio: dict[int, float] = {}
     for b in COUPLING_BEARINGS:
