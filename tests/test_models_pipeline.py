@@ -78,6 +78,28 @@ def test_the_decision_policy_stored_with_the_model_is_the_one_applied(bundle, al
     assert w.probabilities == v.probabilities and w.misalignment == v.misalignment     # the model's call unchanged
 
 
+def test_no_status_threshold_lives_in_the_estimators():
+    """The decision policy is one object outside the estimators (``models.status.DecisionPolicy``): the estimator
+    module neither imports the status module nor names any of the policy's thresholds (its own thresholds are fitted
+    parts of what it scores: the OOD distance's calibration, the envelope's margin, the ordinal false-alarm
+    thresholds)."""
+    import ast
+    from dataclasses import fields
+    from pathlib import Path
+
+    import rotordiag.models.estimators as est
+    from rotordiag.models.status import DecisionPolicy
+
+    source = Path(est.__file__).read_text(encoding="utf-8")
+    tree = ast.parse(source)
+    imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    assert not any(m and m.endswith("status") for m in imported)
+    policy_names = {f.name for f in fields(DecisionPolicy)} | {f.name.upper() for f in fields(DecisionPolicy)}
+    named = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)} | \
+            {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)}
+    assert not (named & policy_names), sorted(named & policy_names)
+
+
 @needs_model
 def test_a_verdict_from_given_features_is_the_recordings_when_nothing_reads_it_again(bundle, aligned):
     """``pipeline.diagnose`` (features in) is the pipeline without the recording: on a recording no speed choice
