@@ -24,6 +24,7 @@ from .checks.bearing_sets import bearing_set_check
 from .checks.clearance_check import clearance_check
 from .checks.common_mode import common_mode_check
 from .checks.numbering import numbering_check
+from .checks.one_position import one_position_check
 from .checks.reverse_2x import reverse_2x_check
 from .checks.speed_choice import choose_speed, chosen_speed_notes
 from .predict import (
@@ -126,11 +127,11 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
         ctx = CheckContext(fr=fr, names=scores.names, row=scores.row, call=scores.call,
                            aligned_band=str(model.bands_.names[0]), ood_score=scores.ood_score, ood=scores.ood,
                            classes_of=scores.classes_of, ood_of=scores.ood_of, score=partial(ood_score_and_class, bundle),
-                           plan=scores.plan, recording=recording)
+                           band_names=[str(c) for c in model.classes_], plan=scores.plan, recording=recording)
         probe_set = bearing_set_check(ctx)
         beside = [r for check in SCORE_CHECKS for r in check(ctx)]
         # 6. assess status: every reason together, by the decision policy stored with the model
-        call = _model_call(scores)
+        call = _model_call(scores, one_position_check(ctx))
         status, reasons = assess(_recording_checks(scores, fr, probe_set + beside), call, policy)
         #    — the doubts that read the recording again, given that status; assessed again when one is found
         doubts = [r for check in DOUBT_CHECKS for r in check(replace(ctx, status=status))]
@@ -155,7 +156,7 @@ def _recording_checks(scores: ModelScores, fr: FeatureResult, extra: Sequence[Re
                            envelope=scores.findings, extra=extra)
 
 
-def _model_call(scores: ModelScores) -> ModelCall:
+def _model_call(scores: ModelScores, static_offset: Sequence[Reason]) -> ModelCall:
     model = scores.model
     bands = model.bands_
     _, _, agree = consistent_estimate(scores.band, bands.edges, scores.point, scores.interval)
@@ -163,5 +164,5 @@ def _model_call(scores: ModelScores) -> ModelCall:
                      band_names=[str(c) for c in model.classes_], misaligned_call=scores.band > 0,
                      alarm=scores.alarm(), delta_interval=scores.interval, band_edges=bands.edges,
                      interval_level=1.0 - float(model.regressor_.alpha),
-                     one_position_call=scores.one_position_call() if scores.band > 0 else None)
+                     static_offset=static_offset)
 

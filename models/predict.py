@@ -25,7 +25,7 @@ from rotordiag.features import evidence
 
 from .checks.bearing_sets import bearing_plan, leave_out_bearings
 from .registry import Registry
-from .status import INCONCLUSIVE, Reason, consistent_estimate, journals_at_one_position
+from .status import INCONCLUSIVE, Reason, consistent_estimate
 
 if TYPE_CHECKING:
     from .compiled import CompiledModel
@@ -383,14 +383,6 @@ class ModelScores:
     def ood_of(self, rows: np.ndarray) -> np.ndarray:
         """The kNN OOD score of each of ``rows``."""
         return self.fast.ood_ratio(rows)
-
-    def one_position_call(self) -> int | None:
-        """The lowest band the classifier gives the row with the coupling-end journals at one static position
-        (``models.status.journals_at_one_position``), or None when their centrelines are not measured."""
-        rows = journals_at_one_position(self.names, self.row)
-        if rows is None:
-            return None
-        return int(np.min(self.model.band_index(self.fast.predict_proba(rows), rows)))
 
     def alarm(self) -> tuple[float, float] | None:
         """P(misaligned) and the ordinal classifier's false-alarm threshold for an "aligned" call, else None."""

@@ -532,11 +532,9 @@ class ModelCall:
         The bands' inner edges.
     interval_level : float
         The interval's coverage, for that reason's message.
-    one_position_call : int, optional
-        The lowest band the classifier gives the recording with the coupling-end journals at one static position
-        (:func:`journals_at_one_position`); None when not measured. A misalignment call that falls to a lower band
-        there (the aligned band above all) rests on the static offset between the two journals:
-        ``static_offset_only`` (uncertain).
+    static_offset : sequence of Reason
+        ``static_offset_only`` of a misalignment call that falls to a lower band with the coupling-end journals at
+        one static position (``models.checks.one_position``), listed after the call's 2X reason.
     """
 
     probabilities: Sequence[float] | np.ndarray
@@ -548,7 +546,7 @@ class ModelCall:
     delta_interval: tuple[float, float] | None = None
     band_edges: Sequence[float] = ()
     interval_level: float = 0.9
-    one_position_call: int | None = None
+    static_offset: Sequence[Reason] = ()
 
 
 def assess(checks: RecordingChecks, call: ModelCall, policy: DecisionPolicy | None = None
@@ -603,7 +601,7 @@ def _call_reasons(m: ModelCall, c: RecordingChecks, policy: DecisionPolicy = DEF
     """Low probability, probability or Δ interval on bands two or more from the call, below the alarm
     threshold, a severity without the coupling 2X or "aligned" without the coupling centreline (these two
     read the recording's features), a severity resting on the static offset between the coupling journals
-    (``one_position_call``), class and Δ disagreeing."""
+    (``static_offset``, from ``models.checks.one_position``), class and Δ disagreeing."""
     reasons: list[Reason] = []
     probabilities, call_index, band_names = m.probabilities, m.call_index, m.band_names
     pmax = float(np.max(probabilities)) if len(probabilities) else np.nan
@@ -658,22 +656,7 @@ def _call_reasons(m: ModelCall, c: RecordingChecks, policy: DecisionPolicy = DEF
                                   f"{policy.signature_min_2x_1x:g}): the classic signature is missing and nothing physical "
                                   "backs the model's call — compare with this machine's baseline, check the "
                                   "centreline, or re-record"))
-        if m.one_position_call is not None and call_index is not None and m.one_position_call < call_index:
-            lower = m.one_position_call
-            what = ("called misaligned on the static offset between the coupling-end journals: with the two journals "
-                    "at one position in their bearings the model would call it aligned" if lower == 0 else
-                    "the severity rests on the static offset between the coupling-end journals: with the two journals "
-                    "at one position in their bearings the model would call it "
-                    + (str(band_names[lower]) if len(band_names) > lower else f"band {lower}"))
-            apart = journals_apart_c(c.names, c.row)
-            if apart is not None:
-                what += (f" (bearing 3's journal sits {np.hypot(*apart):.2f} c from bearing 2's: "
-                         f"x {apart[0]:+.2f} c, y {apart[1]:+.2f} c)")
-            reasons.append(Reason("static_offset_only", UNCERTAIN,
-                                  what + ". A healthy train's coupling-end journals also sit apart (each by its own "
-                                  "load: a heavy generator journal beside a light exciter one), and a DC gap referenced "
-                                  "to the wrong zero reads the same — compare with this machine's cold or baseline "
-                                  "positions before acting"))
+        reasons += list(m.static_offset)          # models.checks.one_position: listed here, after the 2X
     elif not coupling_centreline_known(c.names, c.row):
         reasons.append(Reason("offset_not_assessed", UNCERTAIN,
                               "called aligned without the shaft-centreline position at the coupling bearings "

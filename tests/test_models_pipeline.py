@@ -18,6 +18,7 @@ from rotordiag.features.examples import example_path
 from rotordiag.models import pipeline
 from rotordiag.models.checks import CheckContext
 from rotordiag.models.checks.bearing_sets import bearing_set_check
+from rotordiag.models.checks.one_position import one_position_check
 from rotordiag.models.status import Reason
 from tests.service_util import shipped_registry_usable
 
@@ -41,7 +42,8 @@ def aligned():
     return read_recording(path, options=load_options(path, None, {})).recording
 
 
-@pytest.mark.parametrize("check", [bearing_set_check, *pipeline.SCORE_CHECKS, *pipeline.DOUBT_CHECKS],
+@pytest.mark.parametrize("check", [bearing_set_check, one_position_check, *pipeline.SCORE_CHECKS,
+                                   *pipeline.DOUBT_CHECKS],
                          ids=lambda c: c.__name__)
 def test_every_check_has_the_one_signature_and_lives_in_the_checks_folder(check):
     assert check.__module__.startswith("rotordiag.models.checks.")

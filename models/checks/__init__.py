@@ -43,6 +43,8 @@ class CheckContext:
         left out).
     call, aligned_band : str
         The classifier's class of ``row``, and the name of the model's aligned (lowest) band.
+    band_names : sequence of str
+        The classifier's classes in band order (what ``classes_of`` answers).
     ood_score : float
         The row's kNN OOD score; ``ood``: above 1, or a feature outside the training range.
     classes_of, ood_of : callable
@@ -69,6 +71,7 @@ class CheckContext:
     classes_of: Callable[[np.ndarray], list[str]]
     ood_of: Callable[[np.ndarray], np.ndarray]
     score: Scorer
+    band_names: Sequence[str] = ()
     plan: Any = None
     recording: Recording | None = None
     status: str | None = None
