@@ -207,7 +207,8 @@ def recordings(data: dict[str, np.ndarray]) -> list[dict]:
     """Every cached recording's features, signature and the shipped model's present-state verdict (computed
     now, with the model shipped now)."""
     from rotordiag.features import ProbeChannel, Recording, extract_features, signature
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import load_bundle
     from rotordiag.models.registry import shipped_registry_dir
 
     bundle = load_bundle(shipped_registry_dir())
@@ -273,7 +274,8 @@ def ross_recordings(seed: int = SEED, *, fixed_runout: bool = False) -> list[dic
     from ross_validation import BAND_PATH, load_ross_set
 
     from rotordiag.features import ProbeChannel, Recording, extract_features, signature
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import load_bundle
     from rotordiag.models.registry import shipped_registry_dir
 
     bundle = load_bundle(shipped_registry_dir())

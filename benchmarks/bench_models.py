@@ -65,13 +65,14 @@ def _from_data(paths, rows: int, seed: int = 0):
 
 
 def _diagnose_plain(model, fr):
-    """``models.predict.diagnose`` with the compiled predictor swapped for the plain model."""
+    """``models.pipeline.diagnose`` with the compiled predictor swapped for the plain model."""
     import rotordiag.models.predict as mp
+    from rotordiag.models.pipeline import diagnose
 
     saved = mp.fast_predictor
     mp.fast_predictor = lambda m: m
     try:
-        return mp._diagnose(model, fr, clearance_um=None, top_k=5)
+        return diagnose(model, fr, clearance_um=None, top_k=5)
     finally:
         mp.fast_predictor = saved
 
@@ -88,7 +89,8 @@ def main() -> None:
 
     from rotordiag.models.baselines import RuleOfThumb, ratio_column
     from rotordiag.models.config import TrainConfig
-    from rotordiag.models.predict import diagnose, fast_predictor
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import fast_predictor
     from rotordiag.models.table import FeatureTable
     from rotordiag.models.train import fit_final
 

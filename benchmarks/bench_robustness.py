@@ -6,7 +6,7 @@
 
 Simulates held-out recordings with the project's own simulator (cached per set in ``--cache``,
 so a re-run only re-measures and re-diagnoses), applies each *condition* of the measurement
-(:data:`CONDITIONS`), runs ``features.extract_features`` + ``models.predict.diagnose`` with the
+(:data:`CONDITIONS`), runs ``features.extract_features`` + ``models.pipeline.diagnose_recording`` with the
 shipped model (models/default_registry) and the 2X/1X rule of thumb beside it, and writes the
 table to ``--out``. The ``other machines`` row is the ROSS set of ``benchmarks/ross_validation.py``
 (read from its cached file: ROSS is not needed here).

@@ -12,7 +12,7 @@ estimates the speed with ``features.extract_features`` and prints the error dist
 the fraction within 0.5 %, the sub-harmonic picks, and how often an error was flagged as
 ambiguous (a "speed estimate ambiguous" warning: the verdict's ``speed_ambiguous`` reason)
 and the shipped model's verdict status on the wrong ones (a wrong speed must not be ``confident``),
-and the same fraction for the speed the verdict is given at (``models.speed_choice``: a doubtful
+and the same fraction for the speed the verdict is given at (``models.checks.speed_choice``: a doubtful
 estimate whose verdict is out of distribution replaced by the reading the model finds in distribution).
 
 The target (issue 15): error ≤ 0.5 % on ≥ 99 % of recordings; a wrong one never silent.
@@ -119,8 +119,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from rotordiag.features import ProbeChannel, Recording, extract_features, speed_in_doubt
-    from rotordiag.models.predict import diagnose, load_bundle
-    from rotordiag.models.speed_choice import choose_speed
+    from rotordiag.models.pipeline import diagnose_recording
+    from rotordiag.models.predict import load_bundle
 
     bundle = load_bundle(Path(__file__).resolve().parent.parent / "models" / "default_registry")
 
@@ -142,7 +142,7 @@ def main(argv=None) -> int:
             est = fr.speed_rpm
             amb = any(speed_in_doubt(w) for w in fr.warnings)
             sub = max(fr[f"b{b}_subsync_frac"] for b in (1, 2, 3, 4))
-            verdict, fr_used, _ = choose_speed(bundle, rec, fr, diagnose(bundle, fr))
+            verdict, fr_used = diagnose_recording(bundle, rec, fr=fr)
             status, used = verdict.status, fr_used.speed_rpm
         except ValueError as exc:
             est, amb, sub, status, used = np.nan, True, np.nan, "refused", np.nan
@@ -170,7 +170,7 @@ def main(argv=None) -> int:
     print(f"|error| <= 0.5 %: {ok.mean():.2%} ({int(ok.sum())}/{n}); target >= 99 %")
     ok_v = np.abs(np.array(errs_verdict)) <= SPEED_TOLERANCE
     print(f"  the verdict's speed (a doubtful estimate with an out-of-distribution verdict replaced by the reading the "
-          f"shipped model finds in distribution, models.speed_choice): {ok_v.mean():.2%} ({int(ok_v.sum())}/{n}); "
+          f"shipped model finds in distribution, models.checks.speed_choice): {ok_v.mean():.2%} ({int(ok_v.sum())}/{n}); "
           f"replaced {int(np.sum(np.abs(np.array(errs_verdict) - np.array(errs)) > 1e-12))}, "
           f"right → wrong {int(np.sum(ok & ~ok_v))}, wrong → right {int(np.sum(~ok & ok_v))}")
     print(f"  of those with whirl/whip: {ok[whirl_a].mean() if whirl_a.any() else float('nan'):.2%}")

@@ -24,7 +24,7 @@ import numpy as np
 from rotordiag.core.conventions import project_on_probe
 from rotordiag.features import ProbeChannel, Recording
 from rotordiag.features import transient as T
-from rotordiag.models.diagnosis import diagnose_recording
+from rotordiag.models.pipeline import diagnose_recording
 from rotordiag.models.predict import load_bundle
 from rotordiag.models.startup_check import compare_startups, startup_evidence, startup_reasons
 from rotordiag.simulator import Plant, simulate

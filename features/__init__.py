@@ -21,7 +21,7 @@ extract_features(recording, *, speed_estimate_rpm=None, speed_notes=()) -> Featu
     ``fr.as_dict()`` give the vector; ``fr.bearings`` the per-bearing details.
 speed_alternatives_rpm(recording, estimate_rpm) -> list of float
     The other running speeds the spectrum allows besides an estimate (2X / 1/2X readings, the largest
-    peaks): for a caller that can judge them (``models.speed_choice``), re-extracted with
+    peaks): for a caller that can judge them (``models.checks.speed_choice``), re-extracted with
     ``extract_features(recording, speed_estimate_rpm=...)``.
 check_recording(recording, feature_result) -> tuple of SanityFinding
     Physics sanity checks (flat / clipped / all-zero channels, orbit vs clearance and probe

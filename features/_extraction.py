@@ -33,7 +33,7 @@ def extract_features(recording: Recording, *, speed_estimate_rpm: float | None =
     speed_estimate_rpm : float, optional
         For a recording without keyphasor or ``speed_rpm``: a running speed estimated elsewhere, used
         instead of this package's estimate (``speed_source`` stays ``"estimated"``) — a caller that chose
-        among :func:`speed_alternatives_rpm` (``models.speed_choice``). Ignored otherwise.
+        among :func:`speed_alternatives_rpm` (``models.checks.speed_choice``). Ignored otherwise.
     speed_notes : sequence of rotordiag.core.notes.Note
         The warnings that go with ``speed_estimate_rpm`` (in place of the estimator's). A speed from
         elsewhere is never the signal's own reading: when no note puts it in doubt

@@ -3,7 +3,7 @@
 A spectral estimate of the running speed can be wrong in whirl, whip and period-n motion: it reads a
 whirl partner, a 2X or a sub-harmonic as the 1X and says so (``SPEED_AMBIGUOUS``). No rule on the
 spectrum alone tells these readings apart (docs/features.md, "Estimated speed"); a caller that knows
-the machine family can (``models.speed_choice``: the reading at which the recording looks like the
+the machine family can (``models.checks.speed_choice``: the reading at which the recording looks like the
 machines its model was trained on). This module lists the readings to try.
 """
 from __future__ import annotations

@@ -2,18 +2,16 @@
 
 Public API (import from the submodules; importing ``models`` itself stays light):
 
+models.pipeline
+    ``diagnose_recording(bundle, recording) -> (Verdict, FeatureResult)``: the one verdict function — features
+    once per speed hypothesis, model scores, checks (``models.checks``), status, verdict — used by the service,
+    ``rotordiag diagnose`` and the benchmarks; ``diagnose(bundle, feature_result)`` from given features.
 models.predict
-    ``load_bundle(registry_root, version=None) -> ModelBundle``;
-    ``diagnose(bundle, feature_result, clearance_um=None) -> Verdict`` — the one verdict
-    function, used by ``rotordiag diagnose`` and the service; ``format_verdict``.
-models.diagnosis
-    ``diagnose_recording(bundle, recording) -> (Verdict, FeatureResult)``: features, verdict, a
-    doubtful estimated speed judged by the model (``models.speed_choice.choose_speed``) and the doubts
-    that read the recording again (``models.checks.common_mode``, ``models.checks.clearance_check``) — what every
-    caller that starts from a recording uses.
-models.checks.bearing_sets, models.checks.numbering, models.checks.acquisitions
-    Which probe set a verdict reads; bearings numbered from the other end; the coupling's bearings
-    recorded in separate takes.
+    ``load_bundle(registry_root, version=None) -> ModelBundle``; ``model_scores``, ``verdict_of``,
+    ``Verdict``, ``format_verdict``.
+models.checks
+    The checks of a verdict, one signature (``CheckContext`` in, reasons out): the probe set, separate
+    acquisitions, reverse 2X, numbering, common mode, diametral clearance; the speed choice.
 models.registry
     ``Registry(root)``: ``register``, ``load``, ``list``, ``activate``, ``rollback``,
     ``active_version``, ``card``; ``TRUSTED_TYPES`` (skops), ``RegistryError``.

@@ -272,7 +272,7 @@ class CompiledModel:
 
     Notes
     -----
-    Inputs are not validated beyond shape: callers (:func:`models.predict.diagnose`)
+    Inputs are not validated beyond shape: callers (:func:`models.pipeline.diagnose_recording`)
     build rows in the model's feature order. A model with a pair per clearance case
     (``clearance_heads``) answers each row with its case's pair, as the model does.
     """

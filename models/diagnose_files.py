@@ -160,7 +160,7 @@ def diagnose_read(bundle: Any, res: ReadResult, slow_roll: Any = None) -> tuple[
     """Diagnose a recording already read (:func:`diagnose_one` without the reading)."""
     from rotordiag.features import apply_slow_roll, signature
 
-    from .diagnosis import diagnose_recording
+    from .pipeline import diagnose_recording
 
     recording = res.recording
     if slow_roll is not None:

@@ -14,7 +14,7 @@ Three components, each a scikit-learn estimator that passes
   quantile of the training points' leave-one-out distances.
 
 :class:`MisalignmentModel` bundles the three with the severity bands and the feature
-names; it is the one object the registry stores and :func:`models.predict.diagnose` uses.
+names; it is the one object the registry stores and :func:`models.pipeline.diagnose_recording` uses.
 """
 from __future__ import annotations
 
@@ -1043,25 +1043,24 @@ class MisalignmentModel(BaseEstimator):
     def envelope_values(self, X: np.ndarray) -> np.ndarray:
         """The envelope's columns of X in their own units (derived attitude offsets computed), (n, q)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
-        index = {n: i for i, n in enumerate(self.feature_names_)}
+        plain_j, plain_cols, derived = _envelope_plan(tuple(str(n) for n in self.feature_names_),
+                                                      tuple(str(n) for n in self.envelope_names_))
         out = np.empty((X.shape[0], len(self.envelope_names_)))
-        for j, name in enumerate(tuple(str(n) for n in self.envelope_names_)):
-            m = self._ATTITUDE.fullmatch(name)
-            if name in index:
-                out[:, j] = X[:, index[name]]
-            elif m:
-                x, y = X[:, index[f"b{m.group(1)}_centre_x_per_c"]], X[:, index[f"b{m.group(1)}_centre_y_per_c"]]
-                ecc = np.hypot(x, y)
-                att = attitude_angle_deg(x, y) - (short_bearing_attitude_deg(ecc) if m.group(2) else 0.0)
-                defined = (ecc >= ATTITUDE_MIN_ECC) & (ecc <= 1.0)
-                out[:, j] = np.where(defined, (att + 180.0) % 360.0 - 180.0, np.nan)
-            else:                                   # pragma: no cover - names come from _fit_envelope
-                raise KeyError(name)
+        out[:, plain_j] = X[:, plain_cols]
+        for j, cx, cy, offset in derived:
+            x, y = X[:, cx], X[:, cy]
+            ecc = np.hypot(x, y)
+            att = attitude_angle_deg(x, y) - (short_bearing_attitude_deg(ecc) if offset else 0.0)
+            defined = (ecc >= ATTITUDE_MIN_ECC) & (ecc <= 1.0)
+            out[:, j] = np.where(defined, (att + 180.0) % 360.0 - 180.0, np.nan)
         return out
 
     def envelope_input(self, X: np.ndarray) -> np.ndarray:
         """:meth:`envelope_values`, log10-scaled where ``envelope_log_floor_`` > 0."""
-        V = self.envelope_values(X)
+        return self._envelope_log(self.envelope_values(X))
+
+    def _envelope_log(self, V: np.ndarray) -> np.ndarray:
+        """``V`` (envelope values, changed in place) log10-scaled where ``envelope_log_floor_`` > 0."""
         logc = self.envelope_log_floor_ > 0
         with np.errstate(invalid="ignore", divide="ignore"):
             V[:, logc] = np.log10(np.maximum(V[:, logc], self.envelope_log_floor_[logc]))
@@ -1073,7 +1072,7 @@ class MisalignmentModel(BaseEstimator):
         env = self.envelope_
         assert env is not None, "no envelope fitted"
         V = self.envelope_values(X)
-        Z = self.envelope_input(X)
+        Z = self._envelope_log(V.copy())
         exc = env.excess(Z)
         for j, name in enumerate(self.envelope_names_):
             tol = ENVELOPE_REL_TOLERANCE.get(str(name))
@@ -1174,3 +1173,24 @@ class MisalignmentModel(BaseEstimator):
         check_is_fitted(self, "ood_")
         X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
         return self.ood_.ood_ratio(self.ood_input(X))
+
+
+@lru_cache(maxsize=8)
+def _envelope_plan(feature_names: tuple[str, ...], envelope_names: tuple[str, ...]
+                   ) -> tuple[np.ndarray, np.ndarray, tuple[tuple[int, int, int, bool], ...]]:
+    """Where :meth:`MisalignmentModel.envelope_values` finds each envelope column, made once per model's names: the
+    plain columns (envelope column, feature column) and the derived attitude angles (envelope column, the bearing's
+    centre x and y feature columns, whether the short-bearing attitude is subtracted)."""
+    index = {n: i for i, n in enumerate(feature_names)}
+    plain_j, plain_cols, derived = [], [], []
+    for j, name in enumerate(envelope_names):
+        m = MisalignmentModel._ATTITUDE.fullmatch(name)
+        if name in index:
+            plain_j.append(j)
+            plain_cols.append(index[name])
+        elif m:
+            derived.append((j, index[f"b{m.group(1)}_centre_x_per_c"], index[f"b{m.group(1)}_centre_y_per_c"],
+                            bool(m.group(2))))
+        else:                                   # pragma: no cover - names come from _fit_envelope
+            raise KeyError(name)
+    return np.array(plain_j, dtype=np.intp), np.array(plain_cols, dtype=np.intp), tuple(derived)

@@ -1,6 +1,6 @@
 """A verdict in the engineer's length units (µm or mils), the same for the CLI and the API.
 
-The verdict is computed in µm (:func:`rotordiag.models.predict.diagnose`); this turns a
+The verdict is computed in µm (:func:`rotordiag.models.pipeline.diagnose_recording`); this turns a
 finished verdict dict into ``units`` without recomputing anything: every µm-named field is
 renamed and converted (:func:`rotordiag.core.units.lengths_in`: ``offset_um`` →
 ``offset_mil``, ``b2_1x_major_um_pp`` → ``b2_1x_major_mil_pp``), the top features' values

@@ -1,9 +1,9 @@
-"""The verdict: one function, used by ``rotordiag diagnose`` and by the service.
+"""The model's side of a verdict: the loaded model, its scores of one feature result, and the verdict made of them.
 
-``diagnose(bundle, feature_result) -> Verdict``: severity band and calibrated
-probabilities, Δ estimate with its conformal interval (and the offset δ = Δ·c in µm
-when the bearing clearance is known), motion type, the features that drove the
-verdict, and an out-of-distribution warning.
+``load_bundle`` (a registry's model and card), :func:`model_scores` (the "model scores" stage of
+``models.pipeline``: band probabilities, Δ and its conformal interval, kNN OOD score, features outside the training
+range), :func:`verdict_of` (a :class:`Verdict` from the scores and the assessed status), :func:`format_verdict`
+(the CLI's text). The verdict of a recording is ``models.pipeline.diagnose_recording``.
 """
 from __future__ import annotations
 
@@ -11,7 +11,9 @@ import copy
 import logging
 import weakref
 from collections.abc import Sequence
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field, fields, is_dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -21,22 +23,9 @@ from threadpoolctl import threadpool_limits
 from rotordiag.core.notes import Measured, Note
 from rotordiag.features import evidence
 
-from .checks.acquisitions import acquisitions_reason, coupling_phase_rows, coupling_split
 from .checks.bearing_sets import bearing_plan, leave_out_bearings
-from .checks.numbering import has_every_bearing, mirrored_row, numbering_reason
-from .checks.reverse_2x import reverse_2x_reason
 from .registry import Registry
-from .status import (
-    DEFAULT_POLICY,
-    INCONCLUSIVE,
-    ModelCall,
-    Reason,
-    RecordingChecks,
-    assess,
-    consistent_estimate,
-    journals_at_one_position,
-    policy_of,
-)
+from .status import INCONCLUSIVE, Reason, consistent_estimate
 
 if TYPE_CHECKING:
     from .compiled import CompiledModel
@@ -45,7 +34,7 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class ModelBundle:
-    """A loaded model with its card (what :func:`diagnose` needs)."""
+    """A loaded model with its card (what ``models.pipeline.diagnose_recording`` needs)."""
 
     model: Any                 # fitted models.estimators.MisalignmentModel
     card: dict
@@ -116,18 +105,35 @@ class Verdict:
     speed_source: str | None = None
 
     def to_dict(self) -> dict:
-        d = {f.name: _copied(getattr(self, f.name)) for f in fields(self)}     # as dataclasses.asdict, 4× faster
+        """The verdict as JSON-able data (as :func:`dataclasses.asdict`, 4× faster), with ``warning_codes``: the
+        catalogue code of each warning (``rotordiag.core.notes``), in the order of ``warnings``.
+
+        Raises
+        ------
+        TypeError
+            For a warning that is not a catalogue :class:`~rotordiag.core.notes.Note` (a programming error: every
+            warning a verdict is given is one).
+        """
+        d = {f.name: _copied(getattr(self, f.name)) for f in fields(self)}
         d["misalignment_interval"] = list(self.misalignment_interval)
         if self.offset_interval_um is not None:
             d["offset_interval_um"] = list(self.offset_interval_um)
+        d["warning_codes"] = [_code(w) for w in self.warnings]
         return d
+
+
+def _code(warning: object) -> str:
+    if not isinstance(warning, Note):
+        raise TypeError(f"a verdict's warnings are catalogue notes (rotordiag.core.notes.Note), not {warning!r}")
+    return warning.code
 
 
 def _copied(v: Any) -> Any:
     """A deep copy of a verdict field as :func:`dataclasses.asdict` makes it (dataclasses to dicts, containers
-    copied with their types), for the few types a verdict holds."""
+    copied with their types), for the few types a verdict holds. Strings are values: a warning (``Note``) or a
+    measured text (``Measured``), ``str`` subclasses with their typed values, is kept as it is, not rebuilt."""
     t = type(v)
-    if t is float or t is str or t is int or t is bool or v is None:
+    if t is float or t is str or t is int or t is bool or v is None or isinstance(v, str):
         return v
     if t is list:
         return [_copied(x) for x in v]
@@ -146,10 +152,23 @@ def feature_vector(names: Sequence[str], feature_result) -> tuple[np.ndarray, li
     ``feature_result`` needs ``names`` and ``values`` (a ``features.FeatureResult``).
     Returns the row and the list of model features the result did not provide.
     """
-    got = dict(zip(tuple(feature_result.names), np.asarray(feature_result.values, dtype=float)))
-    row = np.array([got.get(n, np.nan) for n in names], dtype=float)
-    missing = [n for n in names if n not in got]
-    return row, missing
+    values = np.asarray(feature_result.values, dtype=float)
+    have, cols, missing = _columns_of(tuple(names), tuple(feature_result.names), len(values))
+    row = np.full(len(have), np.nan)
+    row[have] = values[cols]
+    return row, list(missing)
+
+
+@lru_cache(maxsize=16)
+def _columns_of(names: tuple[str, ...], given: tuple[str, ...], n_values: int
+                ) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Where each of the model's ``names`` is among a feature result's ``given`` names (the first ``n_values`` of them;
+    a repeated name: its last place): the mask of those found, their columns, the names not found. Made once per
+    pair of name lists (every recording of one extractor has the same)."""
+    index = {n: i for i, n in enumerate(given[:n_values])}
+    have = np.array([n in index for n in names], dtype=bool)
+    cols = np.array([index[n] for n in names if n in index], dtype=np.intp)
+    return have, cols, tuple(n for n in names if n not in index)
 
 
 def _motion_type(feature_result) -> str | None:
@@ -221,48 +240,14 @@ def _contributions(model, fast, row: np.ndarray, cls: int, top_k: int) -> list[F
     ]
 
 
-def diagnose(
-    bundle: ModelBundle | Any,
-    feature_result,
-    *,
-    clearance_um: float | None = None,
-    top_k: int = 5,
-    extra_reasons: Sequence[Reason] = (),
-) -> Verdict:
-    """Diagnose one recording from its features.
-
-    Parameters
-    ----------
-    bundle : ModelBundle or fitted MisalignmentModel
-    feature_result : features.FeatureResult
-        Anything with ``names`` and ``values``; ``speed_rpm``, ``warnings``,
-        ``motion_type`` and ``clearance_um`` are used when present.
-    clearance_um : float, optional
-        Radial bearing clearance c in µm; gives the offset δ = Δ·c. Defaults to the
-        feature result's ``clearance_um`` when it has one.
-    top_k : int
-        Number of contributing features reported.
-    extra_reasons : sequence of models.status.Reason
-        Reasons found outside the feature row, by a caller that has the recording
-        (``models.checks.common_mode``, ``models.checks.clearance_check``); they count in the status like the others.
-
-    Returns
-    -------
-    Verdict
-
-    Notes
-    -----
-    The trees are walked by the compiled predictor (:mod:`models.compiled`; same numbers
-    as the scikit-learn methods, about 1 ms instead of about 30 ms per verdict). A model
-    it cannot compile runs through scikit-learn with one OpenMP thread: for a single row
-    that is the fastest, and the boosted trees' thread pool spins badly when the
-    machine's cores are busy (measured: ~1 s per verdict on 2 oversubscribed cores).
-    """
-    model = bundle.model if isinstance(bundle, ModelBundle) else bundle
+def predictor_threads(model: Any) -> AbstractContextManager:
+    """The thread limit a verdict's model calls run under: none for a compiled model (:func:`fast_predictor`), one
+    OpenMP thread for a model run through scikit-learn — for a single row that is the fastest, and the boosted
+    trees' thread pool spins badly when the machine's cores are busy (measured: ~1 s per verdict on 2
+    oversubscribed cores)."""
     if fast_predictor(model) is not model:
-        return _diagnose(bundle, feature_result, clearance_um=clearance_um, top_k=top_k, extra_reasons=extra_reasons)
-    with threadpool_limits(limits=1, user_api="openmp"):
-        return _diagnose(bundle, feature_result, clearance_um=clearance_um, top_k=top_k, extra_reasons=extra_reasons)
+        return nullcontext()
+    return threadpool_limits(limits=1, user_api="openmp")
 
 
 def _alarm(model, proba: np.ndarray, cls: int, X: np.ndarray) -> tuple[float, float] | None:
@@ -276,27 +261,6 @@ def _alarm(model, proba: np.ndarray, cls: int, X: np.ndarray) -> tuple[float, fl
     if thresholds is None:
         return None
     return float(1.0 - proba[0]), float(thresholds[0])
-
-
-def _one_position_call(model, fast, names: Sequence[str], row: np.ndarray) -> int | None:
-    """The lowest band the classifier gives ``row`` with the coupling-end journals at one static position
-    (``models.status.journals_at_one_position``), or None when their centrelines are not measured."""
-    rows = journals_at_one_position(names, row)
-    if rows is None:
-        return None
-    return int(np.min(model.band_index(fast.predict_proba(rows), rows)))
-
-
-def _numbering_reasons(model, fast, names, row: np.ndarray, ood_score: float, cls: int) -> list:
-    """``bearing_numbering`` (models.checks.numbering) for a four-bearing row that is markedly more like the training family
-    numbered from the other end: one more OOD and class pass, on the renumbered row."""
-    if not has_every_bearing(names, row):
-        return []
-    X_other = mirrored_row(names, row)[None, :]
-    other_cls = int(model.band_index(fast.predict_proba(X_other), X_other)[0])
-    reason = numbering_reason(ood_score, float(fast.ood_ratio(X_other)[0]), str(model.classes_[cls]),
-                              str(model.classes_[other_cls]))
-    return [reason] if reason is not None else []
 
 
 @dataclass(frozen=True)
@@ -344,33 +308,102 @@ def _model_row(bundle, feature_result) -> _ModelRow:
 
 
 def ood_score_and_class(bundle: ModelBundle | Any, feature_result) -> tuple[float, str]:
-    """The kNN OOD score and the classifier's class of a feature result, as :func:`diagnose` computes them, and
-    nothing else: for a second reading of a recording (``models.checks.clearance_check``, ``models.checks.common_mode``) at a
-    fraction of a verdict's cost.
+    """The kNN OOD score and the classifier's class of a feature result, as :func:`model_scores` computes them, and
+    nothing else: for a second reading of a recording (``models.checks.clearance_check``,
+    ``models.checks.common_mode``) at a fraction of a verdict's cost.
     """
     m = _model_row(bundle, feature_result)
     X = m.row[None, :]
     fast = fast_predictor(m.model)
-
-    def score() -> tuple[float, str]:
+    with predictor_threads(m.model):
         cls = int(m.model.band_index(fast.predict_proba(X), X)[0])
         return float(fast.ood_ratio(X)[0]), str(m.model.classes_[cls])
 
-    if fast is not m.model:                 # compiled trees: no thread pool (as diagnose)
-        return score()
-    with threadpool_limits(limits=1, user_api="openmp"):
-        return score()
+
+@dataclass(frozen=True)
+class ModelScores:
+    """The active model's reading of one feature result: the "model scores" stage of ``models.pipeline``.
+
+    Attributes
+    ----------
+    model, fast, version
+        The fitted model, its compiled predictor (:func:`fast_predictor`) and its registry version.
+    names, row
+        The model's feature names and the row (bearings outside the answering probe set left out).
+    missing, never_missing
+        The model's features the extractor did not produce; those missing here that training always had.
+    warnings : list of rotordiag.core.notes.Note
+        The feature result's warnings and the model side's (features not produced or missing, probe set, OOD).
+    plan : models.checks.bearing_sets.BearingPlan or None
+    sanity : tuple of features.SanityFinding
+    probabilities : ndarray
+        Calibrated band probabilities; ``call_index`` the called band's index into them (``call`` its name).
+    point, interval
+        The Δ regressor's own estimate and conformal interval.
+    ood_score, findings, ood
+        kNN OOD score, features outside the training range (``MisalignmentModel.envelope_findings``), and
+        whether either puts the row out of distribution.
+    """
+
+    model: Any
+    fast: Any
+    version: str | None
+    names: Sequence[str]
+    row: np.ndarray
+    missing: list[str]
+    never_missing: list[str]
+    warnings: list
+    plan: Any
+    sanity: tuple
+    probabilities: np.ndarray
+    call_index: int
+    point: float
+    interval: tuple[float, float]
+    ood_score: float
+    findings: list[dict]
+
+    @property
+    def ood(self) -> bool:
+        return self.ood_score > 1.0 or bool(self.findings)
+
+    @property
+    def call(self) -> str:
+        return str(self.model.classes_[self.call_index])
+
+    @property
+    def band(self) -> int:
+        """The call's index into the model's severity bands."""
+        bands = self.model.bands_
+        return list(bands.names).index(self.call) if self.call in bands.names else self.call_index
+
+    def classes_of(self, rows: np.ndarray) -> list[str]:
+        """The classifier's class name of each of ``rows`` (n, n_features)."""
+        return [str(self.model.classes_[k]) for k in self.model.band_index(self.fast.predict_proba(rows), rows)]
+
+    def ood_of(self, rows: np.ndarray) -> np.ndarray:
+        """The kNN OOD score of each of ``rows``."""
+        return self.fast.ood_ratio(rows)
+
+    def alarm(self) -> tuple[float, float] | None:
+        """P(misaligned) and the ordinal classifier's false-alarm threshold for an "aligned" call, else None."""
+        return _alarm(self.model, self.probabilities, self.call_index, self.row[None, :])
 
 
-def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Sequence[Reason] = ()) -> Verdict:
-    read = _model_row(bundle, feature_result)
-    model, version, names, row, missing = read.model, read.version, read.names, read.row, read.missing
-    warnings, plan, sanity = read.warnings, read.plan, read.sanity
-    never_missing = (~np.isfinite(row)) & (model.feature_nan_rate_ == 0)
-    never_missing_names = [n for n, m in zip(names, never_missing) if m and n not in missing]
-    if never_missing_names:
-        warnings.append(Note("features_never_missing", n_missing=len(never_missing_names),
-                             examples=str(never_missing_names[:3])))
+def model_scores(bundle: ModelBundle | Any, feature_result) -> ModelScores:
+    """The model's reading of ``feature_result`` (:class:`ModelScores`); the caller holds
+    :func:`predictor_threads`.
+
+    Raises
+    ------
+    ValueError
+        When none of the model's features are present (features of another extractor).
+    """
+    m = _model_row(bundle, feature_result)
+    model, row, warnings = m.model, m.row, m.warnings
+    never = (~np.isfinite(row)) & (model.feature_nan_rate_ == 0)
+    never_missing = [n for n, flag in zip(m.names, never) if flag and n not in m.missing]
+    if never_missing:
+        warnings.append(Note("features_never_missing", n_missing=len(never_missing), examples=str(never_missing[:3])))
     X = row[None, :]
     fast = fast_predictor(model)
     proba = fast.predict_proba(X)[0]
@@ -378,45 +411,30 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
     point, interval = fast.predict_misalignment(X)
     ood_score = float(fast.ood_ratio(X)[0])
     findings = model.envelope_findings(X)[0] if hasattr(model, "envelope_findings") else []
-    ood = ood_score > 1.0 or bool(findings)
-    extra = (plan.reasons() if plan is not None else []) + list(extra_reasons)
-    if coupling_split(feature_result):
-        X_phase = coupling_phase_rows(names, row)
-        readings = None if X_phase is None else \
-            [str(model.classes_[k]) for k in model.band_index(fast.predict_proba(X_phase), X_phase)]
-        extra.append(acquisitions_reason(feature_result, readings))
-    backward = reverse_2x_reason(names, row, str(model.classes_[cls]) != str(model.bands_.names[0]))
-    if backward is not None:
-        extra.append(backward)
-    if not ood:
-        extra += _numbering_reasons(model, fast, names, row, ood_score, cls)
     if ood_score > 1.0:
         warnings.append(Note("signal_unlike_training", ood_score=ood_score))
     if findings:
         warnings.append(Note("features_outside_training", n_outside=len(findings),
                              examples=f"{', '.join(f['feature'] for f in findings[:5])}"
                                       f"{' …' if len(findings) > 5 else ''}"))
-    if clearance_um is None:
-        clearance_um = getattr(feature_result, "clearance_um", None)
-    if clearance_um is not None and not (np.isfinite(clearance_um) and clearance_um > 0):
-        raise ValueError(f"clearance_um: must be a positive number of micrometres, got {clearance_um!r}")
-    severity = str(model.classes_[cls])
+    return ModelScores(model=model, fast=fast, version=m.version, names=m.names, row=row, missing=m.missing,
+                       never_missing=never_missing, warnings=warnings, plan=m.plan, sanity=m.sanity,
+                       probabilities=proba, call_index=cls, point=float(point[0]),
+                       interval=(float(interval[0, 0]), float(interval[0, 1])), ood_score=ood_score,
+                       findings=findings)
+
+
+def verdict_of(scores: ModelScores, feature_result, status: str, reasons: Sequence[Reason], *,
+               clearance_um: float | None, top_k: int) -> Verdict:
+    """The :class:`Verdict` of a feature result from its model scores and its assessed status and reasons: the
+    class and Δ made consistent (``models.status.consistent_estimate``), no severity nor Δ when inconclusive, the
+    offset δ = Δ·c when the clearance is known, the occlusion contributions of the ``top_k`` features and the
+    model-independent evidence."""
+    model = scores.model
     bands = model.bands_
-    band = list(bands.names).index(severity) if severity in bands.names else cls
-    raw = float(point[0])
-    delta, (lo, hi), agree = consistent_estimate(band, bands.edges, raw, (float(interval[0, 0]),
-                                                                          float(interval[0, 1])))
-    status, reasons = assess(
-        RecordingChecks(names=names, row=row, feature_median=np.asarray(model.feature_median_, dtype=float),
-                        sanity=sanity, ood_score=ood_score,
-                        never_missing=never_missing_names, speed_source=getattr(feature_result, "speed_source", None),
-                        warnings=warnings, envelope=findings, extra=extra),
-        ModelCall(probabilities=proba, class_delta_agree=agree, call_index=cls,
-                  band_names=[str(c) for c in model.classes_], misaligned_call=band > 0,
-                  alarm=_alarm(model, proba, cls, X), delta_interval=(float(interval[0, 0]), float(interval[0, 1])),
-                  band_edges=bands.edges, interval_level=1.0 - float(model.regressor_.alpha),
-                  one_position_call=_one_position_call(model, fast, names, row) if band > 0 else None),
-        policy_of(bundle.card) if isinstance(bundle, ModelBundle) else DEFAULT_POLICY)
+    raw = scores.point
+    delta, (lo, hi), _ = consistent_estimate(scores.band, bands.edges, raw, scores.interval)
+    severity = scores.call
     shown: float | None = delta
     shown_iv: tuple[float | None, float | None] = (lo, hi)
     if status == INCONCLUSIVE:
@@ -432,24 +450,24 @@ def _diagnose(bundle, feature_result, *, clearance_um, top_k, extra_reasons: Seq
         reasons=[r.to_dict() for r in reasons],
         evidence=[e.to_dict() for e in ev],
         misalignment_model=raw,
-        model_severity=str(model.classes_[cls]),
+        model_severity=scores.call,
         speed_source=getattr(feature_result, "speed_source", None),
         severity=severity,
-        probabilities={str(n): float(p) for n, p in zip(model.classes_, proba)},
+        probabilities={str(n): float(p) for n, p in zip(model.classes_, scores.probabilities)},
         misalignment=shown,
         misalignment_interval=shown_iv,
         interval_level=1.0 - float(model.regressor_.alpha),
         offset_um=offset,
         offset_interval_um=offset_iv,
         motion_type=_motion_type(feature_result),
-        top_features=_contributions(model, fast, row, cls, top_k),
-        ood=bool(ood),
-        ood_score=ood_score,
-        ood_findings=findings,
+        top_features=_contributions(model, scores.fast, scores.row, scores.call_index, top_k),
+        ood=bool(scores.ood),
+        ood_score=scores.ood_score,
+        ood_findings=scores.findings,
         speed_rpm=None if speed is None else float(speed),
-        model_version=version,
-        bands=model.bands_.to_dict(),
-        warnings=warnings,
+        model_version=scores.version,
+        bands=bands.to_dict(),
+        warnings=scores.warnings,
     )
 
 

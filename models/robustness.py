@@ -345,7 +345,7 @@ class Outcome:
     notes: list[str] = field(default_factory=list)
     speed_rpm: float = math.nan          # the simulated speed
     speed_rpm_used: float = math.nan     # the speed the verdict's features were computed at (speed not given: the
-    #                                      estimate, or the reading models.speed_choice chose when it was in doubt)
+    #                                      estimate, or the reading models.checks.speed_choice chose when it was in doubt)
     speed_rpm_estimated: float = math.nan  # the features package's own estimate (speed not given)
     speed_line: str = ""                 # speed not given: how the true 1X line shows (bench_speed.running_speed_line)
     across_dc_per_c: float = math.nan    # the shaft ends across the coupling (:func:`across_coupling`): static offset
@@ -361,7 +361,7 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
     ``acquisitions`` and ``speed_range_rpm`` as ``Recording``'s."""
     from rotordiag.features import ProbeChannel, Recording, extract_features
     from rotordiag.models.baselines import RuleOfThumb, ratio_column
-    from rotordiag.models.diagnosis import diagnose_recording
+    from rotordiag.models.pipeline import diagnose_recording
 
     chans = [ProbeChannel(b, a, units, waveforms_um[2 * k + j]) for k, b in enumerate(bearings)
              for j, a in enumerate(ANGLES_DEG)]
@@ -914,7 +914,7 @@ def targets(rows: dict[str, dict], ross: dict | None) -> list[tuple[str, bool | 
                      + _interval_text(_wilson(round(sp["within"] * sp["n"]), sp["n"]), "{:.1%}", "Wilson interval")
                      + " (the spectral estimate alone: "
                      f"{_f(sp.get('within_estimator'), '{:.1%}')}; {sp.get('switched', 0)} doubtful estimates "
-                     "replaced by the reading the model finds in distribution, models.speed_choice)"))
+                     "replaced by the reading the model finds in distribution, models.checks.speed_choice)"))
         n_sep, ok_sep = sp["by_line"]["separate"]
         out.append((f"speed unknown: the verdict's speed within {SPEED_TOLERANCE:.1%} on ≥ 99 % of the recordings whose 1X is a "
                     "separate spectral line above the noise",

@@ -53,6 +53,7 @@ from rotordiag.core.notes import Length, Measured
 from rotordiag.core.reasons import INCONCLUSIVE, UNCERTAIN, code_info, require_code
 from rotordiag.features import speed_in_doubt
 
+from ._patterns import name_index
 from .baselines import DEFAULT_RULE_CUTS, RuleOfThumb
 
 __all__ = ["Reason", "RecordingChecks", "ModelCall", "assess", "consistent_estimate", "CONFIDENT", "UNCERTAIN", "INCONCLUSIVE",
@@ -206,7 +207,7 @@ def _near_centre_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
                           ) -> list[Reason]:
     """``journals_near_centre`` when all four bearings' centrelines are read and every journal sits within
     :data:`NEAR_CENTRE_MAX_ECC` of its bearing centre."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     cols = [index.get(f"b{b}_centre_ecc_per_c") for b in (1, 2, 3, 4)]
     if any(j is None for j in cols):
         return []
@@ -228,7 +229,7 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
     by more than :data:`FRAME_OFFSET_DEG` beyond a plain short journal bearing's at the same eccentricity, every one
     on the same side: the probes' frame as given is turned (wrong ``angle_deg``), or the bearings are no plain
     cylindrical ones (the ROSS set's linear bearings, tilting pads: the journal near the load line)."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     bearings, xye = [], []
     for b in range(1, 10):
         cols = [index.get(f"b{b}_centre_{k}_per_c") for k in ("x", "y", "ecc")]
@@ -258,7 +259,7 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
 
 def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray,
                    policy: DecisionPolicy = DEFAULT_POLICY) -> list[Reason]:
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     ratios = []
     for b in COUPLING_BEARINGS:
         j = index.get(f"b{b}_1x_major_um_pp")
@@ -367,9 +368,9 @@ def envelope_reasons(findings: Sequence[dict], *, max_reasons: int = 3,
 
 def coupling_2x_1x(names: Sequence[str], row: np.ndarray) -> float:
     """The largest 2X/1X amplitude ratio of the coupling bearings' probes (NaN when none is measured)."""
-    vals = [float(row[i]) for i, n in enumerate(names)
-            if any(n in (f"b{b}_x_2x_1x_ratio", f"b{b}_y_2x_1x_ratio") for b in COUPLING_BEARINGS)]
-    vals = [v for v in vals if np.isfinite(v)]
+    index = name_index(names)
+    cols = [index[n] for b in COUPLING_BEARINGS for n in (f"b{b}_x_2x_1x_ratio", f"b{b}_y_2x_1x_ratio") if n in index]
+    vals = [v for v in (float(row[j]) for j in cols) if np.isfinite(v)]
     return max(vals) if vals else float("nan")
 
 
@@ -399,7 +400,7 @@ CENTRELINE_FEATURES = ("centre_x_per_c", "centre_y_per_c", "centre_ecc_per_c")
 def journals_apart_c(names: Sequence[str], row: np.ndarray) -> tuple[float, float] | None:
     """Bearing 3's static journal position minus bearing 2's (x, y), in clearances; None when either is not
     measured."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     cols = [index.get(f"b{b}_centre_{d}_per_c") for b in COUPLING_BEARINGS[::-1] for d in "xy"]
     if any(j is None or not np.isfinite(row[j]) for j in cols):
         return None
@@ -416,7 +417,7 @@ def journals_at_one_position(names: Sequence[str], row: np.ndarray) -> np.ndarra
     journal sits by its own load, and a DC gap referenced to the wrong zero reads the same. The model's call on
     these rows says whether the call rests on that offset (docs/robustness.md, transfer check). None when
     either coupling bearing's centreline is not measured (no clearance, raw gaps, bearing absent)."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     found = {b: [index.get(f"b{b}_{q}") for q in CENTRELINE_FEATURES] for b in COUPLING_BEARINGS}
     if any(j is None or not np.isfinite(row[j]) for js in found.values() for j in js):
         return None
@@ -531,14 +532,12 @@ class ModelCall:
         The bands' inner edges.
     interval_level : float
         The interval's coverage, for that reason's message.
-    one_position_call : int, optional
-        The lowest band the classifier gives the recording with the coupling-end journals at one static position
-        (:func:`journals_at_one_position`); None when not measured. A misalignment call that falls to a lower band
-        there (the aligned band above all) rests on the static offset between the two journals:
-        ``static_offset_only`` (uncertain).
+    static_offset : sequence of Reason
+        ``static_offset_only`` of a misalignment call that falls to a lower band with the coupling-end journals at
+        one static position (``models.checks.one_position``), listed after the call's 2X reason.
     """
 
-    probabilities: Sequence[float]
+    probabilities: Sequence[float] | np.ndarray
     class_delta_agree: bool
     call_index: int | None = None
     band_names: Sequence[str] = ()
@@ -547,7 +546,7 @@ class ModelCall:
     delta_interval: tuple[float, float] | None = None
     band_edges: Sequence[float] = ()
     interval_level: float = 0.9
-    one_position_call: int | None = None
+    static_offset: Sequence[Reason] = ()
 
 
 def assess(checks: RecordingChecks, call: ModelCall, policy: DecisionPolicy | None = None
@@ -602,7 +601,7 @@ def _call_reasons(m: ModelCall, c: RecordingChecks, policy: DecisionPolicy = DEF
     """Low probability, probability or Δ interval on bands two or more from the call, below the alarm
     threshold, a severity without the coupling 2X or "aligned" without the coupling centreline (these two
     read the recording's features), a severity resting on the static offset between the coupling journals
-    (``one_position_call``), class and Δ disagreeing."""
+    (``static_offset``, from ``models.checks.one_position``), class and Δ disagreeing."""
     reasons: list[Reason] = []
     probabilities, call_index, band_names = m.probabilities, m.call_index, m.band_names
     pmax = float(np.max(probabilities)) if len(probabilities) else np.nan
@@ -657,22 +656,7 @@ def _call_reasons(m: ModelCall, c: RecordingChecks, policy: DecisionPolicy = DEF
                                   f"{policy.signature_min_2x_1x:g}): the classic signature is missing and nothing physical "
                                   "backs the model's call — compare with this machine's baseline, check the "
                                   "centreline, or re-record"))
-        if m.one_position_call is not None and call_index is not None and m.one_position_call < call_index:
-            lower = m.one_position_call
-            what = ("called misaligned on the static offset between the coupling-end journals: with the two journals "
-                    "at one position in their bearings the model would call it aligned" if lower == 0 else
-                    "the severity rests on the static offset between the coupling-end journals: with the two journals "
-                    "at one position in their bearings the model would call it "
-                    + (str(band_names[lower]) if len(band_names) > lower else f"band {lower}"))
-            apart = journals_apart_c(c.names, c.row)
-            if apart is not None:
-                what += (f" (bearing 3's journal sits {np.hypot(*apart):.2f} c from bearing 2's: "
-                         f"x {apart[0]:+.2f} c, y {apart[1]:+.2f} c)")
-            reasons.append(Reason("static_offset_only", UNCERTAIN,
-                                  what + ". A healthy train's coupling-end journals also sit apart (each by its own "
-                                  "load: a heavy generator journal beside a light exciter one), and a DC gap referenced "
-                                  "to the wrong zero reads the same — compare with this machine's cold or baseline "
-                                  "positions before acting"))
+        reasons += list(m.static_offset)          # models.checks.one_position: listed here, after the 2X
     elif not coupling_centreline_known(c.names, c.row):
         reasons.append(Reason("offset_not_assessed", UNCERTAIN,
                               "called aligned without the shaft-centreline position at the coupling bearings "

@@ -1,8 +1,8 @@
 """The model store: the service's registry, the loaded active model, and one diagnosis call.
 
-The verdict itself is the models package's (``models.predict.diagnose``) on the
-features package's feature vector (``features.extract_features``); this module
-only caches loaded models per version and turns a request into those calls.
+The verdict itself is the models package's (``models.pipeline.diagnose_recording``: features, model scores,
+checks, status, verdict); this module only caches loaded models per version and turns a request into that call
+(in a diagnosis worker process, ``service.pool``, sent as a typed ``WorkerCall``).
 """
 from __future__ import annotations
 
@@ -194,16 +194,18 @@ class ModelStore:
     @staticmethod
     def _verdict(bundle: Any, recording: Any, fr: Any = None) -> tuple[Any, Any]:
         """The verdict and the features it was computed from: ``features.extract_features`` (unless ``fr``,
-        the recording's features, is given), then ``models.diagnosis.diagnose_recording`` (the verdict and a
+        the recording's features, is given), then ``models.pipeline.diagnose_recording`` (the verdict and a
         doubtful estimated speed judged by the model)."""
+        import numpy as np
+
         from rotordiag.features import extract_features
-        from rotordiag.models.diagnosis import diagnose_recording
+        from rotordiag.models.pipeline import diagnose_recording
 
         if fr is None:
             fr = extract_features(recording)
-        overflowed = [k for k, v in fr.as_dict().items() if isinstance(v, float) and math.isinf(v)]
-        if overflowed:
-            raise ValueError(f"the waveforms are too large to analyse ({overflowed[0]} overflows); check the units: "
+        overflowed = np.flatnonzero(np.isinf(np.asarray(fr.values, dtype=float)))
+        if overflowed.size:
+            raise ValueError(f"the waveforms are too large to analyse ({fr.names[overflowed[0]]} overflows); check the units: "
                              "`data` is in `units` (um by default), and a proximity probe reads at most a few "
                              "thousand µm")
         clearance = getattr(recording, "clearance_um", None)
@@ -213,7 +215,7 @@ class ModelStore:
     def plot_features(self, recording: Any) -> Any:
         """The features the web page's pictures are drawn from: those of the verdict (:meth:`diagnose`, the
         active model), so that the pictures mark the orders at the verdict's speed. Only an estimated speed in
-        doubt can differ from the features package's own (``models.speed_choice``): for any other the model is
+        doubt can differ from the features package's own (``models.checks.speed_choice``): for any other the model is
         not run; nor when no model can be loaded."""
         from rotordiag.features import extract_features, speed_in_doubt
 
@@ -249,7 +251,6 @@ def _check_usable(model: Any, version: str) -> None:
 def _clean(v: Any) -> Any:
     """JSON-able copy: dataclasses/arrays to dicts/lists, non-finite floats to ``None``."""
     import dataclasses
-    import math
 
     import numpy as np
 

@@ -59,10 +59,14 @@ def _read_error(exc: ValueError) -> InputError:
 
 
 def recording_from_model(req: RecordingIn) -> Any:
-    """``features.Recording`` from the JSON form (validated by pydantic), through the reader."""
+    """``features.Recording`` from the JSON form (validated by pydantic), through the reader. The channels' samples
+    are handed over as pydantic validated them, not copied into new lists by ``model_dump`` (131,072 numbers in
+    bench_service's recording: 0.8 ms)."""
     from rotordiag.features.reader import recording_from_dict
 
-    return recording_from_dict(req.model_dump(), limits=service_limits()).recording
+    d = req.model_dump(exclude={"channels"})
+    d["channels"] = [{**ch.model_dump(exclude={"data"}), "data": ch.data} for ch in req.channels]
+    return recording_from_dict(d, limits=service_limits()).recording
 
 
 def _parse_list(text: str | None, name: str, kind: type) -> list | None:

@@ -134,7 +134,7 @@ def plot_data(recording: Recording, feature_result: Any = None) -> dict[str, Any
     recording : features.Recording
     feature_result : features.FeatureResult, optional
         The recording's features as the verdict used them (``ModelStore.plot_features``: its speed may be
-        one the model chose, ``models.speed_choice``); ``extract_features(recording)`` when not given.
+        one the model chose, ``models.checks.speed_choice``); ``extract_features(recording)`` when not given.
 
     Returns
     -------

@@ -316,7 +316,9 @@ class CheckModel(WorkerCall):
         return _load_check(self.version)
 
 
-def _recv_exact(sock: socket.socket, n: int) -> bytes | None:
+def _recv_exact(sock: socket.socket, n: int) -> bytearray | None:
+    """``n`` bytes from ``sock`` (None at end of file), in the buffer they were read into (not copied again: a
+    request's body is half a megabyte)."""
     buf = bytearray(n)
     view = memoryview(buf)
     got = 0
@@ -325,7 +327,7 @@ def _recv_exact(sock: socket.socket, n: int) -> bytes | None:
         if k == 0:
             return None
         got += k
-    return bytes(buf)
+    return buf
 
 
 def _worker_main(sock: socket.socket, registry_root: str, version: str | None, memory_bytes: int = 0) -> None:
@@ -539,7 +541,7 @@ class _Worker:
         if self._on_ready is not None:   # wake requests waiting for a worker: this one is gone
             self._on_ready()
 
-    async def _recv_exact(self, loop, n: int) -> bytes:
+    async def _recv_exact(self, loop, n: int) -> bytearray:
         buf = bytearray(n)
         view = memoryview(buf)
         got = 0
@@ -548,7 +550,7 @@ class _Worker:
             if k == 0:
                 raise ConnectionResetError("diagnosis worker closed its socket")
             got += k
-        return bytes(buf)
+        return buf
 
     def stop(self, timeout_s: float = 5.0) -> None:
         self.close()

@@ -540,7 +540,7 @@ class HeadlineOut(BaseModel):
 
 
 class DiagnoseResponse(BaseModel):
-    """The verdict of the active (or requested) model, from ``models.predict.diagnose``."""
+    """The verdict of the active (or requested) model, from ``models.pipeline.diagnose_recording``."""
 
     model_config = ConfigDict(protected_namespaces=())
 
@@ -600,6 +600,10 @@ class DiagnoseResponse(BaseModel):
     warnings: list[str] = Field(..., description="Anything that makes the verdict less certain: each the message of "
                                 "one code of the warnings catalogue (`rotordiag.core.notes`; docs/pipeline.md's warnings "
                                 "table): " + ", ".join(f"`{c}`" for c in NOTES) + ".")
+    warning_codes: list[Literal[tuple(NOTES)]] = Field(  # type: ignore[valid-type]
+        default_factory=list, description="The catalogue code of each of `warnings`, in the same order "
+        "(`rotordiag.core.notes`; docs/pipeline.md's warnings table says what each means and what to do): match on "
+        "these, not on the words. Empty in answers stored before the codes were given.")
     asset_probes: AssetProbesSection | None = Field(None, description="With an `asset_id` that has a probe "
                                                     "configuration (PUT /assets/{id}/probes): what of it was used.")
     input_notes: list[str] = Field(default_factory=list, description="What the reader assumed or left out of an "

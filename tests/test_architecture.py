@@ -284,8 +284,8 @@ def test_no_climbs_inside_the_service():
 
 
 #: what a check (``models/checks/``) must not import: the predictor and the modules that call the checks
-CHECKS_MUST_NOT_IMPORT = ("rotordiag.models.predict", "rotordiag.models.pipeline", "rotordiag.models.diagnosis",
-                          "rotordiag.models.speed_choice")
+CHECKS_MUST_NOT_IMPORT = ("rotordiag.models.predict", "rotordiag.models.pipeline", "rotordiag.models.estimators",
+                          "rotordiag.models.compiled", "rotordiag.models.registry")
 
 
 def _check_climbs() -> list[str]:

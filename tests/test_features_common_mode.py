@@ -93,7 +93,7 @@ def test_shipped_model_doubts_a_call_that_rests_on_pickup():
     slight by the classifier; read without the common signal it is aligned, so the verdict is uncertain and says
     why. At 12 µm (share 0.96: the 2X is the pickup) the class, moderate, depends on it: inconclusive. Without
     pickup there is no such reason."""
-    from rotordiag.models.diagnosis import diagnose_recording
+    from rotordiag.models.pipeline import diagnose_recording
     from rotordiag.models.predict import load_bundle
 
     if not (REGISTRY / "active").exists():

@@ -92,7 +92,7 @@ def simulated():
 
 def _diagnose(simulated, scale=1.0, offset=0.0, clearance_um=None):
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose
+    from rotordiag.models.pipeline import diagnose
 
     d, bundle = simulated
     rec = Recording(sample_rate_hz=4096.0, speed_rpm=1800.0, clearance_um=clearance_um, channels=[
@@ -145,7 +145,8 @@ def test_each_steady_shipped_example_gets_its_band_confidently(name, band, actio
     from rotordiag.features import extract_features
     from rotordiag.features.examples import example_options, example_path
     from rotordiag.features.reader import ReadOptions, read_recording
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import load_bundle
     from rotordiag.models.registry import shipped_registry_dir
 
     opts = example_options(name)

@@ -35,7 +35,7 @@ def _recording(misalignment: float, late_samples: int = 0, **kw) -> Recording:
 def test_coupling_bearings_in_separate_takes_are_never_confident(bundle, misalignment):
     """Bearings 3 and 4 taken 5 ms later: stated as a second take, the verdict is uncertain and says why and what to
     do; the phase across the coupling is then not what the model read."""
-    from rotordiag.models.diagnosis import diagnose_recording
+    from rotordiag.models.pipeline import diagnose_recording
 
     plain, _ = diagnose_recording(bundle, _recording(misalignment))
     assert plain.status == "confident" and not plain.reasons
@@ -52,7 +52,7 @@ def test_other_pairs_split_leave_the_verdict(bundle):
     """Bearing 1 (or 4) alone in a take: the coupling's phase is measured, the model does not read the phase between
     bearings 1 and 2 (3 and 4) much, so the verdict is the one of the recording sampled together, without the
     reason."""
-    from rotordiag.models.diagnosis import diagnose_recording
+    from rotordiag.models.pipeline import diagnose_recording
 
     for misalignment in (0.0, 0.3):
         plain, _ = diagnose_recording(bundle, _recording(misalignment))
@@ -69,7 +69,7 @@ def test_the_reason_reads_the_recording_at_both_coupling_phases(bundle):
     and in anti-phase (180°) across the coupling — the healthy plant reads aligned in phase, the severely misaligned
     one the same either way — and those readings are the classifier's own on rows with that phase put in."""
     from rotordiag.models.checks.acquisitions import COUPLING_PHASES_DEG, coupling_phase_rows
-    from rotordiag.models.diagnosis import diagnose_recording
+    from rotordiag.models.pipeline import diagnose_recording
     from rotordiag.models.predict import _model_row, fast_predictor
 
     late = int(round(0.005 * 2048.0))

@@ -120,7 +120,8 @@ def test_the_shipped_table_was_measured_for_the_shipped_model():
 
 def _shipped_verdict(bearings, misalignment=0.0, *, plan=True):
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import ModelBundle, diagnose, load_bundle
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import ModelBundle, load_bundle
     from tests.service_util import simulated_channels
 
     if not (REGISTRY / "active").exists():
@@ -173,7 +174,8 @@ def test_a_bearing_whose_1x_alone_whirls_backward_is_not_read():
 
 def test_shipped_model_leaves_out_a_bearing_with_an_inverted_probe():
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import load_bundle
     from tests.service_util import simulated_channels
 
     if not (REGISTRY / "active").exists():

@@ -16,7 +16,7 @@ def test_shipped_model_doubts_a_confident_verdict_at_the_diametral_clearance(del
     """The default plant (slight and moderate misalignment) is a confident verdict at its radial clearance and has
     no such reason; stated at twice it (the diametral clearance), half of that is at least as like the training
     family, so the verdict is uncertain and says to check which clearance was given."""
-    from rotordiag.models.diagnosis import diagnose_recording
+    from rotordiag.models.pipeline import diagnose_recording
     from rotordiag.models.predict import load_bundle
     from tests.service_util import simulated_channels
 
@@ -61,7 +61,8 @@ def test_the_scaled_row_is_the_features_at_that_clearance(clearance):
 def test_the_second_reading_scores_as_the_verdict_does():
     """rotordiag.models.predict.ood_score_and_class is the verdict's OOD score and class, without the rest of the verdict."""
     from rotordiag.features import extract_features
-    from rotordiag.models.predict import diagnose, load_bundle, ood_score_and_class
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import load_bundle, ood_score_and_class
     from tests.service_util import simulated_channels
 
     if not (REGISTRY / "active").exists():

@@ -9,7 +9,8 @@ from threadpoolctl import threadpool_limits
 
 from rotordiag.models.compiled import CompiledModel, compile_forest, occlusion_raw, raw_predict
 from rotordiag.models.config import TrainConfig
-from rotordiag.models.predict import _contributions, diagnose, fast_predictor
+from rotordiag.models.pipeline import diagnose
+from rotordiag.models.predict import _contributions, fast_predictor
 from tests.models_synthetic import FEATURE_NAMES, make_table
 
 

@@ -55,7 +55,8 @@ def test_the_numbering_is_doubted_only_when_the_other_one_is_markedly_more_like_
 def test_shipped_model_doubts_a_train_numbered_from_the_exciter_end(recording):
     """The simulated default plant numbered 4-3-2-1: never confident — out of distribution already, or doubted for
     its numbering; numbered right, no such reason."""
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import load_bundle
 
     if not (REGISTRY / "active").exists():
         pytest.skip("no shipped registry in this checkout")

@@ -8,7 +8,8 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 from rotordiag.models.config import TrainConfig
-from rotordiag.models.predict import ModelBundle, diagnose, format_verdict
+from rotordiag.models.pipeline import diagnose
+from rotordiag.models.predict import ModelBundle, format_verdict
 from tests.models_synthetic import FEATURE_NAMES, make_table
 
 

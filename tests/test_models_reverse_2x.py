@@ -38,7 +38,7 @@ def test_a_backward_2x_at_the_coupling_makes_a_misalignment_call_uncertain():
     """The default plant (Δ 0.3) is a confident misalignment call with a forward coupling 2X; with a 2X of 12 µm
     whirling backward added at bearings 2 and 3 (a phase of its own on each probe's cable reads so) it is still
     called misaligned, uncertain with ``reverse_2x``; the same 2X whirling forward adds no such reason."""
-    from rotordiag.models.diagnosis import diagnose_recording
+    from rotordiag.models.pipeline import diagnose_recording
     from rotordiag.models.predict import load_bundle
     from tests.service_util import simulated_channels
 

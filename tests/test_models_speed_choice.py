@@ -1,18 +1,17 @@
-"""A doubtful estimated speed judged by the model (models.speed_choice; issue 15, item 6).
+"""A doubtful estimated speed judged by the model (models.checks.speed_choice; issue 15, item 6).
 
-The choice's logic is tested with a stand-in for ``diagnose`` that calls a recording out of distribution
-at every speed but the one it is told is the machine's; the verdict's honesty (``speed_ambiguous``, never
-``confident``) with the shipped model's own ``diagnose``.
+The choice's logic is tested with a stand-in for the model's judgement that calls a recording out of distribution
+at every speed but the one it is told is the machine's; the pipeline's cost (features once per speed hypothesis)
+and the verdict's honesty (``speed_ambiguous``, never ``confident``) with the shipped model.
 """
 from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
-from types import SimpleNamespace
 
 import pytest
 
-import rotordiag.models.speed_choice as sc
+import rotordiag.models.checks.speed_choice as sc
 from rotordiag.features import Note, extract_features, speed_alternatives_rpm, speed_in_doubt
 
 from .test_features_speed import _whip_recording
@@ -33,16 +32,16 @@ def whip():
 
 
 def _judge(in_family_rpm: float | None, *, score_in: float = 0.6, score_out: float = 2.0):
-    """A stand-in for ``models.predict.diagnose``: in distribution (score ``score_in``) only within 0.5 % of
-    ``in_family_rpm``; records each speed it was asked about."""
+    """A stand-in for the model's judgement (``models.checks.speed_choice.Judge``): in distribution (score
+    ``score_in``) only within 0.5 % of ``in_family_rpm``; records each speed it was asked about."""
     asked: list[float] = []
 
-    def diagnose(bundle, fr, *, clearance_um=None, top_k=5):
-        asked.append(fr.speed_rpm)
-        inside = in_family_rpm is not None and abs(fr.speed_rpm / in_family_rpm - 1) <= 5e-3
-        return SimpleNamespace(ood=not inside, ood_score=score_in if inside else score_out, speed_rpm=fr.speed_rpm)
+    def judge(rpm):
+        asked.append(rpm)
+        inside = in_family_rpm is not None and abs(rpm / in_family_rpm - 1) <= 5e-3
+        return (score_in if inside else score_out), not inside
 
-    return diagnose, asked
+    return judge, asked
 
 
 def test_alternatives_hold_the_running_speed_and_the_estimates_double_and_half(whip):
@@ -82,72 +81,100 @@ def test_features_at_a_speed_estimated_elsewhere(whip):
         extract_features(rec, speed_estimate_rpm=-1.0)
 
 
-def test_an_out_of_distribution_verdict_at_a_doubtful_estimate_moves_to_the_in_family_reading(whip, monkeypatch):
+def test_an_out_of_distribution_verdict_at_a_doubtful_estimate_moves_to_the_in_family_reading(whip):
     rec, fr = whip
-    diagnose, asked = _judge(TRUE_RPM)
-    monkeypatch.setattr(sc, "diagnose", diagnose)
-    v, fr2, choice = sc.choose_speed(None, rec, fr, diagnose(None, fr))
-    assert fr2.speed_rpm == pytest.approx(TRUE_RPM, rel=5e-3) and v.speed_rpm == fr2.speed_rpm
-    assert fr2.speed_source == "estimated"
-    chosen = fr2.warnings[0]
+    judge, asked = _judge(TRUE_RPM)
+    choice = sc.choose_speed(rec, fr, 2.0, True, judge)
+    assert choice is not None and choice.chosen_rpm == pytest.approx(TRUE_RPM, rel=5e-3)
+    assert choice.chosen_ood_score == 0.6 and choice.estimate_ood_score == 2.0
+    assert choice.estimate_rpm == fr.speed_rpm and len(choice.tried) == len(speed_alternatives_rpm(rec, fr.speed_rpm))
+    assert asked == [t[0] for t in choice.tried]                          # each reading judged once
+    notes = sc.chosen_speed_notes(fr, choice)
+    chosen = notes[0]
     assert chosen.code == "speed_chosen_by_model" and speed_in_doubt(chosen)
     assert chosen.values["estimate_rpm"] == fr.speed_rpm and chosen.values["speed_rpm"] == choice.chosen_rpm
-    assert chosen.values["n_tried"] == len(choice.tried)
-    assert choice is not None and choice.chosen_rpm == pytest.approx(TRUE_RPM, rel=5e-3)
-    assert choice.estimate_rpm == fr.speed_rpm and len(choice.tried) == len(speed_alternatives_rpm(rec, fr.speed_rpm))
+    assert chosen.values["n_tried"] == len(choice.tried) and chosen.values["chosen_ood"] == 0.6
     # the estimator's own doubt is kept, marked as about the estimate
-    kept = [w for w in fr2.warnings if w.code == "speed_doubt_at_estimate"]
+    kept = [w for w in notes if w.code == "speed_doubt_at_estimate"]
     assert kept and [w.values["note"] for w in kept] == [w for w in fr.warnings if speed_in_doubt(w)]
     assert all(w.values["estimate_rpm"] == fr.speed_rpm for w in kept)
 
 
 @pytest.mark.parametrize("case", ["in distribution", "every reading out", "gain too small", "speed given"])
-def test_the_estimate_stays_when_there_is_no_case_for_another_reading(whip, monkeypatch, case):
+def test_the_estimate_stays_when_there_is_no_case_for_another_reading(whip, case):
     rec, fr = whip
+    estimate_score, ood = 2.0, True
     if case == "in distribution":                   # the verdict at the estimate is in family: nothing is tried
-        diagnose, asked = _judge(fr.speed_rpm)
+        judge, asked = _judge(fr.speed_rpm)
+        estimate_score, ood = 0.6, False
     elif case == "every reading out":               # another design: out of distribution at every speed
-        diagnose, asked = _judge(None)
+        judge, asked = _judge(None)
     elif case == "gain too small":                  # in family elsewhere, but hardly better than the estimate
-        diagnose, asked = _judge(TRUE_RPM, score_in=0.95, score_out=1.0)
+        judge, asked = _judge(TRUE_RPM, score_in=0.95, score_out=1.0)
+        estimate_score = 1.0
     else:
         rec = replace(rec, speed_rpm=1230.0)
         fr = extract_features(rec)
-        diagnose, asked = _judge(TRUE_RPM)
-    monkeypatch.setattr(sc, "diagnose", diagnose)
-    v0 = diagnose(None, fr)
-    v, fr2, choice = sc.choose_speed(None, rec, fr, v0)
-    assert v is v0 and fr2 is fr
+        judge, asked = _judge(TRUE_RPM)
+    choice = sc.choose_speed(rec, fr, estimate_score, ood, judge)
     if case in ("in distribution", "speed given"):
-        assert choice is None and asked == [fr.speed_rpm]
+        assert choice is None and asked == []
     else:
         assert choice is not None and choice.chosen_rpm is None and len(choice.tried) >= 4
 
 
-def test_the_verdict_at_a_chosen_speed_is_never_confident(whip, monkeypatch):
-    """The features the choice hands on carry the doubt: the shipped model's own ``diagnose`` gives the
-    ``speed_ambiguous`` reason, so the verdict is at best ``uncertain``."""
-    from rotordiag.models.predict import diagnose as real_diagnose
+def _count_extractions(monkeypatch):
+    """Wrap the pipeline's ``extract_features``; returns the list of speeds it was called at."""
+    from rotordiag.models import pipeline
+
+    calls: list[float | None] = []
+    real = pipeline.extract_features
+
+    def counted(recording, **kw):
+        calls.append(kw.get("speed_estimate_rpm"))
+        return real(recording, **kw)
+
+    monkeypatch.setattr(pipeline, "extract_features", counted)
+    return calls
+
+
+def test_the_pipeline_extracts_features_once_per_speed_hypothesis(whip, monkeypatch):
+    """Every reading the speed choice judges is extracted once, the chosen one not again (its notes are changed,
+    ``features.with_speed_notes``), and the verdict at it is never confident (``speed_ambiguous``)."""
+    from rotordiag.models import pipeline
     from rotordiag.models.predict import load_bundle
 
     rec, fr = whip
-    fake, _ = _judge(TRUE_RPM)
-    monkeypatch.setattr(sc, "diagnose", fake)
-    _, fr2, _ = sc.choose_speed(None, rec, fr, fake(None, fr))
-    v = real_diagnose(load_bundle(REGISTRY), fr2)
-    assert v.speed_rpm == pytest.approx(TRUE_RPM, rel=5e-3) and v.speed_source == "estimated"
+    alts = speed_alternatives_rpm(rec, fr.speed_rpm)
+    pick = min(alts, key=lambda a: abs(a / TRUE_RPM - 1))
+    judged: list[tuple[float, bool] | None] = []
+
+    def choose(recording, fr_, ood_score, ood, judge):    # the model's judgement asked at every reading
+        for rpm in alts:
+            judged.append(judge(rpm))
+        return sc.SpeedChoice(fr_.speed_rpm, 2.0, tuple((a, 0.5, False) for a in alts), pick, 0.5)
+
+    monkeypatch.setattr(pipeline, "choose_speed", choose)
+    calls = _count_extractions(monkeypatch)
+    v, fr2 = pipeline.diagnose_recording(load_bundle(REGISTRY), rec)
+    assert sorted(calls, key=str) == sorted([None, *alts], key=str)         # once per hypothesis, never more
+    assert all(j is not None for j in judged)
+    assert fr2.speed_rpm == pytest.approx(pick) and v.speed_rpm == pytest.approx(pick)
+    assert fr2.warnings[0].code == "speed_chosen_by_model" and v.speed_source == "estimated"
     assert "speed_ambiguous" in [r["code"] for r in v.reasons] and v.status != "confident"
 
 
-def test_diagnose_recording_is_extract_diagnose_and_choose(whip, monkeypatch):
-    from rotordiag.models import diagnosis
+def test_given_features_are_not_extracted_again(whip, monkeypatch):
+    """Features handed in (the service checks them before the verdict) are the estimate's: no extraction at all
+    when the speed is not in doubt out of distribution."""
+    from rotordiag.models import pipeline
+    from rotordiag.models.predict import load_bundle
 
     rec, fr = whip
-    diagnose, _ = _judge(TRUE_RPM)
-    monkeypatch.setattr(sc, "diagnose", diagnose)
-    monkeypatch.setattr(diagnosis, "diagnose", diagnose)
-    v, fr2 = diagnosis.diagnose_recording(None, rec)
-    assert fr2.speed_rpm == pytest.approx(TRUE_RPM, rel=5e-3) and v.speed_rpm == fr2.speed_rpm
+    monkeypatch.setattr(pipeline, "choose_speed", lambda *a: None)
+    calls = _count_extractions(monkeypatch)
+    v, fr2 = pipeline.diagnose_recording(load_bundle(REGISTRY), rec, fr=fr)
+    assert calls == [] and fr2 is fr and v.speed_rpm == fr.speed_rpm
 
 
 def test_speed_notes_changed_without_extracting_again_give_the_extracted_result(whip):

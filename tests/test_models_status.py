@@ -105,7 +105,8 @@ def test_every_speed_doubt_the_extractor_words_makes_the_verdict_uncertain():
 def test_shipped_model_never_gives_a_severity_to_an_impossible_recording():
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, format_verdict
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import format_verdict
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()
@@ -182,7 +183,8 @@ def test_shipped_model_does_not_rule_out_an_offset_without_the_clearance():
     without it the same recording is called aligned but not confidently, and the reason says what to give."""
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, feature_vector
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import feature_vector
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()
@@ -288,7 +290,7 @@ def test_shipped_model_flags_one_bearing_scaled_down_and_names_it():
     training range of 0.04–1280 µm — plants of the family vibrate that little there.)"""
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose
+    from rotordiag.models.pipeline import diagnose
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()
@@ -318,7 +320,7 @@ def test_shipped_verdict_checks_the_regressors_own_interval():
     from rotordiag.features import extract_features
     from rotordiag.features.examples import example_path
     from rotordiag.features.reader import ReadOptions, read_recording
-    from rotordiag.models.predict import diagnose
+    from rotordiag.models.pipeline import diagnose
     from rotordiag.models.status import interval_far_bands
 
     bundle = _shipped_bundle()
@@ -357,21 +359,42 @@ def test_a_misalignment_call_resting_on_the_static_offset_across_the_coupling_is
     moderate, confident (15 of 48 upward, 27 of 48 sideways). A misalignment call that falls to a lower band with
     the journals at one position is uncertain and says what to compare with; one that stands, or an aligned
     call, is not touched."""
+    from rotordiag.models.checks import CheckContext
+    from rotordiag.models.checks.one_position import one_position_check
+
     names = ["b2_1x_major_um_pp", "b2_x_2x_1x_ratio", "b2_centre_ecc_per_c", "b2_centre_x_per_c", "b2_centre_y_per_c",
-             "b3_centre_x_per_c", "b3_centre_y_per_c"]
-    kw = dict(names=names, row=np.array([30.0, 0.6, 0.4, 0.1, -0.39, 0.25, -0.19]),
-              feature_median=np.array([30.0, 0.5, 0.3, 0.1, -0.4, 0.1, -0.4]),
+             "b3_centre_x_per_c", "b3_centre_y_per_c", "b3_centre_ecc_per_c"]
+    row = np.array([30.0, 0.6, 0.4, 0.1, -0.39, 0.25, -0.19, 0.31])
+    kw = dict(names=names, row=row, feature_median=np.array([30.0, 0.5, 0.3, 0.1, -0.4, 0.1, -0.4, 0.4]),
               misaligned_call=True, probabilities=[0.05, 0.05, 0.8, 0.1], call_index=2)
-    status, reasons = _assess(one_position_call=0, **kw)
+    bands = ["aligned", "slight", "moderate", "severe"]
+    asked = []
+
+    def check(at_one_position, call="moderate", names=names, row=row):
+        """The check with a stand-in classifier that calls the journals-at-one-position rows ``at_one_position``."""
+        def classes_of(rows):
+            asked.append(rows)
+            return [at_one_position] * len(rows)
+        return one_position_check(CheckContext(
+            fr=None, names=names, row=row, call=call, aligned_band="aligned", ood_score=0.3, ood=False,
+            classes_of=classes_of, ood_of=lambda rows: pytest.fail("no OOD asked"),
+            score=lambda fr: pytest.fail("no second reading asked"), band_names=bands))
+
+    found = check("aligned")
+    assert [r.code for r in found] == ["static_offset_only"] and asked[-1].shape == (2, len(names))
+    status, reasons = _assess(static_offset=found, **kw)
     assert status == UNCERTAIN and [r.code for r in reasons] == ["static_offset_only"]
     assert "baseline positions" in reasons[0].message and "own load" in reasons[0].message
     assert "sits 0.25 c from bearing 2's: x +0.15 c, y +0.20 c" in reasons[0].message       # (0.15, 0.20): 0.25 c
-    status, reasons = _assess(one_position_call=1, band_names=["aligned", "slight", "moderate", "severe"], **kw)
-    assert status == UNCERTAIN and [r.code for r in reasons] == ["static_offset_only"]
-    assert "severity rests on" in reasons[0].message and "call it slight" in reasons[0].message
-    assert _assess(one_position_call=2, **kw) == ("confident", [])
-    assert _assess(one_position_call=None, **kw) == ("confident", [])
-    assert _assess(one_position_call=0) == ("confident", [])          # an aligned call: the rule does not apply
+    found = check("slight")
+    assert [r.code for r in found] == ["static_offset_only"]
+    assert "severity rests on" in found[0].message and "call it slight" in found[0].message
+    assert check("moderate") == [] and check("severe") == []           # the call stands (or rises)
+    n_asked = len(asked)
+    assert check("aligned", call="aligned") == []                      # an aligned call: the rule does not apply
+    assert check("aligned", names=names[:5], row=row[:5]) == []         # bearing 3's centreline not measured
+    assert len(asked) == n_asked                                        # neither asked the classifier
+    assert _assess(**kw) == ("confident", [])
 
 
 def test_shipped_model_does_not_confidently_alarm_on_coupling_journals_apart():
@@ -379,7 +402,7 @@ def test_shipped_model_does_not_confidently_alarm_on_coupling_journals_apart():
     lighter load) or 0.25 c aside: no confident misalignment verdict; the unshifted recording is untouched."""
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose
+    from rotordiag.models.pipeline import diagnose
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()
@@ -452,7 +475,8 @@ def test_a_stated_clearance_without_the_centreline_is_answered_by_the_pair_that_
     called 71 % of aligned machines misaligned on such recordings; the no-clearance pair answers them."""
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, feature_vector
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import feature_vector
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()
@@ -500,7 +524,7 @@ def test_every_journal_near_its_bearing_centre_is_not_confident():
 def test_shipped_model_is_not_confident_on_numbers_ten_times_too_small():
 
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose
+    from rotordiag.models.pipeline import diagnose
     from tests.service_util import simulated_channels
 
     bundle = _shipped_bundle()

@@ -76,7 +76,8 @@ def test_every_warning_of_a_produced_verdict_is_a_catalogue_note():
     stated speed off the signal, too few bearings for the model): every warning of the verdict is a Note of a
     catalogue code — a plain string, or a code the catalogue lacks, fails here."""
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import load_bundle
     from rotordiag.models.registry import shipped_registry_dir
     from rotordiag.simulator import Plant, simulate
 
@@ -116,7 +117,8 @@ def test_mil_output_is_rendered_from_typed_values_not_parsed():
     import rotordiag.models.output_units as ou
     from rotordiag.core.notes import Measured
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose, load_bundle
+    from rotordiag.models.pipeline import diagnose
+    from rotordiag.models.predict import load_bundle
     from rotordiag.models.registry import shipped_registry_dir
     from rotordiag.simulator import Plant, simulate
 

@@ -69,9 +69,9 @@ def _check_verdict(v, active):
 
 
 def test_json_verdict_matches_the_library(client, rec):
-    """The service returns exactly what models.predict.diagnose says for the same recording."""
+    """The service returns exactly what models.pipeline.diagnose says for the same recording."""
     from rotordiag.features import ProbeChannel, Recording, extract_features
-    from rotordiag.models.predict import diagnose
+    from rotordiag.models.pipeline import diagnose
 
     fs, channels = rec
     r = client.post("/diagnose", json=diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0))
@@ -90,6 +90,8 @@ def test_json_verdict_matches_the_library(client, rec):
     assert v["severity"] == direct.severity
     assert v["probabilities"] == pytest.approx(direct.probabilities, rel=1e-12)
     assert v["misalignment"] == pytest.approx(direct.misalignment, rel=1e-12)
+    # every warning of the answer with its catalogue code (issue 43, item 2), as the library gives them
+    assert v["warning_codes"] == [w.code for w in direct.warnings] and len(v["warning_codes"]) == len(v["warnings"])
 
 
 def test_binary_npy_and_json_agree(client, rec):

@@ -249,11 +249,11 @@ def test_spectrum_helpers_and_bin_reduction():
 
 
 def test_pictures_are_drawn_at_the_verdicts_speed(client, monkeypatch):
-    """When the verdict's speed is not the features package's estimate (models.speed_choice chose another
+    """When the verdict's speed is not the features package's estimate (models.checks.speed_choice chose another
     reading of a doubtful estimate), the page's pictures mark the orders at the verdict's speed."""
-    import rotordiag.models.diagnosis as dg
-    import rotordiag.models.speed_choice as sc
-    from rotordiag.features import Note, extract_features
+    import rotordiag.models.checks.speed_choice as sc
+    import rotordiag.models.pipeline as pl
+    from rotordiag.features import extract_features
 
     from .test_features_speed import _whip_recording
 
@@ -261,11 +261,10 @@ def test_pictures_are_drawn_at_the_verdicts_speed(client, monkeypatch):
     assert extract_features(rec).speed_rpm == pytest.approx(1230.0, rel=5e-3)
     chosen = 3074.0
 
-    def choose(bundle, recording, fr, verdict, **kw):       # stands in for the model's judgement
-        fr2 = extract_features(recording, speed_estimate_rpm=chosen, speed_notes=[Note("speed_estimate_ambiguous", detail="test")])
-        return sc.diagnose(bundle, fr2, clearance_um=kw.get("clearance_um")), fr2, None
+    def choose(recording, fr, ood_score, ood, judge):      # stands in for the model's judgement
+        return sc.SpeedChoice(fr.speed_rpm, 2.0, ((chosen, 0.5, False),), chosen, 0.5)
 
-    monkeypatch.setattr(dg, "choose_speed", choose)
+    monkeypatch.setattr(pl, "choose_speed", choose)
     body = {"sample_rate_hz": rec.sample_rate_hz,
             "channels": [{"bearing": c.bearing, "angle_deg": c.angle_deg, "units": c.units, "data": c.data.tolist()}
                          for c in rec.channels]}

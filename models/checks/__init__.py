@@ -1,20 +1,81 @@
-"""The checks that doubt a verdict, one module each: each gives reasons (``models.status.Reason``) from a recording's
-features, its verdict and what else it needs, handed in (a :data:`Scorer` for a second reading), never the predictor.
+"""The checks that doubt a verdict, one module each, every one with the same signature: a :class:`CheckContext` in,
+a list of ``models.status.Reason`` out (:data:`Check`).
 
-Why a folder: the verdict's doubts are read in one place, and a check cannot reach back into ``models.predict``
-(``tests/test_architecture.py`` enforces it). ``bearing_sets`` (the probe set the model reads), ``acquisitions``
-(bearings 2 and 3 recorded apart), ``numbering`` (bearings numbered from the other end), ``reverse_2x`` (a coupling
-2X whirling backward), ``common_mode`` (a 1X / 2X common to every probe), ``clearance_check`` (a diametral
-clearance). What each was measured to do: docs/checks.md.
+Why a folder: the verdict's doubts are read in one place, and a check cannot reach back into ``models.predict`` or
+``models.pipeline`` (``tests/test_architecture.py`` enforces it): what a check needs of the model — the classifier's
+class of other rows, their OOD score, a second reading of other features — is handed in, in the context, as
+callables bound to the active model. ``bearing_sets`` (the probe set the model reads), ``acquisitions`` (bearings 2
+and 3 recorded apart), ``reverse_2x`` (a coupling 2X whirling backward), ``numbering`` (bearings numbered from the
+other end), ``one_position`` (a call resting on the static offset between the coupling journals), ``common_mode`` (a
+1X / 2X common to every probe), ``clearance_check`` (a diametral clearance); ``speed_choice`` chooses among the
+speed hypotheses a doubtful estimate allows (its own signature: it picks a reading, it gives no reason). The
+pipeline that runs them in order: ``models.pipeline``; what each was measured to do: docs/checks.md.
 """
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
 
-from rotordiag.features import FeatureResult
+import numpy as np
 
-__all__ = ["Scorer"]
+from rotordiag.features import FeatureResult, Recording
+
+from ..status import Reason
+
+__all__ = ["Scorer", "CheckContext", "Check"]
 
 #: a recording's features to (OOD score, class name) with the active model: ``models.predict.ood_score_and_class``
 #: bound to its bundle
 Scorer = Callable[[FeatureResult], "tuple[float, str]"]
+
+
+@dataclass(frozen=True)
+class CheckContext:
+    """What a check may read of one recording and the active model's reading of it.
+
+    Attributes
+    ----------
+    fr : features.FeatureResult
+        The recording's features at the speed the verdict is given at.
+    names, row
+        The model's feature names and this recording's row over them (bearings outside the answering probe set
+        left out).
+    call, aligned_band : str
+        The classifier's class of ``row``, and the name of the model's aligned (lowest) band.
+    band_names : sequence of str
+        The classifier's classes in band order (what ``classes_of`` answers).
+    ood_score : float
+        The row's kNN OOD score; ``ood``: above 1, or a feature outside the training range.
+    classes_of, ood_of : callable
+        Rows (n, n_features) to the classifier's class names / their OOD scores, with the active model.
+    score : Scorer
+        Another feature result to (OOD score, class name) with the active model.
+    plan : models.checks.bearing_sets.BearingPlan, optional
+        How the recording's bearings are read (None: every bearing).
+    recording : features.Recording, optional
+        The recording itself; None when the verdict is made from given features (the checks that read the
+        recording again then find nothing).
+    status : str, optional
+        The verdict's status before the doubts that read the recording again (``common_mode``,
+        ``clearance_check``); None until it is assessed.
+    """
+
+    fr: FeatureResult
+    names: Sequence[str]
+    row: np.ndarray
+    call: str
+    aligned_band: str
+    ood_score: float
+    ood: bool
+    classes_of: Callable[[np.ndarray], list[str]]
+    ood_of: Callable[[np.ndarray], np.ndarray]
+    score: Scorer
+    band_names: Sequence[str] = ()
+    plan: Any = None
+    recording: Recording | None = None
+    status: str | None = None
+
+
+#: one check: a context in, the reasons it finds out (none: nothing to doubt)
+Check = Callable[[CheckContext], list[Reason]]

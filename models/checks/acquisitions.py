@@ -17,8 +17,9 @@ from rotordiag.core.conventions import COUPLING_BEARINGS
 from rotordiag.features import format_acquisitions, split_pairs
 
 from ..status import UNCERTAIN, Reason
+from . import CheckContext
 
-__all__ = ["COUPLING_PHASES_DEG", "coupling_split", "coupling_phase_rows", "acquisitions_reason"]
+__all__ = ["COUPLING_PHASES_DEG", "coupling_split", "coupling_phase_rows", "acquisitions_reason", "acquisitions_check"]
 
 #: the phases across the coupling the model reads a recording at when it was not measured: in phase, anti-phase
 COUPLING_PHASES_DEG = (0.0, 180.0)
@@ -62,3 +63,13 @@ def acquisitions_reason(feature_result: Any, readings: Sequence[str] | None = No
                   f"({format_acquisitions(feature_result.acquisitions)}): the phase across the coupling is not "
                   f"measured, and the model tells aligned from slight partly by it{said}; record bearings {i} and {j} "
                   f"in one acquisition (or trend this machine's 2X/1X) before acting")
+
+
+def acquisitions_check(ctx: CheckContext) -> list[Reason]:
+    """``separate_acquisitions`` with the model's class at each phase across the coupling (:func:`acquisitions_reason`)
+    when bearings 2 and 3 were recorded apart, else none."""
+    if not coupling_split(ctx.fr):
+        return []
+    rows = coupling_phase_rows(ctx.names, ctx.row)
+    reason = acquisitions_reason(ctx.fr, None if rows is None else ctx.classes_of(rows))
+    return [reason] if reason is not None else []

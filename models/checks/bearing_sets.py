@@ -24,9 +24,10 @@ from rotordiag.core.notes import Note
 
 from .._patterns import bearing_feature
 from ..status import INCONCLUSIVE, UNCERTAIN, Reason
+from . import CheckContext
 
 __all__ = ["CAPABILITY_PATH", "MAX_FALSE_ALARM", "MAX_FALSE_ALARM_ANY", "MIN_MACRO_F1", "BearingPlan", "answering_set", "bearing_plan",
-           "set_key", "trained_sets", "load_capability", "leave_out_bearings", "probe_sets"]
+           "set_key", "trained_sets", "load_capability", "leave_out_bearings", "probe_sets", "bearing_set_check"]
 
 #: held-out figures of the shipped model per probe set (``benchmarks/bench_bearing_sets.py --write``)
 CAPABILITY_PATH = Path(__file__).resolve().parent.parent / "default" / "bearing_sets.json"
@@ -223,3 +224,8 @@ def probe_sets(card: Mapping[str, Any] | None) -> list[dict] | None:
         out.append({"bearings": list(s), "verdict": verdict,
                     **({"macro_f1": f["macro_f1"], "false_alarm": f["false_alarm"], "n": f["n"]} if f else {})})
     return out
+
+
+def bearing_set_check(ctx: CheckContext) -> list[Reason]:
+    """The probe set's reasons (:meth:`BearingPlan.reasons`) of the context's plan; none without a plan."""
+    return ctx.plan.reasons() if ctx.plan is not None else []

@@ -9,15 +9,14 @@ verdict stays the one at the clearance given. The measurements behind it: docs/c
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
 
 from rotordiag.core.notes import Length, Measured
 from rotordiag.features import FeatureResult, Recording, with_scale
 
 from ..status import CONFIDENT, UNCERTAIN, Reason
-from . import Scorer
+from . import CheckContext, Scorer
 
-__all__ = ["DIAMETRAL_OOD_RATIO", "clearance_reason"]
+__all__ = ["DIAMETRAL_OOD_RATIO", "clearance_reason", "clearance_check"]
 
 #: the OOD score at half the stated clearance at or below this fraction of the stated clearance's →
 #: ``clearance_diametral``: half the clearance is at least as like the training family (module docstring). At 0.95
@@ -26,7 +25,16 @@ __all__ = ["DIAMETRAL_OOD_RATIO", "clearance_reason"]
 DIAMETRAL_OOD_RATIO = 1.0
 
 
-def clearance_reason(score: Scorer, recording: Recording, fr: FeatureResult, verdict: Any) -> Reason | None:
+def clearance_check(ctx: CheckContext) -> list[Reason]:
+    """:func:`clearance_reason` of the context's recording, features, status before the doubts and OOD score."""
+    if ctx.recording is None:
+        return []
+    reason = clearance_reason(ctx.score, ctx.recording, ctx.fr, ctx.status, ctx.ood_score)
+    return [reason] if reason is not None else []
+
+
+def clearance_reason(score: Scorer, recording: Recording, fr: FeatureResult, status: str | None,
+                     ood_score: float) -> Reason | None:
     """``clearance_diametral`` when half the stated clearance makes a confident verdict's recording markedly more
     like the training family, else None.
 
@@ -39,15 +47,18 @@ def clearance_reason(score: Scorer, recording: Recording, fr: FeatureResult, ver
         The recording as sent; judged only when it states a clearance.
     fr : features.FeatureResult
         Its features (the speed the verdict was given at).
-    verdict : models.Verdict
+    status : str
+        The verdict's status (before this doubt); only a confident one is judged.
+    ood_score : float
+        The recording's own OOD score at the clearance given.
     """
-    if getattr(verdict, "status", None) != CONFIDENT or recording.clearance_um is None:
+    if status != CONFIDENT or recording.clearance_um is None:
         return None
     try:
         ood_half, class_half = score(with_scale(fr, clearance_factor=0.5))
     except ValueError:
         return None
-    ratio = ood_half / verdict.ood_score if verdict.ood_score > 0 else float("inf")
+    ratio = ood_half / ood_score if ood_score > 0 else float("inf")
     if not ratio <= DIAMETRAL_OOD_RATIO:
         return None
     stated = recording.clearance_um
@@ -58,6 +69,6 @@ def clearance_reason(score: Scorer, recording: Recording, fr: FeatureResult, ver
     return Reason(
         "clearance_diametral", UNCERTAIN,
         Measured.of("with half the stated clearance (", *said, ") the recording is markedly more like the machines "
-                    f"the model was trained on (OOD score {ood_half:.2f} against {verdict.ood_score:.2f}); there it "
+                    f"the model was trained on (OOD score {ood_half:.2f} against {ood_score:.2f}); there it "
                     f"would be {class_half!r}. clearance_um is the radial clearance c, half the diametral one (bore "
                     "minus journal): check which one was given"))

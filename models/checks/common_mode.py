@@ -9,8 +9,6 @@ The measurements behind it: docs/checks.md.
 """
 from __future__ import annotations
 
-from typing import Any
-
 from rotordiag.core.notes import Length, Measured
 from rotordiag.features import (
     COMMON_MODE_NOTABLE_SHARE,
@@ -22,9 +20,9 @@ from rotordiag.features import (
 )
 
 from ..status import INCONCLUSIVE, UNCERTAIN, Reason
-from . import Scorer
+from . import CheckContext, Scorer
 
-__all__ = ["COMMON_MODE_DOUBT_SHARE", "common_mode_reason"]
+__all__ = ["COMMON_MODE_DOUBT_SHARE", "common_mode_reason", "common_mode_check"]
 
 #: a 1X or 2X whose common share (``features.common_mode``) reaches this is read again without its common part
 #: (``features.COMMON_MODE_NOTABLE_SHARE``: about one in-family recording in 1000); doubted only when the class changes
@@ -32,7 +30,16 @@ COMMON_MODE_DOUBT_SHARE = COMMON_MODE_NOTABLE_SHARE
 _ORDERS = (1, 2)
 
 
-def common_mode_reason(score: Scorer, recording: Recording, fr: FeatureResult, verdict: Any) -> Reason | None:
+def common_mode_check(ctx: CheckContext) -> list[Reason]:
+    """:func:`common_mode_reason` of the context's recording, features, status before the doubts and call."""
+    if ctx.recording is None:
+        return []
+    reason = common_mode_reason(ctx.score, ctx.recording, ctx.fr, ctx.status, ctx.call)
+    return [reason] if reason is not None else []
+
+
+def common_mode_reason(score: Scorer, recording: Recording, fr: FeatureResult, status: str | None,
+                       call: str | None) -> Reason | None:
     """``common_mode`` when the verdict's class changes with the common 1X / 2X removed, else None.
 
     Parameters
@@ -44,11 +51,13 @@ def common_mode_reason(score: Scorer, recording: Recording, fr: FeatureResult, v
         The recording as sent.
     fr : features.FeatureResult
         Its features (the speed the verdict was given at).
-    verdict : models.Verdict
-        Its verdict; an inconclusive one is not read again.
+    status : str
+        The verdict's status (before this doubt); an inconclusive one is not read again.
+    call : str
+        The classifier's class of the recording (``Verdict.model_severity``).
     """
     found = [cm for k in _ORDERS if (cm := common_mode(fr, k)) is not None and cm.share >= COMMON_MODE_DOUBT_SHARE]
-    if not found or verdict.status == INCONCLUSIVE or verdict.model_severity is None:
+    if not found or status == INCONCLUSIVE or call is None:
         return None
     try:
         clean = without_common_mode(recording, fr, found)
@@ -57,7 +66,7 @@ def common_mode_reason(score: Scorer, recording: Recording, fr: FeatureResult, v
         _, other = score(fr_clean)
     except ValueError:
         return None
-    if other == verdict.model_severity:
+    if other == call:
         return None
     dominant = [f.code for f in fr.sanity if f.code in ("common_mode_1x", "common_mode_2x")]
     what = [x for k, cm in enumerate(found)
@@ -69,6 +78,6 @@ def common_mode_reason(score: Scorer, recording: Recording, fr: FeatureResult, v
                     *what, "); a shaft's orbit differs from probe to probe and bearing to bearing, so that part is "
                     "likely electrical pickup (mains at the running frequency or twice it on a grid-synchronous "
                     "generator) or the probe mountings vibrating together. Without it the class is "
-                    f"{other!r}, not {verdict.model_severity!r}: check the probe cabling and grounding (a probe at a "
+                    f"{other!r}, not {call!r}: check the probe cabling and grounding (a probe at a "
                     "fixed target reads the pickup alone) before acting on this verdict"
                     + (f" ({' and '.join(dominant)}: that part dominates, so no severity is given)" if dominant else "")))

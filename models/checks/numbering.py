@@ -1,7 +1,7 @@
 """Bearings numbered from the wrong end, judged by the machine family the model knows.
 
 Bearing 1 is the generator's far end and 4 the exciter's; a plant numbering from the exciter end sends the train
-as 4-3-2-1 with no feature out of range. ``models.predict.diagnose`` scores a four-bearing, in-distribution
+as 4-3-2-1 with no feature out of range. :func:`numbering_check` scores a four-bearing, in-distribution
 recording once more with its feature row renumbered (:func:`mirrored_row`); when that OOD score is at or below
 :data:`NUMBERING_OOD_RATIO` times the recording's own, :func:`numbering_reason` gives ``bearing_numbering``
 (uncertain). The verdict stays the one of the numbering given. The measurements behind it: docs/checks.md.
@@ -15,10 +15,11 @@ import numpy as np
 
 from rotordiag.core.conventions import wrap_deg
 
-from .._patterns import bearing_feature
+from .._patterns import bearing_feature, name_index
 from ..status import UNCERTAIN, Reason
+from . import CheckContext
 
-__all__ = ["NUMBERING_OOD_RATIO", "mirrored_row", "numbering_reason", "has_every_bearing"]
+__all__ = ["NUMBERING_OOD_RATIO", "mirrored_row", "numbering_reason", "has_every_bearing", "numbering_check"]
 
 #: the other numbering's OOD score at or below this fraction of the recording's own → ``bearing_numbering``
 #: (correctly numbered clean base-set recordings, seed 815: the ratio's lowest value 0.963, 1st percentile 1.04)
@@ -28,7 +29,7 @@ _BEARINGS = (1, 2, 3, 4)
 
 def has_every_bearing(names: Sequence[str], row: np.ndarray) -> bool:
     """Whether the row carries the 1X of all four bearings (``b{n}_1x_major_um_pp``)."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     cols = [index.get(f"b{b}_1x_major_um_pp") for b in _BEARINGS]
     return all(j is not None and np.isfinite(row[j]) for j in cols)
 
@@ -88,3 +89,13 @@ def numbering_reason(ood_score: float, other_ood_score: float, call: str, other_
                   + (f"called {other_call} instead of {call}" if other_call != call else f"called {call} either way")
                   + "): check the numbering — bearing 1 is the generator's far end (the turbine side), "
                   "2 its coupling end, 3 the exciter's coupling end and 4 its far end")
+
+
+def numbering_check(ctx: CheckContext) -> list[Reason]:
+    """``bearing_numbering`` for an in-distribution four-bearing row that is markedly more like the training family
+    numbered from the other end: one more class and OOD pass, on the renumbered row (:func:`mirrored_row`)."""
+    if ctx.ood or not has_every_bearing(ctx.names, ctx.row):
+        return []
+    other = mirrored_row(ctx.names, ctx.row)[None, :]
+    reason = numbering_reason(ctx.ood_score, float(ctx.ood_of(other)[0]), ctx.call, ctx.classes_of(other)[0])
+    return [reason] if reason is not None else []

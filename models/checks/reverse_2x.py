@@ -14,9 +14,11 @@ import numpy as np
 
 from rotordiag.core.conventions import COUPLING_BEARINGS
 
+from .._patterns import name_index
 from ..status import UNCERTAIN, Reason
+from . import CheckContext
 
-__all__ = ["REVERSE_2X_MIN_RATIO", "REVERSE_2X_MIN_SHARE", "coupling_reverse_2x", "reverse_2x_reason"]
+__all__ = ["REVERSE_2X_MIN_RATIO", "REVERSE_2X_MIN_SHARE", "coupling_reverse_2x", "reverse_2x_reason", "reverse_2x_check"]
 
 #: a coupling bearing's 2X reverse/forward ratio from which a misalignment call is doubted (held-out plants' 99th
 #: percentile 1.6–1.9)
@@ -29,7 +31,7 @@ REVERSE_2X_MIN_SHARE = 0.5
 def coupling_reverse_2x(names: Sequence[str], row: np.ndarray) -> tuple[int, float] | None:
     """The coupling bearing whose sizeable 2X whirls backward the most and its reverse/forward ratio, when that
     ratio is at least :data:`REVERSE_2X_MIN_RATIO`; else None (also when the 2X is not measured)."""
-    index = {n: i for i, n in enumerate(names)}
+    index = name_index(names)
     major: dict[int, float] = {}
     ratio: dict[int, float] = {}
     for b in COUPLING_BEARINGS:
@@ -60,3 +62,9 @@ def reverse_2x_reason(names: Sequence[str], row: np.ndarray, misaligned_call: bo
                   "problem reads so; a strongly preloaded (flattened) orbit can too. Check the probe cabling and "
                   "grounding (a record with the unit off the grid shows pickup that stays), or compare with this "
                   "machine's baseline")
+
+
+def reverse_2x_check(ctx: CheckContext) -> list[Reason]:
+    """``reverse_2x`` (:func:`reverse_2x_reason`) for a misalignment call on a coupling 2X that whirls backward."""
+    reason = reverse_2x_reason(ctx.names, ctx.row, ctx.call != ctx.aligned_band)
+    return [reason] if reason is not None else []

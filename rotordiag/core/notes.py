@@ -136,7 +136,7 @@ class NoteInfo:
 
 _GIVE = "give speed_rpm, speed_range_rpm or keyphasor_times_s"
 _ENTRIES = (
-    # --- the running speed in doubt (features' speed estimate, models.speed_choice) ---
+    # --- the running speed in doubt (features' speed estimate, models.checks.speed_choice) ---
     NoteInfo("speed_estimate_ambiguous", DOUBT, "the running speed was estimated from the spectrum and another "
              "reading of it (a whirl, a sub-harmonic, a 2X) fits nearly as well", _GIVE,
              "speed estimate ambiguous: {detail}"),

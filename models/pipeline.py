@@ -1,0 +1,168 @@
+"""A recording to a verdict, in one function: :func:`diagnose_recording`.
+
+Every door (``POST /diagnose``, the web page, ``rotordiag diagnose``, the benchmarks, the robustness report) calls
+it with the active model (``models.predict.load_bundle``), so that the verdict, its speed and the features it was
+computed from agree wherever a recording is diagnosed. Its body shows the stages in order — read, sanity, features
+(once per speed hypothesis), model scores, checks, assess status, verdict — each done by its own module; the page
+that walks through them is docs/pipeline.md. :func:`diagnose` is the same pipeline from features already extracted
+(no recording: the checks that read the recording again find nothing).
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+from functools import partial
+from typing import Any
+
+import numpy as np
+
+from rotordiag.features import FeatureResult, Recording, extract_features, with_speed_notes
+
+from .checks import Check, CheckContext
+from .checks.acquisitions import acquisitions_check
+from .checks.bearing_sets import bearing_set_check
+from .checks.clearance_check import clearance_check
+from .checks.common_mode import common_mode_check
+from .checks.numbering import numbering_check
+from .checks.one_position import one_position_check
+from .checks.reverse_2x import reverse_2x_check
+from .checks.speed_choice import choose_speed, chosen_speed_notes
+from .predict import (
+    ModelBundle,
+    ModelScores,
+    Verdict,
+    model_scores,
+    ood_score_and_class,
+    predictor_threads,
+    verdict_of,
+)
+from .status import DEFAULT_POLICY, ModelCall, Reason, RecordingChecks, assess, consistent_estimate, policy_of
+
+__all__ = ["diagnose_recording", "diagnose", "SCORE_CHECKS", "DOUBT_CHECKS"]
+
+#: the checks read beside the model's scores of the features the verdict is given at, in the order the answer lists
+#: their reasons (the probe set's first; the doubts below come right after it)
+SCORE_CHECKS: tuple[Check, ...] = (acquisitions_check, reverse_2x_check, numbering_check)
+#: the checks that read the recording again, given the status found without them (``CheckContext.status``)
+DOUBT_CHECKS: tuple[Check, ...] = (common_mode_check, clearance_check)
+
+
+def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um: float | None = None,
+                       top_k: int = 5, fr: FeatureResult | None = None) -> tuple[Verdict, FeatureResult]:
+    """The verdict of one recording with the active model, and the features it was given from.
+
+    Parameters
+    ----------
+    bundle : models.predict.ModelBundle or fitted MisalignmentModel
+    recording : features.Recording or None
+        The recording, read by a reader (``features.reader``, ``service.parsing``). None with ``fr``: the verdict
+        of given features (no speed choice, no doubt that reads the recording again).
+    clearance_um : float, optional
+        Radial bearing clearance c (µm): gives the offset δ = Δ·c. Defaults to the features' ``clearance_um``.
+    top_k : int
+        Number of contributing features reported.
+    fr : features.FeatureResult, optional
+        The recording's features when the caller has them already (extracted at the recording's own speed).
+
+    Returns
+    -------
+    verdict, feature_result
+
+    Raises
+    ------
+    ValueError
+        With a message for the user: a recording the features refuse (``features.extract_features``), features
+        none of which the model reads, a clearance that is not a positive number.
+    """
+    model = bundle.model if isinstance(bundle, ModelBundle) else bundle
+    policy = policy_of(bundle.card) if isinstance(bundle, ModelBundle) else DEFAULT_POLICY
+    with predictor_threads(model):
+        # 1. read: the caller's reader made ``recording`` (units to µm, probes, bearings, keyphasor, clearance)
+        # 2. sanity and 3. features, once per speed hypothesis (None: the recording's own reading of its speed);
+        #    the physics sanity findings are made with the features (``FeatureResult.sanity``)
+        features: dict[float | None, FeatureResult] = {} if fr is None else {None: fr}
+
+        def features_at(rpm: float | None) -> FeatureResult:
+            if rpm not in features:
+                assert recording is not None
+                features[rpm] = extract_features(recording, speed_estimate_rpm=rpm)
+            return features[rpm]
+
+        fr = features_at(None)
+        if clearance_um is None:
+            clearance_um = getattr(fr, "clearance_um", None)
+        if clearance_um is not None and not (np.isfinite(clearance_um) and clearance_um > 0):
+            raise ValueError(f"clearance_um: must be a positive number of micrometres, got {clearance_um!r}")
+        # 4. model scores, once per speed hypothesis
+        scored: dict[float | None, ModelScores] = {}
+
+        def scores_at(rpm: float | None) -> ModelScores:
+            if rpm not in scored:
+                scored[rpm] = model_scores(bundle, features_at(rpm))
+            return scored[rpm]
+
+        def judge(rpm: float) -> tuple[float, bool] | None:
+            try:
+                features_at(rpm)
+            except ValueError:                  # too few revolutions or samples per revolution at that speed
+                return None
+            at = scores_at(rpm)
+            return at.ood_score, at.ood
+
+        # 5. checks — the speed: a doubtful estimate out of distribution judged at the other speeds it allows
+        scores = scores_at(None)
+        speed = choose_speed(recording, fr, scores.ood_score, scores.ood, judge) if recording is not None else None
+        if speed is not None and speed.chosen_rpm is not None:
+            notes = chosen_speed_notes(fr, speed)
+            chosen = features_at(speed.chosen_rpm)
+            noted = with_speed_notes(chosen, notes)      # the chosen reading with its speed notes, not extracted again
+            if noted is not None:               # its scores: the row is the same, the leading warnings changed
+                fr, at = noted, scores_at(speed.chosen_rpm)
+                scores = replace(at, warnings=[*noted.warnings, *at.warnings[len(chosen.warnings):]])
+            else:                               # read by take: extracted once more, with its notes
+                assert recording is not None
+                fr = extract_features(recording, speed_estimate_rpm=speed.chosen_rpm, speed_notes=notes)
+                scores = model_scores(bundle, fr)
+        #    — beside the scores: the probe set, separate acquisitions, a reverse coupling 2X, the numbering
+        ctx = CheckContext(fr=fr, names=scores.names, row=scores.row, call=scores.call,
+                           aligned_band=str(model.bands_.names[0]), ood_score=scores.ood_score, ood=scores.ood,
+                           classes_of=scores.classes_of, ood_of=scores.ood_of, score=partial(ood_score_and_class, bundle),
+                           band_names=[str(c) for c in model.classes_], plan=scores.plan, recording=recording)
+        probe_set = bearing_set_check(ctx)
+        beside = [r for check in SCORE_CHECKS for r in check(ctx)]
+        # 6. assess status: every reason together, by the decision policy stored with the model
+        call = _model_call(scores, one_position_check(ctx))
+        status, reasons = assess(_recording_checks(scores, fr, probe_set + beside), call, policy)
+        #    — the doubts that read the recording again, given that status; assessed again when one is found
+        doubts = [r for check in DOUBT_CHECKS for r in check(replace(ctx, status=status))]
+        if doubts:
+            status, reasons = assess(_recording_checks(scores, fr, probe_set + doubts + beside), call, policy)
+        # 7. the verdict
+        return verdict_of(scores, fr, status, reasons, clearance_um=clearance_um, top_k=top_k), fr
+
+
+def diagnose(bundle: Any, feature_result: FeatureResult, *, clearance_um: float | None = None,
+             top_k: int = 5) -> Verdict:
+    """The verdict of features already extracted: :func:`diagnose_recording` without a recording (no speed choice,
+    no doubt that reads the recording again)."""
+    return diagnose_recording(bundle, None, clearance_um=clearance_um, top_k=top_k, fr=feature_result)[0]
+
+
+def _recording_checks(scores: ModelScores, fr: FeatureResult, extra: Sequence[Reason]) -> RecordingChecks:
+    return RecordingChecks(names=scores.names, row=scores.row,
+                           feature_median=np.asarray(scores.model.feature_median_, dtype=float),
+                           sanity=scores.sanity, ood_score=scores.ood_score, never_missing=scores.never_missing,
+                           speed_source=getattr(fr, "speed_source", None), warnings=scores.warnings,
+                           envelope=scores.findings, extra=extra)
+
+
+def _model_call(scores: ModelScores, static_offset: Sequence[Reason]) -> ModelCall:
+    model = scores.model
+    bands = model.bands_
+    _, _, agree = consistent_estimate(scores.band, bands.edges, scores.point, scores.interval)
+    return ModelCall(probabilities=scores.probabilities, class_delta_agree=agree, call_index=scores.call_index,
+                     band_names=[str(c) for c in model.classes_], misaligned_call=scores.band > 0,
+                     alarm=scores.alarm(), delta_interval=scores.interval, band_edges=bands.edges,
+                     interval_level=1.0 - float(model.regressor_.alpha),
+                     static_offset=static_offset)
+
