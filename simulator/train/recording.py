@@ -13,9 +13,10 @@ from .dynamics import TrainRun, simulate_train
 from .model import Train, TrainError, misaligned
 from .probes import TrainProbes, train_probes
 from .stability import stability
+from .static import ClearanceError, static_state
 from .transient import unbalanced
 
-__all__ = ["TrainRecording", "train_recording"]
+__all__ = ["TrainRecording", "largest_offset_scale", "train_recording"]
 
 
 @dataclass(frozen=True)
@@ -66,11 +67,23 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
             raise TrainError(f"{name} must be a finite number (got {v!r})")
     if not (snr_db > 0 or snr_db == math.inf):
         raise TrainError(f"snr_db must be positive (inf: no noise), got {snr_db!r}")
-    tr = misaligned(train, offset_m=offset_um * 1e-6, angle_rad=angular_mrad * 1e-3,
-                    direction_rad=math.radians(direction_deg)) if (offset_um or angular_mrad) else train
-    tr = unbalanced(tr, unbalance_kg_m)
+    def moved(scale: float) -> Train:
+        return misaligned(train, offset_m=scale * offset_um * 1e-6, angle_rad=scale * angular_mrad * 1e-3,
+                          direction_rad=math.radians(direction_deg)) if (offset_um or angular_mrad) else train
+
+    tr = unbalanced(moved(1.0), unbalance_kg_m)
     warnings = []
-    log_dec = stability(tr, speed_rpm).log_decrement   # its static state refuses a journal outside its clearance
+    try:
+        log_dec = stability(tr, speed_rpm).log_decrement   # its static state refuses a journal pressed on its metal
+    except ClearanceError as exc:
+        if not (offset_um or angular_mrad):
+            raise
+        scale = largest_offset_scale(moved, speed_rpm)
+        most = " and ".join(([f"an offset of {scale * offset_um:.0f} µm"] if offset_um else [])
+                            + ([f"an angle of {scale * angular_mrad:.3g} mrad"] if angular_mrad else []))
+        raise ClearanceError(
+            f"{exc}. Along {direction_deg:g}° this train takes at most about {most} at {speed_rpm:g} r/min "
+            f"({100 * (1 - scale):.0f} % less than asked)", exc.bearing, exc.film_eccentricity, exc.limit) from None
     if log_dec <= 0:
         warnings.append(f"{speed_rpm:g} r/min is beyond this train's stability threshold (least-damped mode's "
                         f"logarithmic decrement {log_dec:.3f} ≤ 0): expect oil whirl or whip, not a forced response")
@@ -90,3 +103,18 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
               "samples_per_rev": int(samples_per_rev), "snr_db": float(snr_db), "seed": int(seed),
               "log_decrement": log_dec}
     return TrainRecording(probes=replace(probes, waveforms_um=wave), run=run, warnings=warnings, inputs=inputs)
+
+
+def largest_offset_scale(moved, speed_rpm: float, *, tol: float = 0.01) -> float:
+    """The largest fraction s in [0, 1] of a misalignment whose static state ``moved(s)`` keeps every journal off
+    its metal (:class:`~rotordiag.simulator.train.static.ClearanceError` beyond it), by bisection to ``tol``;
+    what a refusal tells the user to reduce the offset to."""
+    lo, hi = 0.0, 1.0
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        try:
+            static_state(moved(mid), speed_rpm)
+            lo = mid
+        except ClearanceError:
+            hi = mid
+    return lo
