@@ -73,33 +73,45 @@ def sweep(name: str, fractions, directions) -> dict:
 
 
 def figure(results: list[dict], path: Path) -> None:
+    """Top: onset speed / rated speed against δ/c per direction (a triangle at 3: none below 3× rated). Bottom: the
+    coupling-end bearings' vertical loads at rated speed (B2 solid, B3 dashed), the radial preload."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(results), figsize=(4.2 * len(results), 4.0), squeeze=False)
-    for ax, res in zip(axes[0], results, strict=True):
+    fig, axes = plt.subplots(2, len(results), figsize=(4.3 * len(results), 7.5), squeeze=False, sharex="col")
+    for col, res in enumerate(results):
+        ax, axl = axes[0, col], axes[1, col]
         base = [r for r in res["rows"] if r["direction"] == "aligned"]
         for k, where in enumerate(DIRECTIONS):
-            rows = base + [r for r in res["rows"] if r["direction"] == where]
-            xs = [r["fraction_c"] for r in rows if "onset_rpm" in r]
-            ys = [min(r["onset_rpm"], 3.0 * res["rated_rpm"]) / res["rated_rpm"] for r in rows if "onset_rpm" in r]
-            ax.plot(xs, ys, "o-", color=f"C{k}", label=f"offset {where}")
-        ax.axhline(1.0, color="k", lw=0.8, ls="--", label="rated speed")
+            rows = [r for r in base + [r for r in res["rows"] if r["direction"] == where] if "onset_rpm" in r]
+            xs = [r["fraction_c"] for r in rows]
+            ys = [min(r["onset_rpm"], SPAN[1] * res["rated_rpm"]) / res["rated_rpm"] for r in rows]
+            ax.plot(xs, ys, "-", color=f"C{k}", label=f"offset {where}")
+            for x, y, r in zip(xs, ys, rows, strict=True):
+                ax.plot([x], [y], "^" if not math.isfinite(r["onset_rpm"]) else "o", color=f"C{k}")
+            axl.plot(xs, [r["load_kn"][1] for r in rows], "-o", color=f"C{k}", ms=4, label=f"B2, {where}")
+            axl.plot(xs, [r["load_kn"][2] for r in rows], "--s", color=f"C{k}", ms=4, label=f"B3, {where}")
+        ax.axhline(1.0, color="k", lw=0.8, ls=":", label="rated speed")
         if math.isfinite(res["reduced_onset_rpm_aligned"]):
             ax.plot([0], [res["reduced_onset_rpm_aligned"] / res["rated_rpm"]], "k*", ms=9,
                     label="aligned, pads' reduced coeff.")
         ax.set_title(f"{res['preset']} (rated {res['rated_rpm']:g} r/min)", fontsize=9)
-        ax.set_xlabel(f"parallel offset δ / c  (c = {res['c3_um']:.0f} µm)")
         ax.set_ylabel("whirl onset speed / rated speed")
-        ax.set_ylim(0, 3.1)
+        ax.set_ylim(0, SPAN[1] + 0.15)
         ax.grid(alpha=0.3)
+        axl.axhline(0.0, color="k", lw=0.6)
+        axl.set_xlabel(f"parallel offset δ / c  (c = {res['c3_um']:.0f} µm)")
+        axl.set_ylabel("vertical load at rated speed, kN (+ down)")
+        axl.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7, loc="lower left")
-    fig.suptitle("Threshold speed of instability (film coefficients at the static state) against the exciter's "
-                 "offset from the catenary; 3 = none below 3× rated", fontsize=9)
+    axes[1, 0].legend(fontsize=6, loc="upper left", ncol=2)
+    fig.suptitle("Threshold speed of instability (nonlinear film coefficients at the static state) against the "
+                 "exciter's offset from the catenary, rigid coupling\n▲ at 3: no onset below 3× rated speed; "
+                 "bottom: the coupling-end bearings' loads (B2 generator, B3 exciter)", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
 
 

@@ -904,6 +904,14 @@ class TrainSummaryOut(BaseModel):
 MAX_TRAIN_SIM_SAMPLES = 32_768
 
 
+class TrainProbeIn(_Strict):
+    """One probe of a simulated train: the bearing it is at and its angle."""
+
+    bearing: int = Field(..., ge=1, le=8, description="Bearing number along the train, 1 = generator far end.")
+    angle_deg: float = Field(..., ge=-360.0, le=360.0, allow_inf_nan=False,
+                             description="Probe angle, degrees from +x (horizontal) toward +y (vertical up).")
+
+
 class TrainSimulateRequest(_Strict):
     """Body of POST /trains/simulate: one shaft train (a preset, a shaft-line table or a shaft-line TOML text), its
     misalignment and unbalance, the speed, and the recording's length and format."""
@@ -936,6 +944,9 @@ class TrainSimulateRequest(_Strict):
                                 "record (the transient of the start).")
     record_revs: int = Field(32, ge=1, le=256, description="Revolutions recorded.")
     samples_per_rev: int = Field(128, ge=16, le=512, description="Samples per revolution of the record.")
+    probes: list[TrainProbeIn] | None = Field(
+        None, min_length=1, max_length=16, description="The probes to record; default a 45°/135° pair at every "
+        "bearing (the layout the features read: two probes per bearing, at least 30° from parallel).")
     snr_db: float | None = Field(40.0, gt=0.0, le=200.0, allow_inf_nan=False,
                                  description="Probe noise: signal-to-noise ratio per probe, dB (null: none).")
     seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed of the probe noise.")

@@ -84,7 +84,8 @@ def simulate_train_request(body: Any) -> dict[str, Any]:
                               direction_deg=body.offset_angle_deg, unbalance_kg_m=body.unbalance_kg_m,
                               transient_revs=body.transient_revs, record_revs=body.record_revs,
                               samples_per_rev=body.samples_per_rev,
-                              snr_db=float("inf") if body.snr_db is None else body.snr_db, seed=body.seed)
+                              snr_db=float("inf") if body.snr_db is None else body.snr_db, seed=body.seed,
+                              probes=None if body.probes is None else [(p.bearing, p.angle_deg) for p in body.probes])
     except (TrainError, ValueError, ArithmeticError) as exc:
         raise InputError(f"train: {exc}") from None
     if body.format != "json":

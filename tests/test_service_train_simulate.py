@@ -68,6 +68,23 @@ def test_csv_download_is_the_cli_layout_and_reads_back(client, preset_json, tmp_
     assert len(rec.keyphasor_times_s) >= 7
 
 
+def test_probes_are_chosen_and_checked_before_simulating(client):
+    r = client.post("/trains/simulate", json={"preset": "gen200_2pole", **SHORT,
+                                              "probes": [{"bearing": 3, "angle_deg": 0.0}, {"bearing": 3, "angle_deg": 90.0}]})
+    assert r.status_code == 200, r.text
+    s = r.json()
+    assert [(c["bearing"], c["angle_deg"]) for c in s["channels"]] == [(3, 0.0), (3, 90.0)]
+    # a probe at 0° reads x, at 90° y: the same journal as the default 45°/135° pair, projected (x cos a + y sin a)
+    d = client.post("/trains/simulate", json={"preset": "gen200_2pole", **SHORT}).json()
+    p45, p135 = (np.array(c["data"]) for c in d["channels"] if c["bearing"] == 3)
+    x, y = (np.array(c["data"]) for c in s["channels"])
+    np.testing.assert_allclose((x + y) / np.sqrt(2), p45, atol=1e-9)
+    np.testing.assert_allclose((y - x) / np.sqrt(2), p135, atol=1e-9)
+    bad = client.post("/trains/simulate", json={"preset": "gen200_2pole", **SHORT,
+                                                "probes": [{"bearing": 6, "angle_deg": 0.0}]})
+    assert bad.status_code == 422 and "bearing 1…4" in bad.text
+
+
 def test_h5_download_carries_the_speed(client):
     import h5py
 

@@ -4,6 +4,7 @@ measurement noise, and a keyphasor — what ``rotordiag simulate --train`` write
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -39,7 +40,7 @@ class TrainRecording:
 def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, angular_mrad: float = 0.0,
                     direction_deg: float = -90.0, unbalance_kg_m: float = 0.2, transient_revs: int = 320,
                     record_revs: int = 48, samples_per_rev: int = 128, snr_db: float = 40.0,
-                    seed: int = 0) -> TrainRecording:
+                    seed: int = 0, probes: Sequence[tuple[int, float]] | None = None) -> TrainRecording:
     """The steady recording of ``train`` at ``speed_rpm``.
 
     Parameters
@@ -50,6 +51,9 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
         (:func:`~rotordiag.simulator.train.model.misaligned`).
     unbalance_kg_m
         Unbalance at the middle of the generator, along the keyphasor mark (a shaft line carries none of its own).
+    probes
+        (bearing number, angle_deg) of every probe, bearings numbered 1… along the train; default a 45°/135° pair at
+        every bearing. Checked before anything is simulated.
     snr_db
         White measurement noise per probe: its rms is the probe's AC rms over 10^(snr/20) (``inf``: none); drawn
         with ``seed``.
@@ -67,6 +71,14 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
             raise TrainError(f"{name} must be a finite number (got {v!r})")
     if not (snr_db > 0 or snr_db == math.inf):
         raise TrainError(f"snr_db must be positive (inf: no noise), got {snr_db!r}")
+    n_bearings = len(train.supports())
+    if probes is not None:
+        probes = [tuple(p) for p in probes]  # type: ignore[misc]
+        bad = [p for p in probes if not (len(p) == 2 and isinstance(p[0], int | np.integer)
+                                         and 1 <= int(p[0]) <= n_bearings and math.isfinite(float(p[1])))]
+        if bad or not probes:
+            raise TrainError(f"probes: each is (bearing 1…{n_bearings}, finite angle_deg), at least one; "
+                             f"got {bad[0] if bad else 'none'}")
     def moved(scale: float) -> Train:
         return misaligned(train, offset_m=scale * offset_um * 1e-6, angle_rad=scale * angular_mrad * 1e-3,
                           direction_rad=math.radians(direction_deg)) if (offset_um or angular_mrad) else train
@@ -91,8 +103,8 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
                          samples_per_rev=samples_per_rev)
     if run.status != "ok":
         raise TrainError(f"the simulation ended as {run.status!r} ({getattr(run, 'message', '')}); nothing recorded")
-    probes = train_probes(run)
-    wave = probes.waveforms_um.copy()
+    read = train_probes(run, probes)
+    wave = read.waveforms_um.copy()
     if snr_db != math.inf:
         rng = np.random.default_rng(seed)
         ac_rms = np.sqrt(np.mean((wave - wave.mean(axis=1, keepdims=True)) ** 2, axis=1, keepdims=True))
@@ -101,8 +113,8 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
               "direction_deg": float(direction_deg), "unbalance_kg_m": float(unbalance_kg_m),
               "transient_revs": int(transient_revs), "record_revs": int(record_revs),
               "samples_per_rev": int(samples_per_rev), "snr_db": float(snr_db), "seed": int(seed),
-              "log_decrement": log_dec}
-    return TrainRecording(probes=replace(probes, waveforms_um=wave), run=run, warnings=warnings, inputs=inputs)
+              "log_decrement": log_dec, "probes": [[int(b), float(a)] for b, a in read.channels]}
+    return TrainRecording(probes=replace(read, waveforms_um=wave), run=run, warnings=warnings, inputs=inputs)
 
 
 def largest_offset_scale(moved, speed_rpm: float, *, tol: float = 0.01) -> float:
