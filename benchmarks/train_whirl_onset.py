@@ -120,13 +120,17 @@ def main() -> None:
     ap.add_argument("--out-dir", type=Path, default=ROOT / "docs" / "figures" / "train_misalignment")
     ap.add_argument("--quick", action="store_true", help="gen200_2pole only, δ 0 and 0.5 c down")
     ap.add_argument("--presets", default=",".join(PRESETS))
+    ap.add_argument("--directions", default=",".join(DIRECTIONS), help="a subset of down,up,sideways")
+    ap.add_argument("--fractions", default=",".join(f"{f:g}" for f in FRACTIONS), help="δ/c values (0: aligned)")
     args = ap.parse_args()
+    directions = {d: DIRECTIONS[d] for d in args.directions.split(",")}
+    fractions = tuple(float(f) for f in args.fractions.split(","))
     args.out_dir.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     if args.quick:
         results = [sweep("gen200_2pole", (0.0, 0.5), {"down": -90.0})]
     else:
-        results = [sweep(n, FRACTIONS, DIRECTIONS) for n in args.presets.split(",")]
+        results = [sweep(n, fractions, directions) for n in args.presets.split(",")]
     (args.out_dir / "whirl_onset.json").write_text(json.dumps(results, indent=1))
     figure(results, args.out_dir / "whirl_onset.png")
     for res in results:
