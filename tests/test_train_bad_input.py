@@ -7,7 +7,16 @@ import pytest
 from typer.testing import CliRunner
 
 from rotordiag.cli import app
-from rotordiag.simulator.train import misaligned, static_state
+from rotordiag.simulator.train import (
+    Coupling,
+    Rotor,
+    Support,
+    Train,
+    TrainError,
+    misaligned,
+    static_state,
+    uniform_elements,
+)
 from rotordiag.simulator.train.recording import train_recording
 from rotordiag.simulator.train.shaftline import shaftline_of, train_from_shaftline
 from rotordiag.simulator.train.static import MAX_FILM_ECCENTRICITY, ClearanceError, film_eccentricity
@@ -83,3 +92,17 @@ def test_cli_refuses_bad_shaft_lines_with_what_to_fix(tmp_path, toml, says):
     assert r.exit_code == 2, r.output
     assert says in _said(r.output) and "Traceback" not in r.output
     assert not out.exists()
+
+
+def test_a_train_too_large_to_reduce_is_refused_before_anything_is_assembled():
+    """Three rotors of 150 elements (453 stations, 1812 DOFs) is beyond the limit of 400 stations; 3 × 100 is not."""
+    from rotordiag.simulator.train.model import MAX_TRAIN_STATIONS
+    from tests.train_support import iso
+
+    def rotors(n):
+        return tuple(Rotor(f"r{k}", uniform_elements(2.0, 0.3, n), supports=(Support(0, iso(1e9)), Support(n, iso(1e9))))
+                     for k in range(3))
+
+    with pytest.raises(TrainError, match=f"453 stations, more than {MAX_TRAIN_STATIONS}.*longer elements"):
+        Train(rotors(150), (Coupling("rigid"), Coupling("rigid")))
+    assert sum(r.n_stations for r in Train(rotors(100), (Coupling("rigid"), Coupling("rigid"))).rotors) == 303
