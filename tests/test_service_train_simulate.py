@@ -85,6 +85,24 @@ def test_probes_are_chosen_and_checked_before_simulating(client):
     assert bad.status_code == 422 and "bearing 1…4" in bad.text
 
 
+def _two_x_pp(channel: dict, record_revs: int) -> float:
+    d = np.asarray(channel["data"])
+    return float(4 * np.abs(np.fft.rfft(d - d.mean()))[2 * record_revs] / d.size)
+
+
+def test_a_flexible_coupling_under_offset_gets_its_kinematic_2x(client):
+    """coupling: flexible replaces the preset's rigid one; the offset then drives the double-engagement coupling's 2X
+    (docs/train.md), which a rigid coupling does not have: 2X at the exciter's coupling-end bearing grows with δ."""
+    body = {"preset": "gen200_2pole", "coupling": "flexible", "unbalance_kg_m": 0.0, **SHORT}
+    aligned = client.post("/trains/simulate", json=body)
+    off = client.post("/trains/simulate", json={**body, "offset_um": 100.0})
+    assert aligned.status_code == off.status_code == 200, (aligned.text, off.text)
+    assert off.json()["inputs"]["coupling"] == "flexible"
+    b3 = [k for k, c in enumerate(off.json()["channels"]) if c["bearing"] == 3][0]
+    a2, o2 = (_two_x_pp(r.json()["channels"][b3], 8) for r in (aligned, off))
+    assert o2 > 3 * a2 and o2 > 5.0, (a2, o2)
+
+
 def test_h5_download_carries_the_speed(client):
     import h5py
 

@@ -17,7 +17,7 @@ from .stability import stability
 from .static import ClearanceError, static_state
 from .transient import unbalanced
 
-__all__ = ["TrainRecording", "largest_offset_scale", "train_recording"]
+__all__ = ["TrainRecording", "largest_offset_scale", "train_recording", "with_kinematic_offset"]
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,8 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
     offset_um, angular_mrad, direction_deg
         Parallel offset (µm) and angular offset (mrad) between the shaft lines at the first coupling, both
         along ``direction_deg`` (from +x toward +y; −90 = the exciter low), set by moving the exciter's bearings
-        (:func:`~rotordiag.simulator.train.model.misaligned`).
+        (:func:`~rotordiag.simulator.train.model.misaligned`); a flexible first coupling also gets the parallel
+        offset's kinematic 2X forcing (:func:`with_kinematic_offset`).
     unbalance_kg_m
         Unbalance at the middle of the generator, along the keyphasor mark (a shaft line carries none of its own).
     probes
@@ -83,7 +84,7 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
         return misaligned(train, offset_m=scale * offset_um * 1e-6, angle_rad=scale * angular_mrad * 1e-3,
                           direction_rad=math.radians(direction_deg)) if (offset_um or angular_mrad) else train
 
-    tr = unbalanced(moved(1.0), unbalance_kg_m)
+    tr = unbalanced(with_kinematic_offset(moved(1.0), offset_um, direction_deg), unbalance_kg_m)
     warnings = []
     try:
         log_dec = stability(tr, speed_rpm).log_decrement   # its static state refuses a journal pressed on its metal
@@ -115,6 +116,17 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
               "samples_per_rev": int(samples_per_rev), "snr_db": float(snr_db), "seed": int(seed),
               "log_decrement": log_dec, "probes": [[int(b), float(a)] for b, a in read.channels]}
     return TrainRecording(probes=replace(read, waveforms_um=wave), run=run, warnings=warnings, inputs=inputs)
+
+
+def with_kinematic_offset(train: Train, offset_um: float, direction_deg: float) -> Train:
+    """The train with a flexible first coupling given the double-engagement kinematic 2X forcing of the parallel
+    offset ``offset_um`` along ``direction_deg`` (:class:`~rotordiag.simulator.train.model.Coupling`, as
+    benchmarks/train_misalignment.py sets it); a rigid coupling or no offset: the train unchanged."""
+    if not train.couplings or train.couplings[0].kind != "flexible" or not offset_um:
+        return train
+    direction = math.radians(direction_deg) + (math.pi if offset_um < 0 else 0.0)
+    first = replace(train.couplings[0], kinematic_offset_m=abs(offset_um) * 1e-6, kinematic_direction_rad=direction)
+    return replace(train, couplings=(first, *train.couplings[1:]))
 
 
 def largest_offset_scale(moved, speed_rpm: float, *, tol: float = 0.01) -> float:
