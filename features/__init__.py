@@ -3,7 +3,7 @@
 Public API
 ----------
 ProbeChannel(bearing, angle_deg, units, data)
-    One proximity probe (bearing 1–4, mounting angle from horizontal +x toward +y, units
+    One proximity probe (bearing 1–8 along the train, mounting angle from horizontal +x toward +y, units
     "um" / "mm" / "m" / "mil").
 Recording(sample_rate_hz, channels, speed_rpm=None, keyphasor_times_s=None, clearance_um=None, speed_range_rpm=None,
           dc_removed=False, acquisitions=None)

@@ -16,7 +16,7 @@ import numpy as np
 
 from rotordiag.core.input_bounds import KEYPHASOR_MAX_TIME_S, KEYPHASOR_MIN_INTERVAL_S
 
-from ._config import BEARINGS
+from ._config import PROBE_BEARINGS
 
 __all__ = ["parse_acquisitions", "acquisitions_in_order", "format_acquisitions", "split_pairs", "parse_keyphasor_takes"]
 
@@ -30,9 +30,9 @@ def _bearing(value: object, name: str) -> int:
     try:
         b = int(value)  # type: ignore[call-overload]
     except (TypeError, ValueError):
-        raise ValueError(f"{name}: {value!r} is not a bearing number {list(BEARINGS)}; {_HINT}") from None
-    if isinstance(value, bool) or b not in BEARINGS or (not isinstance(value, str) and b != value):
-        raise ValueError(f"{name}: {value!r} is not a bearing number {list(BEARINGS)}; {_HINT}")
+        raise ValueError(f"{name}: {value!r} is not a bearing number 1–{PROBE_BEARINGS[-1]}; {_HINT}") from None
+    if isinstance(value, bool) or b not in PROBE_BEARINGS or (not isinstance(value, str) and b != value):
+        raise ValueError(f"{name}: {value!r} is not a bearing number 1–{PROBE_BEARINGS[-1]}; {_HINT}")
     return b
 
 

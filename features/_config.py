@@ -1,12 +1,14 @@
 """Tunables of the feature extractor, in one place (documented in docs/features.md)."""
 from __future__ import annotations
 
-from rotordiag.core.conventions import BEARINGS
+from rotordiag.core.conventions import BEARINGS, MAX_BEARING
 from rotordiag.core.units import ALLOWED_UNITS, UNITS_TO_UM
 
-__all__ = ["ALLOWED_UNITS", "UNITS_TO_UM", "BEARINGS"]  # re-exported for the package's modules
+__all__ = ["ALLOWED_UNITS", "UNITS_TO_UM", "BEARINGS", "MAX_BEARING", "PROBE_BEARINGS"]  # re-exported for the package's modules
 
 # BEARINGS (rotordiag.core.conventions): the feature vector always covers all four.
+#: bearing numbers a probe channel may carry (1 … MAX_BEARING: a train's bearings along it)
+PROBE_BEARINGS: tuple[int, ...] = tuple(range(1, MAX_BEARING + 1))
 #: bearing pairs whose 1X / 2X phase differences are features: across the coupling, then
 #: along the generator and along the exciter
 PHASE_PAIRS: tuple[tuple[int, int], ...] = ((2, 3), (1, 2), (3, 4))

@@ -35,9 +35,14 @@ _SPEED_INDEX = _NAME_INDEX["speed_rpm"]
 
 @cache
 def _bearing_schema(bearing: int) -> tuple[tuple[str, ...], np.ndarray]:
-    """The ``b{n}_…`` names of one bearing in schema order, and their indices in the vector."""
+    """The ``b{n}_…`` names of one bearing in schema order, and their indices in the vector. A train's bearing beyond
+    the vector's four (5, 6, …) gets bearing 1's names with its own number and no index: its features are in its
+    :class:`BearingDetail` only."""
     prefix = f"b{bearing}_"
     index = [i for i, n in enumerate(FEATURE_NAMES) if n.startswith(prefix)]
+    if not index:
+        names = tuple(prefix + FEATURE_NAMES[i][3:] for i in _bearing_schema(1)[1])
+        return names, np.zeros(0, dtype=np.intp)
     arr = np.array(index, dtype=np.intp)
     arr.flags.writeable = False
     return tuple(FEATURE_NAMES[i] for i in index), arr
@@ -450,7 +455,8 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
         ix, iy = 2 * i, 2 * i + 1
         names, index = _bearing_schema(b)
         row = table[i]
-        values[index] = row
+        if index.size:
+            values[index] = row
         cx, cy = cx_all[i], cy_all[i]
         chans = [ch for ch in rec.channels if ch.bearing == b]
         angles = np.deg2rad([chans[0].angle_deg, chans[1].angle_deg])

@@ -16,7 +16,7 @@ from rotordiag.core.input_bounds import (
 )
 
 from ._acquisitions import acquisitions_in_order, format_acquisitions, parse_acquisitions, parse_keyphasor_takes
-from ._config import ALLOWED_UNITS, BEARINGS, UNITS_TO_UM
+from ._config import ALLOWED_UNITS, PROBE_BEARINGS, UNITS_TO_UM
 
 __all__ = ["ProbeChannel", "Recording", "parse_speed_range"]
 
@@ -78,8 +78,9 @@ class ProbeChannel:
     Parameters
     ----------
     bearing : int
-        Bearing number 1–4 (1 generator far end, 2 generator coupling end, 3 exciter
-        coupling end, 4 exciter far end).
+        Bearing number along the train, 1 … ``MAX_BEARING`` (8): the paper model's 1 generator far end,
+        2 generator coupling end, 3 exciter coupling end, 4 exciter far end; a shaft train with more bearings
+        goes on numbering (their features are in :attr:`FeatureResult.bearings`, not in the vector of 1–4).
     angle_deg : float
         Mounting angle of the probe, degrees from horizontal +x toward vertical +y
         (counter-clockwise, the direction the shaft turns). A probe reads the shaft
@@ -107,9 +108,9 @@ class ProbeChannel:
 
     def __post_init__(self) -> None:
         b = self.bearing
-        if isinstance(b, bool) or not isinstance(b, (int, np.integer)) or int(b) not in BEARINGS:
-            raise ValueError(f"ProbeChannel.bearing must be one of {list(BEARINGS)} "
-                             f"(1 generator far end … 4 exciter far end), got {b!r}")
+        if isinstance(b, bool) or not isinstance(b, (int, np.integer)) or int(b) not in PROBE_BEARINGS:
+            raise ValueError(f"ProbeChannel.bearing must be a bearing number 1–{PROBE_BEARINGS[-1]} along the train "
+                             f"(1 generator far end, 4 exciter far end on a generator–exciter pair), got {b!r}")
         object.__setattr__(self, "bearing", int(b))
         try:
             angle = float(self.angle_deg)
@@ -275,8 +276,9 @@ class Recording:
             if isinstance(cl, Mapping):
                 clean = {}
                 for b, v in cl.items():
-                    if isinstance(b, bool) or not isinstance(b, (int, np.integer)) or int(b) not in BEARINGS:
-                        raise ValueError(f"Recording.clearance_um: key {b!r} is not a bearing number {list(BEARINGS)}")
+                    if isinstance(b, bool) or not isinstance(b, (int, np.integer)) or int(b) not in PROBE_BEARINGS:
+                        raise ValueError(f"Recording.clearance_um: key {b!r} is not a bearing number "
+                                         f"1–{PROBE_BEARINGS[-1]}")
                     clean[int(b)] = check_range(v, f"Recording.clearance_um[{b}]", CLEARANCE_RANGE_UM, "µm",
                                            "radial clearance in µm")
                 object.__setattr__(self, "clearance_um", clean)

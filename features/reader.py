@@ -11,7 +11,7 @@ can loop or crash on a corrupt file), NPY through ``load_npy_bounded`` and JSON 
 
 What a file may say, and what :class:`ReadOptions` may add (options win over the file):
 
-- **Channel layout** (bearing 1–4 and probe angle of every probe). CSV header names
+- **Channel layout** (bearing 1–8 along the train and probe angle of every probe). CSV header names
   ``b<bearing>@<angle>`` (``b2@45``; ``2@45`` too) give it; or ``ReadOptions.channels``:
   a list in file order (``"1@45,1@135,2@45,2@135"`` or ``[(1, 45.0), ...]``) or a mapping
   from column name to ``"b2@45"`` (``{"GEN DE X": "b2@45", ...}``; other columns are
@@ -143,9 +143,9 @@ def parse_recorded_at(text: str) -> str | None:
 
 _META_UNIT_KEYS = ("units", "unit", "y_unit_label", "engineering units", "eu")
 _KP_COLUMNS = ("kp", "keyphasor", "kph", "keyphasor_v")
-_LAYOUT_RE = re.compile(r"^\s*b?([1-4])\s*@\s*(-?\d+(?:\.\d*)?)\s*$", re.IGNORECASE)
+_LAYOUT_RE = re.compile(r"^\s*b?([1-8])\s*@\s*(-?\d+(?:\.\d*)?)\s*$", re.IGNORECASE)
 #: CSV column names: ``b2@45`` and the spelled-out ``b2_45deg_um`` / ``b2 45° mil`` (unit suffix optional)
-_HEADER_RE = re.compile(r"^\s*b([1-4])\s*[@_ ]\s*(-?\d+(?:\.\d*)?)\s*(?:deg|°)?"
+_HEADER_RE = re.compile(r"^\s*b([1-8])\s*[@_ ]\s*(-?\d+(?:\.\d*)?)\s*(?:deg|°)?"
                         r"(?:[_ ]*[\[(]?(um|µm|μm|mm|mils?|mv|v)[\])]?)?\s*$", re.IGNORECASE)
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 _NPY_MAGIC = b"\x93NUMPY"
@@ -157,11 +157,11 @@ _UFF_START = re.compile(rb"^\s*-1\s*\r?\n\s*(58b?|151|164)\b")
 class ReadLimits:
     """Bounds on what a file may make the reader allocate.
 
-    The defaults suit one recording (8 probes, 16 s at 16 kHz); the CLI raises
+    The defaults suit one recording (up to 16 probes, 16 s at 16 kHz); the CLI raises
     ``max_file_bytes`` / ``max_hdf5_bytes`` for local dataset files.
     """
 
-    max_channels: int = 8
+    max_channels: int = 16                 # two probes at each of up to MAX_BEARING (8) bearings
     max_points: int = 262_144
     max_file_bytes: int = 256 * 2**20
     max_hdf5_bytes: int = 256 * 2**20
@@ -283,13 +283,13 @@ def parse_layout(text: str | Sequence[Any]) -> list[tuple[int, float]]:
             m = _LAYOUT_RE.match(item)
             if not m:
                 raise ValueError(f"channels: entry {k + 1} {item!r} is not BEARING@ANGLE (e.g. 'b2@45' or '2@45'; "
-                                 "bearing 1-4, angle in degrees)")
+                                 "bearing 1-8 along the train, angle in degrees)")
             out.append((int(m.group(1)), float(m.group(2))))
         elif isinstance(item, Mapping):
             try:
                 out.append((int(item["bearing"]), float(item["angle_deg"])))
             except (KeyError, TypeError, ValueError):
-                raise ValueError(f"channels: entry {k + 1} needs 'bearing' (1-4) and 'angle_deg', got {item!r}") from None
+                raise ValueError(f"channels: entry {k + 1} needs 'bearing' (1-8) and 'angle_deg', got {item!r}") from None
         else:
             try:
                 b, a = item

@@ -307,6 +307,19 @@ class AssetReport(WorkerCall):
 
 
 @dataclass(frozen=True)
+class TrainSimulate(WorkerCall):
+    """A shaft train's simulated recording (``POST /trains/simulate``, :func:`service.trains.simulate_train_request`)
+    from the validated request: ``("ok", answer)`` or an error tuple."""
+
+    request: Any
+
+    def run(self) -> tuple:
+        from .trains import simulate_train_request
+
+        return _tagged(lambda: ("ok", simulate_train_request(self.request)))
+
+
+@dataclass(frozen=True)
 class CheckModel(WorkerCall):
     """Which file of ``version`` the worker holds, and whether it can be used (:func:`_load_check`)."""
 

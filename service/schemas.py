@@ -941,3 +941,94 @@ class TrainSummaryOut(BaseModel):
     mode_forward: bool = Field(..., description="Whether that mode whirls forward (with the rotation).")
     stable: bool = Field(..., description="log_decrement > 0.")
     warning: str | None = Field(None, description="Why the speed is beyond the stability threshold, when it is.")
+
+
+#: a simulated train recording's length: samples per channel (record_revs × samples_per_rev), checked before allocating
+MAX_TRAIN_SIM_SAMPLES = 32_768
+
+
+class TrainProbeIn(_Strict):
+    """One probe of a simulated train: the bearing it is at and its angle."""
+
+    bearing: int = Field(..., ge=1, le=8, description="Bearing number along the train, 1 = generator far end.")
+    angle_deg: float = Field(..., ge=-360.0, le=360.0, allow_inf_nan=False,
+                             description="Probe angle, degrees from +x (horizontal) toward +y (vertical up).")
+
+
+class TrainSimulateRequest(_Strict):
+    """Body of POST /trains/simulate: one shaft train (a preset, a shaft-line table or a shaft-line TOML text), its
+    misalignment and unbalance, the speed, and the recording's length and format."""
+
+    preset: str | None = Field(None, max_length=64, description="A preset machine: one of GET /trains/presets.",
+                               examples=["gen200_2pole"])
+    shaftline: dict[str, Any] | None = Field(
+        None, description="A shaft line as tables (as for POST /trains/summary).")
+    shaftline_toml: str | None = Field(
+        None, max_length=MAX_SHAFTLINE_TOML_CHARS, description="The same shaft line as the text of its TOML file.")
+    speed_rpm: float | None = Field(
+        None, ge=SPEED_RANGE_RPM[0], le=SPEED_RANGE_RPM[1], allow_inf_nan=False,
+        description="Running speed, r/min; default the preset's rated speed (required for a shaft line).")
+    coupling: Literal["rigid", "flexible"] | None = Field(
+        None, description="Coupling type, replacing the shaft line's (a flexible one takes the shaft line's "
+        "coupling stiffnesses); default the shaft line's own.")
+    offset_um: float = Field(0.0, ge=-10_000.0, le=10_000.0, allow_inf_nan=False,
+                             description="Parallel offset δ between the shaft lines at the coupling, µm, along "
+                             "`offset_angle_deg`, set by moving the exciter's bearings.")
+    offset_angle_deg: float = Field(-90.0, ge=-360.0, le=360.0, allow_inf_nan=False,
+                                    description="Direction of the offset and of the angle, degrees from +x "
+                                    "(horizontal) toward +y (vertical up): -90 (default) = the exciter low, the "
+                                    "common vertical offset; 0 = sideways.")
+    angular_mrad: float = Field(0.0, ge=-10.0, le=10.0, allow_inf_nan=False,
+                                description="Angular offset α between the shaft lines, mrad (the exciter's line "
+                                "rising away from the coupling along `offset_angle_deg`).")
+    unbalance_kg_m: float = Field(0.2, ge=0.0, le=10.0, allow_inf_nan=False,
+                                  description="Unbalance at the middle of the generator, kg·m, at the keyphasor mark.")
+    transient_revs: int = Field(200, ge=10, le=320, description="Revolutions simulated and discarded before the "
+                                "record (the transient of the start).")
+    record_revs: int = Field(32, ge=1, le=256, description="Revolutions recorded.")
+    samples_per_rev: int = Field(128, ge=16, le=512, description="Samples per revolution of the record.")
+    probes: list[TrainProbeIn] | None = Field(
+        None, min_length=1, max_length=16, description="The probes to record; default a 45°/135° pair at every "
+        "bearing (the layout the features read: two probes per bearing, at least 30° from parallel).")
+    snr_db: float | None = Field(40.0, gt=0.0, le=200.0, allow_inf_nan=False,
+                                 description="Probe noise: signal-to-noise ratio per probe, dB (null: none).")
+    seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed of the probe noise.")
+    format: Literal["json", "csv", "h5"] = Field(
+        "json", description="`json`: the recording as JSON (channels, keyphasor, warnings); `csv` or `h5`: a file "
+        "download in the layout `rotordiag simulate --train --probes-out` writes (b<bearing>@<angle> µm columns and "
+        "a `kp` keyphasor pulse column; warnings in the `X-Rotordiag-Warnings` header), readable by "
+        "`rotordiag diagnose` and POST /diagnose.")
+
+    @field_validator("samples_per_rev")
+    @classmethod
+    def _bounded_record(cls, v: int, info: Any) -> int:
+        revs = info.data.get("record_revs")
+        if revs is not None and revs * v > MAX_TRAIN_SIM_SAMPLES:
+            raise ValueError(f"record_revs × samples_per_rev = {revs} × {v} = {revs * v} samples per channel, more "
+                             f"than {MAX_TRAIN_SIM_SAMPLES}: record fewer revolutions or fewer samples per revolution")
+        return v
+
+
+class TrainChannelOut(BaseModel):
+    """One probe of a simulated train."""
+
+    bearing: int = Field(..., description="Bearing number along the train, 1 = generator far end.")
+    angle_deg: float = Field(..., description="Probe angle, degrees from +x toward +y.")
+    units: str = Field("um", description="Always `um`.")
+    data: list[float] = Field(..., description="Displacement of the journal toward the probe, µm, DC included.")
+
+
+class TrainSimulateOut(BaseModel):
+    """A shaft train's steady recording as its probes read it."""
+
+    source: str = Field(..., description="The preset name, or `shaftline` for an uploaded shaft line.")
+    speed_rpm: float = Field(..., description="Running speed, r/min.")
+    sample_rate_hz: float = Field(..., description="Sample rate of every channel, Hz.")
+    channels: list[TrainChannelOut] = Field(..., description="Two probes (45° and 135°) at every bearing.")
+    keyphasor_times_s: list[float] = Field(..., description="Keyphasor mark times, s (one per revolution).")
+    clearance_um: dict[str, float] = Field(..., description="Radial clearance of each bearing (by number), µm.")
+    log_decrement: float = Field(..., description="Log decrement of the least-damped mode at the static state.")
+    warnings: list[str] = Field(..., description="What the user must know, e.g. a speed beyond the stability "
+                                "threshold (the response is then oil whirl/whip).")
+    inputs: dict[str, Any] = Field(..., description="Everything that made the recording (offsets, unbalance, "
+                                   "revolutions, noise and its seed).")

@@ -315,9 +315,12 @@ def register(app: typer.Typer) -> None:
         samples_per_rev: int = typer.Option(128, help="Samples per revolution."),
         exciter_unbalance: float = typer.Option(0.0, help="Exciter unbalance a2/c (0–0.5)."),
         exciter_unbalance_phase_deg: float = typer.Option(0.0, help="Exciter unbalance phase θ2, degrees."),
-        offset_angle_deg: float = typer.Option(
-            0.0, help="Offset direction φ0, degrees from +x toward +y: rotating eccentricity at t = 0 (rigid) "
-                      "or stationary exciter shaft-line offset (offset, flexible; -90 = downward)."),
+        offset_angle_deg: Optional[float] = typer.Option(
+            None, help="Offset direction, degrees from +x (horizontal) toward +y (vertical up): -90 = the exciter "
+                       "low, 0 = sideways. A train (--train/--shaftline): direction of --offset-um and the angle, "
+                       "default -90 (a vertical offset, the common case in a plant). The paper's model: φ0, the "
+                       "rotating eccentricity at t = 0 (rigid) or the stationary exciter shaft-line offset (offset, "
+                       "flexible), default 0 (the paper's convention)."),
         coupling_phase_deg: float = typer.Option(0.0, help="flexible: phase ψ of the coupling's 2X excitation, degrees."),
         angular_misalignment_mrad: float = typer.Option(
             0.0, "--angular-misalignment-mrad",
@@ -338,7 +341,7 @@ def register(app: typer.Typer) -> None:
         shaftline: Optional[Path] = typer.Option(None, "--shaftline", help="Simulate the finite-element train of "
                                                  "this shaft-line file (TOML/JSON)."),
         offset_um: float = typer.Option(0.0, "--offset-um", help="A train's parallel offset at the coupling, µm, "
-                                        "along --offset-angle-deg (-90 = the exciter low), set by moving the "
+                                        "along --offset-angle-deg (default -90: the exciter low), set by moving the "
                                         "exciter's bearings."),
         unbalance_kg_m: float = typer.Option(0.2, "--unbalance-kg-m", help="A train's unbalance at the middle of "
                                              "the generator, kg·m, at the keyphasor mark."),
@@ -354,7 +357,8 @@ def register(app: typer.Typer) -> None:
                 raise typer.BadParameter("--misalignment and --plant are the paper model's; a train takes "
                                          "--offset-um and --angular-misalignment-mrad", param_hint="--train")
             _simulate_train(_shaftline_train(shaftline, train), speed_rpm, offset_um=offset_um,
-                            angular_mrad=angular_misalignment_mrad, direction_deg=offset_angle_deg,
+                            angular_mrad=angular_misalignment_mrad,
+                            direction_deg=-90.0 if offset_angle_deg is None else offset_angle_deg,
                             unbalance_kg_m=unbalance_kg_m, transient_revs=min(transient_revs, 320),
                             record_revs=record_revs, samples_per_rev=samples_per_rev, snr_db=snr_db, seed=seed,
                             probes_out=probes_out, as_json=as_json)
@@ -368,7 +372,7 @@ def register(app: typer.Typer) -> None:
                       transient_revs=transient_revs, record_revs=record_revs, samples_per_rev=samples_per_rev,
                       exciter_unbalance=exciter_unbalance,
                       exciter_unbalance_phase_rad=math.radians(exciter_unbalance_phase_deg),
-                      offset_angle_rad=math.radians(offset_angle_deg),
+                      offset_angle_rad=math.radians(offset_angle_deg or 0.0),
                       coupling_phase_rad=math.radians(coupling_phase_deg),
                       angular_misalignment_mrad=angular_misalignment_mrad)
         except ValueError as exc:
@@ -418,7 +422,9 @@ def register(app: typer.Typer) -> None:
         plant: Optional[Path] = typer.Option(None, help="Plant file (TOML or JSON); default MODEL.md's plant."),
         sample_rate_hz: float = typer.Option(2560.0, "--sample-rate-hz", help="Acquisition rate, Hz."),
         settle_revs: int = typer.Option(200, help="Revolutions at the first speed before t = 0 (a settled start)."),
-        offset_angle_deg: float = typer.Option(0.0, help="Offset direction φ0, degrees (as `simulate`)."),
+        offset_angle_deg: Optional[float] = typer.Option(
+            None, help="Offset direction, degrees from +x toward +y (as `simulate`): a train's --offset-um, default -90 "
+                       "(the exciter low); the paper model's φ0, default 0."),
         snr_db: float = typer.Option(40.0, "--snr-db", help="Probe noise, dB (inf: none)."),
         seed: int = typer.Option(0, "--seed", help="Seed of the probe noise."),
         out: Path = typer.Option(..., "--out", help="Probe file: .csv (with a kp keyphasor column), .npy/.h5 (the "
@@ -428,8 +434,9 @@ def register(app: typer.Typer) -> None:
                                                                   "gen600_2pole, gen600_4pole)."),
         shaftline: Optional[Path] = typer.Option(None, "--shaftline", help="Run the finite-element train of this "
                                                                            "shaft-line TOML (examples/shaftline_200mw.toml)."),
-        offset_um: float = typer.Option(0.0, "--offset-um", help="A train's parallel offset at its first coupling, µm "
-                                                                 "(downward; --misalignment is the paper model's)."),
+        offset_um: float = typer.Option(0.0, "--offset-um", help="A train's parallel offset at its first coupling, µm, "
+                                                                 "along --offset-angle-deg (default -90: downward; "
+                                                                 "--misalignment is the paper model's)."),
         unbalance_kg_m: float = typer.Option(0.2, "--unbalance-kg-m", help="A train's unbalance at the middle of "
                                                                            "its first rotor, kg·m, along +x at the "
                                                                            "keyphasor mark (--unbalance is the paper "
@@ -454,7 +461,8 @@ def register(app: typer.Typer) -> None:
             tr = _shaftline_train(shaftline, train)
             try:
                 if offset_um:
-                    tr = train_misaligned(tr, offset_m=offset_um * 1e-6)
+                    tr = train_misaligned(tr, offset_m=offset_um * 1e-6, direction_rad=math.radians(
+                        -90.0 if offset_angle_deg is None else offset_angle_deg))
                 model = TrainTransientModel(unbalanced(tr, unbalance_kg_m))
             except (TrainError, ValueError) as exc:
                 raise typer.BadParameter(str(exc), param_hint="--offset-um") from None
@@ -467,7 +475,7 @@ def register(app: typer.Typer) -> None:
             prof = SpeedProfile.parse(profile)
             res = simulate_transient(model, prof, misalignment, unbalance, mechanism=mechanism,
                                      sample_rate_hz=sample_rate_hz, settle_revs=settle_revs,
-                                     offset_angle_rad=math.radians(offset_angle_deg))
+                                     offset_angle_rad=math.radians(offset_angle_deg or 0.0))
             w = res.probe_waveforms_um(channels, snr_db=snr_db, seed=seed)
         except ValueError as exc:
             raise typer.BadParameter(str(exc)) from None

@@ -161,7 +161,8 @@ def test_no_bare_package_names(pattern):
 
 #: service modules below the API layer: they raise ``service.errors`` domain exceptions and
 #: never touch the web framework (issue 11, item 5); HTTP statuses are chosen in service/api only
-SERVICE_DOMAIN_MODULES = ("errors", "parsing", "work", "pool", "inference", "jobs", "store", "state", "schemas")
+SERVICE_DOMAIN_MODULES = ("errors", "parsing", "work", "pool", "inference", "jobs", "store", "state", "schemas",
+                          "trains")
 
 
 @pytest.mark.parametrize("name", SERVICE_DOMAIN_MODULES)

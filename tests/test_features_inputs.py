@@ -161,8 +161,11 @@ def test_non_finite_samples_refused(bad):
 
 
 def test_bearing_number_checked():
-    with pytest.raises(ValueError, match="bearing must be one of"):
-        ProbeChannel(5, 45.0, "um", np.zeros(100))
+    """Bearings are numbered 1–8 along a train (a three-rotor train has six); beyond, zero or not an integer: refused."""
+    for bad in (9, 0, 2.0, True):
+        with pytest.raises(ValueError, match="bearing must be a bearing number 1–8"):
+            ProbeChannel(bad, 45.0, "um", np.zeros(100))
+    assert ProbeChannel(5, 45.0, "um", np.zeros(100)).bearing == 5
 
 
 def test_mismatched_lengths_refused():
@@ -209,7 +212,7 @@ def test_sample_rate_too_low_for_3x_refused():
     (dict(clearance_um=-3.0), "clearance_um must be between 1 and 100000 µm"),
     (dict(clearance_um=5e-324), "clearance_um must be between"),
     (dict(speed_range_rpm=(5e-324, 3000.0)), "speed_range_rpm must lie between 1 and 100000 r/min"),
-    (dict(clearance_um={7: 300.0}), "not a bearing number"),
+    (dict(clearance_um={9: 300.0}), "not a bearing number"),
 ])
 def test_recording_fields_validated(kw, match):
     args = dict(sample_rate_hz=5120.0, channels=_chans())

@@ -9,8 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 
-#: bearings of the machine train, generator far end first
+#: bearings of the machine train, generator far end first: the paper model's four, which the feature vector covers
 BEARINGS: tuple[int, ...] = (1, 2, 3, 4)
+#: the highest bearing number a probe may carry: a shaft train numbers its bearings 1, 2, … along the train (a
+#: three-rotor train has six); bearings beyond :data:`BEARINGS` are read and analysed but not in the feature vector
+MAX_BEARING: int = 8
 #: the two bearings next to the coupling (generator side, exciter side)
 COUPLING_BEARINGS: tuple[int, int] = (2, 3)
 

@@ -21,6 +21,9 @@ import numpy as np
 
 #: Coupling kinds: ``rigid`` (bolted flanges: displacement and slope continuous) or ``flexible``.
 COUPLING_KINDS = ("rigid", "flexible")
+#: the most stations a train may have (1600 DOFs): its dense static solution, modes and reduction grow as the cube of
+#: the DOFs (a 40-node train takes well under a second, 400 stations about a thousand times its work)
+MAX_TRAIN_STATIONS = 400
 
 
 class TrainError(ValueError):
@@ -297,6 +300,11 @@ def validate(train: Train) -> None:
     if len(couplings) != len(rotors) - 1:
         raise TrainError(f"{len(rotors)} rotors need {len(rotors) - 1} coupling(s), "
                          f"one between each pair (got {len(couplings)})")
+    n_stations = sum(len(r.elements) + 1 for r in rotors)
+    if n_stations > MAX_TRAIN_STATIONS:
+        raise TrainError(f"the train has {n_stations} stations, more than {MAX_TRAIN_STATIONS}: too large to solve and "
+                         f"reduce within the limits; use longer elements (a few per span between bearings suffice for "
+                         f"the first modes) or fewer rotors")
     _check_fields(train, "Train", gravity_m_s2="non_negative", internal_damping_s="non_negative",
                   rayleigh_mass_1_s="non_negative", rayleigh_stiffness_s="non_negative")
     for i, r in enumerate(rotors):

@@ -1,8 +1,10 @@
 """Stability of a train at a speed: the least-damped mode of the train linearised at its static state.
 
-Bearing coefficients are the *reduced* ones where a bearing has them (a tilting-pad bearing's
-``reduced_coefficients``, Lund's pad assembly at synchronous whirl, the coefficients tilting-pad tables
-quote) and the film's own derivatives otherwise. The margin is the logarithmic decrement
+Bearing coefficients are, by default (``coefficients="reduced"``), the *reduced* ones where a bearing has them (a
+tilting-pad bearing's ``reduced_coefficients``, Lund's pad assembly at synchronous whirl, the coefficients tilting-pad
+tables quote) and the film's own derivatives otherwise; ``coefficients="film"`` takes the nonlinear film's own
+derivatives at the static state for every bearing (the force the time integration uses, so the margin the
+simulation has; for tilting pads it is the smaller one). The margin is the logarithmic decrement
 δ = −2π Re λ / Im λ of the least-damped mode (API 684's measure); δ ≤ 0 is an unstable train (oil whip
 or whirl). :func:`threshold_speed_rpm` brackets the speed where δ crosses zero.
 """
@@ -27,6 +29,17 @@ def reduced_coefficients(brg, x_m: float, y_m: float, speed_rad_s: float) -> tup
     return bearing_coefficients(brg, x_m, y_m, speed_rad_s)
 
 
+#: the bearing coefficients :func:`stability` can linearise with: ``reduced`` (synchronous reduced where a bearing has
+#: them) or ``film`` (the nonlinear film's own derivatives)
+COEFFICIENTS = {"reduced": reduced_coefficients, "film": bearing_coefficients}
+
+
+def _coefficients(which: str):
+    if which not in COEFFICIENTS:
+        raise TrainError(f"coefficients must be one of {sorted(COEFFICIENTS)} (got {which!r})")
+    return COEFFICIENTS[which]
+
+
 @dataclass(frozen=True)
 class Stability:
     """The least-damped mode at ``speed_rpm``: its log decrement, damped frequency and direction."""
@@ -42,13 +55,15 @@ class Stability:
 
 
 def stability(train: Train | Assembly, speed_rpm: float, *, max_frequency_hz: float | None = None,
-              static: StaticState | None = None) -> Stability:
+              static: StaticState | None = None, coefficients: str = "reduced") -> Stability:
     """The least-damped mode of the train at ``speed_rpm`` (modes up to ``max_frequency_hz``, default
     4× running speed: the shaft modes a film can drive, not the stiff local modes of a fine mesh), linearised
-    about ``static`` (solved here unless given)."""
+    about ``static`` (solved here unless given) with the bearings' ``coefficients`` (``reduced`` or ``film``,
+    module docstring)."""
+    coef = _coefficients(coefficients)
     asm = train if isinstance(train, Assembly) else assemble(train)
     st = static if static is not None else static_state(asm, speed_rpm)
-    m = modes(asm, speed_rpm, st, coefficients=reduced_coefficients)
+    m = modes(asm, speed_rpm, st, coefficients=coef)
     top = 4 * speed_rpm / 60.0 if max_frequency_hz is None else max_frequency_hz
     keep = m.frequency_hz <= top
     if not np.any(keep):
@@ -58,21 +73,28 @@ def stability(train: Train | Assembly, speed_rpm: float, *, max_frequency_hz: fl
 
 
 def threshold_speed_rpm(train: Train | Assembly, max_rpm: float, *, min_rpm: float = 300.0, n_grid: int = 12,
-                        tol_rpm: float = 5.0) -> float:
+                        tol_rpm: float = 5.0, coefficients: str = "reduced") -> float:
     """The lowest speed in [``min_rpm``, ``max_rpm``] where the least-damped mode's log decrement
-    reaches zero (onset of oil whirl/whip), by a grid and bisection; ``math.inf`` if stable throughout."""
+    reaches zero (onset of oil whirl/whip), by a grid and bisection; ``math.inf`` if stable throughout.
+    The static state is solved again at every speed (a film's load capacity grows with speed, so the journals
+    rise and, under an offset, the load shares change); ``coefficients`` as :func:`stability`."""
+    _coefficients(coefficients)
     asm = train if isinstance(train, Assembly) else assemble(train)
     grid = np.linspace(min_rpm, max_rpm, n_grid)
     prev = None
+
+    def log_dec(speed_rpm: float) -> float:
+        return stability(asm, speed_rpm, coefficients=coefficients).log_decrement
+
     for s in grid:
-        d = stability(asm, float(s)).log_decrement
+        d = log_dec(float(s))
         if d <= 0:
             if prev is None:
                 return float(s)
             lo, hi = prev, float(s)
             while hi - lo > tol_rpm:
                 mid = 0.5 * (lo + hi)
-                if stability(asm, mid).log_decrement <= 0:
+                if log_dec(mid) <= 0:
                     hi = mid
                 else:
                     lo = mid
