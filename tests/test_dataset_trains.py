@@ -172,3 +172,21 @@ def test_a_train_dataset_is_the_train_simulated_directly_and_reads_as_features(t
     table = load_feature_table(out, cache=False)
     assert table.X.shape[0] == 2 and np.isfinite(table.X).mean() > 0.9
     np.testing.assert_allclose(table.misalignment, delta)
+
+
+def test_a_flexible_samples_coupling_carries_the_offsets_kinematic_forcing():
+    """As ``simulate --train`` (train_recording): a flexible coupling under a parallel offset is given the
+    double-engagement coupling's kinematic 2X forcing of that offset, in its direction; a rigid one is not."""
+    from dataclasses import replace
+
+    from rotordiag.simulator.dataset import build_design
+    from rotordiag.simulator.dataset.worker import sample_train
+
+    tp = TrainPlant.of(shaftline.preset("gen50_2pole"))
+    p = next(q for q in (build_design(parse_spec(SPEC))[i] for i in range(2)) if q.misalignment > 0)
+    flex = sample_train(tp, replace(p, mechanism="flexible")).couplings[0]
+    assert flex.kind == "flexible"
+    assert flex.kinematic_offset_m == pytest.approx(0.4 * tp.clearance_m)
+    assert math.sin(flex.kinematic_direction_rad) == pytest.approx(-1.0)          # downward, as offset_angle_rad
+    rigid = sample_train(tp, p).couplings[0]
+    assert rigid.kind == "rigid" and rigid.kinematic_offset_m == 0.0

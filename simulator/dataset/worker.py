@@ -11,10 +11,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..train.plant import is_train_plant
+from rotordiag.simulator.train.plant import TrainPlant, is_train_plant
+
+if TYPE_CHECKING:
+    from rotordiag.simulator.train.model import Train
 from .design import SampleParams
 from .measurement import (
     MeasurementDraws,
@@ -136,6 +140,24 @@ def run_sample(task: SampleTask) -> SampleOutput:
                         steady_start=start.path, steady_note=_stiff_note(start.note, res.inputs.get("stiff_from_rev")))
 
 
+def sample_train(plant: TrainPlant, p: SampleParams) -> Train:
+    """The finite-element train of a train sample: ``plant``'s line with the sample's coupling, the exciter's
+    bearings moved by Δ·c and α along ``offset_angle_rad`` (a flexible coupling given the offset's kinematic 2X
+    forcing, as ``simulate --train`` does), the generator unbalanced to its balance grade."""
+    from rotordiag.simulator.train.model import misaligned
+    from rotordiag.simulator.train.recording import with_kinematic_offset
+    from rotordiag.simulator.train.shaftline import train_from_shaftline
+    from rotordiag.simulator.train.transient import unbalanced
+
+    train = train_from_shaftline(plant.line(coupling=p.mechanism))
+    offset_um = p.misalignment * plant.clearance_m * 1e6
+    if p.misalignment or p.angular_misalignment_mrad:
+        train = misaligned(train, offset_m=offset_um * 1e-6, angle_rad=p.angular_misalignment_mrad * 1e-3,
+                           direction_rad=p.offset_angle_rad)
+        train = with_kinematic_offset(train, offset_um, math.degrees(p.offset_angle_rad))
+    return unbalanced(train, plant.unbalance_kg_m(p.speed_rpm), angle_rad=p.unbalance_phase_rad)
+
+
 def _run_train_sample(task: SampleTask, draws: MeasurementDraws, revs: int,
                       rng: np.random.Generator) -> SampleOutput:
     """A shaft train's sample: the plant's line with the sample's coupling, the exciter's bearings moved by
@@ -144,11 +166,7 @@ def _run_train_sample(task: SampleTask, draws: MeasurementDraws, revs: int,
     import time
 
     from rotordiag.simulator.train.dynamics import simulate_train
-    from rotordiag.simulator.train.model import misaligned
-    from rotordiag.simulator.train.plant import TrainPlant
-    from rotordiag.simulator.train.shaftline import train_from_shaftline
     from rotordiag.simulator.train.stability import stability
-    from rotordiag.simulator.train.transient import unbalanced
 
     p, sim, meas = task.params, task.simulation, task.measurement
     aligned = p.misalignment == 0 and p.angular_misalignment_mrad == 0
@@ -158,12 +176,8 @@ def _run_train_sample(task: SampleTask, draws: MeasurementDraws, revs: int,
         t0 = time.perf_counter()
         plant = TrainPlant.from_dict(p.plant)
         offset_um = p.misalignment * plant.clearance_m * 1e6
-        train = train_from_shaftline(plant.line(coupling=p.mechanism))
-        if not aligned:
-            train = misaligned(train, offset_m=offset_um * 1e-6, angle_rad=p.angular_misalignment_mrad * 1e-3,
-                               direction_rad=p.offset_angle_rad)
         unb = plant.unbalance_kg_m(p.speed_rpm)
-        train = unbalanced(train, unb, angle_rad=p.unbalance_phase_rad)
+        train = sample_train(plant, p)
         log_dec = stability(train, p.speed_rpm).log_decrement  # its static state refuses a journal outside c
         run = simulate_train(train, p.speed_rpm, transient_revs=sim.transient_revs, record_revs=revs,
                              samples_per_rev=sim.samples_per_rev, rtol=sim.rtol)
