@@ -283,21 +283,17 @@ def _startup_evidence(verdict: dict | None, recording, track, baseline) -> tuple
     for an "aligned" call on a start-up that changed since the baseline, the ``startup_changed`` reason added to the
     verdict (a confident verdict becomes uncertain; the band is never changed)."""
     from rotordiag.features.transient import centreline, track_orders
-    from rotordiag.models.startup_check import startup_evidence, startup_reasons
+    from rotordiag.models.startup_check import misaligned_call, startup_evidence, startup_reasons, with_startup
 
     def evidence(rec, tr):
         return startup_evidence(tr, None if rec.dc_removed else centreline(rec, tr))
 
     base = evidence(baseline, track_orders(baseline)) if baseline is not None else None
-    call = verdict is not None and verdict.get("severity") not in ("aligned", "inconclusive", None)
     entries, reasons = startup_reasons({"startup": evidence(recording, track), "baseline": base,
-                                        "misaligned_call": call})
+                                        "misaligned_call": misaligned_call(verdict)})
     notes = [f"start-up evidence ({e['effect']}): {e['text']}" for e in entries]
     if verdict is not None and reasons:
-        verdict = dict(verdict)
-        verdict["reasons"] = list(verdict.get("reasons") or []) + [r.to_dict() for r in reasons]
-        if verdict.get("status") == "confident":
-            verdict["status"] = "uncertain"
+        verdict = with_startup(verdict, [], reasons)
     return verdict, notes
 
 
