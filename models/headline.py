@@ -132,7 +132,8 @@ RULES: Final[tuple[Rule, ...]] = (
     ("changed since the baseline", lambda f: f.baseline_changed or f.startup_changed,
      lambda f: Headline("investigate_change", "soon" if f.band in ("moderate", "severe") else "next_outage",
                         f"investigate: {_change_clause(f)}"
-                        + (f"; the model reads {f.band} misalignment{_offset_clause(f)}" if f.band else ""))),
+                        + ("; the model reads aligned" if f.band == "aligned" else
+                           f"; the model reads {f.band} misalignment{_offset_clause(f)}" if f.band else ""))),
     ("aligned", lambda f: f.band == "aligned" and f.status == "confident",
      lambda f: Headline("none", "none", "no action: aligned")),
     ("probably aligned", lambda f: f.band == "aligned",

@@ -116,19 +116,22 @@ _REPORT_HTML_HEADERS = {
             summary="A report of an asset to hand on (PDF or HTML)",
             description="The asset, its stored recordings (the trend and its plot), the latest verdict with its "
             "status, severity, Δ and interval, probabilities, reasons, warnings and model-independent evidence — "
-            "the content of `rotordiag report --asset`. The service stores verdicts, not waveforms, so the start-up "
-            "plots are not in it (the report says so). Rendered in a diagnosis worker (or a thread) within "
+            "the content of `rotordiag report --asset`, with the asset's latest start-up compared with its baseline "
+            "start-up (POST /assets/{id}/startup), lengths in `output_units`. The service stores verdicts, not "
+            "waveforms, so the start-up plots are not in it (the report says so). Rendered in a diagnosis worker (or a thread) within "
             "ROTORDIAG_DIAGNOSIS_TIMEOUT_S.")
 async def asset_report(
     asset_id: AssetPath, state: StateDep,
     format: Annotated[Literal["pdf", "html"], Query(description="pdf (default) or html.")] = "pdf",
+    output_units: Annotated[Literal["um", "mil"], Query(description="Lengths of the report: `um` (default) or "
+                                                        "`mil`, as the diagnosis answers (`?output_units=`).")] = "um",
 ) -> Response:
     from ...pool import AssetReport
     from ...report import asset_report_inputs, render_asset_report
 
     def read() -> dict | None:
         with state.sessions() as s:
-            return asset_report_inputs(s, asset_id)
+            return asset_report_inputs(s, asset_id, units=output_units)
 
     inputs = await run_in_threadpool(read)
     if inputs is None:
@@ -345,7 +348,7 @@ def _startup_sync(recording) -> dict:
 def _startup_answer(state, asset_id: str, startup_id: int, units: str) -> dict:
     """A stored start-up with what it does to the asset's verdict: the comparison with the baseline start-up
     (evidence rows, reasons) and the asset's latest stored verdict with it (status, headline)."""
-    from rotordiag.models.output_units import verdict_in_units
+    from rotordiag.models.output_units import revive_typed_texts, verdict_in_units
 
     from ...core.db import AssetStartup
     from ...startups import attach_startup, startup_comparison, startup_dict, startups_in_force
@@ -357,7 +360,7 @@ def _startup_answer(state, asset_id: str, startup_id: int, units: str) -> dict:
         base, later = startups_in_force(s, asset_id)
         out["baseline_startup_id"] = None if base is None else base.id
         rows = [r for r in asset_history(s, asset_id, 50, None) if r.verdict]
-        latest = rows[-1].verdict if rows else None
+        latest = revive_typed_texts(rows[-1].verdict) if rows else None
         if row.is_baseline:
             out["evidence_rows"], out["reasons"] = [], []
             out["comparison"] = ("this is the asset's baseline start-up: later start-ups (POST without "
