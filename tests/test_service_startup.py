@@ -108,6 +108,8 @@ def test_a_changed_startup_is_evidence_in_the_assets_verdict_never_a_surer_one(c
     rows = [e for e in after["evidence"] if e["scope"] == "start-up"]
     assert rows and any("half its centreline rise" in e["value"] for e in rows)
     assert "startup_changed" in [x["code"] for x in after["reasons"]]
+    assert after["startup"] == {"startup_id": changed["startup_id"], "baseline_startup_id": base["startup_id"],
+                                "changed": True, "reasons": ["startup_changed"]}
     assert after["severity"] == before["severity"] and after["misalignment"] == pytest.approx(before["misalignment"])
     assert after["probabilities"] == pytest.approx(before["probabilities"])
     assert after["status"] != "confident" and after["headline"]["action"] == "investigate_change"
