@@ -82,6 +82,7 @@ class _Facts:
     baseline_exceeded: tuple[str, ...]
     baseline_set_at: str | None
     units: str
+    startup_changed: bool = False
 
 
 def _length(value_um: float, units: str) -> str:
@@ -99,6 +100,9 @@ def _offset_clause(f: _Facts) -> str:
 
 def _change_clause(f: _Facts) -> str:
     from .change import CHANGE_NAMES
+
+    if f.startup_changed and not f.baseline_changed:
+        return "the start-up's coupling-end centreline rise changed since the baseline start-up"
 
     what = " and ".join(CHANGE_NAMES.get(x, x.replace("_", " ")) for x in f.baseline_exceeded) or "the signature"
     when = f" of {readable_time(f.baseline_set_at)}" if f.baseline_set_at else ""
@@ -125,10 +129,11 @@ RULES: Final[tuple[Rule, ...]] = (
     ("inconclusive", lambda f: f.status == INCONCLUSIVE,
      lambda f: Headline("record_again", "before_acting", "no verdict from this recording: " + _first_action(f.codes),
                         show_severity=False)),
-    ("changed since the baseline", lambda f: f.baseline_changed,
+    ("changed since the baseline", lambda f: f.baseline_changed or f.startup_changed,
      lambda f: Headline("investigate_change", "soon" if f.band in ("moderate", "severe") else "next_outage",
                         f"investigate: {_change_clause(f)}"
-                        + (f"; the model reads {f.band} misalignment{_offset_clause(f)}" if f.band else ""))),
+                        + ("; the model reads aligned" if f.band == "aligned" else
+                           f"; the model reads {f.band} misalignment{_offset_clause(f)}" if f.band else ""))),
     ("aligned", lambda f: f.band == "aligned" and f.status == "confident",
      lambda f: Headline("none", "none", "no action: aligned")),
     ("probably aligned", lambda f: f.band == "aligned",
@@ -167,7 +172,8 @@ def _facts(verdict: Mapping[str, Any], baseline: Mapping[str, Any] | None, units
                   baseline_exceeded=tuple(base.get("exceeded") or ()) if changed and isinstance(base, Mapping) else (),
                   baseline_set_at=str(base.get("set_at")) if changed and isinstance(base, Mapping)
                   and base.get("set_at") else None,
-                  units="mil" if units.strip().lower().startswith("mil") else "um")
+                  units="mil" if units.strip().lower().startswith("mil") else "um",
+                  startup_changed="startup_changed" in codes)
 
 
 def headline(verdict: Mapping[str, Any], *, baseline: Mapping[str, Any] | None = None,

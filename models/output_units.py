@@ -20,7 +20,67 @@ from rotordiag.core.units import UM_PER_MIL, lengths_in, um_to
 
 from .headline import headline_dict
 
-__all__ = ["verdict_in_units"]
+__all__ = ["verdict_in_units", "with_typed_texts", "revive_typed_texts", "TYPED_TEXTS_KEY"]
+
+#: the key of a stored verdict that keeps its texts' typed values (:func:`with_typed_texts`)
+TYPED_TEXTS_KEY = "typed_texts"
+
+
+def _typed_places(verdict: dict[str, Any]):
+    """(section, index, field, value) of every text that carries typed values: evidence values, reason
+    messages, warnings."""
+    for i, ev in enumerate(verdict.get("evidence") or []):
+        if isinstance(ev, dict) and isinstance(ev.get("value"), Measured):
+            yield "evidence", i, "value", ev["value"]
+    for i, r in enumerate(verdict.get("reasons") or []):
+        if isinstance(r, dict) and isinstance(r.get("message"), Measured):
+            yield "reasons", i, "message", r["message"]
+    for i, w in enumerate(verdict.get("warnings") or []):
+        if isinstance(w, Note | Measured):
+            yield "warnings", i, None, w
+
+
+def with_typed_texts(verdict: dict[str, Any]) -> dict[str, Any]:
+    """A copy of ``verdict`` (µm) for storage as JSON: its texts stay as they are (µm), and ``typed_texts`` keeps
+    the typed values of each (:func:`rotordiag.core.notes.typed_to_json`), so a stored verdict can be given in
+    mils later (:func:`revive_typed_texts`, then :func:`verdict_in_units`) without reading numbers out of
+    sentences."""
+    from rotordiag.core.notes import typed_to_json
+
+    typed: dict[str, dict[str, Any]] = {}
+    for section, i, _, value in _typed_places(verdict):
+        typed.setdefault(section, {})[str(i)] = typed_to_json(value)
+    return {**verdict, TYPED_TEXTS_KEY: typed} if typed else dict(verdict)
+
+
+def revive_typed_texts(stored: dict[str, Any]) -> dict[str, Any]:
+    """A stored verdict with its texts typed again (the inverse of :func:`with_typed_texts`; a verdict stored
+    before typed texts were kept comes back as it is, its texts in µm). A typed entry whose text no longer
+    matches the stored text is left as stored."""
+    from rotordiag.core.notes import typed_from_json
+
+    typed = stored.get(TYPED_TEXTS_KEY)
+    out = {k: v for k, v in stored.items() if k != TYPED_TEXTS_KEY}
+    if not isinstance(typed, dict):
+        return out
+    for section, field_ in (("evidence", "value"), ("reasons", "message"), ("warnings", None)):
+        items = list(out.get(section) or [])
+        for key, data in (typed.get(section) or {}).items():
+            try:
+                i = int(key)
+                obj = typed_from_json(data)
+            except (TypeError, ValueError):
+                continue
+            if not 0 <= i < len(items):
+                continue
+            if field_ is None:
+                if items[i] == str(obj):
+                    items[i] = obj
+            elif isinstance(items[i], dict) and items[i].get(field_) == str(obj):
+                items[i] = {**items[i], field_: obj}
+        if items:
+            out[section] = items
+    return out
 
 
 def verdict_in_units(verdict: dict[str, Any], units: str) -> dict[str, Any]:

@@ -45,6 +45,8 @@ class ReportContent:
     figures : dict of name → matplotlib Figure
     notes : list of str
         What the report leaves out and why (e.g. a service report has no start-up plots: waveforms are not stored).
+    units : {"um", "mil"}
+        The lengths' units of the text (the verdict is given already in them: ``models.output_units``).
     """
 
     title: str
@@ -58,31 +60,44 @@ class ReportContent:
     generated_at: str = field(default_factory=lambda: dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC"))
     code_version: str = ""
     notes: list[str] = field(default_factory=list)
+    units: str = "um"
 
 
-def transient_summary(track: Any) -> dict:
+def transient_summary(track: Any, units: str = "um") -> dict:
     """A start-up's summary (a ``features.transient.OrderTrack``): kind, speed source and range, steps tracked,
-    the 1X and 2X resonance peaks, conventions and notes (plain data; the report and the web page show it)."""
+    the 1X and 2X resonance peaks (``amp_um_pp``), conventions (lengths in ``units``) and notes (plain data; the
+    report and the web page show it)."""
+    from rotordiag.features.transient import conventions
+
     return {"kind": track.kind, "speed_source": track.speed_source,
             "speed_range_rpm": [float(track.speed_rpm.min()), float(track.speed_rpm.max())],
             "n_steps": int(track.speed_rpm.size), "peaks": track.peaks(1) + track.peaks(2),
-            "conventions": track.conventions, "notes": list(track.notes)}
+            "conventions": track.conventions if units == "um" else conventions(units), "notes": list(track.notes)}
 
 
 def build_report(*, title: str, asset_id: str | None = None, recordings: list[dict] | None = None,
                  verdict: dict | None = None, verdict_note: str | None = None, history: list[dict] | None = None,
                  track: Any = None, figures: dict[str, Any] | None = None,
-                 notes: list[str] | None = None) -> ReportContent:
-    """Assemble a :class:`ReportContent`; ``track`` (a ``features.transient.OrderTrack``) gives the start-up summary."""
+                 notes: list[str] | None = None, units: str = "um") -> ReportContent:
+    """Assemble a :class:`ReportContent`; ``track`` (a ``features.transient.OrderTrack``) gives the start-up summary;
+    ``units`` (``"um"`` / ``"mil"``) are those of the lengths in the text — ``verdict`` must be given in them
+    (``models.output_units.verdict_in_units``), the figures drawn in them."""
+    from rotordiag.core.units import um_to
     from rotordiag.core.version import code_version
 
-    transient = transient_summary(track) if track is not None else None
+    um_to(None, units)
+    units = "mil" if units.strip().lower().startswith("mil") else "um"
+    if verdict is not None and verdict.get("output_units", "um") != units:
+        raise ValueError(f"the verdict's lengths are in {verdict.get('output_units', 'um')}, the report's in {units}: "
+                         "convert it with models.output_units.verdict_in_units")
+    transient = transient_summary(track, units) if track is not None else None
     if history:
         figures = dict(figures or {})
         figures = {"trend": _trend_figure(history, asset_id), **figures}
     return ReportContent(title=title, asset_id=asset_id, recordings=list(recordings or []), verdict=verdict,
                          verdict_note=verdict_note, history=list(history or []), transient=transient,
-                         figures=dict(figures or {}), code_version=code_version(), notes=list(notes or []))
+                         figures=dict(figures or {}), code_version=code_version(), notes=list(notes or []),
+                         units=units)
 
 
 def _fmt(v: Any, nd: int = 3) -> str:
@@ -91,7 +106,11 @@ def _fmt(v: Any, nd: int = 3) -> str:
 
 def summary_lines(c: ReportContent) -> list[tuple[str, str]]:
     """The report's text as (kind, line): kind ``h`` heading, ``t`` text, ``b`` bullet."""
-    out: list[tuple[str, str]] = [("t", f"generated {c.generated_at}; rotordiag {c.code_version}")]
+    from rotordiag.core.units import um_to
+
+    mil = c.units == "mil"
+    unit = "mil" if mil else "µm"
+    out: list[tuple[str, str]] = [("t", f"generated {c.generated_at}; rotordiag {c.code_version}; lengths in {unit}")]
     if c.asset_id:
         out.append(("t", f"asset: {c.asset_id}"))
     out.append(("h", "Recordings"))
@@ -112,9 +131,11 @@ def summary_lines(c: ReportContent) -> list[tuple[str, str]]:
         out.append(("t", f"status: {v.get('status')}    severity: {severity}"))
         lo, hi = (v.get("misalignment_interval") or [None, None])[:2]
         out.append(("t", f"misalignment Δ = δ/c: {_fmt(v.get('misalignment'))} (interval {_fmt(lo)} – {_fmt(hi)})"))
-        if v.get("offset_um") is not None:
-            a, b = v.get("offset_interval_um") or [None, None]
-            out.append(("t", f"offset δ: {_fmt(v['offset_um'], 1)} µm ({_fmt(a, 1)} – {_fmt(b, 1)} µm)"))
+        offset = v.get("offset_mil" if mil else "offset_um")
+        if offset is not None:
+            a, b = v.get("offset_interval_mil" if mil else "offset_interval_um") or [None, None]
+            nd = 2 if mil else 1
+            out.append(("t", f"offset δ: {_fmt(offset, nd)} {unit} ({_fmt(a, nd)} – {_fmt(b, nd)} {unit})"))
         out.append(("t", f"speed: {_fmt(v.get('speed_rpm'), 1)} r/min; motion type: {v.get('motion_type') or '–'}; "
                          f"model {v.get('model_version') or '–'}"))
         probs = v.get("probabilities") or {}
@@ -136,8 +157,9 @@ def summary_lines(c: ReportContent) -> list[tuple[str, str]]:
         out.append(("t", f"{t['kind']}, {lo:.0f}–{hi:.0f} r/min, {t['n_steps']} revolutions tracked, speed from the "
                          f"{t['speed_source']}"))
         for p in t["peaks"]:
-            out.append(("b", f"{p['order']}X peak at b{p['bearing']}@{p['angle_deg']:g}: {p['amp_um_pp']:.1f} µm pk-pk "
-                             f"at {p['speed_rpm']:.0f} r/min"))
+            amp = um_to(p["amp_um_pp"], c.units)
+            out.append(("b", f"{p['order']}X peak at b{p['bearing']}@{p['angle_deg']:g}: {amp:.{2 if mil else 1}f} "
+                             f"{unit} pk-pk at {p['speed_rpm']:.0f} r/min"))
         if not t["peaks"]:
             out.append(("b", "no 1X/2X resonance peak inside the run"))
         for n in t["notes"]:

@@ -21,8 +21,8 @@ from rotordiag.core.conventions import COUPLING_BEARINGS
 
 from .status import UNCERTAIN, Reason
 
-__all__ = ["StartupEvidence", "startup_evidence", "compare_startups", "startup_reasons",
-           "CRITICAL_MOVED_FRACTION", "RISE_CHANGED_FRACTION"]
+__all__ = ["StartupEvidence", "startup_evidence", "compare_startups", "startup_reasons", "with_startup",
+           "misaligned_call", "CRITICAL_MOVED_FRACTION", "RISE_CHANGED_FRACTION"]
 
 #: a 1X peak has moved when its speed differs from the baseline's by more than this fraction; reported as an entry
 #: only: on simulated healthy re-runs of the same plant (another unbalance phase, or another ramp rate) the 1X peak
@@ -44,6 +44,30 @@ class StartupEvidence:
     top_um: dict[int, tuple[float, float]] = field(default_factory=dict)
     clearance_um: dict[int, float] = field(default_factory=dict)
     speed_range_rpm: tuple[float, float] = (math.nan, math.nan)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON data (probes as ``"b2@45"``, bearings as strings): what the service stores of a start-up."""
+        return {"criticals": {f"b{b}@{a:g}": s for (b, a), s in sorted(self.criticals.items())},
+                "half_rise_rpm": {str(b): v for b, v in sorted(self.half_rise_rpm.items())},
+                "top_um": {str(b): [float(v[0]), float(v[1])] for b, v in sorted(self.top_um.items())},
+                "clearance_um": {str(b): v for b, v in sorted(self.clearance_um.items())},
+                "speed_range_rpm": [float(v) for v in self.speed_range_rpm]}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> StartupEvidence:
+        """The inverse of :meth:`to_dict`. Raises ValueError on data it did not write."""
+        try:
+            crit = {}
+            for key, s in (d.get("criticals") or {}).items():
+                b, a = str(key).removeprefix("b").split("@")
+                crit[(int(b), float(a))] = float(s)
+            lo, hi = d.get("speed_range_rpm") or (math.nan, math.nan)
+            return cls(crit, {int(b): float(v) for b, v in (d.get("half_rise_rpm") or {}).items()},
+                       {int(b): (float(v[0]), float(v[1])) for b, v in (d.get("top_um") or {}).items()},
+                       {int(b): float(v) for b, v in (d.get("clearance_um") or {}).items()},
+                       (float(lo), float(hi)))
+        except (TypeError, ValueError, IndexError, AttributeError) as exc:
+            raise ValueError(f"not a stored start-up evidence: {exc}") from None
 
 
 def startup_evidence(track: Any, centreline: Any = None) -> StartupEvidence:
@@ -70,17 +94,20 @@ def startup_evidence(track: Any, centreline: Any = None) -> StartupEvidence:
     return ev
 
 
-def compare_startups(now: StartupEvidence, baseline: StartupEvidence) -> dict[str, Any]:
+def compare_startups(now: StartupEvidence, baseline: StartupEvidence,
+                     coupling_bearings: tuple[int, ...] = COUPLING_BEARINGS) -> dict[str, Any]:
     """How the run differs from the baseline: ``critical_shift`` {probe: (baseline, now, fraction)} for the probes
     with a 1X critical in both; ``half_rise_shift`` {coupling bearing: (baseline, now, fraction)};
-    ``top_change_per_clearance`` {coupling bearing: |Δ position at the top speed| / clearance}."""
+    ``top_change_per_clearance`` {coupling bearing: |Δ position at the top speed| / clearance}.
+    ``coupling_bearings``: the bearings either side of the coupling (the paper model's 2 and 3; a train's the
+    last of the driving rotor and the first of the driven one)."""
     crit = {p: (baseline.criticals[p], s, (s - baseline.criticals[p]) / baseline.criticals[p])
             for p, s in now.criticals.items() if p in baseline.criticals}
     rise = {b: (baseline.half_rise_rpm[b], now.half_rise_rpm[b],
                 (now.half_rise_rpm[b] - baseline.half_rise_rpm[b]) / baseline.half_rise_rpm[b])
-            for b in COUPLING_BEARINGS if b in now.half_rise_rpm and b in baseline.half_rise_rpm}
+            for b in coupling_bearings if b in now.half_rise_rpm and b in baseline.half_rise_rpm}
     top = {}
-    for b in COUPLING_BEARINGS:
+    for b in coupling_bearings:
         c = now.clearance_um.get(b) or baseline.clearance_um.get(b)
         if b in now.top_um and b in baseline.top_um and c:
             d = np.subtract(now.top_um[b], baseline.top_um[b])
@@ -92,7 +119,7 @@ def startup_reasons(context: dict[str, Any]) -> tuple[list[dict[str, Any]], list
     """Evidence entries and reasons from a start-up.
 
     ``context``: ``startup`` (:class:`StartupEvidence`), ``baseline`` (the asset's baseline start-up's, or None),
-    ``misaligned_call`` (the steady verdict calls misalignment). Returns (evidence entries — each
+    ``misaligned_call`` (the steady verdict calls misalignment), optionally ``coupling_bearings``. Returns (evidence entries — each
     ``{"code", "value", "text", "effect"}`` with effect ``"supports"`` / ``"doubts"`` / ``"none"`` —, reasons: at
     most ``startup_changed`` (uncertain) for an "aligned" call on a run that changed since the baseline)."""
     now: StartupEvidence = context["startup"]
@@ -108,7 +135,7 @@ def startup_reasons(context: dict[str, Any]) -> tuple[list[dict[str, Any]], list
                         "text": "no baseline start-up of this asset: nothing to compare the criticals and the "
                                 "centreline rise with"})
         return entries, []
-    cmp_ = compare_startups(now, base)
+    cmp_ = compare_startups(now, base, tuple(context.get("coupling_bearings") or COUPLING_BEARINGS))
     moved = [f"the 1X peak at b{b}@{a:g} moved from {s0:.0f} to {s1:.0f} r/min ({100 * f:+.0f} %)"
              for (b, a), (s0, s1, f) in sorted(cmp_["critical_shift"].items()) if abs(f) > CRITICAL_MOVED_FRACTION]
     if moved:  # reported, never a doubt by itself: see CRITICAL_MOVED_FRACTION
@@ -142,3 +169,37 @@ def startup_reasons(context: dict[str, Any]) -> tuple[list[dict[str, Any]], list
                             f"called aligned, but the start-up changed since the asset's baseline start-up: {text}. "
                             "A moved bearing, a changed coupling or a rub changes a run-up so; compare the two "
                             "start-ups' Bode and centreline plots before accepting the verdict")]
+
+
+def misaligned_call(verdict: dict[str, Any] | None) -> bool:
+    """Whether a verdict dict calls misalignment (a band other than aligned; inconclusive calls nothing)."""
+    return verdict is not None and verdict.get("severity") not in ("aligned", "inconclusive", None)
+
+
+#: what each entry of :func:`startup_reasons` is called on an evidence row (``scope`` "start-up")
+_ENTRY_NAMES = {"startup_criticals": "1X criticals", "startup_no_baseline": "baseline start-up",
+                "startup_criticals_moved": "1X criticals against the baseline",
+                "startup_unchanged": "coupling-end centreline rise", "startup_changed": "coupling-end centreline rise"}
+_EFFECT_MEANING = {"supports": "the start-up changed as a misalignment would change it: supports the call",
+                   "doubts": "the start-up changed since the baseline start-up, which the verdict does not explain",
+                   "none": "for the record; not a doubt by itself"}
+
+
+def with_startup(verdict: dict[str, Any], entries: list[dict[str, Any]], reasons: list[Reason],
+                 source: str = "") -> dict[str, Any]:
+    """``verdict`` (a ``Verdict.to_dict()``-style dict, not changed) with a start-up's evidence: each entry as an
+    evidence row (``scope`` "start-up", ``name``, ``value``, ``meaning``) and the reasons added; a ``confident``
+    status becomes ``uncertain`` when a reason is added. The band, Δ and probabilities are never changed, so the
+    start-up can only make the verdict less certain. ``source`` names the start-up (e.g. its date) in the rows."""
+    out = dict(verdict)
+    tag = f" ({source})" if source else ""
+    rows = [{"scope": "start-up", "name": _ENTRY_NAMES.get(e["code"], e["code"]) + tag, "value": e["text"],
+             "meaning": _EFFECT_MEANING[e["effect"]], "number": None, "code": e["code"], "effect": e["effect"]}
+            for e in entries]
+    out["evidence"] = [ev for ev in (verdict.get("evidence") or []) if ev.get("scope") != "start-up"] + rows
+    if reasons:
+        have = {r.get("code") for r in verdict.get("reasons") or [] if isinstance(r, dict)}
+        out["reasons"] = list(verdict.get("reasons") or []) + [r.to_dict() for r in reasons if r.code not in have]
+        if out.get("status") == "confident":
+            out["status"] = UNCERTAIN
+    return out

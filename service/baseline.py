@@ -255,6 +255,10 @@ def record_verdict(state: AppState, asset_id: str | None, plant: str | None, ver
     if asset_id is None:
         return None
     attach_baseline(state, asset_id, verdict, signature, storing=store)
+    from .startups import attach_startup
+
+    with state.sessions() as s:
+        verdict.update(attach_startup(s, asset_id, verdict))
     verdict["stored"] = store
     if not store:
         verdict["storage_note"] = (f"not stored in the history of asset {asset_id!r}: storing a diagnosis needs the "

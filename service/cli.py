@@ -323,7 +323,7 @@ class _DbState:
         self.settings = settings
 
 
-def asset_report_data(asset_id: str) -> dict:
+def asset_report_data(asset_id: str, units: str = "um") -> dict:
     """What ``GET /assets/{id}/report`` shows of an asset (:func:`rotordiag.service.report.asset_report_inputs`:
     its trend, latest stored verdict, recordings and notes), from the service's database (ROTORDIAG_* settings,
     as ``rotordiag serve``). Raises ValueError for an unknown asset or unreadable settings."""
@@ -339,7 +339,7 @@ def asset_report_data(asset_id: str) -> dict:
         raise ValueError(f"invalid service settings: {exc}") from None
     sessions = init_db(make_engine(settings.effective_database_url))
     with sessions() as s:
-        out = asset_report_inputs(s, asset_id)
+        out = asset_report_inputs(s, asset_id, units=units)
     if out is None:
         raise ValueError(f"asset {asset_id!r} has no stored diagnoses in {settings.effective_database_url}")
     return out
@@ -350,21 +350,17 @@ def _startup_evidence(verdict: dict | None, recording, track, baseline) -> tuple
     for an "aligned" call on a start-up that changed since the baseline, the ``startup_changed`` reason added to the
     verdict (a confident verdict becomes uncertain; the band is never changed)."""
     from rotordiag.features.transient import centreline, track_orders
-    from rotordiag.models.startup_check import startup_evidence, startup_reasons
+    from rotordiag.models.startup_check import misaligned_call, startup_evidence, startup_reasons, with_startup
 
     def evidence(rec, tr):
         return startup_evidence(tr, None if rec.dc_removed else centreline(rec, tr))
 
     base = evidence(baseline, track_orders(baseline)) if baseline is not None else None
-    call = verdict is not None and verdict.get("severity") not in ("aligned", "inconclusive", None)
     entries, reasons = startup_reasons({"startup": evidence(recording, track), "baseline": base,
-                                        "misaligned_call": call})
+                                        "misaligned_call": misaligned_call(verdict)})
     notes = [f"start-up evidence ({e['effect']}): {e['text']}" for e in entries]
     if verdict is not None and reasons:
-        verdict = dict(verdict)
-        verdict["reasons"] = list(verdict.get("reasons") or []) + [r.to_dict() for r in reasons]
-        if verdict.get("status") == "confident":
-            verdict["status"] = "uncertain"
+        verdict = with_startup(verdict, [], reasons)
     return verdict, notes
 
 
@@ -390,6 +386,7 @@ def _register_report(app: typer.Typer) -> None:
                                                         "start-up (same layout): --startup is compared with it, its "
                                                         "coupling-end centreline rise as evidence beside the verdict."),
         title: Optional[str] = typer.Option(None, "--title", help="Report title."),
+        output_units: str = typer.Option("um", "--output-units", help="Lengths in the report and its plots: um | mil."),
     ) -> None:
         """Write a report (PDF + HTML): the verdict with its status, reasons and evidence, the start-up plots, the trend."""
         if recording is None and startup is None and asset is None:
@@ -399,9 +396,18 @@ def _register_report(app: typer.Typer) -> None:
             typer.secho(f"error: --out {out}: the report is a .pdf (the .html is written next to it)", fg="red",
                         err=True)
             raise typer.Exit(2)
+        from rotordiag.core.units import um_to
         from rotordiag.models.cli import default_registry
+        from rotordiag.models.output_units import verdict_in_units
         from rotordiag.models.registry import RegistryError
         from rotordiag.models.report import build_report, write_report
+
+        try:
+            um_to(None, output_units)
+        except ValueError as exc:
+            typer.secho(f"error: --output-units: {exc}", fg="red", err=True)
+            raise typer.Exit(2) from None
+        units = "mil" if output_units.strip().lower().startswith("mil") else "um"
 
         given = {"sample_rate_hz": sample_rate_hz, "channels": channels, "keyphasor_channel": keyphasor_channel,
                  "clearance_um": clearance_um}
@@ -439,7 +445,7 @@ def _register_report(app: typer.Typer) -> None:
                     from rotordiag.simulator import Plant
 
                     pl = Plant.from_file(plant)
-                figs = transient_figures(sres.recording, track, plant=pl)
+                figs = transient_figures(sres.recording, track, plant=pl, units=units)
                 recs.append({"file": str(startup), "role": "start-up", "format": sres.format, "notes": sres.notes})
             notes: list[str] = []
             if baseline_startup is not None:
@@ -452,8 +458,10 @@ def _register_report(app: typer.Typer) -> None:
                 verdict, more = _startup_evidence(verdict, sres.recording, track,
                                                   bres.recording if baseline_startup is not None else None)
                 notes += more
+            if verdict is not None:
+                verdict = verdict_in_units(verdict, units)
             if asset is not None:
-                stored = asset_report_data(asset)
+                stored = asset_report_data(asset, units)
                 history = stored["history"]
                 if recording is None:   # the asset's latest stored verdict, as GET /assets/{id}/report shows it
                     verdict, note = stored["verdict"], stored["verdict_note"]
@@ -463,7 +471,7 @@ def _register_report(app: typer.Typer) -> None:
                     notes = [n for n in stored["notes"] if startup is None or n != NO_WAVEFORMS_NOTE]
             content = build_report(title=title or f"rotordiag report{' — ' + asset if asset else ''}", asset_id=asset,
                                    recordings=recs, verdict=verdict, verdict_note=note, history=history,
-                                   track=track, figures=figs, notes=notes)
+                                   track=track, figures=figs, notes=notes, units=units)
             paths = write_report(content, out, out.with_suffix(".html"))
         except (ValueError, OSError) as exc:
             typer.secho(f"error: {exc}", fg="red", err=True)

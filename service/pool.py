@@ -293,6 +293,23 @@ class TransientPlots(WorkerCall):
 
 
 @dataclass(frozen=True)
+class StartupBody(WorkerCall):
+    """A start-up or coast-down sent to ``POST /assets/{id}/startup``: parsed and reduced to the evidence the
+    service stores (:func:`service.startups.startup_data`): ``("ok", data)`` or an error tuple."""
+
+    kind: str
+    body: Body
+    filename: str
+    query: dict[str, Any]
+
+    def run(self) -> tuple:
+        from .parsing import parse_body
+        from .startups import startup_data
+
+        return _tagged(lambda: ("ok", startup_data(parse_body(self.kind, self.body, self.filename, self.query)[0])))
+
+
+@dataclass(frozen=True)
 class AssetReport(WorkerCall):
     """An asset's report (``GET /assets/{id}/report``) as PDF or HTML bytes, from the plain data read from the
     store (:func:`service.report.asset_report_inputs`): ``("ok", bytes)`` or an error tuple."""

@@ -25,12 +25,19 @@ NO_WAVEFORMS_NOTE = ("the service stores verdicts, not waveforms: the start-up /
                      "upload, or with `rotordiag report --startup FILE`")
 
 
-def asset_report_inputs(session: Session, asset_id: str, limit: int = REPORT_HISTORY_LIMIT) -> dict[str, Any] | None:
+def asset_report_inputs(session: Session, asset_id: str, limit: int = REPORT_HISTORY_LIMIT,
+                        units: str = "um") -> dict[str, Any] | None:
     """What a report of ``asset_id`` shows, from the store: ``{"asset_id", "history", "verdict", "recordings",
-    "notes"}`` (plain data), or None when the asset has no stored diagnosis.
+    "notes", "units"}`` (plain data), or None when the asset has no stored diagnosis.
 
     The verdict is the latest stored diagnosis that still holds its full verdict (retention keeps only the
-    summary of old ones); the recordings are the stored diagnoses, oldest first (the trend)."""
+    summary of old ones), with the asset's latest start-up compared with its baseline start-up
+    (``service.startups``), in ``units`` (``"um"`` or ``"mil"``: its texts rendered again from their stored typed
+    values, ``models.output_units``); the recordings are the stored diagnoses, oldest first (the trend)."""
+    from rotordiag.models.output_units import revive_typed_texts, verdict_in_units
+
+    from .startups import attach_startup
+
     rows = asset_history(session, asset_id, limit, None)
     if not rows:
         return None
@@ -47,14 +54,15 @@ def asset_report_inputs(session: Session, asset_id: str, limit: int = REPORT_HIS
         if latest is not rows[-1]:
             notes.append(f"the latest diagnosis (#{rows[-1].id}) keeps only its summary; the verdict shown is "
                          f"#{latest.id}'s")
-        verdict: dict[str, Any] | None = v
+        verdict: dict[str, Any] | None = verdict_in_units(attach_startup(session, asset_id, revive_typed_texts(v)),
+                                                          units)
     else:
         verdict = None
     recordings.append({"file": f"{len(rows)} stored diagnos{'is' if len(rows) == 1 else 'es'}, {rows[0].created_at:%Y-%m-%d %H:%M} to "
                                f"{rows[-1].created_at:%Y-%m-%d %H:%M} UTC (the trend below)",
                        "role": "trend", "format": "stored summaries", "notes": []})
     return {"asset_id": asset_id, "history": history_dicts(rows), "verdict": verdict, "recordings": recordings,
-            "notes": notes,
+            "notes": notes, "units": units,
             "verdict_note": None if verdict is not None else
             "no stored diagnosis of this asset keeps its full verdict (retention keeps only summaries): no verdict"}
 
@@ -67,7 +75,8 @@ def render_asset_report(inputs: dict[str, Any], fmt: str) -> bytes:
 
     content = build_report(title=f"rotordiag report — {inputs['asset_id']}", asset_id=inputs["asset_id"],
                            recordings=inputs["recordings"], verdict=inputs["verdict"],
-                           verdict_note=inputs["verdict_note"], history=inputs["history"], notes=inputs["notes"])
+                           verdict_note=inputs["verdict_note"], history=inputs["history"], notes=inputs["notes"],
+                           units=inputs.get("units", "um"))
     try:
         return report_bytes(content, fmt)
     finally:

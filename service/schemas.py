@@ -616,6 +616,11 @@ class DiagnoseResponse(BaseModel):
                                 "asset's history (only requests with the `X-API-Key` header store).")
     storage_note: str | None = Field(None, description="With an `asset_id` and no API key: why the diagnosis was "
                                      "not stored.")
+    startup: dict[str, Any] | None = Field(None, description="With an `asset_id` whose later start-up is compared with its "
+                                           "baseline start-up (POST /assets/{id}/startup): `startup_id`, "
+                                           "`baseline_startup_id` (null: none), `changed` (the coupling-end "
+                                           "centreline rise moved), `reasons` added; the comparison itself is in "
+                                           "`evidence` (scope `start-up`).")
     baseline: BaselineSectionOut | None = Field(None, description="With an `asset_id`: whether the asset's baseline "
                                                 "was used, its date, and what changed since it (the change items are "
                                                 "also in `evidence`, scope `change since baseline`).")

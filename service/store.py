@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING, Any
 
 from sqlalchemy import Text, cast, delete, func, select, update
 
+from rotordiag.models.output_units import with_typed_texts
+
 from .alarms import evaluate
 from .core.db import AssetBaseline, AssetBaselineRecording, AssetDiagnosis, AssetSettings, Job, ServiceProbe, utcnow
 
@@ -47,7 +49,7 @@ def store_diagnosis(state: AppState, asset_id: str, plant: str | None, verdict: 
         misalignment_low=_num(interval[0]), misalignment_high=_num(interval[1]),
         speed_rpm=_num(verdict.get("speed_rpm")),
         ood=None if verdict.get("ood") is None else bool(verdict.get("ood")),
-        verdict=verdict, key_features=dict(verdict.get("key_features") or {}),
+        verdict=with_typed_texts(verdict), key_features=dict(verdict.get("key_features") or {}),
         signature=signature, change=change, alarm=None if change is None else bool(change.get("changed")),
         recorded_at=meta.get("recorded_at"), tags=meta.get("tags") or None, note=meta.get("note") or None,
     )

@@ -189,3 +189,14 @@ def test_api_timestamps_are_iso_8601_with_utc_as_z():
     plus_one = dt.timezone(dt.timedelta(hours=1))
     assert iso_utc(dt.datetime(2026, 3, 2, 11, 0, tzinfo=plus_one)) == "2026-03-02T11:00:00+01:00"
     assert iso_utc(None) is None
+
+
+def test_a_changed_start_up_asks_to_investigate_the_change():
+    """``startup_changed`` (models.startup_check, on an "aligned" call) leads to "investigate change", naming the
+    start-up; an inconclusive verdict still asks to record again first; no "aligned misalignment" wording."""
+    h = headline(_v(status="uncertain", codes=("startup_changed",), offset_um=7.0))
+    assert (h.action, h.urgency) == ("investigate_change", "next_outage")
+    assert "start-up's coupling-end centreline rise changed since the baseline start-up" in h.text
+    assert h.text.endswith("the model reads aligned") and "aligned misalignment" not in h.text
+    h = headline(_v(status="inconclusive", severity="inconclusive", codes=("signature_above_call", "startup_changed")))
+    assert h.action == "record_again"

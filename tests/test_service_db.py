@@ -71,7 +71,7 @@ def test_pre_alembic_sqlite_database_is_adopted_with_its_rows(tmp_path):
     engine = make_engine(_old_sqlite(tmp_path / "old.sqlite3"))
     assert current_revision(engine) is None
     sessions = init_db(engine)
-    assert current_revision(engine) == head_revision() == "v0008"
+    assert current_revision(engine) == head_revision() == "v0010"
     _check_reference_rows(sessions)
     init_db(engine)   # a second start changes nothing
     _check_reference_rows(sessions)
@@ -98,7 +98,7 @@ def test_versions_up_and_down_keep_the_rows(database_url):
     migrate(engine, "v0002")
     assert current_revision(engine) == "v0002"
     sessions = init_db(engine)
-    assert current_revision(engine) == "v0008"
+    assert current_revision(engine) == "v0010"
     with sessions() as s:
         job = s.get(Job, "j1")
         assert job is not None and job.params == {"n": 3} and job.progress == 0.5 and job.lease_expires_at is None
@@ -126,7 +126,7 @@ def test_versions_up_and_down_keep_the_rows(database_url):
     with engine.connect() as conn:
         assert conn.execute(text("SELECT asset_id FROM asset_settings")).scalar_one() == "u1"
     migrate(engine)
-    assert current_revision(engine) == "v0008"
+    assert current_revision(engine) == "v0010"
     with sessions.begin() as s:
         row = s.get(AssetSettings, "u1")
         assert row is not None and row.probes == {"units": "mil"} and row.setpoints is None
@@ -146,7 +146,7 @@ def test_versions_up_and_down_keep_the_rows(database_url):
         assert conn.execute(text("SELECT COUNT(*) FROM asset_diagnoses WHERE asset_id = 'u1'")).scalar_one() == 1
         assert conn.execute(text("SELECT setpoints FROM asset_settings")).scalar_one() is not None
     migrate(engine)
-    assert current_revision(engine) == "v0008"
+    assert current_revision(engine) == "v0010"
     engine.dispose()
 
 
@@ -179,9 +179,43 @@ def test_v0008_baseline_recordings_up_and_down(database_url):
     with engine.connect() as conn:
         assert conn.execute(text("SELECT COUNT(*) FROM asset_baselines")).scalar_one() == 4
     migrate(engine)
-    assert current_revision(engine) == "v0008"
+    assert current_revision(engine) == "v0010"
     with sessions() as s:
         assert s.scalar(select(func.count()).select_from(AssetBaselineRecording)) == 4
+    engine.dispose()
+
+
+def test_v0010_asset_startups_up_and_down(database_url):
+    """v0010 adds the asset_startups table (an asset's start-ups as evidence, issue 46); down removes it and
+    leaves every other row; up again gives an empty table that takes a start-up."""
+    from rotordiag.service.core.db import AssetStartup
+
+    engine = make_engine(database_url)
+    migrate(engine, "v0007")
+    assert "asset_startups" not in inspect(engine).get_table_names()
+    with engine.begin() as conn:   # a diagnosis written by version v0007's code
+        conn.execute(text("INSERT INTO asset_diagnoses (asset_id, created_at, model_version, severity, verdict, "
+                          "key_features) VALUES ('u9', '2026-11-01 12:00:00', 'v1', 'aligned', '{}', '{}')"))
+    sessions = init_db(engine)
+    assert current_revision(engine) == "v0010"
+    evidence = {"criticals": {"b2@45": 1150.0}, "half_rise_rpm": {"2": 800.0}, "top_um": {"2": [1.0, 60.0]},
+                "clearance_um": {"2": 350.0}, "speed_range_rpm": [300.0, 2000.0]}
+    with sessions.begin() as s:
+        s.add(AssetStartup(asset_id="u9", is_baseline=True, evidence=evidence, summary={"kind": "run-up"},
+                           recorded_at=dt.datetime(2026, 3, 1, 6, 0, tzinfo=dt.UTC)))
+    with sessions() as s:
+        row = s.scalars(select(AssetStartup)).one()
+        assert row.evidence == evidence and row.is_baseline is True and row.note is None
+        assert row.recorded_at == dt.datetime(2026, 3, 1, 6, 0, tzinfo=dt.UTC)
+    migrate(engine, "v0007")
+    assert current_revision(engine) == "v0007"
+    assert "asset_startups" not in inspect(engine).get_table_names()
+    with engine.connect() as conn:
+        assert conn.execute(text("SELECT COUNT(*) FROM asset_diagnoses WHERE asset_id = 'u9'")).scalar_one() == 1
+    migrate(engine)
+    assert current_revision(engine) == "v0010"
+    with sessions() as s:
+        assert s.scalar(select(func.count()).select_from(AssetStartup)) == 0
     engine.dispose()
 
 
@@ -225,8 +259,7 @@ def test_copy_sqlite_store_into_postgresql(tmp_path, postgres):
     dst_url = postgres.new_database()
     dst = make_engine(dst_url)
     copied = copy_store(src, dst)
-    assert copied == {"alarm_events": 0, "asset_baseline_recordings": 2, "asset_baselines": 1, "asset_diagnoses": 3,
-                      "asset_settings": 1, "jobs": 2,
+    assert copied == {"alarm_events": 0, "asset_baseline_recordings": 2, "asset_baselines": 1, "asset_diagnoses": 3, "asset_settings": 1, "asset_startups": 0, "jobs": 2,
                       "service_probe": 0, "webhook_deliveries": 0, "webhooks": 0}
     sessions = init_db(dst)
     _check_reference_rows(sessions)
@@ -253,7 +286,7 @@ def test_db_copy_command(tmp_path, postgres):
     assert r.exit_code == 0, r.output
     assert "asset_diagnoses: 3 row(s)" in r.output
     r = runner.invoke(app, ["db", "current", "--url", dst])
-    assert r.exit_code == 0 and "database: v0008" in r.output
+    assert r.exit_code == 0 and "database: v0010" in r.output
     r = runner.invoke(app, ["db", "copy", dst, "--from", src])
     assert r.exit_code == 2 and "already holds rows" in r.output
 

@@ -19,7 +19,7 @@ from typing import Any, Final, Literal
 from rotordiag.core.units import UM_PER_MIL
 
 __all__ = ["Length", "Measured", "NoteInfo", "Note", "NOTES", "DOUBT", "CAUTION", "INFO", "SPEED_DOUBT_CODES",
-           "speed_in_doubt", "notes_markdown_table"]
+           "speed_in_doubt", "notes_markdown_table", "typed_to_json", "typed_from_json"]
 
 #: severities: ``doubt`` — the running speed is in doubt (``speed_ambiguous`` reason, never ``confident``);
 #: ``caution`` — the verdict rests on less or different data than usual; ``info`` — a limit of what was measured
@@ -330,3 +330,43 @@ def notes_markdown_table() -> str:
     for e in _ENTRIES:
         rows.append(f"| `{e.code}` | {e.severity} | {e.meaning} | {e.action} |")
     return "\n".join(rows) + "\n"
+
+
+def typed_to_json(obj: Any) -> Any:
+    """A :class:`Note`, :class:`Measured` or :class:`Length` (also inside dicts and lists) as plain JSON data that
+    :func:`typed_from_json` turns back into the same typed object — so a stored text can be rendered again in mils.
+    Other values pass as they are (numbers, strings, None); anything else as its ``str``."""
+    if isinstance(obj, Length):
+        return {"__length_um__": float(obj.value_um), "fmt": obj.fmt}
+    if isinstance(obj, Note):
+        return {"__note__": obj.code, "values": typed_to_json(obj.values)}
+    if isinstance(obj, Measured):
+        return {"__measured__": obj.template, "values": typed_to_json(obj.values)}
+    if isinstance(obj, dict):
+        return {str(k): typed_to_json(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [typed_to_json(v) for v in obj]
+    if obj is None or isinstance(obj, bool | int | float | str):
+        return obj
+    if hasattr(obj, "__float__"):   # NumPy scalars
+        return float(obj)
+    return str(obj)
+
+
+def typed_from_json(data: Any) -> Any:
+    """The inverse of :func:`typed_to_json`. Raises ValueError on a typed entry it cannot rebuild (an unknown
+    warning code, values that are not the template's fields)."""
+    if isinstance(data, list):
+        return [typed_from_json(v) for v in data]
+    if not isinstance(data, dict):
+        return data
+    if "__length_um__" in data:
+        return Length(float(data["__length_um__"]), str(data.get("fmt", ".3g")))
+    if "__note__" in data:
+        return Note(str(data["__note__"]), **typed_from_json(data.get("values") or {}))
+    if "__measured__" in data:
+        try:
+            return Measured(str(data["__measured__"]), **typed_from_json(data.get("values") or {}))
+        except (KeyError, IndexError, ValueError) as exc:
+            raise ValueError(f"a stored measurement does not fit its template: {exc}") from None
+    return {k: typed_from_json(v) for k, v in data.items()}

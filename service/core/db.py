@@ -165,6 +165,25 @@ class AssetSettings(Base):
     train: Mapped[str | None] = mapped_column(String(128), nullable=True)
 
 
+class AssetStartup(Base):
+    """A start-up or coast-down of an asset, as evidence (``service.startups``): what ``models.startup_check``
+    read of it (``evidence``: 1X criticals, coupling-end centreline rise) and its summary (speed range, peaks,
+    notes); ``is_baseline`` marks the asset's baseline start-up (the latest such row). No waveform is kept."""
+
+    __tablename__ = "asset_startups"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    asset_id: Mapped[str] = mapped_column(String(128))
+    created_at: Mapped[dt.datetime] = mapped_column(UTCDateTime(), default=utcnow)
+    recorded_at: Mapped[dt.datetime | None] = mapped_column(UTCDateTime(), nullable=True)
+    is_baseline: Mapped[bool] = mapped_column(Boolean)
+    evidence: Mapped[dict[str, Any]] = mapped_column(JSON)
+    summary: Mapped[dict[str, Any]] = mapped_column(JSON)
+    note: Mapped[str | None] = mapped_column(Text, nullable=True)
+
+    __table_args__ = (Index("ix_asset_startups_asset_id", "asset_id", "id"),)
+
+
 class AlarmEvent(Base):
     """A raised or cleared alarm of an asset (a setpoint level or the baseline-change alarm), with its
     acknowledgement (``service.alarms``)."""

@@ -119,19 +119,22 @@ _REPORT_HTML_HEADERS = {
             summary="A report of an asset to hand on (PDF or HTML)",
             description="The asset, its stored recordings (the trend and its plot), the latest verdict with its "
             "status, severity, Δ and interval, probabilities, reasons, warnings and model-independent evidence — "
-            "the content of `rotordiag report --asset`. The service stores verdicts, not waveforms, so the start-up "
-            "plots are not in it (the report says so). Rendered in a diagnosis worker (or a thread) within "
+            "the content of `rotordiag report --asset`, with the asset's latest start-up compared with its baseline "
+            "start-up (POST /assets/{id}/startup), lengths in `output_units`. The service stores verdicts, not "
+            "waveforms, so the start-up plots are not in it (the report says so). Rendered in a diagnosis worker (or a thread) within "
             "ROTORDIAG_DIAGNOSIS_TIMEOUT_S.")
 async def asset_report(
     asset_id: AssetPath, state: StateDep,
     format: Annotated[Literal["pdf", "html"], Query(description="pdf (default) or html.")] = "pdf",
+    output_units: Annotated[Literal["um", "mil"], Query(description="Lengths of the report: `um` (default) or "
+                                                        "`mil`, as the diagnosis answers (`?output_units=`).")] = "um",
 ) -> Response:
     from ...pool import AssetReport
     from ...report import asset_report_inputs, render_asset_report
 
     def read() -> dict | None:
         with state.sessions() as s:
-            return asset_report_inputs(s, asset_id)
+            return asset_report_inputs(s, asset_id, units=output_units)
 
     inputs = await run_in_threadpool(read)
     if inputs is None:
@@ -368,3 +371,123 @@ def put_asset_hierarchy(asset_id: AssetPath, body: HierarchyIn, state: StateDep,
     put_hierarchy(state, asset_id, body.model_dump())
     found = [r for r in list_assets(session) if r["asset_id"] == asset_id]
     return AssetSummary(**found[0])
+
+
+_STARTUP_BODY = {"requestBody": {
+    "required": True,
+    "description": "A start-up or coast-down recording with a keyphasor (or a speed the signal shows), in the forms "
+    "of POST /diagnose: JSON (`DiagnoseRequest`), NPY (`application/octet-stream`) or a multipart part `file` "
+    "(CSV / NPY / HDF5 / UFF / JSON); the asset's probe configuration fills what the query does not give.",
+    "content": {"application/json": {"schema": {"$ref": "#/components/schemas/DiagnoseRequest"}},
+                "application/octet-stream": {"schema": {"type": "string", "format": "binary"}},
+                "multipart/form-data": {"schema": {"type": "object", "required": ["file"],
+                                                   "properties": {"file": {"type": "string", "format": "binary"}}}}}}}
+
+
+def _startup_sync(recording) -> dict:
+    from ...startups import startup_data
+
+    try:
+        return startup_data(recording)
+    except ValueError as exc:  # the features package's messages (speed reverses, keyphasor drops out, ...)
+        raise InputError(str(exc)) from None
+
+
+def _startup_answer(state, asset_id: str, startup_id: int, units: str) -> dict:
+    """A stored start-up with what it does to the asset's verdict: the comparison with the baseline start-up
+    (evidence rows, reasons) and the asset's latest stored verdict with it (status, headline)."""
+    from rotordiag.models.output_units import revive_typed_texts, verdict_in_units
+
+    from ...core.db import AssetStartup
+    from ...startups import attach_startup, startup_comparison, startup_dict, startups_in_force
+
+    with state.sessions() as s:
+        row = s.get(AssetStartup, startup_id)
+        assert row is not None
+        out = startup_dict(row)
+        base, later = startups_in_force(s, asset_id)
+        out["baseline_startup_id"] = None if base is None else base.id
+        rows = [r for r in asset_history(s, asset_id, 50, None) if r.verdict]
+        latest = revive_typed_texts(rows[-1].verdict) if rows else None
+        if row.is_baseline:
+            out["evidence_rows"], out["reasons"] = [], []
+            out["comparison"] = ("this is the asset's baseline start-up: later start-ups (POST without "
+                                 "?baseline=true) are compared with it")
+        else:
+            entries, reasons = startup_comparison(base, row, latest)
+            out["evidence_rows"] = entries
+            out["reasons"] = [r.to_dict() for r in reasons]
+            out["comparison"] = (f"compared with baseline start-up #{base.id}" if base is not None else
+                                 f"no baseline start-up of this asset: nothing to compare with (POST "
+                                 f"/assets/{asset_id}/startup?baseline=true sets one)")
+        if latest is not None and later is not None and later.id == row.id:
+            v = verdict_in_units(attach_startup(s, asset_id, latest), units)
+            out["asset_verdict"] = {"diagnosis_id": rows[-1].id, "severity": v.get("severity"),
+                                    "status": v.get("status"), "headline": v.get("headline"),
+                                    "reasons": v.get("reasons") or []}
+        else:
+            out["asset_verdict"] = None
+    out["output_units"] = units
+    if units == "mil":
+        from rotordiag.core.units import UM_PER_MIL, lengths_in
+
+        out["peaks"] = [lengths_in(dict(p), "mil") for p in out["peaks"]]
+        ev = out["evidence"]
+        ev["top_mil"] = {b: [v / UM_PER_MIL for v in xy] for b, xy in ev.pop("top_um").items()}
+        ev["clearance_mil"] = {b: v / UM_PER_MIL for b, v in ev.pop("clearance_um").items()}
+    return out
+
+
+@router.post("/assets/{asset_id}/startup", responses=_BASELINE_ERRORS, dependencies=[ApiKeyDep],
+             openapi_extra=_STARTUP_BODY, summary="Store a start-up or coast-down of an asset as evidence",
+             description="The run is order-tracked and reduced to its 1X criticals and its coupling-end bearings' "
+             "shaft-centreline rise (half-rise speed, position at the top speed); only that is stored, no waveform. "
+             "`?baseline=true` makes it the asset's baseline start-up. A later start-up is compared with the "
+             "baseline's: from then on every diagnosis of the asset (POST /diagnose with `asset_id`) and its report "
+             "carry the comparison as `start-up` evidence rows and, on an \"aligned\" call whose coupling-end "
+             "centreline rise changed, the reason `startup_changed` (confident → uncertain; headline: investigate "
+             "the change). It never changes a band, Δ or probability. The answer says what it does to the asset's "
+             "latest stored verdict. Refused (422, with what to do): a speed that reverses, a keyphasor that drops "
+             "out, a recording too long for the reader's limits.")
+async def post_asset_startup(
+    request: Request, asset_id: AssetPath, state: StateDep, reader: ReaderQueryDep,
+    baseline: Annotated[bool, Query(description="Make this run the asset's baseline start-up.")] = False,
+    recorded_at: Annotated[dt.datetime | None, BeforeValidator(_iso_time), Query(
+        description="When the run was recorded (ISO 8601).")] = None,
+    note: Annotated[str | None, Query(min_length=1, max_length=2000, description="A note stored with it.")] = None,
+    output_units: Annotated[Literal["um", "mil"], Query(description="Lengths of the answer: um or mil.")] = "um",
+) -> dict:
+    from ...pool import StartupBody
+    from ...startups import store_startup
+    from ..recordings import asset_probes_query, recording_answer
+
+    query = dict(asset_id=asset_id, plant=None, sample_index=0, **reader)
+    if "application/json" not in request.headers.get("content-type", ""):
+        query = {**(await run_in_threadpool(asset_probes_query, state, query))[0], "asset_id": None}
+    data = await recording_answer(request, state, query,
+                                  lambda kind, body, filename, q: StartupBody(kind, body, filename, q),
+                                  _startup_sync)
+    sid = await run_in_threadpool(lambda: store_startup(state, asset_id, data, is_baseline=baseline,
+                                                        recorded_at=recorded_at, note=note))
+    return await run_in_threadpool(_startup_answer, state, asset_id, sid, output_units)
+
+
+@router.get("/assets/{asset_id}/startups", summary="An asset's stored start-ups",
+            responses={404: {"model": ErrorOut, "description": "No start-up stored for this asset."}})
+def get_asset_startups(asset_id: AssetPath, session: SessionDep) -> dict:
+    """The asset's stored start-ups (newest first, at most 100), which one is the baseline start-up and which
+    later one is compared with it in the asset's verdicts."""
+    from sqlalchemy import select
+
+    from ...core.db import AssetStartup
+    from ...startups import startup_dict, startups_in_force
+
+    rows = list(session.scalars(select(AssetStartup).where(AssetStartup.asset_id == asset_id)
+                                .order_by(AssetStartup.id.desc()).limit(100)))
+    if not rows:
+        raise InputError(f"no start-up stored for asset {asset_id!r}; POST /assets/{asset_id}/startup?baseline=true "
+                         "with a run-up or coast-down recording sets its baseline start-up", "not_found")
+    base, later = startups_in_force(session, asset_id)
+    return {"asset_id": asset_id, "baseline_startup_id": None if base is None else base.id,
+            "compared_startup_id": None if later is None else later.id,
+            "startups": [startup_dict(r) for r in rows]}
