@@ -32,7 +32,7 @@ def verdict():
     """A real verdict of the shipped (or tiny) model on a simulated Δ 0.3 recording with its clearance: an offset
     and evidence texts with lengths."""
     from rotordiag.features import ProbeChannel, Recording
-    from rotordiag.models.diagnosis import diagnose_recording
+    from rotordiag.models.pipeline import diagnose_recording
     from rotordiag.models.predict import load_bundle
 
     fs, channels = simulated_channels(misalignment=0.3, speed_rpm=1800.0, sample_rate_hz=2048.0, record_revs=40)
