@@ -674,6 +674,10 @@ class FieldRecord(_Strict):
         return v
 
 
+#: the largest shaft-line TOML text POST /trains/summary and POST /models/retrain read (a real one is a few kB)
+MAX_SHAFTLINE_TOML_CHARS = 100_000
+
+
 class RetrainRequest(_Strict):
     """Body of POST /models/retrain: retrain the model for a plant."""
 
@@ -696,6 +700,10 @@ class RetrainRequest(_Strict):
                    "bearings": {"diameter_m": [0.45, 0.45, 0.25, 0.25], "length_m": [0.35, 0.35, 0.15, 0.15],
                                 "clearance_m": 0.00035},
                    "coupling": {"type": "flexible", "stiffness_n_m": 1.0e8}}])
+    shaftline_toml: str | None = Field(
+        None, max_length=MAX_SHAFTLINE_TOML_CHARS,
+        description="The same shaft line as the text of its TOML file (`rotordiag retrain --shaftline`'s file; it "
+        "may hold `rated_speed_rpm` at the top); instead of `shaftline` or `preset`.")
     preset: str | None = Field(None, min_length=1, max_length=64,
                                description="A rated-machine preset by name (`gen50_2pole`, `gen200_2pole`, "
                                "`gen600_2pole`, `gen600_4pole`) instead of `shaftline`: its shaft line and its rated "
@@ -851,8 +859,6 @@ class DeliveryOut(BaseModel):
 
 # --- shaft trains ---------------------------------------------------------------------------
 
-#: the largest shaft-line TOML text POST /trains/summary reads (a real shaft line is a few kB)
-MAX_SHAFTLINE_TOML_CHARS = 100_000
 
 
 class TrainSummaryRequest(_Strict):

@@ -159,8 +159,20 @@ def _retrain_plant(body: Any) -> Any:
 
     from rotordiag.models.plant_retrain import describe_plant
 
+    line = body.shaftline
+    if body.shaftline_toml is not None:
+        import tomllib
+
+        if body.shaftline is not None:
+            raise InputError("shaftline and shaftline_toml: give the shaft line once, as tables or as the file's text")
+        try:
+            line = tomllib.loads(body.shaftline_toml)
+        except tomllib.TOMLDecodeError as exc:
+            raise InputError(f"shaftline_toml is not valid TOML: {exc}") from None
+        except RecursionError:
+            raise InputError("shaftline_toml is nested too deeply; a shaft line has a few levels of tables") from None
     try:
-        plain = describe_plant(preset=body.preset, shaftline=body.shaftline, rated_speed_rpm=body.rated_speed_rpm)
+        plain = describe_plant(preset=body.preset, shaftline=line, rated_speed_rpm=body.rated_speed_rpm)
     except ValueError as exc:
         raise InputError(str(exc)) from None
     _check_plant_types(body.plant, plain.base_plant())

@@ -329,3 +329,26 @@ def test_columns_measured_on_few_plants_are_dropped_before_training():
                      np.array(["rigid"] * 96, dtype=object), np.full(96, 1500.0), np.arange(96), {})
     kept, dropped = drop_unmeasured(t)
     assert dropped == ["few", "never"] and list(kept.feature_names) == ["a", "twenty"]
+
+
+def test_retrain_request_takes_the_shaftline_files_text_with_its_rated_speed(tmp_path):
+    """POST /models/retrain's `shaftline_toml`: the file `rotordiag retrain --shaftline` reads, rated speed
+    included, gives the same plant and the sweep around that speed; bad text is a 422 saying so."""
+    from rotordiag.service.errors import InputError
+    from rotordiag.service.schemas import RetrainRequest
+    from rotordiag.service.work import prepare_retrain_job
+    from rotordiag.simulator import shaftline
+    from rotordiag.simulator.dataset.spec import parse_spec
+
+    text = "rated_speed_rpm = 3600\n" + EXAMPLE.read_text()
+    params = prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": text}), make_settings(tmp_path))
+    resolved = parse_spec(params["spec_toml"])
+    assert resolved.base_plant == shaftline.to_plant(shaftline.ShaftLine.from_file(EXAMPLE))
+    sp = resolved.spec.operating.speed_rpm
+    assert (sp.min, sp.max) == (pytest.approx(0.8 * 3600), pytest.approx(1.05 * 3600))
+    assert params["plant_description"]["rated_speed_rpm"] == [3600.0] and params["activate"] is True
+    with pytest.raises(InputError, match="not valid TOML"):
+        prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": "[generator"}), make_settings(tmp_path))
+    with pytest.raises(InputError, match="once"):
+        prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": text, "shaftline": {}}),
+                            make_settings(tmp_path))
