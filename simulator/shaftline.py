@@ -256,6 +256,29 @@ class ShaftLine:
             coupling_angular_damping_n_m_s_rad=coupling_extra["angular_damping_n_m_s_rad"],
         )
 
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML layout :meth:`from_dict` reads (``from_dict(line.to_dict()) == line``): for a dataset's
+        record of its base shaft lines and for sending a line to a worker."""
+        def rotor(r: Rotor) -> dict[str, Any]:
+            return {"segments": [list(s) for s in r.segments], "body_masses": [list(b) for b in r.body_masses],
+                    "overhang": [list(s) for s in r.overhang], "disks": [list(d) for d in r.disks]}
+
+        return {
+            "generator": rotor(self.generator), "exciter": rotor(self.exciter), "material": self.material,
+            "bearings": {"diameter_m": list(self.bearing_diameter_m), "length_m": list(self.bearing_length_m),
+                         "clearance_m": self.clearance_m, "type": list(self.bearing_types),
+                         "options": [dict(o) for o in self.bearing_options],
+                         "centre_x_m": [c[0] for c in self.bearing_centres_m],
+                         "centre_y_m": [c[1] for c in self.bearing_centres_m]},
+            "oil": {"viscosity_pa_s": self.viscosity_pa_s},
+            "coupling": {"type": self.coupling, "stiffness_n_m": self.coupling_stiffness_n_m,
+                         "angular_stiffness_n_m_rad": self.coupling_angular_stiffness_n_m_rad,
+                         "damping_n_s_m": self.coupling_damping_n_s_m,
+                         "angular_damping_n_m_s_rad": self.coupling_angular_damping_n_m_s_rad},
+            "generator_asymmetry": self.generator_asymmetry, "damping_ratio": self.damping_ratio,
+            "plant": dict(self.extra),
+        }
+
     @classmethod
     def from_file(cls, path: str | Path) -> ShaftLine:
         path = Path(path)

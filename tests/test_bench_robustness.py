@@ -8,9 +8,6 @@ skips without it; everything else reads the cached set with NumPy.
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,21 +15,9 @@ import pytest
 from rotordiag.features import running_speed_line
 from rotordiag.models import robustness as bench
 
-BENCH = Path(__file__).resolve().parent.parent / "benchmarks"
+from .bench_util import BENCH, load_benchmark
 
-
-def _load(name: str):
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod
-    spec.loader.exec_module(mod)
-    return mod
-
-
-rv = _load("ross_validation")
+rv = load_benchmark("ross_validation")
 
 SPEED_RPM = 2400.0          # 40 Hz: 64 samples per revolution at 2560 Hz, 48 whole revolutions
 
@@ -400,7 +385,7 @@ def test_a_refused_recording_is_left_out_of_the_scores_and_counted():
 
 
 # ----------------------------------------------------------------- bench_learning_curve.py
-lc = _load("bench_learning_curve")
+lc = load_benchmark("bench_learning_curve")
 
 
 def test_plant_subset_keeps_whole_plants_and_is_seeded():
@@ -440,7 +425,7 @@ def test_every_variant_is_a_valid_training_configuration():
 
 
 # ----------------------------------------------------------------- bench_status.py
-status_bench = _load("bench_status")
+status_bench = load_benchmark("bench_status")
 
 
 def test_far_probability_and_confident_error_counts():
@@ -516,7 +501,7 @@ def test_shift_journal_dc_moves_bearing_3_by_the_drawn_distance_only():
     assert not w2.any()
 
 
-bbs = _load("bench_bearing_sets")
+bbs = load_benchmark("bench_bearing_sets")
 
 
 def test_bench_bearing_sets_passes_each_probe_sets_own_channels(monkeypatch):

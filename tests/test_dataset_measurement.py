@@ -134,5 +134,7 @@ def test_record_is_long_enough_for_the_shaft_angle():
 
 
 def test_bad_displacement_shape():
-    with pytest.raises(ValueError, match=r"shape \(n, 4, 2\)"):
+    with pytest.raises(ValueError, match=r"shape \(n, n_bearings ≥ 4, 2\)"):
         probe_waveforms_um(np.zeros((10, 4)), S, 1800.0, settings(), draws(), np.random.default_rng(0))
+    with pytest.raises(ValueError, match=r"n_bearings ≥ 4"):   # a 3-bearing train with a probe at bearing 4
+        probe_waveforms_um(np.zeros((10, 3, 2)), S, 1800.0, settings(), draws(), np.random.default_rng(0))

@@ -147,6 +147,8 @@ def test_the_shipped_model_was_trained_on_the_shipped_recipe():
     assert [Path(p).stem for p in data["path"]] == parts
     for part, trained in zip(parts, data["spec"]):
         on_disk = load_spec(REPO / "models" / "default" / f"dataset_{part}.toml").spec.model_dump(mode="json")
+        if on_disk["plant"].get("model") == "lumped" and "model" not in data["spec"][0]["plant"]:
+            on_disk["plant"].pop("model")  # added with shaft trains, at its default: the same spec
         changed = {k: sorted(kk for kk in set(on_disk[k]) | set(trained[k]) if on_disk[k].get(kk) != trained[k].get(kk))
                    for k in on_disk if on_disk[k] != trained.get(k)}
         assert not changed, f"dataset_{part}.toml differs from what the shipped model was trained on: {changed}"

@@ -105,14 +105,9 @@ def test_whirling_train_has_a_near_zero_exponent():
     continuation test's Neimark–Sacker point): after 300 revolutions it whips (orbit ≈ 1.8 c pk-pk) and its
     largest exponent is near zero (a limit cycle / torus: neutral along the flow), an order of magnitude
     smaller than the stable train's (−0.064 per revolution above). Measured: −0.0070 ± 0.0039 per rev."""
-    import importlib.util
-    from pathlib import Path
+    from .bench_util import bench_machine
 
-    spec = importlib.util.spec_from_file_location(
-        "bench_train", Path(__file__).resolve().parents[1] / "benchmarks" / "bench_train.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    train = bench.plain_train(bench._ref())
+    train = bench_machine()
     lle, state = train_lyapunov(train, 4300.0, n_revs=60, transient_revs=300)
     assert abs(lle.lle_per_interval) < 0.02, lle
 

@@ -2,11 +2,8 @@
 the two-pole asymmetry's gravity 2X against quasi-static solutions, the reduction's error."""
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -26,19 +23,8 @@ from rotordiag.simulator.train.dynamics import build_kernel, simulate_train
 from rotordiag.simulator.train.linear import linear_matrices
 from rotordiag.simulator.train.reduced import reduce
 
+from .bench_util import bench_machine, ross_reference
 from .train_support import iso, two_rotor_train
-
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
-
-
-def _ref():
-    name = "train_ross_reference"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
-        mod = importlib.util.module_from_spec(spec)
-        sys.modules[name] = mod
-        spec.loader.exec_module(mod)
-    return sys.modules[name]
 
 
 def _line(sig: np.ndarray, revs: int, order: int) -> np.ndarray:
@@ -47,7 +33,7 @@ def _line(sig: np.ndarray, revs: int, order: int) -> np.ndarray:
 
 
 def test_time_response_of_the_reduced_train_matches_the_full_models_unbalance_response():
-    asm = assemble(_ref().reference_train(True))
+    asm = assemble(ross_reference().reference_train(True))
     run = simulate_train(asm, 3000.0, transient_revs=60, record_revs=16, samples_per_rev=64, n_modes=16)
     assert run.ok
     X = _line(run.journal_m, 16, 1)
@@ -57,7 +43,7 @@ def test_time_response_of_the_reduced_train_matches_the_full_models_unbalance_re
 
 
 def test_reduction_keeps_the_first_six_critical_speeds_within_a_tenth_of_a_percent():
-    asm = assemble(_ref().reference_train(False))
+    asm = assemble(ross_reference().reference_train(False))
     red = reduce(asm, 16)
     full = critical_speeds(asm, 6, 9000.0, n_grid=90)
     np.testing.assert_allclose(reduced_critical_speeds(red, 6, 9000.0, n_grid=90), full, rtol=1e-3)
@@ -127,11 +113,7 @@ def test_two_pole_asymmetry_gives_the_quasi_static_gravity_2x_of_a_turning_shaft
 def test_exponential_integrator_agrees_with_adaptive_dormand_prince_on_oil_films():
     """Plain bearings, gravity, a two-pole body: the fixed-step ETDRK4 (32 steps per revolution) against the
     adaptive explicit integrator at the paper model's tolerances, DC, 1X and 2X at every probe."""
-    ref = _ref()
-    bench = importlib.util.spec_from_file_location("bench_train", BENCH / "bench_train.py")
-    mod = importlib.util.module_from_spec(bench)
-    bench.loader.exec_module(mod)
-    kern = build_kernel(mod.plain_train(ref), 3000.0, 12)
+    kern = build_kernel(bench_machine(), 3000.0, 12)
     a = simulate_train(kern, 3000.0, transient_revs=24, record_revs=8, samples_per_rev=32)
     b = simulate_train(kern, 3000.0, transient_revs=24, record_revs=8, samples_per_rev=32, method="dopri")
     assert a.ok and b.ok and a.inputs["method"] == "etd" and b.n_accepted > 20 * a.n_accepted / 32
@@ -210,11 +192,7 @@ def test_trains_on_two_lobe_and_tilting_pad_films_settle_and_run(kind):
     from rotordiag.simulator.bearings import EllipticalBearing, TiltingPadBearing
     from rotordiag.simulator.train import static_state
 
-    ref = _ref()
-    bench = importlib.util.spec_from_file_location("bench_train", BENCH / "bench_train.py")
-    mod = importlib.util.module_from_spec(bench)
-    bench.loader.exec_module(mod)
-    t = mod.plain_train(ref)
+    t = bench_machine()
     cls = EllipticalBearing if kind == "elliptical" else TiltingPadBearing
     bg = cls(diameter_m=0.25, length_m=0.2, clearance_m=190e-6, viscosity_pa_s=0.02)
     be = cls(diameter_m=0.15, length_m=0.1, clearance_m=120e-6, viscosity_pa_s=0.02)
@@ -234,10 +212,7 @@ def test_aligned_reference_on_oil_films_and_the_load_transfer_of_a_downward_offs
     coupling-end bearing and loads the generator's (the field's and the paper model's direction)."""
     from rotordiag.simulator.train import aligned_offsets, misaligned, static_state, with_moves
 
-    bench = importlib.util.spec_from_file_location("bench_train", BENCH / "bench_train.py")
-    mod = importlib.util.module_from_spec(bench)
-    bench.loader.exec_module(mod)
-    t = mod.plain_train(_ref())
+    t = bench_machine()
     moves = aligned_offsets(t, 3000.0)
     assert np.abs(moves).max() > 4 * 120e-6  # far beyond the clearance: the continuation must carry it
     al = static_state(with_moves(t, moves), 3000.0)

@@ -2,10 +2,7 @@
 probe must equal the train's frequency (unbalance) response there; bad channels refused."""
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,22 +12,12 @@ from rotordiag.simulator.train import TrainError, assemble, unbalance_response
 from rotordiag.simulator.train.dynamics import simulate_train
 from rotordiag.simulator.train.probes import train_probes
 
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
-
-
-def _ref():
-    name = "train_ross_reference"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
-        mod = importlib.util.module_from_spec(spec)
-        sys.modules[name] = mod
-        spec.loader.exec_module(mod)
-    return sys.modules[name]
+from .bench_util import bench_machine, ross_reference
 
 
 @pytest.fixture(scope="module")
 def run_and_asm():
-    asm = assemble(_ref().reference_train(True))  # linear bearings: the frequency response is exact
+    asm = assemble(ross_reference().reference_train(True))  # linear bearings: the frequency response is exact
     run = simulate_train(asm, 3000.0, transient_revs=60, record_revs=16, samples_per_rev=64, n_modes=16)
     assert run.ok
     return run, asm
@@ -74,10 +61,7 @@ def test_probe_channels_are_checked(run_and_asm):
 def test_probes_keep_the_static_journal_position():
     """Plain bearings under gravity: each probe's mean is its journal's mean position projected on the probe
     (x cos α + y sin α at 45° and 135°), the DC a DC-coupled probe keeps."""
-    spec = importlib.util.spec_from_file_location("bench_train", BENCH / "bench_train.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    run = simulate_train(bench.plain_train(_ref()), 3000.0, transient_revs=2, record_revs=1, samples_per_rev=16)
+    run = simulate_train(bench_machine(), 3000.0, transient_revs=2, record_revs=1, samples_per_rev=16)
     p = train_probes(run)
     x, y = run.journal_m.mean(axis=0).T * 1e6  # (n_bearings,) µm
     assert (np.hypot(x, y) > 0.02 * run.clearance_m * 1e6).all()  # every journal sits off its bearing centre

@@ -4,27 +4,14 @@ amplitude and 0.02 rad in phase, 500–4000 r/min. The default suite reads ROSS'
 test recomputes them with ROSS when it is installed."""
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from rotordiag.simulator.train import assemble, critical_speeds, modes, unbalance_response
 
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
-
-
-def _ref():
-    name = "train_ross_reference"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
-        mod = importlib.util.module_from_spec(spec)
-        sys.modules[name] = mod
-        spec.loader.exec_module(mod)
-    return sys.modules[name]
+from .bench_util import BENCH, ross_reference
 
 
 def _stored() -> dict:
@@ -32,7 +19,7 @@ def _stored() -> dict:
 
 
 def _compare(fig: dict) -> None:
-    ref = _ref()
+    ref = ross_reference()
     asm = assemble(ref.reference_train(True))
     for s, f in zip(fig["campbell_rpm"], fig["campbell_hz"], strict=True):
         ours = modes(asm, s, n_modes=len(f), about_static=False).frequency_hz
@@ -55,7 +42,7 @@ def test_train_matches_rosss_stored_campbell_critical_speeds_and_unbalance_respo
 @pytest.mark.slow
 def test_rosss_figures_recomputed_match_the_stored_ones_and_ours():
     pytest.importorskip("ross")
-    fig = _ref().ross_figures()
+    fig = ross_reference().ross_figures()
     stored = _stored()
     np.testing.assert_allclose(fig["critical_speeds_rpm"], stored["critical_speeds_rpm"], rtol=1e-6)
     np.testing.assert_allclose(np.array(fig["probe_response_m"]), np.array(stored["probe_response_m"]),

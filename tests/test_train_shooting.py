@@ -3,9 +3,6 @@ equals the long time response; its Floquet multipliers and the branch's whirl on
 linearisation about the static state."""
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -15,20 +12,13 @@ from rotordiag.simulator.train.dynamics import build_kernel, linear_stability, s
 from rotordiag.simulator.train.linear import modes
 from rotordiag.simulator.train.shooting import TrainSpeedFamily, train_fixed_point
 
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
-
-
-def _machine():
-    spec = importlib.util.spec_from_file_location("bench_train", BENCH / "bench_train.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    return bench.plain_train(bench._ref())
+from .bench_util import bench_machine
 
 
 def test_period_one_orbit_by_shooting_equals_the_long_time_response():
     """Bench machine (plain films, gravity, two-pole body) at 3000 r/min: the shooting solution from the
     static state against 448 revolutions of the time response (at the same 64 steps per revolution)."""
-    train = _machine()
+    train = bench_machine()
     speed = 3000.0
     kern = build_kernel(train, speed, 12)
     fp = train_fixed_point(kern, speed, 1, steps_per_rev=64)
@@ -59,7 +49,7 @@ def test_continuation_over_speed_finds_the_whirl_onset_at_the_linear_stability_t
     """The period-1 branch of the bench machine from 3200 r/min upward loses stability by a Neimark–Sacker
     bifurcation (a pair of multipliers leaving the unit circle: the whirl onset) where the least log
     decrement of the static linearisation crosses zero (found here by root-finding on the eigenvalues)."""
-    train = _machine()
+    train = bench_machine()
     fam = TrainSpeedFamily(train)
     start = 3200.0
     fp = train_fixed_point(fam.at(start).kernel, start)

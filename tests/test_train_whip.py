@@ -2,10 +2,6 @@
 limit cycle converges as the tolerance is tightened and agrees with an independent stiff integrator."""
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -14,23 +10,7 @@ from rotordiag.simulator.train import dynamics
 from rotordiag.simulator.train.dynamics import build_kernel, initial_state, linear_stability, simulate_train
 from rotordiag.simulator.train.linear import modes
 
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
-
-
-def _bench():
-    name = "bench_train"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, BENCH / f"{name}.py")
-        mod = importlib.util.module_from_spec(spec)
-        sys.modules[name] = mod
-        spec.loader.exec_module(mod)
-    return sys.modules[name]
-
-
-def _machine():
-    """The bench machine: 40-node train on four plain oil films, gravity, two-pole body."""
-    b = _bench()
-    return b.plain_train(b._ref())
+from .bench_util import bench_machine
 
 
 def _whirl(sig: np.ndarray, samples_per_rev: int, speed_rpm: float) -> tuple[float, float]:
@@ -44,7 +24,7 @@ def _whirl(sig: np.ndarray, samples_per_rev: int, speed_rpm: float) -> tuple[flo
 def test_stability_margin_of_the_reduced_train_matches_the_full_models_and_a_whip_speed_is_flagged():
     """The least log decrement the time response reports (reduced model about the static state) against the
     full finite-element model's damped modes; a speed beyond the threshold is said in the run's message."""
-    train = _machine()
+    train = bench_machine()
     for speed in (3000.0, 4500.0):
         kern = build_kernel(train, speed, 12)
         logdec, f_hz = linear_stability(kern, speed)
@@ -67,7 +47,7 @@ def test_stability_margin_of_the_reduced_train_matches_the_full_models_and_a_whi
 def test_error_controlled_exponential_integrator_meets_its_tolerance_in_stable_operation():
     """Step-doubling ETDRK4 at rtol 1e-7 against Dormand–Prince at 1e-10 over the first revolutions from the
     static state (the start-up transient, the most demanding part of a stable run)."""
-    train = _machine()
+    train = bench_machine()
     kern = build_kernel(train, 3000.0, 12)
     kw = dict(transient_revs=0, record_revs=6, samples_per_rev=32)
     a = simulate_train(kern, 3000.0, method="etd_adaptive", rtol=1e-7, **kw)
@@ -84,7 +64,7 @@ def test_whip_limit_cycle_converges_with_tolerance_and_agrees_with_lsoda():
     """4500 r/min (least log decrement −0.23): 80 revolutions from the static state reach the whip limit
     cycle. Its pk-pk and whirl frequency at every probe agree within 1 % at rtol 1e-5 and 1e-7, and with
     scipy's LSODA (stiff BDF, its own Jacobian) at rtol 1e-9 on the same reduced equations."""
-    train = _machine()
+    train = bench_machine()
     speed, spr, revs = 4500.0, 32, 80
     kern = build_kernel(train, speed, 12)
     runs = [simulate_train(kern, speed, transient_revs=revs - 8, record_revs=8, samples_per_rev=spr, rtol=rt,

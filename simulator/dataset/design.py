@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from .spec import PERTURBABLE, Range, ResolvedSpec, SpecError
+from .spec import Range, ResolvedSpec, SpecError
 
 __all__ = ["VARIABLES", "Design", "SampleParams", "build_design", "sample_seed"]
 
@@ -99,7 +99,7 @@ class Design:
         self._mechanism: str | list[str] | dict[str, float] = op.mechanism
         # perturbation dimensions: (field, element index or None, half-width)
         self._perturb: list[tuple[str, int | None, float]] = []
-        for name in PERTURBABLE:
+        for name in spec.plant.perturbable:
             r = spec.plant.perturb.get(name, 0.0)
             if r <= 0:
                 continue

@@ -116,6 +116,7 @@ def _dataset_attrs() -> dict[str, dict[str, Any]]:
 
 def _rows(p: SampleParams, out: SampleOutput) -> dict[str, Any]:
     from rotordiag.simulator import Plant
+    from rotordiag.simulator.train.plant import TrainPlant, is_train_plant
 
     bands = severity_bands()
     rows: dict[str, Any] = {"waveforms": out.waveforms_um}
@@ -126,11 +127,14 @@ def _rows(p: SampleParams, out: SampleOutput) -> dict[str, Any]:
     rows["parameters/mechanism"] = MECHANISM_CODES[p.mechanism]
     rows["parameters/simulated_mechanism"] = SIMULATED_MECHANISM_CODES[out.simulated_mechanism]
     rows["parameters/sample_seed"] = np.uint64(p.sample_seed)
-    rows["parameters/plant_id"] = Plant.from_dict(p.plant).plant_id().encode()
+    train = is_train_plant(p.plant)
+    plant_id = (TrainPlant.from_dict(p.plant) if train else Plant.from_dict(p.plant)).plant_id()
+    rows["parameters/plant_id"] = plant_id.encode()
     rows["parameters/plant_source"] = p.plant_source.encode("utf-8", "replace")[:PLANT_SOURCE_LEN]
     rows["parameters/record_revs"] = out.record_revs
     for name, v in p.plant.items():
-        rows[f"parameters/plant/{name}"] = v.encode() if isinstance(v, str) else np.asarray(v, dtype=float)
+        if not isinstance(v, dict):  # a train's base shaft line is in the file's plant_sources_json
+            rows[f"parameters/plant/{name}"] = v.encode() if isinstance(v, str) else np.asarray(v, dtype=float)
     d = out.draws
     rows["measurement/snr_db"] = d.snr_db
     rows["measurement/start_angle_rad"] = d.start_angle_rad
@@ -149,6 +153,11 @@ def _rows(p: SampleParams, out: SampleOutput) -> dict[str, Any]:
     rows["diagnostics/message"] = out.message.encode("utf-8", "replace")[:256]
     rows["diagnostics/steady_start"] = out.steady_start.encode()[:16]
     rows["diagnostics/steady_start_note"] = out.steady_note.encode("utf-8", "replace")[:96]
+    if train:  # the lumped model's unbalance inputs do not apply: the train's is labels/unbalance_kg_m
+        rows["parameters/unbalance"] = rows["parameters/exciter_unbalance"] = math.nan
+        rows["labels/offset_um"] = out.offset_um
+        rows["labels/unbalance_kg_m"] = out.unbalance_kg_m
+        rows["diagnostics/log_decrement"] = out.log_decrement
     return rows
 
 

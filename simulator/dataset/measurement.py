@@ -166,8 +166,9 @@ def probe_waveforms_um(
 
     Parameters
     ----------
-    journal_displacements_m : ndarray, shape (n, 4, 2)
-        Journals of bearings 1..4 relative to their bearing centres, sampled at
+    journal_displacements_m : ndarray, shape (n, n_bearings, 2)
+        Journals of bearings 1..n_bearings (4 for the paper's model; a shaft train's
+        own number) relative to their bearing centres, sampled at
         τ = 2πk / samples_per_rev from the start of the record (fewer rows if
         the simulation stopped early).
     samples_per_rev : int
@@ -186,8 +187,10 @@ def probe_waveforms_um(
     from scipy.interpolate import CubicSpline
 
     disp = np.asarray(journal_displacements_m, dtype=float)
-    if disp.ndim != 3 or disp.shape[1:] != (4, 2):
-        raise ValueError(f"journal_displacements_m must have shape (n, 4, 2), got {disp.shape}")
+    if disp.ndim != 3 or disp.shape[2] != 2 or disp.shape[1] < max(settings.bearings):
+        raise ValueError(f"journal_displacements_m must have shape (n, n_bearings ≥ {max(settings.bearings)}, 2), "
+                         f"got {disp.shape}")
+    n_b = disp.shape[1]
     n_ch, n_pts = len(settings.channels), settings.n_points
     theta = shaft_angle_rad(settings.time_s, speed_rpm, settings, draws)
     out = np.full((n_ch, n_pts), np.nan)
@@ -195,8 +198,8 @@ def probe_waveforms_um(
     if n >= 4:
         tau = TWO_PI / samples_per_rev * np.arange(n)
         inside = theta <= tau[-1]
-        spline = CubicSpline(tau, disp.reshape(n, 8), axis=0)
-        xy = spline(theta[inside]).reshape(-1, 4, 2) * 1e6  # µm
+        spline = CubicSpline(tau, disp.reshape(n, 2 * n_b), axis=0)
+        xy = spline(theta[inside]).reshape(-1, n_b, 2) * 1e6  # µm
         for c, (b, angle_deg) in enumerate(settings.channels):
             signal = project_on_probe(xy[:, b - 1, 0], xy[:, b - 1, 1], angle_deg)
             r1, r2 = _runout_orders_um(theta[inside], angle_deg, draws, settings.bearings.index(b))

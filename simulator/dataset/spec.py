@@ -46,6 +46,9 @@ PERTURBABLE: tuple[str, ...] = (
 )
 
 
+#: Couplings a shaft train's samples may have (``operating.mechanism`` with ``plant.model = "train"``).
+TRAIN_MECHANISMS: tuple[str, ...] = ("rigid", "flexible")
+
 #: Factor bounds of ``plant.scale`` ranges, and the most members of a machine family.
 SCALE_RANGE: tuple[float, float] = (0.1, 10.0)
 MAX_FAMILY = 64
@@ -219,6 +222,10 @@ class Operating(_Strict):
 class PlantSpec(_Strict):
     """The base plant (or a family of base plants) and how it varies between samples."""
 
+    model: Literal["lumped", "train"] = Field(
+        default="lumped", description="how the shaft line is simulated: \"lumped\" (the paper's 11-DOF model, the "
+        "line reduced to it) or \"train\" (the finite-element shaft train, each rotor on its own bearings, "
+        "misaligned by moving the exciter's bearings; simulator.train)")
     file: str | None = Field(default=None, description="plant TOML/JSON file, relative to the spec file")
     shaftline: str | dict[str, Any] | None = Field(
         default=None, description="shaft-line TOML file (relative to the spec file), or the shaft-line tables "
@@ -244,8 +251,6 @@ class PlantSpec(_Strict):
     @classmethod
     def _perturb(cls, v: dict[str, float]) -> dict[str, float]:
         for name, r in v.items():
-            if name not in PERTURBABLE:
-                raise ValueError(f"{name!r} cannot be perturbed; perturbable: {', '.join(PERTURBABLE)}")
             if not (math.isfinite(r) and 0.0 <= r <= 0.9):
                 raise ValueError(f"perturbation of {name} must be a relative half-width in [0, 0.9], got {r}")
         return v
@@ -254,8 +259,6 @@ class PlantSpec(_Strict):
     @classmethod
     def _scale(cls, v: dict[str, Range]) -> dict[str, Range]:
         for name, r in v.items():
-            if name not in PERTURBABLE:
-                raise ValueError(f"{name!r} cannot be scaled; scalable: {', '.join(PERTURBABLE)}")
             if r.n is not None:
                 raise ValueError(f"scale.{name}: n (levels) is not used; scaling needs a random design")
             if not (SCALE_RANGE[0] <= r.min <= r.max <= SCALE_RANGE[1]):
@@ -288,7 +291,25 @@ class PlantSpec(_Strict):
         if len(single) > 1 or (single and family):
             raise ValueError(f"give one of file, shaftline, preset, or a family (presets and/or shaftlines), "
                              f"got {', '.join(single + family)}")
+        if self.model == "train" and (self.file is not None or not (single or family)):
+            raise ValueError("model = \"train\" simulates a finite-element shaft train: give its shaft line "
+                             "(preset, shaftline, presets or shaftlines), not a lumped plant file or none")
+        allowed = self.perturbable
+        for what, names in (("perturbed", self.perturb), ("scaled", self.scale)):
+            for name in names:
+                if name not in allowed:
+                    raise ValueError(f"{name!r} cannot be {what} in a {self.model} plant; {what}: "
+                                     f"{', '.join(allowed)}")
         return self
+
+    @property
+    def perturbable(self) -> tuple[str, ...]:
+        """The names ``perturb`` and ``scale`` accept for this plant model."""
+        if self.model == "train":
+            from rotordiag.simulator.train.plant import TRAIN_PERTURBABLE
+
+            return TRAIN_PERTURBABLE
+        return PERTURBABLE
 
     @property
     def is_family(self) -> bool:
@@ -415,6 +436,18 @@ class DatasetSpec(_Strict):
                 v = getattr(op, name)
                 if isinstance(v, Range) and v.n is not None:
                     raise ValueError(f"operating.{name}: n (levels) is only used by method = \"grid\"")
+        if self.plant.model == "train":
+            mechs = [op.mechanism] if isinstance(op.mechanism, str) else list(op.mechanism)
+            bad = sorted(set(mechs) - set(TRAIN_MECHANISMS))
+            if bad:
+                raise ValueError(f"operating.mechanism {bad} is not a shaft train's coupling: a train is "
+                                 f"misaligned by moving bearings, with a {' or '.join(TRAIN_MECHANISMS)} coupling")
+            given = sorted({"unbalance", "exciter_unbalance", "exciter_unbalance_phase_rad",
+                            "coupling_phase_rad"} & op.model_fields_set)
+            if given:
+                raise ValueError(f"operating.{given[0]} is the lumped model's; a train's unbalance is its balance "
+                                 "grade (plant.set.balance_grade_mm_s, ISO 21940 G in mm/s, at the generator's "
+                                 "middle, phase operating.unbalance_phase_rad)")
         s_lo, s_hi = _bounds(op.speed_rpm)
         nyquist_need = 4.0 * s_hi / 60.0  # resolve 2X: fs > 2 × (2 × f_max)
         if self.measurement.sample_rate_hz < nyquist_need:
@@ -493,8 +526,8 @@ class ResolvedSpec:
     spec : DatasetSpec
     text : str
         The TOML text as written (stored in the HDF5 file).
-    sources : dict[str, simulator.Plant]
-        Every base plant by its label (``"default"``, ``"file:NAME"``, ``"preset:NAME"``,
+    sources : dict[str, simulator.Plant | simulator.train.plant.TrainPlant]
+        Every base plant (a shaft train's with ``plant.model = "train"``) by its label (``"default"``, ``"file:NAME"``, ``"preset:NAME"``,
         ``"shaftline:NAME"``, ``"shaftline:inline"``), ``plant.set`` applied: one entry, or the
         members of a machine family in the spec's order.
     source_weights : dict[str, float]
@@ -520,10 +553,16 @@ class ResolvedSpec:
         self.base_plant = next(iter(self.sources.values()))
         for label, plant in self.sources.items():
             _check_extremes(plant, ps, label if len(self.sources) > 1 else "")
+            if ps.model == "train" and max(spec.measurement.bearings) > plant.n_bearings:
+                raise SpecError(f"invalid dataset spec:\n  measurement.bearings {spec.measurement.bearings}: "
+                                f"the train {label} has bearings 1..{plant.n_bearings} only (its exciter is "
+                                f"overhung on its coupling-end bearing)")
         dumped = spec.model_dump(mode="json", exclude={"plant": {"file", "shaftline", "shaftlines"}})
         for key in ("presets", "scale"):  # absent when unused, so specs written before them keep their hash
             if not dumped["plant"].get(key):
                 dumped["plant"].pop(key, None)
+        if dumped["plant"].get("model") == "lumped":  # likewise
+            dumped["plant"].pop("model")
         if dumped["operating"].get("angular_misalignment_mrad") == 0.0:  # likewise
             dumped["operating"].pop("angular_misalignment_mrad")
         if dumped["simulation"].get("transient_stop") == "fixed":  # the transient before it existed: same hash
@@ -549,6 +588,12 @@ def _hashed_plant(plant: Any) -> dict[str, Any]:
 def _plant_members(ps: PlantSpec, base_dir: Path) -> dict[str, tuple[Any, float]]:
     """label → (plant before ``set``, weight) of the spec's base plant or family (raises ValueError)."""
     from rotordiag.simulator import Plant, shaftline
+    from rotordiag.simulator.train.plant import TrainPlant
+
+    lumped = ps.model == "lumped"
+
+    def plant_of(line: Any) -> Any:
+        return shaftline.to_plant(line) if lumped else TrainPlant.of(line)
 
     def path(name: str) -> Path:
         f = Path(name)
@@ -561,11 +606,11 @@ def _plant_members(ps: PlantSpec, base_dir: Path) -> dict[str, tuple[Any, float]
 
     if ps.shaftline is not None:
         if isinstance(ps.shaftline, dict):
-            return {"shaftline:inline": (shaftline.to_plant(shaftline.ShaftLine.from_dict(ps.shaftline)), 1.0)}
+            return {"shaftline:inline": (plant_of(shaftline.ShaftLine.from_dict(ps.shaftline)), 1.0)}
         f = path(ps.shaftline)
-        return {f"shaftline:{f.name}": (shaftline.to_plant(shaftline.ShaftLine.from_file(f)), 1.0)}
+        return {f"shaftline:{f.name}": (plant_of(shaftline.ShaftLine.from_file(f)), 1.0)}
     if ps.preset is not None:
-        return {f"preset:{ps.preset}": (shaftline.to_plant(shaftline.preset(ps.preset)), 1.0)}
+        return {f"preset:{ps.preset}": (plant_of(shaftline.preset(ps.preset)), 1.0)}
     if ps.file is not None:
         f = path(ps.file)
         return {f"file:{f.name}": (Plant.from_file(f), 1.0)}
@@ -574,7 +619,7 @@ def _plant_members(ps: PlantSpec, base_dir: Path) -> dict[str, tuple[Any, float]
     out: dict[str, tuple[Any, float]] = {}
     for name, w in members(ps.presets):
         try:
-            out[f"preset:{name}"] = (shaftline.to_plant(shaftline.preset(name)), w)
+            out[f"preset:{name}"] = (plant_of(shaftline.preset(name)), w)
         except ValueError as exc:
             raise ValueError(f"presets: {exc}") from None
     for name, w in members(ps.shaftlines):
@@ -584,7 +629,7 @@ def _plant_members(ps: PlantSpec, base_dir: Path) -> dict[str, tuple[Any, float]
             raise ValueError(f"shaftlines: two files are named {f.name!r}; rename one (the file name labels "
                              "the samples)")
         try:
-            out[label] = (shaftline.to_plant(shaftline.ShaftLine.from_file(f)), w)
+            out[label] = (plant_of(shaftline.ShaftLine.from_file(f)), w)
         except ValueError as exc:
             raise ValueError(f"shaftlines: {exc}") from None
     if sum(w for _, w in out.values()) <= 0:

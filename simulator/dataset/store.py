@@ -74,6 +74,8 @@ def _utcnow() -> str:
 def _plant_layout(plant_dict: dict[str, Any]) -> dict[str, tuple[tuple[int, ...], str]]:
     out: dict[str, tuple[tuple[int, ...], str]] = {}
     for name, v in plant_dict.items():
+        if isinstance(v, dict):  # a train's base shaft line: recorded once per source (plant_sources_json)
+            continue
         if isinstance(v, str):
             out[f"parameters/plant/{name}"] = ((), f"S{_KIND_LEN}")
         else:
@@ -86,10 +88,19 @@ def _plant_layout(plant_dict: dict[str, Any]) -> dict[str, tuple[tuple[int, ...]
 ANGULAR_DATASETS: tuple[str, ...] = ("parameters/angular_misalignment_mrad", "parameters/plant/exciter_bearing_span_m")
 
 
+#: Per-sample datasets that only shaft-train files have (``plant.model = "train"``): the offset at the coupling
+#: in µm (Δ·c), the generator's unbalance from its balance grade, and the stability margin at the sample's speed.
+TRAIN_DATASETS: dict[str, tuple[tuple[int, ...], str]] = {
+    "labels/offset_um": ((), "f8"),
+    "labels/unbalance_kg_m": ((), "f8"),
+    "diagnostics/log_decrement": ((), "f8"),
+}
+
+
 def layout(n_channels: int, n_points: int, n_bearings: int,
            plant_dict: dict[str, Any], *, angular: bool = False) -> dict[str, tuple[tuple[int, ...], str]]:
     """Per-sample datasets: name → (shape after the sample axis, dtype); ``angular``: the spec uses
-    an angular offset (adds :data:`ANGULAR_DATASETS`)."""
+    an angular offset (adds :data:`ANGULAR_DATASETS`); a train's plant adds :data:`TRAIN_DATASETS`."""
     L: dict[str, tuple[tuple[int, ...], str]] = {
         "waveforms": ((n_channels, n_points), "f4"),
         "done": ((), "u1"),
@@ -123,6 +134,8 @@ def layout(n_channels: int, n_points: int, n_bearings: int,
     L["diagnostics/message"] = ((), f"S{_MESSAGE_LEN}")
     L["diagnostics/steady_start"] = ((), f"S{_KIND_LEN}")
     L["diagnostics/steady_start_note"] = ((), f"S{_NOTE_LEN}")
+    if plant_dict.get("model") == "train":
+        L.update(TRAIN_DATASETS)
     return L
 
 

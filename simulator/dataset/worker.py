@@ -9,10 +9,12 @@ result sent back is smaller.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..train.plant import is_train_plant
 from .design import SampleParams
 from .measurement import (
     MeasurementDraws,
@@ -71,6 +73,9 @@ class SampleOutput:
     message: str = ""             # simulator message when status != ok
     steady_start: str = ""        # how the record started: "shooting" or "integrate" ("" for an error sample)
     steady_note: str = ""         # why "integrate" when shooting was asked for
+    offset_um: float = math.nan   # a train's offset at the coupling, Δ·c (µm)
+    unbalance_kg_m: float = math.nan  # a train's generator unbalance from its balance grade
+    log_decrement: float = math.nan   # a train's least-damped mode about its static state at the sample's speed
 
 
 def _motion(poincare_m: np.ndarray) -> tuple[str, int]:
@@ -98,6 +103,8 @@ def run_sample(task: SampleTask) -> SampleOutput:
     rng = np.random.default_rng(p.sample_seed)
     draws = draw_measurement(meas, rng)
     revs = max(required_record_revs(p.speed_rpm, meas, draws), sim.record_revs_min)
+    if is_train_plant(p.plant):
+        return _run_train_sample(task, draws, revs, rng)
     try:
         t0 = time.perf_counter()
         plant = Plant.from_dict(p.plant)
@@ -127,6 +134,55 @@ def run_sample(task: SampleTask) -> SampleOutput:
                         motion_kind=kind, motion_period=period,
                         message="" if res.status == "ok" else res.message,
                         steady_start=start.path, steady_note=_stiff_note(start.note, res.inputs.get("stiff_from_rev")))
+
+
+def _run_train_sample(task: SampleTask, draws: MeasurementDraws, revs: int,
+                      rng: np.random.Generator) -> SampleOutput:
+    """A shaft train's sample: the plant's line with the sample's coupling, the exciter's bearings moved by
+    Δ·c along ``offset_angle_rad`` with the angular offset, the generator unbalanced to its balance grade,
+    integrated from its static state (simulator.train); probes and measurement as for the lumped model."""
+    import time
+
+    from rotordiag.simulator.train.dynamics import simulate_train
+    from rotordiag.simulator.train.model import misaligned
+    from rotordiag.simulator.train.plant import TrainPlant
+    from rotordiag.simulator.train.shaftline import train_from_shaftline
+    from rotordiag.simulator.train.stability import stability
+    from rotordiag.simulator.train.transient import unbalanced
+
+    p, sim, meas = task.params, task.simulation, task.measurement
+    aligned = p.misalignment == 0 and p.angular_misalignment_mrad == 0
+    label = "aligned" if aligned else p.mechanism
+    offset_um = math.nan
+    try:
+        t0 = time.perf_counter()
+        plant = TrainPlant.from_dict(p.plant)
+        offset_um = p.misalignment * plant.clearance_m * 1e6
+        train = train_from_shaftline(plant.line(coupling=p.mechanism))
+        if not aligned:
+            train = misaligned(train, offset_m=offset_um * 1e-6, angle_rad=p.angular_misalignment_mrad * 1e-3,
+                               direction_rad=p.offset_angle_rad)
+        unb = plant.unbalance_kg_m(p.speed_rpm)
+        train = unbalanced(train, unb, angle_rad=p.unbalance_phase_rad)
+        log_dec = stability(train, p.speed_rpm).log_decrement  # its static state refuses a journal outside c
+        run = simulate_train(train, p.speed_rpm, transient_revs=sim.transient_revs, record_revs=revs,
+                             samples_per_rev=sim.samples_per_rev, rtol=sim.rtol)
+        wall_s = time.perf_counter() - t0
+    except ValueError as exc:  # TrainError and the plant's own checks: a labelled error sample, as for the lumped
+        return SampleOutput(p.index, np.full((len(meas.channels), meas.n_points), np.nan, np.float32), draws,
+                            "error", label, revs, message=f"{type(exc).__name__}: {exc}", offset_um=offset_um)
+    waveforms = probe_waveforms_um(run.journal_m, sim.samples_per_rev, p.speed_rpm, meas, draws, rng)
+    kind, period = ("", 0)
+    if sim.classify_motion and run.status == "ok":
+        poincare = run.journal_m[::sim.samples_per_rev].reshape(-1, 2 * run.journal_m.shape[1])
+        kind, period = _motion(poincare)
+    message = run.message if run.status != "ok" else ""
+    if log_dec <= 0:  # whirl/whip: the record is the self-excited orbit; said with every sample beyond the threshold
+        message = "; ".join(filter(None, [f"beyond the stability threshold (log decrement {log_dec:.3f})", message]))
+    return SampleOutput(p.index, waveforms, draws, run.status, label, revs, nfev=run.nfev, wall_time_s=wall_s,
+                        motion_kind=kind, motion_period=period, message=message, steady_start="integrate",
+                        steady_note="shaft train: from its static state", offset_um=offset_um,
+                        unbalance_kg_m=unb, log_decrement=log_dec)
 
 
 def _stiff_note(note: str, stiff_from_rev: float | None) -> str:

@@ -442,10 +442,8 @@ def _linear_operator(kern: Kernel) -> np.ndarray:
     asm = red.assembly
     w = kern.speed_rad_s
     eta = asm.train.internal_damping_s
-    K = red.K + eta * w * red.K_circ
-    C = red.C + w * red.G + eta * red.K_shaft
-    K = K.copy()
-    C = C.copy()
+    K = red.mean_stiffness(w, eta)
+    C = red.damping(w, eta)
     journal = kern.journal_m if kern.journal_m is not None else np.zeros((len(asm.bearings), 2))
     for b, j in enumerate(red.support_index):
         kb, cb = bearing_coefficients(asm.bearings[b], float(journal[b, 0]), float(journal[b, 1]), w)
@@ -493,10 +491,10 @@ def build_kernel(train: Train | Assembly | Reduced, speed_rpm: float, n_modes: i
     w = speed_rpm * math.pi / 30.0
     eta = asm.train.internal_damping_s
     Minv = np.linalg.inv(red.M)
-    AK = Minv @ (red.K + eta * w * red.K_circ)
+    AK = Minv @ red.mean_stiffness(w, eta)
     AKc = Minv @ red.K_cos
     AKs = Minv @ red.K_sin
-    AC = Minv @ (red.C + w * red.G + eta * red.K_shaft)
+    AC = Minv @ red.damping(w, eta)
     f0 = Minv @ red.gravity_n
     n_u = len(asm.unbalance_nodes)
     U = np.zeros((max(n_u, 0), 2, red.n))

@@ -18,7 +18,7 @@ K̄ ⊗ [[1 + ρ cos 2θ, ρ sin 2θ], [ρ sin 2θ, 1 − ρ cos 2θ]], θ = Ωt
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -90,21 +90,18 @@ _XP = np.array([0, 2, 4, 6])
 _YP = np.array([1, 3, 5, 7])
 
 
-@dataclass
-class Assembly:
-    """The train's matrices (n_dof = 4·n_nodes) in rotation dofs ``[x, y, θx, θy]`` per node.
+@dataclass(kw_only=True)
+class TrainMatrices:
+    """The train's equations of motion, shared by the full model (:class:`Assembly`, rotation dofs
+    ``[x, y, θx, θy]`` per node) and its reductions (``reduced.Reduced``, the same matrices on a basis).
 
     ``K`` mean (non-rotating) shaft and coupling stiffness; ``K_cos``/``K_sin`` the asymmetric parts:
     K(t) = K + cos 2(Ωt)·K_cos + sin 2(Ωt)·K_sin (each rotor's stiff-axis angle is inside them);
     ``K_shaft`` the shafts' stiffness alone (internal damping), ``K_circ`` its circulatory partner
     (force −η·(K_shaft q̇ + Ω K_circ q)); ``G`` gyroscopic per rad/s of spin; ``C`` stationary damping
-    (couplings and proportional damping).
+    (couplings and proportional damping); ``gravity_n`` the gravity load vector.
     """
 
-    train: Train
-    node_z_m: np.ndarray
-    node_rotor: np.ndarray
-    rotor_nodes: list[np.ndarray]
     M: np.ndarray
     K: np.ndarray
     K_cos: np.ndarray
@@ -114,6 +111,36 @@ class Assembly:
     G: np.ndarray
     C: np.ndarray
     gravity_n: np.ndarray
+
+    def stiffness_at(self, spin_angle_rad: float) -> np.ndarray:
+        """The stationary-frame stiffness with the rotors turned by ``spin_angle_rad`` from t = 0."""
+        return self.K + math.cos(2 * spin_angle_rad) * self.K_cos + math.sin(2 * spin_angle_rad) * self.K_sin
+
+    def mean_stiffness(self, speed_rad_s: float, internal_damping_s: float) -> np.ndarray:
+        """K + η Ω K_circ: the shafts' and couplings' stiffness at spin Ω, asymmetry at its mean, no bearings."""
+        return self.K + internal_damping_s * speed_rad_s * self.K_circ
+
+    def damping(self, speed_rad_s: float, internal_damping_s: float) -> np.ndarray:
+        """C + Ω G + η K_shaft: stationary, gyroscopic and internal damping at spin Ω, no bearings."""
+        return self.C + speed_rad_s * self.G + internal_damping_s * self.K_shaft
+
+    def projected(self, T: np.ndarray) -> dict[str, np.ndarray]:
+        """Every matrix on the basis ``T`` (q = T p): Tᵀ A T, and the load Tᵀ f — keyword arguments of a
+        subclass that holds them on that basis."""
+        out = {f.name: T.T @ getattr(self, f.name) @ T for f in fields(TrainMatrices) if f.name != "gravity_n"}
+        out["gravity_n"] = T.T @ self.gravity_n
+        return out
+
+
+@dataclass(kw_only=True)
+class Assembly(TrainMatrices):
+    """The train's finite-element matrices (n_dof = 4·n_nodes; :class:`TrainMatrices`), its nodes, bearings,
+    unbalances and couplings."""
+
+    train: Train
+    node_z_m: np.ndarray
+    node_rotor: np.ndarray
+    rotor_nodes: list[np.ndarray]
     support_nodes: np.ndarray
     support_centres_m: np.ndarray
     bearings: list
@@ -130,10 +157,6 @@ class Assembly:
     @property
     def n_dof(self) -> int:
         return DOF_PER_NODE * self.n_nodes
-
-    def stiffness_at(self, spin_angle_rad: float) -> np.ndarray:
-        """The stationary-frame stiffness with the rotors turned by ``spin_angle_rad`` from t = 0."""
-        return self.K + math.cos(2 * spin_angle_rad) * self.K_cos + math.sin(2 * spin_angle_rad) * self.K_sin
 
     def translation(self, axis: int) -> np.ndarray:
         """Rigid-body translation of the whole train along x (0) or y (1), unit metres."""

@@ -44,10 +44,8 @@ def linear_matrices(asm: Assembly, speed_rad_s: float, journal_m: np.ndarray | N
     to their bearing centres; zero if not given), the asymmetric stiffness at its mean. ``coefficients``
     (brg, x, y, Ω) → (K, C) gives each bearing's (default: the force's own derivatives)."""
     eta = asm.train.internal_damping_s
-    K = asm.K + eta * speed_rad_s * asm.K_circ
-    C = asm.C + speed_rad_s * asm.G + eta * asm.K_shaft
-    K = K.copy()
-    C = C.copy()
+    K = asm.mean_stiffness(speed_rad_s, eta)
+    C = asm.damping(speed_rad_s, eta)
     for b, node in enumerate(asm.support_nodes):
         x, y = (0.0, 0.0) if journal_m is None else journal_m[b]
         kb, cb = coefficients(asm.bearings[b], float(x), float(y), speed_rad_s)

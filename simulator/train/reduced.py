@@ -14,30 +14,21 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from .fe import Assembly
+from .fe import Assembly, TrainMatrices
 from .model import TrainError
 
 #: a reduced model keeps at most this many fixed-interface modes (the compiled kernels' budget)
 MAX_MODES = 60
 
 
-@dataclass
-class Reduced:
-    """The train on its Craig–Bampton basis ``T`` (n_dof × n_red); same matrix names as :class:`Assembly`."""
+@dataclass(kw_only=True)
+class Reduced(TrainMatrices):
+    """The train on its Craig–Bampton basis ``T`` (n_dof × n_red): the :class:`Assembly`'s matrices projected."""
 
     assembly: Assembly
     T: np.ndarray
     boundary: np.ndarray
     n_modes: int
-    M: np.ndarray
-    K: np.ndarray
-    K_cos: np.ndarray
-    K_sin: np.ndarray
-    K_shaft: np.ndarray
-    K_circ: np.ndarray
-    G: np.ndarray
-    C: np.ndarray
-    gravity_n: np.ndarray
     #: position in p of the x DOF of each bearing (y is the next one)
     support_index: np.ndarray
     #: position in p of the x DOF of each flexible coupling's two nodes
@@ -78,13 +69,8 @@ def reduce(asm: Assembly, n_modes: int = 12) -> Reduced:
         w2, phi = sla.eigh(Kii, Mii, subset_by_index=[0, n_modes - 1])
         T[np.ix_(interior, np.arange(nb, nb + n_modes))] = phi
 
-    def p(A: np.ndarray) -> np.ndarray:
-        return T.T @ A @ T
-
     pos = {int(n): k for k, n in enumerate(bnodes)}
     sup = np.array([2 * pos[int(n)] for n in asm.support_nodes], dtype=int)
     cpl = np.array([2 * pos[int(n)] for a, b, *_ in asm.flexible for n in (a, b)], dtype=int)
-    return Reduced(assembly=asm, T=T, boundary=boundary, n_modes=n_modes, M=p(asm.M), K=p(asm.K),
-                   K_cos=p(asm.K_cos), K_sin=p(asm.K_sin), K_shaft=p(asm.K_shaft), K_circ=p(asm.K_circ),
-                   G=p(asm.G), C=p(asm.C), gravity_n=T.T @ asm.gravity_n, support_index=sup, coupling_index=cpl,
-                   unbalance_rows=np.array([4 * n for n in asm.unbalance_nodes], dtype=int))
+    return Reduced(**asm.projected(T), assembly=asm, T=T, boundary=boundary, n_modes=n_modes, support_index=sup,
+                   coupling_index=cpl, unbalance_rows=np.array([4 * n for n in asm.unbalance_nodes], dtype=int))

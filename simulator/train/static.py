@@ -121,7 +121,7 @@ def static_state(train: Train | Assembly, speed_rpm: float, *, tol_n: float = 1e
     if not (np.isfinite(speed_rpm) and speed_rpm > 0):
         raise TrainError(f"speed_rpm must be positive (got {speed_rpm!r}): an oil film carries no load at rest")
     speed = speed_rpm * math.pi / 30.0
-    Keff = asm.K + asm.train.internal_damping_s * speed * asm.K_circ
+    Keff = asm.mean_stiffness(speed, asm.train.internal_damping_s)
     centres_full = asm.support_centres_m.copy()
     q = np.zeros(asm.n_dof) if q0 is None else np.array(q0, dtype=float)
     scale = max(1.0, float(np.abs(asm.gravity_n).sum()))
@@ -242,7 +242,7 @@ def coupling_loads(asm: Assembly, q: np.ndarray, speed: float, f_bearing: np.nda
         # rigid: the generalised force the left rotor's own elements, disks, gravity and bearings leave
         # unbalanced at the shared node is what the coupling supplies
         left = _single_rotor_assembly(asm, i)
-        Kl = left.K + train.internal_damping_s * speed * left.K_circ
+        Kl = left.mean_stiffness(speed, train.internal_damping_s)
         nodes = asm.rotor_nodes[i]
         dofs = np.concatenate([np.arange(4 * n, 4 * n + 4) for n in nodes])
         ql = q[dofs]
