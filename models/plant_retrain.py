@@ -371,11 +371,13 @@ def paired_bootstrap(new: dict[str, list], old: dict[str, list], names: list[str
 
 def quality_report(new_bundle: Any, old_bundle: Any, plant: PlantDescription, cases: list[dict],
                    disps: list, seed: int, *, progress: Callable[[int, int], None] | None = None,
-                   old_label: str | None = None) -> dict[str, Any]:
+                   old_label: str | None = None, old_outcomes: dict[str, list] | None = None) -> dict[str, Any]:
     """The plant's quality report: ``new_bundle`` and ``old_bundle`` (the active model) diagnosed on the same
     held-out recordings under every :func:`report_conditions` condition; per condition and pooled figures
     (:func:`_figures`), Wilson intervals of the rates, the paired bootstrap of the differences
-    (:func:`paired_bootstrap`), and :func:`decide`'s decision."""
+    (:func:`paired_bootstrap`), and :func:`decide`'s decision. ``old_outcomes``: a dict that keeps
+    ``old_bundle``'s outcomes per condition (filled when empty; reused when the same recordings are scored
+    against several new models, as the learning curve does)."""
     from .robustness import run_condition
 
     t0 = time.perf_counter()
@@ -386,7 +388,12 @@ def quality_report(new_bundle: Any, old_bundle: Any, plant: PlantDescription, ca
     steps, done = 2 * len(conds), 0
     for who, bundle in (("new", new_bundle), ("active", old_bundle)):
         for cond in conds:
-            outs[who][cond.name] = run_condition(bundle, cond, cases, disps, seed)
+            if who == "active" and old_outcomes is not None and cond.name in old_outcomes:
+                outs[who][cond.name] = old_outcomes[cond.name]
+            else:
+                outs[who][cond.name] = run_condition(bundle, cond, cases, disps, seed)
+            if who == "active" and old_outcomes is not None:
+                old_outcomes[cond.name] = outs[who][cond.name]
             done += 1
             if progress is not None:
                 progress(done, steps)
