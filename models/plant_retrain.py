@@ -273,8 +273,9 @@ def _scored(outs: list) -> list:
 
 
 def _figures(outs: list, names: list[str], edges: np.ndarray) -> dict[str, Any]:
-    """Band macro-F1 (over the bands present in the truth), false alarms, confident share, confident two-bands-off, 90 % coverage of one model's
-    outcomes (refused and failed runs counted, not scored)."""
+    """Band macro-F1 (over the bands present in the truth), false alarms, confident share, confident two-bands-off,
+    90 % coverage and the share flagged out of distribution of one model's outcomes (refused and failed runs
+    counted, not scored)."""
     from sklearn.metrics import f1_score
 
     s = _scored(outs)
@@ -296,6 +297,7 @@ def _figures(outs: list, names: list[str], edges: np.ndarray) -> dict[str, Any]:
         "false_alarms": int(np.sum(aligned & (pred != 0))), "n_aligned": int(aligned.sum()),
         "false_alarm_rate": float(np.mean(pred[aligned] != 0)) if aligned.any() else None,
         "confident_share": float(conf.mean()),
+        "ood_share": float(np.mean([o.ood for o in s])),
         "confident_two_bands_off": int(np.sum(conf & (np.abs(shown - truth) >= 2))),
         "interval_coverage": float(np.mean((lo[has] <= delta[has]) & (delta[has] <= hi[has]))) if has.any() else None,
     }
@@ -487,6 +489,9 @@ def format_report(report: Mapping[str, Any]) -> str:
     for name, r in report["per_condition"].items():
         lines.append(row(name, r))
     lines.append(row("ALL (pooled)", p))
+    if "ood_share" in p["new"]:
+        lines.append(f"flagged out of distribution (pooled): new {p['new']['ood_share']:.0%}, "
+                     f"active {p['active'].get('ood_share', float('nan')):.0%}")
     b = report["paired_bootstrap"]
     lines.append(f"new − active, 90 % paired bootstrap: macro-F1 {b['macro_f1_diff_point']:+.3f} "
                  f"({b['macro_f1_diff'][0]:+.3f}…{b['macro_f1_diff'][1]:+.3f}), false-alarm rate "
