@@ -33,6 +33,11 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--work", type=Path, default=Path("/tmp/rotordiag_plant_curve"))
     a = ap.parse_args()
+    from threadpoolctl import threadpool_limits
+
+    # one OpenMP thread, as `rotordiag retrain --threads 1`: boosted trees spinning on oversubscribed shared
+    # cores took minutes for a fit of seconds
+    threadpool_limits(1)
 
     from rotordiag.models.config import TrainConfig
     from rotordiag.models.dataset import load_feature_table
