@@ -65,6 +65,117 @@ def register(app: typer.Typer) -> None:
         typer.echo(f"registered {version} in {registry}" + (" (active)" if activate else ""))
         typer.echo(_summary(report))
 
+    @app.command()
+    def retrain(
+        registry: Path = typer.Option(..., "--registry", help="Registry to add the model to (created if missing); "
+                                      "its active model is the one the new one must beat (empty: the shipped one)."),
+        preset: Optional[str] = typer.Option(None, "--preset", help="A rated-machine preset by name (gen50_2pole, "
+                                             "gen200_2pole, gen600_2pole, gen600_4pole)."),
+        shaftline: Optional[Path] = typer.Option(None, "--shaftline", help="The plant's shaft-line TOML "
+                                                 "(rotordiag plant from-shaftline; may hold rated_speed_rpm)."),
+        rated_speed_rpm: Optional[list[float]] = typer.Option(None, "--rated-speed-rpm", help="Rated speed(s), r/min "
+                                                              "(a preset gives its own); the sweep runs 0.8–1.05 × it."),
+        n_samples: int = typer.Option(0, "--n-samples", min=0, max=20000, help="Simulated samples of the plant's "
+                                      "dataset (0: the default, docs/models.md's learning curve)."),
+        report_cases: int = typer.Option(0, "--report-cases", min=0, max=200, help="Held-out recordings per class "
+                                         "(4 mechanisms + aligned) of the quality report (0: the default)."),
+        seed: int = typer.Option(0, "--seed", min=0, help="Seed of the dataset's design and of the report's held-out set."),
+        work_dir: Optional[Path] = typer.Option(None, "--work-dir", help="Folder for the dataset and its features "
+                                                "(default: ./retrain-<plant>; a rerun resumes it)."),
+        workers: Optional[int] = typer.Option(None, "--workers", min=0, max=256, help="Simulation worker processes "
+                                              "(default: the CPUs; 0: in this process)."),
+        activate: bool = typer.Option(True, "--activate/--no-activate", help="Activate the new model if its report "
+                                      "says it is better than the active one."),
+        force: bool = typer.Option(False, "--force", help="Activate it even if it is not better (recorded: "
+                                   "activated_by = forced)."),
+        threads: int = typer.Option(1, min=1, max=256, help="OpenMP threads of the boosted trees."),
+    ) -> None:
+        """Retrain for one plant: its dataset, a model, and a quality report on held-out recordings of that plant
+        beside the active model's; activated only if better (docs/models.md, "Retraining for one plant")."""
+        from threadpoolctl import threadpool_limits
+        from tqdm import tqdm
+
+        from rotordiag.simulator.dataset.generate import generate
+        from rotordiag.simulator.dataset.spec import SpecError, parse_spec
+
+        from .config import TrainConfig
+        from .dataset import load_feature_table
+        from .plant_retrain import (
+            DEFAULT_N_SAMPLES,
+            DEFAULT_REPORT_CASES,
+            StagedProgress,
+            describe_plant,
+            drop_unmeasured,
+            format_report,
+            pending_card,
+            plant_dataset_spec,
+            report_and_activate,
+            report_conditions,
+        )
+        from .predict import load_bundle
+        from .registry import Registry, RegistryError, shipped_registry_dir
+        from .train import train_and_register
+
+        try:
+            if (preset is None) == (shaftline is None):
+                raise ValueError("give the plant as exactly one of --preset NAME or --shaftline FILE")
+            plant = describe_plant(preset=preset, shaftline=shaftline, rated_speed_rpm=rated_speed_rpm or None)
+            n = n_samples or DEFAULT_N_SAMPLES
+            k = report_cases or DEFAULT_REPORT_CASES
+            spec = plant_dataset_spec(plant, n_samples=n, seed=seed)
+            reg = Registry(registry)
+            own = reg.active_version() is not None
+            compare_with = load_bundle(registry if own else shipped_registry_dir())
+            label = f"{compare_with.version} ({'active in ' + str(registry) if own else 'the shipped model'})"
+        except (ValueError, RegistryError) as exc:
+            _fail(str(exc))
+        import tomli_w
+
+        folder = work_dir or Path(f"retrain-{plant.name.split(':')[-1].removesuffix('.toml')}")
+        folder.mkdir(parents=True, exist_ok=True)
+        spec_path = folder / "dataset.toml"
+        spec_path.write_text(tomli_w.dumps(spec), encoding="utf-8")
+        cfg = TrainConfig.shipped({"seed": seed})
+        rows = n * (1 + (cfg.augment.copies if cfg.augment is not None else 0))
+        staged = StagedProgress({"simulating": n, "features": n, "training": rows, "held-out simulation": 5 * k,
+                                 "report": 2 * len(report_conditions()) * 5 * k})
+        bar = tqdm(total=1000, bar_format="{desc} {percentage:3.0f}%|{bar}| {elapsed}", dynamic_ncols=True)
+
+        def cb(stage: str):
+            def on(done: int, total: int) -> None:
+                f, eta = staged.update(stage, done, total)
+                bar.set_description_str(f"{stage} {done}/{total}, ETA "
+                                        + ("?" if eta is None else f"{eta / 60:.1f} min"), refresh=False)
+                bar.update(max(0, round(1000 * f) - bar.n))
+            return on
+
+        try:
+            resolved = parse_spec(spec_path.read_text(encoding="utf-8"))
+            generate(resolved, folder / "dataset.h5", n_workers=workers, progress=False, on_progress=cb("simulating"))
+            table = load_feature_table(folder / "dataset.h5", progress=cb("features"), augment=cfg.augment)
+            table, dropped = drop_unmeasured(table)
+            cb("training")(0, 1)
+            with threadpool_limits(threads):
+                version, _ = train_and_register(table, cfg, reg, activate=False, card_extra={
+                    **pending_card(plant), "features_never_measured": dropped})
+            cb("training")(1, 1)
+            report, by = report_and_activate(
+                reg, version, plant, compare_with, seed=seed, n_per_class=k, activate=activate, force=force,
+                progress=lambda stage, d, t: cb(stage)(d, t), cache=folder,
+                compare_label=label)
+        except (ValueError, SpecError, RegistryError) as exc:
+            bar.close()
+            _fail(str(exc))
+        except KeyboardInterrupt:
+            bar.close()
+            _fail("interrupted; the dataset is kept and a rerun resumes it", 130)
+        bar.close()
+        typer.echo(format_report(report))
+        state = ("activated (forced)" if by == "forced" else "activated: better on its report" if by
+                 else "registered, NOT activated" + ("" if not activate else
+                                                     " (not better on its report; --force to activate it anyway)"))
+        typer.echo(f"{version} in {registry}: {state}")
+
     @models_app.command("list")
     def list_models(registry: Optional[Path] = typer.Option(None, "--registry", help=_REGISTRY_HELP)) -> None:
         """List the versions of a registry (* = active)."""
@@ -89,15 +200,55 @@ def register(app: typer.Typer) -> None:
     def activate_model(
         version: str = typer.Argument(..., help="Version name, e.g. v0002."),
         registry: Optional[Path] = typer.Option(None, "--registry", help=_REGISTRY_HELP),
+        force: bool = typer.Option(False, "--force", help="Activate a plant-retrained version whose quality report "
+                                   "says it is not better (recorded in its card: activated_by = forced)."),
     ) -> None:
-        """Make VERSION the active model."""
+        """Make VERSION the active model (a plant-retrained one only if its report says it is better, or --force)."""
         from .registry import Registry, RegistryError
 
         try:
-            Registry(registry or default_registry()).activate(version)
+            Registry(registry or default_registry()).activate(version, force=force)
         except RegistryError as exc:
             _fail(str(exc))
         typer.echo(f"active: {version}")
+
+    @models_app.command("show")
+    def show_model(
+        version: Optional[str] = typer.Argument(None, help="Version name (default: the active one)."),
+        registry: Optional[Path] = typer.Option(None, "--registry", help=_REGISTRY_HELP),
+        as_json: bool = typer.Option(False, "--json", help="Print the card (and the plant report) as JSON."),
+    ) -> None:
+        """A version's card: training data, held-out metrics and, for a plant-retrained one, its quality report."""
+        import json
+
+        from .plant_retrain import REPORT_FILE, format_report
+        from .registry import Registry, RegistryError
+
+        reg = Registry(registry or default_registry())
+        try:
+            name = version or reg.active_version()
+            if name is None:
+                raise RegistryError(f"registry {reg.root}: no active model; name a version")
+            card = reg.card(name)
+        except RegistryError as exc:
+            _fail(str(exc))
+        assert name is not None   # _fail exits otherwise
+        path = reg.root / name / REPORT_FILE
+        report = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
+        if as_json:
+            typer.echo(json.dumps({"card": card, "plant_report": report}, indent=2))
+            return
+        td = card.get("training_data", {})
+        typer.echo(f"{name}{' (active)' if reg.active_version() == name else ''}  created {card.get('created', '?')}  "
+                   f"code {card.get('code_version', '?')}")
+        typer.echo(f"  trained on {td.get('n_rows_used', '?')} rows of {td.get('n_plants', '?')} plants, speeds "
+                   f"{td.get('speed_rpm_range')} r/min; plant: {(card.get('plant') or {}).get('name', card.get('plant_family'))}")
+        if "activated_by" in card:
+            typer.echo(f"  activated_by: {card.get('activated_by')}")
+        if report is not None:
+            typer.echo(format_report(report))
+        elif isinstance(card.get("plant_report"), dict) and card["plant_report"].get("pending"):
+            typer.echo("  plant quality report: pending (the retraining did not finish)")
 
     @models_app.command("rollback")
     def rollback_model(registry: Optional[Path] = typer.Option(None, "--registry", help=_REGISTRY_HELP)) -> None:

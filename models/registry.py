@@ -83,6 +83,26 @@ class RegistryError(ValueError):
     """A registry operation that cannot be done (unknown version, untrusted file, ...)."""
 
 
+class ActivationRefused(RegistryError):
+    """Activating a version whose plant quality report says it is not better than the model it was compared
+    with (or whose report is not written yet), without ``force`` (docs/models.md, "Activated only if better")."""
+
+
+def activation_refusal(card: Mapping[str, Any]) -> str | None:
+    """Why ``card``'s version may not be activated without force, or None: a plant-retrained version
+    (card ``plant_report``) whose report is still pending or says it is not better."""
+    rep = card.get("plant_report")
+    if not isinstance(rep, dict):
+        return None
+    if rep.get("pending"):
+        return "its plant quality report is not written yet (the retraining did not finish)"
+    if rep.get("better") is False:
+        failed = (rep.get("decision") or {}).get("failed") or []
+        return (f"its quality report on {rep.get('plant', 'its plant')} says it is not better than "
+                f"{rep.get('compared_with', 'the active model')}: " + "; ".join(failed))
+    return None
+
+
 @dataclass(frozen=True)
 class ModelVersion:
     """One registered version: its name, directory and card."""
@@ -326,11 +346,41 @@ class Registry:
             raise RegistryError(f"registry {self.root}: {HISTORY_FILE} is corrupt ({exc})") from None
         return [str(v) for v in h]
 
-    def activate(self, version: str) -> None:
-        """Make ``version`` the active one (recorded in the history for rollback)."""
+    def write_file(self, version: str, name: str, content: str | bytes) -> None:
+        """Add or replace one extra file of ``version`` (atomically; not the model nor the card)."""
+        d = self._version_dir(version)
+        if "/" in name or name in (MODEL_FILE, CARD_FILE) or name.startswith("."):
+            raise RegistryError(f"write_file: invalid file name {name!r}")
+        _atomic_write_text(d / name, content.decode("utf-8") if isinstance(content, bytes) else content)
+
+    def update_card(self, version: str, fields: Mapping[str, Any]) -> dict:
+        """Set ``fields`` in ``version``'s card (atomic replace); returns the new card."""
+        card = self.card(version)
+        card.update(fields)
+        _atomic_write_text(self._version_dir(version) / CARD_FILE, dumps_json(card))
+        return card
+
+    def activate(self, version: str, *, force: bool = False) -> None:
+        """Make ``version`` the active one (recorded in the history for rollback).
+
+        A plant-retrained version whose quality report says it is not better (:func:`activation_refusal`) is
+        refused unless ``force``; its card then records ``activated_by: "forced"``.
+
+        Raises
+        ------
+        ActivationRefused
+            Not better on its report and not forced (the message says why).
+        """
         self._version_dir(version)
         if self.active_version() == version:
             return
+        card = self.card(version)
+        why = activation_refusal(card)
+        if why is not None and not force:
+            raise ActivationRefused(f"version {version} not activated: {why}; activate it anyway with force")
+        if "plant_report" in card:
+            self.update_card(version, {"activated_by": "forced" if why is not None else "report",
+                                       "activated_at": datetime.now(UTC).isoformat(timespec="seconds")})
         history = self._history() + [version]
         _atomic_write_text(self.root / HISTORY_FILE, json.dumps(history) + "\n")
         _atomic_write_text(self.root / ACTIVE_FILE, version + "\n")

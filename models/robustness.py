@@ -339,6 +339,8 @@ class Outcome:
     ood_score: float = math.nan
     outside: list[str] = field(default_factory=list)
     delta_model: float = math.nan
+    #: the verdict's Δ interval (``Verdict.misalignment_interval``, at its ``interval_level``); NaN when refused
+    interval: tuple[float, float] = (math.nan, math.nan)
     rule_class: str = "aligned"
     ratio: float = math.nan
     reasons: list[str] = field(default_factory=list)
@@ -380,6 +382,8 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
     out.reasons = [str(r["code"]) for r in v.reasons]
     out.ood_score, out.outside = float(v.ood_score), [str(f["feature"]) for f in v.ood_findings]
     out.ood, out.delta_model = bool(v.ood), float(v.misalignment_model) if v.misalignment_model is not None else math.nan
+    lo, hi = v.misalignment_interval
+    out.interval = (math.nan if lo is None else float(lo), math.nan if hi is None else float(hi))
     names = list(fr.names)
     out.across_dc_per_c, out.across_1x_per_c = across_coupling(fr)
     out.ratio = float(ratio_column(np.asarray(fr.values, dtype=float)[None, :], names, RULE_PATTERNS)[0])

@@ -96,11 +96,12 @@ class ModelStore:
             out.append(card)
         return out
 
-    def activate(self, version: str) -> None:
-        """Point ``active`` at ``version`` (``KeyError`` when unknown)."""
+    def activate(self, version: str, *, force: bool = False) -> None:
+        """Point ``active`` at ``version`` (``KeyError`` when unknown; ``models.registry.ActivationRefused`` when
+        a plant-retrained version's report says it is not better and ``force`` is not set)."""
         if version not in self.registry.versions():
             raise KeyError(version)
-        self.registry.activate(version)
+        self.registry.activate(version, force=force)
 
     def load(self, version: str | None = None) -> ModelBundle:
         """The ``models.predict.ModelBundle`` of ``version`` or the active model, loaded once and cached."""

@@ -196,8 +196,12 @@ class JobOut(BaseModel):
                                                 "(POST /models/retrain).")
     status: JobStatus = Field(..., description="`interrupted`: the server stopped while it ran; `cancelled`: "
                               "stopped by POST /jobs/{id}/cancel; POST /jobs/{id}/resume continues either.")
-    progress: float = Field(..., ge=0, le=1, description="Fraction done, 0-1.")
-    stage: str = Field(..., description="Current stage, e.g. `simulating`, `training`.")
+    progress: float = Field(..., ge=0, le=1, description="Fraction done, 0-1 (a retrain's stages weighted by "
+                            "their expected time: models.plant_retrain.StagedProgress).")
+    stage: str = Field(..., description="Current stage, e.g. `simulating`, `features`, `training`, `held-out "
+                       "simulation`, `report`.")
+    eta_s: float | None = Field(None, ge=0, description="While running: seconds left, estimated as the time since "
+                                "the attempt started × (1 − progress) / progress; null before 1 % or when not running.")
     message: str = Field(..., description="Human-readable progress note.")
     params: dict[str, Any] = Field(..., description="The request that created the job.")
     result: dict[str, Any] | None = Field(None, description="Dataset summary or new model version and evaluation.")
@@ -660,6 +664,20 @@ class ModelCard(BaseModel):
         "them it has (docs/models.md). Null when the card does not list them.")
 
 
+class ModelDetail(ModelCard):
+    """One version: its card, and for a plant-retrained version its quality report (docs/models.md)."""
+
+    activated_by: Literal["forced", "report"] | None = Field(
+        None, description="How a plant-retrained version was activated: `report` (its quality report says it is "
+        "better than the model it was compared with), `forced` (activated although it is not); null: never activated, "
+        "or not a plant-retrained version.")
+    plant_report: dict[str, Any] | None = Field(
+        None, description="The full quality report of a plant-retrained version (`plant_report.json`): held-out "
+        "recordings of its plant under every measurement condition, this model beside the one it was compared "
+        "with (band macro-F1, false alarms, confident share, confident two bands off, 90 % interval coverage, "
+        "paired bootstrap intervals) and the `decision`; null for other versions.")
+
+
 class ModelList(BaseModel):
     """The registry."""
 
@@ -704,6 +722,10 @@ class FieldRecord(_Strict):
         return v
 
 
+#: the largest shaft-line TOML text POST /trains/summary and POST /models/retrain read (a real one is a few kB)
+MAX_SHAFTLINE_TOML_CHARS = 100_000
+
+
 class RetrainRequest(_Strict):
     """Body of POST /models/retrain: retrain the model for a plant."""
 
@@ -726,6 +748,10 @@ class RetrainRequest(_Strict):
                    "bearings": {"diameter_m": [0.45, 0.45, 0.25, 0.25], "length_m": [0.35, 0.35, 0.15, 0.15],
                                 "clearance_m": 0.00035},
                    "coupling": {"type": "flexible", "stiffness_n_m": 1.0e8}}])
+    shaftline_toml: str | None = Field(
+        None, max_length=MAX_SHAFTLINE_TOML_CHARS,
+        description="The same shaft line as the text of its TOML file (`rotordiag retrain --shaftline`'s file; it "
+        "may hold `rated_speed_rpm` at the top); instead of `shaftline` or `preset`.")
     preset: str | None = Field(None, min_length=1, max_length=64,
                                description="A rated-machine preset by name (`gen50_2pole`, `gen200_2pole`, "
                                "`gen600_2pole`, `gen600_4pole`) instead of `shaftline`: its shaft line and its rated "
@@ -745,7 +771,12 @@ class RetrainRequest(_Strict):
                                      "shipped model's recipe, models/default/train.toml; what is not named is kept.")
     field_data: list[FieldRecord] = Field(default_factory=list, max_length=1000,
                                           description="Optional field-labelled recordings added to the training set.")
-    activate: bool = Field(False, description="Make the new version active when training succeeds.")
+    activate: bool = Field(True, description="Make the new version active if its quality report on the plant says it "
+                           "is better than the active model (docs/models.md, \"Activated only if better\").")
+    force: bool = Field(False, description="Activate the new version even if its report says it is not better "
+                        "(recorded in its card: `activated_by` = `forced`).")
+    report_cases: int = Field(6, ge=1, le=50, description="Held-out recordings per class (four mechanisms and "
+                              "aligned) of the plant's quality report; each is measured under every condition.")
 
 
 class JobCreated(BaseModel):
@@ -876,8 +907,6 @@ class DeliveryOut(BaseModel):
 
 # --- shaft trains ---------------------------------------------------------------------------
 
-#: the largest shaft-line TOML text POST /trains/summary reads (a real shaft line is a few kB)
-MAX_SHAFTLINE_TOML_CHARS = 100_000
 
 
 class TrainSummaryRequest(_Strict):

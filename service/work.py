@@ -12,26 +12,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from rotordiag.core.tables import deep_merge
-
 from .core.config import Settings
 from .errors import InputError
-
-#: Retraining sweep used unless the request overrides a table/key (a small, fast default).
-RETRAIN_DEFAULT_SWEEP: dict[str, Any] = {
-    "design": {"method": "sobol", "n_samples": 256, "seed": 0},
-    "operating": {
-        "misalignment": {"min": 0.0, "max": 0.6},
-        "speed_rpm": {"min": 1200.0, "max": 2200.0},
-        "unbalance": {"min": 0.02, "max": 0.15},
-        "unbalance_phase_rad": {"min": -3.14159, "max": 3.14159},
-        "mechanism": "rigid",
-    },
-    "plant": {"perturb": {"generator_mass_kg": 0.05, "generator_stiffness_n_m": 0.05, "asymmetry": 0.1,
-                          "clearance_m": 0.05, "viscosity_pa_s": 0.1}},
-    "measurement": {"sample_rate_hz": 2048.0, "duration_revs": 32.0, "snr_db": 30.0},
-}
-
 
 #: Bounds on what one job may ask for, checked at POST time (422) so that an absurd job is never queued
 #: (docs/service.md, "Job bounds"): simulated samples, stored points (samples x points per channel, about
@@ -170,58 +152,55 @@ def prepare_dataset_job(body: Any, settings: Settings) -> dict[str, Any]:
     return {"spec_toml": text, "spec_hash": resolved.spec_hash, "name": body.name}
 
 
-def _retrain_plant_line(body: Any) -> tuple[dict[str, Any] | None, list[float]]:
-    """The shaft-line tables of a retrain request (its ``shaftline``, or its ``preset``'s) and the rated speeds
-    its default sweep follows (``rated_speed_rpm``, else the preset's; none: the default range)."""
-    from rotordiag.simulator.shaftline import PRESETS
+def _retrain_plant(body: Any) -> Any:
+    """The plant of a retrain request (``models.plant_retrain.describe_plant``: its preset or shaft line, rated
+    speeds, ``plant`` values checked for type first)."""
+    from dataclasses import replace
 
-    if body.preset is not None and body.shaftline is not None:
-        raise InputError("preset and shaftline: give the plant one way, a preset name or the shaft-line tables")
-    rated = [float(body.rated_speed_rpm)] if body.rated_speed_rpm is not None else []
-    if body.preset is None:
-        return body.shaftline, rated
-    if body.preset not in PRESETS:
-        raise InputError(f"preset {body.preset!r} is not known; the presets: {', '.join(sorted(PRESETS))}")
-    tables = {k: v for k, v in PRESETS[body.preset].items() if k != "rated_speed_rpm"}
-    return tables, rated or [float(v) for v in PRESETS[body.preset]["rated_speed_rpm"]]
+    from rotordiag.models.plant_retrain import describe_plant
+
+    line = body.shaftline
+    if body.shaftline_toml is not None:
+        import tomllib
+
+        if body.shaftline is not None:
+            raise InputError("shaftline and shaftline_toml: give the shaft line once, as tables or as the file's text")
+        try:
+            line = tomllib.loads(body.shaftline_toml)
+        except tomllib.TOMLDecodeError as exc:
+            raise InputError(f"shaftline_toml is not valid TOML: {exc}") from None
+        except RecursionError:
+            raise InputError("shaftline_toml is nested too deeply; a shaft line has a few levels of tables") from None
+    try:
+        plain = describe_plant(preset=body.preset, shaftline=line, rated_speed_rpm=body.rated_speed_rpm)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    _check_plant_types(body.plant, plain.base_plant())
+    plant = replace(plain, plant_set=dict(body.plant))
+    try:
+        plant.base_plant()
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"plant: {exc}") from None
+    return plant
 
 
 def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
-    """Validate a POST /models/retrain body (plant, sweep, training options, field data)."""
+    """Validate a POST /models/retrain body (plant, sweep, training options, field data); the dataset spec is
+    ``models.plant_retrain.plant_dataset_spec``'s (the plant's tolerances, speeds and probe layout)."""
     from rotordiag.models.config import TrainConfig
-    from rotordiag.simulator import Plant
+    from rotordiag.models.plant_retrain import plant_dataset_spec
 
-    base = Plant.default()
-    line_tables, rated = _retrain_plant_line(body)
-    if line_tables is not None:
-        from rotordiag.simulator import shaftline
-
-        try:
-            base = shaftline.to_plant(shaftline.ShaftLine.from_dict(line_tables))
-        except (TypeError, ValueError, OverflowError, ZeroDivisionError, FloatingPointError) as exc:
-            raise InputError(f"shaftline: {exc}") from None
-    _check_plant_types(body.plant, base)
-    try:
-        plant = base.replace(**body.plant) if body.plant else base
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise InputError(f"plant: {exc}") from None
+    plant = _retrain_plant(body)
     sweep = dict(body.sweep)
     if "plant" in sweep:
         extra = set(sweep["plant"]) - RETRAIN_SWEEP_PLANT_KEYS if isinstance(sweep["plant"], dict) else {"plant"}
         if extra:
             raise InputError(f"sweep.plant: only {' and '.join(sorted(RETRAIN_SWEEP_PLANT_KEYS))} may be given "
                              "here; put plant values in `plant` and a shaft-line description in `shaftline`")
-    defaults = RETRAIN_DEFAULT_SWEEP
-    if rated:                                       # the default sweep follows the plant's rated speed(s)
-        lo, hi = max(100.0, 0.8 * min(rated)), min(6000.0, 1.05 * max(rated))
-        defaults = deep_merge(defaults, {"operating": {"speed_rpm": {"min": lo, "max": hi}}})
-    spec = deep_merge(defaults, sweep, whole=("mechanism",))   # a mechanism table is a whole mix
-    spec.setdefault("plant", {})["set"] = {k: v for k, v in plant.to_dict().items() if k in body.plant} \
-        if body.plant else {}
-    if not spec["plant"]["set"]:
-        del spec["plant"]["set"]
-    if line_tables is not None:
-        spec["plant"]["shaftline"] = line_tables
+    try:
+        spec = plant_dataset_spec(plant, sweep=sweep)
+    except (TypeError, ValueError, AttributeError) as exc:
+        raise InputError(f"sweep: {exc}") from None
     text = _spec_toml_from_dict(spec)
     resolved = _validate_spec_text(text)
     _check_training_numbers(body.training)
@@ -238,9 +217,10 @@ def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
                 recording_from_model(rec.recording)
             except ValueError as exc:
                 raise InputError(f"field_data[{i}].recording: {exc}") from None
-    return {"plant": body.plant, "shaftline": line_tables is not None, "preset": body.preset, "spec_toml": text,
-            "spec_hash": resolved.spec_hash,
-            "training": train_cfg.to_dict(), "field_data": field, "activate": body.activate}
+    return {"plant": body.plant, "shaftline": plant.shaftline is not None, "preset": body.preset,
+            "plant_description": plant.to_dict(), "spec_toml": text, "spec_hash": resolved.spec_hash,
+            "training": train_cfg.to_dict(), "field_data": field, "activate": body.activate, "force": body.force,
+            "report_cases": body.report_cases}
 
 
 # --- execution (inside the job thread) ---------------------------------------------------------
@@ -300,39 +280,85 @@ def _jsonable(v: Any) -> bool:
 
 
 def run_retrain(params: dict[str, Any], ctx) -> dict[str, Any]:
-    """Dataset for the plant (resumable), features, then train, evaluate and register a model version.
-
-    Uses the models package's ``load_feature_table`` (cached features next to the dataset) and
-    ``train_and_register`` (held-out-plant evaluation, final fit, registry write).
+    """Dataset for the plant (resumable), features, train and register a version (not active, its report
+    pending), then the plant's quality report against the active model, and activation only if it is better
+    (or forced): ``models.plant_retrain``. Progress is one fraction over the stages weighted by their
+    expected time (``models.plant_retrain.StagedProgress``), so that the job's ``eta_s`` is sane.
     """
+    from dataclasses import replace
+
     from rotordiag.models.config import TrainConfig
     from rotordiag.models.dataset import load_feature_table
+    from rotordiag.models.plant_retrain import (
+        DEFAULT_REPORT_CASES,
+        StagedProgress,
+        describe_plant,
+        pending_card,
+        report_and_activate,
+        report_conditions,
+    )
+    from rotordiag.simulator.dataset.spec import parse_spec
+
+    desc = params.get("plant_description") or {}
+    plant = replace(describe_plant(shaftline=desc.get("shaftline"), rated_speed_rpm=desc.get("rated_speed_rpm") or None,
+                                   plant_set=desc.get("plant_set") or params.get("plant") or {}),
+                    name=desc.get("name", "plant"))
+    k = int(params.get("report_cases") or DEFAULT_REPORT_CASES)
+    n = parse_spec(params["spec_toml"]).spec.design.n_samples or 1
+    config = TrainConfig.from_dict(params["training"])
+    rows = n * (1 + (config.augment.copies if config.augment is not None else 0))
+    staged = StagedProgress({"simulating": n, "features": n, "training": rows, "held-out simulation": 5 * k,
+                             "report": 2 * len(report_conditions()) * 5 * k})
+
+    def span(stage: str) -> tuple[float, float]:
+        return staged.start[stage], staged.start[stage] + staged.share[stage]
 
     out = ctx.settings.datasets_dir / f"retrain-{ctx.job_id}.h5"
-    dataset = _generate(params["spec_toml"], out, ctx, 0.0, 0.6)
-    ctx.progress(0.6, "features", "extracting features")
-    config = TrainConfig.from_dict(params["training"])
-    table = load_feature_table(out, progress=_progress_cb(ctx, 0.6, 0.8, "features"), augment=config.augment)
+    dataset = _generate(params["spec_toml"], out, ctx, *span("simulating"))
+    ctx.progress(span("features")[0], "features", "extracting features")
+    table = load_feature_table(out, progress=_progress_cb(ctx, *span("features"), "features"), augment=config.augment)
     field = params.get("field_data") or []
     if field:
         table = _with_field_rows(table, field)
     table, dropped = _drop_unmeasured(table)
-    ctx.progress(0.8, "training", f"training on {len(table)} rows (held-out-plant evaluation, then final fit)")
-    activate = bool(params.get("activate"))
+    ctx.progress(span("training")[0], "training", f"training on {len(table)} rows (held-out-plant evaluation, then final fit)")
     version = _registered_by(ctx.models.registry, ctx.job_id)
     if version is None:
         # in a child process, so that a cancel or a shutdown stops a fit that has no progress to check
-        version = run_in_child(ctx, _train_step, table, params["training"], str(ctx.models.root), activate,
+        version = run_in_child(ctx, _train_step, table, params["training"], str(ctx.models.root), False,
                                {"retrain_job": ctx.job_id, "plant_overrides": params.get("plant") or {},
-                                "field_records": len(field), "features_never_measured": dropped})
+                                "field_records": len(field), "features_never_measured": dropped,
+                                **pending_card(plant)})
     else:   # an earlier attempt registered it, then died before recording success: do not train it twice
-        ctx.progress(0.95, "training", f"{version} was registered by an earlier attempt of this job")
-        if activate:
-            ctx.models.registry.activate(version)
+        ctx.progress(span("training")[1], "training", f"{version} was registered by an earlier attempt of this job")
+    compare_with, label = _model_to_beat(ctx)
+    report, by = report_and_activate(
+        ctx.models.registry, version, plant, compare_with, seed=int(config.seed), n_per_class=k,
+        activate=bool(params.get("activate", True)), force=bool(params.get("force")),
+        progress=lambda stage, d, t: _progress_cb(ctx, *span(stage), stage)(d, t),
+        cache=ctx.settings.datasets_dir, compare_label=label)
     card = ctx.models.registry.card(version)
-    return {"version": version, "activated": activate, "metrics": card.get("metrics"),
+    return {"version": version, "activated": by is not None, "activated_by": by,
+            "better": report["decision"]["better"], "decision": report["decision"],
+            "plant_report": {"pooled": report["pooled"], "paired_bootstrap": report["paired_bootstrap"],
+                             "file": str((ctx.models.root / version / "plant_report.json").resolve())},
+            "metrics": card.get("metrics"),
             "n_rows": len(table), "field_records": len(field), "features_never_measured": dropped,
             "report": str((ctx.models.root / version / "report.json").resolve()), "dataset": dataset}
+
+
+def _model_to_beat(ctx) -> tuple[Any, str]:
+    """The active model (``ModelBundle``) and its label; with none active, the shipped registry's."""
+    from rotordiag.models.predict import load_bundle
+
+    from .inference import ModelUnavailable
+
+    try:
+        bundle = ctx.models.load(None)
+        return bundle, f"{bundle.version} (active)"
+    except ModelUnavailable:
+        bundle = load_bundle(ctx.settings.shipped_registry_dir)
+        return bundle, f"{bundle.version} (the shipped model)"
 
 
 def _registered_by(registry, job_id: str) -> str | None:
@@ -426,16 +452,10 @@ def _kill(proc: Any) -> None:
 
 
 def _drop_unmeasured(table) -> tuple[Any, list[str]]:
-    """Drop feature columns that are NaN in every row (e.g. motion type for records shorter than the
-    classifier needs, sub-synchronous peak order when no row has a sub-synchronous line).
+    """``models.plant_retrain.drop_unmeasured`` (columns NaN in every row dropped)."""
+    from rotordiag.models.plant_retrain import drop_unmeasured
 
-    Such a column carries no information, and scikit-learn's histogram gradient boosting fails to bin
-    it; the verdict maps features by name, so the model simply does not use them.
-    """
-    import numpy as np
-
-    never = [n for n, col in zip(table.feature_names, np.isnan(table.X).all(axis=0)) if col]
-    return (table.without_features(never) if never else table), never
+    return drop_unmeasured(table)
 
 
 def _with_field_rows(table, field: list[dict[str, Any]]):

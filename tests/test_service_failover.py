@@ -31,7 +31,7 @@ RETRAIN = {
                              "classify_motion": False}},
     "training": {"seed": 1, "classifier": {"max_iter": 20, "min_samples_leaf": 2},
                  "regressor": {"max_iter": 20, "min_samples_leaf": 2}, "evaluation": {"n_splits": 3}},
-    "activate": False,
+    "activate": False, "report_cases": 1,
 }
 
 

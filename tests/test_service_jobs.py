@@ -94,7 +94,8 @@ def test_dataset_spec_errors_are_422_before_any_job(tmp_path):
 @pytest.mark.slow
 def test_retrain_tiny_model_for_a_perturbed_plant(tmp_path):
     """POST /models/retrain for a plant unlike the default, on a real local Dask cluster; the new
-    version is registered with its held-out evaluation, activated, and then diagnoses."""
+    version is registered with its held-out evaluation and its plant's quality report, activated (forced, or
+    by its report), and then diagnoses."""
     from tests.service_util import diagnose_json, shipped_or_tiny_registry, simulated_channels
 
     settings = make_settings(tmp_path, dask_local_workers=2, shipped_registry_dir=shipped_or_tiny_registry())
@@ -109,7 +110,7 @@ def test_retrain_tiny_model_for_a_perturbed_plant(tmp_path):
         "training": {"seed": 1, "classifier": {"max_iter": 30, "min_samples_leaf": 2},
                      "regressor": {"max_iter": 30, "min_samples_leaf": 2}, "evaluation": {"n_splits": 3}},
         "field_data": [{"misalignment": 0.3, "recording": diagnose_json(fs, channels, speed_rpm=1800.0)}],
-        "activate": True,
+        "activate": True, "force": True, "report_cases": 1,
     }
     app = create_app(settings)
     with TestClient(app) as c:
@@ -120,11 +121,17 @@ def test_retrain_tiny_model_for_a_perturbed_plant(tmp_path):
         assert job["status"] == "succeeded", job
         res = job["result"]
         assert res["field_records"] == 1 and res["n_rows"] >= 30
-        assert "b2_subsync_peak_order" in res["features_never_measured"]   # no sub-synchronous line anywhere
+        # classify_motion = false: the motion features are never computed, so never trained on
+        assert {"motion_period", "motion_quasi_periodic", "motion_chaotic"} <= set(res["features_never_measured"])
         assert res["dataset"]["n_samples"] == 40
         assert "per_mechanism" in res["metrics"]
         after = c.get("/models").json()
         assert after["active"] == res["version"] and len(after["versions"]) == len(before["versions"]) + 1
+        # its quality report on the plant, beside the model that was active, and how it was activated
+        assert res["activated_by"] == ("report" if res["better"] else "forced")
+        shown = c.get(f"/models/{res['version']}").json()
+        assert shown["activated_by"] == res["activated_by"] and shown["plant_report"]["held_out"]["n_cases"] == 5
+        assert shown["plant_report"]["models"]["active"] == f"{before['active']} (active)"
         card = next(v for v in after["versions"] if v["version"] == res["version"])
         assert card["plant_overrides"] == body["plant"] and card["retrain_job"] == job["id"]
         assert card["plant_family"]["base_plant"]["generator_mass_kg"] == 28000.0

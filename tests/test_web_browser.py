@@ -134,6 +134,7 @@ def server(tmp_path_factory):
             proc.kill()
             pytest.fail(f"server did not become healthy within 90 s:\n{proc.communicate()[0]}")
         time.sleep(0.25)
+    REGISTRIES[base] = Path(env.get("ROTORDIAG_MODEL_REGISTRY_DIR") or tmp / "data" / "registry")
     yield base
     proc.send_signal(signal.SIGINT)
     try:
@@ -142,6 +143,10 @@ def server(tmp_path_factory):
         proc.kill()
         out, _ = proc.communicate()
     assert "Traceback" not in out, out
+
+
+#: the registry directory of each test server (by its base URL)
+REGISTRIES: dict[str, Path] = {}
 
 
 @pytest.fixture(scope="module")
@@ -987,3 +992,35 @@ def test_an_upload_with_its_time_state_and_note_and_the_asset_tree(server, brows
     assert "2025-03-04 09:15 UTC: after the March outage — load mw 320, stator temp c 68" in \
         d.find_element("id", "trend-alarms").text
     _screenshot(d, "asset_tree")
+
+
+def test_rollback_button_restores_the_previous_model(server, browser):
+    """The Models card's rollback button: refused without the API key (the service's words shown), then one
+    click re-activates the version that was active before (POST /models/rollback), shown in the table."""
+    reg = REGISTRIES[server]
+    before = _get(server + "/models")[1]["active"]
+    new = f"v{int(before[1:]) + 1:04d}"
+    shutil.copytree(reg / before, reg / new)                 # the same model under a new version
+    card = json.loads((reg / new / "card.json").read_text())
+    (reg / new / "card.json").write_text(json.dumps({**card, "version": new}))
+    req = urllib.request.Request(f"{server}/models/{new}/activate", data=b"", method="POST",
+                                 headers={"X-API-Key": "web-test-key"})
+    with urllib.request.urlopen(req, timeout=60) as r:
+        assert r.status == 200
+    _open(browser, server)
+    _wait(browser, lambda d: "active" in d.find_element("css selector", f"#models-table tr[data-version='{new}']").text,
+          30, "the new version active in the table")
+    browser.find_element("id", "rollback-btn").click()
+    _wait(browser, lambda d: d.find_element("id", "rollback-error").is_displayed(), 20, "the missing-key message")
+    assert "key" in browser.find_element("id", "rollback-error").text.lower()
+    assert _get(server + "/models")[1]["active"] == new
+    browser.find_element("id", "rollback-key").send_keys("web-test-key")
+    browser.find_element("id", "rollback-btn").click()
+    _wait(browser, lambda d: f"Active model: {before} (was {new})" in d.find_element("id", "rollback-done").text, 30,
+          "the rollback's answer")
+    _wait(browser, lambda d: "active" in d.find_element("css selector",
+                                                      f"#models-table tr[data-version='{before}']").text,
+          30, "the previous version active in the table")
+    assert not browser.find_element("id", "rollback-error").is_displayed()
+    assert _get(server + "/models")[1]["active"] == before
+    _screenshot(browser, "models-rollback")

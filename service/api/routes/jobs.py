@@ -2,6 +2,7 @@
 POST /jobs/{id}/cancel."""
 from __future__ import annotations
 
+import datetime as dt
 from collections.abc import Callable
 from typing import Annotated, Any
 
@@ -29,7 +30,20 @@ def _submit(jobs, kind: str, params: dict[str, Any]):
 
 
 def _out(job) -> JobOut:
-    return JobOut.model_validate(job, from_attributes=True)
+    out = JobOut.model_validate(job, from_attributes=True)
+    out.eta_s = eta_seconds(out.status, out.progress, out.started_at)
+    return out
+
+
+def eta_seconds(status: str, progress: float, started_at: dt.datetime | None,
+                now: dt.datetime | None = None) -> float | None:
+    """Seconds left of a running job: elapsed × (1 − progress) / progress (None below 1 % or not running)."""
+    if status != "running" or started_at is None or progress < 0.01:
+        return None
+    now = now or dt.datetime.now(dt.UTC)
+    start = started_at if started_at.tzinfo is not None else started_at.replace(tzinfo=dt.UTC)
+    elapsed = max((now - start).total_seconds(), 0.0)
+    return round(elapsed * (1.0 - progress) / progress, 1)
 
 
 async def _created(jobs, kind: str, params: dict[str, Any]) -> JobCreated:

@@ -965,7 +965,11 @@
     if (m.ece !== undefined) parts.push(`ECE ${num(m.ece)}`);
     if (m.ood_flag_rate !== undefined) parts.push(`OOD flag rate ${num(m.ood_flag_rate)}`);
     const held = card.metrics.held_out ? ` (${card.metrics.held_out})` : "";
-    return parts.join(", ") + held;
+    const pr = card.plant_report;
+    const plant = !pr ? "" : pr.pending ? "; plant report pending" :
+      `; on ${pr.plant}: ${pr.better ? "better than" : "NOT better than"} ${pr.compared_with}` +
+      (pr.pooled && pr.pooled.new ? ` (macro-F1 ${num(pr.pooled.new.macro_f1)} vs ${num(pr.pooled.active.macro_f1)})` : "");
+    return parts.join(", ") + held + plant;
   }
   function trainingSummary(card) {
     const td = card.training_data || {};
@@ -986,13 +990,27 @@
       const tb = $("models-table").tBodies[0];
       tb.replaceChildren(...m.versions.slice().reverse().map((c) => el("tr", { "data-version": c.version, class: c.active ? "active" : "" },
         el("th", { scope: "row" }, el("code", { text: c.version })),
-        el("td", { text: c.active ? "active" : "—" }),
+        el("td", { text: (c.active ? "active" : "—") + (c.activated_by ? ` (activated by ${c.activated_by === "forced" ? "force" : "its plant report"})` : "") }),
         el("td", { text: c.created || c.created_at || "—" }),
         el("td", { text: trainingSummary(c) }),
         el("td", { text: evalSummary(c) }))));
       if (!m.versions.length) tb.append(el("tr", {}, el("td", { colspan: "5", text: "No model is registered yet." })));
     } catch (exc) {
       setError($("models-error"), exc.message);
+    }
+  }
+  async function rollbackModel(ev) {
+    ev.preventDefault();
+    setError($("rollback-error"), "");
+    $("rollback-done").textContent = "";
+    const before = state.models && state.models.active;
+    try {
+      const m = await api("/models/rollback", { method: "POST", headers: { "X-API-Key": $("rollback-key").value } });
+      $("rollback-done").textContent = `Active model: ${m.active}` + (before ? ` (was ${before})` : "");
+      await loadModels();
+      loadHealth();
+    } catch (exc) {
+      setError($("rollback-error"), exc.message);
     }
   }
   async function loadHealth() {
@@ -1103,6 +1121,7 @@
     $("trend-form").addEventListener("submit", (ev) => { ev.preventDefault(); loadTrend($("trend-asset").value.trim()); });
     $("assets-box").addEventListener("toggle", () => { if ($("assets-box").open) loadAssets(); });
     $("hierarchy-form").addEventListener("submit", onHierarchy);
+    $("rollback-form").addEventListener("submit", rollbackModel);
     $("baseline-form").addEventListener("submit", (ev) => ev.preventDefault());
     $("baseline-latest-btn").addEventListener("click", () => setBaseline("latest"));
     $("baseline-auto-btn").addEventListener("click", () => setBaseline("auto"));

@@ -1,0 +1,612 @@
+"""Retraining for one plant, and the quality report that says whether the new model is better *for that plant*.
+
+The flow (``rotordiag retrain``, ``POST /models/retrain``; docs/models.md, "Retraining for one plant"):
+
+1. :func:`describe_plant` — the plant as the user gives it (a preset name or shaft-line tables, its rated
+   speeds, Plant-field overrides);
+2. :func:`plant_dataset_spec` — the one place that turns that description into a dataset spec: the plant's
+   geometry within manufacturing tolerances (:data:`PLANT_TOLERANCES`), its rated and off-rated speeds, the
+   training data's probe layout and measurement realities;
+3. the dataset, features and model (``models.train.train_and_register``, registered *not* active, its card
+   marked ``plant_report.pending`` so that nothing activates it before its report);
+4. :func:`held_out_cases` / :func:`simulate_held_out` — recordings of the same plant drawn with a seed stream
+   no training spec uses, measured under every condition of :mod:`models.robustness` that is about the
+   measurement (not another plant), and :func:`quality_report` — the new model and the active one diagnosed on
+   those same recordings, with paired bootstrap intervals;
+5. :func:`decide` — "better" as docs/models.md defines it; :func:`finish_retrain` stores the report with the
+   version and activates it only when it is better, or when the user forces it (card ``activated_by``).
+"""
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: Relative half-widths (uniform ×(1 ± r)) of the lumped plant's fields around the described plant: what
+#: manufacturing tolerances, the oil's temperature and wear move on one machine. Used by the training spec
+#: (``plant.perturb``) and by the report's held-out plants alike, so that both are draws of the same machine.
+PLANT_TOLERANCES: dict[str, float] = {
+    "journal1_mass_kg": 0.03, "generator_mass_kg": 0.03, "journal3_mass_kg": 0.03, "journal4_mass_kg": 0.03,
+    "exciter_mass_kg": 0.03, "journal6_mass_kg": 0.03,
+    "generator_stiffness_n_m": 0.05, "exciter_stiffness_n_m": 0.05,
+    "generator_damping_n_s_m": 0.2, "exciter_damping_n_s_m": 0.2,
+    "asymmetry": 0.1, "clearance_m": 0.1, "viscosity_pa_s": 0.2,
+    "bearing_radius_m": 0.01, "bearing_length_m": 0.02, "coupling_stiffness_n_m": 0.3,
+}
+
+#: The default sweep's speed range as fractions of the rated speed(s): run-up, slow-down and off-rated running.
+SPEED_FRACTIONS = (0.8, 1.05)
+#: Δ levels of the default sweep: a quarter of the samples aligned (Δ = 0), the rest spread over 0.01–0.6
+#: (a Sobol design maps a list onto equally likely levels)
+MISALIGNMENT_LEVELS: list[float] = [0.0] * 16 + [round(float(x), 4) for x in np.linspace(0.01, 0.6, 48)]
+#: Default number of simulated samples of a plant's dataset (docs/models.md, "Learning curve")
+DEFAULT_N_SAMPLES = 96
+
+#: The default sweep: the shipped training data's operating ranges, mechanisms and measurement realities
+#: (models/default/dataset_*.toml), the speed following the plant's rated speed (:func:`plant_dataset_spec`).
+PLANT_SWEEP: dict[str, Any] = {
+    "design": {"method": "sobol", "n_samples": DEFAULT_N_SAMPLES, "seed": 0},
+    "operating": {
+        "misalignment": MISALIGNMENT_LEVELS,
+        "speed_rpm": {"min": 1200.0, "max": 2200.0},
+        "unbalance": {"min": 0.02, "max": 0.10},
+        "unbalance_phase_rad": {"min": 0.0, "max": 2 * math.pi},
+        "exciter_unbalance": {"min": 0.0, "max": 0.05},
+        "exciter_unbalance_phase_rad": {"min": 0.0, "max": 2 * math.pi},
+        "offset_angle_rad": {"min": 0.0, "max": 2 * math.pi},
+        "coupling_phase_rad": {"min": 0.0, "max": 2 * math.pi},
+        "mechanism": {"pin": 0.25, "rigid": 0.25, "offset": 0.25, "flexible": 0.25},
+    },
+    "plant": {"perturb": dict(PLANT_TOLERANCES)},
+    "measurement": {
+        "bearings": [1, 2, 3, 4], "probe_angles_deg": [45.0, 135.0], "sample_rate_hz": 2560.0,
+        "duration_revs": 48, "snr_db": {"min": 10.0, "max": 45.0}, "runout_1x_um": {"min": 0.0, "max": 6.0},
+        "runout_2x_um": {"min": 0.0, "max": 2.0}, "speed_fluctuation": 0.002, "speed_fluctuation_hz": 0.5,
+    },
+    "simulation": {"transient_revs": 400, "samples_per_rev": 128, "record_revs_min": 48, "classify_motion": False},
+}
+
+#: The report's held-out recordings come from this seed stream (``numpy.random.default_rng([REPORT_STREAM,
+#: seed])``); training specs draw from Sobol sequences scrambled with their own seed, never from it.
+REPORT_STREAM = 48_003
+#: Default held-out cases per class (each mechanism and aligned) of a report
+DEFAULT_REPORT_CASES = 6
+#: Bootstrap draws and level of the report's intervals
+BOOTSTRAP_DRAWS, BOOTSTRAP_LEVEL = 1000, 0.90
+
+
+@dataclass(frozen=True)
+class PlantDescription:
+    """One plant to retrain for.
+
+    ``shaftline``: the shaft-line tables (``simulator.shaftline.ShaftLine.from_dict``); ``rated_speed_rpm``: its
+    rated speed(s) (empty: the sweep's default range); ``plant_set``: ``simulator.Plant`` fields set over the
+    reduced plant; ``name``: what the card calls it (``preset:gen600_4pole``, ``shaftline:plant.toml``).
+    """
+
+    name: str
+    shaftline: dict[str, Any] | None
+    rated_speed_rpm: tuple[float, ...] = ()
+    plant_set: dict[str, Any] = field(default_factory=dict)
+
+    def base_plant(self):
+        """The lumped ``simulator.Plant`` this description reduces to (``plant_set`` applied)."""
+        from rotordiag.simulator import Plant, shaftline
+
+        base = Plant.default() if self.shaftline is None else \
+            shaftline.to_plant(shaftline.ShaftLine.from_dict(self.shaftline))
+        return base.replace(**self.plant_set) if self.plant_set else base
+
+    def speed_range_rpm(self) -> tuple[float, float] | None:
+        """(min, max) r/min of the default sweep: :data:`SPEED_FRACTIONS` of the rated speed(s)."""
+        if not self.rated_speed_rpm:
+            return None
+        return (max(100.0, SPEED_FRACTIONS[0] * min(self.rated_speed_rpm)),
+                min(6000.0, SPEED_FRACTIONS[1] * max(self.rated_speed_rpm)))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "rated_speed_rpm": list(self.rated_speed_rpm), "plant_set": dict(self.plant_set),
+                "shaftline": self.shaftline}
+
+
+def describe_plant(*, preset: str | None = None, shaftline: Mapping[str, Any] | str | Path | None = None,
+                   rated_speed_rpm: float | Sequence[float] | None = None,
+                   plant_set: Mapping[str, Any] | None = None) -> PlantDescription:
+    """The plant from a preset name, shaft-line tables or a shaft-line TOML file (exactly one of them, or
+    neither: MODEL.md's plant), its rated speed(s) (a preset gives its own) and Plant-field overrides.
+
+    Raises
+    ------
+    ValueError
+        Both or an unknown preset, an unreadable or invalid shaft line (the message names the key).
+    """
+    from rotordiag.simulator.shaftline import PRESETS, ShaftLine, to_plant
+
+    if preset is not None and shaftline is not None:
+        raise ValueError("preset and shaftline: give the plant one way, a preset name or the shaft-line tables")
+    rated: tuple[float, ...] = ()
+    if rated_speed_rpm is not None:
+        rated = tuple(float(v) for v in ([rated_speed_rpm] if isinstance(rated_speed_rpm, (int, float))
+                                         else rated_speed_rpm))
+        if not rated or any(not (math.isfinite(v) and 100.0 <= v <= 6000.0) for v in rated):
+            raise ValueError(f"rated_speed_rpm: {list(rated)} — give speeds of 100–6000 r/min")
+    if preset is not None:
+        if preset not in PRESETS:
+            raise ValueError(f"preset {preset!r} is not known; the presets: {', '.join(sorted(PRESETS))}")
+        tables = {k: v for k, v in PRESETS[preset].items() if k != "rated_speed_rpm"}
+        desc = PlantDescription(f"preset:{preset}", tables,
+                                rated or tuple(float(v) for v in PRESETS[preset]["rated_speed_rpm"]),
+                                dict(plant_set or {}))
+    elif isinstance(shaftline, (str, Path)):
+        import tomllib
+
+        path = Path(shaftline)
+        try:
+            tables = tomllib.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ValueError(f"shaftline {path}: cannot be read ({exc})") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"shaftline {path}: not valid TOML ({exc})") from None
+        file_rated = tables.pop("rated_speed_rpm", None)
+        if not rated and file_rated is not None:
+            return replace(describe_plant(shaftline=tables, rated_speed_rpm=file_rated, plant_set=plant_set),
+                           name=f"shaftline:{path.name}")
+        desc = PlantDescription(f"shaftline:{path.name}", tables, rated, dict(plant_set or {}))
+    elif shaftline is not None:
+        tables = dict(shaftline)
+        file_rated = tables.pop("rated_speed_rpm", None)
+        if not rated and file_rated is not None:
+            return describe_plant(shaftline=tables, rated_speed_rpm=file_rated, plant_set=plant_set)
+        desc = PlantDescription("shaftline:inline", tables, rated, dict(plant_set or {}))
+    else:
+        desc = PlantDescription("default", None, rated, dict(plant_set or {}))
+    if desc.shaftline is not None:
+        try:
+            to_plant(ShaftLine.from_dict(desc.shaftline))
+        except (TypeError, ValueError, OverflowError, ZeroDivisionError, FloatingPointError) as exc:
+            raise ValueError(f"shaftline: {exc}") from None
+    try:
+        desc.base_plant()
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ValueError(f"plant: {exc}") from None
+    return desc
+
+
+def plant_dataset_spec(plant: PlantDescription, *, n_samples: int | None = None, seed: int | None = None,
+                       sweep: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The dataset spec (as tables) of ``plant``: the one function every retraining path builds its data with.
+
+    :data:`PLANT_SWEEP` with the speed at :data:`SPEED_FRACTIONS` of the rated speed(s), the plant's shaft line
+    (or MODEL.md's plant) with ``plant_set`` over it and :data:`PLANT_TOLERANCES` around it; ``sweep`` (tables of
+    a spec) overrides what it names (a mechanism table is replaced whole), then ``n_samples`` and ``seed``.
+    """
+    from rotordiag.core.tables import deep_merge
+
+    defaults: dict[str, Any] = PLANT_SWEEP
+    rng = plant.speed_range_rpm()
+    if rng is not None:
+        defaults = deep_merge(defaults, {"operating": {"speed_rpm": {"min": rng[0], "max": rng[1]}}})
+    spec = deep_merge(defaults, dict(sweep or {}), whole=("mechanism", "misalignment"))
+    if n_samples is not None:
+        spec["design"]["n_samples"] = int(n_samples)
+    if seed is not None:
+        spec["design"]["seed"] = int(seed)
+    spec.setdefault("plant", {})
+    if plant.plant_set:
+        spec["plant"]["set"] = dict(plant.plant_set)
+    if plant.shaftline is not None:
+        spec["plant"]["shaftline"] = plant.shaftline
+    return spec
+
+
+# ----------------------------------------------------------------------------- held-out recordings
+def held_out_cases(plant: PlantDescription, n_per_class: int, seed: int) -> list[dict]:
+    """Held-out cases of ``plant`` in :func:`models.robustness.design`'s form: ``n_per_class`` for each of
+    :data:`models.robustness.MECHANISMS` and as many aligned, each a draw of the plant within
+    :data:`PLANT_TOLERANCES`, half at a rated speed (±1 %) and half anywhere in the sweep's speed range, Δ
+    uniform in 0.02–0.6, from the seed stream :data:`REPORT_STREAM` (no training spec draws from it)."""
+    from .robustness import MECHANISMS
+
+    rng = np.random.default_rng([REPORT_STREAM, int(seed)])
+    base = plant.base_plant().to_dict()
+    lo, hi = plant.speed_range_rpm() or (1200.0, 2200.0)
+    rated = plant.rated_speed_rpm or (0.5 * (lo + hi),)
+    cases = []
+    for i, mech in enumerate([m for m in MECHANISMS for _ in range(n_per_class)] + ["aligned"] * n_per_class):
+        p = dict(base)
+        for name, r in PLANT_TOLERANCES.items():
+            v = p[name]
+            p[name] = ([float(x) * (1 + r * rng.uniform(-1, 1)) for x in v] if isinstance(v, list)
+                       else float(v) * (1 + r * rng.uniform(-1, 1)))
+        speed = float(rng.choice(rated)) * float(rng.uniform(0.99, 1.01)) if i % 2 == 0 else float(rng.uniform(lo, hi))
+        cases.append(dict(
+            plant=p, speed_rpm=speed, misalignment=0.0 if mech == "aligned" else float(rng.uniform(0.02, 0.6)),
+            mechanism="pin" if mech == "aligned" else mech, label_mechanism=mech,
+            unbalance=float(rng.uniform(0.02, 0.1)), unbalance_phase_rad=float(rng.uniform(0, 2 * math.pi)),
+            exciter_unbalance=float(rng.uniform(0, 0.05)), exciter_unbalance_phase_rad=float(rng.uniform(0, 2 * math.pi)),
+            offset_angle_rad=float(rng.uniform(0, 2 * math.pi)), coupling_phase_rad=float(rng.uniform(0, 2 * math.pi)),
+        ))
+    return cases
+
+
+def report_conditions() -> tuple[Any, ...]:
+    """The :data:`models.robustness.CONDITIONS` of a plant's report: every one measured on the plant's own
+    recordings (those of another simulated set — the presets, the far plants — are about other plants)."""
+    from .robustness import CONDITIONS
+
+    return tuple(c for c in CONDITIONS if c.sim_set == "base")
+
+
+def simulate_held_out(cases: list[dict], *, progress: Callable[[int, int], None] | None = None,
+                      cache: Path | None = None) -> list[np.ndarray | None]:
+    """Journal displacements of each case over the longest record a report condition takes (None: the run
+    failed or the simulator refused the plant); ``cache``: an ``.npz`` read when present, else written."""
+    from .robustness import simulate_case
+
+    if cache is not None and cache.is_file():
+        z = np.load(cache, allow_pickle=False)
+        return [z[f"d{i}"] if f"d{i}" in z.files else None for i in range(len(cases))]
+    revs = max(c.revs for c in report_conditions())
+    out: list[np.ndarray | None] = []
+    for i, c in enumerate(cases):
+        try:
+            out.append(simulate_case(c, revs))
+        except ValueError:
+            out.append(None)
+        if progress is not None:
+            progress(i + 1, len(cases))
+    if cache is not None:
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        arrays: dict[str, Any] = {f"d{i}": d for i, d in enumerate(out) if d is not None}
+        np.savez(cache, **arrays)
+    return out
+
+
+# ----------------------------------------------------------------------------- the report
+def _scored(outs: list) -> list:
+    return [o for o in outs if o.status not in ("sim failed", "refused")]
+
+
+def _figures(outs: list, names: list[str], edges: np.ndarray) -> dict[str, Any]:
+    """Band macro-F1 (over the bands present in the truth), false alarms, confident share, confident two-bands-off,
+    90 % coverage and the share flagged out of distribution of one model's outcomes (refused and failed runs
+    counted, not scored)."""
+    from sklearn.metrics import f1_score
+
+    s = _scored(outs)
+    n = len(s)
+    if not n:
+        return {"n": 0, "refused": len(outs)}
+    truth = np.searchsorted(edges, [o.delta for o in s], side="right")
+    pred = np.array([names.index(o.model_class) for o in s])
+    aligned = np.array([o.mechanism == "aligned" for o in s])
+    conf = np.array([o.status == "confident" and o.severity in names for o in s])
+    shown = np.array([names.index(o.severity) if o.severity in names else -9 for o in s])
+    lo = np.array([o.interval[0] for o in s])
+    hi = np.array([o.interval[1] for o in s])
+    delta = np.array([o.delta for o in s])
+    has = np.isfinite(lo) & np.isfinite(hi)
+    return {
+        "n": n, "refused": len(outs) - n,
+        "macro_f1": float(f1_score(truth, pred, labels=np.unique(truth), average="macro", zero_division=0)),
+        "false_alarms": int(np.sum(aligned & (pred != 0))), "n_aligned": int(aligned.sum()),
+        "false_alarm_rate": float(np.mean(pred[aligned] != 0)) if aligned.any() else None,
+        "confident_share": float(conf.mean()),
+        "ood_share": float(np.mean([o.ood for o in s])),
+        "confident_two_bands_off": int(np.sum(conf & (np.abs(shown - truth) >= 2))),
+        "interval_coverage": float(np.mean((lo[has] <= delta[has]) & (delta[has] <= hi[has]))) if has.any() else None,
+    }
+
+
+def _wilson(k: int, n: int) -> list[float] | None:
+    from scipy.stats import binomtest
+
+    if n <= 0:
+        return None
+    ci = binomtest(int(k), int(n)).proportion_ci(confidence_level=BOOTSTRAP_LEVEL, method="wilson")
+    return [float(ci.low), float(ci.high)]
+
+
+def _pooled_arrays(outs_by_cond: dict[str, list], names: list[str], edges: np.ndarray):
+    """(case index, true band, predicted band, aligned, confident two-bands-off) of every scored outcome
+    over the conditions, and the mechanism of each case (for stratified resampling)."""
+    case, truth, pred, aligned = [], [], [], []
+    for outs in outs_by_cond.values():
+        for i, o in enumerate(outs):
+            if o.status in ("sim failed", "refused"):
+                continue
+            case.append(i)
+            truth.append(int(np.searchsorted(edges, o.delta, side="right")))
+            pred.append(names.index(o.model_class))
+            aligned.append(o.mechanism == "aligned")
+    return np.array(case, int), np.array(truth, int), np.array(pred, int), np.array(aligned, bool)
+
+
+def paired_bootstrap(new: dict[str, list], old: dict[str, list], names: list[str], edges: np.ndarray,
+                     mechanisms: list[str], *, draws: int = BOOTSTRAP_DRAWS, level: float = BOOTSTRAP_LEVEL,
+                     seed: int = 0) -> dict[str, Any]:
+    """Intervals of new − old macro-F1 and false-alarm rate pooled over every condition, resampling the
+    held-out *cases* (each with all its conditions' recordings, for both models together) within each class.
+
+    Returns ``{"macro_f1_diff": [lo, hi], "false_alarm_diff": [lo, hi], "macro_f1_diff_point": .., ...}``.
+    """
+    from sklearn.metrics import f1_score
+
+    a = _pooled_arrays(new, names, edges)
+    b = _pooled_arrays(old, names, edges)
+    n_cases = len(mechanisms)
+    strata: dict[str, list[int]] = {}
+    for i, m in enumerate(mechanisms):
+        strata.setdefault(m, []).append(i)
+
+    def stats(weights: np.ndarray) -> tuple[float, float]:
+        out = []
+        for case, truth, pred, aligned in (a, b):
+            w = weights[case]
+            f1 = f1_score(truth, pred, labels=np.unique(truth[w > 0]), average="macro", sample_weight=w,
+                          zero_division=0)
+            wa = w * aligned
+            fa = float(np.sum(wa * (pred != 0)) / np.sum(wa)) if np.sum(wa) > 0 else 0.0
+            out.append((f1, fa))
+        return out[0][0] - out[1][0], out[0][1] - out[1][1]
+
+    point = stats(np.ones(n_cases))
+    rng = np.random.default_rng(seed)
+    d_f1, d_fa = [], []
+    for _ in range(draws):
+        w = np.zeros(n_cases)
+        for g in strata.values():
+            np.add.at(w, rng.choice(g, size=len(g), replace=True), 1.0)
+        f, fa = stats(w)
+        d_f1.append(f)
+        d_fa.append(fa)
+    q = [(1 - level) / 2, (1 + level) / 2]
+    return {"macro_f1_diff_point": float(point[0]), "macro_f1_diff": [float(x) for x in np.quantile(d_f1, q)],
+            "false_alarm_diff_point": float(point[1]), "false_alarm_diff": [float(x) for x in np.quantile(d_fa, q)],
+            "draws": draws, "level": level, "resampled": "held-out cases within each class, all conditions together"}
+
+
+def quality_report(new_bundle: Any, old_bundle: Any, plant: PlantDescription, cases: list[dict],
+                   disps: list, seed: int, *, progress: Callable[[int, int], None] | None = None,
+                   old_label: str | None = None, old_outcomes: dict[str, list] | None = None) -> dict[str, Any]:
+    """The plant's quality report: ``new_bundle`` and ``old_bundle`` (the active model) diagnosed on the same
+    held-out recordings under every :func:`report_conditions` condition; per condition and pooled figures
+    (:func:`_figures`), Wilson intervals of the rates, the paired bootstrap of the differences
+    (:func:`paired_bootstrap`), and :func:`decide`'s decision. ``old_outcomes``: a dict that keeps
+    ``old_bundle``'s outcomes per condition (filled when empty; reused when the same recordings are scored
+    against several new models, as the learning curve does)."""
+    from .robustness import run_condition
+
+    t0 = time.perf_counter()
+    conds = report_conditions()
+    names = list(new_bundle.model.bands_.names)
+    edges = np.asarray(new_bundle.model.bands_.edges, dtype=float)
+    outs: dict[str, dict[str, list]] = {"new": {}, "active": {}}
+    steps, done = 2 * len(conds), 0
+    for who, bundle in (("new", new_bundle), ("active", old_bundle)):
+        for cond in conds:
+            if who == "active" and old_outcomes is not None and cond.name in old_outcomes:
+                outs[who][cond.name] = old_outcomes[cond.name]
+            else:
+                outs[who][cond.name] = run_condition(bundle, cond, cases, disps, seed)
+            if who == "active" and old_outcomes is not None:
+                old_outcomes[cond.name] = outs[who][cond.name]
+            done += 1
+            if progress is not None:
+                progress(done, steps)
+    rows: dict[str, Any] = {}
+    for cond in conds:
+        rows[cond.name] = {who: _figures(outs[who][cond.name], names, edges) for who in outs}
+    pooled = {}
+    for who in outs:
+        allo = [o for c in conds for o in outs[who][c.name]]
+        f = _figures(allo, names, edges)
+        f["false_alarm_interval"] = _wilson(f.get("false_alarms", 0), f.get("n_aligned", 0))
+        f["confident_share_interval"] = _wilson(round(f.get("confident_share", 0.0) * f["n"]), f["n"])
+        f["interval_coverage_interval"] = (None if f.get("interval_coverage") is None else
+                                           _wilson(round(f["interval_coverage"] * f["n"]), f["n"]))
+        pooled[who] = f
+    mechs = [c["label_mechanism"] for c in cases]
+    boot = paired_bootstrap(outs["new"], outs["active"], names, edges, mechs, seed=seed)
+    report = {
+        "plant": plant.name, "rated_speed_rpm": list(plant.rated_speed_rpm),
+        "models": {"new": new_bundle.version, "active": old_label or old_bundle.version},
+        "held_out": {"n_cases": len(cases), "n_failed": sum(d is None for d in disps), "seed_stream": [REPORT_STREAM, seed],
+                     "per_class": {m: mechs.count(m) for m in sorted(set(mechs))},
+                     "speed_rpm_range": [float(min(c["speed_rpm"] for c in cases)),
+                                         float(max(c["speed_rpm"] for c in cases))],
+                     "tolerances": dict(PLANT_TOLERANCES)},
+        "conditions": [c.name for c in conds],
+        "conditions_left_out": "the robustness report's rows on other simulated plants (rated-machine presets, far "
+                               "plants) are not about this plant",
+        "pooled": pooled, "per_condition": rows, "paired_bootstrap": boot,
+        "wall_time_s": round(time.perf_counter() - t0, 1),
+    }
+    report["decision"] = decide(report)
+    return report
+
+
+def decide(report: Mapping[str, Any]) -> dict[str, Any]:
+    """Whether the new model is better than the active one on this plant's report (docs/models.md):
+
+    1. its pooled band macro-F1 is higher than the active model's (point estimate);
+    2. its false alarms are not higher beyond the bootstrap interval: the 90 % paired bootstrap interval of
+       (new − active) false-alarm rate reaches 0 or below;
+    3. it gives no confident verdict two or more bands off, under any condition;
+    4. it answered (was not refused on) at least as many recordings as the active model.
+
+    Returns ``{"better": bool, "reasons": [what failed, or what held]}``.
+    """
+    p, boot = report["pooled"], report["paired_bootstrap"]
+    new, old = p["new"], p["active"]
+    failed: list[str] = []
+    held: list[str] = []
+    if not new.get("n"):
+        return {"better": False, "reasons": ["the new model answered none of the held-out recordings"]}
+    f1_new, f1_old = new["macro_f1"], old.get("macro_f1", 0.0)
+    (failed if not f1_new > f1_old else held).append(
+        f"band macro-F1 {f1_new:.3f} vs the active model's {f1_old:.3f} (90 % bootstrap interval of the difference "
+        f"{boot['macro_f1_diff'][0]:+.3f}…{boot['macro_f1_diff'][1]:+.3f}): {'higher' if f1_new > f1_old else 'not higher'}")
+    lo_fa = boot["false_alarm_diff"][0]
+    (failed if lo_fa > 0 else held).append(
+        f"false alarms {new.get('false_alarm_rate') or 0:.1%} vs {old.get('false_alarm_rate') or 0:.1%} "
+        f"(difference's interval {boot['false_alarm_diff'][0]:+.3f}…{boot['false_alarm_diff'][1]:+.3f}): "
+        + ("higher beyond the bootstrap interval" if lo_fa > 0 else "not higher beyond the bootstrap interval"))
+    off2 = new.get("confident_two_bands_off", 0)
+    (failed if off2 else held).append(f"{off2} confident verdict(s) two or more bands off")
+    if new.get("refused", 0) > old.get("refused", 0):
+        failed.append(f"refused {new['refused']} recordings, the active model {old.get('refused', 0)}")
+    return {"better": not failed, "failed": failed, "held": held,
+            "rule": "macro-F1 higher AND false alarms not higher beyond the 90 % paired bootstrap interval AND no "
+                    "confident verdict two bands off AND no more recordings refused (docs/models.md)"}
+
+
+def format_report(report: Mapping[str, Any]) -> str:
+    """The report as a plain-text table (``rotordiag retrain``, ``rotordiag models show``)."""
+    p = report["pooled"]
+    m = report["models"]
+    lines = [f"quality report for {report['plant']} ({report['held_out']['n_cases']} held-out recordings × "
+             f"{len(report['conditions'])} measurement conditions): {m['new']} vs the active {m['active']}",
+             f"{'condition':<46s} {'F1 new':>7s} {'F1 act':>7s} {'FA new':>7s} {'FA act':>7s} "
+             f"{'conf new':>8s} {'conf act':>8s} {'off2 n/a':>8s} {'cov new':>7s} {'cov act':>7s}"]
+
+    def pct(v: Any) -> str:
+        return "–" if v is None else f"{v:.0%}"
+
+    def row(name: str, r: Mapping[str, Any]) -> str:
+        a, b = r["new"], r["active"]
+        return (f"{name[:46]:<46s} {a.get('macro_f1', float('nan')):7.2f} {b.get('macro_f1', float('nan')):7.2f} "
+                f"{pct(a.get('false_alarm_rate')):>7s} {pct(b.get('false_alarm_rate')):>7s} "
+                f"{pct(a.get('confident_share')):>8s} {pct(b.get('confident_share')):>8s} "
+                f"{a.get('confident_two_bands_off', 0):>4d}/{b.get('confident_two_bands_off', 0):<3d} "
+                f"{pct(a.get('interval_coverage')):>7s} {pct(b.get('interval_coverage')):>7s}")
+
+    for name, r in report["per_condition"].items():
+        lines.append(row(name, r))
+    lines.append(row("ALL (pooled)", p))
+    if "ood_share" in p["new"]:
+        lines.append(f"flagged out of distribution (pooled): new {p['new']['ood_share']:.0%}, "
+                     f"active {p['active'].get('ood_share', float('nan')):.0%}")
+    b = report["paired_bootstrap"]
+    lines.append(f"new − active, 90 % paired bootstrap: macro-F1 {b['macro_f1_diff_point']:+.3f} "
+                 f"({b['macro_f1_diff'][0]:+.3f}…{b['macro_f1_diff'][1]:+.3f}), false-alarm rate "
+                 f"{b['false_alarm_diff_point']:+.3f} ({b['false_alarm_diff'][0]:+.3f}…{b['false_alarm_diff'][1]:+.3f})")
+    d = report["decision"]
+    lines.append(("BETTER on this plant: " if d["better"] else "NOT better on this plant: ")
+                 + "; ".join(d.get("failed") or d.get("held") or d.get("reasons", [])))
+    return "\n".join(lines)
+
+
+REPORT_FILE = "plant_report.json"
+
+
+def store_report(registry: Any, version: str, report: Mapping[str, Any]) -> None:
+    """Write ``report`` next to ``version``'s model and its summary (decision, pooled figures) into its card."""
+    from .registry import dumps_json
+
+    registry.write_file(version, REPORT_FILE, dumps_json(report))
+    summary = {"pending": False, "plant": report["plant"], "compared_with": report["models"]["active"],
+               "better": report["decision"]["better"], "decision": report["decision"],
+               "pooled": report["pooled"], "paired_bootstrap": report["paired_bootstrap"], "file": REPORT_FILE}
+    registry.update_card(version, {"plant_report": summary})
+
+
+def pending_card(plant: PlantDescription) -> dict[str, Any]:
+    """Card fields of a plant-retrained version at registration: the plant, and a report still pending (so
+    that nothing activates the version before its report says it is better)."""
+    return {"plant": plant.to_dict(), "plant_report": {"pending": True, "plant": plant.name}, "activated_by": None}
+
+
+def report_and_activate(registry: Any, version: str, plant: PlantDescription, compare_with: Any, *,
+                        seed: int = 0, n_per_class: int = DEFAULT_REPORT_CASES, activate: bool = True,
+                        force: bool = False, progress: Callable[[str, int, int], None] | None = None,
+                        cache: Path | None = None, compare_label: str | None = None) -> tuple[dict[str, Any], str | None]:
+    """Simulate the held-out recordings, write ``version``'s quality report against ``compare_with`` (a
+    ``models.predict.ModelBundle``, the active model), and activate ``version`` when ``activate`` and the
+    report says it is better, or when ``force``. Returns ``(report, activated_by)`` (None: not activated).
+
+    ``cache``: a folder where the held-out simulations are kept (named by a hash of the cases).
+    ``progress(stage, done, total)`` is called per simulated case (``"held-out simulation"``) and per
+    condition and model (``"report"``).
+    """
+    import hashlib
+    import json
+
+    from .predict import load_bundle
+
+    cases = held_out_cases(plant, n_per_class, seed)
+    if cache is not None:                      # a folder: the file is named by the cases themselves
+        cache = cache / f"held_out_{hashlib.sha256(json.dumps(cases, sort_keys=True).encode()).hexdigest()[:16]}.npz"
+    disps = simulate_held_out(cases, cache=cache, progress=None if progress is None else
+                              (lambda d, t: progress("held-out simulation", d, t)))
+    new = load_bundle(registry.root, version)
+    report = quality_report(new, compare_with, plant, cases, disps, seed, old_label=compare_label,
+                            progress=None if progress is None else (lambda d, t: progress("report", d, t)))
+    store_report(registry, version, report)
+    by = None
+    if activate and (report["decision"]["better"] or force):
+        registry.activate(version, force=force)
+        by = registry.card(version).get("activated_by")
+    return report, by
+
+
+#: Seconds per unit of each retraining stage measured on one core of the 2-core machine (gen600_4pole, 24
+#: samples: simulating and features per sample, training per feature row, held-out simulation per case, report per
+#: case × condition × model), which weight the stages' shares of the progress fraction so that its linear ETA is sane
+STAGE_SECONDS: dict[str, float] = {"simulating": 0.4, "features": 0.4, "training": 0.35,
+                                   "held-out simulation": 0.5, "report": 0.07}
+
+
+class StagedProgress:
+    """One fraction 0–1 over the retraining stages, each weighted by its expected seconds
+    (:data:`STAGE_SECONDS` × its units), with the ETA of that fraction.
+
+    ``units``: stage → how many units it has (samples, feature rows, training rows, held-out cases,
+    condition × model steps). ``update(stage, done, total)`` returns ``(fraction, eta_s)``; ``eta_s`` is the
+    elapsed time × (1 − fraction) / fraction (None before 1 %).
+    """
+
+    def __init__(self, units: Mapping[str, int], clock: Callable[[], float] = time.monotonic) -> None:
+        w = {s: STAGE_SECONDS[s] * max(int(units.get(s, 0)), 0) for s in STAGE_SECONDS}
+        total = sum(w.values()) or 1.0
+        self.share = {s: v / total for s, v in w.items()}
+        self.start: dict[str, float] = {}
+        acc = 0.0
+        for s in STAGE_SECONDS:
+            self.start[s] = acc
+            acc += self.share[s]
+        self._clock = clock
+        self._t0 = clock()
+
+    def update(self, stage: str, done: int, total: int) -> tuple[float, float | None]:
+        f = self.start[stage] + self.share[stage] * (min(done, total) / total if total else 1.0)
+        f = min(max(f, 0.0), 1.0)
+        elapsed = self._clock() - self._t0
+        eta = elapsed * (1.0 - f) / f if f >= 0.01 else None
+        return f, eta
+
+
+#: A feature column measured (not NaN) on fewer plants than this is dropped from a plant's training table
+MIN_MEASURED_PLANTS = 20
+
+
+def drop_unmeasured(table: Any, min_plants: int = MIN_MEASURED_PLANTS) -> tuple[Any, list[str]]:
+    """Drop feature columns measured on fewer than ``min_plants`` plants (NaN in every other row: e.g. motion type
+    for records shorter than the classifier needs, the sub-synchronous peak order, which only some plants show).
+
+    A column seen on a few plants carries little to learn from, and a cross-validation fold without any of them
+    holds it all NaN, which scikit-learn's histogram gradient boosting fails to bin (a retrain of 32 samples of
+    gen600_4pole did: 5 of its 32 plants had a sub-synchronous line). The verdict maps features by name, so the
+    model simply does not use them.
+    """
+    measured = ~np.isnan(table.X)
+    pid = np.asarray(table.plant_id)
+    never = [n for j, n in enumerate(table.feature_names)
+             if len(np.unique(pid[measured[:, j]])) < min(min_plants, len(np.unique(pid)))
+             or not measured[:, j].any()]
+    return (table.without_features(never) if never else table), never

@@ -1,0 +1,354 @@
+"""Retraining for one plant (issue 48 item 3): the plant's dataset spec, its held-out report set, the decision
+"better", activation only if better (409 / exit 2 otherwise, force recorded), rollback, and the progress's ETA."""
+from __future__ import annotations
+
+import datetime as dt
+import json
+import math
+import shutil
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+from typer.testing import CliRunner
+
+from rotordiag.models.plant_retrain import (
+    PLANT_TOLERANCES,
+    StagedProgress,
+    decide,
+    describe_plant,
+    held_out_cases,
+    paired_bootstrap,
+    plant_dataset_spec,
+    report_conditions,
+)
+from rotordiag.models.registry import ActivationRefused, Registry, shipped_registry_dir
+from rotordiag.models.robustness import CONDITIONS, Outcome
+from tests.service_util import auth, make_settings
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "shaftline_200mw.toml"
+NAMES = ["aligned", "slight", "moderate", "severe"]
+EDGES = np.array([0.05, 0.15, 0.35])
+
+
+# --- the plant's dataset and its held-out set ----------------------------------------------------------
+
+def test_a_preset_plants_spec_is_its_shaft_line_at_its_rated_speeds_within_tolerances():
+    """gen600_4pole runs at 1500/1800 r/min: the sweep covers 0.8 × 1500 … 1.05 × 1800 r/min (run-up, off-rated),
+    on its own shaft line, every lumped field drawn within the plant's tolerances; the spec parses."""
+    import tomli_w
+
+    from rotordiag.simulator.dataset.spec import parse_spec
+    from rotordiag.simulator.shaftline import preset, to_plant
+
+    plant = describe_plant(preset="gen600_4pole")
+    assert plant.rated_speed_rpm == (1500.0, 1800.0)
+    spec = plant_dataset_spec(plant, n_samples=40, seed=3)
+    resolved = parse_spec(tomli_w.dumps(spec))
+    sp = resolved.spec.operating.speed_rpm
+    assert (sp.min, sp.max) == (pytest.approx(1200.0), pytest.approx(1890.0))
+    assert resolved.base_plant == to_plant(preset("gen600_4pole"))
+    assert resolved.spec.design.n_samples == 40 and resolved.spec.design.seed == 3
+    assert spec["plant"]["perturb"] == PLANT_TOLERANCES
+    assert set(spec["operating"]["mechanism"]) == {"pin", "rigid", "offset", "flexible"}
+    # a quarter of the Δ levels are aligned machines: the model sees healthy ones of its plant
+    levels = spec["operating"]["misalignment"]
+    assert levels.count(0.0) / len(levels) == pytest.approx(0.25) and max(levels) == pytest.approx(0.6)
+
+
+def test_a_shaftline_file_gives_its_plant_and_the_users_sweep_wins(tmp_path):
+    from rotordiag.simulator import shaftline
+
+    f = tmp_path / "plant.toml"
+    f.write_text("rated_speed_rpm = 3000\n" + EXAMPLE.read_text())
+    plant = describe_plant(shaftline=f)
+    assert plant.name == "shaftline:plant.toml" and plant.rated_speed_rpm == (3000.0,)
+    assert plant.base_plant() == shaftline.to_plant(shaftline.ShaftLine.from_file(EXAMPLE))
+    spec = plant_dataset_spec(plant, sweep={"operating": {"speed_rpm": {"min": 2900, "max": 3100},
+                                                          "misalignment": {"min": 0.0, "max": 0.5}}})
+    assert spec["operating"]["speed_rpm"] == {"min": 2900, "max": 3100}
+    assert spec["operating"]["misalignment"] == {"min": 0.0, "max": 0.5}
+    with pytest.raises(ValueError, match="one way"):
+        describe_plant(preset="gen50_2pole", shaftline=f)
+    with pytest.raises(ValueError, match="gen600_4pole"):
+        describe_plant(preset="gen999")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[generator\n")
+    with pytest.raises(ValueError, match="not valid TOML"):
+        describe_plant(shaftline=bad)
+
+
+def test_held_out_cases_are_the_plant_within_tolerance_at_its_speeds_and_seeded():
+    plant = describe_plant(preset="gen600_4pole")
+    base = plant.base_plant().to_dict()
+    cases = held_out_cases(plant, 3, seed=7)
+    assert len(cases) == 15 and [c["label_mechanism"] for c in cases].count("aligned") == 3
+    for c in cases:
+        for name, r in PLANT_TOLERANCES.items():
+            ratio = np.asarray(c["plant"][name], dtype=float) / np.asarray(base[name], dtype=float)
+            assert np.all(np.abs(ratio - 1) <= r + 1e-12), name
+        assert 1200.0 <= c["speed_rpm"] <= 1890.0
+        assert (c["misalignment"] == 0.0) == (c["label_mechanism"] == "aligned")
+    rated = [c["speed_rpm"] for i, c in enumerate(cases) if i % 2 == 0]
+    assert all(min(abs(s / 1500 - 1), abs(s / 1800 - 1)) <= 0.01 for s in rated)
+    assert held_out_cases(plant, 3, seed=7) == cases and held_out_cases(plant, 3, seed=8) != cases
+
+
+def test_the_report_measures_every_condition_of_the_plants_own_recordings():
+    names = {c.name for c in report_conditions()}
+    assert {c.name for c in CONDITIONS if c.sim_set == "base"} == names
+    assert "rated-machine presets" not in names and "clean" in names and "coupling journals apart" in names
+
+
+# --- the decision ------------------------------------------------------------------------------------
+
+def _outs(deltas, mechs, classes, status="confident", shown=None):
+    return [Outcome(d, m, model_class=c, severity=(shown or classes)[i], status=status, interval=(d - 0.05, d + 0.05))
+            for i, (d, m, c) in enumerate(zip(deltas, mechs, classes))]
+
+
+def _band(d: float) -> str:
+    return NAMES[int(np.searchsorted(EDGES, d, side="right"))]
+
+
+def test_paired_bootstrap_tells_a_right_model_from_one_that_calls_everything_aligned():
+    """A model whose class is the true band against one that answers `aligned` always: F1 difference's interval
+    above 0, and false alarms equal (neither alarms on a healthy machine): difference 0."""
+    rng = np.random.default_rng(0)
+    mechs = ["rigid"] * 20 + ["aligned"] * 10
+    deltas = [float(x) for x in rng.uniform(0.02, 0.6, 20)] + [0.0] * 10
+    right = {"clean": _outs(deltas, mechs, [_band(d) for d in deltas])}
+    lazy = {"clean": _outs(deltas, mechs, ["aligned"] * 30)}
+    b = paired_bootstrap(right, lazy, NAMES, EDGES, mechs, draws=300)
+    # macro-F1 over the bands present: the right model 1; the lazy one F1 2a/(2a + (30 − a)) on `aligned` (a machines
+    # truly in that band, the rest its false positives) and 0 on every other band present
+    truth = [_band(d) for d in deltas]
+    a = truth.count("aligned")
+    assert b["macro_f1_diff_point"] == pytest.approx(1.0 - (2 * a / (2 * a + 30 - a)) / len(set(truth)))
+    assert b["macro_f1_diff"][0] > 0.3
+    assert b["false_alarm_diff"] == [0.0, 0.0]
+
+
+def _report(f1_new, f1_old, fa_interval, off2=0, refused=(0, 0)):
+    return {"pooled": {"new": {"n": 100, "macro_f1": f1_new, "false_alarm_rate": 0.05, "confident_two_bands_off": off2,
+                               "refused": refused[0]},
+                       "active": {"n": 100, "macro_f1": f1_old, "false_alarm_rate": 0.05, "refused": refused[1]}},
+            "paired_bootstrap": {"macro_f1_diff": [f1_new - f1_old - 0.05, f1_new - f1_old + 0.05],
+                                 "false_alarm_diff": list(fa_interval)}}
+
+
+@pytest.mark.parametrize("report, better", [
+    (_report(0.80, 0.70, (-0.05, 0.03)), True),
+    (_report(0.80, 0.70, (0.01, 0.09)), False),          # more false alarms beyond the interval
+    (_report(0.70, 0.80, (-0.05, 0.03)), False),         # lower F1
+    (_report(0.80, 0.80, (-0.05, 0.03)), False),         # not higher
+    (_report(0.80, 0.70, (-0.05, 0.03), off2=1), False),  # a confident verdict two bands off
+    (_report(0.80, 0.70, (-0.05, 0.03), refused=(3, 0)), False),
+])
+def test_better_is_higher_f1_no_more_false_alarms_and_no_confident_two_bands_off(report, better):
+    d = decide(report)
+    assert d["better"] is better
+    assert bool(d["failed"]) is (not better)
+
+
+# --- activation, force, rollback ---------------------------------------------------------------------
+
+def _registry_with_candidate(root: Path, better: bool | None) -> Registry:
+    """A copy of the shipped registry (v0001 active) plus v0002, the same model, as a plant-retrained
+    version whose report says ``better`` (None: still pending)."""
+    shutil.copytree(shipped_registry_dir(), root)
+    reg = Registry(root)
+    shutil.copytree(root / "v0001", root / "v0002")
+    rep: dict = {"pending": True, "plant": "preset:gen600_4pole"} if better is None else {
+        "pending": False, "plant": "preset:gen600_4pole", "compared_with": "v0001 (active)", "better": better,
+        "decision": {"better": better, "failed": [] if better else ["band macro-F1 0.300 vs 0.400: not higher"]}}
+    reg.update_card("v0002", {"version": "v0002", "plant_report": rep, "activated_by": None})
+    (root / "v0002" / "plant_report.json").write_text(json.dumps({"decision": rep.get("decision")}))
+    return reg
+
+
+def test_registry_refuses_a_worse_version_unless_forced_and_rollback_restores(tmp_path):
+    reg = _registry_with_candidate(tmp_path / "reg", better=False)
+    with pytest.raises(ActivationRefused, match="not better.*macro-F1 0.300"):
+        reg.activate("v0002")
+    assert reg.active_version() == "v0001" and reg.card("v0002")["activated_by"] is None
+    reg.activate("v0002", force=True)
+    assert reg.active_version() == "v0002" and reg.card("v0002")["activated_by"] == "forced"
+    assert reg.rollback() == "v0001" and reg.active_version() == "v0001"
+
+
+def test_a_pending_report_blocks_activation_and_a_better_one_is_recorded(tmp_path):
+    reg = _registry_with_candidate(tmp_path / "a", better=None)
+    with pytest.raises(ActivationRefused, match="not written yet"):
+        reg.activate("v0002")
+    good = _registry_with_candidate(tmp_path / "b", better=True)
+    good.activate("v0002")
+    assert good.active_version() == "v0002" and good.card("v0002")["activated_by"] == "report"
+    # an ordinary version (no plant report) activates as before, its card untouched
+    good.activate("v0001")
+    assert "activated_by" not in good.card("v0001")
+
+
+def test_api_activate_worse_is_409_force_is_recorded_show_and_rollback(tmp_path):
+    from rotordiag.service.main import create_app
+
+    _registry_with_candidate(tmp_path / "registry", better=False)
+    settings = make_settings(tmp_path, model_registry_dir=tmp_path / "registry")
+    with TestClient(create_app(settings)) as c:
+        r = c.post("/models/v0002/activate", headers=auth())
+        assert r.status_code == 409 and "not better" in r.json()["detail"] and "force" in r.json()["detail"]
+        assert c.get("/models").json()["active"] == "v0001"
+        shown = c.get("/models/v0002").json()
+        assert shown["plant_report"]["decision"]["better"] is False and shown["activated_by"] is None
+        assert c.get("/models/v0009").status_code == 404
+        r = c.post("/models/v0002/activate?force=true", headers=auth())
+        assert r.status_code == 200 and r.json()["active"] == "v0002"
+        assert c.get("/models/v0002").json()["activated_by"] == "forced"
+        r = c.post("/models/rollback", headers=auth())
+        assert r.status_code == 200 and r.json()["active"] == "v0001"
+
+
+def test_cli_activate_worse_exits_2_force_works_and_show_prints_the_report(tmp_path):
+    from rotordiag.cli import app
+
+    _registry_with_candidate(tmp_path / "reg", better=False)
+    run = CliRunner().invoke
+    r = run(app, ["models", "activate", "v0002", "--registry", str(tmp_path / "reg")])
+    assert r.exit_code == 2 and "not better" in r.output
+    r = run(app, ["models", "activate", "v0002", "--registry", str(tmp_path / "reg"), "--force"])
+    assert r.exit_code == 0 and "active: v0002" in r.output
+    r = run(app, ["models", "show", "v0002", "--registry", str(tmp_path / "reg"), "--json"])
+    assert r.exit_code == 0 and json.loads(r.output)["card"]["activated_by"] == "forced"
+    r = run(app, ["models", "rollback", "--registry", str(tmp_path / "reg")])
+    assert r.exit_code == 0 and "active: v0001" in r.output
+
+
+# --- progress and ETA ----------------------------------------------------------------------------------
+
+def test_staged_progress_is_monotonic_and_its_eta_is_the_linear_rest():
+    t = [0.0]
+    p = StagedProgress({"simulating": 10, "features": 10, "training": 30, "held-out simulation": 5, "report": 250},
+                       clock=lambda: t[0])
+    seen = []
+    for stage, total in (("simulating", 10), ("features", 10), ("training", 1), ("held-out simulation", 5),
+                         ("report", 50)):
+        for d in range(total + 1):
+            t[0] += 1.0
+            seen.append(p.update(stage, d, total))
+    fr = [f for f, _ in seen]
+    assert fr == sorted(fr) and fr[-1] == pytest.approx(1.0) and seen[-1][1] == pytest.approx(0.0)
+    f, eta = seen[5]
+    assert eta == pytest.approx(6.0 * (1 - f) / f)
+    assert sum(p.share.values()) == pytest.approx(1.0)
+
+
+def test_job_eta_is_elapsed_times_the_rest_over_the_fraction():
+    from rotordiag.service.api.routes.jobs import eta_seconds
+
+    now = dt.datetime(2026, 1, 1, 12, 0, tzinfo=dt.UTC)
+    start = now - dt.timedelta(seconds=60)
+    assert eta_seconds("running", 0.25, start, now) == pytest.approx(180.0)
+    assert eta_seconds("running", 0.005, start, now) is None
+    assert eta_seconds("succeeded", 1.0, start, now) is None
+    assert eta_seconds("running", 1.0, start.replace(tzinfo=None), now) == 0.0
+
+
+def test_job_status_carries_eta_s(tmp_path):
+    """A running job's GET /jobs/{id} has `eta_s` (null until 1 % is done, then ≥ 0 and finite)."""
+    import threading
+
+    from rotordiag.service.main import create_app
+
+    settings = make_settings(tmp_path)
+    app = create_app(settings)
+    release = threading.Event()
+
+    def work(params, ctx):
+        ctx.progress(0.5, "simulating", "half")
+        release.wait(30)
+        return {}
+
+    with TestClient(app) as c:
+        app.state.rd.jobs.register("retrain", work)
+        job = app.state.rd.jobs.submit("retrain", {})
+        try:
+            from tests.service_util import wait_until
+
+            got = wait_until(lambda: (j := c.get(f"/jobs/{job.id}").json())["progress"] == 0.5 and j,
+                             "the job at 50 %", ceiling_s=60)
+            assert got["stage"] == "simulating" and got["eta_s"] is not None
+            assert math.isfinite(got["eta_s"]) and 0 <= got["eta_s"] < 60
+        finally:
+            release.set()
+
+
+# --- end to end ----------------------------------------------------------------------------------------
+
+@pytest.mark.slow
+def test_retrain_cli_for_a_preset_stores_its_report_and_shows_it(tmp_path):
+    """`rotordiag retrain --preset gen600_4pole` with a few samples: the version is registered with its plant's
+    quality report (every condition, both models, not pending) and activated only as that report decides."""
+    from rotordiag.cli import app
+
+    reg_root = tmp_path / "reg"
+    r = CliRunner().invoke(app, ["retrain", "--registry", str(reg_root), "--preset", "gen600_4pole",
+                                 "--n-samples", "24", "--report-cases", "1", "--workers", "0",
+                                 "--work-dir", str(tmp_path / "work")])
+    assert r.exit_code == 0, r.output
+    reg = Registry(reg_root)
+    card = reg.card("v0001")
+    rep = json.loads((reg_root / "v0001" / "plant_report.json").read_text())
+    assert card["plant_report"]["pending"] is False and card["plant"]["name"] == "preset:gen600_4pole"
+    assert set(rep["per_condition"]) == {c.name for c in report_conditions()}
+    assert rep["held_out"]["n_cases"] == 5 and rep["models"]["active"].endswith("(the shipped model)")
+    for who in ("new", "active"):
+        assert 0.0 <= rep["pooled"][who]["macro_f1"] <= 1.0 and rep["pooled"][who]["n"] > 0
+    assert (reg.active_version() == "v0001") is (card["plant_report"]["better"] is True)
+    assert card["activated_by"] == ("report" if card["plant_report"]["better"] else None)
+    shown = CliRunner().invoke(app, ["models", "show", "v0001", "--registry", str(reg_root)])
+    assert shown.exit_code == 0 and "quality report for preset:gen600_4pole" in shown.output
+    assert tomllib.loads((tmp_path / "work" / "dataset.toml").read_text())["plant"]["shaftline"]
+
+
+def test_columns_measured_on_few_plants_are_dropped_before_training():
+    """A column seen on 5 of 32 plants (a retrain of 32 gen600_4pole samples had its sub-synchronous peak order so)
+    leaves some cross-validation folds all NaN, which the boosted trees cannot bin: dropped; one seen on every
+    plant, or on 20 of them, is kept."""
+    from rotordiag.models.plant_retrain import drop_unmeasured
+    from rotordiag.models.table import FeatureTable
+
+    rng = np.random.default_rng(0)
+    pid = np.repeat(np.arange(32), 3)
+    X = rng.normal(size=(96, 4))
+    X[pid >= 5, 1] = np.nan       # measured on plants 0-4 only
+    X[pid >= 20, 2] = np.nan      # measured on 20 plants
+    X[:, 3] = np.nan              # never measured
+    t = FeatureTable(X, ["a", "few", "twenty", "never"], rng.uniform(0, 0.5, 96), pid,
+                     np.array(["rigid"] * 96, dtype=object), np.full(96, 1500.0), np.arange(96), {})
+    kept, dropped = drop_unmeasured(t)
+    assert dropped == ["few", "never"] and list(kept.feature_names) == ["a", "twenty"]
+
+
+def test_retrain_request_takes_the_shaftline_files_text_with_its_rated_speed(tmp_path):
+    """POST /models/retrain's `shaftline_toml`: the file `rotordiag retrain --shaftline` reads, rated speed
+    included, gives the same plant and the sweep around that speed; bad text is a 422 saying so."""
+    from rotordiag.service.errors import InputError
+    from rotordiag.service.schemas import RetrainRequest
+    from rotordiag.service.work import prepare_retrain_job
+    from rotordiag.simulator import shaftline
+    from rotordiag.simulator.dataset.spec import parse_spec
+
+    text = "rated_speed_rpm = 3600\n" + EXAMPLE.read_text()
+    params = prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": text}), make_settings(tmp_path))
+    resolved = parse_spec(params["spec_toml"])
+    assert resolved.base_plant == shaftline.to_plant(shaftline.ShaftLine.from_file(EXAMPLE))
+    sp = resolved.spec.operating.speed_rpm
+    assert (sp.min, sp.max) == (pytest.approx(0.8 * 3600), pytest.approx(1.05 * 3600))
+    assert params["plant_description"]["rated_speed_rpm"] == [3600.0] and params["activate"] is True
+    with pytest.raises(InputError, match="not valid TOML"):
+        prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": "[generator"}), make_settings(tmp_path))
+    with pytest.raises(InputError, match="once"):
+        prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": text, "shaftline": {}}),
+                            make_settings(tmp_path))
