@@ -4,7 +4,7 @@ alarm thresholds (GET/PUT /assets/{asset_id}/thresholds) and probe configuration
 from __future__ import annotations
 
 import datetime as dt
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 import anyio
 from fastapi import APIRouter, Path, Query, Request, Response
@@ -224,8 +224,14 @@ async def set_asset_baseline(
         return await run_in_threadpool(from_diagnosis, state, asset_id, diagnosis_id)
     if auto:
         return await run_in_threadpool(set_auto, state, asset_id, n)
+    did = await _recorded_from_body(request, state, asset_id, reader, "?diagnosis_id= or ?auto=true")
+    return await run_in_threadpool(from_diagnosis, state, asset_id, did, "recording")
+
+
+async def _recorded_from_body(request: Request, state: Any, asset_id: str, reader: dict, otherwise: str) -> int:
+    """Diagnose the recording in the body (as POST /diagnose does) and store it as the asset's diagnosis: its id."""
     if not request.headers.get("content-type"):
-        raise InputError("send a recording in the body (as for POST /diagnose), or use ?diagnosis_id= or ?auto=true")
+        raise InputError(f"send a recording in the body (as for POST /diagnose), or use {otherwise}")
     from .diagnose import diagnose_from_request
 
     query = dict(asset_id=asset_id, plant=None, sample_index=0, **reader)
@@ -235,7 +241,7 @@ async def set_asset_baseline(
     verdict.pop("baseline", None)
     did = await run_in_threadpool(record_verdict, state, asset_id, None, verdict)
     assert did is not None
-    return await run_in_threadpool(from_diagnosis, state, asset_id, did, "recording")
+    return did
 
 
 _RECORDING_BODY = {"requestBody": {"required": False, "content": {
@@ -260,17 +266,7 @@ async def add_baseline_recording(
     diagnosis_id: Annotated[int | None, Query(ge=1, le=2**63 - 1, description="Add this stored diagnosis.")] = None,
 ) -> dict:
     if diagnosis_id is None:
-        if not request.headers.get("content-type"):
-            raise InputError("send a recording in the body (as for POST /diagnose), or use ?diagnosis_id=")
-        from .diagnose import diagnose_from_request
-
-        query = dict(asset_id=asset_id, plant=None, sample_index=0, **reader)
-        verdict, body_asset = await diagnose_from_request(request, state, query, None, store=False)
-        if body_asset is not None and body_asset != asset_id:
-            raise InputError(f"the body's asset_id {body_asset!r} is not the asset of the path ({asset_id!r})")
-        verdict.pop("baseline", None)
-        diagnosis_id = await run_in_threadpool(record_verdict, state, asset_id, None, verdict)
-        assert diagnosis_id is not None
+        diagnosis_id = await _recorded_from_body(request, state, asset_id, reader, "?diagnosis_id=")
     return await run_in_threadpool(add_recording, state, asset_id, diagnosis_id)
 
 
