@@ -268,3 +268,15 @@ def full_disk(engine, on: dict) -> Callable:
             raise OperationalError(statement, parameters, sqlite3.OperationalError("database or disk is full"))
 
     return _raise
+
+
+def pooled_and_plain_apps(tmp_path_factory):
+    """Two apps on the shipped (or tiny) model, each with its own data folder: one diagnosing in a worker
+    process (``diagnosis_workers=1``), one in the server's threads — for tests that both doors answer alike."""
+    from rotordiag.service.main import create_app
+
+    registry = shipped_or_tiny_registry(tmp_path_factory.mktemp("registry"))
+    pooled = create_app(make_settings(tmp_path_factory.mktemp("pooled"), shipped_registry_dir=registry,
+                                      diagnosis_workers=1))
+    plain = create_app(make_settings(tmp_path_factory.mktemp("plain"), shipped_registry_dir=registry))
+    return pooled, plain

@@ -10,16 +10,17 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from rotordiag.service.main import create_app
-from tests.service_util import auth, diagnose_json, make_settings, shipped_or_tiny_registry, simulated_channels
+from tests.service_util import (
+    auth,
+    diagnose_json,
+    pooled_and_plain_apps,
+    simulated_channels,
+)
 
 
 @pytest.fixture(scope="module")
 def clients(tmp_path_factory):
-    registry = shipped_or_tiny_registry(tmp_path_factory.mktemp("registry"))
-    pooled = create_app(make_settings(tmp_path_factory.mktemp("pooled"), shipped_registry_dir=registry,
-                                      diagnosis_workers=1))
-    plain = create_app(make_settings(tmp_path_factory.mktemp("plain"), shipped_registry_dir=registry))
+    pooled, plain = pooled_and_plain_apps(tmp_path_factory)
     with TestClient(pooled) as a, TestClient(plain) as b:
         assert a.app.state.rd.pool is not None and b.app.state.rd.pool is None
         yield a, b

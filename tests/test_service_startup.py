@@ -14,8 +14,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from rotordiag.service.main import create_app
-from tests.service_util import auth, make_settings, shipped_or_tiny_registry
+from tests.service_util import auth, pooled_and_plain_apps
 
 
 def _csv_body(path: Path) -> dict:
@@ -46,10 +45,7 @@ def runs(tmp_path_factory) -> dict[str, Path]:
 
 @pytest.fixture(scope="module")
 def clients(tmp_path_factory):
-    registry = shipped_or_tiny_registry(tmp_path_factory.mktemp("registry"))
-    pooled = create_app(make_settings(tmp_path_factory.mktemp("pooled"), shipped_registry_dir=registry,
-                                      diagnosis_workers=1))
-    plain = create_app(make_settings(tmp_path_factory.mktemp("plain"), shipped_registry_dir=registry))
+    pooled, plain = pooled_and_plain_apps(tmp_path_factory)
     with TestClient(pooled) as a, TestClient(plain) as b:
         yield {"pooled": a, "plain": b}
 
