@@ -178,9 +178,14 @@ def browser():
 
 
 def _wait(driver, predicate, timeout=180, what="condition"):
+    from selenium.common.exceptions import NoSuchElementException, StaleElementReferenceException
+
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout:
-        value = predicate(driver)
+        try:
+            value = predicate(driver)
+        except (StaleElementReferenceException, NoSuchElementException):
+            value = None                    # the page re-rendered the element between finding and reading it
         if value:
             return value
         time.sleep(0.1)
