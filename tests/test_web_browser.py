@@ -279,8 +279,8 @@ def test_page_loads_with_models_health_and_labelled_controls(server, browser):
     status, models = _get(server + "/models")
     assert status == 200
     active = models["active"]
-    row = browser.find_element("css selector", f"#models-table tr[data-version='{active}']")
-    assert "active" in row.text
+    _wait(browser, lambda d: "active" in d.find_element("css selector", f"#models-table tr[data-version='{active}']").text,
+          30, "the active version marked in the table")
     _wait(browser, lambda d: "active model" in d.find_element("id", "health").text, 30, "the health line")
     assert active in browser.find_element("id", "health").text
     unlabelled = browser.execute_script("""
