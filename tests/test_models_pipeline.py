@@ -114,6 +114,33 @@ def test_a_verdict_from_given_features_is_the_recordings_when_nothing_reads_it_a
 
 
 @needs_model
+def test_sanity_is_a_stage_of_its_own_run_once_per_reading(bundle, aligned, monkeypatch):
+    """The pipeline extracts without the sanity checks and runs them as their own stage (``read_features``): once
+    per extraction, and the verdict's features carry exactly ``check_recording``'s findings."""
+    from rotordiag.features import check_recording
+
+    seen: list[str] = []
+    real_extract, real_sanity = pipeline.extract_features, pipeline.with_sanity
+
+    def extract(recording, **kw):
+        assert kw.get("sanity") is False
+        seen.append("features")
+        return real_extract(recording, **kw)
+
+    def sanity(recording, fr):
+        assert fr.sanity == ()
+        seen.append("sanity")
+        return real_sanity(recording, fr)
+
+    monkeypatch.setattr(pipeline, "extract_features", extract)
+    monkeypatch.setattr(pipeline, "with_sanity", sanity)
+    v, fr = pipeline.diagnose_recording(bundle, aligned, clearance_um=350.0)
+    assert seen and seen == ["features", "sanity"] * (len(seen) // 2)
+    assert fr.sanity == check_recording(aligned, fr)
+    assert v.status == "confident"
+
+
+@needs_model
 def test_every_warning_carries_its_catalogue_code(bundle):
     """``warning_codes`` (new in the answer) holds the code of each warning, in order; each is the catalogue's and
     the warning's text is its template rendered."""
