@@ -53,6 +53,18 @@ def test_every_check_has_the_one_signature_and_lives_in_the_checks_folder(check)
     assert hints["return"] == list[Reason]
 
 
+def test_the_start_up_check_has_the_same_shape_with_its_own_context():
+    """``models.checks.startup.startup_check``: a context in (its own, ``StartupContext``: two stored runs and a
+    verdict's call, not a steady recording), the reasons out; it lives in the checks folder."""
+    from rotordiag.models.checks.startup import StartupContext, startup_check
+
+    assert startup_check.__module__ == "rotordiag.models.checks.startup"
+    params = list(inspect.signature(startup_check).parameters.values())
+    hints = typing.get_type_hints(startup_check)
+    assert len(params) == 1 and hints[params[0].name] is StartupContext
+    assert hints["return"] == list[Reason]
+
+
 def _context(**kw) -> CheckContext:
     base = dict(fr=None, names=(), row=np.zeros(0), call="aligned", aligned_band="aligned", ood_score=0.5, ood=False,
                 classes_of=lambda rows: pytest.fail("no class asked"), ood_of=lambda rows: pytest.fail("no OOD asked"),
