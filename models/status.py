@@ -89,10 +89,8 @@ CONFIDENT_MAX_FAR_PROBABILITY = 0.1
 #: the bearings either side of the coupling whose 1X level is compared with the training data
 COUPLING_BEARINGS = (2, 3)
 #: a misalignment verdict needs the classic signature to be confident: the largest 2X/1X amplitude ratio of the
-#: coupling bearings' probes at least this. Measured (benchmarks/bench_robustness.py, n = 48, clean + runout +
-#: far plants + ROSS): the confident non-aligned verdicts below it were the ROSS machines' healthy cases (2X/1X
-#: 0.00; 2 of 2 with the shipped model) and 5 of 69 confident rigid-coupling cases (a rigid coupling moves 1X);
-#: none of pin, offset or flexible
+#: coupling bearings' probes at least this (what the confident calls below it were: docs/models.md, "How it
+#: decides")
 SIGNATURE_MIN_2X_1X = 0.05
 #: outside its training family (OOD score above 1 or a feature outside the training range) the model's call is not
 #: trusted against the classic 2X/1X reading (the rule of thumb's bands, models.baselines.DEFAULT_RULE_CUTS) when that
