@@ -4,7 +4,7 @@ Each plant is the paper's model with its stiffnesses, damping, clearance and oil
 the clearance) from a seed. Its baseline start-up is a run-up at Δ = 0; then three more run-ups of the same plant:
 Δ = 0 with another unbalance phase and amount (a healthy later start-up), Δ = 0.15 and Δ = 0.3. Each run: 300 →
 2000 r/min at 100 r/min/s, 2560 Hz, 40 dB probe noise, order-tracked (``features.transient``), then
-``models.startup_check``: does the run differ from the baseline (a critical moved > 5 %, a coupling-end
+``models.checks.startup``: does the run differ from the baseline (a critical moved > 5 %, a coupling-end
 bearing's centreline half-rise speed moved > 10 % or its top-speed position > 10 % of the clearance)? The rate at
 which it fires per Δ, with Wilson 95 % intervals, and the features' values; beside it the steady verdict of the
 shipped model (``models/default_registry``) on a 1950 r/min recording of the same plant and Δ (40 dB noise), and
@@ -24,9 +24,10 @@ import numpy as np
 from rotordiag.core.conventions import project_on_probe
 from rotordiag.features import ProbeChannel, Recording
 from rotordiag.features import transient as T
+from rotordiag.models.checks.startup import StartupContext, startup_check
 from rotordiag.models.pipeline import diagnose_recording
 from rotordiag.models.predict import load_bundle
-from rotordiag.models.startup_check import compare_startups, startup_evidence, startup_reasons
+from rotordiag.models.startup import compare_startups, startup_evidence
 from rotordiag.simulator import Plant, simulate
 from rotordiag.simulator.transient import DEFAULT_CHANNELS, SpeedProfile, simulate_transient
 
@@ -107,7 +108,7 @@ def main() -> None:
             ev = run(pl, delta, ub, ph, seed=10 * i + 1 + int(delta * 100),
                      duration_s=28.3 if "60 r/min/s" in name else 17.0)
             cmp_ = compare_startups(ev, base)
-            _, reasons = startup_reasons({"startup": ev, "baseline": base, "misaligned_call": False})
+            reasons = startup_check(StartupContext(ev, base, misaligned_call=False))
             fired[name].append(bool(reasons))
             sev, status = steady_call(bundle, pl, delta, ub, ph, seed=10 * i + 5 + int(delta * 100))
             calls[name].append((sev, status, bool(reasons)))

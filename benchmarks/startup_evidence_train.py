@@ -5,7 +5,7 @@ the exciter's bearings moved down by a parallel offset at the coupling (``simula
 run 300 → 1500 r/min in 6 s (200 r/min/s), 20 settling revolutions, 1024 Hz, 40 dB probe noise, order-tracked
 (``features.transient``).
 
-*With* the start-up: ``models.startup_check`` on the coupling-end bearings 2 and 3 (the generator's rear and the
+*With* the start-up: ``models.checks.startup`` on the coupling-end bearings 2 and 3 (the generator's rear and the
 exciter's front bearing) — does it fire? *Without* it, what the service has is the steady comparison with the
 asset's baseline at the running speed: here its proxy, the change of the coupling-end probes' 1X and 2X vectors
 (pk-pk) and of the journals' mean position between the last 10 revolutions (~1450–1500 r/min) of the run and of the
@@ -27,7 +27,8 @@ import numpy as np
 
 from rotordiag.features import ProbeChannel, Recording
 from rotordiag.features import transient as T
-from rotordiag.models.startup_check import compare_startups, startup_evidence, startup_reasons
+from rotordiag.models.checks.startup import StartupContext, startup_check
+from rotordiag.models.startup import compare_startups, startup_evidence
 from rotordiag.simulator import shaftline as sl
 from rotordiag.simulator.train import misaligned
 from rotordiag.simulator.train.shaftline import train_from_shaftline
@@ -100,8 +101,7 @@ def main() -> None:
                 continue
             ev, tr, cl, _ = run(off, ub, ph, seed=100 * i + 1 + int(off))
             cmp_ = compare_startups(ev, base_ev, COUPLING)
-            _, reasons = startup_reasons({"startup": ev, "baseline": base_ev, "misaligned_call": False,
-                                          "coupling_bearings": COUPLING})
+            reasons = startup_check(StartupContext(ev, base_ev, misaligned_call=False, coupling_bearings=COUPLING))
             st = steady_change(steady_signature(tr, cl), base_sig, c_um)
             rise = max((abs(v[2]) for v in cmp_["half_rise_shift"].values()), default=math.nan)
             top = max(cmp_["top_change_per_clearance"].values(), default=math.nan)

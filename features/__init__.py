@@ -27,6 +27,9 @@ check_recording(recording, feature_result) -> tuple of SanityFinding
     Physics sanity checks (flat / clipped / all-zero channels, orbit vs clearance and probe
     range, implausible DC gap, all-reverse whirl, no 1X above noise, a 1X / 2X common to every
     probe); ``extract_features`` runs them and puts the findings in ``FeatureResult.sanity``.
+with_sanity(recording, feature_result) -> FeatureResult
+    The features with those findings: what ``extract_features`` does after extracting, for a caller that
+    extracts with ``sanity=False`` and runs the checks as a stage of its own (``models.pipeline``).
 common_mode(feature_result, order) -> CommonMode or None
     The signal common to every probe at 1X / 2X and its share of the order's power (electrical
     pickup at a grid-synchronous machine's 1X / 2X reads the same at every probe; no orbit does);
@@ -86,7 +89,7 @@ from ._config import (
 )
 from ._evidence import EvidenceItem, evidence
 from ._extract import BearingDetail, FeatureResult
-from ._extraction import extract_features, with_speed_notes
+from ._extraction import extract_features, with_sanity, with_speed_notes
 from ._lines import LINE_CLASSES, running_speed_line
 from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
 from ._orbit import OrbitShape
@@ -99,7 +102,7 @@ from ._speed_alternatives import speed_alternatives_rpm
 tune_malloc()
 
 __all__ = [
-    "ProbeChannel", "Recording", "parse_speed_range", "extract_features", "with_speed_notes", "FeatureResult", "BearingDetail", "OrbitShape",
+    "ProbeChannel", "Recording", "parse_speed_range", "extract_features", "with_sanity", "with_speed_notes", "FeatureResult", "BearingDetail", "OrbitShape",
     "FEATURE_NAMES", "FEATURE_SPECS", "FeatureSpec", "feature_names", "ALLOWED_UNITS", "MIN_REVS",
     "MIN_REVS_MOTION", "WHIRL_BAND", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",

@@ -2,7 +2,8 @@
 
 A recording whose probes were recorded in several takes, each with its own keyphasor, is read take by take
 (``features._takes``); any other in one pass (``features._extract``). The physics checks
-(``features._sanity``) then read the recording with its features.
+(``features._sanity``) then read the recording with its features (:func:`with_sanity`); the verdict pipeline
+(``models.pipeline``) runs them as a stage of its own (``sanity=False`` here, then :func:`with_sanity`).
 """
 from __future__ import annotations
 
@@ -18,11 +19,11 @@ from ._recording import Recording
 from ._sanity import check_recording
 from ._takes import extract_by_take
 
-__all__ = ["extract_features", "with_speed_notes"]
+__all__ = ["extract_features", "with_sanity", "with_speed_notes"]
 
 
 def extract_features(recording: Recording, *, speed_estimate_rpm: float | None = None,
-                     speed_notes: Sequence[str] = ()) -> FeatureResult:
+                     speed_notes: Sequence[str] = (), sanity: bool = True) -> FeatureResult:
     """Features of one recording: order analysis, orbit shape, sub-harmonics, motion type.
 
     Parameters
@@ -38,6 +39,9 @@ def extract_features(recording: Recording, *, speed_estimate_rpm: float | None =
         The warnings that go with ``speed_estimate_rpm`` (in place of the estimator's). A speed from
         elsewhere is never the signal's own reading: when no note puts it in doubt
         (:func:`speed_in_doubt`), one that does is added, so a verdict at it is never ``confident``.
+    sanity : bool
+        Run the physics sanity checks (:func:`with_sanity`) and put their findings in ``FeatureResult.sanity``.
+        False leaves ``sanity`` empty for a caller that runs them as a stage of its own (``models.pipeline``).
 
     Returns
     -------
@@ -62,7 +66,17 @@ def extract_features(recording: Recording, *, speed_estimate_rpm: float | None =
             result = extract_by_take(recording, _extract)
         else:
             result = _extract(recording, estimate)
-        return replace(result, sanity=check_recording(recording, result))
+        return with_sanity(recording, result) if sanity else result
+
+
+def with_sanity(recording: Recording, fr: FeatureResult) -> FeatureResult:
+    """``fr`` with the physics sanity findings of ``recording`` read with it (``check_recording``) in ``sanity``.
+
+    The checks read the features as well as the samples (orbit against clearance, whirl direction, the sync lines),
+    so they run after extraction, once per reading, under the same BLAS thread limit as the extraction.
+    """
+    with _blas_limit:
+        return replace(fr, sanity=check_recording(recording, fr))
 
 
 def _speed_notes(speed_rpm: float, notes: Sequence[str]) -> list[str]:

@@ -2,8 +2,9 @@
 
 Every door (``POST /diagnose``, the web page, ``rotordiag diagnose``, the benchmarks, the robustness report) calls
 it with the active model (``models.predict.load_bundle``), so that the verdict, its speed and the features it was
-computed from agree wherever a recording is diagnosed. Its body shows the stages in order — read, sanity, features
-(once per speed hypothesis), model scores, checks, assess status, verdict — each done by its own module; the page
+computed from agree wherever a recording is diagnosed. Its body shows the stages in order — read, features and
+sanity (once per speed hypothesis, :func:`read_features`), model scores, checks, assess status, verdict — each done
+by its own module; the page
 that walks through them is docs/pipeline.md. :func:`diagnose` is the same pipeline from features already extracted
 (no recording: the checks that read the recording again find nothing).
 """
@@ -16,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from rotordiag.features import FeatureResult, Recording, extract_features, with_speed_notes
+from rotordiag.features import FeatureResult, Recording, extract_features, with_sanity, with_speed_notes
 
 from .checks import Check, CheckContext
 from .checks.acquisitions import acquisitions_check
@@ -38,7 +39,7 @@ from .predict import (
 )
 from .status import DEFAULT_POLICY, ModelCall, Reason, RecordingChecks, assess, consistent_estimate, policy_of
 
-__all__ = ["diagnose_recording", "diagnose", "SCORE_CHECKS", "DOUBT_CHECKS"]
+__all__ = ["diagnose_recording", "diagnose", "read_features", "SCORE_CHECKS", "DOUBT_CHECKS"]
 
 #: the checks read beside the model's scores of the features the verdict is given at, in the order the answer lists
 #: their reasons (the probe set's first; the doubts below come right after it)
@@ -78,14 +79,14 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
     policy = policy_of(bundle.card) if isinstance(bundle, ModelBundle) else DEFAULT_POLICY
     with predictor_threads(model):
         # 1. read: the caller's reader made ``recording`` (units to µm, probes, bearings, keyphasor, clearance)
-        # 2. sanity and 3. features, once per speed hypothesis (None: the recording's own reading of its speed);
-        #    the physics sanity findings are made with the features (``FeatureResult.sanity``)
+        # 2. features and 3. sanity, once per speed hypothesis (None: the recording's own reading of its speed):
+        #    :func:`read_features`; given features (``fr``) come with their sanity findings
         features: dict[float | None, FeatureResult] = {} if fr is None else {None: fr}
 
         def features_at(rpm: float | None) -> FeatureResult:
             if rpm not in features:
                 assert recording is not None
-                features[rpm] = extract_features(recording, speed_estimate_rpm=rpm)
+                features[rpm] = read_features(recording, rpm)
             return features[rpm]
 
         fr = features_at(None)
@@ -121,7 +122,7 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
                 scores = replace(at, warnings=[*noted.warnings, *at.warnings[len(chosen.warnings):]])
             else:                               # read by take: extracted once more, with its notes
                 assert recording is not None
-                fr = extract_features(recording, speed_estimate_rpm=speed.chosen_rpm, speed_notes=notes)
+                fr = read_features(recording, speed.chosen_rpm, notes)
                 scores = model_scores(bundle, fr)
         #    — beside the scores: the probe set, separate acquisitions, a reverse coupling 2X, the numbering
         ctx = CheckContext(fr=fr, names=scores.names, row=scores.row, call=scores.call,
@@ -139,6 +140,21 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
             status, reasons = assess(_recording_checks(scores, fr, probe_set + doubts + beside), call, policy)
         # 7. the verdict
         return verdict_of(scores, fr, status, reasons, clearance_um=clearance_um, top_k=top_k), fr
+
+
+def read_features(recording: Recording, speed_rpm: float | None = None,
+                  speed_notes: Sequence[str] = ()) -> FeatureResult:
+    """Stages 2 and 3 of one speed hypothesis: the recording's features (``features.extract_features`` at
+    ``speed_rpm``, None: its own reading of its speed, with ``speed_notes``), then its physics sanity findings
+    (``features.with_sanity``: flat / clipped channels, orbit against clearance, whirl, no sync line, a common
+    mode) in ``FeatureResult.sanity``.
+
+    The sanity checks read the features as well as the samples, so they run right after each extraction, once per
+    reading; a failed one makes the verdict ``inconclusive`` in ``models.status.assess``. Raises ValueError
+    (a message for the user) for a recording the features refuse.
+    """
+    features = extract_features(recording, speed_estimate_rpm=speed_rpm, speed_notes=speed_notes, sanity=False)
+    return with_sanity(recording, features)
 
 
 def diagnose(bundle: Any, feature_result: FeatureResult, *, clearance_um: float | None = None,

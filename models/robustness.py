@@ -361,9 +361,9 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
     """Run features + the shipped model + the rule of thumb on one recording (fills ``out``); ``units``
     is what the channels are declared in (the numbers are µm: ``"mil"`` is the µm-read-as-mils mistake);
     ``acquisitions`` and ``speed_range_rpm`` as ``Recording``'s."""
-    from rotordiag.features import ProbeChannel, Recording, extract_features
+    from rotordiag.features import ProbeChannel, Recording
     from rotordiag.models.baselines import RuleOfThumb, ratio_column
-    from rotordiag.models.pipeline import diagnose_recording
+    from rotordiag.models.pipeline import diagnose_recording, read_features
 
     chans = [ProbeChannel(b, a, units, waveforms_um[2 * k + j]) for k, b in enumerate(bearings)
              for j, a in enumerate(ANGLES_DEG)]
@@ -371,7 +371,7 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
         rec = Recording(sample_rate_hz=fs_hz, channels=chans, speed_rpm=speed_rpm, clearance_um=clearance_um,
                         keyphasor_times_s=keyphasor_times_s, acquisitions=acquisitions,
                         speed_range_rpm=speed_range_rpm)
-        fr = extract_features(rec)
+        fr = read_features(rec)                                             # the pipeline's features and sanity
         out.speed_rpm_estimated = float(fr.speed_rpm)
         v, fr = diagnose_recording(bundle, rec, fr=fr)                     # as the service and the CLI
     except ValueError as exc:

@@ -70,12 +70,12 @@ CONFIDENT = "confident"
 #: OOD score (distance to training data over its usual distance) beyond which no severity is given
 OOD_INCONCLUSIVE = 3.0
 #: every journal of a recording with the four bearings' centrelines within this many clearances of its bearing
-#: centre → uncertain (``journals_near_centre``: a units or sensitivity slip that shrinks the numbers; on the
-#: clean base set ×0.1 made 43 of 240 verdicts confident, 12 of them two bands off, every one so)
+#: centre → uncertain (``journals_near_centre``: a units or sensitivity slip that shrinks the numbers and left
+#: verdicts confident and two bands off; measured in docs/models-history.md, "Numbers too small for the clearance")
 NEAR_CENTRE_MAX_ECC = 0.15
 #: the journals' attitude angles all this many degrees beyond (or short of) a plain short bearing's → uncertain
-#: (``centreline_frame_turned``: probes declared at 0°/90° that sit at 45°/135° made 40 of 240 verdicts confident on the
-#: clean base set, 8 of them two bands off, 4 of those healthy machines shown severe)
+#: (``centreline_frame_turned``: probes declared at 0°/90° that sit at 45°/135° left verdicts confident and two bands
+#: off; measured in docs/models-history.md, "Probe angles not the ones given")
 FRAME_OFFSET_DEG = 30.0
 #: coupling-bearing 1X orbit major axis this many times above / below the training median → uncertain …
 SCALE_UNCERTAIN = 20.0
@@ -89,10 +89,8 @@ CONFIDENT_MAX_FAR_PROBABILITY = 0.1
 #: the bearings either side of the coupling whose 1X level is compared with the training data
 COUPLING_BEARINGS = (2, 3)
 #: a misalignment verdict needs the classic signature to be confident: the largest 2X/1X amplitude ratio of the
-#: coupling bearings' probes at least this. Measured (benchmarks/bench_robustness.py, n = 48, clean + runout +
-#: far plants + ROSS): the confident non-aligned verdicts below it were the ROSS machines' healthy cases (2X/1X
-#: 0.00; 2 of 2 with the shipped model) and 5 of 69 confident rigid-coupling cases (a rigid coupling moves 1X);
-#: none of pin, offset or flexible
+#: coupling bearings' probes at least this (what the confident calls below it were: docs/models.md, "How it
+#: decides")
 SIGNATURE_MIN_2X_1X = 0.05
 #: outside its training family (OOD score above 1 or a feature outside the training range) the model's call is not
 #: trusted against the classic 2X/1X reading (the rule of thumb's bands, models.baselines.DEFAULT_RULE_CUTS) when that

@@ -346,18 +346,18 @@ def asset_report_data(asset_id: str, units: str = "um") -> dict:
 
 
 def _startup_evidence(verdict: dict | None, recording, track, baseline) -> tuple[dict | None, list[str]]:
-    """The start-up beside the steady verdict (``models.startup_check``): its evidence entries as report notes and,
+    """The start-up beside the steady verdict (``models.checks.startup``): its evidence entries as report notes and,
     for an "aligned" call on a start-up that changed since the baseline, the ``startup_changed`` reason added to the
     verdict (a confident verdict becomes uncertain; the band is never changed)."""
     from rotordiag.features.transient import centreline, track_orders
-    from rotordiag.models.startup_check import misaligned_call, startup_evidence, startup_reasons, with_startup
+    from rotordiag.models.checks.startup import StartupContext, startup_findings
+    from rotordiag.models.startup import misaligned_call, startup_evidence, with_startup
 
     def evidence(rec, tr):
         return startup_evidence(tr, None if rec.dc_removed else centreline(rec, tr))
 
     base = evidence(baseline, track_orders(baseline)) if baseline is not None else None
-    entries, reasons = startup_reasons({"startup": evidence(recording, track), "baseline": base,
-                                        "misaligned_call": misaligned_call(verdict)})
+    entries, reasons = startup_findings(StartupContext(evidence(recording, track), base, misaligned_call(verdict)))
     notes = [f"start-up evidence ({e['effect']}): {e['text']}" for e in entries]
     if verdict is not None and reasons:
         verdict = with_startup(verdict, [], reasons)

@@ -194,16 +194,16 @@ class ModelStore:
 
     @staticmethod
     def _verdict(bundle: Any, recording: Any, fr: Any = None) -> tuple[Any, Any]:
-        """The verdict and the features it was computed from: ``features.extract_features`` (unless ``fr``,
-        the recording's features, is given), then ``models.pipeline.diagnose_recording`` (the verdict and a
-        doubtful estimated speed judged by the model)."""
+        """The verdict and the features it was computed from: the pipeline's features and sanity stages
+        (``models.pipeline.read_features``, unless ``fr``, the recording's features, is given), refused here when a
+        feature overflows, then ``models.pipeline.diagnose_recording`` (the verdict and a doubtful estimated speed
+        judged by the model)."""
         import numpy as np
 
-        from rotordiag.features import extract_features
-        from rotordiag.models.pipeline import diagnose_recording
+        from rotordiag.models.pipeline import diagnose_recording, read_features
 
         if fr is None:
-            fr = extract_features(recording)
+            fr = read_features(recording)
         overflowed = np.flatnonzero(np.isinf(np.asarray(fr.values, dtype=float)))
         if overflowed.size:
             raise ValueError(f"the waveforms are too large to analyse ({fr.names[overflowed[0]]} overflows); check the units: "

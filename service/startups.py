@@ -1,7 +1,7 @@
 """An asset's start-ups and coast-downs as evidence beside its steady verdicts (issue 46, item 4).
 
 A start-up uploaded to an asset (``POST /assets/{id}/startup``) is order-tracked and reduced to what
-:mod:`rotordiag.models.startup_check` compares — the 1X criticals and the coupling-end bearings' centreline rise —
+:mod:`rotordiag.models.checks.startup` compares — the 1X criticals and the coupling-end bearings' centreline rise —
 and stored (``asset_startups``; no waveform). One start-up is the asset's **baseline start-up** (``?baseline=true``:
 the latest such upload). A later start-up is compared with it, and the comparison is evidence in the asset's
 verdicts from then on: every diagnosis of the asset (:func:`attach_startup`, called by
@@ -33,7 +33,7 @@ def startup_data(recording: Any) -> dict[str, Any]:
     cannot be tracked (a speed that reverses, a keyphasor that drops out, no speed change, ...)."""
     from rotordiag.features.transient import centreline, track_orders
     from rotordiag.models.report import transient_summary
-    from rotordiag.models.startup_check import startup_evidence
+    from rotordiag.models.startup import startup_evidence
 
     track = track_orders(recording)
     cl = None if recording.dc_removed else centreline(recording, track)
@@ -73,20 +73,21 @@ def _when(row: AssetStartup) -> str:
 
 def startup_comparison(base: AssetStartup | None, later: AssetStartup,
                        verdict: dict[str, Any] | None) -> tuple[list[dict[str, Any]], list[Any]]:
-    """``models.startup_check.startup_reasons`` of a stored later start-up against the stored baseline start-up,
+    """``models.checks.startup.startup_findings`` of a stored later start-up against the stored baseline start-up,
     for ``verdict``'s call (None: no steady verdict, nothing is called)."""
-    from rotordiag.models.startup_check import StartupEvidence, misaligned_call, startup_reasons
+    from rotordiag.models.checks.startup import StartupContext, startup_findings
+    from rotordiag.models.startup import StartupEvidence, misaligned_call
 
-    return startup_reasons({"startup": StartupEvidence.from_dict(later.evidence),
-                            "baseline": StartupEvidence.from_dict(base.evidence) if base is not None else None,
-                            "misaligned_call": misaligned_call(verdict)})
+    return startup_findings(StartupContext(StartupEvidence.from_dict(later.evidence),
+                                           StartupEvidence.from_dict(base.evidence) if base is not None else None,
+                                           misaligned_call(verdict)))
 
 
 def attach_startup(session: Session, asset_id: str, verdict: dict[str, Any]) -> dict[str, Any]:
-    """``verdict`` with the asset's latest later start-up as evidence (``models.startup_check.with_startup``)
+    """``verdict`` with the asset's latest later start-up as evidence (``models.startup.with_startup``)
     and a ``startup`` section naming the start-ups compared; ``verdict`` itself when the asset has no later
     start-up. Skipped for a verdict that already carries that start-up."""
-    from rotordiag.models.startup_check import with_startup
+    from rotordiag.models.startup import with_startup
 
     base, later = startups_in_force(session, asset_id)
     if later is None or (verdict.get("startup") or {}).get("startup_id") == later.id:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rotordiag.features import ProbeChannel, Recording, check_recording, evidence, extract_features
+from rotordiag.features import ProbeChannel, Recording, check_recording, evidence, extract_features, with_sanity
 from tests.service_util import simulated_channels
 
 CLEARANCE_UM = 350.0
@@ -169,6 +169,19 @@ def test_check_recording_is_what_extract_features_reports(sim):
     fr = extract_features(rec)
     assert check_recording(rec, fr) == fr.sanity
     assert fr.sanity[0].level == "fail"                   # failures first
+
+
+def test_the_sanity_stage_apart_gives_what_extract_features_reports(sim):
+    """``extract_features(..., sanity=False)`` then ``with_sanity`` (the verdict pipeline's two stages) is
+    ``extract_features``: the same features, the same findings (a failing recording: orbit in mil read as µm)."""
+    fs, ch = sim
+    rec = _rec(ch, fs, units="mil")
+    whole = extract_features(rec)
+    bare = extract_features(rec, sanity=False)
+    assert bare.sanity == () and whole.sanity
+    staged = with_sanity(rec, bare)
+    assert staged.sanity == whole.sanity
+    assert np.array_equal(staged.values, whole.values, equal_nan=True) and staged.names == whole.names
 
 
 def test_slow_roll_vectors_are_subtracted():

@@ -192,7 +192,7 @@ def test_api_timestamps_are_iso_8601_with_utc_as_z():
 
 
 def test_a_changed_start_up_asks_to_investigate_the_change():
-    """``startup_changed`` (models.startup_check, on an "aligned" call) leads to "investigate change", naming the
+    """``startup_changed`` (models.checks.startup, on an "aligned" call) leads to "investigate change", naming the
     start-up; an inconclusive verdict still asks to record again first; no "aligned misalignment" wording."""
     h = headline(_v(status="uncertain", codes=("startup_changed",), offset_um=7.0))
     assert (h.action, h.urgency) == ("investigate_change", "next_outage")

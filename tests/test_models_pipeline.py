@@ -53,6 +53,18 @@ def test_every_check_has_the_one_signature_and_lives_in_the_checks_folder(check)
     assert hints["return"] == list[Reason]
 
 
+def test_the_start_up_check_has_the_same_shape_with_its_own_context():
+    """``models.checks.startup.startup_check``: a context in (its own, ``StartupContext``: two stored runs and a
+    verdict's call, not a steady recording), the reasons out; it lives in the checks folder."""
+    from rotordiag.models.checks.startup import StartupContext, startup_check
+
+    assert startup_check.__module__ == "rotordiag.models.checks.startup"
+    params = list(inspect.signature(startup_check).parameters.values())
+    hints = typing.get_type_hints(startup_check)
+    assert len(params) == 1 and hints[params[0].name] is StartupContext
+    assert hints["return"] == list[Reason]
+
+
 def _context(**kw) -> CheckContext:
     base = dict(fr=None, names=(), row=np.zeros(0), call="aligned", aligned_band="aligned", ood_score=0.5, ood=False,
                 classes_of=lambda rows: pytest.fail("no class asked"), ood_of=lambda rows: pytest.fail("no OOD asked"),
@@ -111,6 +123,33 @@ def test_a_verdict_from_given_features_is_the_recordings_when_nothing_reads_it_a
     v, fr = pipeline.diagnose_recording(bundle, aligned, clearance_um=350.0)
     w = pipeline.diagnose(bundle, extract_features(aligned), clearance_um=350.0)
     assert w.to_dict() == v.to_dict()
+
+
+@needs_model
+def test_sanity_is_a_stage_of_its_own_run_once_per_reading(bundle, aligned, monkeypatch):
+    """The pipeline extracts without the sanity checks and runs them as their own stage (``read_features``): once
+    per extraction, and the verdict's features carry exactly ``check_recording``'s findings."""
+    from rotordiag.features import check_recording
+
+    seen: list[str] = []
+    real_extract, real_sanity = pipeline.extract_features, pipeline.with_sanity
+
+    def extract(recording, **kw):
+        assert kw.get("sanity") is False
+        seen.append("features")
+        return real_extract(recording, **kw)
+
+    def sanity(recording, fr):
+        assert fr.sanity == ()
+        seen.append("sanity")
+        return real_sanity(recording, fr)
+
+    monkeypatch.setattr(pipeline, "extract_features", extract)
+    monkeypatch.setattr(pipeline, "with_sanity", sanity)
+    v, fr = pipeline.diagnose_recording(bundle, aligned, clearance_um=350.0)
+    assert seen and seen == ["features", "sanity"] * (len(seen) // 2)
+    assert fr.sanity == check_recording(aligned, fr)
+    assert v.status == "confident"
 
 
 @needs_model

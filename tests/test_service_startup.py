@@ -134,14 +134,15 @@ def test_a_changed_startup_is_evidence_in_the_assets_verdict_never_a_surer_one(c
 
 def test_a_misalignment_call_gets_support_not_a_doubt():
     """The comparison on a verdict that calls misalignment: a supporting evidence row, no reason, status kept."""
-    from rotordiag.models.startup_check import StartupEvidence, startup_reasons, with_startup
+    from rotordiag.models.checks.startup import StartupContext, startup_findings
+    from rotordiag.models.startup import StartupEvidence, with_startup
 
     def ev(rise: float) -> StartupEvidence:
         return StartupEvidence({}, {2: rise, 3: rise}, {2: (0.0, 50.0), 3: (0.0, 50.0)}, {2: 350.0, 3: 350.0},
                                (300.0, 2000.0))
 
     verdict = {"severity": "moderate", "status": "confident", "reasons": [], "evidence": []}
-    entries, reasons = startup_reasons({"startup": ev(1500.0), "baseline": ev(1000.0), "misaligned_call": True})
+    entries, reasons = startup_findings(StartupContext(ev(1500.0), ev(1000.0), misaligned_call=True))
     out = with_startup(verdict, entries, reasons)
     assert not reasons and out["status"] == "confident" and out["severity"] == "moderate"
     assert [e["effect"] for e in out["evidence"]][-1] == "supports"

@@ -8,8 +8,11 @@ callables bound to the active model. ``bearing_sets`` (the probe set the model r
 and 3 recorded apart), ``reverse_2x`` (a coupling 2X whirling backward), ``numbering`` (bearings numbered from the
 other end), ``one_position`` (a call resting on the static offset between the coupling journals), ``common_mode`` (a
 1X / 2X common to every probe), ``clearance_check`` (a diametral clearance); ``speed_choice`` chooses among the
-speed hypotheses a doubtful estimate allows (its own signature: it picks a reading, it gives no reason). The
-pipeline that runs them in order: ``models.pipeline``; what each was measured to do: docs/checks.md.
+speed hypotheses a doubtful estimate allows (its own signature: it picks a reading, it gives no reason).
+``startup`` (a start-up that changed since the asset's baseline start-up) has the same shape — a context in, the
+reasons out — with a context of its own (``StartupContext``): it reads two stored runs and a verdict's call, not a
+steady recording, and is run beside a verdict (``service.startups``, ``rotordiag report --startup``). The pipeline
+that runs the others in order: ``models.pipeline``; what each was measured to do: docs/checks.md.
 """
 from __future__ import annotations
 

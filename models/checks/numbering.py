@@ -22,7 +22,7 @@ from . import CheckContext
 __all__ = ["NUMBERING_OOD_RATIO", "mirrored_row", "numbering_reason", "has_every_bearing", "numbering_check"]
 
 #: the other numbering's OOD score at or below this fraction of the recording's own → ``bearing_numbering``
-#: (correctly numbered clean base-set recordings, seed 815: the ratio's lowest value 0.963, 1st percentile 1.04)
+#: (below the lowest ratio of correctly numbered recordings: docs/models-history.md, "Bearings numbered from the exciter end")
 NUMBERING_OOD_RATIO = 0.95
 _BEARINGS = (1, 2, 3, 4)
 

@@ -166,7 +166,7 @@ class AssetSettings(Base):
 
 
 class AssetStartup(Base):
-    """A start-up or coast-down of an asset, as evidence (``service.startups``): what ``models.startup_check``
+    """A start-up or coast-down of an asset, as evidence (``service.startups``): what ``models.checks.startup``
     read of it (``evidence``: 1X criticals, coupling-end centreline rise) and its summary (speed range, peaks,
     notes); ``is_baseline`` marks the asset's baseline start-up (the latest such row). No waveform is kept."""
 

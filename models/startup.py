@@ -1,13 +1,14 @@
-"""A start-up or coast-down as evidence beside the steady verdict (issue 46, item 4).
+"""A start-up or coast-down as evidence beside the steady verdict (issue 46, item 4): what a run shows, and how it
+is merged into a verdict.
 
 From a tracked run (``features.transient``): each probe's 1X critical (``OrderTrack.peaks``) and each bearing's
 shaft-centreline rise — the speed by which the journal has made half its rise from the slowest step
 (``half_rise_rpm``, a lift-off speed) and where it stands at the top speed (``top_um``, from the slowest step's
-position). Against the asset's baseline start-up: how far each critical moved (an entry only) and how the
-coupling-end bearings' rise changed. :func:`startup_reasons` (context in, reasons out) turns that into evidence
-entries and at most one reason: ``startup_changed`` (uncertain) when the coupling-end centreline rise changed since
-the baseline and the steady verdict says "aligned" — a change the verdict does not explain —, or a supporting
-entry when the verdict is a misalignment call. It never changes a band. How much it adds, measured on simulated held-out plants: docs/transient.md.
+position): :func:`startup_evidence`, stored by the service as plain data (:class:`StartupEvidence`).
+:func:`compare_startups` sets a run against the asset's baseline start-up. The check that turns the comparison into
+evidence entries and at most one reason (``startup_changed``) is ``models.checks.startup``; :func:`with_startup`
+adds its entries and reasons to a verdict, never changing a band. How much it adds, measured on simulated held-out
+plants: docs/transient.md.
 """
 from __future__ import annotations
 
@@ -21,16 +22,7 @@ from rotordiag.core.conventions import COUPLING_BEARINGS
 
 from .status import UNCERTAIN, Reason
 
-__all__ = ["StartupEvidence", "startup_evidence", "compare_startups", "startup_reasons", "with_startup",
-           "misaligned_call", "CRITICAL_MOVED_FRACTION", "RISE_CHANGED_FRACTION"]
-
-#: a 1X peak has moved when its speed differs from the baseline's by more than this fraction; reported as an entry
-#: only: on simulated healthy re-runs of the same plant (another unbalance phase, or another ramp rate) the 1X peak
-#: of a probe jumped between the plant's nearby modes by 10–50 % (docs/transient.md)
-CRITICAL_MOVED_FRACTION = 0.05
-#: a coupling-end bearing's centreline changed when its half-rise speed moved by this fraction, or its position at
-#: the top speed by this fraction of the clearance
-RISE_CHANGED_FRACTION = 0.10
+__all__ = ["StartupEvidence", "startup_evidence", "compare_startups", "with_startup", "misaligned_call"]
 
 
 @dataclass
@@ -115,68 +107,12 @@ def compare_startups(now: StartupEvidence, baseline: StartupEvidence,
     return {"critical_shift": crit, "half_rise_shift": rise, "top_change_per_clearance": top}
 
 
-def startup_reasons(context: dict[str, Any]) -> tuple[list[dict[str, Any]], list[Reason]]:
-    """Evidence entries and reasons from a start-up.
-
-    ``context``: ``startup`` (:class:`StartupEvidence`), ``baseline`` (the asset's baseline start-up's, or None),
-    ``misaligned_call`` (the steady verdict calls misalignment), optionally ``coupling_bearings``. Returns (evidence entries — each
-    ``{"code", "value", "text", "effect"}`` with effect ``"supports"`` / ``"doubts"`` / ``"none"`` —, reasons: at
-    most ``startup_changed`` (uncertain) for an "aligned" call on a run that changed since the baseline)."""
-    now: StartupEvidence = context["startup"]
-    base: StartupEvidence | None = context.get("baseline")
-    call = bool(context.get("misaligned_call"))
-    entries: list[dict[str, Any]] = [{
-        "code": "startup_criticals", "effect": "none",
-        "value": {f"b{b}@{a:g}": s for (b, a), s in sorted(now.criticals.items())},
-        "text": "1X criticals of the start-up: " + (", ".join(
-            f"b{b}@{a:g} {s:.0f} r/min" for (b, a), s in sorted(now.criticals.items())) or "none in the run")}]
-    if base is None:
-        entries.append({"code": "startup_no_baseline", "effect": "none", "value": None,
-                        "text": "no baseline start-up of this asset: nothing to compare the criticals and the "
-                                "centreline rise with"})
-        return entries, []
-    cmp_ = compare_startups(now, base, tuple(context.get("coupling_bearings") or COUPLING_BEARINGS))
-    moved = [f"the 1X peak at b{b}@{a:g} moved from {s0:.0f} to {s1:.0f} r/min ({100 * f:+.0f} %)"
-             for (b, a), (s0, s1, f) in sorted(cmp_["critical_shift"].items()) if abs(f) > CRITICAL_MOVED_FRACTION]
-    if moved:  # reported, never a doubt by itself: see CRITICAL_MOVED_FRACTION
-        entries.append({"code": "startup_criticals_moved", "effect": "none", "value": None,
-                        "text": "; ".join(moved) + " (a 1X peak's speed also moves with the unbalance's phase and "
-                                "the ramp rate between nearby modes: not a doubt by itself)"})
-    found = []
-    for b, (s0, s1, f) in sorted(cmp_["half_rise_shift"].items()):
-        if abs(f) > RISE_CHANGED_FRACTION:
-            found.append(f"bearing {b} (coupling end) makes half its centreline rise at {s1:.0f} r/min against "
-                         f"{s0:.0f} in the baseline ({100 * f:+.0f} %)")
-    for b, v in sorted(cmp_["top_change_per_clearance"].items()):
-        if v > RISE_CHANGED_FRACTION:
-            found.append(f"bearing {b} (coupling end) stands {100 * v:.0f} % of its clearance away from where it "
-                         "stood at the top speed in the baseline")
-    value = {"critical_shift": {f"b{b}@{a:g}": f for (b, a), (_, _, f) in cmp_["critical_shift"].items()},
-             "half_rise_shift": {str(b): v[2] for b, v in cmp_["half_rise_shift"].items()},
-             "top_change_per_clearance": {str(b): v for b, v in cmp_["top_change_per_clearance"].items()}}
-    if not found:
-        entries.append({"code": "startup_unchanged", "effect": "none", "value": value,
-                        "text": "the coupling-end centreline rise matches the baseline start-up's (within "
-                                f"{100 * RISE_CHANGED_FRACTION:.0f} %)"})
-        return entries, []
-    text = "; ".join(found)
-    if call:
-        entries.append({"code": "startup_changed", "effect": "supports", "value": value,
-                        "text": f"the start-up changed since the baseline, as a misalignment would change it: {text}"})
-        return entries, []
-    entries.append({"code": "startup_changed", "effect": "doubts", "value": value, "text": text})
-    return entries, [Reason("startup_changed", UNCERTAIN,
-                            f"called aligned, but the start-up changed since the asset's baseline start-up: {text}. "
-                            "A moved bearing, a changed coupling or a rub changes a run-up so; compare the two "
-                            "start-ups' Bode and centreline plots before accepting the verdict")]
-
-
 def misaligned_call(verdict: dict[str, Any] | None) -> bool:
     """Whether a verdict dict calls misalignment (a band other than aligned; inconclusive calls nothing)."""
     return verdict is not None and verdict.get("severity") not in ("aligned", "inconclusive", None)
 
 
-#: what each entry of :func:`startup_reasons` is called on an evidence row (``scope`` "start-up")
+#: what each entry of ``models.checks.startup.startup_findings`` is called on an evidence row (``scope`` "start-up")
 _ENTRY_NAMES = {"startup_criticals": "1X criticals", "startup_no_baseline": "baseline start-up",
                 "startup_criticals_moved": "1X criticals against the baseline",
                 "startup_unchanged": "coupling-end centreline rise", "startup_changed": "coupling-end centreline rise"}

@@ -1,17 +1,20 @@
-"""A start-up as evidence beside the steady verdict (models.startup_check): entries, and a doubt never a band."""
+"""A start-up as evidence beside the steady verdict (models.startup, models.checks.startup): entries, and a doubt
+never a band."""
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from rotordiag.features import transient as T
-from rotordiag.models.startup_check import (
+from rotordiag.models.checks.startup import (
     CRITICAL_MOVED_FRACTION,
-    StartupEvidence,
-    compare_startups,
-    startup_evidence,
-    startup_reasons,
+    StartupContext,
+    startup_check,
+    startup_findings,
 )
+from rotordiag.models.startup import StartupEvidence, compare_startups, startup_evidence
 from rotordiag.models.status import UNCERTAIN
 from tests.test_features_transient import _synthetic
 
@@ -22,7 +25,7 @@ def _ev(crit_rpm: float = 1500.0, half_rise_rpm: float = 1200.0, top=(10.0, 60.0
 
 
 def test_no_baseline_gives_entries_and_no_reason():
-    entries, reasons = startup_reasons({"startup": _ev(), "baseline": None, "misaligned_call": False})
+    entries, reasons = startup_findings(StartupContext(_ev(), None, misaligned_call=False))
     assert not reasons
     assert [e["code"] for e in entries] == ["startup_criticals", "startup_no_baseline"]
     assert "b2@45 1500 r/min" in entries[0]["text"]
@@ -30,12 +33,12 @@ def test_no_baseline_gives_entries_and_no_reason():
 
 def test_an_unchanged_start_up_adds_no_doubt():
     small = 1500.0 * (1 + 0.5 * CRITICAL_MOVED_FRACTION)
-    entries, reasons = startup_reasons({"startup": _ev(crit_rpm=small), "baseline": _ev(), "misaligned_call": False})
+    entries, reasons = startup_findings(StartupContext(_ev(crit_rpm=small), _ev()))
     assert not reasons and entries[-1]["code"] == "startup_unchanged"
 
 
 def test_a_moved_critical_alone_is_an_entry_not_a_doubt():
-    entries, reasons = startup_reasons({"startup": _ev(crit_rpm=1400.0), "baseline": _ev(), "misaligned_call": False})
+    entries, reasons = startup_findings(StartupContext(_ev(crit_rpm=1400.0), _ev()))
     assert not reasons
     moved = [e for e in entries if e["code"] == "startup_criticals_moved"]
     assert moved and "moved from 1500 to 1400 r/min (-7 %)" in moved[0]["text"] and moved[0]["effect"] == "none"
@@ -46,13 +49,23 @@ def test_a_moved_critical_alone_is_an_entry_not_a_doubt():
     (dict(top=(10.0, 100.0)), "13 % of its clearance away"),          # |Δ| 40 µm of a 300 µm clearance
 ])
 def test_a_changed_start_up_doubts_an_aligned_call_and_supports_a_misaligned_one(now, what):
-    ctx = {"startup": _ev(**now), "baseline": _ev()}
-    entries, reasons = startup_reasons({**ctx, "misaligned_call": False})
+    ctx = StartupContext(_ev(**now), _ev(), misaligned_call=False)
+    entries, reasons = startup_findings(ctx)
     assert len(reasons) == 1 and reasons[0].code == "startup_changed" and reasons[0].status == UNCERTAIN
     assert what in reasons[0].message
     assert entries[-1]["effect"] == "doubts"
-    entries, reasons = startup_reasons({**ctx, "misaligned_call": True})
+    assert startup_check(ctx) == reasons                 # the check: the context in, the same reasons out
+    entries, reasons = startup_findings(replace(ctx, misaligned_call=True))
     assert not reasons and entries[-1]["effect"] == "supports" and what in entries[-1]["text"]
+    assert startup_check(replace(ctx, misaligned_call=True)) == []
+
+
+def test_the_start_up_check_reads_the_coupling_bearings_it_is_given():
+    """A train's coupling is elsewhere than the paper model's bearings 2 and 3: a change at bearings 2 and 3 is no
+    doubt when the context names bearings 4 and 5, and is one when it names 2 and 3."""
+    ctx = StartupContext(_ev(half_rise_rpm=1500.0), _ev())
+    assert [r.code for r in startup_check(ctx)] == ["startup_changed"]
+    assert startup_check(replace(ctx, coupling_bearings=(4, 5))) == []
 
 
 def test_evidence_of_a_tracked_run_reads_its_critical_and_its_rise():
