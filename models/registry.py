@@ -26,6 +26,7 @@ import os
 import re
 import shutil
 import tempfile
+import threading
 import zipfile
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -144,6 +145,9 @@ def dumps_json(obj: Any) -> str:
     return json.dumps(obj, indent=2, default=_json_default, allow_nan=True) + "\n"
 
 
+_SKOPS_LOAD_LOCK = threading.Lock()
+
+
 def load_model_bytes(data: bytes, name: str = "<bytes>") -> MisalignmentModel:
     """Load a skops model from bytes with the explicit trusted-types list.
 
@@ -167,8 +171,12 @@ def load_model_bytes(data: bytes, name: str = "<bytes>") -> MisalignmentModel:
         raise RegistryError(f"model file {name} is not a readable skops file ({exc})") from None
     try:
         # skops audits the whole tree against ``trusted`` before constructing anything, so one
-        # parse does (checking with get_untrusted_types first parsed the schema twice: ~0.3 s)
-        return sio.loads(data, trusted=list(TRUSTED_TYPES))
+        # parse does (checking with get_untrusted_types first parsed the schema twice: ~0.3 s).
+        # One load at a time: skops reads its arrays with np.load, whose header parse (ast.literal_eval) is not
+        # thread-safe on CPython 3.11.7 — two threads loading at once can fail with "AST constructor recursion
+        # depth mismatch" (seen when the service's warm-up and a request loaded the model together).
+        with _SKOPS_LOAD_LOCK:
+            return sio.loads(data, trusted=list(TRUSTED_TYPES))
     except UntrustedTypesFoundException:
         extra = sorted(set(sio.get_untrusted_types(data=data)) - set(TRUSTED_TYPES))
         raise RegistryError(
