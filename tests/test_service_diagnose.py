@@ -725,3 +725,23 @@ def test_rollback_by_one_call(tmp_path, registry_src):
         assert r.status_code == 200 and r.json()["active"] == first
         r = c.post("/models/rollback", headers=auth())
         assert r.status_code == 409 and "no rollback" in r.json()["detail"]
+
+
+def test_a_plant_model_in_the_query_is_judged_against_the_models_training_families(client):
+    """``?plant_model=``: a family the active model's card lacks makes the verdict uncertain at most
+    (``family_untrained``, issue 48); a plant that is neither default nor a preset is a 422 saying what to use."""
+    from rotordiag.features.examples import example_path
+    from tests.service_util import shipped_registry_usable
+
+    body = example_path("aligned.csv").read_bytes()
+    r = client.post("/diagnose", params={"clearance_um": 350, "plant_model": "gen999"}, files={"file": ("a.csv", body)})
+    assert r.status_code == 422 and "use default or a preset" in r.text
+    if not shipped_registry_usable():
+        pytest.skip("the tiny registry's card records no training families")
+    r = client.post("/diagnose", params={"clearance_um": 350, "plant_model": "train:gen600_2pole"},
+                    files={"file": ("a.csv", body)})
+    assert r.status_code == 200, r.text
+    v = r.json()
+    assert v["status"] == "uncertain" and [x["code"] for x in v["reasons"]] == ["family_untrained"]
+    r = client.post("/diagnose", params={"clearance_um": 350, "plant_model": "default"}, files={"file": ("a.csv", body)})
+    assert r.status_code == 200 and r.json()["status"] == "confident"
