@@ -208,3 +208,20 @@ def test_aligned_beside_a_strong_forward_coupling_2x_is_never_confident(bundle):
         chans.append(c)
     v, _ = pipeline.diagnose_recording(bundle, dataclasses.replace(rec, channels=chans))
     assert v.severity == "aligned" and v.status == "uncertain" and _codes(v) == ["signature_contradicts_call"]
+
+
+@needs_model
+def test_the_cli_takes_the_plant_model_and_refuses_an_unknown_one(tmp_path):
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+    from rotordiag.models.registry import shipped_registry_dir
+
+    path = str(example_path("aligned.csv"))
+    res = CliRunner().invoke(app, ["diagnose", path, "--registry", str(shipped_registry_dir()), "--json",
+                                   "--plant-model", "train:gen600_2pole"])
+    assert res.exit_code == 0, res.output
+    v = json.loads(res.output)
+    assert v["status"] == "uncertain" and [r["code"] for r in v["reasons"]] == ["family_untrained"]
+    res = CliRunner().invoke(app, ["diagnose", path, "--plant-model", "gen999"])
+    assert res.exit_code == 2 and "use default or a preset" in res.output and "Traceback" not in res.output
