@@ -106,14 +106,12 @@ def train_without(table, families: np.ndarray, held_out: str, config_path: Path,
     config = TrainConfig.from_file(config_path)
     if n_splits is not None:      # the held-out family is the evaluation that matters here: fewer inner folds
         config = dataclasses.replace(config, n_splits=n_splits)
-    from rotordiag.models.families import families_of_specs
+    from rotordiag.models.families import families_of_specs, specs_of_meta
 
     sub = table.subset(np.flatnonzero(families != held_out))
     registry = Registry(root / held_out)
     # the card's families are its specs' less the family whose rows were left out (the specs name every preset)
-    specs = [m.get("dataset_spec") for m in sub.meta.get("sources", [sub.meta])]
-    specs = [x for s in specs for x in (s if isinstance(s, list) else [s]) if x]
-    trained = [f for f in families_of_specs(specs) if not f.endswith(f"preset:{held_out}")]
+    trained = [f for f in families_of_specs(specs_of_meta(sub.meta)) if not f.endswith(f"preset:{held_out}")]
     train_and_register(sub, config, registry, card_extra={"training_families": trained})
     return load_bundle(registry.root)
 

@@ -19,8 +19,8 @@ import json
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
-__all__ = ["SIMULATIONS", "shaftline_key", "plant_key", "families_of_specs", "training_families", "machine_family",
-           "trained_on", "describe_family"]
+__all__ = ["SIMULATIONS", "shaftline_key", "plant_key", "specs_of_meta", "families_of_specs", "training_families",
+           "machine_family", "trained_on", "describe_family"]
 
 #: how a training plant was simulated (``simulator.dataset.spec.PlantSpec.model``)
 SIMULATIONS = ("lumped", "train")
@@ -95,6 +95,16 @@ def _spec_families(spec: Mapping[str, Any]) -> list[str]:
     if not keys:
         keys.append("default")
     return [f"{sim}:{k}" for k in keys]
+
+
+def specs_of_meta(meta: Mapping[str, Any]) -> list[Mapping[str, Any]]:
+    """The dataset specs of a feature table's ``meta``: its ``dataset_spec`` (one spec or a list), else those of the
+    tables it was concatenated from (``meta["sources"]``, ``FeatureTable.concat``)."""
+    found: list[Mapping[str, Any]] = []
+    for m in [meta] if meta.get("dataset_spec") else list(meta.get("sources") or []):
+        spec = m.get("dataset_spec") if isinstance(m, Mapping) else None
+        found += [x for x in (spec if isinstance(spec, list) else [spec]) if isinstance(x, Mapping)]
+    return found
 
 
 def families_of_specs(specs: Mapping[str, Any] | Sequence[Mapping[str, Any]] | None) -> list[str]:

@@ -11,7 +11,7 @@ import numpy as np
 
 from .config import TrainConfig
 from .evaluate import METHODS, evaluate, plot_report
-from .families import families_of_specs
+from .families import families_of_specs, specs_of_meta
 from .registry import TRUSTED_TYPES, Registry, dumps_json
 from .status import DEFAULT_POLICY
 from .table import FeatureTable
@@ -103,7 +103,7 @@ def train_and_register(
         },
         "plant_family": meta.get("plant_family"),
         # the machine families it was trained on (models.families): the family guard reads them
-        "training_families": families_of_specs(meta.get("dataset_spec")),
+        "training_families": families_of_specs(specs_of_meta(meta)),
         "feature_names": list(table.feature_names),
         "bands": config.bands.to_dict(),
         "interval_level": 1 - float(model.regressor_.alpha),

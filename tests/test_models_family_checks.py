@@ -24,6 +24,7 @@ from rotordiag.models.families import (
     families_of_specs,
     machine_family,
     shaftline_key,
+    specs_of_meta,
     trained_on,
     training_families,
 )
@@ -47,6 +48,13 @@ def test_a_spec_without_a_plant_is_the_default_lumped_family_and_presets_keep_th
     assert families_of_specs([{"plant": {"model": "train", "presets": ["gen50_2pole", "gen600_4pole"]}},
                               {"plant": {"presets": {"gen200_2pole": 1.0}}}]) == [
         "lumped:preset:gen200_2pole", "train:preset:gen50_2pole", "train:preset:gen600_4pole"]
+
+
+def test_the_specs_of_a_concatenated_table_are_its_sources():
+    one, two = {"plant": {}}, {"plant": {"model": "train", "preset": "gen50_2pole"}}
+    assert specs_of_meta({"dataset_spec": one}) == [one]
+    assert specs_of_meta({"sources": [{"dataset_spec": [one]}, {"dataset_spec": two}, {}]}) == [one, two]
+    assert specs_of_meta({}) == []
 
 
 def test_a_shaft_line_that_is_a_presets_is_that_preset_and_another_gets_a_stable_fingerprint():
