@@ -12,8 +12,9 @@ fluctuation in every sample). Build them first (about 1–4 s per sample per cor
 
 Held out (``--holdout``, default on): for each family (preset) a model is trained, with ``models/default/
 train.toml``'s configuration, on the other families' recordings only, and judged on the held-out family's —
-machines of a design it never saw. The shipped model never saw any train. Each recording is judged three ways:
-speed and clearance stated; clearance not stated; speed not stated. Figures per family, per coupling and per
+machines of a design it never saw. The shipped model never saw any train. Each recording is judged four ways:
+speed and clearance stated; clearance not stated; speed not stated; clearance not stated with the machine's plant
+model declared (``train:PRESET``, as an asset's plant model: ``models.checks.family``). Figures per family, per coupling and per
 condition; ``robustness.summarize``'s definitions (false alarm: a healthy train given any misalignment class).
 """
 from __future__ import annotations
@@ -30,7 +31,8 @@ import h5py
 import numpy as np
 
 PARTS = ("trains_2pole", "trains_2pole_aligned", "trains_4pole", "trains_4pole_aligned")
-CONDITIONS = ("speed and clearance stated", "clearance not stated", "speed not stated")
+CONDITIONS = ("speed and clearance stated", "clearance not stated", "speed not stated",
+              "clearance not stated, plant model declared")
 
 
 def read_samples(data: Path) -> list[dict]:
@@ -69,7 +71,8 @@ def judge(bundle, samples: list[dict], condition: str) -> list:
         o = Outcome(s["delta"], s["mechanism"], machine=s["family"], speed_rpm=s["speed_rpm"])
         diagnose_waveforms(bundle, s["waveforms_um"], s["bearings"], s["fs_hz"],
                            None if condition == "speed not stated" else s["speed_rpm"],
-                           None if condition == "clearance not stated" else s["clearance_um"], o)
+                           None if condition.startswith("clearance not stated") else s["clearance_um"], o,
+                           plant_model=f"train:{s['family']}" if condition.endswith("plant model declared") else None)
         outs.append(o)
     return outs
 
@@ -103,9 +106,13 @@ def train_without(table, families: np.ndarray, held_out: str, config_path: Path,
     config = TrainConfig.from_file(config_path)
     if n_splits is not None:      # the held-out family is the evaluation that matters here: fewer inner folds
         config = dataclasses.replace(config, n_splits=n_splits)
+    from rotordiag.models.families import families_of_specs, specs_of_meta
+
     sub = table.subset(np.flatnonzero(families != held_out))
     registry = Registry(root / held_out)
-    train_and_register(sub, config, registry)
+    # the card's families are its specs' less the family whose rows were left out (the specs name every preset)
+    trained = [f for f in families_of_specs(specs_of_meta(sub.meta)) if not f.endswith(f"preset:{held_out}")]
+    train_and_register(sub, config, registry, card_extra={"training_families": trained})
     return load_bundle(registry.root)
 
 

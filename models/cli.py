@@ -332,6 +332,7 @@ def register(app: typer.Typer) -> None:
         viewed_from: str = typer.Option("driver", "--viewed-from", help="End the probe angles are measured from: driver | non-driver."),
         speed_rpm: Optional[float] = typer.Option(None, "--speed-rpm", help="Running speed, r/min (estimated from the signal if omitted)."),
         clearance_um: Optional[float] = typer.Option(None, "--clearance-um", help="Radial bearing clearance, µm (gives the offset in µm)."),
+        plant_model: Optional[str] = typer.Option(None, "--plant-model", help="The machine's plant model: default (MODEL.md's plant) or a preset (gen50_2pole, gen200_2pole, gen600_2pole, gen600_4pole; train:NAME for its finite-element train). A family the model was not trained on is never given a confident verdict (family_untrained)."),
         speed_range_rpm: Optional[str] = typer.Option(None, "--speed-range-rpm", help="MIN,MAX r/min: the running speed's range when it is not known exactly (the machine's nominal speed, e.g. 2900,3100): the speed estimate is sought only there."),
         sample: Optional[int] = typer.Option(None, "--sample", help="Row of a rotordiag dataset HDF5 file."),
         dc_removed: bool = typer.Option(False, "--dc-removed", help="The channels' DC part is no shaft position (AC-coupled acquisition): the shaft centreline is not read (zero-mean channels and --units V without --gap-voltage-v are read so anyway)."),
@@ -371,6 +372,10 @@ def register(app: typer.Typer) -> None:
             if sensitivity is not None and sensitivity_v_per_mm is not None:
                 raise ValueError("--sensitivity and --sensitivity-v-per-mm: give the probe sensitivity once")
             paths = collect_files(files)
+            if plant_model is not None:
+                from .families import machine_family
+
+                machine_family(plant_model)           # refused here, before any file is read
             given = {
                 "sample_rate_hz": sample_rate_hz, "units": units,
                 "sensitivity_v_per_mm": sensitivity if sensitivity is not None else sensitivity_v_per_mm,
@@ -401,10 +406,11 @@ def register(app: typer.Typer) -> None:
         full: list[dict] = []
         n_bad = 0
         def one(p: Path) -> tuple:
-            return diagnose_one(bundle, p, load_options(p, sidecar, given), runout)
+            return diagnose_one(bundle, p, load_options(p, sidecar, given), runout, plant_model)
 
         jobs: list[tuple[Path, Callable[[], tuple]]] = (
-            [(Path("+".join(str(p) for p in paths)), partial(diagnose_takes, bundle, paths, sidecar, given, runout))]
+            [(Path("+".join(str(p) for p in paths)), partial(diagnose_takes, bundle, paths, sidecar, given, runout,
+                                                                    plant_model))]
             if takes else [(p, partial(one, p)) for p in paths])
         for path, run in jobs:
             try:

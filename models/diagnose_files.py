@@ -127,19 +127,20 @@ def slow_roll_from_file(path: Path, options: ReadOptions) -> Any:
 
 
 def diagnose_one(bundle: Any, path: Path, options: ReadOptions,
-                 slow_roll: Any = None) -> tuple[Any, ReadResult, dict[str, Any]]:
+                 slow_roll: Any = None, plant_model: str | None = None) -> tuple[Any, ReadResult, dict[str, Any]]:
     """Read ``path`` and diagnose it with ``bundle`` (a loaded model, or a callable that loads it: the
     file is read first, so a bad file is reported before the model is loaded); ValueError says what to fix.
     ``slow_roll`` (``features.SlowRollVectors``, :func:`slow_roll_from_file`): runout vectors subtracted
-    from the recording's 1X/2X (the reader's notes say so and what was left out).
+    from the recording's 1X/2X (the reader's notes say so and what was left out). ``plant_model``: the machine's
+    plant model (``models.pipeline.diagnose_recording``).
 
     Returns the verdict, the reader's result and the recording's ``features.signature`` (what an asset
     baseline compares, ``models.change.compare``)."""
-    return diagnose_read(bundle, read_recording(path, options=options, limits=CLI_LIMITS), slow_roll)
+    return diagnose_read(bundle, read_recording(path, options=options, limits=CLI_LIMITS), slow_roll, plant_model)
 
 
 def diagnose_takes(bundle: Any, paths: Sequence[Path], sidecar: Path | None, given: Mapping[str, Any],
-                   slow_roll: Any = None) -> tuple[Any, ReadResult, dict[str, Any]]:
+                   slow_roll: Any = None, plant_model: str | None = None) -> tuple[Any, ReadResult, dict[str, Any]]:
     """Read ``paths`` as the takes of one recording (each with :func:`load_options`: its own sidecar), merge them
     (``features.take_files.merge_takes``: each file one acquisition, its keyphasor that take's) and diagnose the
     merged recording as :func:`diagnose_one`. ValueError names the file."""
@@ -153,10 +154,11 @@ def diagnose_takes(bundle: Any, paths: Sequence[Path], sidecar: Path | None, giv
             results.append(read_recording(path, options=load_options(path, sidecar, given), limits=CLI_LIMITS))
         except ValueError as exc:
             raise ValueError(f"{path}: {exc}") from None
-    return diagnose_read(bundle, merge_takes(results, [p.name for p in paths]), slow_roll)
+    return diagnose_read(bundle, merge_takes(results, [p.name for p in paths]), slow_roll, plant_model)
 
 
-def diagnose_read(bundle: Any, res: ReadResult, slow_roll: Any = None) -> tuple[Any, ReadResult, dict[str, Any]]:
+def diagnose_read(bundle: Any, res: ReadResult, slow_roll: Any = None,
+                  plant_model: str | None = None) -> tuple[Any, ReadResult, dict[str, Any]]:
     """Diagnose a recording already read (:func:`diagnose_one` without the reading)."""
     from rotordiag.features import apply_slow_roll, signature
 
@@ -170,7 +172,8 @@ def diagnose_read(bundle: Any, res: ReadResult, slow_roll: Any = None) -> tuple[
         res.notes.extend(slow_roll.notes)
     if callable(bundle):
         bundle = bundle()
-    verdict, fr = diagnose_recording(bundle, recording, clearance_um=coupling_clearance_um(recording))
+    verdict, fr = diagnose_recording(bundle, recording, clearance_um=coupling_clearance_um(recording),
+                                     plant_model=plant_model)
     return verdict, res, signature(fr)
 
 

@@ -21,13 +21,17 @@ from rotordiag.features import FeatureResult, Recording, extract_features, with_
 
 from .checks import Check, CheckContext
 from .checks.acquisitions import acquisitions_check
+from .checks.attitude import attitude_check
 from .checks.bearing_sets import bearing_set_check
 from .checks.clearance_check import clearance_check
 from .checks.common_mode import common_mode_check
+from .checks.contradiction import contradiction_check
+from .checks.family import family_check
 from .checks.numbering import numbering_check
 from .checks.one_position import one_position_check
 from .checks.reverse_2x import reverse_2x_check
 from .checks.speed_choice import choose_speed, chosen_speed_notes
+from .families import machine_family, training_families
 from .predict import (
     ModelBundle,
     ModelScores,
@@ -43,13 +47,15 @@ __all__ = ["diagnose_recording", "diagnose", "read_features", "SCORE_CHECKS", "D
 
 #: the checks read beside the model's scores of the features the verdict is given at, in the order the answer lists
 #: their reasons (the probe set's first; the doubts below come right after it)
-SCORE_CHECKS: tuple[Check, ...] = (acquisitions_check, reverse_2x_check, numbering_check)
+SCORE_CHECKS: tuple[Check, ...] = (acquisitions_check, reverse_2x_check, numbering_check, family_check,
+                                   contradiction_check)
 #: the checks that read the recording again, given the status found without them (``CheckContext.status``)
-DOUBT_CHECKS: tuple[Check, ...] = (common_mode_check, clearance_check)
+DOUBT_CHECKS: tuple[Check, ...] = (common_mode_check, clearance_check, attitude_check)
 
 
 def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um: float | None = None,
-                       top_k: int = 5, fr: FeatureResult | None = None) -> tuple[Verdict, FeatureResult]:
+                       top_k: int = 5, fr: FeatureResult | None = None, plant_model: str | None = None,
+                       plant_shaftline: dict[str, Any] | None = None) -> tuple[Verdict, FeatureResult]:
     """The verdict of one recording with the active model, and the features it was given from.
 
     Parameters
@@ -64,6 +70,11 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
         Number of contributing features reported.
     fr : features.FeatureResult, optional
         The recording's features when the caller has them already (extracted at the recording's own speed).
+    plant_model, plant_shaftline : optional
+        The machine's plant model, when known (the asset's or the request's): ``default``, a preset's name
+        (``train:NAME``: its finite-element train), or shaft-line tables (``models.families.machine_family``). A
+        family the model's card does not list among its training families makes the verdict uncertain at most
+        (``family_untrained``, ``models.checks.family``).
 
     Returns
     -------
@@ -73,10 +84,13 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
     ------
     ValueError
         With a message for the user: a recording the features refuse (``features.extract_features``), features
-        none of which the model reads, a clearance that is not a positive number.
+        none of which the model reads, a clearance that is not a positive number, a plant model that is not
+        ``default``, a preset or readable shaft-line tables.
     """
     model = bundle.model if isinstance(bundle, ModelBundle) else bundle
     policy = policy_of(bundle.card) if isinstance(bundle, ModelBundle) else DEFAULT_POLICY
+    family = machine_family(plant_model, plant_shaftline)
+    families = training_families(bundle.card) if isinstance(bundle, ModelBundle) else []
     with predictor_threads(model):
         # 1. read: the caller's reader made ``recording`` (units to µm, probes, bearings, keyphasor, clearance)
         # 2. features and 3. sanity, once per speed hypothesis (None: the recording's own reading of its speed):
@@ -128,7 +142,9 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
         ctx = CheckContext(fr=fr, names=scores.names, row=scores.row, call=scores.call,
                            aligned_band=str(model.bands_.names[0]), ood_score=scores.ood_score, ood=scores.ood,
                            classes_of=scores.classes_of, ood_of=scores.ood_of, score=partial(ood_score_and_class, bundle),
-                           band_names=[str(c) for c in model.classes_], plan=scores.plan, recording=recording)
+                           band_names=[str(c) for c in model.classes_], plan=scores.plan, recording=recording,
+                           machine_family=family, model_families=families,
+                           envelope_of=getattr(model, "envelope_findings", None))
         probe_set = bearing_set_check(ctx)
         beside = [r for check in SCORE_CHECKS for r in check(ctx)]
         # 6. assess status: every reason together, by the decision policy stored with the model

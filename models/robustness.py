@@ -357,10 +357,11 @@ class Outcome:
 def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ...], fs_hz: float,
                        speed_rpm: float | None, clearance_um: float | None, out: Outcome, units: str = "um",
                        keyphasor_times_s: Any = None, acquisitions: str | None = None,
-                       speed_range_rpm: tuple[float, float] | None = None) -> Outcome:
+                       speed_range_rpm: tuple[float, float] | None = None, plant_model: str | None = None) -> Outcome:
     """Run features + the shipped model + the rule of thumb on one recording (fills ``out``); ``units``
     is what the channels are declared in (the numbers are µm: ``"mil"`` is the µm-read-as-mils mistake);
-    ``acquisitions`` and ``speed_range_rpm`` as ``Recording``'s."""
+    ``acquisitions`` and ``speed_range_rpm`` as ``Recording``'s; ``plant_model`` the machine's declared plant
+    (``models.pipeline.diagnose_recording``)."""
     from rotordiag.features import ProbeChannel, Recording
     from rotordiag.models.baselines import RuleOfThumb, ratio_column
     from rotordiag.models.pipeline import diagnose_recording, read_features
@@ -373,7 +374,7 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
                         speed_range_rpm=speed_range_rpm)
         fr = read_features(rec)                                             # the pipeline's features and sanity
         out.speed_rpm_estimated = float(fr.speed_rpm)
-        v, fr = diagnose_recording(bundle, rec, fr=fr)                     # as the service and the CLI
+        v, fr = diagnose_recording(bundle, rec, fr=fr, plant_model=plant_model)   # as the service and the CLI
     except ValueError as exc:
         out.notes.append(str(exc))
         return out

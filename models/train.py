@@ -11,6 +11,7 @@ import numpy as np
 
 from .config import TrainConfig
 from .evaluate import METHODS, evaluate, plot_report
+from .families import families_of_specs, specs_of_meta
 from .registry import TRUSTED_TYPES, Registry, dumps_json
 from .status import DEFAULT_POLICY
 from .table import FeatureTable
@@ -101,6 +102,8 @@ def train_and_register(
             "mechanisms": sorted(set(table.mechanism.tolist())),
         },
         "plant_family": meta.get("plant_family"),
+        # the machine families it was trained on (models.families): the family guard reads them
+        "training_families": families_of_specs(specs_of_meta(meta)),
         "feature_names": list(table.feature_names),
         "bands": config.bands.to_dict(),
         "interval_level": 1 - float(model.regressor_.alpha),

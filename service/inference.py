@@ -165,8 +165,12 @@ class ModelStore:
         return entry[1] if entry is not None else None
 
     # -- diagnosis ------------------------------------------------------------------------------
-    def diagnose(self, recording: Any, version: str | None = None) -> dict[str, Any]:
+    def diagnose(self, recording: Any, version: str | None = None, plant_model: str | None = None,
+                 plant_shaftline: dict[str, Any] | None = None) -> dict[str, Any]:
         """Features, then the verdict of the models package, as a JSON-able dict.
+
+        ``plant_model`` / ``plant_shaftline``: the machine's plant model when known (the request's, else its
+        asset's): a family the model was not trained on is never confident (``models.checks.family``).
 
         The verdict (``models.predict.Verdict``) is returned as is, plus
         ``bearings`` (the features package's per-bearing details) and
@@ -183,7 +187,7 @@ class ModelStore:
         from rotordiag.features import signature
 
         bundle = self.load(version)
-        verdict, fr = self._verdict(bundle, recording)
+        verdict, fr = self._verdict(bundle, recording, plant_model=plant_model, plant_shaftline=plant_shaftline)
         out = _clean(verdict.to_dict())  # NaN/inf -> null: JSON has no non-finite numbers
         out["model_version"] = out.get("model_version") or bundle.version
         out["bearings"] = _bearings(fr)
@@ -193,11 +197,12 @@ class ModelStore:
 
 
     @staticmethod
-    def _verdict(bundle: Any, recording: Any, fr: Any = None) -> tuple[Any, Any]:
+    def _verdict(bundle: Any, recording: Any, fr: Any = None, plant_model: str | None = None,
+                 plant_shaftline: dict[str, Any] | None = None) -> tuple[Any, Any]:
         """The verdict and the features it was computed from: the pipeline's features and sanity stages
         (``models.pipeline.read_features``, unless ``fr``, the recording's features, is given), refused here when a
         feature overflows, then ``models.pipeline.diagnose_recording`` (the verdict and a doubtful estimated speed
-        judged by the model)."""
+        judged by the model; ``plant_model``/``plant_shaftline``: the machine's declared plant)."""
         import numpy as np
 
         from rotordiag.models.pipeline import diagnose_recording, read_features
@@ -211,7 +216,8 @@ class ModelStore:
                              "thousand µm")
         clearance = getattr(recording, "clearance_um", None)
         clearance = float(clearance) if isinstance(clearance, (int, float)) else None
-        return diagnose_recording(bundle, recording, clearance_um=clearance, fr=fr)
+        return diagnose_recording(bundle, recording, clearance_um=clearance, fr=fr, plant_model=plant_model,
+                                  plant_shaftline=plant_shaftline)
 
     def plot_features(self, recording: Any) -> Any:
         """The features the web page's pictures are drawn from: those of the verdict (:meth:`diagnose`, the

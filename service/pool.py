@@ -168,7 +168,8 @@ def _work(kind: str, body: Body, filename: str, query: dict[str, Any], slow_roll
 
     def run() -> tuple:
         recording, asset_id, plant, notes = parse_request(kind, body, filename, query, slow_roll)
-        return ("ok", {**_store().diagnose(recording, version), "input_notes": notes,
+        return ("ok", {**_store().diagnose(recording, version, query.get("plant_model"), query.get("plant_shaftline")),
+                       "input_notes": notes,
                        "recorded_at_in_file": recording.recorded_at}, asset_id, plant)
 
     return _tagged(run)

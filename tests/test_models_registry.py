@@ -122,7 +122,8 @@ def test_failed_register_leaves_nothing_behind(tmp_path, fitted):
 def test_train_and_register_writes_card_and_report(tmp_path):
     t = make_table(n_plants=12, per_plant=8, seed=1)
     tab = FeatureTable(t.X, t.feature_names, t.misalignment, t.plant_id, t.mechanism, t.speed_rpm,
-                       meta={"dataset_hash": "abc", "plant_family": "default±20%"})
+                       meta={"dataset_hash": "abc", "plant_family": "default±20%",
+                             "dataset_spec": [{"plant": {}}, {"plant": {"model": "train", "presets": ["gen50_2pole"]}}]})
     cfg = TrainConfig.from_dict({"classifier": {"max_iter": 15, "cv": 3}, "regressor": {"max_iter": 15},
                                  "evaluation": {"n_splits": 3}, "features": {"exclude": ["noise_*"]}})
     with threadpool_limits(1):
@@ -131,6 +132,8 @@ def test_train_and_register_writes_card_and_report(tmp_path):
     card = json.loads((d / "card.json").read_text())
     assert card["training_data"]["hash"] == "abc"
     assert card["plant_family"] == "default±20%"
+    # the machine families the family guard reads (models.families), one per plant and simulation of the specs
+    assert card["training_families"] == ["lumped:default", "train:preset:gen50_2pole"]
     assert "noise_a" not in card["feature_names"] and len(card["feature_names"]) == 5
     assert card["bands"]["edges"] == [0.05, 0.15, 0.35]
     assert set(card["metrics"]["per_mechanism"]) == {"pin", "rigid"}

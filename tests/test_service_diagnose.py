@@ -725,3 +725,49 @@ def test_rollback_by_one_call(tmp_path, registry_src):
         assert r.status_code == 200 and r.json()["active"] == first
         r = c.post("/models/rollback", headers=auth())
         assert r.status_code == 409 and "no rollback" in r.json()["detail"]
+
+
+def test_a_plant_model_in_the_query_is_judged_against_the_models_training_families(client):
+    """``?plant_model=``: a family the active model's card lacks makes the verdict uncertain at most
+    (``family_untrained``, issue 48); a plant that is neither default nor a preset is a 422 saying what to use."""
+    from rotordiag.features.examples import example_path
+    from tests.service_util import shipped_registry_usable
+
+    body = example_path("aligned.csv").read_bytes()
+    r = client.post("/diagnose", params={"clearance_um": 350, "plant_model": "gen999"}, files={"file": ("a.csv", body)})
+    assert r.status_code == 422 and "use default or a preset" in r.text
+    if not shipped_registry_usable():
+        pytest.skip("the tiny registry's card records no training families")
+    r = client.post("/diagnose", params={"clearance_um": 350, "plant_model": "train:gen600_2pole"},
+                    files={"file": ("a.csv", body)})
+    assert r.status_code == 200, r.text
+    v = r.json()
+    assert v["status"] == "uncertain" and [x["code"] for x in v["reasons"]] == ["family_untrained"]
+    r = client.post("/diagnose", params={"clearance_um": 350, "plant_model": "default"}, files={"file": ("a.csv", body)})
+    assert r.status_code == 200 and r.json()["status"] == "confident"
+
+
+def test_an_assets_own_shaft_line_is_a_family_the_shipped_model_never_saw(client):
+    """An asset whose stored plant is its own shaft line (not a preset's) is diagnosed with that plant: the shipped
+    model, trained on MODEL.md's plant and the presets' reductions, is never confident there (issue 48)."""
+    import json as _json
+
+    from rotordiag.features.examples import example_path
+    from rotordiag.simulator.shaftline import preset
+    from tests.service_util import shipped_registry_usable
+
+    if not shipped_registry_usable():
+        pytest.skip("the tiny registry's card records no training families")
+    tables = _json.loads(_json.dumps(preset("gen200_2pole").to_dict()))
+    tables["coupling"]["stiffness_n_m"] = 2 * float(tables["coupling"].get("stiffness_n_m", 1e8))
+    r = client.put("/assets/own-line/probes", json={"plant_shaftline": tables, "clearance_um": 350}, headers=auth())
+    assert r.status_code == 200, r.text
+    body = example_path("aligned.csv").read_bytes()
+    r = client.post("/diagnose", params={"asset_id": "own-line"}, files={"file": ("a.csv", body)})
+    assert r.status_code == 200, r.text
+    v = r.json()
+    assert v["status"] == "uncertain" and [x["code"] for x in v["reasons"]] == ["family_untrained"]
+    assert "shaftline:" in v["reasons"][0]["message"]
+    r = client.post("/diagnose", params={"asset_id": "own-line", "plant_model": "default"},
+                    files={"file": ("a.csv", body)})
+    assert r.status_code == 200 and r.json()["status"] == "confident"       # the upload's plant model wins

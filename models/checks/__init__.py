@@ -7,9 +7,10 @@ class of other rows, their OOD score, a second reading of other features — is 
 callables bound to the active model. ``bearing_sets`` (the probe set the model reads), ``acquisitions`` (bearings 2
 and 3 recorded apart), ``reverse_2x`` (a coupling 2X whirling backward), ``numbering`` (bearings numbered from the
 other end), ``one_position`` (a call resting on the static offset between the coupling journals), ``common_mode`` (a
-1X / 2X common to every probe), ``clearance_check`` (a diametral clearance); ``speed_choice`` chooses among the
-speed hypotheses a doubtful estimate allows (its own signature: it picks a reading, it gives no reason).
-``startup`` (a start-up that changed since the asset's baseline start-up) has the same shape — a context in, the
+1X / 2X common to every probe), ``clearance_check`` (a diametral clearance), ``family`` (a machine of a family the
+model was not trained on), ``contradiction`` ("aligned" against its own 2X/1X), ``attitude`` (the journals'
+attitude angles, which need no clearance, outside training when the clearance is not stated); ``speed_choice`` chooses among the
+speed hypotheses a doubtful estimate allows (its own signature: it picks a reading, it gives no reason). ``startup`` (a start-up that changed since the asset's baseline start-up) has the same shape — a context in, the
 reasons out — with a context of its own (``StartupContext``): it reads two stored runs and a verdict's call, not a
 steady recording, and is run beside a verdict (``service.startups``, ``rotordiag report --startup``). The pipeline
 that runs the others in order: ``models.pipeline``; what each was measured to do: docs/checks.md.
@@ -62,6 +63,13 @@ class CheckContext:
     status : str, optional
         The verdict's status before the doubts that read the recording again (``common_mode``,
         ``clearance_check``); None until it is assessed.
+    machine_family : str, optional
+        The machine's declared family (``models.families.machine_family``: the asset's or the request's plant
+        model); None when not declared.
+    model_families : sequence of str
+        The families the active model's card says it was trained on (``models.families.training_families``).
+    envelope_of : callable, optional
+        Rows (n, n_features) to the training envelope's findings per row (``MisalignmentModel.envelope_findings``).
     """
 
     fr: FeatureResult
@@ -78,6 +86,9 @@ class CheckContext:
     plan: Any = None
     recording: Recording | None = None
     status: str | None = None
+    machine_family: str | None = None
+    model_families: Sequence[str] = ()
+    envelope_of: Callable[[np.ndarray], list[list[dict]]] | None = None
 
 
 #: one check: a context in, the reasons it finds out (none: nothing to doubt)

@@ -163,6 +163,18 @@ _ENTRIES = (
              "compare the two start-ups' Bode and centreline plots before accepting the verdict"),
     CodeInfo("clearance_diametral", REASON, _U, "half the stated clearance makes the recording markedly more like the "
              "training machines", "check that clearance_um is the radial clearance (half the diametral one)"),
+    CodeInfo("family_untrained", REASON, _U, "the machine's declared plant model is not a machine family the model "
+             "was trained on (its card's training families): its call is not to be trusted on this design",
+             "retrain for this plant (`rotordiag retrain --shaftline`, POST /models/retrain) or compare with this "
+             "machine's baseline; check the asset's plant model"),
+    CodeInfo("signature_contradicts_call", REASON, _U, "called aligned while the coupling bearings' 2X/1X reads two or "
+             "more bands higher on the rule of thumb: the verdict contradicts its own evidence",
+             "check the alignment or compare with this machine's baseline; a strong 2X has other causes too (two-pole "
+             "rotor, crack, looseness, runout)"),
+    CodeInfo("attitude_outside_training", REASON, _U, "the clearance is not stated, but the direction of a journal's "
+             "DC position in its bearing (its attitude angle, which needs no clearance) lies outside the training "
+             "machines'", "state clearance_um and check that the DC readings are referenced to the bearing centre; "
+             "bearings unlike plain cylindrical ones (tilting pads) read so"),
     CodeInfo("common_mode", REASON, _UI, "without the part of the 1X / 2X common to every probe the class differs "
              "(inconclusive when that part dominates)", "check the probe cabling and grounding before acting"),
 )

@@ -72,9 +72,10 @@ _BINARY_BODY = {
     }
 }
 
-def _diagnose_sync(state, recording, version: str | None) -> dict:
+def _diagnose_sync(state, recording, version: str | None, plant_model: str | None = None,
+                   plant_shaftline: dict | None = None) -> dict:
     try:
-        verdict = state.models.diagnose(recording, version)
+        verdict = state.models.diagnose(recording, version, plant_model, plant_shaftline)
     except ModelUnavailable as exc:
         if version is not None:
             raise InputError(str(exc), "not_found") from None
@@ -117,6 +118,11 @@ async def diagnose(
                                                description="Diagnose with this registered version instead of the "
                                                "active one.")] = None,
     output_units: OutputUnitsQuery = "um",
+    plant_model: Annotated[str | None, Query(min_length=1, max_length=64, description=(
+        "Binary/multipart only: the machine's plant model, `default` (MODEL.md's plant) or a preset (`gen50_2pole`, "
+        "`gen200_2pole`, `gen600_2pole`, `gen600_4pole`; `train:NAME`: its finite-element train); default: the "
+        "asset's plant model. A machine family the model was not trained on is never given a confident verdict "
+        "(`family_untrained`)."))] = None,
     recorded_at: Annotated[dt.datetime | None, Query(description="When the recording was made (ISO 8601; UTC when no "
                                                      "offset): orders the asset's trend, so a backfilled recording "
                                                      "lands in its place (and raises no alarm).")] = None,
@@ -132,6 +138,8 @@ async def diagnose(
         "times, s, comma-separated (or a keyphasor column/channel in that file).")] = None,
 ) -> dict:
     query = dict(asset_id=asset_id, plant=plant, sample_index=sample_index, **reader)
+    if plant_model is not None:                 # else the asset's, when it has one (service.parsing.with_probe_config)
+        query["plant_model"] = plant_model
     query.update(slow_roll_sample_rate_hz=slow_roll_sample_rate_hz, slow_roll_keyphasor_times_s=slow_roll_keyphasor_times_s)
     meta = recording_meta(recorded_at, tags, note)
     verdict, _ = await diagnose_from_request(request, state, query, model_version, slow_roll_allowed=True,
@@ -197,7 +205,8 @@ def recording_meta(recorded_at: dt.datetime | None, tags: str | None, note: str 
 def _parse_and_diagnose(state, kind, body, filename, query, slow_roll,
                         model_version) -> tuple[dict, str | None, str | None]:
     recording, asset_id, plant, notes = parse_request(kind, body, filename, query, slow_roll)
-    return ({**_diagnose_sync(state, recording, model_version), "input_notes": notes,
+    return ({**_diagnose_sync(state, recording, model_version, query.get("plant_model"), query.get("plant_shaftline")),
+             "input_notes": notes,
              "recorded_at_in_file": recording.recorded_at}, asset_id, plant)
 
 

@@ -624,6 +624,7 @@
       const json = JSON.stringify(body);
       const opts = () => ({ method: "POST", headers: { "Content-Type": "application/json", ...keyHeader() }, body: json });
       const dq = new URLSearchParams({ output_units: $("length-units").value });
+      if (formValue("plant-model") !== null) dq.set("plant_model", formValue("plant-model"));
       if (formValue("recorded-at") !== null) dq.set("recorded_at", formValue("recorded-at") + "Z");
       if (formValue("tags") !== null) dq.set("tags", formValue("tags"));
       if (formValue("note") !== null) dq.set("note", formValue("note"));
@@ -654,6 +655,8 @@
     if (formValue("recorded-at") !== null) q.set("recorded_at", formValue("recorded-at") + "Z");
     if (formValue("tags") !== null) q.set("tags", formValue("tags"));
     if (formValue("note") !== null) q.set("note", formValue("note"));
+    // the machine's plant model: the verdict is judged against the model's training families (diagnosis only)
+    if (formValue("plant-model") !== null) q.set("plant_model", formValue("plant-model"));
     q.set("output_units", $("length-units").value);
     const opts = () => { const fd = new FormData(); for (const f of files) fd.append("file", f, f.name); return { method: "POST", body: fd, headers: keyHeader() }; };
     const qt = new URLSearchParams(qp);
