@@ -72,7 +72,7 @@ def simulate_machine(name: str, rated_rpm: float, seed: int) -> dict:
             k += 1
     waves, kps, t0 = [], [], time.perf_counter()
     for s, off, d, _ in cases:
-        rec = train_recording(train, s, offset_um=off, direction_deg=d, snr_db=math.inf)
+        rec = train_recording(train, s, offset_um=off, direction_deg=d, unbalance_kg_m=0.2, snr_db=math.inf)
         waves.append(rec.probes.waveforms_um.astype(np.float64))
         kps.append(rec.probes.keyphasor_times_s)
         probes = rec.probes

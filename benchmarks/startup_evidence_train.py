@@ -44,7 +44,7 @@ def run(offset_um: float, unbalance_kg_m: float, phase_rad: float, seed: int):
     tr = train_from_shaftline(sl.preset("gen200_2pole"))
     if offset_um:
         tr = misaligned(tr, offset_m=offset_um * 1e-6)
-    model = TrainTransientModel(unbalanced(tr, unbalance_kg_m, angle_rad=phase_rad))
+    model = TrainTransientModel(unbalanced(tr, unbalance_kg_m, angle_rad=phase_rad, replace_own=True))
     res = simulate_transient(model, SpeedProfile.linear(300, 1500, 6), sample_rate_hz=FS, settle_revs=20)
     if not res.ok:
         raise RuntimeError(res.message)

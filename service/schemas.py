@@ -1015,8 +1015,10 @@ class TrainSimulateRequest(_Strict):
     angular_mrad: float = Field(0.0, ge=-10.0, le=10.0, allow_inf_nan=False,
                                 description="Angular offset α between the shaft lines, mrad (the exciter's line "
                                 "rising away from the coupling along `offset_angle_deg`).")
-    unbalance_kg_m: float = Field(0.2, ge=0.0, le=10.0, allow_inf_nan=False,
-                                  description="Unbalance at the middle of the generator, kg·m, at the keyphasor mark.")
+    unbalance_kg_m: float | None = Field(None, ge=0.0, le=10.0, allow_inf_nan=False,
+                                         description="Unbalance at the middle of the generator, kg·m, at the "
+                                         "keyphasor mark, in place of the line's own (a preset's: ISO 21940-11 "
+                                         "G2.5); omitted: the line's own.")
     transient_revs: int = Field(200, ge=10, le=320, description="Revolutions simulated and discarded before the "
                                 "record (the transient of the start).")
     record_revs: int = Field(32, ge=1, le=256, description="Revolutions recorded.")

@@ -343,8 +343,9 @@ def register(app: typer.Typer) -> None:
         offset_um: float = typer.Option(0.0, "--offset-um", help="A train's parallel offset at the coupling, µm, "
                                         "along --offset-angle-deg (default -90: the exciter low), set by moving the "
                                         "exciter's bearings."),
-        unbalance_kg_m: float = typer.Option(0.2, "--unbalance-kg-m", help="A train's unbalance at the middle of "
-                                             "the generator, kg·m, at the keyphasor mark."),
+        unbalance_kg_m: Optional[float] = typer.Option(None, "--unbalance-kg-m", help="A train's unbalance at the "
+                                                       "middle of the generator, kg·m, at the keyphasor mark, in "
+                                                       "place of its own (a preset's: ISO 21940-11 G2.5)."),
     ) -> None:
         """Simulate one operating point and summarise the journal vibration: the paper's model, or a shaft
         train (--train / --shaftline: misaligned by --offset-um and --angular-misalignment-mrad)."""
@@ -437,10 +438,10 @@ def register(app: typer.Typer) -> None:
         offset_um: float = typer.Option(0.0, "--offset-um", help="A train's parallel offset at its first coupling, µm, "
                                                                  "along --offset-angle-deg (default -90: downward; "
                                                                  "--misalignment is the paper model's)."),
-        unbalance_kg_m: float = typer.Option(0.2, "--unbalance-kg-m", help="A train's unbalance at the middle of "
-                                                                           "its first rotor, kg·m, along +x at the "
-                                                                           "keyphasor mark (--unbalance is the paper "
-                                                                           "model's)."),
+        unbalance_kg_m: Optional[float] = typer.Option(None, "--unbalance-kg-m", help="A train's unbalance at the "
+                                                       "middle of its first rotor, kg·m, along +x at the keyphasor "
+                                                       "mark, in place of its own (a preset's: ISO 21940-11 G2.5; "
+                                                       "--unbalance is the paper model's)."),
     ) -> None:
         """Simulate a run-up or coast-down of the paper's model (or of a shaft train: --train / --shaftline) and
         write what its probes (x/y at 45° and 135° at every bearing) and a keyphasor record."""
@@ -463,7 +464,8 @@ def register(app: typer.Typer) -> None:
                 if offset_um:
                     tr = train_misaligned(tr, offset_m=offset_um * 1e-6, direction_rad=math.radians(
                         -90.0 if offset_angle_deg is None else offset_angle_deg))
-                model = TrainTransientModel(unbalanced(tr, unbalance_kg_m))
+                model = TrainTransientModel(tr if unbalance_kg_m is None
+                                            else unbalanced(tr, unbalance_kg_m, replace_own=True))
             except (TrainError, ValueError) as exc:
                 raise typer.BadParameter(str(exc), param_hint="--offset-um") from None
             channels = train_channels(model.n_bearings)

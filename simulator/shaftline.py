@@ -185,6 +185,9 @@ class ShaftLine:
     coupling_angular_stiffness_n_m_rad: float = 0.0
     coupling_damping_n_s_m: float = 0.0
     coupling_angular_damping_n_m_s_rad: float = 0.0
+    #: the generator's residual unbalance (kg·m) at the middle of its span, along the keyphasor mark; a preset
+    #: carries its ISO 21940-11 G2.5 value, a file none unless it says (``generator_unbalance_kg_m``)
+    generator_unbalance_kg_m: float = 0.0
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> ShaftLine:
@@ -192,7 +195,7 @@ class ShaftLine:
         if not isinstance(d, dict):
             raise ValueError("a shaft line must be a table")
         known = {"generator", "exciter", "material", "bearings", "oil", "coupling", "generator_asymmetry",
-                 "damping_ratio", "plant"}
+                 "damping_ratio", "plant", "generator_unbalance_kg_m"}
         unknown = set(d) - known
         if unknown:
             raise ValueError(f"unknown shaft-line key(s) {sorted(unknown)}; known: {sorted(known)}")
@@ -235,6 +238,9 @@ class ShaftLine:
         zeta = _number("damping_ratio", d.get("damping_ratio", 0.008))
         if not 0 <= zeta < 1:
             raise ValueError(f"damping_ratio must be in [0, 1), got {zeta!r}")
+        unbalance = _number("generator_unbalance_kg_m", d.get("generator_unbalance_kg_m", 0.0))
+        if not 0 <= unbalance <= 100:
+            raise ValueError(f"generator_unbalance_kg_m must be within 0..100 kg·m, got {unbalance!r}")
         return cls(
             generator=Rotor.from_dict("generator", d["generator"]),
             exciter=Rotor.from_dict("exciter", d["exciter"]),
@@ -254,6 +260,7 @@ class ShaftLine:
             coupling_angular_stiffness_n_m_rad=coupling_extra["angular_stiffness_n_m_rad"],
             coupling_damping_n_s_m=coupling_extra["damping_n_s_m"],
             coupling_angular_damping_n_m_s_rad=coupling_extra["angular_damping_n_m_s_rad"],
+            generator_unbalance_kg_m=unbalance,
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -276,7 +283,7 @@ class ShaftLine:
                          "damping_n_s_m": self.coupling_damping_n_s_m,
                          "angular_damping_n_m_s_rad": self.coupling_angular_damping_n_m_s_rad},
             "generator_asymmetry": self.generator_asymmetry, "damping_ratio": self.damping_ratio,
-            "plant": dict(self.extra),
+            "generator_unbalance_kg_m": self.generator_unbalance_kg_m, "plant": dict(self.extra),
         }
 
     @classmethod
@@ -474,8 +481,14 @@ def lumped_critical_speeds(plant: Plant, bearing_stiffness_n_m: float, n: int = 
 
 
 # ----------------------------------------------------------------------------- presets
+#: residual asymmetry of a cross-slotted two-pole body (ΔEI/EĪ = 2 %) and of a four-pole body (0.4 %)
+TWO_POLE_ASYMMETRY = 0.01
+FOUR_POLE_ASYMMETRY = 0.002
+#: ISO 21940-11 balance grade of a preset generator (G2.5: turbo-generator rotors), mm/s
+PRESET_BALANCE_GRADE_MM_S = 2.5
+
 def _preset(body, windings, shaft, journal, exc, bearings_d, bearings_l, clearance, rated, *, types, options,
-            overhang=(0.5, 0.3), asymmetry=0.0549):
+            overhang=(0.5, 0.3), asymmetry=TWO_POLE_ASYMMETRY):
     """Two-bearing generator (journal, shaft, body, shaft, journal) and exciter (journal, shaft, journal),
     with overhangs from the coupling-end bearings to the flange (generator, exciter lengths in m, the
     journal diameter) and the bearing types of ``simulator.bearings``."""
@@ -503,10 +516,16 @@ _LEMON = {"preload": 0.5}
 #: (body ≤ ≈ 1.2 m at 3000/3600 r/min) and four-pole (larger body, 1500/1800 r/min) generators — not a
 #: vendor's drawings. Bearings as such machines have: four-pad tilting-pad journals on the large two-pole
 #: generators, two-lobe (elliptical, preload 0.5) on the small generator, the four-pole generator and the
-#: exciters; a four-pole rotor nearly symmetric (ρ = 0.005; two-pole ρ = 0.0549, the paper's). Each has
-#: ``rated_speed_rpm`` (not a plant parameter) for the user's operating points; its stability margin at
-#: rated speed is in docs/train-misalignment.md and tests/test_train_shaftline.py. The lumped plant
-#: (:func:`to_plant`) reads only the span, masses, bearing sizes, clearance and ρ.
+#: exciters. Rotor asymmetry ρ (stiffnesses K̄(1 ± ρ), so ΔEI/EĪ = 2ρ): a two-pole body with the transverse
+#: slots that equalise its bending stiffnesses keeps a residual ρ = ``TWO_POLE_ASYMMETRY``; a four-pole
+#: section has four-fold symmetry, so its second moments are equal and ρ = ``FOUR_POLE_ASYMMETRY`` is a
+#: manufacturing tolerance (docs/train-misalignment.md, "The presets' asymmetry and unbalance"; the paper's
+#: ρ = 0.0549 is an uncompensated rotor's and stays the default of a shaft-line file). Each preset carries
+#: the residual unbalance of ISO 21940-11 grade ``PRESET_BALANCE_GRADE_MM_S`` at its first rated speed
+#: (``generator_unbalance_kg_m``) and ``rated_speed_rpm`` (not a plant parameter) for the user's operating
+#: points; its stability margin at rated speed is in docs/train-misalignment.md and
+#: tests/test_train_shaftline.py. The lumped plant (:func:`to_plant`) reads only the span, masses, bearing
+#: sizes, clearance and ρ.
 PRESETS: dict[str, dict[str, Any]] = {
     "gen50_2pole": _preset((0.75, 3.2), [1200.0] * 4, (0.42, 0.6), (0.30, 0.4), (0.18, 0.3, 0.26, 1.8, 600.0),
                            (0.30, 0.30, 0.18, 0.18), (0.24, 0.24, 0.11, 0.11), 0.25e-3, (3000, 3600),
@@ -522,8 +541,27 @@ PRESETS: dict[str, dict[str, Any]] = {
     "gen600_4pole": _preset((1.6, 5.5), [7000.0] * 4, (0.85, 1.2), (0.60, 0.8), (0.30, 0.5, 0.45, 3.2, 3000.0),
                             (0.60, 0.60, 0.30, 0.30), (0.50, 0.50, 0.20, 0.20), 0.50e-3, (1500, 1800),
                             types=("elliptical",) * 4, options=(_LEMON,) * 4, overhang=(0.6, 0.35),
-                            asymmetry=0.005),
+                            asymmetry=FOUR_POLE_ASYMMETRY),
 }
+
+
+def rotor_mass_kg(rotor: Rotor, material: str = "steel") -> float:
+    """Mass of a shaft-line rotor: its segments and overhang as solid cylinders, its body masses and disks."""
+    rho = MATERIALS[material][1]
+    steel = sum(math.pi * d * d / 4.0 * length * rho for length, d in (*rotor.segments, *rotor.overhang))
+    return steel + sum(m for _, m in rotor.body_masses) + sum(d[1] for d in rotor.disks)
+
+
+def balance_grade_unbalance_kg_m(rotor: Rotor, grade_mm_s: float, speed_rpm: float, material: str = "steel") -> float:
+    """The permissible residual unbalance U = G·M/Ω of ISO 21940-11 for grade G (mm/s) at ``speed_rpm`` (kg·m)."""
+    return grade_mm_s * 1e-3 * rotor_mass_kg(rotor, material) / (speed_rpm * math.pi / 30.0)
+
+
+for _d in PRESETS.values():  # the residual unbalance of grade G2.5 at the preset's first rated speed
+    _line = ShaftLine.from_dict({k: v for k, v in _d.items() if k != "rated_speed_rpm"})
+    _d["generator_unbalance_kg_m"] = balance_grade_unbalance_kg_m(
+        _line.generator, PRESET_BALANCE_GRADE_MM_S, _d["rated_speed_rpm"][0], _line.material)
+del _d, _line
 
 
 def preset(name: str) -> ShaftLine:

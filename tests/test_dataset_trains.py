@@ -123,7 +123,7 @@ def _direct_probe_um(tp: TrainPlant, spec_text: str, index: int, path) -> tuple[
     train = train_from_shaftline(tp.line(coupling="rigid"))
     if delta:
         train = misaligned(train, offset_m=delta * tp.clearance_m, direction_rad=-math.pi / 2)
-    train = unbalanced(train, tp.unbalance_kg_m(3000.0), angle_rad=phase)
+    train = unbalanced(train, tp.unbalance_kg_m(3000.0), angle_rad=phase, replace_own=True)  # not added to the preset's
     run = simulate_train(train, 3000.0, transient_revs=60, record_revs=revs, samples_per_rev=64)
     t = np.arange(stored.shape[1]) / fs
     theta = theta0 + 100 * math.pi * t                # shaft angle from the record's start (module measurement)

@@ -17,7 +17,7 @@ def gen200():
     from rotordiag.simulator.train.shaftline import train_from_shaftline
     from rotordiag.simulator.train.transient import unbalanced
 
-    return unbalanced(train_from_shaftline(sl.preset("gen200_2pole")), 0.2)
+    return unbalanced(train_from_shaftline(sl.preset("gen200_2pole")), 0.2, replace_own=True)
 
 
 def _lightly_damped_crossings(train, grid_rpm: np.ndarray, max_zeta: float = 0.15) -> list[tuple[float, float]]:

@@ -11,6 +11,8 @@ MECHANISM_HELP = ("Coupling model: pin (the paper's holonomic constraint), rigid
                   "offset (stationary shaft-line offset), flexible (offset across a flexible coupling, 2X reaction).")
 TRAIN_HELP = "A preset shaft train: gen50_2pole, gen200_2pole, gen600_2pole, gen600_4pole (the finite-element train)."
 SHAFTLINE_HELP = "A shaft-line TOML file (examples/shaftline_200mw.toml) built as a finite-element train."
+UNBALANCE_HELP = ("Train: generator unbalance, kg·m, at its heaviest body mass, in place of the train's own (a preset's: "
+                  "ISO 21940-11 G2.5 at its middle); default: its own.")
 WORKERS_HELP = "Local Dask worker processes (default: all usable CPUs; 0 = run in this process, no Dask)."
 SCHEDULER_HELP = "Address of an existing Dask scheduler, e.g. tcp://host:8786 (instead of a local cluster)."
 
@@ -77,7 +79,7 @@ def register(app: typer.Typer) -> None:
         progress: bool = typer.Option(True, help="Show a progress bar."),
         train: Optional[str] = typer.Option(None, help=TRAIN_HELP + " --over speed; --out a JSON file."),
         shaftline: Optional[Path] = typer.Option(None, help=SHAFTLINE_HELP),
-        unbalance_kg_m: float = typer.Option(0.0, help="Train: generator unbalance, kg·m, at its heaviest body mass."),
+        unbalance_kg_m: Optional[float] = typer.Option(None, help=UNBALANCE_HELP),
     ) -> None:
         """Bifurcation diagram: Poincaré points of X = x/c against speed or misalignment; for a shaft train
         (--train/--shaftline) the amplitude–speed curves (1X, 2X at each bearing) and Poincaré points."""
@@ -259,7 +261,7 @@ def register(app: typer.Typer) -> None:
         as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
         train: Optional[str] = typer.Option(None, help=TRAIN_HELP),
         shaftline: Optional[Path] = typer.Option(None, help=SHAFTLINE_HELP),
-        unbalance_kg_m: float = typer.Option(0.0, help="Train: generator unbalance, kg·m, at its heaviest body mass."),
+        unbalance_kg_m: Optional[float] = typer.Option(None, help=UNBALANCE_HELP),
     ) -> None:
         """Largest Lyapunov exponent and motion type at one operating point (the paper model, or a shaft
         train with --train/--shaftline)."""
@@ -377,7 +379,7 @@ def register(app: typer.Typer) -> None:
         scheduler: Optional[str] = typer.Option(None, help=SCHEDULER_HELP),
         train: Optional[str] = typer.Option(None, help=TRAIN_HELP + " Its figure set instead of the paper's."),
         shaftline: Optional[Path] = typer.Option(None, help=SHAFTLINE_HELP),
-        unbalance_kg_m: float = typer.Option(0.5, help="Train: generator unbalance, kg·m, at its heaviest body mass."),
+        unbalance_kg_m: Optional[float] = typer.Option(None, help=UNBALANCE_HELP),
         speed_rpm: Optional[float] = typer.Option(None, help="Train: speed of the orbits and spectra (default: the "
                                                              "preset's rated speed; required for a file)."),
     ) -> None:
@@ -431,20 +433,28 @@ def register(app: typer.Typer) -> None:
         typer.echo(f"wrote {len(summary['files'])} figures to {out} in {summary['wall_time_s']:.0f} s")
 
 
-def _train_of(preset: Optional[str], shaftline: Optional[Path], unbalance_kg_m: float):
-    """The finite-element train of a preset or a shaft-line file, with the generator unbalance added."""
+def _train_of(preset: Optional[str], shaftline: Optional[Path], unbalance_kg_m: Optional[float]):
+    """The finite-element train of a preset or a shaft-line file, with its own generator unbalance or, given one,
+    ``unbalance_kg_m`` in its place."""
     from rotordiag.simulator.analysis.train import with_unbalance
     from rotordiag.simulator.train.shaftline import shaftline_of, train_from_shaftline
 
     try:
         line, rated = shaftline_of(preset, shaftline)
-        return with_unbalance(train_from_shaftline(line), unbalance_kg_m), rated
+        tr = train_from_shaftline(line)
+        return (tr if unbalance_kg_m is None else with_unbalance(tr, unbalance_kg_m, replace_own=True)), rated
     except ValueError as exc:
         _fail(str(exc))
         raise  # unreachable: _fail exits
 
 
-def _train_lyapunov(preset, shaftline, speed_rpm: float, unbalance_kg_m: float, revs: int, transient_revs: int,
+def _unbalance_of(train: Any) -> float:
+    """The train's unbalance in all (kg·m): what its 1X answers to."""
+    return float(sum(u.amount_kg_m for r in train.rotors for u in r.unbalances))
+
+
+def _train_lyapunov(preset, shaftline, speed_rpm: float, unbalance_kg_m: Optional[float], revs: int,
+                    transient_revs: int,
                     seed: int, plot: Optional[Path], as_json: bool) -> None:
     from rotordiag.simulator.analysis.train import train_lyapunov
 
@@ -453,6 +463,7 @@ def _train_lyapunov(preset, shaftline, speed_rpm: float, unbalance_kg_m: float, 
     if plot is not None and not plot.parent.exists():
         raise typer.BadParameter(f"directory {plot.parent} does not exist", param_hint="--plot")
     tr, _ = _train_of(preset, shaftline, unbalance_kg_m)
+    unbalance_kg_m = _unbalance_of(tr)
     try:
         lle, _ = train_lyapunov(tr, speed_rpm, n_revs=revs, transient_revs=transient_revs, seed=seed)
     except ValueError as exc:
@@ -492,7 +503,8 @@ def _report_lle(lle: Any, summary: dict, motion: str, as_json: bool, plot: Optio
         _write_png(fig, plot)
 
 
-def _train_bifurcate(preset, shaftline, over: str, from_: float, to: float, points: int, unbalance_kg_m: float,
+def _train_bifurcate(preset, shaftline, over: str, from_: float, to: float, points: int,
+                     unbalance_kg_m: Optional[float],
                      transient_revs: int, record_revs: int, out: Optional[Path], plot: Optional[Path]) -> None:
     import numpy as np
 
@@ -511,6 +523,7 @@ def _train_bifurcate(preset, shaftline, over: str, from_: float, to: float, poin
         if path is not None and not path.parent.exists():
             raise typer.BadParameter(f"directory {path.parent} does not exist", param_hint=hint)
     tr, _ = _train_of(preset, shaftline, unbalance_kg_m)
+    unbalance_kg_m = _unbalance_of(tr)
     try:
         sw = train_speed_sweep(tr, np.linspace(from_, to, points), transient_revs=transient_revs,
                                record_revs=max(record_revs, 2))

@@ -31,15 +31,17 @@ __all__ = ["with_unbalance", "train_lyapunov", "TrainSweep", "train_speed_sweep"
 MAX_SWEEP_POINTS = 200
 
 
-def with_unbalance(train: Train, amount_kg_m: float, angle_deg: float = 0.0, rotor: int = 0) -> Train:
+def with_unbalance(train: Train, amount_kg_m: float, angle_deg: float = 0.0, rotor: int = 0, *,
+                   replace_own: bool = False) -> Train:
     """``train`` with an unbalance ``amount_kg_m`` (kg·m) at ``angle_deg`` added to rotor ``rotor``, at the
-    station of its heaviest disk or body mass (its mid station when it has none): what a shaft-line preset,
-    which carries no unbalance, needs for a 1X response (``simulator.train.transient.unbalanced``)."""
-    if amount_kg_m == 0 and 0 <= rotor < len(train.rotors):
+    station of its heaviest disk or body mass (its mid station when it has none); ``replace_own``: in place of
+    the train's own (a preset's residual unbalance; ``simulator.train.transient.unbalanced``)."""
+    if amount_kg_m == 0 and not replace_own and 0 <= rotor < len(train.rotors):
         return train
     r = train.rotors[rotor] if 0 <= rotor < len(train.rotors) else None
     station = max(r.disks, key=lambda d: d.mass_kg).station if r is not None and r.disks else None
-    return unbalanced(train, amount_kg_m, rotor=rotor, station=station, angle_rad=math.radians(angle_deg))
+    return unbalanced(train, amount_kg_m, rotor=rotor, station=station, angle_rad=math.radians(angle_deg),
+                      replace_own=replace_own)
 
 
 def train_lyapunov(train: Train | Assembly, speed_rpm: float, *, n_revs: int = 150, transient_revs: int = 300,

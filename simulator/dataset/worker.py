@@ -155,7 +155,7 @@ def sample_train(plant: TrainPlant, p: SampleParams) -> Train:
         train = misaligned(train, offset_m=offset_um * 1e-6, angle_rad=p.angular_misalignment_mrad * 1e-3,
                            direction_rad=p.offset_angle_rad)
         train = with_kinematic_offset(train, offset_um, math.degrees(p.offset_angle_rad))
-    return unbalanced(train, plant.unbalance_kg_m(p.speed_rpm), angle_rad=p.unbalance_phase_rad)
+    return unbalanced(train, plant.unbalance_kg_m(p.speed_rpm), angle_rad=p.unbalance_phase_rad, replace_own=True)
 
 
 def _run_train_sample(task: SampleTask, draws: MeasurementDraws, revs: int,

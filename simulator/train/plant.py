@@ -17,8 +17,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from ..shaftline import MATERIALS, ShaftLine
 from ..shaftline import Rotor as LineRotor
+from ..shaftline import ShaftLine, balance_grade_unbalance_kg_m, rotor_mass_kg
 
 __all__ = ["TRAIN_PERTURBABLE", "TrainPlant", "rotor_mass_kg", "is_train_plant"]
 
@@ -32,13 +32,6 @@ TRAIN_PERTURBABLE: tuple[str, ...] = (
 
 #: ISO 21940-11 balance grade of a sample's generator unbalance unless the spec sets one (G2.5: turbo-generators)
 DEFAULT_BALANCE_GRADE_MM_S = 2.5
-
-
-def rotor_mass_kg(rotor: LineRotor, material: str = "steel") -> float:
-    """Mass of a shaft-line rotor: its segments and overhang as solid steel cylinders, its body masses and disks."""
-    rho = MATERIALS[material][1]
-    steel = sum(math.pi * d * d / 4.0 * length * rho for length, d in (*rotor.segments, *rotor.overhang))
-    return steel + sum(m for _, m in rotor.body_masses) + sum(d[1] for d in rotor.disks)
 
 
 def is_train_plant(plant_dict: dict[str, Any]) -> bool:
@@ -181,5 +174,5 @@ class TrainPlant:
 
     def unbalance_kg_m(self, speed_rpm: float) -> float:
         """The generator's unbalance U = G·M/Ω for the balance grade G at ``speed_rpm`` (kg·m)."""
-        omega = speed_rpm * math.pi / 30.0
-        return self.balance_grade_mm_s * 1e-3 * rotor_mass_kg(self.line().generator, self.base.material) / omega
+        return balance_grade_unbalance_kg_m(self.line().generator, self.balance_grade_mm_s, speed_rpm,
+                                            self.base.material)

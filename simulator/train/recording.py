@@ -38,7 +38,7 @@ class TrainRecording:
 
 
 def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, angular_mrad: float = 0.0,
-                    direction_deg: float = -90.0, unbalance_kg_m: float = 0.2, transient_revs: int = 320,
+                    direction_deg: float = -90.0, unbalance_kg_m: float | None = None, transient_revs: int = 320,
                     record_revs: int = 48, samples_per_rev: int = 128, snr_db: float = 40.0,
                     seed: int = 0, probes: Sequence[tuple[int, float]] | None = None) -> TrainRecording:
     """The steady recording of ``train`` at ``speed_rpm``.
@@ -51,7 +51,8 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
         (:func:`~rotordiag.simulator.train.model.misaligned`); a flexible first coupling also gets the parallel
         offset's kinematic 2X forcing (:func:`with_kinematic_offset`).
     unbalance_kg_m
-        Unbalance at the middle of the generator, along the keyphasor mark (a shaft line carries none of its own).
+        Unbalance at the middle of the generator, along the keyphasor mark, in place of the train's own (a preset's
+        ISO 21940-11 G2.5 residual unbalance); None keeps the train's own.
     probes
         (bearing number, angle_deg) of every probe, bearings numbered 1… along the train; default a 45°/135° pair at
         every bearing. Checked before anything is simulated.
@@ -84,7 +85,9 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
         return misaligned(train, offset_m=scale * offset_um * 1e-6, angle_rad=scale * angular_mrad * 1e-3,
                           direction_rad=math.radians(direction_deg)) if (offset_um or angular_mrad) else train
 
-    tr = unbalanced(with_kinematic_offset(moved(1.0), offset_um, direction_deg), unbalance_kg_m)
+    tr = with_kinematic_offset(moved(1.0), offset_um, direction_deg)
+    if unbalance_kg_m is not None:
+        tr = unbalanced(tr, unbalance_kg_m, replace_own=True)
     warnings = []
     try:
         log_dec = stability(tr, speed_rpm).log_decrement   # its static state refuses a journal pressed on its metal
@@ -111,7 +114,7 @@ def train_recording(train: Train, speed_rpm: float, *, offset_um: float = 0.0, a
         ac_rms = np.sqrt(np.mean((wave - wave.mean(axis=1, keepdims=True)) ** 2, axis=1, keepdims=True))
         wave = wave + rng.standard_normal(wave.shape) * ac_rms / 10 ** (snr_db / 20)
     inputs = {"speed_rpm": float(speed_rpm), "offset_um": float(offset_um), "angular_mrad": float(angular_mrad),
-              "direction_deg": float(direction_deg), "unbalance_kg_m": float(unbalance_kg_m),
+              "direction_deg": float(direction_deg), "unbalance_kg_m": float(sum(u.amount_kg_m for r in tr.rotors for u in r.unbalances)),
               "transient_revs": int(transient_revs), "record_revs": int(record_revs),
               "samples_per_rev": int(samples_per_rev), "snr_db": float(snr_db), "seed": int(seed),
               "log_decrement": log_dec, "probes": [[int(b), float(a)] for b, a in read.channels]}

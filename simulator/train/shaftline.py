@@ -13,6 +13,8 @@ directly, with no lumped reduction:
 - the generator's two-pole asymmetry ρ (``generator_asymmetry``) on its body: the segments of its
   largest diameter;
 - body masses as point masses (no inertia: the old tables give none), disks with their inertias;
+- the generator's residual unbalance (``generator_unbalance_kg_m``; a preset's ISO 21940-11 G2.5) at the
+  middle of its span, along the keyphasor mark;
 - stationary stiffness-proportional damping β = 2ζ/ω₁ with ω₁ the generator's first pinned bending
   frequency, so that mode has the description's ``damping_ratio`` (the lumped model's rotor damping).
 """
@@ -27,7 +29,7 @@ import numpy as np
 from ..bearings import bearing_from_dict
 from ..shaftline import MATERIALS, ShaftLine, reduce_rotor
 from ..shaftline import Rotor as LineRotor
-from .model import Coupling, Disk, Material, Rotor, ShaftElement, Support, Train, TrainError
+from .model import Coupling, Disk, Material, Rotor, ShaftElement, Support, Train, TrainError, Unbalance
 
 #: a shaft-line train has at most this many stations (the static solution and modes stay seconds)
 MAX_STATIONS = 160
@@ -74,8 +76,9 @@ def _bearing(line: ShaftLine, k: int):
 
 
 def _rotor(name: str, lr: LineRotor, rho: float, material: Material, max_element_m: float, *, first: bool,
-           bearings: list[tuple[int, Any, tuple[float, float]]]) -> tuple[Rotor, float]:
-    """One train rotor; ``bearings`` = (slot, bearing, centre) at the two ends of the segments (slot −1: none)."""
+           bearings: list[tuple[int, Any, tuple[float, float]]], unbalance_kg_m: float = 0.0) -> tuple[Rotor, float]:
+    """One train rotor; ``bearings`` = (slot, bearing, centre) at the two ends of the segments (slot −1: none);
+    ``unbalance_kg_m`` at the middle of its span, along the keyphasor mark."""
     body_d = max(d for _, d in lr.segments)
     seg = [(length, d, rho if (rho and d == body_d) else 0.0) for length, d in lr.segments]
     over = [(length, d, 0.0) for length, d in lr.overhang]
@@ -86,6 +89,8 @@ def _rotor(name: str, lr: LineRotor, rho: float, material: Material, max_element
     else:  # flange, overhang (reversed: given from the flange), bearing a, segments, bearing b
         pieces, shift = over + seg, over_l
     points = [shift + x for x, _ in lr.body_masses] + [shift + d[0] for d in lr.disks] + [shift, shift + span]
+    if unbalance_kg_m > 0:
+        points.append(shift + span / 2)
     elems, xs = _stations(pieces, points, max_element_m)
     disks = [Disk(_at(xs, shift + x), m) for x, m in lr.body_masses]
     disks += [Disk(_at(xs, shift + x), m, jp, jt) for x, m, jp, jt in lr.disks]
@@ -93,7 +98,9 @@ def _rotor(name: str, lr: LineRotor, rho: float, material: Material, max_element
     for (slot, brg, (cx, cy)), z in zip(bearings, (shift, shift + span), strict=True):
         if brg is not None:
             sup.append(Support(_at(xs, z), brg, cx, cy, name=f"B{slot + 1}"))
-    return Rotor(name, tuple(elems), disks=tuple(disks), supports=tuple(sup), material=material), span
+    unb = (Unbalance(_at(xs, shift + span / 2), unbalance_kg_m, 0.0),) if unbalance_kg_m > 0 else ()
+    return Rotor(name, tuple(elems), disks=tuple(disks), supports=tuple(sup), unbalances=unb,
+                 material=material), span
 
 
 def train_from_shaftline(line: ShaftLine, *, max_element_m: float = 0.3) -> Train:
@@ -105,7 +112,7 @@ def train_from_shaftline(line: ShaftLine, *, max_element_m: float = 0.3) -> Trai
     brg = [None if t == "none" else _bearing(line, k) for k, t in enumerate(line.bearing_types)]
     c = line.bearing_centres_m
     gen, _ = _rotor("generator", line.generator, line.generator_asymmetry, material, max_element_m, first=True,
-                    bearings=[(0, brg[0], c[0]), (1, brg[1], c[1])])
+                    bearings=[(0, brg[0], c[0]), (1, brg[1], c[1])], unbalance_kg_m=line.generator_unbalance_kg_m)
     exc, _ = _rotor("exciter", line.exciter, 0.0, material, max_element_m, first=False,
                     bearings=[(2, brg[2], c[2]), (3, brg[3], c[3])])
     n = gen.n_stations + exc.n_stations

@@ -124,10 +124,11 @@ def train_channels(n_bearings: int) -> tuple[tuple[int, float], ...]:
 
 
 def unbalanced(train: Train, amount_kg_m: float, *, rotor: int = 0, station: int | None = None,
-               angle_rad: float = 0.0) -> Train:
+               angle_rad: float = 0.0, replace_own: bool = False) -> Train:
     """The train with an unbalance ``amount_kg_m`` added at ``station`` of ``rotor`` (default: its middle
-    station), along +x at t = 0 (the keyphasor mark) turned by ``angle_rad``. A shaft line's train carries no
-    unbalance of its own, and without one a run-up has no 1X to show."""
+    station), along +x at t = 0 (the keyphasor mark) turned by ``angle_rad``. ``replace_own``: drop the train's
+    own unbalances first (a shaft line's residual one, ``ShaftLine.generator_unbalance_kg_m``), so that the
+    given amount is the only one and is not added to it."""
     if not (math.isfinite(amount_kg_m) and 0.0 <= amount_kg_m <= 100.0):
         raise TrainError(f"unbalance amount_kg_m must be within 0..100 kg·m, got {amount_kg_m!r}")
     if not 0 <= rotor < len(train.rotors):
@@ -136,6 +137,9 @@ def unbalanced(train: Train, amount_kg_m: float, *, rotor: int = 0, station: int
     k = r.n_stations // 2 if station is None else int(station)
     if not 0 <= k < r.n_stations:
         raise TrainError(f"station must be 0..{r.n_stations - 1} on rotor {r.name!r}, got {station!r}")
-    rotors = list(train.rotors)
-    rotors[rotor] = replace(r, unbalances=r.unbalances + (Unbalance(k, float(amount_kg_m), float(angle_rad)),))
+    rotors = [replace(x, unbalances=()) for x in train.rotors] if replace_own else list(train.rotors)
+    own = rotors[rotor].unbalances
+    if amount_kg_m > 0 or not replace_own:
+        own = own + (Unbalance(k, float(amount_kg_m), float(angle_rad)),)
+    rotors[rotor] = replace(rotors[rotor], unbalances=own)
     return replace(train, rotors=tuple(rotors))
