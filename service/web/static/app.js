@@ -632,7 +632,8 @@
       if (formValue("recorded-at") !== null) sq.set("recorded_at", formValue("recorded-at") + "Z");
       if (formValue("note") !== null) sq.set("note", formValue("note"));
       return { diagnose: [`/diagnose?${dq}`, opts()], plot: ["/ui/plot-data", opts()],
-        transient: [`/ui/transient-plots?output_units=${$("length-units").value}`, opts()], asset: body.asset_id || null,
+        transient: [`/ui/transient-plots?output_units=${$("length-units").value}&centreline_reference=${$("centreline-ref").value}`, opts()],
+        asset: body.asset_id || null,
         startup: (a) => [`/assets/${encodeURIComponent(a)}/startup?${sq}`, opts()] };
     }
     let files = Array.from($("file").files);
@@ -663,9 +664,10 @@
     const opts = () => { const fd = new FormData(); for (const f of files) fd.append("file", f, f.name); return { method: "POST", body: fd, headers: keyHeader() }; };
     const qt = new URLSearchParams(qp);
     qt.set("output_units", $("length-units").value);
+    qt.set("centreline_reference", $("centreline-ref").value);
     // storing a start-up on the asset: the reader's query, its time and note, baseline or not
     const sq = new URLSearchParams(qt);
-    sq.delete("asset_id");
+    sq.delete("asset_id"); sq.delete("centreline_reference");
     if ($("transient-baseline").checked) sq.set("baseline", "true");
     if (formValue("recorded-at") !== null) sq.set("recorded_at", formValue("recorded-at") + "Z");
     if (formValue("note") !== null) sq.set("note", formValue("note"));
