@@ -218,13 +218,19 @@ def plot_data(recording: Recording, feature_result: Any = None) -> dict[str, Any
 TRANSIENT_PNG_DPI = 80
 
 
+#: the page's names of the centreline references (``features.transient.centreline``'s ``reference``)
+CENTRELINE_REFERENCES = {"recorded": "as recorded", "slow_roll": "slow roll at the bottom"}
+
+
 def transient_plots(recording: Recording, units: str = "um", cascade_scale: str = "db",
-                    plant: Any = None) -> dict[str, Any]:
+                    plant: Any = None, centreline_reference: str = "recorded") -> dict[str, Any]:
     """A start-up or coast-down recording's plots as the page shows them: ``features.transient.track_orders``
     and ``features.plots.transient_figures`` (Bode, polar, cascade and full spectrum per bearing, centreline,
     orbits) rendered to PNG (base64), with the run's summary (``models.report.transient_summary``: kind, speed
     range and source, 1X/2X peaks, conventions, notes). ``units``: ``"um"`` or ``"mil"``; ``cascade_scale``: the
-    cascades' trace height (``features.plots.CASCADE_SCALES``). Raises ValueError
+    cascades' trace height (``features.plots.CASCADE_SCALES``); ``centreline_reference``: ``"recorded"`` (the
+    probes' own zero, or the gap voltage stated with a voltage record) or ``"slow_roll"`` (the slowest step's
+    position put at the bottom of the clearance; needs the clearance). Raises ValueError
     (the features package's message) for a recording that cannot be tracked."""
     import base64
     import io
@@ -236,7 +242,11 @@ def transient_plots(recording: Recording, units: str = "um", cascade_scale: str 
     from rotordiag.models.report import transient_summary
 
     track = track_orders(recording)
+    if centreline_reference not in CENTRELINE_REFERENCES:
+        raise ValueError(f"centreline_reference must be one of {sorted(CENTRELINE_REFERENCES)}, got "
+                         f"{centreline_reference!r}")
     figs = transient_figures(recording, track, units=units, cascade_scale=cascade_scale,
+                             centreline_reference=CENTRELINE_REFERENCES[centreline_reference],
                              plant=plant)                       # with a plant model: its Campbell too
     try:
         figures = []
@@ -248,4 +258,5 @@ def transient_plots(recording: Recording, units: str = "um", cascade_scale: str 
     finally:
         for fig in figs.values():
             plt.close(fig)
-    return {**transient_summary(track), "units": units, "cascade_scale": cascade_scale, "figures": figures}
+    return {**transient_summary(track), "units": units, "cascade_scale": cascade_scale,
+            "centreline_reference": centreline_reference, "figures": figures}

@@ -264,7 +264,7 @@ class PlotBody(WorkerCall):
 
 
 def _transient(kind: str, body: Body, filename: str, query: dict[str, Any], units: str,
-               cascade_scale: str = "db") -> tuple:
+               cascade_scale: str = "db", centreline_reference: str = "recorded") -> tuple:
     """Parse a start-up / coast-down recording and render its plots (:func:`service.plotdata.transient_plots`):
     ``("ok", data)`` or an error tuple."""
     from .parsing import parse_body, plant_of_model
@@ -273,7 +273,8 @@ def _transient(kind: str, body: Body, filename: str, query: dict[str, Any], unit
     def run() -> tuple:
         plant = (plant_of_model(query.get("plant_model"), query.get("plant_shaftline"))
                  if query.get("plant_model") or query.get("plant_shaftline") else None)
-        return ("ok", transient_plots(parse_body(kind, body, filename, query)[0], units, cascade_scale, plant=plant))
+        return ("ok", transient_plots(parse_body(kind, body, filename, query)[0], units, cascade_scale, plant=plant,
+                                      centreline_reference=centreline_reference))
 
     return _tagged(run)
 
@@ -288,9 +289,11 @@ class TransientPlots(WorkerCall):
     query: dict[str, Any]
     units: str
     cascade_scale: str = "db"
+    centreline_reference: str = "recorded"
 
     def run(self) -> tuple:
-        return _transient(self.kind, self.body, self.filename, self.query, self.units, self.cascade_scale)
+        return _transient(self.kind, self.body, self.filename, self.query, self.units, self.cascade_scale,
+                          self.centreline_reference)
 
 
 @dataclass(frozen=True)

@@ -218,6 +218,29 @@ def test_transient_plots_take_the_cascade_scale_and_say_it(clients, runup_csv):
     assert r.status_code == 422, r.text
 
 
+def test_transient_plots_take_the_centreline_reference_and_need_the_clearance_for_a_slow_roll(clients, runup_csv):
+    """``centreline_reference=slow_roll`` (the slowest step at the bottom of the clearance) needs the clearance —
+    the run-up's CSV carries none: refused with what to give —, draws another centreline than the probes' own zero,
+    and an unknown reference is a 422."""
+    _, plain, _ = clients
+    body = {"file": ("runup.csv", runup_csv.read_bytes())}
+    r = plain.post("/ui/transient-plots", params={"centreline_reference": "slow_roll"}, files=body)
+    assert r.status_code == 422 and "clearance_um" in r.text, r.text
+    recorded = plain.post("/ui/transient-plots", params={"clearance_um": 350}, files=body).json()
+    r = plain.post("/ui/transient-plots", params={"centreline_reference": "slow_roll", "clearance_um": 350},
+                   files=body)
+    assert r.status_code == 200, r.text
+    slow = r.json()
+    assert recorded["centreline_reference"] == "recorded" and slow["centreline_reference"] == "slow_roll"
+
+    def centreline_png(t: dict) -> str:
+        return next(f["png_base64"] for f in t["figures"] if f["name"] == "centreline")
+
+    assert centreline_png(slow) != centreline_png(recorded)
+    r = plain.post("/ui/transient-plots", params={"centreline_reference": "bottom"}, files=body)
+    assert r.status_code == 422, r.text
+
+
 def test_transient_plots_refuse_a_1e8_sample_file_with_a_4xx_saying_why(clients, tmp_path):
     """A 10⁸-sample NPY (its header says 8 × 10⁸ float32, 3.2 GB; the file is 200 bytes): refused before it is
     read, with the size, through both service paths."""

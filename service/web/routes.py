@@ -127,13 +127,14 @@ async def _reader_query(request: Request, state: Any, reader: dict[str, Any], sa
 
 
 def _transient_sync(recording: Any, units: str, cascade_scale: str = "db", plant_model: str | None = None,
-                    plant_shaftline: dict | None = None) -> dict[str, Any]:
+                    plant_shaftline: dict | None = None, centreline_reference: str = "recorded") -> dict[str, Any]:
     from ..parsing import plant_of_model
 
     try:
         return transient_plots(recording, units, cascade_scale,
                                plant=plant_of_model(plant_model, plant_shaftline)
-                               if plant_model or plant_shaftline else None)
+                               if plant_model or plant_shaftline else None,
+                               centreline_reference=centreline_reference)
     except ValueError as exc:  # the features package's messages (speed reverses, keyphasor drops out, ...)
         raise InputError(str(exc)) from None
 
@@ -149,15 +150,20 @@ async def transient(
     cascade_scale: Annotated[Literal["db", "row", "linear"], Query(
         description="Trace height of the cascades: dB below the largest line (60 dB shown), each trace to its own "
                     "largest line, or one linear scale (a whip line dwarfs the low speeds)")] = "db",
+    centreline_reference: Annotated[Literal["recorded", "slow_roll"], Query(
+        description="Where the centreline plot's positions are measured from: the probes' own zero as recorded "
+                    "(the gap voltage stated with a voltage record), or the slow roll — the slowest step put at the "
+                    "bottom of the clearance (needs the clearance)")] = "recorded",
 ) -> dict[str, Any]:
     """A start-up or coast-down recording sent as to ``POST /diagnose``, order-tracked (``features.transient``)
     and plotted (``features.plots``): Bode, polar, cascade and full spectrum of each bearing, centreline, orbits,
     as PNG (base64) with the run's summary (``service.plotdata.transient_plots``); ``cascade_scale`` as
-    ``rotordiag plots --cascade-scale``. Nothing is stored. In a
+    ``rotordiag plots --cascade-scale``, ``centreline_reference`` as ``--centreline-reference``. Nothing is stored. In a
     diagnosis worker (memory and time limits), or with no workers in a thread of the server, as /ui/plot-data."""
     query = await _reader_query(request, state, reader, sample_index, asset_id)
     return await recording_answer(
         request, state, query,
-        lambda kind, body, filename, q: TransientPlots(kind, body, filename, q, output_units, cascade_scale),
+        lambda kind, body, filename, q: TransientPlots(kind, body, filename, q, output_units, cascade_scale,
+                                                       centreline_reference),
         lambda recording: _transient_sync(recording, output_units, cascade_scale, query.get("plant_model"),
-                                          query.get("plant_shaftline")))
+                                          query.get("plant_shaftline"), centreline_reference))

@@ -475,10 +475,18 @@ class DatasetSpec(_Strict):
         return int(math.ceil(m.duration_revs * 60.0 * m.sample_rate_hz / s_lo - 1e-9))
 
 
+#: keys a spec writer reaches for to ask for run-ups or coast-downs, which dataset specs do not take (yet)
+_TRANSIENT_KEYS = frozenset({"profile", "speed_profile", "ramp", "runup", "run_up", "coast_down", "coastdown"})
+
+
 def _one_error(err: Mapping[str, Any]) -> str:
     loc = ".".join(str(p) for p in err["loc"])
     msg = err["msg"].removeprefix("Value error, ")
-    if err["type"] == "extra_forbidden":
+    if err["type"] == "extra_forbidden" and err["loc"] and str(err["loc"][-1]) in _TRANSIENT_KEYS:
+        msg = ("a dataset's samples are steady runs at one speed each: run-ups and coast-downs are not in dataset "
+               "specs yet. Simulate them one at a time with `rotordiag runup --profile START:END:SECONDS` (or a "
+               "table TIME@SPEED,…) or `rotordiag.simulator.transient.simulate_transient` (docs/transient.md)")
+    elif err["type"] == "extra_forbidden":
         msg = "unknown key (check the spelling; see examples/dataset_small.toml)"
     elif err["type"] == "missing":
         msg = "required key is missing"

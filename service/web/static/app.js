@@ -628,8 +628,14 @@
       if (formValue("recorded-at") !== null) dq.set("recorded_at", formValue("recorded-at") + "Z");
       if (formValue("tags") !== null) dq.set("tags", formValue("tags"));
       if (formValue("note") !== null) dq.set("note", formValue("note"));
+      const sq = new URLSearchParams({ output_units: $("length-units").value });
+      if ($("transient-baseline").checked) sq.set("baseline", "true");
+      if (formValue("recorded-at") !== null) sq.set("recorded_at", formValue("recorded-at") + "Z");
+      if (formValue("note") !== null) sq.set("note", formValue("note"));
       return { diagnose: [`/diagnose?${dq}`, opts()], plot: ["/ui/plot-data", opts()],
-        transient: [`/ui/transient-plots?output_units=${$("length-units").value}`, opts()], asset: body.asset_id || null };
+        transient: [`/ui/transient-plots?output_units=${$("length-units").value}&centreline_reference=${$("centreline-ref").value}`, opts()],
+        asset: body.asset_id || null,
+        startup: (a) => [`/assets/${encodeURIComponent(a)}/startup?${sq}`, opts()] };
     }
     let files = Array.from($("file").files);
     const q = new URLSearchParams();
@@ -661,8 +667,16 @@
     const opts = () => { const fd = new FormData(); for (const f of files) fd.append("file", f, f.name); return { method: "POST", body: fd, headers: keyHeader() }; };
     const qt = new URLSearchParams(qp);
     qt.set("output_units", $("length-units").value);
+    qt.set("centreline_reference", $("centreline-ref").value);
+    // storing a start-up on the asset: the reader's query, its time and note, baseline or not
+    const sq = new URLSearchParams(qt);
+    sq.delete("asset_id"); sq.delete("centreline_reference");
+    if ($("transient-baseline").checked) sq.set("baseline", "true");
+    if (formValue("recorded-at") !== null) sq.set("recorded_at", formValue("recorded-at") + "Z");
+    if (formValue("note") !== null) sq.set("note", formValue("note"));
     return { diagnose: [`/diagnose?${q}`, opts()], plot: [`/ui/plot-data?${qp}`, opts()],
-      transient: [`/ui/transient-plots?${qt}`, opts()], asset };
+      transient: [`/ui/transient-plots?${qt}`, opts()], asset,
+      startup: (a) => [`/assets/${encodeURIComponent(a)}/startup?${sq}`, opts()] };
   }
 
   async function onDiagnose(ev) {
@@ -712,6 +726,71 @@
     } finally {
       $("transient-btn").disabled = false; show($("busy"), false); $("busy").textContent = "diagnosing…";
     }
+  }
+
+  // store the uploaded start-up on the asset: POST /assets/{id}/startup (the same body), then its comparison
+  async function onStoreStartup() {
+    setError($("transient-store-error"), "");
+    show($("transient-stored"), false);
+    const asset = formValue("asset");
+    if (!asset) { setError($("transient-store-error"), "Type the asset id in the form above: the start-up is stored on that asset."); return; }
+    if (!$("diagnose-key").value) { setError($("transient-store-error"), "Type the API key in the form above: storing a start-up changes the asset's verdicts."); return; }
+    let req;
+    try { req = buildRequests(); } catch (exc) { setError($("transient-store-error"), exc.message); return; }
+    $("transient-store-btn").disabled = true; $("busy").textContent = "storing the start-up…"; show($("busy"), true);
+    document.body.dataset.state = "busy";
+    try {
+      renderStoredStartup(await api(...req.startup(asset)));
+      if ($("trend-asset").value.trim() === asset) await loadStartups(asset);
+      document.body.dataset.state = "done";
+    } catch (exc) {
+      setError($("transient-store-error"), `The start-up was not stored. ${exc.message}`);
+      document.body.dataset.state = "error";
+    } finally {
+      $("transient-store-btn").disabled = false; show($("busy"), false); $("busy").textContent = "diagnosing…";
+    }
+  }
+
+  function renderStoredStartup(r) {
+    const what = r.is_baseline ? "the asset's baseline start-up" : "a later start-up";
+    let text = `Stored as start-up #${r.startup_id} of ${r.asset_id}, ${what}; ${r.comparison}.`;
+    const v = r.asset_verdict;
+    if (v) text += ` The asset's latest verdict with it: ${v.severity} (${v.status})${v.headline && v.headline.text ? ` — ${v.headline.text}` : ""}.`;
+    $("transient-stored-info").textContent = text;
+    const rows = $("transient-stored-rows");
+    rows.replaceChildren();
+    for (const e of r.evidence_rows || []) rows.append(el("li", { class: `effect-${e.effect}`, text: e.text }));
+    for (const x of r.reasons || []) rows.append(el("li", { text: x.message || x.code }));
+    show($("transient-stored"), true);
+  }
+
+  // an asset's stored start-ups (GET /assets/{id}/startups): which is the baseline, which is compared with it
+  async function loadStartups(asset) {
+    const list = $("trend-startups");
+    list.replaceChildren();
+    let r;
+    try {
+      r = await api(`/assets/${encodeURIComponent(asset)}/startups`);
+    } catch (exc) {
+      if (exc.status !== 404) throw exc;
+      $("trend-startups-info").textContent = "No start-up stored for this asset: upload a run-up or coast-down, " +
+        "draw its plots and store it as the asset's baseline start-up.";
+      show($("trend-startups-box"), true);
+      return;
+    }
+    $("trend-startups-info").textContent = "The service keeps each start-up's evidence, not its waveform: " +
+      "upload the recording again to see its plots.";
+    for (const s of r.startups) {
+      const [lo, hi] = s.speed_range_rpm || [NaN, NaN];
+      const role = s.startup_id === r.baseline_startup_id ? "baseline start-up" :
+        (s.startup_id === r.compared_startup_id ? "compared with the baseline in the verdicts" : "earlier");
+      const rise = Object.entries((s.evidence || {}).half_rise_rpm || {})
+        .map(([b, v]) => `b${b} ${Number(v).toFixed(0)}`).join(", ");
+      list.append(el("li", { "data-startup-id": String(s.startup_id), text: `#${s.startup_id} ${when(s.recorded_at || s.created_at)}: ${s.kind || "run"}, ` +
+        `${fixed(lo, 0)}–${fixed(hi, 0)} r/min, ${s.peaks.length} peak${s.peaks.length === 1 ? "" : "s"}` +
+        (rise ? `; centreline half-rise at ${rise} r/min` : "") + ` — ${role}` + (s.note ? ` (${s.note})` : "") }));
+    }
+    show($("trend-startups-box"), true);
   }
 
   function renderTransient(t) {
@@ -854,6 +933,11 @@
       show($("trend-plots"), false); show($("trend-report"), false);
       $("trend-info").textContent = "";
       setError($("trend-error"), exc.message);
+    }
+    // an asset's start-ups, also when it has no stored diagnosis yet
+    try { await loadStartups(asset); } catch (exc) {
+      $("trend-startups-info").textContent = `The asset's start-ups could not be read. ${exc.message}`;
+      show($("trend-startups-box"), true);
     }
   }
 
@@ -1119,6 +1203,7 @@
     }));
     $("diagnose-form").addEventListener("submit", onDiagnose);
     $("transient-btn").addEventListener("click", onTransient);
+    $("transient-store-btn").addEventListener("click", onStoreStartup);
     for (const id of ["show-raw", "show-1x", "show-2x", "show-1x2x", "spectrum-scale"]) $(id).addEventListener("change", renderPlots);
     $("length-units").addEventListener("change", () => { renderPlots(); renderTrend(); });
     $("trend-form").addEventListener("submit", (ev) => { ev.preventDefault(); loadTrend($("trend-asset").value.trim()); });
