@@ -390,14 +390,54 @@ def test_retrain_cli_for_a_preset_stores_its_report_and_shows_it(tmp_path):
     rep = json.loads((reg_root / "v0001" / "plant_report.json").read_text())
     assert card["plant_report"]["pending"] is False and card["plant"]["name"] == "preset:gen600_4pole"
     assert set(rep["per_condition"]) == {c.name for c in report_conditions()}
-    assert rep["held_out"]["n_cases"] == 5 and rep["models"]["active"].endswith("(the shipped model)")
+    # a shaft train: one held-out case per coupling (rigid, flexible) and one aligned
+    assert rep["held_out"]["n_cases"] == 3 and rep["models"]["active"].endswith("(the shipped model)")
+    assert rep["held_out"]["plant_model"] == "train"
     for who in ("new", "active"):
         assert 0.0 <= rep["pooled"][who]["macro_f1"] <= 1.0 and rep["pooled"][who]["n"] > 0
     assert (reg.active_version() == "v0001") is (card["plant_report"]["better"] is True)
     assert card["activated_by"] == ("report" if card["plant_report"]["better"] else None)
     shown = CliRunner().invoke(app, ["models", "show", "v0001", "--registry", str(reg_root)])
     assert shown.exit_code == 0 and "quality report for preset:gen600_4pole" in shown.output
-    assert tomllib.loads((tmp_path / "work" / "dataset.toml").read_text())["plant"]["shaftline"]
+    spec = tomllib.loads((tmp_path / "work" / "dataset.toml").read_text())
+    assert spec["plant"]["shaftline"] and spec["plant"]["model"] == "train"
+
+
+@pytest.mark.slow
+def test_retrain_request_with_a_shaft_line_runs_on_its_train_and_reports(tmp_path):
+    """POST /models/retrain with a shaft line (gen600_4pole's tables, rated 1500 r/min) and a few samples: the job
+    simulates its finite-element train, registers the version with the plant's report on train recordings, and
+    its status moved through the stages with an ETA."""
+    from rotordiag.service.main import create_app
+    from rotordiag.simulator.shaftline import PRESETS
+    from tests.service_util import wait_until
+
+    tables = {k: v for k, v in PRESETS["gen600_4pole"].items() if k != "rated_speed_rpm"}
+    tables["coupling"] = {"type": "flexible"}
+    app = create_app(make_settings(tmp_path))
+    with TestClient(app) as c:
+        r = c.post("/models/retrain", json={"shaftline": tables, "rated_speed_rpm": 1500, "report_cases": 1,
+                                            "sweep": {"design": {"n_samples": 20}}}, headers=auth())
+        assert r.status_code == 202, r.text
+        url, seen = r.json()["url"], []
+
+        def finished():
+            j = c.get(url).json()
+            seen.append((j["stage"], j["eta_s"]))
+            return j["status"] in ("succeeded", "failed") and j
+
+        j = wait_until(finished, "the retrain job", ceiling_s=900, every_s=0.5)
+    assert j["status"] == "succeeded", j
+    report_file = Path(j["result"]["plant_report"]["file"])
+    rep = json.loads(report_file.read_text())
+    assert rep["held_out"]["plant_model"] == "train" and rep["held_out"]["n_cases"] == 2    # flexible + aligned
+    assert rep["held_out"]["speed_rpm_range"][0] >= 0.8 * 1500 - 1e-6
+    assert rep["held_out"]["speed_rpm_range"][1] <= 1.05 * 1500 + 1e-6
+    card = json.loads((report_file.parent / "card.json").read_text())
+    assert card["plant_report"]["pending"] is False and card["plant"]["shaftline"]["coupling"]["type"] == "flexible"
+    assert any(stage == "simulating" for stage, _ in seen)
+    etas = [e for _, e in seen if e is not None]
+    assert etas and all(math.isfinite(e) and e >= 0 for e in etas)
 
 
 def test_columns_measured_on_few_plants_are_dropped_before_training():
