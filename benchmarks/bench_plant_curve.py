@@ -36,12 +36,11 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--work", type=Path, default=Path("/tmp/rotordiag_plant_curve"))
     a = ap.parse_args()
-    from threadpoolctl import threadpool_limits
-
     # one OpenMP thread, as `rotordiag retrain --threads 1`: boosted trees spinning on oversubscribed shared
-    # cores took minutes for a fit of seconds
-    threadpool_limits(1)
-
+    # cores took minutes for a fit of seconds. Set before anything loads OpenMP: threadpoolctl limits only the
+    # libraries already loaded, and scikit-learn's are loaded when training starts (a threadpool_limits(1)
+    # called here left two threads spinning through the fits)
+    os.environ["OMP_NUM_THREADS"] = "1"
     from rotordiag.models.config import TrainConfig
     from rotordiag.models.dataset import load_feature_table
     from rotordiag.models.plant_retrain import (
@@ -58,7 +57,6 @@ def main() -> None:
     from rotordiag.models.train import train_and_register
     from rotordiag.simulator.dataset.generate import generate
     from rotordiag.simulator.dataset.spec import parse_spec
-
     sizes = sorted(int(s) for s in a.sizes.split(","))
     a.work.mkdir(parents=True, exist_ok=True)
     plant = describe_plant(preset=a.preset)
