@@ -120,8 +120,8 @@ def main() -> None:
           f"(seed {a.seed}); simulation {sim_s / sizes[-1]:.2f} s/sample, features {feat_s / sizes[-1]:.2f} s/sample "
           f"with {a.workers} worker(s)")
     print("| samples | rows | macro-F1 new (shipped) | F1 diff, 90 % interval | false alarms new (shipped) | "
-          "confident new (shipped) | confident 2 bands off new (shipped) | 90 % coverage new (shipped) | better? | "
-          "Spearman Δ new (shipped) | training s | retrain wall time here | idle 2-core (CPU s / 2) |")
+          "confident new (shipped) | confident 2 bands off new (shipped) | 90 % coverage new (shipped) | "
+          "Spearman Δ new (shipped) | better? | training s | retrain wall time here | idle 2-core (CPU s / 2) |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for n, nrows, rep, train_s, report_s, wall, idle2 in rows:
         p, b = rep["pooled"], rep["paired_bootstrap"]

@@ -78,7 +78,7 @@ def register(app: typer.Typer) -> None:
         n_samples: int = typer.Option(0, "--n-samples", min=0, max=20000, help="Simulated samples of the plant's "
                                       "dataset (0: the default, docs/models.md's learning curve)."),
         report_cases: int = typer.Option(0, "--report-cases", min=0, max=200, help="Held-out recordings per class "
-                                         "(4 mechanisms + aligned) of the quality report (0: the default)."),
+                                         "(each coupling of a train, or the 4 lumped mechanisms, + aligned) of the quality report (0: the default)."),
         seed: int = typer.Option(0, "--seed", min=0, help="Seed of the dataset's design and of the report's held-out set."),
         work_dir: Optional[Path] = typer.Option(None, "--work-dir", help="Folder for the dataset and its features "
                                                 "(default: ./retrain-<plant>; a rerun resumes it)."),

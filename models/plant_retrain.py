@@ -63,8 +63,9 @@ SPEED_FRACTIONS = (0.8, 1.05)
 #: Δ levels of the default sweep: a quarter of the samples aligned (Δ = 0), the rest spread over 0.01–0.6
 #: (a Sobol design maps a list onto equally likely levels)
 MISALIGNMENT_LEVELS: list[float] = [0.0] * 16 + [round(float(x), 4) for x in np.linspace(0.01, 0.6, 48)]
-#: Default number of simulated samples of a plant's dataset (docs/models.md, "Learning curve")
-DEFAULT_N_SAMPLES = 96
+#: Default number of simulated samples of a plant's dataset: the largest size of the measured learning curve
+#: (docs/models.md, "Learning curve (gen600_4pole, shaft trains)": about 3 min of idle 2-core time on a train)
+DEFAULT_N_SAMPLES = 192
 
 #: The default sweep: the shipped training data's operating ranges, mechanisms and measurement realities
 #: (models/default/dataset_*.toml), the speed following the plant's rated speed (:func:`plant_dataset_spec`).
