@@ -78,7 +78,7 @@ def register(app: typer.Typer) -> None:
         n_samples: int = typer.Option(0, "--n-samples", min=0, max=20000, help="Simulated samples of the plant's "
                                       "dataset (0: the default, docs/models.md's learning curve)."),
         report_cases: int = typer.Option(0, "--report-cases", min=0, max=200, help="Held-out recordings per class "
-                                         "(4 mechanisms + aligned) of the quality report (0: the default)."),
+                                         "(each coupling of a train, or the 4 lumped mechanisms, + aligned) of the quality report (0: the default)."),
         seed: int = typer.Option(0, "--seed", min=0, help="Seed of the dataset's design and of the report's held-out set."),
         work_dir: Optional[Path] = typer.Option(None, "--work-dir", help="Folder for the dataset and its features "
                                                 "(default: ./retrain-<plant>; a rerun resumes it)."),
@@ -110,7 +110,8 @@ def register(app: typer.Typer) -> None:
             pending_card,
             plant_dataset_spec,
             report_and_activate,
-            report_conditions,
+            retrain_units,
+            stage_seconds,
         )
         from .predict import load_bundle
         from .registry import Registry, RegistryError, shipped_registry_dir
@@ -136,9 +137,8 @@ def register(app: typer.Typer) -> None:
         spec_path = folder / "dataset.toml"
         spec_path.write_text(tomli_w.dumps(spec), encoding="utf-8")
         cfg = TrainConfig.shipped({"seed": seed})
-        rows = n * (1 + (cfg.augment.copies if cfg.augment is not None else 0))
-        staged = StagedProgress({"simulating": n, "features": n, "training": rows, "held-out simulation": 5 * k,
-                                 "report": 2 * len(report_conditions()) * 5 * k})
+        staged = StagedProgress(retrain_units(plant, n, k, cfg.augment.copies if cfg.augment is not None else 0),
+                                seconds=stage_seconds(plant))
         bar = tqdm(total=1000, bar_format="{desc} {percentage:3.0f}%|{bar}| {elapsed}", dynamic_ncols=True)
 
         def cb(stage: str):

@@ -39,13 +39,33 @@ PLANT_TOLERANCES: dict[str, float] = {
     "bearing_radius_m": 0.01, "bearing_length_m": 0.02, "coupling_stiffness_n_m": 0.3,
 }
 
+#: Relative half-widths (uniform ×(1 ± r)) of a shaft train's values (``simulator.train.plant.TRAIN_PERTURBABLE``)
+#: around the described plant, for its training spec and its held-out recordings alike (docs/models.md, "Retraining
+#: for one plant"): what a manufacturer states for one machine — spans, diameters, overhangs ±1 %, bearing bores
+#: ±0.5 % and lengths ±1 %, body masses ±2 % — and what moves on the running machine: the clearance ±15 % (machining
+#: and wear), the oil's viscosity ±30 % (oil inlet temperature ±5 K on an ISO VG 32/46 oil), the coupling's
+#: stiffnesses ±30 %, ρ ±10 %, the damping ±20 % and the balance grade ±60 % (G1–G4 around G2.5).
+TRAIN_TOLERANCES: dict[str, float] = {
+    "generator_span_m": 0.01, "exciter_span_m": 0.01, "generator_diameter_m": 0.01, "exciter_diameter_m": 0.01,
+    "generator_body_mass_kg": 0.02, "exciter_body_mass_kg": 0.02, "overhang_m": 0.01,
+    "bearing_diameter_m": 0.005, "bearing_length_m": 0.01, "clearance_m": 0.15, "viscosity_pa_s": 0.3,
+    "coupling_stiffness_n_m": 0.3, "coupling_angular_stiffness_n_m_rad": 0.3, "generator_asymmetry": 0.1,
+    "damping_ratio": 0.2, "balance_grade_mm_s": 0.6,
+}
+#: Couplings of a shaft train's samples (``simulator.dataset.spec.TRAIN_MECHANISMS``) when the shaft line does not
+#: name its own ``coupling.type``
+TRAIN_COUPLINGS = ("rigid", "flexible")
+#: Half-range of a train sample's angular offset at the coupling (mrad), as models/trains/*.toml
+ANGULAR_OFFSET_MRAD = 0.04
+
 #: The default sweep's speed range as fractions of the rated speed(s): run-up, slow-down and off-rated running.
 SPEED_FRACTIONS = (0.8, 1.05)
 #: Δ levels of the default sweep: a quarter of the samples aligned (Δ = 0), the rest spread over 0.01–0.6
 #: (a Sobol design maps a list onto equally likely levels)
 MISALIGNMENT_LEVELS: list[float] = [0.0] * 16 + [round(float(x), 4) for x in np.linspace(0.01, 0.6, 48)]
-#: Default number of simulated samples of a plant's dataset (docs/models.md, "Learning curve")
-DEFAULT_N_SAMPLES = 96
+#: Default number of simulated samples of a plant's dataset: the largest size of the measured learning curve
+#: (docs/models.md, "Learning curve (gen600_4pole, shaft trains)": about 3 min of idle 2-core time on a train)
+DEFAULT_N_SAMPLES = 192
 
 #: The default sweep: the shipped training data's operating ranges, mechanisms and measurement realities
 #: (models/default/dataset_*.toml), the speed following the plant's rated speed (:func:`plant_dataset_spec`).
@@ -69,6 +89,29 @@ PLANT_SWEEP: dict[str, Any] = {
         "runout_2x_um": {"min": 0.0, "max": 2.0}, "speed_fluctuation": 0.002, "speed_fluctuation_hz": 0.5,
     },
     "simulation": {"transient_revs": 400, "samples_per_rev": 128, "record_revs_min": 48, "classify_motion": False},
+}
+
+#: The sweep of a plant given as a shaft line (preset or the user's tables): its finite-element train
+#: (``[plant] model = "train"``), misaligned by moving the exciter's bearings by Δ·c in any direction with a small
+#: angular offset, the generator unbalanced to its balance grade, the measurement realities of models/trains/*.toml;
+#: the couplings, speeds and instrumented bearings follow the plant (:func:`plant_dataset_spec`).
+TRAIN_SWEEP: dict[str, Any] = {
+    "design": {"method": "sobol", "n_samples": DEFAULT_N_SAMPLES, "seed": 0},
+    "operating": {
+        "misalignment": MISALIGNMENT_LEVELS,
+        "speed_rpm": {"min": 1200.0, "max": 2200.0},
+        "unbalance_phase_rad": {"min": 0.0, "max": 2 * math.pi},
+        "offset_angle_rad": {"min": 0.0, "max": 2 * math.pi},
+        "angular_misalignment_mrad": {"min": -ANGULAR_OFFSET_MRAD, "max": ANGULAR_OFFSET_MRAD},
+        "mechanism": list(TRAIN_COUPLINGS),
+    },
+    "plant": {"model": "train", "perturb": dict(TRAIN_TOLERANCES)},
+    "measurement": {
+        "bearings": [1, 2, 3, 4], "probe_angles_deg": [45.0, 135.0], "sample_rate_hz": 2560.0,
+        "duration_revs": 32, "snr_db": {"min": 10.0, "max": 45.0}, "runout_1x_um": {"min": 0.0, "max": 6.0},
+        "runout_2x_um": {"min": 0.0, "max": 2.0}, "speed_fluctuation": 0.002, "speed_fluctuation_hz": 0.5,
+    },
+    "simulation": {"transient_revs": 100, "samples_per_rev": 128, "record_revs_min": 32, "classify_motion": False},
 }
 
 #: The report's held-out recordings come from this seed stream (``numpy.random.default_rng([REPORT_STREAM,
@@ -95,12 +138,36 @@ class PlantDescription:
     plant_set: dict[str, Any] = field(default_factory=dict)
 
     def base_plant(self):
-        """The lumped ``simulator.Plant`` this description reduces to (``plant_set`` applied)."""
-        from rotordiag.simulator import Plant, shaftline
+        """The plant its samples are drawn around: the ``TrainPlant`` of its shaft line (:meth:`base_train`), or
+        MODEL.md's lumped ``simulator.Plant`` when it has none; ``plant_set`` applied."""
+        from rotordiag.simulator import Plant
 
-        base = Plant.default() if self.shaftline is None else \
-            shaftline.to_plant(shaftline.ShaftLine.from_dict(self.shaftline))
+        if self.is_train:
+            return self.base_train()
+        base = Plant.default()
         return base.replace(**self.plant_set) if self.plant_set else base
+
+    @property
+    def is_train(self) -> bool:
+        """Whether this plant is retrained for on its finite-element shaft train (it has a shaft line); the
+        "default" plant (MODEL.md's, no shaft line) stays the paper's lumped model."""
+        return self.shaftline is not None
+
+    def base_train(self):
+        """The ``simulator.train.plant.TrainPlant`` of the shaft line, ``plant_set`` (train values) applied."""
+        from rotordiag.simulator.shaftline import ShaftLine
+        from rotordiag.simulator.train.plant import TrainPlant
+
+        if self.shaftline is None:
+            raise ValueError("the default plant has no shaft line: it is the paper's lumped plant")
+        base = TrainPlant.of(ShaftLine.from_dict(self.shaftline))
+        return base.replace(**self.plant_set) if self.plant_set else base
+
+    def couplings(self) -> tuple[str, ...]:
+        """The couplings its samples have: the one its shaft line names (``coupling.type``), else rigid and
+        flexible (:data:`TRAIN_COUPLINGS`)."""
+        named = ((self.shaftline or {}).get("coupling") or {}).get("type")
+        return (str(named),) if named in TRAIN_COUPLINGS else TRAIN_COUPLINGS
 
     def speed_range_rpm(self) -> tuple[float, float] | None:
         """(min, max) r/min of the default sweep: :data:`SPEED_FRACTIONS` of the rated speed(s)."""
@@ -188,6 +255,11 @@ def plant_dataset_spec(plant: PlantDescription, *, n_samples: int | None = None,
     from rotordiag.core.tables import deep_merge
 
     defaults: dict[str, Any] = PLANT_SWEEP
+    if plant.is_train:
+        n_bearings = plant.base_train().n_bearings
+        defaults = deep_merge(TRAIN_SWEEP, {"operating": {"mechanism": list(plant.couplings())},
+                                            "measurement": {"bearings": list(range(1, n_bearings + 1))}},
+                              whole=("mechanism", "bearings"))
     rng = plant.speed_range_rpm()
     if rng is not None:
         defaults = deep_merge(defaults, {"operating": {"speed_rpm": {"min": rng[0], "max": rng[1]}}})
@@ -210,6 +282,8 @@ def held_out_cases(plant: PlantDescription, n_per_class: int, seed: int) -> list
     :data:`models.robustness.MECHANISMS` and as many aligned, each a draw of the plant within
     :data:`PLANT_TOLERANCES`, half at a rated speed (±1 %) and half anywhere in the sweep's speed range, Δ
     uniform in 0.02–0.6, from the seed stream :data:`REPORT_STREAM` (no training spec draws from it)."""
+    if plant.is_train:
+        return _held_out_train_cases(plant, n_per_class, seed)
     from .robustness import MECHANISMS
 
     rng = np.random.default_rng([REPORT_STREAM, int(seed)])
@@ -234,6 +308,58 @@ def held_out_cases(plant: PlantDescription, n_per_class: int, seed: int) -> list
     return cases
 
 
+def _held_out_train_cases(plant: PlantDescription, n_per_class: int, seed: int) -> list[dict]:
+    """:func:`held_out_cases` of a shaft-train plant: ``n_per_class`` per coupling of :meth:`PlantDescription.couplings`
+    and as many aligned, each a draw of the train within :data:`TRAIN_TOLERANCES`, half at a rated speed (±1 %) and
+    half anywhere in the sweep's range, Δ uniform in 0.02–0.6 in a uniform direction, angular offset uniform in
+    ±:data:`ANGULAR_OFFSET_MRAD` (0 for the aligned), from the seed stream :data:`REPORT_STREAM`."""
+    rng = np.random.default_rng([REPORT_STREAM, int(seed)])
+    base = plant.base_train().to_dict()
+    lo, hi = plant.speed_range_rpm() or (1200.0, 2200.0)
+    rated = plant.rated_speed_rpm or (0.5 * (lo + hi),)
+    couplings = plant.couplings()
+    cases = []
+    for i, mech in enumerate([m for m in couplings for _ in range(n_per_class)] + ["aligned"] * n_per_class):
+        p = dict(base)
+        for name, r in TRAIN_TOLERANCES.items():
+            v = p[name]
+            p[name] = ([float(x) * (1 + r * rng.uniform(-1, 1)) for x in v] if isinstance(v, list)
+                       else float(v) * (1 + r * rng.uniform(-1, 1)))
+        speed = float(rng.choice(rated)) * float(rng.uniform(0.99, 1.01)) if i % 2 == 0 else float(rng.uniform(lo, hi))
+        aligned = mech == "aligned"
+        cases.append(dict(
+            plant=p, speed_rpm=speed, misalignment=0.0 if aligned else float(rng.uniform(0.02, 0.6)),
+            mechanism=couplings[i % len(couplings)] if aligned else mech, label_mechanism=mech,
+            angular_misalignment_mrad=0.0 if aligned else float(rng.uniform(-ANGULAR_OFFSET_MRAD, ANGULAR_OFFSET_MRAD)),
+            unbalance_phase_rad=float(rng.uniform(0, 2 * math.pi)), offset_angle_rad=float(rng.uniform(0, 2 * math.pi)),
+        ))
+    return cases
+
+
+def simulate_train_case(c: dict, revs: int) -> np.ndarray | None:
+    """One shaft-train case of :func:`held_out_cases`: its journal displacements in m (n, bearings, 2) over
+    ``revs`` + 3 revolutions after the training sweep's transient, from its static state, built exactly as a
+    training sample (``simulator.dataset.worker.sample_train``); None when the run did not finish ``ok``.
+    Raises ``ValueError`` when the simulator refuses the train (a journal outside its clearance)."""
+    from rotordiag.simulator.dataset.design import SampleParams
+    from rotordiag.simulator.dataset.worker import sample_train
+    from rotordiag.simulator.train.dynamics import simulate_train
+    from rotordiag.simulator.train.plant import TrainPlant
+
+    from .robustness import SAMPLES_PER_REV
+
+    sim = TRAIN_SWEEP["simulation"]
+    params = SampleParams(index=0, plant=c["plant"], speed_rpm=c["speed_rpm"], misalignment=c["misalignment"],
+                          unbalance=0.0, unbalance_phase_rad=c["unbalance_phase_rad"], exciter_unbalance=0.0,
+                          exciter_unbalance_phase_rad=0.0, offset_angle_rad=c["offset_angle_rad"],
+                          mechanism=c["mechanism"], sample_seed=0,
+                          angular_misalignment_mrad=c["angular_misalignment_mrad"])
+    train = sample_train(TrainPlant.from_dict(c["plant"]), params)
+    run = simulate_train(train, c["speed_rpm"], transient_revs=sim["transient_revs"], record_revs=revs + 3,
+                         samples_per_rev=SAMPLES_PER_REV)
+    return run.journal_m.astype(np.float32) if run.status == "ok" else None
+
+
 def report_conditions() -> tuple[Any, ...]:
     """The :data:`models.robustness.CONDITIONS` of a plant's report: every one measured on the plant's own
     recordings (those of another simulated set — the presets, the far plants — are about other plants)."""
@@ -248,6 +374,9 @@ def simulate_held_out(cases: list[dict], *, progress: Callable[[int, int], None]
     failed or the simulator refused the plant); ``cache``: an ``.npz`` read when present, else written."""
     from .robustness import simulate_case
 
+    def one(c: dict, revs: int) -> np.ndarray | None:
+        return simulate_train_case(c, revs) if c["plant"].get("model") == "train" else simulate_case(c, revs)
+
     if cache is not None and cache.is_file():
         z = np.load(cache, allow_pickle=False)
         return [z[f"d{i}"] if f"d{i}" in z.files else None for i in range(len(cases))]
@@ -255,7 +384,7 @@ def simulate_held_out(cases: list[dict], *, progress: Callable[[int, int], None]
     out: list[np.ndarray | None] = []
     for i, c in enumerate(cases):
         try:
-            out.append(simulate_case(c, revs))
+            out.append(one(c, revs))
         except ValueError:
             out.append(None)
         if progress is not None:
@@ -291,6 +420,8 @@ def _figures(outs: list, names: list[str], edges: np.ndarray) -> dict[str, Any]:
     hi = np.array([o.interval[1] for o in s])
     delta = np.array([o.delta for o in s])
     has = np.isfinite(lo) & np.isfinite(hi)
+    est = np.array([o.delta_model for o in s], dtype=float)
+    ok = np.isfinite(est)
     return {
         "n": n, "refused": len(outs) - n,
         "macro_f1": float(f1_score(truth, pred, labels=np.unique(truth), average="macro", zero_division=0)),
@@ -300,7 +431,17 @@ def _figures(outs: list, names: list[str], edges: np.ndarray) -> dict[str, Any]:
         "ood_share": float(np.mean([o.ood for o in s])),
         "confident_two_bands_off": int(np.sum(conf & (np.abs(shown - truth) >= 2))),
         "interval_coverage": float(np.mean((lo[has] <= delta[has]) & (delta[has] <= hi[has]))) if has.any() else None,
+        "spearman_delta": _spearman(est[ok], delta[ok]),
     }
+
+
+def _spearman(a: np.ndarray, b: np.ndarray) -> float | None:
+    """Spearman rank correlation of the estimated and true Δ (None with fewer than 3 pairs or a constant side)."""
+    from scipy.stats import spearmanr
+
+    if a.size < 3 or np.ptp(a) == 0 or np.ptp(b) == 0:
+        return None
+    return float(spearmanr(a, b).statistic)
 
 
 def _wilson(k: int, n: int) -> list[float] | None:
@@ -420,7 +561,8 @@ def quality_report(new_bundle: Any, old_bundle: Any, plant: PlantDescription, ca
                      "per_class": {m: mechs.count(m) for m in sorted(set(mechs))},
                      "speed_rpm_range": [float(min(c["speed_rpm"] for c in cases)),
                                          float(max(c["speed_rpm"] for c in cases))],
-                     "tolerances": dict(PLANT_TOLERANCES)},
+                     "plant_model": "train" if plant.is_train else "lumped",
+                     "tolerances": dict(TRAIN_TOLERANCES if plant.is_train else PLANT_TOLERANCES)},
         "conditions": [c.name for c in conds],
         "conditions_left_out": "the robustness report's rows on other simulated plants (rated-machine presets, far "
                                "plants) are not about this plant",
@@ -560,19 +702,50 @@ def report_and_activate(registry: Any, version: str, plant: PlantDescription, co
 #: case × condition × model), which weight the stages' shares of the progress fraction so that its linear ETA is sane
 STAGE_SECONDS: dict[str, float] = {"simulating": 0.4, "features": 0.4, "training": 0.35,
                                    "held-out simulation": 0.5, "report": 0.07}
+#: :data:`STAGE_SECONDS` of a shaft-train plant: the two simulation stages scaled by the measured CPU cost of a
+#: gen600_4pole train against a lumped case (training sample 0.55 s against 0.15 s: ×3.6; held-out case of 195
+#: revolutions 2.0 s against 0.21 s: ×9.6; docs/models.md, "Learning curve"), the other stages as the lumped
+#: plant's (the same features, recipe and report)
+TRAIN_STAGE_SECONDS: dict[str, float] = {"simulating": 1.45, "features": 0.4, "training": 0.35,
+                                         "held-out simulation": 4.8, "report": 0.07}
+
+
+def stage_seconds(plant: PlantDescription) -> dict[str, float]:
+    """The expected seconds per unit of each retraining stage for ``plant``'s model (train or lumped)."""
+    return dict(TRAIN_STAGE_SECONDS if plant.is_train else STAGE_SECONDS)
+
+
+def n_report_classes(plant: PlantDescription) -> int:
+    """Classes of held-out cases of a report (:func:`held_out_cases`): the mechanisms (lumped) or the couplings
+    (train), and the aligned."""
+    from .robustness import MECHANISMS
+
+    return (len(plant.couplings()) if plant.is_train else len(MECHANISMS)) + 1
+
+
+def retrain_units(plant: PlantDescription, n_samples: int, n_per_class: int, augment_copies: int = 0) -> dict[str, int]:
+    """The units of each retraining stage (:class:`StagedProgress`): samples simulated, feature rows, training
+    rows, held-out cases, condition × model report steps × cases."""
+    cases = n_report_classes(plant) * n_per_class
+    return {"simulating": n_samples, "features": n_samples, "training": n_samples * (1 + augment_copies),
+            "held-out simulation": cases, "report": 2 * len(report_conditions()) * cases}
 
 
 class StagedProgress:
     """One fraction 0–1 over the retraining stages, each weighted by its expected seconds
-    (:data:`STAGE_SECONDS` × its units), with the ETA of that fraction.
+    (``seconds`` — :func:`stage_seconds` of the plant, :data:`STAGE_SECONDS` by default — × its units), with the
+    ETA of that fraction.
 
-    ``units``: stage → how many units it has (samples, feature rows, training rows, held-out cases,
-    condition × model steps). ``update(stage, done, total)`` returns ``(fraction, eta_s)``; ``eta_s`` is the
-    elapsed time × (1 − fraction) / fraction (None before 1 %).
+    ``units``: stage → how many units it has (:func:`retrain_units`). ``update(stage, done, total)`` returns
+    ``(fraction, eta_s)``; ``eta_s`` is the elapsed time × (1 − fraction) / fraction (None before 1 %): the
+    measured rate of the work done so far applied to the rest, the stages' weights only saying how the rest
+    compares with what was done.
     """
 
-    def __init__(self, units: Mapping[str, int], clock: Callable[[], float] = time.monotonic) -> None:
-        w = {s: STAGE_SECONDS[s] * max(int(units.get(s, 0)), 0) for s in STAGE_SECONDS}
+    def __init__(self, units: Mapping[str, int], clock: Callable[[], float] = time.monotonic,
+                 seconds: Mapping[str, float] | None = None) -> None:
+        per = dict(STAGE_SECONDS if seconds is None else seconds)
+        w = {s: per[s] * max(int(units.get(s, 0)), 0) for s in STAGE_SECONDS}
         total = sum(w.values()) or 1.0
         self.share = {s: v / total for s, v in w.items()}
         self.start: dict[str, float] = {}

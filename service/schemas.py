@@ -731,16 +731,18 @@ class RetrainRequest(_Strict):
 
     plant: dict[str, Any] = Field(
         default_factory=dict,
-        description="The plant's MODEL.md parameters, by `simulator.Plant` field name with units "
-        "(e.g. `generator_mass_kg`, `clearance_m`, `asymmetry`); missing ones take the MODEL.md defaults, "
-        "or the values of `shaftline` when it is given (then these override them).",
+        description="Values set over the plant. With `shaftline` or `preset` (a finite-element shaft train): "
+        "the train's values by name with units (`simulator.train.plant.TRAIN_PERTURBABLE`: e.g. `clearance_m`, "
+        "`viscosity_pa_s`, `coupling_stiffness_n_m`, `balance_grade_mm_s`), over the shaft line's own. Without: "
+        "the MODEL.md lumped plant's `simulator.Plant` fields (e.g. `generator_mass_kg`, `asymmetry`).",
         examples=[{"generator_mass_kg": 30000.0, "asymmetry": 0.04}])
     shaftline: dict[str, Any] | None = Field(
         None,
         description="The plant as a plant engineer describes it: the shaft-line tables of "
         "`rotordiag plant from-shaftline` (`generator`, `exciter` with `segments` [[length_m, diameter_m], ...] "
-        "and `body_masses`, `bearings`, `oil`, `coupling`, ...; examples/shaftline_200mw.toml), reduced to "
-        "the lumped plant as docs/model.md describes.",
+        "and `body_masses`, `bearings`, `oil`, `coupling`, ...; examples/shaftline_200mw.toml), simulated as its "
+        "finite-element shaft train within manufacturing tolerances (docs/models.md, \"Retraining for one "
+        "plant\"); a `coupling.type` it names is the only coupling trained on.",
         examples=[{"generator": {"segments": [[0.6, 0.45], [0.9, 0.6], [5.0, 1.0], [0.9, 0.6], [0.6, 0.45]],
                                  "body_masses": [[2.125, 3000.0], [3.375, 3000.0], [4.625, 3000.0],
                                                  [5.875, 3000.0]]},
@@ -775,8 +777,9 @@ class RetrainRequest(_Strict):
                            "is better than the active model (docs/models.md, \"Activated only if better\").")
     force: bool = Field(False, description="Activate the new version even if its report says it is not better "
                         "(recorded in its card: `activated_by` = `forced`).")
-    report_cases: int = Field(6, ge=1, le=50, description="Held-out recordings per class (four mechanisms and "
-                              "aligned) of the plant's quality report; each is measured under every condition.")
+    report_cases: int = Field(6, ge=1, le=50, description="Held-out recordings per class (each coupling of a "
+                              "shaft train, or the four lumped mechanisms, and aligned) of the plant's quality "
+                              "report; each is measured under every condition.")
 
 
 class JobCreated(BaseModel):

@@ -295,7 +295,8 @@ def run_retrain(params: dict[str, Any], ctx) -> dict[str, Any]:
         describe_plant,
         pending_card,
         report_and_activate,
-        report_conditions,
+        retrain_units,
+        stage_seconds,
     )
     from rotordiag.simulator.dataset.spec import parse_spec
 
@@ -306,9 +307,8 @@ def run_retrain(params: dict[str, Any], ctx) -> dict[str, Any]:
     k = int(params.get("report_cases") or DEFAULT_REPORT_CASES)
     n = parse_spec(params["spec_toml"]).spec.design.n_samples or 1
     config = TrainConfig.from_dict(params["training"])
-    rows = n * (1 + (config.augment.copies if config.augment is not None else 0))
-    staged = StagedProgress({"simulating": n, "features": n, "training": rows, "held-out simulation": 5 * k,
-                             "report": 2 * len(report_conditions()) * 5 * k})
+    staged = StagedProgress(retrain_units(plant, n, k, config.augment.copies if config.augment is not None else 0),
+                            seconds=stage_seconds(plant))
 
     def span(stage: str) -> tuple[float, float]:
         return staged.start[stage], staged.start[stage] + staged.share[stage]

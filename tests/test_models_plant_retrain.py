@@ -16,6 +16,9 @@ from typer.testing import CliRunner
 
 from rotordiag.models.plant_retrain import (
     PLANT_TOLERANCES,
+    STAGE_SECONDS,
+    TRAIN_STAGE_SECONDS,
+    TRAIN_TOLERANCES,
     StagedProgress,
     decide,
     describe_plant,
@@ -35,41 +38,68 @@ EDGES = np.array([0.05, 0.15, 0.35])
 
 # --- the plant's dataset and its held-out set ----------------------------------------------------------
 
-def test_a_preset_plants_spec_is_its_shaft_line_at_its_rated_speeds_within_tolerances():
+def test_a_preset_plants_spec_is_its_shaft_train_at_its_rated_speeds_within_tolerances():
     """gen600_4pole runs at 1500/1800 r/min: the sweep covers 0.8 × 1500 … 1.05 × 1800 r/min (run-up, off-rated),
-    on its own shaft line, every lumped field drawn within the plant's tolerances; the spec parses."""
+    on its own finite-element shaft train, perturbed within what a manufacturer states (spans and diameters
+    within ±2 %, clearance and oil wider), rigid and flexible couplings; the spec parses."""
     import tomli_w
 
     from rotordiag.simulator.dataset.spec import parse_spec
-    from rotordiag.simulator.shaftline import preset, to_plant
+    from rotordiag.simulator.shaftline import preset
+    from rotordiag.simulator.train.plant import TRAIN_PERTURBABLE, TrainPlant
 
     plant = describe_plant(preset="gen600_4pole")
-    assert plant.rated_speed_rpm == (1500.0, 1800.0)
+    assert plant.rated_speed_rpm == (1500.0, 1800.0) and plant.is_train
     spec = plant_dataset_spec(plant, n_samples=40, seed=3)
     resolved = parse_spec(tomli_w.dumps(spec))
+    assert resolved.spec.plant.model == "train"
     sp = resolved.spec.operating.speed_rpm
     assert (sp.min, sp.max) == (pytest.approx(1200.0), pytest.approx(1890.0))
-    assert resolved.base_plant == to_plant(preset("gen600_4pole"))
+    assert resolved.base_plant == TrainPlant.of(preset("gen600_4pole"))
     assert resolved.spec.design.n_samples == 40 and resolved.spec.design.seed == 3
-    assert spec["plant"]["perturb"] == PLANT_TOLERANCES
-    assert set(spec["operating"]["mechanism"]) == {"pin", "rigid", "offset", "flexible"}
+    tol = spec["plant"]["perturb"]
+    assert tol == TRAIN_TOLERANCES and set(tol) <= set(TRAIN_PERTURBABLE)
+    for name in ("generator_span_m", "exciter_span_m", "generator_diameter_m", "exciter_diameter_m"):
+        assert 0.0 < tol[name] <= 0.02, name
+    assert tol["clearance_m"] > 0.02 and tol["viscosity_pa_s"] > 0.02
+    assert set(spec["operating"]["mechanism"]) == {"rigid", "flexible"}       # the preset names no coupling
+    assert spec["measurement"]["bearings"] == [1, 2, 3, 4]
     # a quarter of the Δ levels are aligned machines: the model sees healthy ones of its plant
     levels = spec["operating"]["misalignment"]
     assert levels.count(0.0) / len(levels) == pytest.approx(0.25) and max(levels) == pytest.approx(0.6)
 
 
-def test_a_shaftline_file_gives_its_plant_and_the_users_sweep_wins(tmp_path):
-    from rotordiag.simulator import shaftline
+def test_the_default_plant_without_a_shaft_line_stays_the_lumped_model():
+    from rotordiag.simulator import Plant
+
+    plant = describe_plant()
+    spec = plant_dataset_spec(plant, n_samples=8)
+    assert not plant.is_train and spec["plant"].get("model", "lumped") == "lumped"
+    assert spec["plant"]["perturb"] == PLANT_TOLERANCES and plant.base_plant() == Plant.default()
+    assert set(spec["operating"]["mechanism"]) == {"pin", "rigid", "offset", "flexible"}
+
+
+def test_a_shaftline_file_gives_its_train_its_coupling_and_the_users_sweep_wins(tmp_path):
+    from rotordiag.simulator.shaftline import ShaftLine
+    from rotordiag.simulator.train.plant import TrainPlant
 
     f = tmp_path / "plant.toml"
     f.write_text("rated_speed_rpm = 3000\n" + EXAMPLE.read_text())
     plant = describe_plant(shaftline=f)
     assert plant.name == "shaftline:plant.toml" and plant.rated_speed_rpm == (3000.0,)
-    assert plant.base_plant() == shaftline.to_plant(shaftline.ShaftLine.from_file(EXAMPLE))
+    assert plant.base_plant() == TrainPlant.of(ShaftLine.from_file(EXAMPLE))
     spec = plant_dataset_spec(plant, sweep={"operating": {"speed_rpm": {"min": 2900, "max": 3100},
                                                           "misalignment": {"min": 0.0, "max": 0.5}}})
     assert spec["operating"]["speed_rpm"] == {"min": 2900, "max": 3100}
     assert spec["operating"]["misalignment"] == {"min": 0.0, "max": 0.5}
+    # a shaft line that names its coupling is trained and reported on that coupling only
+    tables = tomllib.loads(EXAMPLE.read_text())
+    tables["coupling"] = {**tables.get("coupling", {}), "type": "flexible"}
+    flex = describe_plant(shaftline=tables, rated_speed_rpm=3000)
+    assert plant_dataset_spec(flex)["operating"]["mechanism"] == ["flexible"]
+    assert {c["label_mechanism"] for c in held_out_cases(flex, 1, 0)} == {"flexible", "aligned"}
+    with pytest.raises(ValueError, match="unknown train plant value"):
+        describe_plant(shaftline=tables, plant_set={"generator_mass_kg": 1.0})
     with pytest.raises(ValueError, match="one way"):
         describe_plant(preset="gen50_2pole", shaftline=f)
     with pytest.raises(ValueError, match="gen600_4pole"):
@@ -80,20 +110,53 @@ def test_a_shaftline_file_gives_its_plant_and_the_users_sweep_wins(tmp_path):
         describe_plant(shaftline=bad)
 
 
-def test_held_out_cases_are_the_plant_within_tolerance_at_its_speeds_and_seeded():
+def test_held_out_cases_are_the_train_within_tolerance_at_its_speeds_and_seeded():
     plant = describe_plant(preset="gen600_4pole")
     base = plant.base_plant().to_dict()
     cases = held_out_cases(plant, 3, seed=7)
-    assert len(cases) == 15 and [c["label_mechanism"] for c in cases].count("aligned") == 3
+    assert len(cases) == 9 and [c["label_mechanism"] for c in cases].count("aligned") == 3
+    assert {c["mechanism"] for c in cases} == {"rigid", "flexible"}
+    for c in cases:
+        assert c["plant"]["model"] == "train" and c["plant"]["shaftline"] == base["shaftline"]
+        for name, r in TRAIN_TOLERANCES.items():
+            v, v0 = np.asarray(c["plant"][name], dtype=float), np.asarray(base[name], dtype=float)
+            assert np.all(np.abs(v - v0) <= r * np.abs(v0) + 1e-12), name      # a zero (no body mass) stays zero
+        assert 1200.0 <= c["speed_rpm"] <= 1890.0
+        aligned = c["label_mechanism"] == "aligned"
+        assert (c["misalignment"] == 0.0) == aligned and (c["angular_misalignment_mrad"] == 0.0) == aligned
+        assert abs(c["angular_misalignment_mrad"]) <= 0.04
+    rated = [c["speed_rpm"] for i, c in enumerate(cases) if i % 2 == 0]
+    assert all(min(abs(s / 1500 - 1), abs(s / 1800 - 1)) <= 0.01 for s in rated)
+    assert held_out_cases(plant, 3, seed=7) == cases and held_out_cases(plant, 3, seed=8) != cases
+
+
+def test_the_default_plants_held_out_cases_stay_lumped_within_its_tolerances():
+    plant = describe_plant()
+    base = plant.base_plant().to_dict()
+    cases = held_out_cases(plant, 2, seed=7)
+    assert len(cases) == 10 and [c["label_mechanism"] for c in cases].count("aligned") == 2
     for c in cases:
         for name, r in PLANT_TOLERANCES.items():
             ratio = np.asarray(c["plant"][name], dtype=float) / np.asarray(base[name], dtype=float)
             assert np.all(np.abs(ratio - 1) <= r + 1e-12), name
-        assert 1200.0 <= c["speed_rpm"] <= 1890.0
-        assert (c["misalignment"] == 0.0) == (c["label_mechanism"] == "aligned")
-    rated = [c["speed_rpm"] for i, c in enumerate(cases) if i % 2 == 0]
-    assert all(min(abs(s / 1500 - 1), abs(s / 1800 - 1)) <= 0.01 for s in rated)
-    assert held_out_cases(plant, 3, seed=7) == cases and held_out_cases(plant, 3, seed=8) != cases
+
+
+def test_a_held_out_train_case_is_simulated_as_the_training_sample_of_the_same_draw():
+    """The report's recordings and the training data are the same physics: a held-out case run through
+    ``simulate_train_case`` gives the journals that the dataset worker's train sample (same train, speed,
+    offset, transient) gives — an offset case moves the exciter-side journals' mean away from the aligned case."""
+    from rotordiag.models.plant_retrain import simulate_train_case
+
+    plant = describe_plant(preset="gen600_4pole")
+    c = held_out_cases(plant, 1, seed=0)[0]
+    aligned = {**c, "misalignment": 0.0, "angular_misalignment_mrad": 0.0}
+    d, d0 = simulate_train_case(c, 4), simulate_train_case(aligned, 4)
+    assert d.shape == (7 * 128, 4, 2) and np.isfinite(d).all()
+    shift_um = np.linalg.norm(d.mean(axis=0) - d0.mean(axis=0), axis=1) * 1e6
+    offset_um = c["misalignment"] * c["plant"]["clearance_m"] * 1e6
+    # the coupling-end journals (bearings 2, 3) move with the offset, by a fraction of it (the film and the
+    # shafts take the rest), never by more than the offset itself
+    assert shift_um[1:3].max() > 0.01 * offset_um and shift_um.max() < offset_um
 
 
 def test_the_report_measures_every_condition_of_the_plants_own_recordings():
@@ -244,6 +307,31 @@ def test_staged_progress_is_monotonic_and_its_eta_is_the_linear_rest():
     assert sum(p.share.values()) == pytest.approx(1.0)
 
 
+def test_a_train_retrains_eta_is_exact_when_each_stage_runs_at_its_measured_rate():
+    """A shaft-train retrain whose stages take TRAIN_STAGE_SECONDS per unit: the ETA at every step is the time
+    really left (the linear ETA is exact when the weights are the true costs); the lumped constants, where a
+    train sample costs several lumped ones, would be off by more than half the time left once the simulation
+    is done."""
+    from rotordiag.models.plant_retrain import retrain_units, stage_seconds
+
+    plant = describe_plant(preset="gen600_4pole")
+    units = retrain_units(plant, 40, 2)
+    assert units["held-out simulation"] == 6 and units["report"] == 2 * len(report_conditions()) * 6
+    assert retrain_units(describe_plant(), 40, 2)["held-out simulation"] == 10
+    assert stage_seconds(plant) == TRAIN_STAGE_SECONDS and stage_seconds(describe_plant()) == STAGE_SECONDS
+    t = [0.0]
+    p = StagedProgress(units, clock=lambda: t[0], seconds=stage_seconds(plant))
+    lumped = StagedProgress(units, clock=lambda: t[0])
+    total = sum(TRAIN_STAGE_SECONDS[k] * v for k, v in units.items())
+    for stage, n in units.items():
+        for d in range(1, n + 1):
+            t[0] += TRAIN_STAGE_SECONDS[stage]
+            f, eta = p.update(stage, d, n)
+            assert eta is None or eta == pytest.approx(total - t[0], abs=1e-6)
+            if stage == "simulating" and d == n:
+                assert abs(lumped.update(stage, d, n)[1] - (total - t[0])) > 0.5 * (total - t[0])
+
+
 def test_job_eta_is_elapsed_times_the_rest_over_the_fraction():
     from rotordiag.service.api.routes.jobs import eta_seconds
 
@@ -302,14 +390,54 @@ def test_retrain_cli_for_a_preset_stores_its_report_and_shows_it(tmp_path):
     rep = json.loads((reg_root / "v0001" / "plant_report.json").read_text())
     assert card["plant_report"]["pending"] is False and card["plant"]["name"] == "preset:gen600_4pole"
     assert set(rep["per_condition"]) == {c.name for c in report_conditions()}
-    assert rep["held_out"]["n_cases"] == 5 and rep["models"]["active"].endswith("(the shipped model)")
+    # a shaft train: one held-out case per coupling (rigid, flexible) and one aligned
+    assert rep["held_out"]["n_cases"] == 3 and rep["models"]["active"].endswith("(the shipped model)")
+    assert rep["held_out"]["plant_model"] == "train"
     for who in ("new", "active"):
         assert 0.0 <= rep["pooled"][who]["macro_f1"] <= 1.0 and rep["pooled"][who]["n"] > 0
     assert (reg.active_version() == "v0001") is (card["plant_report"]["better"] is True)
     assert card["activated_by"] == ("report" if card["plant_report"]["better"] else None)
     shown = CliRunner().invoke(app, ["models", "show", "v0001", "--registry", str(reg_root)])
     assert shown.exit_code == 0 and "quality report for preset:gen600_4pole" in shown.output
-    assert tomllib.loads((tmp_path / "work" / "dataset.toml").read_text())["plant"]["shaftline"]
+    spec = tomllib.loads((tmp_path / "work" / "dataset.toml").read_text())
+    assert spec["plant"]["shaftline"] and spec["plant"]["model"] == "train"
+
+
+@pytest.mark.slow
+def test_retrain_request_with_a_shaft_line_runs_on_its_train_and_reports(tmp_path):
+    """POST /models/retrain with a shaft line (gen600_4pole's tables, rated 1500 r/min) and a few samples: the job
+    simulates its finite-element train, registers the version with the plant's report on train recordings, and
+    its status moved through the stages with an ETA."""
+    from rotordiag.service.main import create_app
+    from rotordiag.simulator.shaftline import PRESETS
+    from tests.service_util import wait_until
+
+    tables = {k: v for k, v in PRESETS["gen600_4pole"].items() if k != "rated_speed_rpm"}
+    tables["coupling"] = {"type": "flexible"}
+    app = create_app(make_settings(tmp_path))
+    with TestClient(app) as c:
+        r = c.post("/models/retrain", json={"shaftline": tables, "rated_speed_rpm": 1500, "report_cases": 1,
+                                            "sweep": {"design": {"n_samples": 20}}}, headers=auth())
+        assert r.status_code == 202, r.text
+        url, seen = r.json()["url"], []
+
+        def finished():
+            j = c.get(url).json()
+            seen.append((j["stage"], j["eta_s"]))
+            return j["status"] in ("succeeded", "failed") and j
+
+        j = wait_until(finished, "the retrain job", ceiling_s=900, every_s=0.5)
+    assert j["status"] == "succeeded", j
+    report_file = Path(j["result"]["plant_report"]["file"])
+    rep = json.loads(report_file.read_text())
+    assert rep["held_out"]["plant_model"] == "train" and rep["held_out"]["n_cases"] == 2    # flexible + aligned
+    assert rep["held_out"]["speed_rpm_range"][0] >= 0.8 * 1500 - 1e-6
+    assert rep["held_out"]["speed_rpm_range"][1] <= 1.05 * 1500 + 1e-6
+    card = json.loads((report_file.parent / "card.json").read_text())
+    assert card["plant_report"]["pending"] is False and card["plant"]["shaftline"]["coupling"]["type"] == "flexible"
+    assert any(stage == "simulating" for stage, _ in seen)
+    etas = [e for _, e in seen if e is not None]
+    assert etas and all(math.isfinite(e) and e >= 0 for e in etas)
 
 
 def test_columns_measured_on_few_plants_are_dropped_before_training():
@@ -339,16 +467,25 @@ def test_retrain_request_takes_the_shaftline_files_text_with_its_rated_speed(tmp
     from rotordiag.service.work import prepare_retrain_job
     from rotordiag.simulator import shaftline
     from rotordiag.simulator.dataset.spec import parse_spec
+    from rotordiag.simulator.train.plant import TrainPlant
 
     text = "rated_speed_rpm = 3600\n" + EXAMPLE.read_text()
     params = prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": text}), make_settings(tmp_path))
     resolved = parse_spec(params["spec_toml"])
-    assert resolved.base_plant == shaftline.to_plant(shaftline.ShaftLine.from_file(EXAMPLE))
+    assert resolved.spec.plant.model == "train"
+    assert resolved.base_plant == TrainPlant.of(shaftline.ShaftLine.from_file(EXAMPLE))
     sp = resolved.spec.operating.speed_rpm
     assert (sp.min, sp.max) == (pytest.approx(0.8 * 3600), pytest.approx(1.05 * 3600))
     assert params["plant_description"]["rated_speed_rpm"] == [3600.0] and params["activate"] is True
     with pytest.raises(InputError, match="not valid TOML"):
         prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": "[generator"}), make_settings(tmp_path))
+    # plant values over a shaft line are the train's (TRAIN_PERTURBABLE); a lumped field is named as unknown
+    params = prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": text, "plant": {
+        "clearance_m": 3.1e-4}}), make_settings(tmp_path))
+    assert parse_spec(params["spec_toml"]).base_plant.clearance_m == pytest.approx(3.1e-4)
+    with pytest.raises(InputError, match="generator_mass_kg"):
+        prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": text, "plant": {
+            "generator_mass_kg": 1.0}}), make_settings(tmp_path))
     with pytest.raises(InputError, match="once"):
         prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": text, "shaftline": {}}),
                             make_settings(tmp_path))

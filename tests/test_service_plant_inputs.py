@@ -23,15 +23,24 @@ def _line() -> dict:
 
 
 def test_retrain_builds_its_sweep_on_the_shaftline_plant_with_overrides(tmp_path):
-    body = RetrainRequest.model_validate({"shaftline": _line(), "plant": {"asymmetry": 0.03},
+    """A shaft line is retrained for on its finite-element train (issue 48 item 3): `plant` values are the train's,
+    the user's sweep tables win, a lumped-only mechanism is a 4xx naming the train's couplings."""
+    from rotordiag.service.errors import InputError
+    from rotordiag.simulator.train.plant import TrainPlant
+
+    body = RetrainRequest.model_validate({"shaftline": _line(), "plant": {"generator_asymmetry": 0.03},
                                           "sweep": {"plant": {"scale": {"viscosity_pa_s": {"min": 0.7, "max": 1.4}}},
-                                                    "operating": {"mechanism": {"offset": 1, "flexible": 1}}}})
+                                                    "operating": {"mechanism": {"rigid": 2, "flexible": 1}}}})
     params = prepare_retrain_job(body, make_settings(tmp_path))
     resolved = parse_spec(params["spec_toml"])
-    expect = shaftline.to_plant(shaftline.ShaftLine.from_file(EXAMPLE)).replace(asymmetry=0.03)
+    expect = TrainPlant.of(shaftline.ShaftLine.from_file(EXAMPLE)).replace(generator_asymmetry=0.03)
     assert resolved.base_plant == expect and resolved.sources.keys() == {"shaftline:inline"}
-    assert resolved.spec.operating.mechanism == {"offset": 1.0, "flexible": 1.0}
+    assert resolved.spec.plant.model == "train"
+    assert resolved.spec.operating.mechanism == {"rigid": 2.0, "flexible": 1.0}
     assert params["spec_hash"] == resolved.spec_hash and params["shaftline"] is True
+    with pytest.raises(InputError, match="coupling"):
+        prepare_retrain_job(RetrainRequest.model_validate({"shaftline": _line(), "sweep": {"operating": {
+            "mechanism": {"offset": 1, "flexible": 1}}}}), make_settings(tmp_path))
 
 
 def test_retrain_takes_a_preset_by_name_and_its_sweep_follows_the_rated_speed(tmp_path):
@@ -39,11 +48,12 @@ def test_retrain_takes_a_preset_by_name_and_its_sweep_follows_the_rated_speed(tm
     rated speeds (0.8–1.05 ×), not at 1200–2200 r/min; a given rated speed does the same; the user's own speed range
     still wins; an unknown preset, or a preset with a shaft line, is a 4xx saying what to fix."""
     from rotordiag.service.errors import InputError
-    from rotordiag.simulator.shaftline import preset, to_plant
+    from rotordiag.simulator.shaftline import preset
+    from rotordiag.simulator.train.plant import TrainPlant
 
     params = prepare_retrain_job(RetrainRequest.model_validate({"preset": "gen600_4pole"}), make_settings(tmp_path))
     resolved = parse_spec(params["spec_toml"])
-    assert resolved.base_plant == to_plant(preset("gen600_4pole")) and params["preset"] == "gen600_4pole"
+    assert resolved.base_plant == TrainPlant.of(preset("gen600_4pole")) and params["preset"] == "gen600_4pole"
     sp = resolved.spec.operating.speed_rpm
     assert (sp.min, sp.max) == (pytest.approx(0.8 * 1500), pytest.approx(1.05 * 1800))
     rated = parse_spec(prepare_retrain_job(RetrainRequest.model_validate({"shaftline": _line(), "rated_speed_rpm": 3000}),
