@@ -85,7 +85,7 @@ def test_every_template_of_every_code_renders_from_its_fields():
     for code, e in CATALOGUE.items():
         assert e.templates and all(re.fullmatch(r"[a-z_]+", v) for v in e.templates)
         for variant, template in e.templates.items():
-            assert template.strip(), (code, variant)
+            assert template.strip() and "`" not in template and "|" not in template, (code, variant)   # the table
             fields = e.fields(variant)
             text = e.message(variant, {f: _Field(f) for f in fields})
             assert "{" not in text and "}" not in text, (code, variant, text)
@@ -146,6 +146,14 @@ def test_the_schema_enum_is_the_catalogue_and_a_foreign_code_is_refused():
     assert ReasonOut(code="ood", status="uncertain", message="m").code == "ood"
     with pytest.raises(ValidationError):
         ReasonOut(code="made_up_code", status="uncertain", message="m")
+
+
+def test_the_reason_table_shows_every_template():
+    table = markdown_table()
+    for e in CATALOGUE.values():
+        row = next(r for r in table.splitlines() if r.startswith(f"| `{e.code}` |"))
+        assert row.count(" | ") == 5 and all(f"`{t}`" in row for t in e.templates.values()), e.code
+        assert all(f"*{v}*: " in row for v in e.templates) if len(e.templates) > 1 else "*default*" not in row
 
 
 def test_docs_pipeline_holds_the_generated_reason_table():

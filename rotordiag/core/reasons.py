@@ -451,9 +451,13 @@ def require_code(code: str, status: str) -> None:
 
 
 def markdown_table() -> str:
-    """The catalogue as a Markdown table (code, found by, status, meaning, what to do), as docs/pipeline.md holds it."""
-    rows = ["| code | found by | status | meaning | what to do |", "|---|---|---|---|---|"]
+    """The catalogue as a Markdown table (code, found by, status, meaning, what to do, message template), as
+    docs/pipeline.md holds it; a code with variants lists each template after its variant's name."""
+    rows = ["| code | found by | status | meaning | what to do | message (template) |", "|---|---|---|---|---|---|"]
     for e in _ENTRIES:
         where = "sanity check" if e.kind == SANITY else "model side"
-        rows.append(f"| `{e.code}` | {where} | {' / '.join(e.statuses)} | {e.meaning} | {e.action} |")
+        templates = e.templates
+        message = ("<br>".join(f"*{v}*: `{t}`" for v, t in templates.items()) if len(templates) > 1
+                   else f"`{templates[DEFAULT_VARIANT]}`")
+        rows.append(f"| `{e.code}` | {where} | {' / '.join(e.statuses)} | {e.meaning} | {e.action} | {message} |")
     return "\n".join(rows) + "\n"
