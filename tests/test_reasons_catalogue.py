@@ -111,6 +111,38 @@ def test_values_that_are_not_the_templates_fields_are_refused():
         Reason("ood", UNCERTAIN, "the recording is unlike the training data")               # free text: refused
 
 
+def _literal_value_calls() -> list[tuple[str, str, str, frozenset[str]]]:
+    """(where, code, variant, value names) of every ``Reason(...)`` / ``SanityFinding(...)`` call in the packages whose
+    code, values (a dict display with string keys, no ``**``) and variant (absent or a string) are written out."""
+    found = []
+    for path in sorted(p for d in ("features", "models", "service", "rotordiag") for p in (ROOT / d).rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in CONSTRUCTORS
+                    and node.args and isinstance(node.args[0], ast.Constant)):
+                continue
+            values = node.args[2] if len(node.args) > 2 else next(
+                (k.value for k in node.keywords if k.arg == "values"), None)
+            variant = node.args[-1] if len(node.args) > 3 + (node.func.id == "SanityFinding") else next(
+                (k.value for k in node.keywords if k.arg == "variant"), ast.Constant("default"))
+            if values is None:
+                values = ast.Dict(keys=[], values=[])
+            if not (isinstance(values, ast.Dict) and all(isinstance(k, ast.Constant) for k in values.keys)
+                    and isinstance(variant, ast.Constant)):
+                continue
+            found.append((f"{path.relative_to(ROOT)}:{node.lineno}", node.args[0].value, variant.value,
+                          frozenset(k.value for k in values.keys if isinstance(k, ast.Constant))))
+    return found
+
+
+def test_the_values_written_at_each_call_are_its_templates_fields():
+    """Where a reason's values are written out at the call, they are its template's fields: a template changed
+    without its call (or a call without its template) fails here, not only when that recording comes."""
+    calls = _literal_value_calls()
+    assert len(calls) >= 15                                    # the scan finds the calls (it can fail)
+    for where, code, variant, names in calls:
+        assert names == CATALOGUE[code].fields(variant), (where, code, variant)
+
+
 def test_a_length_is_written_in_um_or_mil_from_its_value():
     """A deliberate test of a template's rendered wording: a length carried as a number in µm is written in mil
     (÷ 25.4) only when the message is rendered in mil."""
