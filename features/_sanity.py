@@ -19,15 +19,15 @@ Too few revolutions or samples per revolution (3X near Nyquist) are refused earl
 """
 from __future__ import annotations
 
-from collections.abc import Iterable
-from dataclasses import dataclass
-from typing import cast
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, cast
 
 import numpy as np
 
 from rotordiag.core.notes import Length as L
-from rotordiag.core.notes import Measured as M
-from rotordiag.core.reasons import FAIL, WARN, require_code
+from rotordiag.core.notes import Measured
+from rotordiag.core.reasons import DEFAULT_VARIANT, FAIL, WARN, code_info, require_code
 
 from ._common_mode import COMMON_MODE_MIN_PROBES, CommonMode, common_mode
 from ._keyphasor import keyphasor_fault, pulses_in_record
@@ -93,18 +93,27 @@ class SanityFinding:
         Stable identifier, one of the catalogue's (:mod:`rotordiag.core.reasons`; any other is refused).
     level : str
         ``"fail"`` or ``"warn"``.
-    message : str
-        What was found and what to check.
+    values : mapping
+        The catalogue template's fields, exactly (a length as :class:`~rotordiag.core.notes.Length`).
     bearing : int or None
+    variant : str
+        Which of the code's templates (``"default"`` unless the code has named cases).
     """
 
     code: str
     level: str
-    message: str
+    values: Mapping[str, Any] = field(default_factory=dict, hash=False)
     bearing: int | None = None
+    variant: str = DEFAULT_VARIANT
 
     def __post_init__(self) -> None:
         require_code(self.code, self.level)
+        object.__setattr__(self, "_message", code_info(self.code).message(self.variant, self.values))
+
+    @property
+    def message(self) -> Measured:
+        """What was found and what to check, in words (µm; ``.render("mil")`` for mils)."""
+        return self._message  # type: ignore[attr-defined]
 
     def to_dict(self) -> dict:
         return {"code": self.code, "level": self.level, "message": self.message, "bearing": self.bearing}
@@ -123,19 +132,15 @@ def _channel_checks(rec: Recording) -> list[SanityFinding]:
     at_high = np.count_nonzero(data >= (highs - tols)[:, None], axis=1) / n
     for i, ch in enumerate(rec.channels):
         d = data[i]
-        where = f"bearing {ch.bearing} probe at {ch.angle_deg:g}°"
+        where = {"bearing": ch.bearing, "angle_deg": ch.angle_deg}
         lo, hi = float(lows[i]), float(highs[i])
         ptp = hi - lo
         scale = float(scales[i])
         if lo == 0 and hi == 0:
-            out.append(SanityFinding("zero_channel", FAIL, f"{where}: every sample is 0 — the channel is not "
-                                     "connected, not recorded or mapped to the wrong column; check the wiring and "
-                                     "the channel order", ch.bearing))
+            out.append(SanityFinding("zero_channel", FAIL, where, ch.bearing))
             continue
         if ptp <= 1e-9 * scale:
-            out.append(SanityFinding("flat_channel", FAIL, M.of(f"{where}: the signal is constant (", L(float(d[0]), ".6g"), ") — probe "
-                                     "disconnected or saturated, or the DC gap recorded without its AC part; "
-                                     "check the probe, its driver and the acquisition channel"), ch.bearing))
+            out.append(SanityFinding("flat_channel", FAIL, {**where, "level": L(float(d[0]), ".6g")}, ch.bearing))
             continue
         tol = float(tols[i])
         frac = max(float(at_low[i]), float(at_high[i]))
@@ -150,16 +155,13 @@ def _channel_checks(rec: Recording) -> list[SanityFinding]:
                 if stretch is not None:
                     fs = rec.sample_rate_hz
                     out.append(SanityFinding(
-                        "dropout", FAIL, M.of(f"{where}: the signal holds ", L(hi if at == "maximum" else lo, ".6g"), " for "
-                        f"{1e3 * (stretch[1] - stretch[0]) / fs:.0f} ms in one stretch ({stretch[0] / fs:.3f}–"
-                        f"{stretch[1] / fs:.3f} s) — a dropout (a loose connector or cable, the acquisition losing "
-                        "samples), not motion; check the connection and send a record without it (cut it out, or "
-                        "record again)"), ch.bearing))
+                        "dropout", FAIL, {**where, "level": L(hi if at == "maximum" else lo, ".6g"),
+                                          "duration_ms": 1e3 * (stretch[1] - stretch[0]) / fs,
+                                          "start_s": stretch[0] / fs, "stop_s": stretch[1] / fs}, ch.bearing))
                     continue
                 out.append(SanityFinding(
-                    "clipped_channel", FAIL, M.of(f"{where}: {100 * frac:.1f} % of the samples sit at the channel's {at} (",
-                         L(hi if at == "maximum" else lo, ".6g"), ") — the signal is clipped (probe outside its "
-                         "linear range, driver or ADC saturated); check the probe gap voltage and the input range"), ch.bearing))
+                    "clipped_channel", FAIL, {**where, "share_pct": 100 * frac, "extreme": at,
+                                              "level": L(hi if at == "maximum" else lo, ".6g")}, ch.bearing))
     return out
 
 
@@ -217,12 +219,8 @@ def _spike_finding(rec: Recording, b: int, x: np.ndarray, y: np.ndarray, limit: 
     if rest > limit:
         return None
     t = ", ".join(f"{i / rec.sample_rate_hz:.4g}" for i in bad[:5]) + (" …" if bad.size > 5 else "")
-    return SanityFinding(
-        "spike", WARN,
-        M.of(f"bearing {b}: {bad.size} isolated sample(s) (at t = {t} s) stand far off the rest of the record and "
-             "make the motion ", L(ptp, ".4g"), " pk-pk; without them it is ", L(rest, ".4g"), " pk-pk, inside the "
-             "clearance. A glitch — electrical noise, a loose connector, a scratch or a dropout — not shaft motion: "
-             "check the probe's cable and connector, or cut those samples out"), b)
+    return SanityFinding("spike", WARN, {"bearing": b, "n_samples": int(bad.size), "times_s": t,
+                                         "orbit": L(ptp, ".4g"), "orbit_without": L(rest, ".4g")}, b)
 
 
 def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
@@ -240,27 +238,20 @@ def _amplitude_checks(rec: Recording, fr) -> list[SanityFinding]:
         if spike is not None:
             out.append(spike)
         elif beyond and ptp > limit:
-            allowance = ((" (allowing ", L(noise_pp), " pk-pk for the probes' noise)")
-                         if noise_pp > 0.01 * 2 * c else ())
-            out.append(SanityFinding(
-                "orbit_exceeds_clearance", FAIL,
-                M.of(f"bearing {b}: the motion is ", L(ptp, ".4g"), f" pk-pk, {ptp / (2 * c):.1f}× the diametral "
-                     "clearance 2c = ", L(2 * c, ".4g"), *allowance, " — a journal cannot move that far inside its "
-                     f"bearing. Check the units (data declared in {units_txt!r}; µm read as mils is ×25.4), the "
-                     "probe sensitivity (e.g. 7.87 mV/µm) and clearance_um (radial, in µm)"), b))
+            values = {"bearing": b, "orbit": L(ptp, ".4g"), "ratio": ptp / (2 * c), "clearance_2c": L(2 * c, ".4g"),
+                      "units": units_txt}
+            noted = noise_pp > 0.01 * 2 * c
+            out.append(SanityFinding("orbit_exceeds_clearance", FAIL,
+                                     {**values, "noise": L(noise_pp)} if noted else values, b,
+                                     "noise_allowance" if noted else DEFAULT_VARIANT))
         elif ptp > PROBE_RANGE_UM:
-            out.append(SanityFinding(
-                "orbit_exceeds_probe_range", FAIL,
-                M.of(f"bearing {b}: the motion is ", L(ptp, ".4g"), " pk-pk, beyond the linear range of a "
-                     "proximity probe (", L(PROBE_RANGE_UM, "g"), f") — check the units (data declared in "
-                     f"{units_txt!r}) and the probe sensitivity"), b))
+            out.append(SanityFinding("orbit_exceeds_probe_range", FAIL,
+                                     {"bearing": b, "orbit": L(ptp, ".4g"), "probe_range": L(PROBE_RANGE_UM, "g"),
+                                      "units": units_txt}, b))
         mean = np.array(det.mean_um)
         r = float(np.hypot(*mean))
         if r > MAX_DC_UM:
-            out.append(SanityFinding(
-                "dc_implausible", FAIL,
-                M.of(f"bearing {b}: the mean probe reading is ", L(r, ".4g"), " from zero — no proximity "
-                     f"probe reads such a gap; check the units (declared {units_txt!r}) and the scale factor"), b))
+            out.append(SanityFinding("dc_implausible", FAIL, {"bearing": b, "mean": L(r, ".4g"), "units": units_txt}, b))
     return out
 
 
@@ -278,17 +269,11 @@ def _whirl_checks(fr) -> list[SanityFinding]:
         judged.append(b)
         if (f1 - r1) / (f1 + r1) < REVERSE_WHIRL_INDEX:
             reverse.append(b)
-    hint = ("check the probe order (the first probe of each pair must be the one the shaft reaches first when "
-            "it turns), the rotation direction and the viewing end (angles are measured toward the +y probe in "
-            "the direction of rotation)")
     if len(judged) >= 2 and reverse == judged:
-        out.append(SanityFinding("reverse_whirl_all", FAIL,
-                                 f"1X whirls backward at every bearing ({', '.join(map(str, reverse))}); real "
-                                 f"machines whirl forward at 1X almost everywhere — {hint}"))
+        out.append(SanityFinding("reverse_whirl_all", FAIL, {"bearings": ", ".join(map(str, reverse))}))
     else:
         for b in reverse:
-            out.append(SanityFinding("reverse_whirl", WARN, f"bearing {b}: 1X whirls backward — possible with very "
-                                     f"anisotropic supports, but more often a convention error: {hint}", b))
+            out.append(SanityFinding("reverse_whirl", WARN, {"bearing": b}, b))
     return out
 
 
@@ -305,31 +290,22 @@ def _signal_checks(rec: Recording, fr) -> list[SanityFinding]:
         values = dict(zip(fr.names, fr.values))
         whirl = [b for b in weak if float(values.get(f"b{b}_subsync_frac", np.nan)) > WHIRL_DOMINANT_FRACTION]
         mismatch = _speed_mismatch(rec, fr)
+        speed = {} if mismatch is None else mismatch
         if whirl:
             order = float(values.get(f"b{whirl[0]}_subsync_peak_order", np.nan))
-            at = f" near {order:.2f}X" if np.isfinite(order) else ""
-            whirl_text = ("oil whirl or whip, a fault to act on in itself (load, oil temperature, bearing clearance)")
+            near = f" near {order:.2f}X" if np.isfinite(order) else ""
             return [SanityFinding("no_sync_signal", FAIL,
-                                  f"no 1X vibration stands out of the noise at any bearing, and sub-synchronous "
-                                  f"vibration{at} dominates at bearing(s) {', '.join(map(str, whirl))} — "
-                                  + (f"{whirl_text}; misalignment cannot be judged from this recording. Re-record "
-                                     "with less noise or a keyphasor, or once the machine runs stably"
-                                     if mismatch is None else
-                                     f"{mismatch}; or it is {whirl_text}. Misalignment cannot be judged from this "
-                                     "recording"))]
-        return [SanityFinding("no_sync_signal", FAIL,
-                              "no 1X vibration stands out of the noise at any bearing — the recording carries no "
-                              "synchronous signal to diagnose (probes not reading the shaft, wrong speed, or a "
-                              "machine at rest); " + ("check the probes and speed_rpm / the keyphasor"
-                                                      if mismatch is None else mismatch))]
-    return [SanityFinding("no_sync_signal", WARN, f"bearing {b}: no 1X vibration above the noise floor", b)
-            for b in weak]
+                                  {"near": near, "bearings": ", ".join(map(str, whirl)), **speed}, None,
+                                  "whirl" if mismatch is None else "whirl_speed")]
+        return [SanityFinding("no_sync_signal", FAIL, speed, None,
+                              "every_bearing" if mismatch is None else "every_bearing_speed")]
+    return [SanityFinding("no_sync_signal", WARN, {"bearing": b}, b) for b in weak]
 
 
-def _speed_mismatch(rec: Recording, fr) -> str | None:
+def _speed_mismatch(rec: Recording, fr) -> dict[str, float] | None:
     """With a given speed: the running speed the signal shows when it is more than :data:`SPEED_MISMATCH_MIN_REL`
-    away from it, as a sentence — a wrong ``speed_rpm``, or a sample rate stated k times the true one (every line then
-    reads k times its frequency), told apart by the rate that would fit; else None."""
+    away from it, as the ``no_sync_signal`` template's values — a wrong ``speed_rpm``, or a sample rate stated k times
+    the true one (every line then reads k times its frequency), told apart by the rate that would fit; else None."""
     if fr.speed_source != "given":
         return None
     fs = rec.sample_rate_hz
@@ -340,9 +316,8 @@ def _speed_mismatch(rec: Recording, fr) -> str | None:
     ratio = 60.0 * f_hz / fr.speed_rpm
     if not abs(ratio - 1.0) > SPEED_MISMATCH_MIN_REL:
         return None
-    return (f"the signal's running-speed line reads {60.0 * f_hz:.0f} r/min, {ratio:.3g} × the given "
-            f"{fr.speed_rpm:.0f} r/min: either speed_rpm is wrong, or the sample rate is — if {fr.speed_rpm:.0f} r/min "
-            f"is right, the channels were sampled at {fs / ratio:.6g} Hz, not the {fs:g} Hz given")
+    return {"signal_rpm": 60.0 * f_hz, "ratio": ratio, "given_rpm": fr.speed_rpm, "fitting_rate_hz": fs / ratio,
+            "sample_rate_hz": fs}
 
 
 def common_mode_dominates(cm: CommonMode) -> bool:
@@ -359,17 +334,10 @@ def _common_mode_checks(fr) -> list[SanityFinding]:
         cm = common_mode(fr, k)
         if cm is None or not common_mode_dominates(cm):
             continue
-        source = ("mains pickup at the running frequency (50/60 Hz on a 2-pole generator)" if k == 1 else
-                  "mains pickup at twice the running frequency (100/120 Hz on a 2-pole generator, 50/60 Hz on a "
-                  "4-pole one)")
         out.append(SanityFinding(
             f"common_mode_{k}x", WARN,
-            M.of(f"the {k}X is one signal common to every probe (", L(cm.amp_um_pp), f" pk-pk at "
-                 f"{cm.phase_lag_deg:.0f}° on all {cm.n_probes} probes of bearings {', '.join(map(str, cm.bearings))}; "
-                 f"{100 * cm.share:.1f} % of the {k}X power): a shaft's {k}X orbit differs between probe directions "
-                 f"and from bearing to bearing, so this is no shaft motion but electrical — {source}: a ground loop "
-                 "or a shared supply — or the probe mountings vibrating together. Check the probe cabling and "
-                 "grounding (a probe at a fixed target reads the pickup alone) and re-record")))
+            {"amp": L(cm.amp_um_pp), "phase_lag_deg": cm.phase_lag_deg, "n_probes": cm.n_probes,
+             "bearings": ", ".join(map(str, cm.bearings)), "share_pct": 100 * cm.share}))
     return out
 
 
@@ -378,18 +346,15 @@ def _keyphasor_checks(rec: Recording) -> list[SanityFinding]:
         return []
     takes = rec.keyphasor_takes
     trains = takes if takes is not None else (cast(np.ndarray, rec.keyphasor_times_s),)
-    where = [f"the take of bearings {', '.join(map(str, g))}: " for g in rec.acquisition_groups] if takes else [""]
+    where = [", ".join(map(str, g)) for g in rec.acquisition_groups] if takes else [None]
     out = []
-    for train, prefix in zip(trains, where):
+    for train, group in zip(trains, where):
         fault = keyphasor_fault(pulses_in_record(train, rec.n_points, rec.sample_rate_hz))
         if fault is None:
             continue
-        out.append(SanityFinding(
-            "keyphasor_faulty", WARN,
-            f"{prefix}{fault.describe()}: the pulse train has missing or extra pulses, so the orders were not tracked "
-            "by it but at a steady speed, with phases relative to the first sample. Check the keyphasor probe's gap "
-            "and trigger level and the notch (worn, dirty, a second edge), or send the record without "
-            "keyphasor_times_s and with speed_rpm"))
+        out.append(SanityFinding("keyphasor_faulty", WARN, {"fault": fault.describe()}) if group is None else
+                   SanityFinding("keyphasor_faulty", WARN, {"fault": fault.describe(), "bearings": group}, None,
+                                 "take"))
     return out
 
 

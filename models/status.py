@@ -43,14 +43,14 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
 
 from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, short_bearing_attitude_deg
 from rotordiag.core.notes import Length, Measured
-from rotordiag.core.reasons import INCONCLUSIVE, UNCERTAIN, code_info, require_code
+from rotordiag.core.reasons import DEFAULT_VARIANT, INCONCLUSIVE, UNCERTAIN, code_info, require_code
 from rotordiag.features import speed_in_doubt
 
 from ._patterns import name_index
@@ -155,7 +155,8 @@ def policy_of(card: Mapping[str, Any] | None) -> DecisionPolicy:
 
 @dataclass(frozen=True)
 class Reason:
-    """Why a verdict is not confident.
+    """Why a verdict is not confident: a catalogue code with its typed values, its message rendered from the
+    catalogue's template.
 
     Attributes
     ----------
@@ -164,16 +165,25 @@ class Reason:
         status the catalogue does not allow the code).
     status : str
         ``uncertain`` or ``inconclusive``: what this reason alone makes of the verdict.
-    message : str
-        What was found and what to do.
+    values : mapping
+        The template's fields, exactly (a length as :class:`~rotordiag.core.notes.Length`); others are refused.
+    variant : str
+        Which of the code's templates (``"default"`` unless the code has named cases).
     """
 
     code: str
     status: str
-    message: str
+    values: Mapping[str, Any] = field(default_factory=dict, hash=False)
+    variant: str = DEFAULT_VARIANT
 
     def __post_init__(self) -> None:
         require_code(self.code, self.status)
+        object.__setattr__(self, "_message", code_info(self.code).message(self.variant, self.values))
+
+    @property
+    def message(self) -> Measured:
+        """What was found, in words (µm; ``.render("mil")`` for mils)."""
+        return self._message  # type: ignore[attr-defined]
 
     def to_dict(self) -> dict:
         """The reason as the answer carries it, with the catalogue's ``action`` (what to do, for every recording
@@ -212,13 +222,10 @@ def _near_centre_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
     ecc = np.array([row[j] for j in cols if j is not None], dtype=float)       # all four found (above)
     if not np.isfinite(ecc).all() or ecc.max() >= policy.near_centre_max_ecc:
         return []
-    return [Reason("journals_near_centre", UNCERTAIN,
-                   f"every journal sits within {ecc.max():.3f} c of its bearing centre (eccentricities "
-                   f"{', '.join(f'{e:.3f}' for e in ecc)} at bearings 1–4): the rotor's weight holds at least one "
-                   f"journal further off-centre than {policy.near_centre_max_ecc:g} c in nearly every machine (in 22 of 719 "
-                   "held-out plants of the training family it did not), so the sizes per clearance are suspect — check the units and the "
-                   "probe sensitivity (numbers 10× too small read like this), the clearance (radial, in µm) and that "
-                   "the DC readings are referenced to the bearing centre")]
+    e1, e2, e3, e4 = (float(e) for e in ecc)
+    return [Reason("journals_near_centre", UNCERTAIN, {"max_ecc_c": float(ecc.max()), "ecc1_c": e1, "ecc2_c": e2,
+                                                       "ecc3_c": e3, "ecc4_c": e4,
+                                                       "limit_c": policy.near_centre_max_ecc})]
 
 
 def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: DecisionPolicy = DEFAULT_POLICY
@@ -246,13 +253,7 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
         return []
     where = ", ".join(f"bearing {b} {phi:.0f}° ({off:+.0f}°)" for b, phi, off in found)
     return [Reason("centreline_frame_turned", UNCERTAIN,
-                   f"at every bearing the shaft centreline sits {np.mean(offsets):+.0f}° off the attitude angle a plain "
-                   f"oil-film journal bearing takes at its eccentricity ({where}; the angle from the load line, "
-                   "toward rotation). Either the whole picture is turned, as when the probes do not sit at the angles "
-                   "given — check angle_deg (from horizontal +x toward vertical-up +y; 45/135 is the default for 8 "
-                   "channels), the rotation direction and the viewing end — or the bearings are not plain cylindrical "
-                   "ones (tilting-pad bearings hold the journal near the load line), unlike every machine the model "
-                   "was trained on")]
+                   {"mean_offset_deg": float(np.mean(offsets)), "bearings": where})]
 
 
 def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray,
@@ -268,21 +269,15 @@ def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray,
         return []
     b, v, m = max(ratios, key=lambda t: abs(np.log(max(t[1], 1e-300) / t[2])))
     if v <= 0:                       # no 1X vibration at all (all-zero or flat probes): as far below as can be
-        return [Reason("scale", INCONCLUSIVE,
-                       Measured.of(f"no 1X vibration at bearing {b} (", Length(0.0), " pk-pk) where the training "
-                                   "data's typical is ", Length(m), ": check that the probes are connected and the "
-                                   "data are not all zeros"))]
+        return [Reason("scale", INCONCLUSIVE, {"bearing": b, "amp": Length(0.0), "typical": Length(m)},
+                       variant="none")]
     factor = m / v if v < m else v / m
     if factor < policy.scale_uncertain:
         return []
     status = INCONCLUSIVE if factor >= policy.scale_inconclusive else UNCERTAIN
     side = "below" if v < m else "above"
-    return [Reason("scale", status,
-                   Measured.of(f"1X vibration at bearing {b} is ", Length(v), f" pk-pk, {factor:.0f}× {side} the "
-                               "training data's typical ", Length(m), ": the model has not seen machines vibrating "
-                               "like this" + (" — check the units (µm vs mils ×25.4) and the probe sensitivity"
-                                              if side == "above" else " — a different machine design or a very "
-                                              "smooth-running one; read the evidence instead")))]
+    return [Reason("scale", status, {"bearing": b, "amp": Length(v), "factor": factor, "typical": Length(m)},
+                   variant=side)]
 
 
 _ORDER_AMP = re.compile(r"b(\d+)_(\d)x_major_(um_pp|pp_per_c)")
@@ -341,26 +336,33 @@ def envelope_reasons(findings: Sequence[dict], *, max_reasons: int = 3,
         side, factor = f["side"], f.get("factor")
         bound = f["train_min"] if side == "below" else f["train_max"]
         how = f"{factor:.0f}× " if factor is not None and factor >= 2 else ""
-        parts: list[str | Length] = [
-            f"{words} is ", *_num(f["value"], unit), f", {how}{side} anything in the training data "
-            f"({'min' if side == 'below' else 'max'} ", *_num(bound, unit), "; training range ",
-            *(_num(f["train_min"], unit) if unit.startswith("µm") else _num(f["train_min"], "°" if unit == "°" else "")),
-            " … ", *_num(f["train_max"], unit), "): "]
         name = str(f["feature"])
-        if "_attitude_" in name:
-            text = ("the shaft does not sit where a plain oil-film journal bearing puts it — bearings of another "
-                     "type (tilting-pad, rolling-element), or the DC gaps, probe angles or rotation direction are "
-                     "wrong; the model knows plain journal bearings only")
-        elif "um_pp" in name and side == "above":
-            text = "check the units (µm vs mils ×25.4) and the probe sensitivity; the model has not seen this"
-        elif "per_c" in name:
-            text = "check the stated bearing clearance, or a machine unlike the training family"
+        value: str | Length
+        low: str | Length
+        high: str | Length
+        shown: str | Length
+        if unit.startswith("µm"):                   # a length: typed, its unit's tail (" pk-pk") after each number
+            value, low, high, shown = Length(f["value"]), Length(f["train_min"]), Length(f["train_max"]), Length(bound)
+            tail = unit[2:]
         else:
-            text = "a machine or measurement unlike the training family; the model has not seen this"
-        if k == max_reasons - 1 and len(findings) > max_reasons:
-            text += f" (and {len(findings) - max_reasons} more feature(s) outside the training range)"
+            (value,), (shown,), (high,) = _num(f["value"], unit), _num(bound, unit), _num(f["train_max"], unit)
+            (low,) = _num(f["train_min"], "°" if unit == "°" else "")
+            tail = ""
+        if "_attitude_" in name:
+            variant = "attitude"
+        elif "um_pp" in name and side == "above":
+            variant = "amplitude_above"
+        elif "per_c" in name:
+            variant = "per_clearance"
+        else:
+            variant = DEFAULT_VARIANT
+        more = (f" (and {len(findings) - max_reasons} more feature(s) outside the training range)"
+                if k == max_reasons - 1 and len(findings) > max_reasons else "")
         status = INCONCLUSIVE if factor is not None and factor >= policy.scale_inconclusive else UNCERTAIN
-        out.append(Reason("outside_training", status, Measured.of(*parts, text)))
+        out.append(Reason("outside_training", status,
+                          {"feature": words, "value": value, "unit": tail, "how": how, "side": side,
+                           "bound_name": "min" if side == "below" else "max", "bound": shown, "train_min": low,
+                           "train_max": high, "more": more}, variant=variant))
     return out
 
 
@@ -570,12 +572,10 @@ def _recording_reasons(c: RecordingChecks, policy: DecisionPolicy = DEFAULT_POLI
     always had."""
     reasons: list[Reason] = list(c.extra)
     for f in c.sanity:
-        reasons.append(Reason(f.code, INCONCLUSIVE if f.level == "fail" else UNCERTAIN, f.message))
+        reasons.append(Reason(f.code, INCONCLUSIVE if f.level == "fail" else UNCERTAIN, f.values, f.variant))
     if np.isfinite(c.ood_score) and c.ood_score > 1.0:
         status = INCONCLUSIVE if c.ood_score > policy.ood_inconclusive else UNCERTAIN
-        reasons.append(Reason("ood", status, f"the recording is unlike the training data (OOD score {c.ood_score:.2f}; "
-                              f"> 1 unusual, > {policy.ood_inconclusive:g} far outside): another machine design, "
-                              "operating state or measurement set-up than the model knows"))
+        reasons.append(Reason("ood", status, {"ood_score": c.ood_score, "ood_inconclusive": policy.ood_inconclusive}))
     reasons += envelope_reasons(c.envelope, policy=policy)
     reasons += _scale_reasons(c.names, c.row, c.feature_median, policy)
     reasons += _near_centre_reasons(c.names, c.row, policy)
@@ -583,15 +583,11 @@ def _recording_reasons(c: RecordingChecks, policy: DecisionPolicy = DEFAULT_POLI
     if c.speed_source == "estimated":
         for w in c.warnings:
             if speed_in_doubt(w):
-                reasons.append(Reason("speed_ambiguous", UNCERTAIN, f"{w}"))
+                reasons.append(Reason("speed_ambiguous", UNCERTAIN, {"warning": w}))
     if c.never_missing:
         reasons.append(Reason("features_missing", UNCERTAIN,
-                              f"{len(c.never_missing)} feature(s) the model always had are missing here "
-                              f"(e.g. {', '.join(list(c.never_missing)[:3])}): "
-                              + ("record at least 32 revolutions for the motion type; "
-                                 if any(n.startswith("motion_") for n in c.never_missing) else "")
-                              + "give an x/y probe pair at each bearing the model was trained with "
-                              "(the coupling bearings 2 and 3 at least)"))
+                              {"n_missing": len(c.never_missing), "examples": ", ".join(list(c.never_missing)[:3])},
+                              "motion" if any(n.startswith("motion_") for n in c.never_missing) else DEFAULT_VARIANT))
     return reasons
 
 
@@ -605,8 +601,7 @@ def _call_reasons(m: ModelCall, c: RecordingChecks, policy: DecisionPolicy = DEF
     pmax = float(np.max(probabilities)) if len(probabilities) else np.nan
     if not pmax >= policy.confident_min_probability:
         reasons.append(Reason("low_probability", UNCERTAIN,
-                              f"no severity class is likely enough (highest probability {pmax:.0%} < "
-                              f"{policy.confident_min_probability:.0%}): the recording lies between classes"))
+                              {"p_max": pmax, "min_probability": policy.confident_min_probability}))
     if call_index is not None and len(probabilities):
         far = np.flatnonzero(_far_bands(len(probabilities), call_index))
         p_far = float(far_band_probability(probabilities, call_index))
@@ -614,9 +609,8 @@ def _call_reasons(m: ModelCall, c: RecordingChecks, policy: DecisionPolicy = DEF
             which = " or ".join(str(band_names[int(k)]) for k in far) if len(band_names) == len(probabilities) else \
                 "bands two or more away"
             reasons.append(Reason("far_band_probability", UNCERTAIN,
-                                  f"the model gives {p_far:.0%} to {which} — two or more bands from its call, more "
-                                  f"than the {policy.confident_max_far_probability:.0%} a confident verdict allows: recheck, "
-                                  "or compare with this machine's baseline"))
+                                  {"p_far": p_far, "bands": which,
+                                   "max_far_probability": policy.confident_max_far_probability}))
     reached: list[int] = []
     if call_index is not None and m.delta_interval is not None and len(m.band_edges):
         lo, hi = float(m.delta_interval[0]), float(m.delta_interval[1])
@@ -624,46 +618,30 @@ def _call_reasons(m: ModelCall, c: RecordingChecks, policy: DecisionPolicy = DEF
     if reached:
         which = " or ".join(str(band_names[k]) if len(band_names) > k else f"band {k}" for k in reached)
         reasons.append(Reason("far_band_interval", UNCERTAIN,
-                              f"the Δ estimate's {m.interval_level:.0%} interval ({lo:.3f}–{hi:.3f}) reaches {which} — "
-                              "two or more bands from the call: the Δ regressor does not rule out a gross error; "
-                              "recheck, or compare with this machine's baseline"))
+                              {"level": m.interval_level, "low": lo, "high": hi, "bands": which}))
     if m.alarm is not None and m.alarm[0] >= 0.5:
         reasons.append(Reason("below_alarm_threshold", UNCERTAIN,
-                              f"misalignment is more likely than not ({m.alarm[0]:.0%}) but below the {m.alarm[1]:.0%} "
-                              "the model needs to report it (set to keep false alarms on healthy machines at 5 %): "
-                              "called aligned — recheck, or compare with this machine's baseline"))
+                              {"p_misaligned": m.alarm[0], "threshold": m.alarm[1]}))
     ratio = coupling_2x_1x(c.names, c.row)
     outside = (np.isfinite(c.ood_score) and c.ood_score > 1.0) or bool(c.envelope)
     rule = signature_band(ratio, len(probabilities))
     if outside and call_index is not None and rule is not None and rule - call_index >= policy.signature_bands_above_call:
         called = str(band_names[call_index]) if len(band_names) > call_index else f"band {call_index}"
         read = str(band_names[rule]) if len(band_names) > rule else f"band {rule}"
-        reasons.append(Reason(
-            "signature_above_call", INCONCLUSIVE,
-            f"the model calls it {called}, but the coupling bearings' 2X/1X is {ratio:.2f}: the classic misalignment "
-            f"signature reads {read} (2X/1X ≥ {DEFAULT_RULE_CUTS[rule - 1]:g}), two or more bands above the call, and the "
-            "recording lies outside the machines the model was trained on, where its call is not to be trusted "
-            "against the physics — no severity is given. Check the alignment (or compare with this machine's "
-            "baseline); a strong 2X has other causes too: a two-pole rotor's asymmetry under gravity, a shaft "
-            "crack, looseness, or runout (give the slow-roll vectors)"))
+        reasons.append(Reason("signature_above_call", INCONCLUSIVE,
+                              {"called": called, "ratio_2x_1x": ratio, "read": read,
+                               "rule_cut": DEFAULT_RULE_CUTS[rule - 1]}))
     if m.misaligned_call:
         if not ratio >= policy.signature_min_2x_1x:
-            seen = "not measured" if not np.isfinite(ratio) else f"{ratio:.3f}"
-            reasons.append(Reason("no_2x_signature", UNCERTAIN,
-                                  f"called misaligned, but the coupling bearings show no 2X (largest 2X/1X {seen} < "
-                                  f"{policy.signature_min_2x_1x:g}): the classic signature is missing and nothing physical "
-                                  "backs the model's call — compare with this machine's baseline, check the "
-                                  "centreline, or re-record"))
+            if np.isfinite(ratio):
+                reasons.append(Reason("no_2x_signature", UNCERTAIN,
+                                      {"ratio_2x_1x": ratio, "min_2x_1x": policy.signature_min_2x_1x}))
+            else:
+                reasons.append(Reason("no_2x_signature", UNCERTAIN, {"min_2x_1x": policy.signature_min_2x_1x},
+                                      "not_measured"))
         reasons += list(m.static_offset)          # models.checks.one_position: listed here, after the 2X
     elif not coupling_centreline_known(c.names, c.row):
-        reasons.append(Reason("offset_not_assessed", UNCERTAIN,
-                              "called aligned without the shaft-centreline position at the coupling bearings "
-                              "(it needs the bearing clearance and DC probe readings referenced to the bearing "
-                              "centre; a raw gap is not a position): a stationary shaft-line offset shows mainly "
-                              "there and changes the vibration little, so it is not ruled out — give clearance_um "
-                              "and centre-referenced DC readings, or compare with this machine's baseline"))
+        reasons.append(Reason("offset_not_assessed", UNCERTAIN))
     if not m.class_delta_agree:
-        reasons.append(Reason("class_delta_disagree", UNCERTAIN,
-                              "the severity classifier and the Δ regressor disagree (the regressor's interval does "
-                              "not reach the class's band); the Δ shown is clipped into the class's band"))
+        reasons.append(Reason("class_delta_disagree", UNCERTAIN))
     return reasons

@@ -507,7 +507,9 @@ class ReasonOut(BaseModel):
                       "code is also a reason: `fail` makes it `inconclusive`, `warn` `uncertain`.",
                       json_schema_extra={"enum": list(CATALOGUE)})
     status: Literal["uncertain", "inconclusive"] = Field(..., description="What this reason alone makes of the verdict.")
-    message: str = Field(..., description="What was found and what to check.")
+    message: str = Field(..., description="What was found and what to check: the code's message template in the "
+                         "catalogue (docs/pipeline.md's reason table) filled with this recording's values, its lengths "
+                         "in `output_units`.")
     action: str | None = Field(None, description="What to do, the same for every answer with this code: the "
                                "catalogue's (`rotordiag.core.reasons`; docs/pipeline.md's reason table).")
 

@@ -57,7 +57,8 @@ def test_orders_are_not_tracked_by_a_faulty_train(speed_given):
     assert fr.speed_rpm == pytest.approx(RPM, rel=1e-6)
     assert fr.warnings[0].code == "keyphasor_not_used" and fr.warnings[0].values["speed_rpm"] == fr.speed_rpm
     finding = [f for f in fr.sanity if f.code == "keyphasor_faulty"]
-    assert len(finding) == 1 and finding[0].level == "warn" and "notch" in finding[0].message
+    assert len(finding) == 1 and finding[0].level == "warn" and finding[0].variant == "default"
+    assert finding[0].values["fault"]                                       # what is wrong with the pulse train
     for b, comps in DEFAULT_COMPONENTS.items():
         for k, ax, _, ay, _ in comps:
             assert fr[f"b{b}_x_{k}x_amp_um_pp"] == pytest.approx(2 * ax, rel=2e-3)

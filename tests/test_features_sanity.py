@@ -44,7 +44,7 @@ def test_micrometres_declared_as_mils_exceed_the_clearance(sim):
     fr = extract_features(_rec(ch, fs, units="mil"))
     fails = [f for f in fr.sanity if f.code == "orbit_exceeds_clearance"]
     assert fails and all(f.level == "fail" for f in fails)
-    assert "mil" in fails[0].message and "units" in fails[0].message
+    assert fails[0].values["units"] == "mil" and fails[0].values["ratio"] > 1.0     # the declared units, named
 
 
 def test_micrometres_declared_as_mm_exceed_probe_range_and_gap(sim):
@@ -88,13 +88,14 @@ def test_a_dropout_is_not_called_clipping(sim, level):
                for bb, aa, dd in ch]
     found = [f for f in extract_features(_rec(dropped, fs)).sanity if f.level == "fail"]
     assert [(f.code, f.bearing) for f in found] == [("dropout", b)]
-    assert "60 ms in one stretch" in found[0].message and f"{start / fs:.3f}–" in found[0].message
-    assert "loose connector" in found[0].message
+    v = found[0].values
+    assert v["duration_ms"] == pytest.approx(60.0, abs=1.0) and v["start_s"] == pytest.approx(start / fs, abs=1e-3)
+    assert v["bearing"] == b and v["angle_deg"] == a and v["level"].value_um == pytest.approx(held)
 
 
-@pytest.mark.parametrize("fs_factor, speed_rpm, reads, rate", [(1.25, 1800.0, "reads 2250 r/min", "at 2048 Hz, not the 2560 Hz"),
-                                                              (0.8, 1800.0, "reads 1440 r/min", "at 2048 Hz, not the 1638.4 Hz"),
-                                                              (1.0, 3000.0, "reads 1800 r/min", "3413.33 Hz, not the 2048 Hz")])
+@pytest.mark.parametrize("fs_factor, speed_rpm, reads, rate", [(1.25, 1800.0, 2250.0, 2048.0),
+                                                              (0.8, 1800.0, 1440.0, 2048.0),
+                                                              (1.0, 3000.0, 1800.0, 3413.33)])
 def test_no_1x_at_the_given_speed_names_the_signals_speed_and_the_rate_that_fits(fs_factor, speed_rpm, reads, rate):
     """A sample rate stated 1.25× or 0.8× the true one (2048 Hz), or a 1800 r/min machine stated at 3000 r/min: no 1X at
     the given speed; the message names the running speed the signal shows and the sample rate that would put it at the
@@ -102,9 +103,11 @@ def test_no_1x_at_the_given_speed_names_the_signals_speed_and_the_rate_that_fits
     fs, ch = simulated_channels(misalignment=0.2, record_revs=48)
     assert fs == 2048.0
     fr = extract_features(_rec(ch, fs * fs_factor, speed_rpm=speed_rpm))
-    msg = next(f.message for f in fr.sanity if f.code == "no_sync_signal" and f.level == "fail")
-    assert reads in msg and rate in msg and "either speed_rpm is wrong, or the sample rate is" in msg
-    assert ("oil whirl" in msg) == (fs_factor * 1800.0 / speed_rpm < 0.95)
+    f = next(f for f in fr.sanity if f.code == "no_sync_signal" and f.level == "fail")
+    assert f.values["signal_rpm"] == pytest.approx(reads, abs=0.5)
+    assert f.values["fitting_rate_hz"] == pytest.approx(rate, abs=0.01)
+    assert f.values["sample_rate_hz"] == fs * fs_factor and f.values["given_rpm"] == speed_rpm
+    assert f.variant == ("whirl_speed" if fs_factor * 1800.0 / speed_rpm < 0.95 else "every_bearing_speed")
     # at the right rate and speed: no such finding
     assert "no_sync_signal" not in {f.code for f in extract_features(_rec(ch, fs, speed_rpm=1800.0)).sanity}
 
@@ -115,8 +118,8 @@ def test_swapped_probe_order_gives_reverse_whirl_everywhere(sim):
     swapped = [(b, 180.0 - a, d) for b, a, d in ch]
     fr = extract_features(_rec(swapped, fs))
     assert ("reverse_whirl_all", "fail") in _codes(fr)
-    msg = next(f.message for f in fr.sanity if f.code == "reverse_whirl_all")
-    assert "probe order" in msg and "rotation direction" in msg
+    f = next(f for f in fr.sanity if f.code == "reverse_whirl_all")
+    assert f.values == {"bearings": "1, 2, 3, 4"}
 
 
 def test_noise_only_recording_has_no_sync_signal(sim):
@@ -252,10 +255,10 @@ def test_noise_on_a_whip_orbit_near_the_clearance_is_not_an_impossible_orbit():
     fr = extract_features(rec)
     assert not [f for f in fr.sanity if f.code == "orbit_exceeds_clearance"]
     (f,) = [f for f in fr.sanity if f.code == "no_sync_signal"]
-    assert f.level == "fail" and "whip" in f.message and "0.47X" in f.message and "check the probes" not in f.message
+    assert f.level == "fail" and f.variant in ("whirl", "whirl_speed") and f.values["near"] == " near 0.47X"
     fs, ch = _whip_recording(scale=25.4)
     fails = [f for f in extract_features(_rec(ch, fs)).sanity if f.code == "orbit_exceeds_clearance"]
-    assert len(fails) == 4 and "noise" in fails[0].message
+    assert len(fails) == 4 and fails[0].variant == "noise_allowance" and fails[0].values["noise"].value_um > 0
 
 
 def test_noise_allowance_grows_with_the_record_and_the_noise():
@@ -285,8 +288,9 @@ def test_a_single_spike_is_a_glitch_not_a_units_mistake(sim):
     spiked[2][2][777] += 5000.0
     codes = _codes(extract_features(_rec(spiked, fs)))
     assert ("spike", "warn") in codes and not any(c == "orbit_exceeds_clearance" for c, _ in codes)
-    msg = next(f.message for f in extract_features(_rec(spiked, fs)).sanity if f.code == "spike")
-    assert "bearing 2" in msg and "1 isolated sample" in msg and "connector" in msg
+    f = next(f for f in extract_features(_rec(spiked, fs)).sanity if f.code == "spike")
+    assert f.bearing == 2 and f.values["bearing"] == 2 and f.values["n_samples"] == 1
+    assert f.values["orbit_without"].value_um < 100.0 < 1000.0 < f.values["orbit"].value_um   # a 5000 µm glitch
     assert ("orbit_exceeds_clearance", "fail") in _codes(extract_features(_rec(ch, fs, units="mil")))
 
 

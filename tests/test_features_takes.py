@@ -110,7 +110,7 @@ def test_a_faulty_train_leaves_that_take_unreferenced():
     assert np.all(np.isnan(_across(fr))) and fr.acquisitions == ((1, 2), (3, 4))
     assert np.isfinite(fr["dphase_1x_b1_b2_x_deg"]) and np.isfinite(fr["dphase_1x_b3_b4_x_deg"])
     found = [s for s in fr.sanity if s.code == "keyphasor_faulty"]
-    assert len(found) == 1 and found[0].message.startswith("the take of bearings 3, 4: ")
+    assert len(found) == 1 and found[0].variant == "take" and found[0].values["bearings"] == "3, 4"
     assert any(w.code == "separate_acquisitions_unreferenced"
                and w.values["why"].startswith("the keyphasor of the take of bearings 3, 4 could not be used")
                for w in fr.warnings)

@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rotordiag.core.reasons import CATALOGUE
 from rotordiag.features import ProbeChannel, Recording
 
 REGISTRY = Path(__file__).resolve().parent.parent / "models" / "default_registry"
@@ -43,8 +44,9 @@ def test_coupling_bearings_in_separate_takes_are_never_confident(bundle, misalig
     stated, fr = diagnose_recording(bundle, _recording(misalignment, late, acquisitions="1,2;3,4"))
     assert stated.status == "uncertain"
     reason = next(r for r in stated.reasons if r["code"] == "separate_acquisitions")
-    assert reason["status"] == "uncertain" and "(1,2;3,4)" in reason["message"]
-    assert "record bearings 2 and 3 in one acquisition" in reason["message"]
+    values = reason["message"].values
+    assert reason["status"] == "uncertain" and values["acquisitions"] == "1,2;3,4"
+    assert (values["bearing_a"], values["bearing_b"]) == (2, 3)
     assert np.isnan(fr["dphase_1x_b2_b3_x_deg"]) and np.isnan(fr["dphase_2x_b2_b3_y_deg"])
 
 
@@ -77,6 +79,8 @@ def test_the_reason_reads_the_recording_at_both_coupling_phases(bundle):
     for misalignment in (0.0, 0.5):
         v, fr = diagnose_recording(bundle, _recording(misalignment, late, acquisitions="1,2;3,4"))
         msg = next(r["message"] for r in v.reasons if r["code"] == "separate_acquisitions")
+        assert msg.template == CATALOGUE["separate_acquisitions"].templates[
+            "phase_read_same" if msg.values["in_phase"] == msg.values["anti_phase"] else "phase_read"]
         m = _model_row(bundle, fr)
         rows = coupling_phase_rows(m.names, m.row)
         assert rows is not None and rows.shape == (len(COUPLING_PHASES_DEG), len(m.names))
@@ -84,9 +88,9 @@ def test_the_reason_reads_the_recording_at_both_coupling_phases(bundle):
         assert np.isnan(m.row[cols]).all() and (rows[0, cols] == 0.0).all() and (rows[1, cols] == 180.0).all()
         fast = fast_predictor(m.model)
         called = [str(m.model.classes_[k]) for k in m.model.band_index(fast.predict_proba(rows), rows)]
-        assert f"in phase across the coupling (0°, a healthy rigid coupling) the model calls it {called[0]};" in msg
-        assert f"in anti-phase (180°, the classic misalignment sign), {called[1]}" in msg
+        assert (msg.values["in_phase"], msg.values["anti_phase"]) == (called[0], called[1])
         messages[misalignment] = (called, msg)
     assert messages[0.0][0][0] == "aligned"
     severe_called, severe_msg = messages[0.5]
-    assert severe_called[0] == severe_called[1] != "aligned" and "does not hinge on that phase" in severe_msg
+    assert severe_called[0] == severe_called[1] != "aligned"
+    assert severe_msg.template == CATALOGUE["separate_acquisitions"].templates["phase_read_same"]

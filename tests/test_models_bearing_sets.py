@@ -60,14 +60,15 @@ TABLE = {"1-2-3-4": {"n": 480, "macro_f1": 0.77, "false_alarm": 0.0}, "2-3": {"n
 def test_no_training_set_within_the_probes_is_inconclusive_and_says_what_to_add():
     (r,) = _plan((1, 4), TABLE).reasons()
     assert r.code == "bearing_set_untrained" and r.status == INCONCLUSIVE
-    assert "bearings 1 and 4" in r.message and "add an x/y probe pair at a coupling bearing" in r.message
+    assert r.values["usable"] == "bearings 1 and 4" and r.values["left_out"] == ""
 
 
 def test_a_set_that_misses_the_gate_is_inconclusive_and_names_the_sets_that_pass():
     (r,) = _plan((1, 2, 4), TABLE).reasons()
     assert r.code == "bearing_set_uninformative" and r.status == INCONCLUSIVE
-    assert "macro-F1 0.16" in r.message and "94.0%" in r.message and "within bearings 1, 2 and 4" in r.message
-    assert "1-2-3-4, 2-3, 1-2-3, 2-3-4" in r.message and ", 3" not in r.message      # 3 alone is only weak
+    assert r.values["macro_f1"] == 0.16 and r.values["false_alarm"] == 0.94
+    assert "within bearings 1, 2 and 4" in r.values["via"]
+    assert r.values["good_sets"] == "1-2-3-4, 2-3, 1-2-3, 2-3-4"                       # 3 alone is only weak
     assert _plan((1, 2, 4), TABLE).warnings() == []                         # the reason says it all
 
 
@@ -83,7 +84,7 @@ def test_a_usable_subset_is_read_with_a_note():
 def test_a_set_with_too_many_false_alarms_is_never_confident():
     plan = _plan((1, 3, 4), TABLE)
     (r,) = plan.reasons()
-    assert r.code == "bearing_set_weak" and r.status == "uncertain" and "10.4%" in r.message
+    assert r.code == "bearing_set_weak" and r.status == "uncertain" and r.values["false_alarm"] == 0.104
     assert len(plan.warnings()) == 1                                        # the note stays
 
 
@@ -163,13 +164,13 @@ def test_a_bearing_whose_1x_alone_whirls_backward_is_not_read():
                           suspect=(2,))
     assert plan.answering == (3,) and plan.left_out == (1, 2, 4)
     (r,) = plan.reasons()
-    assert r.code == "bearing_set_weak" and r.status == "uncertain" and "10.4%" in r.message
+    assert r.code == "bearing_set_weak" and r.status == "uncertain" and r.values["false_alarm"] == 0.104
     (w,) = plan.warnings()
     assert "bearing 2: the 1X whirls backward" in w and "without it is 3" in w
     plan3 = bs.BearingPlan((1, 2, 3, 4), bs.answering_set((1, 2, 4), TRAINED), tuple(s for s, _ in TRAINED), TABLE,
                            suspect=(3,))
     (r3,) = plan3.reasons()
-    assert r3.code == "bearing_set_uninformative" and "bearing 3 left out: the 1X whirls backward there" in r3.message
+    assert r3.code == "bearing_set_uninformative" and "bearing 3 left out: the 1X whirls backward there" in r3.values["via"]
 
 
 def test_shipped_model_leaves_out_a_bearing_with_an_inverted_probe():

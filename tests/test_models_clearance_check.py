@@ -31,7 +31,8 @@ def test_shipped_model_doubts_a_confident_verdict_at_the_diametral_clearance(del
     codes = [r["code"] for r in slip.reasons]
     assert "clearance_diametral" in codes and slip.status == "uncertain"
     msg = next(r["message"] for r in slip.reasons if r["code"] == "clearance_diametral")
-    assert "700 µm" in msg and "radial clearance" in msg and "diametral" in msg
+    assert [v.value_um for v in msg.values["clearance"].values.values()] == [700.0]     # the stated one, typed
+    assert msg.values["ood_half"] < msg.values["ood_score"]
     # given per bearing, every bearing's is halved
     per_bearing, _ = diagnose_recording(bundle, Recording(fs, chans, speed_rpm=1800.0,
                                                           clearance_um={b: 2 * CLEARANCE_UM for b in (1, 2, 3, 4)}))

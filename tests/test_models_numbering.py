@@ -45,10 +45,12 @@ def test_the_renumbered_row_is_the_renumbered_recordings_features(recording):
 def test_the_numbering_is_doubted_only_when_the_other_one_is_markedly_more_like_the_family():
     r = numbering_reason(0.6, NUMBERING_OOD_RATIO * 0.6, "moderate", "aligned")
     assert r is not None and r.code == "bearing_numbering" and r.status == "uncertain"
-    assert "bearing 1 is the generator's far end" in r.message and "called aligned instead of moderate" in r.message
+    assert r.variant == "default" and r.values == {"ood_score": 0.6, "other_ood_score": NUMBERING_OOD_RATIO * 0.6,
+                                                   "call": "moderate", "other_call": "aligned"}
     assert numbering_reason(0.6, 0.58, "moderate", "aligned") is None
     same = numbering_reason(0.6, 0.3, "slight", "slight")                  # was "called slight instead of slight"
-    assert same is not None and "instead of" not in same.message and "called slight either way" in same.message
+    assert same is not None and same.variant == "same_call" and same.values["call"] == "slight"
+    assert "other_call" not in same.values
     assert numbering_reason(0.0, 0.0, "aligned", "aligned") is None
 
 

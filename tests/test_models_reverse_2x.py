@@ -31,7 +31,7 @@ def test_which_coupling_bearing_whirls_backward(row, found):
     assert reverse_2x_reason(NAMES, np.array(row), misaligned_call=False) is None
     if reason is not None:
         assert reason.code == "reverse_2x" and reason.status == "uncertain"
-        assert f"bearing {found[0]}" in reason.message and "pickup" in reason.message
+        assert reason.values == {"bearing": found[0], "reverse_per_forward": found[1]}
 
 
 def test_a_backward_2x_at_the_coupling_makes_a_misalignment_call_uncertain():

@@ -52,7 +52,7 @@ def test_a_changed_start_up_doubts_an_aligned_call_and_supports_a_misaligned_one
     ctx = StartupContext(_ev(**now), _ev(), misaligned_call=False)
     entries, reasons = startup_findings(ctx)
     assert len(reasons) == 1 and reasons[0].code == "startup_changed" and reasons[0].status == UNCERTAIN
-    assert what in reasons[0].message
+    assert what in reasons[0].values["changes"]
     assert entries[-1]["effect"] == "doubts"
     assert startup_check(ctx) == reasons                 # the check: the context in, the same reasons out
     entries, reasons = startup_findings(replace(ctx, misaligned_call=True))

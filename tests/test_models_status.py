@@ -6,7 +6,12 @@ import dataclasses
 import numpy as np
 import pytest
 
+from rotordiag.core.notes import Length
+from rotordiag.core.reasons import CATALOGUE
 from rotordiag.models.status import INCONCLUSIVE, UNCERTAIN, ModelCall, RecordingChecks, assess, consistent_estimate
+
+#: the codes whose catalogue action is to check the units (a slip of the units is what they catch)
+UNITS_CODES = frozenset(c for c, e in CATALOGUE.items() if "units" in e.action)
 
 EDGES = (0.05, 0.15, 0.35)
 
@@ -93,7 +98,7 @@ def test_every_speed_doubt_the_extractor_words_makes_the_verdict_uncertain():
         assert speed_in_doubt(w), w.code
         status, reasons = _assess(speed_source="estimated", warnings=[w])
         assert status == UNCERTAIN and [r.code for r in reasons] == ["speed_ambiguous"]
-        assert reasons[0].message == str(w)
+        assert reasons[0].values == {"warning": w} and reasons[0].message == str(w)
     calm = [Note("speed_varies", variation_pct=0.4), Note("few_revolutions_motion", n_revs=20, min_revs=32),
             Note("take_note", take="bearings 2, 3", note=Note("speed_varies", variation_pct=0.4)),
             "speed estimate ambiguous: 1200.0 r/min chosen"]         # words without a code put nothing in doubt
@@ -115,7 +120,7 @@ def test_shipped_model_never_gives_a_severity_to_an_impossible_recording():
         rec = Recording(fs, [ProbeChannel(b, a, units, d) for b, a, d in ch], speed_rpm=1800.0, clearance_um=clearance)
         v = diagnose(bundle, extract_features(rec), clearance_um=clearance)
         assert v.status == INCONCLUSIVE and v.severity == INCONCLUSIVE and v.misalignment is None
-        assert v.reasons[0]["status"] == INCONCLUSIVE and "units" in v.reasons[0]["message"]
+        assert v.reasons[0]["status"] == INCONCLUSIVE and v.reasons[0]["code"] in UNITS_CODES
         text = format_verdict(v)
         assert "inconclusive" in text and "evidence" in text
     rec = Recording(fs, [ProbeChannel(b, a, "um", d) for b, a, d in ch], speed_rpm=1800.0, clearance_um=350.0)
@@ -132,7 +137,7 @@ def test_aligned_below_the_alarm_threshold_is_uncertain_and_says_why():
                   speed_source="given", warnings=[])
     status, reasons = _split_assess(**common, alarm=(0.72, 0.82))
     assert status == UNCERTAIN and [r.code for r in reasons] == ["below_alarm_threshold"]
-    assert "72%" in reasons[0].message and "82%" in reasons[0].message
+    assert reasons[0].values == {"p_misaligned": 0.72, "threshold": 0.82}
     status, reasons = _split_assess(**common, alarm=(0.3, 0.82))
     assert status == "confident" and reasons == []
 
@@ -148,11 +153,11 @@ def test_a_misalignment_call_without_the_coupling_2x_is_not_confident():
 
     status, reasons = run([0.001, 0.002, 0.0, 3.0], True)           # bearing 1's 2X does not count
     assert status == UNCERTAIN and [r.code for r in reasons] == ["no_2x_signature"]
-    assert "0.002" in reasons[0].message
+    assert reasons[0].variant == "default" and reasons[0].values["ratio_2x_1x"] == 0.002
     assert run([0.001, 0.002, 0.0, 3.0], False) == ("confident", [])
     assert run([0.001, 0.3, 0.0, 0.0], True) == ("confident", [])
     status, reasons = run([np.nan, np.nan, np.nan, 0.5], True)
-    assert status == UNCERTAIN and "not measured" in reasons[0].message
+    assert status == UNCERTAIN and reasons[0].variant == "not_measured" and "ratio_2x_1x" not in reasons[0].values
 
 
 def test_an_aligned_call_without_the_coupling_centreline_is_not_confident():
@@ -170,7 +175,7 @@ def test_an_aligned_call_without_the_coupling_centreline_is_not_confident():
 
     status, reasons = run([np.nan, np.nan, 0.4])                    # bearing 1's centreline does not count
     assert status == UNCERTAIN and [r.code for r in reasons] == ["offset_not_assessed"]
-    assert "clearance_um" in reasons[0].message and "stationary shaft-line offset" in reasons[0].message
+    assert reasons[0].values == {}
     assert run([np.nan, 0.4, np.nan]) == ("confident", [])
     assert run([0.2, 0.4, 0.4]) == ("confident", [])
     assert _assess(names=["b2_1x_major_um_pp", "b2_x_2x_1x_ratio", "b2_centre_ecc_per_c"],
@@ -234,11 +239,11 @@ def test_a_delta_interval_reaching_two_bands_away_is_not_confident():
     assert _assess(**moderate, delta_interval=(0.06, 0.467))[0] == "confident"
     status, reasons = _assess(**moderate, delta_interval=(0.041, 0.467))
     assert status == UNCERTAIN and [r.code for r in reasons] == ["far_band_interval"]
-    assert "90% interval (0.041–0.467) reaches aligned" in reasons[0].message
+    assert reasons[0].values == {"level": 0.9, "low": 0.041, "high": 0.467, "bands": "aligned"}
     status, reasons = _assess(probabilities=[0.95, 0.03, 0.01, 0.01], call_index=0, band_names=names,
                               band_edges=edges, delta_interval=(0.0, 0.4), interval_level=0.8)
     assert [r.code for r in reasons] == ["far_band_interval"]
-    assert "80% interval (0.000–0.400) reaches moderate or severe" in reasons[0].message
+    assert reasons[0].values == {"level": 0.8, "low": 0.0, "high": 0.4, "bands": "moderate or severe"}
     # without the call or the edges the rule is not applied
     assert _assess(probabilities=[0.95, 0.03, 0.01, 0.01], delta_interval=(0.0, 0.4))[0] == "confident"
     assert _assess(probabilities=[0.95, 0.03, 0.01, 0.01], call_index=0, delta_interval=(0.0, 0.4))[0] == "confident"
@@ -250,14 +255,16 @@ def test_a_call_with_probability_two_bands_away_is_not_confident():
     names = ["aligned", "slight", "moderate", "severe"]
     status, reasons = _assess(probabilities=[0.75, 0.01, 0.2, 0.04], call_index=0, band_names=names)
     assert status == UNCERTAIN and [r.code for r in reasons] == ["far_band_probability"]
-    assert "24% to moderate or severe" in reasons[0].message
+    assert reasons[0].values["bands"] == "moderate or severe" and reasons[0].values["p_far"] == pytest.approx(0.24)
     assert _assess(probabilities=[0.75, 0.16, 0.06, 0.03], call_index=0, band_names=names)[0] == "confident"
     assert _assess(probabilities=[0.06, 0.04, 0.2, 0.7], call_index=3, band_names=names)[0] == "confident"
     status, reasons = _assess(probabilities=[0.06, 0.06, 0.18, 0.7], call_index=3, band_names=names)
-    assert status == UNCERTAIN and "12% to aligned or slight" in reasons[0].message
+    assert status == UNCERTAIN and reasons[0].values["bands"] == "aligned or slight"
+    assert reasons[0].values["p_far"] == pytest.approx(0.12)
     assert _assess(probabilities=[0.3, 0.65, 0.05, 0.0], call_index=1, band_names=names)[0] == "confident"
     status, reasons = _assess(probabilities=[0.1, 0.65, 0.1, 0.15], call_index=1, band_names=names)
-    assert status == UNCERTAIN and "15% to severe" in reasons[0].message
+    assert status == UNCERTAIN and reasons[0].values["bands"] == "severe"
+    assert reasons[0].values["p_far"] == pytest.approx(0.15)
     assert _assess(probabilities=[0.75, 0.01, 0.2, 0.04])[0] == "confident"   # no call given: rule not applied
 
 
@@ -271,14 +278,23 @@ def test_outside_training_reasons_say_which_feature_in_plain_words_with_units():
          "factor": 7.5, "excess_spreads": 0.3}
     (r,) = envelope_reasons([f])
     assert r.code == "outside_training" and r.status == UNCERTAIN
-    assert "1X vibration (orbit major axis) at bearing 2 is 0.4 µm pk-pk" in r.message
-    assert "below anything in the training data (min 3 µm pk-pk" in r.message
+    assert r.variant == "default" and r.values == {
+        "feature": "1X vibration (orbit major axis) at bearing 2", "value": Length(0.4), "unit": " pk-pk",
+        "how": "8× ", "side": "below", "bound_name": "min", "bound": Length(3.0), "train_min": Length(3.0),
+        "train_max": Length(900.0), "more": ""}
+    # a deliberate test of the rendered wording: a length's unit comes from the value, its tail from the feature
+    assert r.message.startswith("1X vibration (orbit major axis) at bearing 2 is 0.4 µm pk-pk, 8× below anything in "
+                                "the training data (min 3 µm pk-pk; training range 3 µm pk-pk … 900 µm pk-pk): ")
+    assert "is 0.0157 mil pk-pk" in r.message.render("mil")
     assert envelope_reasons([{**f, "factor": 150.0}])[0].status == INCONCLUSIVE
     att = {"feature": "b4_attitude_offset_deg", "value": -88.6, "train_min": -56.0, "train_max": 17.0,
            "side": "below", "factor": None, "excess_spreads": 1.0}
     (r,) = envelope_reasons([att])
-    assert "bearing 4 is -89°" in r.message and "plain oil-film journal bearing" in r.message
-    assert len(envelope_reasons([f] * 5)) == 3 and "2 more" in envelope_reasons([f] * 5)[-1].message
+    assert r.variant == "attitude" and r.values["value"] == "-89°" and r.values["unit"] == ""
+    assert r.values["feature"].endswith("at bearing 4") and r.values["how"] == ""
+    five = envelope_reasons([f] * 5)
+    assert len(five) == 3 and [x.values["more"] for x in five[:2]] == ["", ""]
+    assert five[-1].values["more"] == " (and 2 more feature(s) outside the training range)"
     status, reasons = _assess(envelope=[f])
     assert status == UNCERTAIN and reasons[0].code == "outside_training"
 
@@ -308,8 +324,8 @@ def test_shipped_model_flags_one_bearing_scaled_down_and_names_it():
     v = run(0.001)
     assert v.ood and v.ood_findings and v.status != "confident"
     assert all(f["feature"].startswith("b3_") and f["side"] == "below" for f in v.ood_findings)
-    msgs = [r["message"] for r in v.reasons if r["code"] == "outside_training"]
-    assert msgs and all("at bearing 3" in m and "below anything in the training data" in m for m in msgs)
+    found = [r["message"].values for r in v.reasons if r["code"] == "outside_training"]
+    assert found and all(f["feature"].endswith("at bearing 3") and f["side"] == "below" for f in found)
 
 
 def test_shipped_verdict_checks_the_regressors_own_interval():
@@ -384,11 +400,11 @@ def test_a_misalignment_call_resting_on_the_static_offset_across_the_coupling_is
     assert [r.code for r in found] == ["static_offset_only"] and asked[-1].shape == (2, len(names))
     status, reasons = _assess(static_offset=found, **kw)
     assert status == UNCERTAIN and [r.code for r in reasons] == ["static_offset_only"]
-    assert "baseline positions" in reasons[0].message and "own load" in reasons[0].message
-    assert "sits 0.25 c from bearing 2's: x +0.15 c, y +0.20 c" in reasons[0].message       # (0.15, 0.20): 0.25 c
+    assert reasons[0].variant == "aligned_apart"                     # called aligned with the journals together
+    assert reasons[0].values == pytest.approx({"apart_c": 0.25, "apart_x_c": 0.15, "apart_y_c": 0.20})   # (0.15, 0.20)
     found = check("slight")
     assert [r.code for r in found] == ["static_offset_only"]
-    assert "severity rests on" in found[0].message and "call it slight" in found[0].message
+    assert found[0].variant == "apart" and found[0].values["lower_band"] == "slight"
     assert check("moderate") == [] and check("severe") == []           # the call stands (or rises)
     n_asked = len(asked)
     assert check("aligned", call="aligned") == []                      # an aligned call: the rule does not apply
@@ -442,8 +458,8 @@ def test_outside_the_family_a_call_two_bands_below_the_coupling_2x_is_inconclusi
 
     status, reasons = run([0.4, 3.2, 0.0])
     assert status == INCONCLUSIVE and "signature_above_call" in [r.code for r in reasons]
-    msg = next(r.message for r in reasons if r.code == "signature_above_call")
-    assert "3.20" in msg and "aligned" in msg and "severe" in msg and "no severity" in msg
+    values = next(r.values for r in reasons if r.code == "signature_above_call")
+    assert values == {"called": "aligned", "ratio_2x_1x": 3.2, "read": "severe", "rule_cut": 2.0}
     assert "signature_above_call" not in [r.code for r in run([0.4, 3.2, 0.0], ood_score=0.3)[1]]   # in family
     assert "signature_above_call" not in [r.code for r in run([0.4, 0.7, 0.0])[1]]      # slight: one band above
     assert "signature_above_call" in [r.code for r in run([1.0, 0.0, 0.0])[1]]          # moderate: two above
@@ -515,7 +531,8 @@ def test_every_journal_near_its_bearing_centre_is_not_confident():
 
     status, reasons = run([0.05, 0.08, 0.09, 0.12])
     assert status == UNCERTAIN and [r.code for r in reasons] == ["journals_near_centre"]
-    assert "check the units and the probe sensitivity" in reasons[0].message and "0.120" in reasons[0].message
+    assert reasons[0].values == pytest.approx({"max_ecc_c": 0.12, "ecc1_c": 0.05, "ecc2_c": 0.08, "ecc3_c": 0.09,
+                                               "ecc4_c": 0.12, "limit_c": NEAR_CENTRE_MAX_ECC})
     assert run([0.05, 0.08, 0.09, NEAR_CENTRE_MAX_ECC])[0] == "confident"       # one journal at the limit
     assert run([0.05, 0.08, 0.09, 0.6])[0] == "confident"
     assert run([0.05, 0.08, 0.09, np.nan])[0] == "confident"                   # bearing 4's centreline not read
@@ -558,8 +575,9 @@ def test_journals_all_turned_off_a_plain_bearings_attitude_are_not_confident():
 
     status, reasons = run(-45, -44, -50, -40)
     assert status == UNCERTAIN and "centreline_frame_turned" in [r.code for r in reasons]
-    msg = next(r.message for r in reasons if r.code == "centreline_frame_turned")
-    assert "check angle_deg" in msg and "tilting-pad" in msg and "bearing 4" in msg
+    values = next(r.values for r in reasons if r.code == "centreline_frame_turned")
+    assert values["mean_offset_deg"] < -30 and values["bearings"].startswith("bearing 1 ")
+    assert "bearing 4" in values["bearings"]
     assert "centreline_frame_turned" in [r.code for r in run(+40, +45, +50, +35)[1]]
     assert "centreline_frame_turned" not in [r.code for r in run(-45, -44, -50, -FRAME_OFFSET_DEG + 1)[1]]
     assert "centreline_frame_turned" not in [r.code for r in run(-45, +44, -50, -40)[1]]

@@ -126,15 +126,17 @@ def test_cli_text_in_mils_converts_every_length_not_only_the_offset(tmp_path):
     assert "b3_x_direct_mil_pp = 10 (training 0.1 … 5)" in text
     assert "_um_pp" not in text
     # typed reason and warning texts are rendered in mil too (a sentence is never parsed)
-    from rotordiag.core.notes import Length, Measured, Note
+    from rotordiag.core.notes import Length, Note
     from rotordiag.models.status import Reason
 
-    fields.update(reasons=[Reason("scale", "uncertain", Measured.of("1X at bearing 3 is ", Length(254.0),
-                                                                    " pk-pk")).to_dict()],
+    fields.update(reasons=[Reason("scale", "uncertain", {"bearing": 3, "amp": Length(254.0), "factor": 25.0,
+                                                         "typical": Length(10.16)}, "above").to_dict()],
                   warnings=[Note("motion_not_classified", orbit=Length(25.4))])
     text = format_verdict(Verdict(**fields), "mil")
     typed = [ln for ln in text.splitlines() if ln.startswith(("  uncertain:", "warning:"))]
-    assert "  uncertain: 1X at bearing 3 is 10 mil pk-pk" in typed and any("(1 mil)" in ln for ln in typed), text
+    assert any(ln.startswith("  uncertain: 1X vibration at bearing 3 is 10 mil pk-pk, 25× above the training data's "
+                             "typical 0.4 mil") for ln in typed), text
+    assert any("(1 mil)" in ln for ln in typed), text
     assert not any(re.search(r"\d µm", ln) for ln in typed)   # (the evidence here came back from JSON: untyped)
     # an inconclusive verdict with the clearance given does not ask for the clearance (issue 45)
     fields.update(misalignment=None, offset_um=None, offset_interval_um=None, status="inconclusive")

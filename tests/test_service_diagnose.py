@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
+from rotordiag.core.reasons import code_info
 from rotordiag.service.main import create_app
 from tests.service_util import (
     auth,
@@ -349,7 +350,8 @@ def test_probes_at_the_outboard_bearings_alone_give_no_severity_and_say_what_to_
     if "bearing_set_untrained" not in [x["code"] for x in v["reasons"]]:
         pytest.skip("the tiny registry lists no training probe sets")
     assert v["status"] == "inconclusive" and v["severity"] == "inconclusive" and v["misalignment"] is None
-    assert "add an x/y probe pair at a coupling bearing" in v["reasons"][0]["message"]
+    assert v["reasons"][0]["code"] == "bearing_set_untrained"
+    assert v["reasons"][0]["action"] == code_info("bearing_set_untrained").action        # what to add, from the catalogue
 
 
 def _weird_recordings():
@@ -401,7 +403,7 @@ def test_verdict_status_reasons_and_evidence(client, rec):
     assert v["misalignment"] is None and v["offset_um"] is None
     assert sum(v["probabilities"].values()) == pytest.approx(1.0)         # still available for audit
     codes = [r["code"] for r in v["reasons"]]
-    assert codes[0] == "orbit_exceeds_clearance" and "units" in v["reasons"][0]["message"]
+    assert codes[0] == "orbit_exceeds_clearance" and v["reasons"][0]["action"] == code_info(codes[0]).action
     assert v["headline"]["action"] == "check_measurement" and v["headline"]["show_severity"] is False
     batch = client.post("/diagnose/batch", json={"records": [body]}).json()
     assert batch["items"][0]["result"]["status"] == "inconclusive"

@@ -51,18 +51,12 @@ def acquisitions_reason(feature_result: Any, readings: Sequence[str] | None = No
     if not coupling_split(feature_result):
         return None
     i, j = COUPLING_BEARINGS
-    said = ""
-    if readings is not None and len(readings) == len(COUPLING_PHASES_DEG):
-        in_phase, anti = readings
-        said = (f". Read with the shaft ends in phase across the coupling (0°, a healthy rigid coupling) the model "
-                f"calls it {in_phase}; in anti-phase (180°, the classic misalignment sign), {anti}"
-                + (" — the call does not hinge on that phase" if in_phase == anti else
-                   " — measure that phase to tell them apart"))
-    return Reason("separate_acquisitions", UNCERTAIN,
-                  f"bearings {i} and {j} were recorded in separate acquisitions "
-                  f"({format_acquisitions(feature_result.acquisitions)}): the phase across the coupling is not "
-                  f"measured, and the model tells aligned from slight partly by it{said}; record bearings {i} and {j} "
-                  f"in one acquisition (or trend this machine's 2X/1X) before acting")
+    values = {"bearing_a": i, "bearing_b": j, "acquisitions": format_acquisitions(feature_result.acquisitions)}
+    if readings is None or len(readings) != len(COUPLING_PHASES_DEG):
+        return Reason("separate_acquisitions", UNCERTAIN, values)
+    in_phase, anti = readings
+    return Reason("separate_acquisitions", UNCERTAIN, {**values, "in_phase": in_phase, "anti_phase": anti},
+                  "phase_read_same" if in_phase == anti else "phase_read")
 
 
 def acquisitions_check(ctx: CheckContext) -> list[Reason]:

@@ -38,7 +38,7 @@ def attitude_reason(names: Sequence[str], row: np.ndarray, fr: FeatureResult, st
     index = name_index(names)
     probe = np.array(row, dtype=float, copy=True)
     judged = 0
-    for b, d in fr.bearings.items():
+    for b, d in (getattr(fr, "bearings", None) or {}).items():   # features given without their bearings' DC: none
         cx, cy = index.get(f"b{b}_centre_x_per_c"), index.get(f"b{b}_centre_y_per_c")
         if cx is None or cy is None or np.isfinite(row[cx]) or getattr(d, "dc_removed", False):
             continue                                 # not read by the model, stated with a clearance, or no DC
@@ -58,14 +58,7 @@ def attitude_reason(names: Sequence[str], row: np.ndarray, fr: FeatureResult, st
         return None
     where = ", ".join(f"{f['feature'].split('_')[0].replace('b', 'bearing ')} {f['value']:.0f}° (trained "
                       f"{f['train_min']:.0f}–{f['train_max']:.0f}°)" for f in found)
-    return Reason("attitude_outside_training", UNCERTAIN,
-                  f"the clearance is not stated, so the shaft-centreline features are missing; but the direction of "
-                  f"the journal's DC position in its bearing, which needs no clearance, lies outside the machines the "
-                  f"model was trained on ({where}; the attitude angle from the load line, toward rotation). A bearing "
-                  "unlike the training's plain cylindrical ones (tilting pads hold the journal near the load line), or "
-                  "DC readings not referenced to the bearing centre, read so: the model's call is not to be trusted "
-                  "on this machine — state clearance_um and check the DC reference, or compare with this machine's "
-                  "baseline")
+    return Reason("attitude_outside_training", UNCERTAIN, {"where": where})
 
 
 def attitude_check(ctx: CheckContext) -> list[Reason]:

@@ -154,30 +154,25 @@ class BearingPlan:
             usable = tuple(b for b in self.present if b not in self.suspect)
             doubt = f" ({_said(self.suspect)} left out: {_BACKWARD})" if self.suspect else ""
             return [Reason("bearing_set_untrained", INCONCLUSIVE,
-                           f"the probes the model can read are at {_said(usable) if usable else 'no bearing'}{doubt}; "
-                           "the model was trained on the probe sets "
-                           f"{self._sets()} and none of them lies within these, so it cannot judge this recording: "
-                           "add an x/y probe pair at a coupling bearing (3, the exciter's coupling end, tells the "
-                           "most) and send the recording again")]
+                           {"usable": _said(usable) if usable else "no bearing", "left_out": doubt,
+                            "trained_sets": self._sets()})]
         f = self.figures
         if f is None or _passes(f):
             return []
         good = [set_key(s) for s in self.trained if _passes((self.table or {}).get(set_key(s)))]
+        sets = ", ".join(good) if good else "the model was trained on"
         if _informative(f):
             return [Reason("bearing_set_weak", UNCERTAIN,
-                           f"the model reads {_said(self.answering)}, and from {set_key(self.answering)} it called "
-                           f"{f['false_alarm']:.1%} of the aligned machines of held-out plants misaligned (macro-F1 "
-                           f"{f['macro_f1']:.2f}; a confident verdict needs ≤ {MAX_FALSE_ALARM:.0%}): probes at one of "
-                           f"the sets {', '.join(good) if good else 'the model was trained on'} give a firmer one")]
+                           {"bearings": _said(self.answering), "probe_set": set_key(self.answering),
+                            "false_alarm": f["false_alarm"], "macro_f1": f["macro_f1"],
+                            "max_false_alarm": MAX_FALSE_ALARM, "good_sets": sets})]
         via = (f" (the largest of its training sets within {_said(self.present)}"
                + (f", {_said(self.suspect)} left out: {_BACKWARD}" if self.suspect else "") + ")"
                if self.left_out else "")
         return [Reason("bearing_set_uninformative", INCONCLUSIVE,
-                       f"the model reads {_said(self.answering)}{via}, and from {set_key(self.answering)} alone it "
-                       f"tells misalignment poorly: on held-out plants macro-F1 {f['macro_f1']:.2f} with "
-                       f"{f['false_alarm']:.1%} of the aligned machines called misaligned (a verdict needs ≥ "
-                       f"{MIN_MACRO_F1:g} and ≤ {MAX_FALSE_ALARM_ANY:.0%}); add probes so that the recording has one "
-                       f"of the sets {', '.join(good) if good else 'the model was trained on'}")]
+                       {"bearings": _said(self.answering), "via": via, "probe_set": set_key(self.answering),
+                        "macro_f1": f["macro_f1"], "false_alarm": f["false_alarm"], "min_macro_f1": MIN_MACRO_F1,
+                        "max_false_alarm": MAX_FALSE_ALARM_ANY, "good_sets": sets})]
 
 
 def bearing_plan(bundle: Any, present: Iterable[int], suspect: Iterable[int] = ()) -> BearingPlan | None:

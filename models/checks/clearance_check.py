@@ -66,9 +66,6 @@ def clearance_reason(score: Scorer, recording: Recording, fr: FeatureResult, sta
         [x for k, (b, c) in enumerate(sorted(stated.items())) for x in ((", " if k else "") + f"bearing {b}: ",
                                                                        Length(float(c), "g"))]
         if isinstance(stated, Mapping) else [Length(float(stated), "g")])
-    return Reason(
-        "clearance_diametral", UNCERTAIN,
-        Measured.of("with half the stated clearance (", *said, ") the recording is markedly more like the machines "
-                    f"the model was trained on (OOD score {ood_half:.2f} against {ood_score:.2f}); there it "
-                    f"would be {class_half!r}. clearance_um is the radial clearance c, half the diametral one (bore "
-                    "minus journal): check which one was given"))
+    return Reason("clearance_diametral", UNCERTAIN,
+                  {"clearance": Measured.of(*said), "ood_half": ood_half, "ood_score": ood_score,
+                   "class_half": class_half})

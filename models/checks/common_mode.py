@@ -72,12 +72,8 @@ def common_mode_reason(score: Scorer, recording: Recording, fr: FeatureResult, s
     what = [x for k, cm in enumerate(found)
             for x in (("; " if k else "") + f"{cm.order}X: ", Length(cm.amp_um_pp), f" pk-pk at {cm.phase_lag_deg:.0f}°, "
                       f"{100 * cm.share:.0f} % of its power over {cm.n_probes} probes")]
-    return Reason(
-        "common_mode", INCONCLUSIVE if dominant else UNCERTAIN,
-        Measured.of(f"most of the {' and '.join(f'{cm.order}X' for cm in found)} is one signal common to every probe (",
-                    *what, "); a shaft's orbit differs from probe to probe and bearing to bearing, so that part is "
-                    "likely electrical pickup (mains at the running frequency or twice it on a grid-synchronous "
-                    "generator) or the probe mountings vibrating together. Without it the class is "
-                    f"{other!r}, not {call!r}: check the probe cabling and grounding (a probe at a "
-                    "fixed target reads the pickup alone) before acting on this verdict"
-                    + (f" ({' and '.join(dominant)}: that part dominates, so no severity is given)" if dominant else "")))
+    values = {"orders": " and ".join(f"{cm.order}X" for cm in found), "per_order": Measured.of(*what),
+              "other_call": other, "call": call}
+    if dominant:
+        return Reason("common_mode", INCONCLUSIVE, {**values, "dominant": " and ".join(dominant)}, "dominant")
+    return Reason("common_mode", UNCERTAIN, values)

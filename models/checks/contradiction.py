@@ -34,11 +34,7 @@ def contradiction_reason(names: Sequence[str], row: np.ndarray, call: str, band_
     if rule is None or rule - k < SIGNATURE_BANDS_ABOVE_CALL:
         return None
     return Reason("signature_contradicts_call", UNCERTAIN,
-                  f"called {call}, but the coupling bearings' 2X/1X is {ratio:.2f}: the classic misalignment "
-                  f"signature reads {band_names[rule]} (2X/1X ≥ {DEFAULT_RULE_CUTS[rule - 1]:g}), two or more bands "
-                  "above the call, so the verdict contradicts its own evidence. Check the alignment or compare with "
-                  "this machine's baseline; a strong 2X has other causes too (a two-pole rotor's asymmetry under "
-                  "gravity, a shaft crack, looseness, runout: give the slow-roll vectors)")
+                  {"call": call, "ratio": ratio, "rule_band": band_names[rule], "rule_cut": DEFAULT_RULE_CUTS[rule - 1]})
 
 
 def contradiction_check(ctx: CheckContext) -> list[Reason]:

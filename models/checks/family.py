@@ -23,11 +23,7 @@ def family_reason(machine_family: str | None, model_families: Sequence[str]) -> 
     if machine_family is None or not model_families or trained_on(machine_family, model_families):
         return None
     trained = ", ".join(describe_family(f) for f in model_families)
-    return Reason("family_untrained", UNCERTAIN,
-                  f"this machine is declared as {describe_family(machine_family)}, a family the model was not trained "
-                  f"on (it was trained on {trained}): on a design it never saw its severity is not to be trusted, "
-                  "however sure it looks — retrain for this plant (rotordiag retrain --shaftline, POST /models/retrain) "
-                  "or compare with this machine's baseline")
+    return Reason("family_untrained", UNCERTAIN, {"machine": describe_family(machine_family), "trained": trained})
 
 
 def family_check(ctx: CheckContext) -> list[Reason]:

@@ -83,12 +83,10 @@ def numbering_reason(ood_score: float, other_ood_score: float, call: str, other_
     row's own, else None."""
     if not (ood_score > 0 and other_ood_score <= NUMBERING_OOD_RATIO * ood_score):
         return None
-    return Reason("bearing_numbering", UNCERTAIN,
-                  f"numbered the other way round (bearing b read as 5 − b) the recording is more like the machines the "
-                  f"model knows (OOD score {other_ood_score:.2f} against {ood_score:.2f} as given; "
-                  + (f"called {other_call} instead of {call}" if other_call != call else f"called {call} either way")
-                  + "): check the numbering — bearing 1 is the generator's far end (the turbine side), "
-                  "2 its coupling end, 3 the exciter's coupling end and 4 its far end")
+    values = {"other_ood_score": other_ood_score, "ood_score": ood_score, "call": call}
+    if other_call != call:
+        return Reason("bearing_numbering", UNCERTAIN, {**values, "other_call": other_call})
+    return Reason("bearing_numbering", UNCERTAIN, values, "same_call")
 
 
 def numbering_check(ctx: CheckContext) -> list[Reason]:

@@ -40,17 +40,12 @@ def static_offset_reason(lower: int, call_index: int, band_names: Sequence[str],
     band ``call_index``, with how far apart the journals sit; else None."""
     if not lower < call_index:
         return None
-    what = ("called misaligned on the static offset between the coupling-end journals: with the two journals "
-            "at one position in their bearings the model would call it aligned" if lower == 0 else
-            "the severity rests on the static offset between the coupling-end journals: with the two journals "
-            "at one position in their bearings the model would call it "
-            + (str(band_names[lower]) if len(band_names) > lower else f"band {lower}"))
+    values: dict[str, object] = {}
+    if lower > 0:
+        values["lower_band"] = str(band_names[lower]) if len(band_names) > lower else f"band {lower}"
     apart = journals_apart_c(names, row)
     if apart is not None:
-        what += (f" (bearing 3's journal sits {np.hypot(*apart):.2f} c from bearing 2's: "
-                 f"x {apart[0]:+.2f} c, y {apart[1]:+.2f} c)")
-    return Reason("static_offset_only", UNCERTAIN,
-                  what + ". A healthy train's coupling-end journals also sit apart (each by its own "
-                  "load: a heavy generator journal beside a light exciter one), and a DC gap referenced "
-                  "to the wrong zero reads the same — compare with this machine's cold or baseline "
-                  "positions before acting")
+        values.update(apart_c=float(np.hypot(*apart)), apart_x_c=float(apart[0]), apart_y_c=float(apart[1]))
+    variant = {(False, False): "default", (False, True): "apart", (True, False): "aligned",
+               (True, True): "aligned_apart"}[(lower == 0, apart is not None)]
+    return Reason("static_offset_only", UNCERTAIN, values, variant)

@@ -55,13 +55,7 @@ def reverse_2x_reason(names: Sequence[str], row: np.ndarray, misaligned_call: bo
     if found is None:
         return None
     b, r = found
-    return Reason("reverse_2x", UNCERTAIN,
-                  f"called misaligned on a 2X that whirls backward at bearing {b} (reverse {r:.1f} × forward): in the "
-                  "machines the model was trained on a coupling's or a two-pole rotor's 2X whirls forward. A 2X with "
-                  "its own phase on each probe cable (electrical pickup through a ground loop) or a probe wiring "
-                  "problem reads so; a strongly preloaded (flattened) orbit can too. Check the probe cabling and "
-                  "grounding (a record with the unit off the grid shows pickup that stays), or compare with this "
-                  "machine's baseline")
+    return Reason("reverse_2x", UNCERTAIN, {"bearing": b, "reverse_per_forward": r})
 
 
 def reverse_2x_check(ctx: CheckContext) -> list[Reason]:

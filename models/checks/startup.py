@@ -99,7 +99,4 @@ def startup_findings(context: StartupContext) -> tuple[list[dict[str, Any]], lis
                         "text": f"the start-up changed since the baseline, as a misalignment would change it: {text}"})
         return entries, []
     entries.append({"code": "startup_changed", "effect": "doubts", "value": value, "text": text})
-    return entries, [Reason("startup_changed", UNCERTAIN,
-                            f"called aligned, but the start-up changed since the asset's baseline start-up: {text}. "
-                            "A moved bearing, a changed coupling or a rub changes a run-up so; compare the two "
-                            "start-ups' Bode and centreline plots before accepting the verdict")]
+    return entries, [Reason("startup_changed", UNCERTAIN, {"changes": text})]

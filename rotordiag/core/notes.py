@@ -19,7 +19,7 @@ from typing import Any, Final, Literal
 from rotordiag.core.units import UM_PER_MIL
 
 __all__ = ["Length", "Measured", "NoteInfo", "Note", "NOTES", "DOUBT", "CAUTION", "INFO", "SPEED_DOUBT_CODES",
-           "speed_in_doubt", "notes_markdown_table", "typed_to_json", "typed_from_json"]
+           "speed_in_doubt", "notes_markdown_table", "typed_to_json", "typed_from_json", "template_fields"]
 
 #: severities: ``doubt`` — the running speed is in doubt (``speed_ambiguous`` reason, never ``confident``);
 #: ``caution`` — the verdict rests on less or different data than usual; ``info`` — a limit of what was measured
@@ -101,6 +101,11 @@ def _measured(template: str, values: dict[str, Any]) -> Measured:
     return Measured(template, **values)
 
 
+def template_fields(template: str) -> frozenset[str]:
+    """The :meth:`str.format` field names of a message template (what its typed values must be)."""
+    return frozenset(f for _, f, _, _ in Formatter().parse(template) if f)
+
+
 @dataclass(frozen=True)
 class NoteInfo:
     """One warning of the catalogue.
@@ -127,7 +132,7 @@ class NoteInfo:
 
     @property
     def fields(self) -> frozenset[str]:
-        return frozenset(f for _, f, _, _ in Formatter().parse(self.template) if f)
+        return template_fields(self.template)
 
     def to_dict(self) -> dict:
         return {"code": self.code, "severity": self.severity, "meaning": self.meaning, "action": self.action,
@@ -266,7 +271,9 @@ SPEED_DOUBT_CODES: frozenset[str] = frozenset(e.code for e in _ENTRIES if e.seve
 
 
 def _rendered(values: dict[str, Any], units: str) -> dict[str, Any]:
-    return {k: (v.render(units) if isinstance(v, Length) else v) for k, v in values.items()}
+    """The values with their lengths written in ``units``: a :class:`Length`, or a :class:`Measured` (a piece of
+    text with lengths of its own, as a reason's list of per-bearing values)."""
+    return {k: (v.render(units) if isinstance(v, Length | Measured) else v) for k, v in values.items()}
 
 
 class Note(str):
