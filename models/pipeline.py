@@ -134,7 +134,11 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
             if noted is not None:               # its scores: the row is the same, the leading warnings changed
                 fr, at = noted, scores_at(speed.chosen_rpm)
                 scores = replace(at, warnings=[*noted.warnings, *at.warnings[len(chosen.warnings):]])
-            else:                               # read by take: extracted once more, with its notes
+            elif recording is not None and recording.keyphasor_takes is not None:
+                # read by take: each take reads its speed from its own keyphasor (``extract_by_take`` takes no
+                # estimate and no notes), so the reading made is the one at the chosen speed
+                fr, scores = chosen, scores_at(speed.chosen_rpm)
+            else:                               # not a reading with its own speed notes: extracted with them
                 assert recording is not None
                 fr = read_features(recording, speed.chosen_rpm, notes)
                 scores = model_scores(bundle, fr)

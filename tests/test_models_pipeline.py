@@ -193,3 +193,30 @@ def test_the_schema_enumerates_the_warning_catalogue_and_refuses_other_codes():
     assert adapter.validate_python(["speed_varies"]) == ["speed_varies"]
     with pytest.raises(ValidationError):
         adapter.validate_python(["speed_guessed"])                     # a code the catalogue lacks
+
+
+@needs_model
+def test_a_recording_read_by_take_is_extracted_once_per_speed_hypothesis(bundle, monkeypatch):
+    """A speed chosen for a recording read take by take (each take with its own keyphasor) takes the reading made
+    at that hypothesis: no extraction repeated for its speed notes (``extract_by_take`` reads neither)."""
+    from rotordiag.features import Recording
+    from rotordiag.models.checks.speed_choice import SpeedChoice
+    from tests.test_features_takes import FS_HZ, _channels, _pulses
+
+    delay = 0.0073
+    rec = Recording(FS_HZ, _channels(delay), keyphasor_times_s=[_pulses(), _pulses(delay)], acquisitions="1,2;3,4",
+                    clearance_um=350.0)
+    calls: list[tuple[float | None, int]] = []
+    real_extract = pipeline.extract_features
+
+    def extract(recording, **kw):
+        calls.append((kw.get("speed_estimate_rpm"), len(kw.get("speed_notes", ()))))
+        return real_extract(recording, **kw)
+
+    monkeypatch.setattr(pipeline, "extract_features", extract)
+    monkeypatch.setattr(pipeline, "choose_speed", lambda rec, fr, score, ood, judge: SpeedChoice(
+        estimate_rpm=float(fr.speed_rpm), estimate_ood_score=score, tried=((2900.0, 0.5, False),), chosen_rpm=2900.0,
+        chosen_ood_score=0.5))
+    v, fr = pipeline.diagnose_recording(bundle, rec)
+    assert sorted(calls, key=repr) == sorted([(None, 0), (2900.0, 0)], key=repr)
+    assert fr.speed_source == "keyphasor" and v.speed_rpm == pytest.approx(3000.0, rel=1e-3)
