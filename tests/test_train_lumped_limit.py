@@ -55,10 +55,10 @@ K_TIE = 1e13
 #: the beams' density, kg/m³: a 6 m beam weighs 5·10⁻⁶ kg against 500–32 000 kg point masses
 DENSITY = 1e-6
 POISSON = 0.3
-#: train bearing index of the paper's bearings 1..4 (the disks' dampers are bearings 1 and 4 of the train)
+#: the train's bearing indices of the paper's bearings 1..4 (indices 1 and 4 are the disks' dampers c1, c2)
 PAPER_BEARINGS = [0, 2, 3, 5]
 #: static journal positions: the train with its chord springs against the paper model, in clearances: three
-#: times what the coupling's compliance (above) allows; the massless beams (10⁻¹⁰ of the masses) and both
+#: times what the coupling's compliance (above) allows; the massless beams (10⁻⁹ of the masses) and both
 #: Newton solutions (≤ 10⁻⁹ c) add nothing visible
 STATIC_TOL_C = 2e-5
 #: 1X/2X at the probes, relative to each line's amplitude: the ETD (64 samples per revolution) agrees with
