@@ -69,7 +69,8 @@ def plant_key(plant_model: str | None = None, shaftline: Mapping[str, Any] | Non
     if name == "default":
         return "default"
     if name not in PRESETS:
-        raise ValueError(f"plant_model {plant_model!r}: use default or a preset: {', '.join(sorted(PRESETS))}")
+        raise ValueError(f"plant_model {plant_model!r}: use default or a preset: {', '.join(sorted(PRESETS))} "
+                         f"({' or '.join(f'{s}:NAME' for s in SIMULATIONS)} for a preset simulated that way)")
     return f"preset:{name}"
 
 
@@ -135,11 +136,15 @@ def machine_family(plant_model: str | None = None, shaftline: Mapping[str, Any] 
         A plant that is not ``default``, a preset or readable shaft-line tables, or an unknown simulation.
     """
     sim = None
+    given = plant_model
     if plant_model is not None:
         head, sep, rest = plant_model.strip().partition(":")
         if sep and head in SIMULATIONS:
             sim, plant_model = head, rest
-    key = plant_key(plant_model, shaftline)
+    try:
+        key = plant_key(plant_model, shaftline)
+    except ValueError as exc:       # the name as the user gave it, simulation included
+        raise ValueError(str(exc).replace(repr(plant_model), repr(given), 1)) from None
     if key is None:
         return None
     return f"{sim}:{key}" if sim else key

@@ -167,8 +167,8 @@ def _work(kind: str, body: Body, filename: str, query: dict[str, Any], slow_roll
     from .parsing import parse_request
 
     def run() -> tuple:
-        recording, asset_id, plant, notes = parse_request(kind, body, filename, query, slow_roll)
-        return ("ok", {**_store().diagnose(recording, version, query.get("plant_model"), query.get("plant_shaftline")),
+        recording, asset_id, plant, notes, plant_model = parse_request(kind, body, filename, query, slow_roll)
+        return ("ok", {**_store().diagnose(recording, version, plant_model, query.get("plant_shaftline")),
                        "input_notes": notes,
                        "recorded_at_in_file": recording.recorded_at}, asset_id, plant)
 
@@ -181,7 +181,8 @@ def _record(record: dict[str, Any], version: str | None) -> tuple:
 
     def run() -> tuple:
         req = batch_record(record)
-        return ("ok", _store().diagnose(checked(recording_from_model, req), version), req.asset_id, req.plant)
+        return ("ok", _store().diagnose(checked(recording_from_model, req), version, req.plant_model), req.asset_id,
+                req.plant)
 
     return _tagged(run)
 

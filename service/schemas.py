@@ -135,6 +135,15 @@ class RecordingIn(_Strict):
         description=f"Probe channels, at most {MAX_CHANNELS} (two probes per bearing).")
 
 
+#: what ``plant_model`` (the ``POST /diagnose`` query parameter, the JSON body's and a batch record's field) says
+PLANT_MODEL_DESCRIPTION = (
+    "The machine's plant model, `default` (MODEL.md's plant) or a preset (`gen50_2pole`, `gen200_2pole`, "
+    "`gen600_2pole`, `gen600_4pole`; `train:NAME`: its finite-element train). A machine family the model was not "
+    "trained on is never given a confident verdict (`family_untrained`).")
+#: the bounds of ``plant_model`` wherever it is given
+PLANT_MODEL_MAX_LEN = 64
+
+
 class DiagnoseRequest(RecordingIn):
     """Body of POST /diagnose (JSON form)."""
 
@@ -144,6 +153,10 @@ class DiagnoseRequest(RecordingIn):
             {"bearing": 2, "angle_deg": 45.0, "units": "um", "data": [10.1, 12.3, 9.8, 7.7]},
             {"bearing": 2, "angle_deg": 135.0, "units": "um", "data": [3.1, 5.0, 6.2, 4.4]},
         ]}]})
+
+    plant_model: str | None = Field(None, min_length=1, max_length=PLANT_MODEL_MAX_LEN,
+                                    description=PLANT_MODEL_DESCRIPTION + " As the query parameter `plant_model`; "
+                                    "given in both, they must agree.", examples=["gen600_2pole"])
 
 
 class BatchRecord(DiagnoseRequest):
