@@ -174,6 +174,19 @@ def request_plant_model(query_value: str | None, body_value: str | None) -> str 
     return body_value if body_value is not None else query_value
 
 
+#: the query key :func:`with_probe_config` sets when the plant model came from the asset's stored configuration
+PLANT_FROM_ASSET = "plant_model_from_asset"
+
+
+def plant_declared_by(query: dict[str, Any], plant_model: str | None) -> str | None:
+    """Who declared the plant model a request is diagnosed with: ``asset`` (its stored configuration,
+    :func:`with_probe_config`), ``request`` (the query parameter, a JSON body's or a batch record's field), or None
+    (none declared)."""
+    if query.get(PLANT_FROM_ASSET):
+        return "asset"
+    return "request" if plant_model is not None or query.get("plant_shaftline") is not None else None
+
+
 def check_probe_config(config: dict[str, Any]) -> None:
     """Refuse (InputError, saying what to fix) a probe configuration the reader would refuse for every upload."""
     from rotordiag.core.units import INPUT_UNITS, input_unit, sensitivity_v_per_mm
@@ -212,6 +225,8 @@ def with_probe_config(query: dict[str, Any], config: dict[str, Any] | None,
             continue
         out.update(stored)
         used.update(stored)
+        if group == "plant_model":
+            out[PLANT_FROM_ASSET] = True
     return out, {"asset_id": asset_id, "used": used, "overridden_by_upload": overridden}
 
 

@@ -810,6 +810,44 @@ def test_each_batch_record_declares_its_own_plant_model(client, rec):
         assert "family_untrained" not in codes[0] and "family_untrained" in codes[1]
 
 
+def test_the_answer_says_which_model_answered_and_whose_plant_model_it_was_judged_as(client, rec):
+    """`answered_by`: the model version and its card's training families; the plant model declared by the request
+    (query, JSON body, batch record), by the asset's stored configuration, or none; whether the model was trained
+    on it."""
+    from rotordiag.features.examples import example_path
+    from rotordiag.models.families import training_families
+
+    active = client.get("/models").json()["active"]
+    families = training_families(client.get(f"/models/{active}").json())
+    fs, channels = rec
+    body = diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0)
+    plain = client.post("/diagnose", json=body).json()["answered_by"]
+    assert plain["model_version"] == active and plain["training_families"] == families
+    assert plain["plant_model"] is None and plain["declared_by"] is None and plain["retrained_for"] is None
+    assert plain["text"].startswith(f"model {active}")
+    for kwargs in (dict(json={**body, "plant_model": "gen50_2pole"}),
+                   dict(json=body, params={"plant_model": "gen50_2pole"})):
+        a = client.post("/diagnose", **kwargs).json()["answered_by"]
+        assert (a["plant_model"], a["plant_model_text"], a["declared_by"]) == ("preset:gen50_2pole", "gen50_2pole",
+                                                                               "request")
+        assert a["plant_model_trained"] is ("lumped:preset:gen50_2pole" in families if families else None)
+    items = client.post("/diagnose/batch", json={"records": [body, {**body, "plant_model": "default"}]}).json()["items"]
+    got = [it["result"]["answered_by"] for it in items]
+    assert [(a["plant_model"], a["declared_by"]) for a in got] == [(None, None), ("default", "request")]
+    r = client.put("/assets/stored-plant/probes", json={"plant_model": "gen600_2pole", "clearance_um": 350},
+                   headers=auth())
+    assert r.status_code == 200, r.text
+    csv = example_path("aligned.csv").read_bytes()
+    a = client.post("/diagnose", params={"asset_id": "stored-plant"}, files={"file": ("a.csv", csv)}).json()["answered_by"]
+    assert (a["plant_model"], a["declared_by"]) == ("preset:gen600_2pole", "asset")
+    assert "declared by the asset's stored plant model" in a["text"]
+    a = client.post("/diagnose", params={"asset_id": "stored-plant", "plant_model": "default"},
+                    files={"file": ("a.csv", csv)}).json()["answered_by"]
+    assert (a["plant_model"], a["declared_by"]) == ("default", "request")       # the upload's own wins
+    mil = client.post("/diagnose", json={**body, "plant_model": "gen50_2pole"}, params={"output_units": "mil"}).json()
+    assert mil["answered_by"]["plant_model"] == "preset:gen50_2pole"
+
+
 def test_an_assets_own_shaft_line_is_a_family_the_shipped_model_never_saw(client):
     """An asset whose stored plant is its own shaft line (not a preset's) is diagnosed with that plant: the shipped
     model, trained on MODEL.md's plant and the presets' reductions, is never confident there (issue 48)."""

@@ -19,7 +19,15 @@ from rotordiag.models.output_units import verdict_in_units
 
 from ...baseline import parse_tags, record_verdict
 from ...inference import ModelUnavailable
-from ...parsing import MAX_TAKE_FILES, batch_record, checked, parse_batch, parse_request, recording_from_model
+from ...parsing import (
+    MAX_TAKE_FILES,
+    batch_record,
+    checked,
+    parse_batch,
+    parse_request,
+    plant_declared_by,
+    recording_from_model,
+)
 from ...pool import DiagnoseBody, DiagnoseRecord, ParseBatch
 from ...schemas import (
     MAX_BATCH_VALUES,
@@ -82,9 +90,9 @@ _BINARY_BODY = {
 }
 
 def _diagnose_sync(state, recording, version: str | None, plant_model: str | None = None,
-                   plant_shaftline: dict | None = None) -> dict:
+                   plant_shaftline: dict | None = None, declared_by: str | None = None) -> dict:
     try:
-        verdict = state.models.diagnose(recording, version, plant_model, plant_shaftline)
+        verdict = state.models.diagnose(recording, version, plant_model, plant_shaftline, declared_by)
     except ModelUnavailable as exc:
         if version is not None:
             raise InputError(str(exc), "not_found") from None
@@ -212,7 +220,8 @@ def recording_meta(recorded_at: dt.datetime | None, tags: str | None, note: str 
 def _parse_and_diagnose(state, kind, body, filename, query, slow_roll,
                         model_version) -> tuple[dict, str | None, str | None]:
     recording, asset_id, plant, notes, plant_model = parse_request(kind, body, filename, query, slow_roll)
-    return ({**_diagnose_sync(state, recording, model_version, plant_model, query.get("plant_shaftline")),
+    return ({**_diagnose_sync(state, recording, model_version, plant_model, query.get("plant_shaftline"),
+                              plant_declared_by(query, plant_model)),
              "input_notes": notes,
              "recorded_at_in_file": recording.recorded_at}, asset_id, plant)
 
@@ -304,7 +313,8 @@ def _batch_sync(state, records: list[dict[str, Any]], model_version: str | None,
             rec = batch_record(raw)
             recording = checked(recording_from_model, rec)
             meta = record_meta(raw)
-            verdict = _diagnose_sync(state, recording, model_version, rec.plant_model)
+            verdict = _diagnose_sync(state, recording, model_version, rec.plant_model,
+                                     declared_by="request" if rec.plant_model else None)
             record_verdict(state, rec.asset_id, rec.plant, verdict, may_store, meta)
             items.append((i, verdict))
         except InputError as exc:
