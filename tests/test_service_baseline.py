@@ -204,8 +204,17 @@ def test_an_old_database_gets_the_new_columns(tmp_path, registry_src):
     with TestClient(create_app(settings)) as c:
         h = c.get("/assets/old/history").json()
         assert h["count"] == 1 and h["points"][0]["alarm"] is None
-        r = c.post(f"/assets/old/baseline?diagnosis_id={h['points'][0]['id']}", headers=auth())
-        assert r.status_code == 409 and "send its recording" in r.json()["detail"]
+        did = h["points"][0]["id"]
+        r = c.post(f"/assets/old/baseline?diagnosis_id={did}", headers=auth())
+        expected = (f"diagnosis {did} keeps no signature (it was stored before baselines existed, or only its summary "
+                    "is kept past the history's retention); send its recording instead")
+        assert r.status_code == 409 and r.json()["detail"] == expected
+        r = c.post(f"/assets/old/baseline/recordings?diagnosis_id={did}", headers=auth())
+        assert r.status_code == 409 and r.json()["detail"] == expected          # the same refusal, the same words
+        for url in ("/assets/old/baseline?diagnosis_id=999999", "/assets/old/baseline/recordings?diagnosis_id=999999"):
+            r = c.post(url, headers=auth())
+            assert r.status_code == 404 and r.json()["detail"] == (
+                "asset 'old' has no stored diagnosis 999999; GET /assets/old/history lists its diagnoses with their ids")
         assert c.post("/diagnose", json=_body("old"), headers=auth()).json()["diagnosis_id"] == 2
 
 
