@@ -159,7 +159,8 @@ def diagnose_takes(bundle: Any, paths: Sequence[Path], sidecar: Path | None, giv
 
 def diagnose_read(bundle: Any, res: ReadResult, slow_roll: Any = None,
                   plant_model: str | None = None) -> tuple[Any, ReadResult, dict[str, Any]]:
-    """Diagnose a recording already read (:func:`diagnose_one` without the reading)."""
+    """Diagnose a recording already read (:func:`diagnose_one` without the reading); a ``plant_model`` is the
+    command line's (``--plant-model``, the verdict's ``answered_by``)."""
     from rotordiag.features import apply_slow_roll, signature
 
     from .pipeline import diagnose_recording
@@ -173,7 +174,7 @@ def diagnose_read(bundle: Any, res: ReadResult, slow_roll: Any = None,
     if callable(bundle):
         bundle = bundle()
     verdict, fr = diagnose_recording(bundle, recording, clearance_um=coupling_clearance_um(recording),
-                                     plant_model=plant_model)
+                                     plant_model=plant_model, declared_by="command line" if plant_model else None)
     return verdict, res, signature(fr)
 
 

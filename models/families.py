@@ -19,11 +19,17 @@ import json
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
-__all__ = ["SIMULATIONS", "shaftline_key", "plant_key", "specs_of_meta", "families_of_specs", "training_families",
-           "machine_family", "trained_on", "describe_family"]
+__all__ = ["SIMULATIONS", "DECLARED_BY", "shaftline_key", "plant_key", "specs_of_meta", "families_of_specs",
+           "training_families", "machine_family", "trained_on", "describe_family", "answered_by"]
 
 #: how a training plant was simulated (``simulator.dataset.spec.PlantSpec.model``)
 SIMULATIONS = ("lumped", "train")
+#: who declared a machine's plant model (:func:`answered_by`): its asset's stored plant model, the request
+#: (``?plant_model=``, a JSON body's or a batch record's ``plant_model``), ``rotordiag diagnose --plant-model``, or a
+#: caller that does not say (``given``)
+DECLARED_BY = ("asset", "request", "command line", "given")
+_WHO = {"asset": "the asset's stored plant model", "request": "the request", "command line": "--plant-model",
+        "given": "the caller"}
 
 
 def shaftline_key(tables: Mapping[str, Any]) -> str:
@@ -69,7 +75,8 @@ def plant_key(plant_model: str | None = None, shaftline: Mapping[str, Any] | Non
     if name == "default":
         return "default"
     if name not in PRESETS:
-        raise ValueError(f"plant_model {plant_model!r}: use default or a preset: {', '.join(sorted(PRESETS))}")
+        raise ValueError(f"plant_model {plant_model!r}: use default or a preset: {', '.join(sorted(PRESETS))} "
+                         f"({' or '.join(f'{s}:NAME' for s in SIMULATIONS)} for a preset simulated that way)")
     return f"preset:{name}"
 
 
@@ -135,11 +142,15 @@ def machine_family(plant_model: str | None = None, shaftline: Mapping[str, Any] 
         A plant that is not ``default``, a preset or readable shaft-line tables, or an unknown simulation.
     """
     sim = None
+    given = plant_model
     if plant_model is not None:
         head, sep, rest = plant_model.strip().partition(":")
         if sep and head in SIMULATIONS:
             sim, plant_model = head, rest
-    key = plant_key(plant_model, shaftline)
+    try:
+        key = plant_key(plant_model, shaftline)
+    except ValueError as exc:       # the name as the user gave it, simulation included
+        raise ValueError(str(exc).replace(repr(plant_model), repr(given), 1)) from None
     if key is None:
         return None
     return f"{sim}:{key}" if sim else key
@@ -164,3 +175,49 @@ def describe_family(family: str) -> str:
     name = "MODEL.md's plant" if plant == "default" else plant.removeprefix("preset:")
     how = {"lumped": " (lumped 11-DOF)", "train": " (finite-element train)", None: ""}[sim]
     return name + how
+
+
+def answered_by(version: str | None, card: Mapping[str, Any] | None, machine: str | None,
+                declared_by: str | None = None) -> dict[str, Any]:
+    """Which model answered and what the recording was judged as, for the verdict (``Verdict.answered_by``).
+
+    Parameters
+    ----------
+    version : str or None
+        The model's registered version.
+    card : mapping or None
+        Its card: the families it was trained on (:func:`training_families`) and, for a model retrained for one
+        plant, that plant (``plant.name``).
+    machine : str or None
+        The machine's declared family (:func:`machine_family`); None when nothing was declared.
+    declared_by : str, optional
+        Who declared it, one of :data:`DECLARED_BY` (default ``given``); ignored when nothing was declared.
+
+    Returns
+    -------
+    dict
+        ``model_version``, ``training_families`` (keys) and ``training_families_text`` (in words),
+        ``retrained_for`` (the plant of a per-plant model, else None), ``plant_model`` (the declared family or None),
+        ``plant_model_text``, ``declared_by``, ``plant_model_trained`` (whether the model was trained on it; None
+        when nothing was declared or the card records no families) and ``text``, one sentence of it all.
+    """
+    if declared_by is not None and declared_by not in DECLARED_BY:
+        raise ValueError(f"declared_by {declared_by!r}: one of {', '.join(DECLARED_BY)}")
+    families = training_families(card)
+    plant = (card or {}).get("plant")
+    retrained = str(plant["name"]) if isinstance(plant, Mapping) and plant.get("name") else None
+    trained = None if machine is None or not families else trained_on(machine, families)
+    who = (declared_by or "given") if machine is not None else None
+    model = f"model {version or '(unregistered)'}" + (f", retrained for {retrained}" if retrained else "")
+    model += (", trained on " + ", ".join(describe_family(f) for f in families) if families
+              else ", its training families not recorded")
+    if machine is None:
+        judged = "no plant model declared (the asset's, ?plant_model= or --plant-model): no family check"
+    else:
+        judged = (f"judged as {describe_family(machine)}, declared by {_WHO[declared_by or 'given']}"
+                  + {True: ", a family it was trained on", False: ", a family it was NOT trained on (never confident)",
+                     None: ""}[trained])
+    return {"model_version": version, "training_families": families,
+            "training_families_text": [describe_family(f) for f in families], "retrained_for": retrained,
+            "plant_model": machine, "plant_model_text": None if machine is None else describe_family(machine),
+            "declared_by": who, "plant_model_trained": trained, "text": f"{model}; {judged}"}

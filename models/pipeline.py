@@ -31,7 +31,7 @@ from .checks.numbering import numbering_check
 from .checks.one_position import one_position_check
 from .checks.reverse_2x import reverse_2x_check
 from .checks.speed_choice import choose_speed, chosen_speed_notes
-from .families import machine_family, training_families
+from .families import answered_by, machine_family, training_families
 from .predict import (
     ModelBundle,
     ModelScores,
@@ -55,7 +55,8 @@ DOUBT_CHECKS: tuple[Check, ...] = (common_mode_check, clearance_check, attitude_
 
 def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um: float | None = None,
                        top_k: int = 5, fr: FeatureResult | None = None, plant_model: str | None = None,
-                       plant_shaftline: dict[str, Any] | None = None) -> tuple[Verdict, FeatureResult]:
+                       plant_shaftline: dict[str, Any] | None = None,
+                       declared_by: str | None = None) -> tuple[Verdict, FeatureResult]:
     """The verdict of one recording with the active model, and the features it was given from.
 
     Parameters
@@ -75,6 +76,9 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
         (``train:NAME``: its finite-element train), or shaft-line tables (``models.families.machine_family``). A
         family the model's card does not list among its training families makes the verdict uncertain at most
         (``family_untrained``, ``models.checks.family``).
+    declared_by : str, optional
+        Who declared the plant model (``models.families.DECLARED_BY``: ``asset``, ``request``, ``command line``),
+        for the verdict's ``answered_by``.
 
     Returns
     -------
@@ -90,7 +94,9 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
     model = bundle.model if isinstance(bundle, ModelBundle) else bundle
     policy = policy_of(bundle.card) if isinstance(bundle, ModelBundle) else DEFAULT_POLICY
     family = machine_family(plant_model, plant_shaftline)
-    families = training_families(bundle.card) if isinstance(bundle, ModelBundle) else []
+    card = bundle.card if isinstance(bundle, ModelBundle) else None
+    families = training_families(card)
+    answer = answered_by(bundle.version if isinstance(bundle, ModelBundle) else None, card, family, declared_by)
     with predictor_threads(model):
         # 1. read: the caller's reader made ``recording`` (units to µm, probes, bearings, keyphasor, clearance)
         # 2. features and 3. sanity, once per speed hypothesis (None: the recording's own reading of its speed):
@@ -159,7 +165,9 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
         if doubts:
             status, reasons = assess(_recording_checks(scores, fr, probe_set + doubts + beside), call, policy)
         # 7. the verdict
-        return verdict_of(scores, fr, status, reasons, clearance_um=clearance_um, top_k=top_k), fr
+        verdict = verdict_of(scores, fr, status, reasons, clearance_um=clearance_um, top_k=top_k)
+        verdict.answered_by = answer
+        return verdict, fr
 
 
 def read_features(recording: Recording, speed_rpm: float | None = None,

@@ -122,6 +122,17 @@ DEFAULT_REPORT_CASES = 6
 #: Bootstrap draws and level of the report's intervals
 BOOTSTRAP_DRAWS, BOOTSTRAP_LEVEL = 1000, 0.90
 
+#: Floors a plant-retrained model must reach on its plant's report before it is activated automatically, whatever
+#: the active model scores (:func:`decide`; docs/models.md, "Activated only if better"): the issue's per-condition
+#: targets. Under every measurement condition at most this share of the healthy machines is given any
+#: misalignment class (any status) — with fewer than 20 healthy machines per condition, none ...
+FLOOR_FALSE_ALARM_RATE = 0.05
+#: ... and at most this many confident verdicts two or more bands off the true band, under any condition ...
+FLOOR_CONFIDENT_TWO_BANDS_OFF = 0
+#: ... and, pooled over the conditions, at least this share of the moderate-or-worse machines (Δ ≥ the second band
+#: edge, 0.15) given slight or worse (model class, any status): the issue's held-out detection target
+FLOOR_DETECTION_RATE = 0.97
+
 
 @dataclass(frozen=True)
 class PlantDescription:
@@ -422,6 +433,7 @@ def _figures(outs: list, names: list[str], edges: np.ndarray) -> dict[str, Any]:
     has = np.isfinite(lo) & np.isfinite(hi)
     est = np.array([o.delta_model for o in s], dtype=float)
     ok = np.isfinite(est)
+    worse = truth >= 2                  # moderate or worse: Δ at or above the second band edge
     return {
         "n": n, "refused": len(outs) - n,
         "macro_f1": float(f1_score(truth, pred, labels=np.unique(truth), average="macro", zero_division=0)),
@@ -432,6 +444,8 @@ def _figures(outs: list, names: list[str], edges: np.ndarray) -> dict[str, Any]:
         "confident_two_bands_off": int(np.sum(conf & (np.abs(shown - truth) >= 2))),
         "interval_coverage": float(np.mean((lo[has] <= delta[has]) & (delta[has] <= hi[has]))) if has.any() else None,
         "spearman_delta": _spearman(est[ok], delta[ok]),
+        "n_moderate_or_worse": int(worse.sum()),
+        "moderate_or_worse_detected": float(np.mean(pred[worse] >= 1)) if worse.any() else None,
     }
 
 
@@ -574,22 +588,38 @@ def quality_report(new_bundle: Any, old_bundle: Any, plant: PlantDescription, ca
 
 
 def decide(report: Mapping[str, Any]) -> dict[str, Any]:
-    """Whether the new model is better than the active one on this plant's report (docs/models.md):
+    """Whether the new model is better than the active one on this plant's report, and good enough on its own to
+    be activated without being forced (docs/models.md):
 
     1. its pooled band macro-F1 is higher than the active model's (point estimate);
     2. its false alarms are not higher beyond the bootstrap interval: the 90 % paired bootstrap interval of
        (new − active) false-alarm rate reaches 0 or below;
     3. it gives no confident verdict two or more bands off, under any condition;
-    4. it answered (was not refused on) at least as many recordings as the active model.
+    4. it answered (was not refused on) at least as many recordings as the active model;
+    5. the floors, whatever the active model scores: false-alarm rate at most :data:`FLOOR_FALSE_ALARM_RATE` and at
+       most :data:`FLOOR_CONFIDENT_TWO_BANDS_OFF` confident verdicts two bands off under every condition, and at
+       least :data:`FLOOR_DETECTION_RATE` of the moderate-or-worse machines given slight or worse, pooled. Why:
+       "better than the active model" alone activated a model with 65.5 % false alarms because the shipped one
+       had 91 %.
 
-    Returns ``{"better": bool, "reasons": [what failed, or what held]}``.
+    Returns ``{"better": bool, "failed": [...], "held": [...], "floors": {...}, "rule": str}``: each point's line
+    with its figures, in ``failed`` or ``held``.
     """
     p, boot = report["pooled"], report["paired_bootstrap"]
     new, old = p["new"], p["active"]
+    floors = {"false_alarm_rate_max": FLOOR_FALSE_ALARM_RATE,
+              "confident_two_bands_off_max": FLOOR_CONFIDENT_TWO_BANDS_OFF,
+              "moderate_or_worse_detected_min": FLOOR_DETECTION_RATE}
+    rule = ("macro-F1 higher AND false alarms not higher beyond the 90 % paired bootstrap interval AND no confident "
+            "verdict two bands off AND no more recordings refused, AND the floors: false alarms "
+            f"<= {FLOOR_FALSE_ALARM_RATE:.0%} and <= {FLOOR_CONFIDENT_TWO_BANDS_OFF} confident verdicts two bands off "
+            f"under every condition, moderate-or-worse given slight or worse >= {FLOOR_DETECTION_RATE:.0%} "
+            "(docs/models.md)")
+    if not new.get("n"):
+        none = "the new model answered none of the held-out recordings"
+        return {"better": False, "failed": [none], "held": [], "reasons": [none], "floors": floors, "rule": rule}
     failed: list[str] = []
     held: list[str] = []
-    if not new.get("n"):
-        return {"better": False, "reasons": ["the new model answered none of the held-out recordings"]}
     f1_new, f1_old = new["macro_f1"], old.get("macro_f1", 0.0)
     (failed if not f1_new > f1_old else held).append(
         f"band macro-F1 {f1_new:.3f} vs the active model's {f1_old:.3f} (90 % bootstrap interval of the difference "
@@ -603,9 +633,43 @@ def decide(report: Mapping[str, Any]) -> dict[str, Any]:
     (failed if off2 else held).append(f"{off2} confident verdict(s) two or more bands off")
     if new.get("refused", 0) > old.get("refused", 0):
         failed.append(f"refused {new['refused']} recordings, the active model {old.get('refused', 0)}")
-    return {"better": not failed, "failed": failed, "held": held,
-            "rule": "macro-F1 higher AND false alarms not higher beyond the 90 % paired bootstrap interval AND no "
-                    "confident verdict two bands off AND no more recordings refused (docs/models.md)"}
+    for ok, line in _floor_lines(report):
+        (held if ok else failed).append(line)
+    return {"better": not failed, "failed": failed, "held": held, "floors": floors, "rule": rule}
+
+
+def _floor_lines(report: Mapping[str, Any]) -> list[tuple[bool, str]]:
+    """Whether the new model reaches each floor of :func:`decide` on ``report``, and its line with the figures (the
+    conditions above a floor named, worst first). A report without per-condition rows is judged on its pooled
+    figures as one condition. A floor the report cannot measure (no healthy, or no moderate-or-worse, machine among
+    its recordings) is not reached."""
+    rows = {name: r["new"] for name, r in (report.get("per_condition") or {}).items()}
+    if not rows:
+        rows = {"pooled": report["pooled"]["new"]}
+    fa = {name: r.get("false_alarm_rate") for name, r in rows.items()}
+    over = sorted(((v, n) for n, v in fa.items() if v is not None and v > FLOOR_FALSE_ALARM_RATE), reverse=True)
+    measured = [v for v in fa.values() if v is not None]
+    if over:
+        fa_line = (f"floor: false alarms <= {FLOOR_FALSE_ALARM_RATE:.0%} under every condition: above it under "
+                   f"{len(over)} of {len(rows)} (" + ", ".join(f"{n} {v:.1%}" for v, n in over[:5])
+                   + (", …" if len(over) > 5 else "") + ")")
+    elif measured:
+        fa_line = (f"floor: false alarms <= {FLOOR_FALSE_ALARM_RATE:.0%} under every condition: held (worst "
+                   f"{max(measured):.1%})")
+    else:
+        fa_line = "floor: false alarms: no healthy machine among the held-out recordings: not measured, not reached"
+    off = sorted(((int(r.get("confident_two_bands_off") or 0), n) for n, r in rows.items()
+                  if int(r.get("confident_two_bands_off") or 0) > FLOOR_CONFIDENT_TWO_BANDS_OFF), reverse=True)
+    off_line = (f"floor: at most {FLOOR_CONFIDENT_TWO_BANDS_OFF} confident verdict(s) two or more bands off under "
+                "every condition: " + (", ".join(f"{n} {k}" for k, n in off) if off else "held"))
+    det = report["pooled"]["new"].get("moderate_or_worse_detected")
+    n_det = report["pooled"]["new"].get("n_moderate_or_worse", 0)
+    det_ok = det is not None and det >= FLOOR_DETECTION_RATE
+    det_line = (f"floor: moderate-or-worse machines given slight or worse >= {FLOOR_DETECTION_RATE:.0%}: "
+                + ("no moderate-or-worse machine among the held-out recordings: not measured, not reached"
+                   if det is None else
+                   f"{det:.1%} of {n_det} ({'held' if det_ok else 'below'})"))
+    return [(not over and bool(measured), fa_line), (not off, off_line), (det_ok, det_line)]
 
 
 def format_report(report: Mapping[str, Any]) -> str:

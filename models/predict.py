@@ -103,6 +103,9 @@ class Verdict:
     ood_findings: list[dict] = field(default_factory=list)
     model_severity: str | None = None
     speed_source: str | None = None
+    #: which model answered (version, training families, the plant it was retrained for) and which plant model the
+    #: recording was judged as, who declared it (``models.families.answered_by``); None when not made by the pipeline
+    answered_by: dict | None = None
 
     def to_dict(self) -> dict:
         """The verdict as JSON-able data (as :func:`dataclasses.asdict`, 4× faster), with ``warning_codes``: the
@@ -536,6 +539,8 @@ def format_verdict(v: Verdict, output_units: str = "um", *, baseline: dict | Non
         lines.append(f"  outside the training range: {name} = {value:.4g} (training {lo_:.4g} … {hi_:.4g})")
     if v.model_version:
         lines.append(f"model: {v.model_version}")
+    if v.answered_by:
+        lines.append(f"answered by: {v.answered_by['text']}")
     for w in v.warnings:
         lines.append(f"warning: {w.render(unit_key) if isinstance(w, Note) else w}")
     if evidence:

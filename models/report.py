@@ -138,6 +138,8 @@ def summary_lines(c: ReportContent) -> list[tuple[str, str]]:
             out.append(("t", f"offset δ: {_fmt(offset, nd)} {unit} ({_fmt(a, nd)} – {_fmt(b, nd)} {unit})"))
         out.append(("t", f"speed: {_fmt(v.get('speed_rpm'), 1)} r/min; motion type: {v.get('motion_type') or '–'}; "
                          f"model {v.get('model_version') or '–'}"))
+        if (v.get("answered_by") or {}).get("text"):
+            out.append(("t", f"answered by: {v['answered_by']['text']}"))
         probs = v.get("probabilities") or {}
         out.append(("t", "probabilities: " + ", ".join(f"{k} {p:.2f}" for k, p in probs.items())))
         out.append(("h", "Reasons"))

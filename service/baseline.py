@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from rotordiag.core.timefmt import iso_utc
 
-from .core.db import AssetBaseline, AssetBaselineRecording, utcnow
+from .core.db import AssetBaseline, AssetBaselineRecording, AssetDiagnosis, utcnow
 from .errors import InputError
 from .store import (
     AUTO_N,
@@ -100,6 +100,20 @@ def _same_condition(speeds: list[float | None], ids: list[int], what: str, fix: 
             f"the median {med:.0f}); {fix}", "conflict")
 
 
+def _baseline_candidate(session: Session, asset_id: str, diagnosis_id: int) -> AssetDiagnosis:
+    """The stored diagnosis ``diagnosis_id`` of ``asset_id``, to make (part of) its baseline; InputError
+    ``not_found`` when the asset has no such diagnosis, ``conflict`` when it keeps no signature to compare with."""
+    d = get_diagnosis(session, asset_id, diagnosis_id)
+    if d is None:
+        raise InputError(f"asset {asset_id!r} has no stored diagnosis {diagnosis_id}; GET "
+                         f"/assets/{asset_id}/history lists its diagnoses with their ids", "not_found")
+    if d.signature is None:
+        raise InputError(f"diagnosis {diagnosis_id} keeps no signature (it was stored before baselines existed, or "
+                         "only its summary is kept past the history's retention); send its recording instead",
+                         "conflict")
+    return d
+
+
 def add_recording(state: AppState, asset_id: str, diagnosis_id: int) -> dict[str, Any]:
     """Add the stored diagnosis ``diagnosis_id`` to the asset's baseline (making one when it has none) and recompute
     the baseline and its own thresholds.
@@ -112,14 +126,7 @@ def add_recording(state: AppState, asset_id: str, diagnosis_id: int) -> dict[str
     """
     with state.sessions.begin() as s:   # read, check and rewrite in one transaction, the baseline row locked
         row = get_baseline(s, asset_id, lock=True)
-        d = get_diagnosis(s, asset_id, diagnosis_id)
-        if d is None:
-            raise InputError(f"asset {asset_id!r} has no stored diagnosis {diagnosis_id}; GET "
-                             f"/assets/{asset_id}/history lists its diagnoses with their ids", "not_found")
-        if d.signature is None:
-            raise InputError(f"diagnosis {diagnosis_id} keeps no signature (stored before baselines existed, or only "
-                             "its summary is kept past the history's retention); send its recording instead",
-                             "conflict")
+        d = _baseline_candidate(s, asset_id, diagnosis_id)
         members = baseline_recordings(s, asset_id)
         if row is not None and not members:
             raise InputError(f"the baseline of asset {asset_id!r} was set before its recordings were kept one by one "
@@ -281,15 +288,7 @@ def _auto_hint(session: Session, asset_id: str, this_one_stored: bool = False) -
 def from_diagnosis(state: AppState, asset_id: str, diagnosis_id: int, source: str = "diagnosis") -> dict[str, Any]:
     """Make the stored diagnosis ``diagnosis_id`` of ``asset_id`` the asset's baseline."""
     with state.sessions() as s:
-        d = get_diagnosis(s, asset_id, diagnosis_id)
-        if d is None:
-            raise InputError(f"asset {asset_id!r} has no stored diagnosis {diagnosis_id}; GET "
-                             f"/assets/{asset_id}/history lists its diagnoses with their ids", "not_found")
-        if d.signature is None:
-            raise InputError(f"diagnosis {diagnosis_id} keeps no signature (it was stored before baselines existed, "
-                             "or only its summary is kept past the history's retention); send its recording to "
-                             "this endpoint instead", "conflict")
-        member = _member(asset_id, d)
+        member = _member(asset_id, _baseline_candidate(s, asset_id, diagnosis_id))
     put_baseline(state, _build(asset_id, source, [member]), [member])
     return _stored(state, asset_id)
 

@@ -2,9 +2,27 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import Annotated, Any, Optional
 
 import typer
+
+# The options of `rotordiag baseline set|add`, defined once: a stored diagnosis, or how to read a recording (as
+# `rotordiag diagnose` reads it; a sidecar JSON's values are overridden by these)
+DiagnosisIdOption = Annotated[Optional[int], typer.Option("--diagnosis-id", help="A stored diagnosis of the asset.")]
+SampleRateOption = Annotated[Optional[float], typer.Option("--sample-rate-hz", help="The recording's sample rate, Hz.")]
+UnitsOption = Annotated[Optional[str], typer.Option("--units", help="The recording's units: um | mm | m | mil | V | mV "
+                                                   "(V and mV need sensitivity_v_per_mm in its sidecar JSON).")]
+SpeedOption = Annotated[Optional[float], typer.Option("--speed-rpm", help="The running speed, r/min.")]
+ClearanceOption = Annotated[Optional[float], typer.Option("--clearance-um", help="The radial bearing clearance, µm.")]
+ChannelsOption = Annotated[Optional[str], typer.Option("--channels", help="BEARING@ANGLE list, as `rotordiag "
+                                                       "diagnose`.")]
+
+
+def _reading(sample_rate_hz: float | None, units: str | None, speed_rpm: float | None, clearance_um: float | None,
+             channels: str | None) -> dict[str, Any]:
+    """The reading options of a recording given to `rotordiag baseline set|add` (``load_options``' ``given``)."""
+    return {"sample_rate_hz": sample_rate_hz, "units": units, "speed_rpm": speed_rpm, "clearance_um": clearance_um,
+            "channels": channels}
 
 
 def register(app: typer.Typer) -> None:
@@ -195,14 +213,11 @@ def _register_baseline(app: typer.Typer) -> None:
         asset_id: str = typer.Argument(..., help="The asset."),
         recording: Optional[Path] = typer.Argument(None, help="A recording (as `rotordiag diagnose` reads: CSV, NPY, "
                                                    "HDF5, JSON; options from its sidecar JSON or below)."),
-        diagnosis_id: Optional[int] = typer.Option(None, "--diagnosis-id", help="A stored diagnosis of the asset."),
+        diagnosis_id: DiagnosisIdOption = None,
         auto: bool = typer.Option(False, "--auto", help="The average of the asset's first --n stored recordings."),
         n: int = typer.Option(3, "--n", min=1, max=50, help="With --auto: recordings to average."),
-        sample_rate_hz: Optional[float] = typer.Option(None, "--sample-rate-hz"),
-        units: Optional[str] = typer.Option(None, "--units"),
-        speed_rpm: Optional[float] = typer.Option(None, "--speed-rpm"),
-        clearance_um: Optional[float] = typer.Option(None, "--clearance-um"),
-        channels: Optional[str] = typer.Option(None, "--channels", help="BEARING@ANGLE list, as `rotordiag diagnose`."),
+        sample_rate_hz: SampleRateOption = None, units: UnitsOption = None, speed_rpm: SpeedOption = None,
+        clearance_um: ClearanceOption = None, channels: ChannelsOption = None,
     ) -> None:
         """Set (or replace) an asset's baseline: from a recording, --diagnosis-id or --auto."""
         from rotordiag.service.baseline import from_diagnosis, set_auto
@@ -218,9 +233,8 @@ def _register_baseline(app: typer.Typer) -> None:
                 b = set_auto(state, asset_id, n)  # type: ignore[arg-type]
             else:
                 assert recording is not None
-                did = _store_recording(state, settings, asset_id, recording, {
-                    "sample_rate_hz": sample_rate_hz, "units": units, "speed_rpm": speed_rpm,
-                    "clearance_um": clearance_um, "channels": channels})
+                did = _store_recording(state, settings, asset_id, recording,
+                                       _reading(sample_rate_hz, units, speed_rpm, clearance_um, channels))
                 b = from_diagnosis(state, asset_id, did, "recording")  # type: ignore[arg-type]
         except InputError as exc:
             _fail(str(exc))
@@ -256,12 +270,9 @@ def _register_baseline(app: typer.Typer) -> None:
         asset_id: str = typer.Argument(..., help="The asset."),
         recording: Optional[Path] = typer.Argument(None, help="A recording of the unchanged machine at the "
                                                    "baseline's operating condition (as `rotordiag diagnose` reads)."),
-        diagnosis_id: Optional[int] = typer.Option(None, "--diagnosis-id", help="A stored diagnosis of the asset."),
-        sample_rate_hz: Optional[float] = typer.Option(None, "--sample-rate-hz"),
-        units: Optional[str] = typer.Option(None, "--units"),
-        speed_rpm: Optional[float] = typer.Option(None, "--speed-rpm"),
-        clearance_um: Optional[float] = typer.Option(None, "--clearance-um"),
-        channels: Optional[str] = typer.Option(None, "--channels", help="BEARING@ANGLE list, as `rotordiag diagnose`."),
+        diagnosis_id: DiagnosisIdOption = None,
+        sample_rate_hz: SampleRateOption = None, units: UnitsOption = None, speed_rpm: SpeedOption = None,
+        clearance_um: ClearanceOption = None, channels: ChannelsOption = None,
     ) -> None:
         """Add a recording to an asset's baseline (POST /assets/{id}/baseline/recordings): from 3 recordings its
         change thresholds are the asset's own."""
@@ -274,9 +285,8 @@ def _register_baseline(app: typer.Typer) -> None:
         try:
             if diagnosis_id is None:
                 assert recording is not None
-                diagnosis_id = _store_recording(state, settings, asset_id, recording, {
-                    "sample_rate_hz": sample_rate_hz, "units": units, "speed_rpm": speed_rpm,
-                    "clearance_um": clearance_um, "channels": channels})
+                diagnosis_id = _store_recording(state, settings, asset_id, recording,
+                                                _reading(sample_rate_hz, units, speed_rpm, clearance_um, channels))
             b = add_recording(state, asset_id, diagnosis_id)  # type: ignore[arg-type]
         except InputError as exc:
             _fail(str(exc))

@@ -166,11 +166,12 @@ class ModelStore:
 
     # -- diagnosis ------------------------------------------------------------------------------
     def diagnose(self, recording: Any, version: str | None = None, plant_model: str | None = None,
-                 plant_shaftline: dict[str, Any] | None = None) -> dict[str, Any]:
+                 plant_shaftline: dict[str, Any] | None = None, declared_by: str | None = None) -> dict[str, Any]:
         """Features, then the verdict of the models package, as a JSON-able dict.
 
         ``plant_model`` / ``plant_shaftline``: the machine's plant model when known (the request's, else its
-        asset's): a family the model was not trained on is never confident (``models.checks.family``).
+        asset's): a family the model was not trained on is never confident (``models.checks.family``);
+        ``declared_by``: whose it is (``asset`` or ``request``), for the verdict's ``answered_by``.
 
         The verdict (``models.predict.Verdict``) is returned as is, plus
         ``bearings`` (the features package's per-bearing details) and
@@ -187,7 +188,8 @@ class ModelStore:
         from rotordiag.features import signature
 
         bundle = self.load(version)
-        verdict, fr = self._verdict(bundle, recording, plant_model=plant_model, plant_shaftline=plant_shaftline)
+        verdict, fr = self._verdict(bundle, recording, plant_model=plant_model, plant_shaftline=plant_shaftline,
+                                    declared_by=declared_by)
         out = _clean(verdict.to_dict())  # NaN/inf -> null: JSON has no non-finite numbers
         out["model_version"] = out.get("model_version") or bundle.version
         out["bearings"] = _bearings(fr)
@@ -198,7 +200,7 @@ class ModelStore:
 
     @staticmethod
     def _verdict(bundle: Any, recording: Any, fr: Any = None, plant_model: str | None = None,
-                 plant_shaftline: dict[str, Any] | None = None) -> tuple[Any, Any]:
+                 plant_shaftline: dict[str, Any] | None = None, declared_by: str | None = None) -> tuple[Any, Any]:
         """The verdict and the features it was computed from: the pipeline's features and sanity stages
         (``models.pipeline.read_features``, unless ``fr``, the recording's features, is given), refused here when a
         feature overflows, then ``models.pipeline.diagnose_recording`` (the verdict and a doubtful estimated speed
@@ -217,7 +219,7 @@ class ModelStore:
         clearance = getattr(recording, "clearance_um", None)
         clearance = float(clearance) if isinstance(clearance, (int, float)) else None
         return diagnose_recording(bundle, recording, clearance_um=clearance, fr=fr, plant_model=plant_model,
-                                  plant_shaftline=plant_shaftline)
+                                  plant_shaftline=plant_shaftline, declared_by=declared_by)
 
     def plot_features(self, recording: Any) -> Any:
         """The features the web page's pictures are drawn from: those of the verdict (:meth:`diagnose`, the

@@ -64,7 +64,7 @@ def recording_from_model(req: RecordingIn) -> Any:
     bench_service's recording: 0.8 ms)."""
     from rotordiag.features.reader import recording_from_dict
 
-    d = req.model_dump(exclude={"channels"})
+    d = req.model_dump(exclude={"channels", "plant_model"})
     d["channels"] = [{**ch.model_dump(exclude={"data"}), "data": ch.data} for ch in req.channels]
     return recording_from_dict(d, limits=service_limits()).recording
 
@@ -165,6 +165,28 @@ def plant_of_model(name: str | None, shaftline: dict[str, Any] | None = None) ->
     return to_plant(preset(name))
 
 
+def request_plant_model(query_value: str | None, body_value: str | None) -> str | None:
+    """The plant model a JSON request declares: its body's ``plant_model`` or the query parameter's (None: neither);
+    InputError when both are given and differ."""
+    if query_value is not None and body_value is not None and query_value.strip() != body_value.strip():
+        raise InputError(f"plant_model: the query parameter says {query_value!r} and the JSON body {body_value!r}; "
+                         "give the machine's plant model once (or the same in both)")
+    return body_value if body_value is not None else query_value
+
+
+#: the query key :func:`with_probe_config` sets when the plant model came from the asset's stored configuration
+PLANT_FROM_ASSET = "plant_model_from_asset"
+
+
+def plant_declared_by(query: dict[str, Any], plant_model: str | None) -> str | None:
+    """Who declared the plant model a request is diagnosed with: ``asset`` (its stored configuration,
+    :func:`with_probe_config`), ``request`` (the query parameter, a JSON body's or a batch record's field), or None
+    (none declared)."""
+    if query.get(PLANT_FROM_ASSET):
+        return "asset"
+    return "request" if plant_model is not None or query.get("plant_shaftline") is not None else None
+
+
 def check_probe_config(config: dict[str, Any]) -> None:
     """Refuse (InputError, saying what to fix) a probe configuration the reader would refuse for every upload."""
     from rotordiag.core.units import INPUT_UNITS, input_unit, sensitivity_v_per_mm
@@ -203,6 +225,8 @@ def with_probe_config(query: dict[str, Any], config: dict[str, Any] | None,
             continue
         out.update(stored)
         used.update(stored)
+        if group == "plant_model":
+            out[PLANT_FROM_ASSET] = True
     return out, {"asset_id": asset_id, "used": used, "overridden_by_upload": overridden}
 
 
@@ -369,9 +393,10 @@ def parse_body(kind: str, body: Body, filename: str, query: dict[str, Any],
 
 
 def parse_request(kind: str, body: Body, filename: str, query: dict[str, Any],
-                  slow_roll: tuple[bytes, str] | None = None) -> tuple[Any, str | None, str | None, list[str]]:
-    """Recording, asset_id, plant and the reader's notes (what it assumed or left out: the time column's
-    sample rate, the unit conversion, columns not read) from a request body.
+                  slow_roll: tuple[bytes, str] | None = None) -> tuple[Any, str | None, str | None, list[str], str | None]:
+    """Recording, asset_id, plant, the reader's notes (what it assumed or left out: the time column's
+    sample rate, the unit conversion, columns not read) and the declared plant model from a request body
+    (a JSON body's ``plant_model``, else the query's: :func:`request_plant_model`).
 
     Parameters
     ----------
@@ -405,7 +430,8 @@ def parse_request(kind: str, body: Body, filename: str, query: dict[str, Any],
                              "upload; with a JSON body give the slow-roll vectors per channel (channels[].slow_roll)")
         if kind == "json":
             req = _validated_json(DiagnoseRequest, body, MAX_RECORD_VALUES)
-            return checked(recording_from_model, req), req.asset_id, req.plant, []
+            plant_model = request_plant_model(query.get("plant_model"), req.plant_model)
+            return checked(recording_from_model, req), req.asset_id, req.plant, [], plant_model
         if not body:
             raise InputError("empty body: send an NPY file (numpy.save) with an (n_channels, n_points) array, "
                              "or a CSV/HDF5/JSON file as a multipart upload")
@@ -427,4 +453,4 @@ def parse_request(kind: str, body: Body, filename: str, query: dict[str, Any],
             recording = apply_slow_roll(recording, slow)[0]
         except ValueError as exc:
             raise InputError(f"slow_roll_file: {exc}") from None
-    return recording, asset_id, plant, list(res.notes)
+    return recording, asset_id, plant, list(res.notes), query.get("plant_model")

@@ -164,11 +164,12 @@ def _work(kind: str, body: Body, filename: str, query: dict[str, Any], slow_roll
     """Parse and diagnose one request in the worker: ``("ok", verdict, asset_id, plant)`` or an error
     tuple (:func:`_tagged`). ``slow_roll``: an uploaded slow-roll recording and its file name, parsed
     here like the main body (:func:`service.parsing.parse_body`)."""
-    from .parsing import parse_request
+    from .parsing import parse_request, plant_declared_by
 
     def run() -> tuple:
-        recording, asset_id, plant, notes = parse_request(kind, body, filename, query, slow_roll)
-        return ("ok", {**_store().diagnose(recording, version, query.get("plant_model"), query.get("plant_shaftline")),
+        recording, asset_id, plant, notes, plant_model = parse_request(kind, body, filename, query, slow_roll)
+        return ("ok", {**_store().diagnose(recording, version, plant_model, query.get("plant_shaftline"),
+                                           plant_declared_by(query, plant_model)),
                        "input_notes": notes,
                        "recorded_at_in_file": recording.recorded_at}, asset_id, plant)
 
@@ -181,7 +182,8 @@ def _record(record: dict[str, Any], version: str | None) -> tuple:
 
     def run() -> tuple:
         req = batch_record(record)
-        return ("ok", _store().diagnose(checked(recording_from_model, req), version), req.asset_id, req.plant)
+        return ("ok", _store().diagnose(checked(recording_from_model, req), version, req.plant_model,
+                                        declared_by="request" if req.plant_model else None), req.asset_id, req.plant)
 
     return _tagged(run)
 

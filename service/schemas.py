@@ -135,6 +135,16 @@ class RecordingIn(_Strict):
         description=f"Probe channels, at most {MAX_CHANNELS} (two probes per bearing).")
 
 
+#: what ``plant_model`` (the ``POST /diagnose`` query parameter, the JSON body's and a batch record's field) says
+PLANT_MODEL_DESCRIPTION = (
+    "The machine's plant model, `default` (MODEL.md's plant) or a preset (`gen50_2pole`, `gen200_2pole`, "
+    "`gen600_2pole`, `gen600_4pole`; `train:NAME`: its finite-element train). A machine family the model was not "
+    "trained on is never given a confident verdict (`family_untrained`); the answer's `answered_by` says which "
+    "plant model the recording was judged as.")
+#: the bounds of ``plant_model`` wherever it is given
+PLANT_MODEL_MAX_LEN = 64
+
+
 class DiagnoseRequest(RecordingIn):
     """Body of POST /diagnose (JSON form)."""
 
@@ -144,6 +154,10 @@ class DiagnoseRequest(RecordingIn):
             {"bearing": 2, "angle_deg": 45.0, "units": "um", "data": [10.1, 12.3, 9.8, 7.7]},
             {"bearing": 2, "angle_deg": 135.0, "units": "um", "data": [3.1, 5.0, 6.2, 4.4]},
         ]}]})
+
+    plant_model: str | None = Field(None, min_length=1, max_length=PLANT_MODEL_MAX_LEN,
+                                    description=PLANT_MODEL_DESCRIPTION + " As the query parameter `plant_model`; "
+                                    "given in both, they must agree.", examples=["gen600_2pole"])
 
 
 class BatchRecord(DiagnoseRequest):
@@ -545,6 +559,31 @@ class HeadlineOut(BaseModel):
                                 "physics checks failed, or no verdict): then no severity is to be shown.")
 
 
+class AnsweredByOut(BaseModel):
+    """Which model answered and which plant model the recording was judged as (``models.families.answered_by``)."""
+
+    model_config = ConfigDict(protected_namespaces=())
+
+    model_version: str | None = Field(..., description="The registered model version that answered.")
+    training_families: list[str] = Field(..., description="The machine families its card says it was trained on "
+                                         "(`lumped:default`, `lumped:preset:gen600_2pole`, `train:preset:…`); empty "
+                                         "when the card records none.")
+    training_families_text: list[str] = Field(..., description="The same in words.")
+    retrained_for: str | None = Field(..., description="For a model retrained for one plant (`rotordiag retrain`, "
+                                      "`POST /models/retrain`): that plant; null for the shipped or an ordinary model.")
+    plant_model: str | None = Field(..., description="The machine family the recording was judged as (the declared "
+                                    "plant model); null when none was declared.")
+    plant_model_text: str | None = Field(..., description="The same in words.")
+    declared_by: Literal["asset", "request", "command line", "given"] | None = Field(
+        ..., description="Who declared it: `asset` (its stored plant model, PUT /assets/{id}/probes), `request` "
+        "(`?plant_model=`, a JSON body's or a batch record's `plant_model`), `command line` (`--plant-model`); null "
+        "when none was declared.")
+    plant_model_trained: bool | None = Field(..., description="Whether the model was trained on that family (false: "
+                                             "`family_untrained`, never confident); null when none was declared or "
+                                             "the card records no families.")
+    text: str = Field(..., description="All of it in one sentence.")
+
+
 class DiagnoseResponse(BaseModel):
     """The verdict of the active (or requested) model, from ``models.pipeline.diagnose_recording``."""
 
@@ -602,6 +641,10 @@ class DiagnoseResponse(BaseModel):
     speed_rpm: float | None = Field(None, description="Running speed used, r/min (given — locked to the signals' "
                                     "synchronous lines within ±1 % —, from the keyphasor, or estimated from the signals).")
     model_version: str = Field(..., description="Registered model version that produced the verdict.")
+    answered_by: AnsweredByOut | None = Field(None, description="Which model answered (version, training families, "
+                                              "the plant it was retrained for) and which plant model the recording "
+                                              "was judged as, and who declared it; null in answers stored before it "
+                                              "was given.")
     bands: dict[str, Any] = Field(..., description="The model's severity bands: `edges` (Δ) and `names`.")
     warnings: list[str] = Field(..., description="Anything that makes the verdict less certain: each the message of "
                                 "one code of the warnings catalogue (`rotordiag.core.notes`; docs/pipeline.md's warnings "

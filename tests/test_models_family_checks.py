@@ -233,3 +233,70 @@ def test_the_cli_takes_the_plant_model_and_refuses_an_unknown_one(tmp_path):
     assert v["status"] == "uncertain" and [r["code"] for r in v["reasons"]] == ["family_untrained"]
     res = CliRunner().invoke(app, ["diagnose", path, "--plant-model", "gen999"])
     assert res.exit_code == 2 and "use default or a preset" in res.output and "Traceback" not in res.output
+
+
+# --- which model answered, judged as which plant ---------------------------------------------------------------
+
+def test_answered_by_names_the_model_its_families_the_plant_retrained_for_and_the_declared_plant():
+    from rotordiag.models.families import answered_by
+
+    card = {"training_families": ["lumped:default", "train:preset:gen600_4pole"],
+            "plant": {"name": "preset:gen600_4pole", "rated_speed_rpm": [1500.0]}}
+    a = answered_by("v0007", card, "train:preset:gen600_4pole", "asset")
+    assert a["model_version"] == "v0007" and a["retrained_for"] == "preset:gen600_4pole"
+    assert a["training_families"] == ["lumped:default", "train:preset:gen600_4pole"]
+    assert a["training_families_text"] == ["MODEL.md's plant (lumped 11-DOF)", "gen600_4pole (finite-element train)"]
+    assert (a["plant_model"], a["declared_by"], a["plant_model_trained"]) == ("train:preset:gen600_4pole", "asset", True)
+    assert a["text"] == ("model v0007, retrained for preset:gen600_4pole, trained on MODEL.md's plant (lumped 11-DOF), "
+                         "gen600_4pole (finite-element train); judged as gen600_4pole (finite-element train), declared "
+                         "by the asset's stored plant model, a family it was trained on")
+    other = answered_by("v0007", card, "preset:gen50_2pole", "request")
+    assert other["plant_model_trained"] is False and "NOT trained on (never confident)" in other["text"]
+    none = answered_by("v0001", {"training_families": ["lumped:default"]}, None, "request")
+    assert none["plant_model"] is None and none["declared_by"] is None and none["plant_model_trained"] is None
+    assert none["retrained_for"] is None and none["text"].endswith("no plant model declared (the asset's, "
+                                                                    "?plant_model= or --plant-model): no family check")
+    bare = answered_by(None, None, "default")
+    assert bare["declared_by"] == "given" and bare["plant_model_trained"] is None
+    assert "its training families not recorded" in bare["text"]
+    with pytest.raises(ValueError, match="declared_by"):
+        answered_by("v1", None, "default", "somebody")
+
+
+@needs_model
+def test_the_verdict_says_which_model_answered_and_as_which_plant(bundle):
+    from rotordiag.models.families import training_families
+
+    rec = _example("aligned.csv")
+    v, _ = pipeline.diagnose_recording(bundle, rec, plant_model="train:gen600_2pole", declared_by="request")
+    a = v.answered_by
+    assert a["model_version"] == bundle.version == v.model_version
+    assert a["training_families"] == training_families(bundle.card) and a["training_families"]
+    assert (a["plant_model"], a["declared_by"], a["plant_model_trained"]) == ("train:preset:gen600_2pole", "request",
+                                                                              False)
+    assert v.to_dict()["answered_by"] == a
+    v, _ = pipeline.diagnose_recording(bundle, rec)
+    assert v.answered_by["plant_model"] is None and v.answered_by["declared_by"] is None
+    v, _ = pipeline.diagnose_recording(bundle, rec, plant_model="default")
+    assert v.answered_by["plant_model_trained"] is True and v.answered_by["declared_by"] == "given"
+
+
+@needs_model
+def test_the_cli_says_which_model_answered_and_that_the_plant_model_is_its_own(tmp_path):
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+    from rotordiag.models.registry import shipped_registry_dir
+
+    path = str(example_path("aligned.csv"))
+    reg = str(shipped_registry_dir())
+    res = CliRunner().invoke(app, ["diagnose", path, "--registry", reg, "--json", "--plant-model", "gen600_2pole"])
+    assert res.exit_code == 0, res.output
+    a = json.loads(res.output)["answered_by"]
+    assert (a["plant_model"], a["declared_by"], a["plant_model_trained"]) == ("preset:gen600_2pole", "command line",
+                                                                              True)
+    res = CliRunner().invoke(app, ["diagnose", path, "--registry", reg])
+    assert res.exit_code == 0, res.output
+    (line,) = [x for x in res.output.splitlines() if x.startswith("answered by: ")]
+    assert line.startswith("answered by: model v") and "trained on MODEL.md's plant (lumped 11-DOF)" in line
+    assert line.endswith("no plant model declared (the asset's, ?plant_model= or --plant-model): no family check")

@@ -15,6 +15,9 @@ from fastapi.testclient import TestClient
 from typer.testing import CliRunner
 
 from rotordiag.models.plant_retrain import (
+    FLOOR_CONFIDENT_TWO_BANDS_OFF,
+    FLOOR_DETECTION_RATE,
+    FLOOR_FALSE_ALARM_RATE,
     PLANT_TOLERANCES,
     STAGE_SECONDS,
     TRAIN_STAGE_SECONDS,
@@ -194,12 +197,17 @@ def test_paired_bootstrap_tells_a_right_model_from_one_that_calls_everything_ali
     assert b["false_alarm_diff"] == [0.0, 0.0]
 
 
-def _report(f1_new, f1_old, fa_interval, off2=0, refused=(0, 0)):
-    return {"pooled": {"new": {"n": 100, "macro_f1": f1_new, "false_alarm_rate": 0.05, "confident_two_bands_off": off2,
-                               "refused": refused[0]},
-                       "active": {"n": 100, "macro_f1": f1_old, "false_alarm_rate": 0.05, "refused": refused[1]}},
+def _report(f1_new, f1_old, fa_interval, off2=0, refused=(0, 0), fa_new=0.05, fa_old=0.05, detected=1.0,
+            per_condition=None):
+    return {"pooled": {"new": {"n": 100, "macro_f1": f1_new, "false_alarm_rate": fa_new, "confident_two_bands_off": off2,
+                               "refused": refused[0], "moderate_or_worse_detected": detected,
+                               "n_moderate_or_worse": 40},
+                       "active": {"n": 100, "macro_f1": f1_old, "false_alarm_rate": fa_old, "refused": refused[1]}},
             "paired_bootstrap": {"macro_f1_diff": [f1_new - f1_old - 0.05, f1_new - f1_old + 0.05],
-                                 "false_alarm_diff": list(fa_interval)}}
+                                 "false_alarm_diff": list(fa_interval)},
+            **({} if per_condition is None else {"per_condition": {
+                name: {"new": {"false_alarm_rate": fa, "confident_two_bands_off": k}, "active": {}}
+                for name, (fa, k) in per_condition.items()}})}
 
 
 @pytest.mark.parametrize("report, better", [
@@ -214,6 +222,66 @@ def test_better_is_higher_f1_no_more_false_alarms_and_no_confident_two_bands_off
     d = decide(report)
     assert d["better"] is better
     assert bool(d["failed"]) is (not better)
+
+
+def test_the_floors_refuse_a_model_that_is_only_better_than_a_bad_active_one():
+    """The learning curve's 48-sample model: macro-F1 0.37 against the shipped 0.21, false alarms 65.5 % against
+    91 % (lower beyond the interval) — better than the active model, but far above the 5 % false-alarm floor: not
+    activated, and the decision says which floor and by how much."""
+    d = decide(_report(0.37, 0.21, (-0.40, -0.15), fa_new=0.655, fa_old=0.91))
+    assert d["better"] is False
+    assert [line for line in d["failed"] if line.startswith("floor: false alarms <= 5%")] == [
+        "floor: false alarms <= 5% under every condition: above it under 1 of 1 (pooled 65.5%)"]
+    assert d["floors"] == {"false_alarm_rate_max": FLOOR_FALSE_ALARM_RATE, "confident_two_bands_off_max": 0,
+                           "moderate_or_worse_detected_min": FLOOR_DETECTION_RATE}
+    assert (FLOOR_FALSE_ALARM_RATE, FLOOR_CONFIDENT_TWO_BANDS_OFF, FLOOR_DETECTION_RATE) == (0.05, 0, 0.97)
+
+
+GOOD = (0.80, 0.70, (-0.05, 0.03))
+
+
+@pytest.mark.parametrize("per_condition, detected, failing", [
+    # every condition at or under 5 % (1 of 20 healthy machines), detection at the floor: every floor held
+    ({"clean": (0.0, 0), "SNR 15 dB": (0.05, 0)}, 0.97, None),
+    # pooled 4 % would pass, but one condition alarms on 1 of 8 healthy machines (12.5 %): the per-condition floor
+    ({"clean": (0.0, 0), "gains ±20 %": (0.125, 0), "SNR 15 dB": (0.0, 0)}, 1.0, "floor: false alarms"),
+    # one confident verdict two bands off under one condition
+    ({"clean": (0.0, 0), "keyphasor missing": (0.0, 1)}, 1.0, "floor: at most 0 confident"),
+    # 95 % of the moderate-or-worse machines called slight or worse: under 97 %
+    ({"clean": (0.0, 0)}, 0.95, "floor: moderate-or-worse"),
+    # no moderate-or-worse machine to measure it on: not reached
+    ({"clean": (0.0, 0)}, None, "floor: moderate-or-worse"),
+    # no healthy machine under any condition: the false-alarm floor cannot be checked, not reached
+    ({"clean": (None, 0)}, 1.0, "floor: false alarms"),
+])
+def test_each_floor_passes_and_fails_per_condition(per_condition, detected, failing):
+    d = decide(_report(*GOOD, fa_new=0.04, detected=detected, per_condition=per_condition))
+    floors = [line for line in d["failed"] + d["held"] if line.startswith("floor:")]
+    assert len(floors) == 3                                 # every floor is listed, held or failed
+    if failing is None:
+        assert d["better"] is True and not d["failed"]
+    else:
+        assert d["better"] is False and [line for line in d["failed"] if line.startswith(failing)]
+        assert all(line.startswith(failing) for line in d["failed"])   # the other points and floors held
+
+
+def test_the_false_alarm_floor_names_the_conditions_above_it_worst_first():
+    d = decide(_report(*GOOD, per_condition={"clean": (0.0, 0), "runout": (0.25, 0), "gains": (0.125, 0)}))
+    (line,) = [x for x in d["failed"] if x.startswith("floor: false alarms")]
+    assert line.endswith("above it under 2 of 3 (runout 25.0%, gains 12.5%)")
+
+
+def test_moderate_or_worse_detection_is_counted_on_the_model_class_at_any_status():
+    """Of four machines at Δ >= 0.15, three given slight or worse (one uncertain) and one called aligned: 75 %; the
+    slight and healthy machines are not in it."""
+    from rotordiag.models.plant_retrain import _figures
+
+    outs = _outs([0.2, 0.3, 0.5, 0.16, 0.1, 0.0], ["rigid"] * 5 + ["aligned"],
+                 ["moderate", "slight", "severe", "aligned", "aligned", "slight"])
+    outs[1] = Outcome(0.3, "rigid", model_class="slight", severity="slight", status="uncertain", interval=(0.2, 0.4))
+    f = _figures(outs, NAMES, EDGES)
+    assert f["n_moderate_or_worse"] == 4 and f["moderate_or_worse_detected"] == pytest.approx(0.75)
+    assert f["false_alarm_rate"] == 1.0
 
 
 # --- activation, force, rollback ---------------------------------------------------------------------
@@ -401,6 +469,35 @@ def test_retrain_cli_for_a_preset_stores_its_report_and_shows_it(tmp_path):
     assert shown.exit_code == 0 and "quality report for preset:gen600_4pole" in shown.output
     spec = tomllib.loads((tmp_path / "work" / "dataset.toml").read_text())
     assert spec["plant"]["shaftline"] and spec["plant"]["model"] == "train"
+
+
+@pytest.mark.slow
+def test_a_forced_retrain_lists_the_floors_with_the_reports_own_figures(tmp_path):
+    """`rotordiag retrain --force` for gen600_4pole with a few samples: the decision stored with the version
+    lists each floor, failed exactly when the report's own per-condition figures break it, and the version is
+    activated anyway, recorded as forced when the decision said no."""
+    from rotordiag.cli import app
+
+    reg_root = tmp_path / "reg"
+    r = CliRunner().invoke(app, ["retrain", "--registry", str(reg_root), "--preset", "gen600_4pole", "--n-samples", "24",
+                                 "--report-cases", "1", "--workers", "0", "--force", "--work-dir", str(tmp_path / "work")])
+    assert r.exit_code == 0, r.output
+    reg = Registry(reg_root)
+    card = reg.card("v0001")
+    rep = json.loads((reg_root / "v0001" / "plant_report.json").read_text())
+    d = rep["decision"]
+    assert card["plant_report"]["decision"] == d
+    fa = [row["new"].get("false_alarm_rate") for row in rep["per_condition"].values()]
+    off2 = [row["new"].get("confident_two_bands_off", 0) for row in rep["per_condition"].values()]
+    detected = rep["pooled"]["new"].get("moderate_or_worse_detected")
+    breaks = {"floor: false alarms": not any(v is not None for v in fa) or any(v is not None and v > 0.05 for v in fa),
+              "floor: at most 0 confident": any(k > 0 for k in off2),
+              "floor: moderate-or-worse": detected is None or detected < 0.97}
+    for head, broken in breaks.items():
+        assert any(line.startswith(head) for line in (d["failed"] if broken else d["held"])), (head, d)
+    assert d["better"] is (not d["failed"])
+    assert reg.active_version() == "v0001"
+    assert card["activated_by"] == ("report" if d["better"] else "forced")
 
 
 @pytest.mark.slow

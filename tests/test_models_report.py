@@ -79,7 +79,10 @@ def test_write_report_holds_what_it_is_given(tmp_path: Path):
     verdict = {"status": "uncertain", "severity": "moderate", "misalignment": 0.31, "misalignment_interval": [0.2, 0.4],
                "speed_rpm": 2990.0, "probabilities": {"aligned": 0.1, "moderate": 0.9},
                "reasons": [{"status": "uncertain", "message": "bearing 3 & 4 <not> measured"}],
-               "evidence": [{"scope": "bearing 2", "name": "2X/1X", "value": "0.8", "meaning": "strong 2X"}]}
+               "evidence": [{"scope": "bearing 2", "name": "2X/1X", "value": "0.8", "meaning": "strong 2X"}],
+               "model_version": "v0003",
+               "answered_by": {"text": "model v0003, trained on MODEL.md's plant (lumped 11-DOF); judged as "
+                                       "gen600_2pole, declared by the request, a family it was NOT trained on"}}
     history = [{"created_at": "2026-01-01 10:00", "severity": "slight", "misalignment": 0.12, "misalignment_low": 0.05,
                 "misalignment_high": 0.2, "speed_rpm": 3000.0, "status": "confident"},
                {"created_at": "2026-02-01 10:00", "severity": "inconclusive", "misalignment": None,
@@ -93,7 +96,9 @@ def test_write_report_holds_what_it_is_given(tmp_path: Path):
     assert "T &lt;1&gt;" in html and "&lt;not&gt;" in html          # escaped, not injected
     assert "WHAT TO DO (before acting): confirm before acting: the model reads moderate misalignment" in html
     for text in ("status: uncertain", "severity: moderate", "0.310 (interval 0.200 – 0.400)", "bearing 2 · 2X/1X",
-                 "Trend (2 stored diagnoses)", "2026-02-01 10:00: inconclusive"):
+                 "Trend (2 stored diagnoses)", "2026-02-01 10:00: inconclusive",
+                 "answered by: model v0003, trained on MODEL.md&#x27;s plant (lumped 11-DOF); judged as gen600_2pole, "
+                 "declared by the request, a family it was NOT trained on"):
         assert text in html, text
     assert html.count("data:image/png;base64,") == 2                 # trend + bode
     n_pages = len(re.findall(rb"/Type /Page\b(?!s)", pdf.read_bytes()))

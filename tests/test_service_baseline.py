@@ -204,8 +204,17 @@ def test_an_old_database_gets_the_new_columns(tmp_path, registry_src):
     with TestClient(create_app(settings)) as c:
         h = c.get("/assets/old/history").json()
         assert h["count"] == 1 and h["points"][0]["alarm"] is None
-        r = c.post(f"/assets/old/baseline?diagnosis_id={h['points'][0]['id']}", headers=auth())
-        assert r.status_code == 409 and "send its recording" in r.json()["detail"]
+        did = h["points"][0]["id"]
+        r = c.post(f"/assets/old/baseline?diagnosis_id={did}", headers=auth())
+        expected = (f"diagnosis {did} keeps no signature (it was stored before baselines existed, or only its summary "
+                    "is kept past the history's retention); send its recording instead")
+        assert r.status_code == 409 and r.json()["detail"] == expected
+        r = c.post(f"/assets/old/baseline/recordings?diagnosis_id={did}", headers=auth())
+        assert r.status_code == 409 and r.json()["detail"] == expected          # the same refusal, the same words
+        for url in ("/assets/old/baseline?diagnosis_id=999999", "/assets/old/baseline/recordings?diagnosis_id=999999"):
+            r = c.post(url, headers=auth())
+            assert r.status_code == 404 and r.json()["detail"] == (
+                "asset 'old' has no stored diagnosis 999999; GET /assets/old/history lists its diagnoses with their ids")
         assert c.post("/diagnose", json=_body("old"), headers=auth()).json()["diagnosis_id"] == 2
 
 
@@ -357,6 +366,51 @@ def test_cli_adds_and_removes_baseline_recordings(tmp_path, monkeypatch, registr
     assert res.exit_code == 0 and "made of 2 recording(s)" in res.output and "fleet-wide" in res.output
     res = run(app, ["baseline", "remove", "unit-cli2", "--diagnosis-id", str(ids[1])])
     assert res.exit_code == 2 and "is not a recording of the baseline" in res.output
+
+
+def test_cli_set_and_add_read_a_recording_with_the_same_options(tmp_path, monkeypatch, registry_src):
+    """`rotordiag baseline set` and `add` take one shared set of reading options: an NPY file without a sidecar is
+    read only with --sample-rate-hz, --channels, --speed-rpm and --clearance-um, by both commands alike, and both
+    list the same options."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    monkeypatch.setenv("ROTORDIAG_DATA_DIR", str(tmp_path / "data"))
+    monkeypatch.setenv("ROTORDIAG_SHIPPED_REGISTRY_DIR", str(registry_src))
+    files = []
+    for seed in (80, 81):
+        body = _body(seed=seed)
+        f = tmp_path / f"take{seed}.npy"
+        np.save(f, np.array([c["data"] for c in body["channels"]]))
+        files.append(f)
+    layout = ",".join(f"{c['bearing']}@{c['angle_deg']:g}" for c in body["channels"])
+    opts = ["--sample-rate-hz", str(FS_HZ), "--channels", layout, "--speed-rpm", str(SPEED_RPM),
+            "--clearance-um", "350", "--units", "um"]
+    run = CliRunner().invoke
+    res = run(app, ["baseline", "set", "unit-cli3", str(files[0])])
+    assert res.exit_code == 2 and "sample rate" in res.output          # an NPY file says nothing of how to read it
+    res = run(app, ["baseline", "set", "unit-cli3", str(files[0]), *opts])
+    assert res.exit_code == 0, res.output
+    assert f"{SPEED_RPM:.0f} r/min" in res.output
+    res = run(app, ["baseline", "add", "unit-cli3", str(files[1]), *opts])
+    assert res.exit_code == 0, res.output
+    assert "made of 2 recording(s)" in res.output
+    shown = json.loads(run(app, ["baseline", "show", "unit-cli3", "--json"]).output)
+    assert len(shown["baseline"]["diagnosis_ids"]) == 2
+
+    import typer
+
+    baseline = typer.main.get_command(app).commands["baseline"]
+
+    def options(command: str) -> dict[str, tuple]:
+        return {p.opts[0]: (p.name, p.help, p.default) for p in baseline.commands[command].params
+                if p.opts[0] in ("--diagnosis-id", "--sample-rate-hz", "--units", "--speed-rpm", "--clearance-um",
+                                 "--channels")}
+
+    assert options("set") == options("add") and len(options("set")) == 6
 
 
 def test_openapi_documents_the_baseline_recording_routes(client):

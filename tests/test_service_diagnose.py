@@ -749,6 +749,105 @@ def test_a_plant_model_in_the_query_is_judged_against_the_models_training_famili
     assert r.status_code == 200 and r.json()["status"] == "confident"
 
 
+def test_a_plant_model_in_the_json_body_is_validated_as_the_query_parameter(client, rec):
+    """A JSON body's `plant_model`: judged as the query parameter's; a body and a query that disagree are a 422
+    saying so (the same name in both is taken); an unknown name a 422 listing what is accepted; an empty or over-long
+    one refused by the same bounds as the query's, located in the body."""
+    from rotordiag.simulator.shaftline import PRESETS
+    from tests.service_util import shipped_registry_usable
+
+    fs, channels = rec
+    body = diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0)
+    r = client.post("/diagnose", json={**body, "plant_model": "gen999"})
+    assert r.status_code == 422
+    assert "plant_model 'gen999': use default or a preset" in r.json()["detail"]
+    assert all(name in r.json()["detail"] for name in PRESETS) and "train:NAME" in r.json()["detail"]
+    q = client.post("/diagnose", json=body, params={"plant_model": "gen999"})
+    assert (q.status_code, q.json()) == (r.status_code, r.json())
+    r = client.post("/diagnose", json={**body, "plant_model": "default"}, params={"plant_model": "gen600_2pole"})
+    assert r.status_code == 422
+    assert r.json()["detail"] == ("plant_model: the query parameter says 'gen600_2pole' and the JSON body 'default'; "
+                                  "give the machine's plant model once (or the same in both)")
+    for bad in ("", "x" * 65):
+        in_body = client.post("/diagnose", json={**body, "plant_model": bad})
+        in_query = client.post("/diagnose", json=body, params={"plant_model": bad})
+        assert in_body.status_code == in_query.status_code == 422
+        (eb,), (eq,) = in_body.json()["detail"], in_query.json()["detail"]
+        assert eb["loc"] == ["body", "plant_model"] and eq["loc"] == ["query", "plant_model"]
+        assert eb["msg"] == eq["msg"]
+    r = client.post("/diagnose", json={**body, "plant_model": 3})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "plant_model"]
+    if not shipped_registry_usable():
+        pytest.skip("the tiny registry's card records no training families")
+    plain = client.post("/diagnose", json=body).json()
+    assert "family_untrained" not in [x["code"] for x in plain["reasons"]]
+    untrained = client.post("/diagnose", json={**body, "plant_model": "train:gen600_2pole"}).json()
+    assert "family_untrained" in [x["code"] for x in untrained["reasons"]] and untrained["status"] != "confident"
+    same = client.post("/diagnose", json={**body, "plant_model": "train:gen600_2pole"},
+                       params={"plant_model": "train:gen600_2pole"})
+    assert same.status_code == 200 and same.json()["reasons"] == untrained["reasons"]
+    by_query = client.post("/diagnose", json=body, params={"plant_model": "train:gen600_2pole"}).json()
+    assert by_query["reasons"] == untrained["reasons"]
+
+
+def test_each_batch_record_declares_its_own_plant_model(client, rec):
+    """`plant_model` per record of a batch: each judged as its own; an unknown one is that record's 422 listing what
+    is accepted, a malformed one that record's 422 naming the field, and the other records are answered."""
+    from tests.service_util import shipped_registry_usable
+
+    fs, channels = rec
+    body = diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0)
+    records = [body, {**body, "plant_model": "train:gen600_2pole"}, {**body, "plant_model": "gen999"},
+               {**body, "plant_model": ""}]
+    r = client.post("/diagnose/batch", json={"records": records})
+    assert r.status_code == 200, r.text
+    items = r.json()["items"]
+    assert [it["status_code"] for it in items] == [200, 200, 422, 422]
+    assert "plant_model 'gen999': use default or a preset" in items[2]["error"]
+    assert json.loads(items[3]["error"])[0]["loc"] == ["record", "plant_model"]
+    if shipped_registry_usable():
+        codes = [[x["code"] for x in it["result"]["reasons"]] for it in items[:2]]
+        assert "family_untrained" not in codes[0] and "family_untrained" in codes[1]
+
+
+def test_the_answer_says_which_model_answered_and_whose_plant_model_it_was_judged_as(client, rec):
+    """`answered_by`: the model version and its card's training families; the plant model declared by the request
+    (query, JSON body, batch record), by the asset's stored configuration, or none; whether the model was trained
+    on it."""
+    from rotordiag.features.examples import example_path
+    from rotordiag.models.families import training_families
+
+    active = client.get("/models").json()["active"]
+    families = training_families(client.get(f"/models/{active}").json())
+    fs, channels = rec
+    body = diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0)
+    plain = client.post("/diagnose", json=body).json()["answered_by"]
+    assert plain["model_version"] == active and plain["training_families"] == families
+    assert plain["plant_model"] is None and plain["declared_by"] is None and plain["retrained_for"] is None
+    assert plain["text"].startswith(f"model {active}")
+    for kwargs in (dict(json={**body, "plant_model": "gen50_2pole"}),
+                   dict(json=body, params={"plant_model": "gen50_2pole"})):
+        a = client.post("/diagnose", **kwargs).json()["answered_by"]
+        assert (a["plant_model"], a["plant_model_text"], a["declared_by"]) == ("preset:gen50_2pole", "gen50_2pole",
+                                                                               "request")
+        assert a["plant_model_trained"] is ("lumped:preset:gen50_2pole" in families if families else None)
+    items = client.post("/diagnose/batch", json={"records": [body, {**body, "plant_model": "default"}]}).json()["items"]
+    got = [it["result"]["answered_by"] for it in items]
+    assert [(a["plant_model"], a["declared_by"]) for a in got] == [(None, None), ("default", "request")]
+    r = client.put("/assets/stored-plant/probes", json={"plant_model": "gen600_2pole", "clearance_um": 350},
+                   headers=auth())
+    assert r.status_code == 200, r.text
+    csv = example_path("aligned.csv").read_bytes()
+    a = client.post("/diagnose", params={"asset_id": "stored-plant"}, files={"file": ("a.csv", csv)}).json()["answered_by"]
+    assert (a["plant_model"], a["declared_by"]) == ("preset:gen600_2pole", "asset")
+    assert "declared by the asset's stored plant model" in a["text"]
+    a = client.post("/diagnose", params={"asset_id": "stored-plant", "plant_model": "default"},
+                    files={"file": ("a.csv", csv)}).json()["answered_by"]
+    assert (a["plant_model"], a["declared_by"]) == ("default", "request")       # the upload's own wins
+    mil = client.post("/diagnose", json={**body, "plant_model": "gen50_2pole"}, params={"output_units": "mil"}).json()
+    assert mil["answered_by"]["plant_model"] == "preset:gen50_2pole"
+
+
 def test_an_assets_own_shaft_line_is_a_family_the_shipped_model_never_saw(client):
     """An asset whose stored plant is its own shaft line (not a preset's) is diagnosed with that plant: the shipped
     model, trained on MODEL.md's plant and the presets' reductions, is never confident there (issue 48)."""

@@ -70,6 +70,23 @@ def test_worker_errors_are_the_same_4xx(clients, rec, case):
     assert (a.status_code, a.json()) == (b.status_code, b.json())
 
 
+def test_a_plant_model_in_the_body_and_in_batch_records_is_read_by_the_workers(clients, rec):
+    """`plant_model` of a JSON body and of batch records: the workers answer as the in-process path, refusals
+    included."""
+    pooled, plain = clients
+    fs, channels = rec
+    body = diagnose_json(fs, channels, speed_rpm=1800.0, clearance_um=350.0)
+    for kwargs in (dict(json={**body, "plant_model": "train:gen600_2pole"}),
+                   dict(json={**body, "plant_model": "default"}, params={"plant_model": "gen50_2pole"}),
+                   dict(json={"records": [{**body, "plant_model": "train:gen600_2pole"},
+                                          {**body, "plant_model": "gen999"}]})):
+        url = "/diagnose/batch" if "records" in kwargs["json"] else "/diagnose"
+        a, b = pooled.post(url, **kwargs), plain.post(url, **kwargs)
+        assert a.status_code == b.status_code, (a.text, b.text)
+        assert a.json() == b.json()
+    assert a.json()["items"][1]["status_code"] == 422 and "gen999" in a.json()["items"][1]["error"]
+
+
 def test_asset_history_is_stored_by_the_server(clients, rec):
     pooled, _ = clients
     fs, channels = rec

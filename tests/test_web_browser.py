@@ -409,6 +409,28 @@ def test_csv_upload_shows_verdict_orbits_and_spectra(server, browser, recordings
     _wait(d, lambda dr: _canvas(dr, "half-2", BLUE_1X)["ink"] != before, 10, "the log-scale redraw")
 
 
+def test_the_page_says_which_model_answered_and_as_which_plant(server, browser, recordings, tmp_path):
+    """The verdict's "Answered by" line: the API's `answered_by` sentence — the model, its training families, and
+    the plant model chosen in the form (declared by the request) or none declared."""
+    data = recordings[0.2]
+    path = _write_csv(tmp_path / "unit.csv", data)
+    _open(browser, server)
+    d = browser
+    _submit_file(d, path, sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
+    page = d.execute_script("return window.rotordiag.state.verdict")["answered_by"]
+    assert page["plant_model"] is None and page["model_version"] == _verdict_api(server, data)["model_version"]
+    shown = d.find_element("id", "verdict-answered-by")
+    assert shown.is_displayed() and shown.text == page["text"] and "no plant model declared" in shown.text
+    d.find_element("id", "plant-model").send_keys("gen600_4pole")
+    _submit_file(d, path, sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
+    page = d.execute_script("return window.rotordiag.state.verdict")["answered_by"]
+    assert (page["plant_model"], page["declared_by"]) == ("preset:gen600_4pole", "request")
+    text = d.find_element("id", "verdict-answered-by").text
+    assert text == page["text"] and "judged as gen600_4pole, declared by the request" in text
+    _screenshot(d, "verdict-answered-by")
+    d.find_element("id", "plant-model").send_keys("not stated")
+
+
 def test_broken_uploads_show_the_services_message(server, browser, tmp_path):
     _open(browser, server)
     bad = tmp_path / "broken.csv"

@@ -19,9 +19,26 @@ from rotordiag.models.output_units import verdict_in_units
 
 from ...baseline import parse_tags, record_verdict
 from ...inference import ModelUnavailable
-from ...parsing import MAX_TAKE_FILES, batch_record, checked, parse_batch, parse_request, recording_from_model
+from ...parsing import (
+    MAX_TAKE_FILES,
+    batch_record,
+    checked,
+    parse_batch,
+    parse_request,
+    plant_declared_by,
+    recording_from_model,
+)
 from ...pool import DiagnoseBody, DiagnoseRecord, ParseBatch
-from ...schemas import MAX_BATCH_VALUES, MAX_LABEL_LEN, AssetId, BatchItem, BatchResponse, DiagnoseResponse
+from ...schemas import (
+    MAX_BATCH_VALUES,
+    MAX_LABEL_LEN,
+    PLANT_MODEL_DESCRIPTION,
+    PLANT_MODEL_MAX_LEN,
+    AssetId,
+    BatchItem,
+    BatchResponse,
+    DiagnoseResponse,
+)
 from ..deps import (
     DiagnoseKeyDep,
     JsonBodyDep,
@@ -73,9 +90,9 @@ _BINARY_BODY = {
 }
 
 def _diagnose_sync(state, recording, version: str | None, plant_model: str | None = None,
-                   plant_shaftline: dict | None = None) -> dict:
+                   plant_shaftline: dict | None = None, declared_by: str | None = None) -> dict:
     try:
-        verdict = state.models.diagnose(recording, version, plant_model, plant_shaftline)
+        verdict = state.models.diagnose(recording, version, plant_model, plant_shaftline, declared_by)
     except ModelUnavailable as exc:
         if version is not None:
             raise InputError(str(exc), "not_found") from None
@@ -118,11 +135,9 @@ async def diagnose(
                                                description="Diagnose with this registered version instead of the "
                                                "active one.")] = None,
     output_units: OutputUnitsQuery = "um",
-    plant_model: Annotated[str | None, Query(min_length=1, max_length=64, description=(
-        "Binary/multipart only: the machine's plant model, `default` (MODEL.md's plant) or a preset (`gen50_2pole`, "
-        "`gen200_2pole`, `gen600_2pole`, `gen600_4pole`; `train:NAME`: its finite-element train); default: the "
-        "asset's plant model. A machine family the model was not trained on is never given a confident verdict "
-        "(`family_untrained`)."))] = None,
+    plant_model: Annotated[str | None, Query(min_length=1, max_length=PLANT_MODEL_MAX_LEN, description=(
+        PLANT_MODEL_DESCRIPTION + " Default: a binary or multipart upload's asset's plant model. A JSON body may "
+        "give it as its own field `plant_model` instead; given in both, they must agree (422 otherwise)."))] = None,
     recorded_at: Annotated[dt.datetime | None, Query(description="When the recording was made (ISO 8601; UTC when no "
                                                      "offset): orders the asset's trend, so a backfilled recording "
                                                      "lands in its place (and raises no alarm).")] = None,
@@ -204,8 +219,9 @@ def recording_meta(recorded_at: dt.datetime | None, tags: str | None, note: str 
 
 def _parse_and_diagnose(state, kind, body, filename, query, slow_roll,
                         model_version) -> tuple[dict, str | None, str | None]:
-    recording, asset_id, plant, notes = parse_request(kind, body, filename, query, slow_roll)
-    return ({**_diagnose_sync(state, recording, model_version, query.get("plant_model"), query.get("plant_shaftline")),
+    recording, asset_id, plant, notes, plant_model = parse_request(kind, body, filename, query, slow_roll)
+    return ({**_diagnose_sync(state, recording, model_version, plant_model, query.get("plant_shaftline"),
+                              plant_declared_by(query, plant_model)),
              "input_notes": notes,
              "recorded_at_in_file": recording.recorded_at}, asset_id, plant)
 
@@ -297,7 +313,8 @@ def _batch_sync(state, records: list[dict[str, Any]], model_version: str | None,
             rec = batch_record(raw)
             recording = checked(recording_from_model, rec)
             meta = record_meta(raw)
-            verdict = _diagnose_sync(state, recording, model_version)
+            verdict = _diagnose_sync(state, recording, model_version, rec.plant_model,
+                                     declared_by="request" if rec.plant_model else None)
             record_verdict(state, rec.asset_id, rec.plant, verdict, may_store, meta)
             items.append((i, verdict))
         except InputError as exc:

@@ -523,6 +523,9 @@
     $("verdict-speed").textContent = v.speed_rpm ? `${fixed(v.speed_rpm, 1)} r/min (${fixed(v.speed_rpm / 60, 2)} Hz)` +
       (v.speed_source ? `, ${v.speed_source}` : "") + (speedDoubt ? " — in doubt: see the reasons" : "") : "—";
     $("verdict-model").textContent = v.model_version;
+    // which model answered, trained on what, and the plant model the recording was judged as (and whose)
+    $("verdict-answered-by").textContent = v.answered_by ? v.answered_by.text : "";
+    show($("verdict-answered-row"), Boolean(v.answered_by));
     const ood = $("ood-warning");
     if (v.ood) {
       const outside = (v.ood_findings || []).map((f) => f.feature);
