@@ -87,6 +87,11 @@ def test_runups_read_back_with_their_profile_and_keyphasor(runups):
     assert info["sample_kind"] == "transient" and info["transient"]["keyphasor_marks"] == 320
     assert info["transient"]["profiles"] == [{"times_s": [0.0, 16.0], "speeds_rpm": [800.0, 1600.0]}]
     assert "speed_rpm" not in info["parameter_ranges"]
+    from rotordiag.cli import app
+
+    r = CliRunner().invoke(app, ["dataset", "info", str(runups[0])])
+    assert r.exit_code == 0 and "samples are run-ups / coast-downs with a keyphasor: profile 0 s 800 r/min, " \
+        "16 s 1600 r/min" in r.output and "320 keyphasor marks, 0 stopped early" in r.output, r.output
 
 
 def test_runups_are_deterministic_per_seed(runups):
