@@ -155,6 +155,30 @@ def test_steady_and_transient_readers_refuse_each_others_files(runups, tmp_path)
 BASE = RUNUP_SPEC.format(seed=46)
 
 
+def test_a_coast_down_from_a_table_profile(tmp_path):
+    """A table profile (a coast-down 1600 → 1000 r/min with a knee at 2 s): stored as given, the keyphasor marks
+    are the profile's and spread out as the shaft slows, and the example spec is valid."""
+    from rotordiag.simulator.dataset import load_spec
+    from rotordiag.simulator.transient import SpeedProfile
+
+    assert load_spec(Path(__file__).parents[1] / "examples" / "dataset_runup.toml").spec.is_transient
+    text = (BASE.replace("n_samples = 3", "n_samples = 1")
+            .replace("start_rpm = 800\nend_rpm = 1600\nduration_s = 16",
+                     "times_s = [0, 2, 4]\nspeeds_rpm = [1600, 1200, 1000]"))
+    spec = tmp_path / "coast.toml"
+    spec.write_text(text)
+    assert generate(spec, tmp_path / "coast.h5", n_workers=0, progress=False).status_counts == {"ok": 1}
+    with DatasetReader(tmp_path / "coast.h5") as ds:
+        smp = ds.transient_sample(0)
+    assert smp.profile_times_s.tolist() == [0.0, 2.0, 4.0] and smp.profile_speeds_rpm.tolist() == [1600, 1200, 1000]
+    marks = SpeedProfile.table([0, 2, 4], [1600, 1200, 1000]).revolution_times_s()
+    assert np.allclose(smp.keyphasor_times_s, marks[:smp.keyphasor_times_s.size], atol=1e-12)
+    assert smp.keyphasor_times_s.size == marks.size - 1 or smp.keyphasor_times_s.size == marks.size
+    period = np.diff(smp.keyphasor_times_s)
+    assert period[0] == pytest.approx(60 / 1600, rel=0.01) and period[-1] == pytest.approx(60 / 1000, rel=0.02)
+    assert np.all(np.diff(period) > -1e-12)                    # each revolution longer than the one before
+
+
 @pytest.mark.parametrize("old, new, fragment", [
     ("start_rpm = 800\nend_rpm = 1600\nduration_s = 16",
      "times_s = [0, 8, 16]\nspeeds_rpm = [800, 1600, 1200]", "speed profile reverses at t = 8 s"),
