@@ -150,6 +150,12 @@ def test_steady_and_transient_readers_refuse_each_others_files(runups, tmp_path)
     with pytest.raises(StoreError, match="not of the same family"):
         merge([steady, runups[0]], tmp_path / "mixed.h5")
     assert not (tmp_path / "mixed.h5").exists()
+    merge([runups[0], runups[2]], tmp_path / "both.h5")          # two run-up sets of one profile: one file
+    with DatasetReader(tmp_path / "both.h5") as ds, DatasetReader(runups[2]) as c:
+        assert ds.kind == "transient" and len(ds) == 6
+        assert np.array_equal(ds.transient_sample(3).waveforms_um, c.transient_sample(0).waveforms_um)
+        with pytest.raises(StoreError, match="holds run-ups or coast-downs"):
+            ds.waveforms(0)
 
 
 BASE = RUNUP_SPEC.format(seed=46)
