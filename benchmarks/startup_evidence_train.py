@@ -156,6 +156,8 @@ def main() -> None:
     ap.add_argument("--couplings", default="rigid", help="Coupling types: rigid,flexible")
     ap.add_argument("--workers", type=int, default=0, help="Dataset workers (0: serial)")
     ap.add_argument("--out-dir", type=Path, default=Path("build/startup_evidence_train"))
+    ap.add_argument("--evaluate-only", action="store_true",
+                    help="Generate nothing: evaluate the finished run-ups of the datasets already in --out-dir")
     args = ap.parse_args()
     args.out_dir.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -165,14 +167,23 @@ def main() -> None:
             spec = args.out_dir / f"train{i}_{coupling}.toml"
             spec.write_text(train_spec(i, coupling, args))
             out = args.out_dir / f"train{i}_{coupling}.h5"
-            gs = generate(spec, out, n_workers=args.workers, progress=False)
-            print(f"{out}: {gs.n_computed} run-ups generated, {gs.n_done_before} read back "
-                  f"({time.perf_counter() - t0:.0f} s)", flush=True)
+            if args.evaluate_only:
+                if not out.exists():
+                    print(f"{out}: not generated", flush=True)
+                    continue
+            else:
+                gs = generate(spec, out, n_workers=args.workers, progress=False)
+                print(f"{out}: {gs.n_computed} run-ups generated, {gs.n_done_before} read back "
+                      f"({time.perf_counter() - t0:.0f} s)", flush=True)
             with DatasetReader(out) as ds:
-                lab = ds.labels()
+                lab = ds.labels()                     # the finished run-ups only
                 phase = ds.parameters("parameters/unbalance_phase_rad")
                 rows = [int(r) for r in ds.indices]
-                base = next(r for r, d, ph in zip(rows, lab["misalignment"], phase) if d == 0.0 and ph == 0.0)
+                print(f"{out}: {len(rows)} of {ds.done.size} run-ups finished", flush=True)
+                base = next((r for r, d, ph in zip(rows, lab["misalignment"], phase) if d == 0.0 and ph == 0.0), None)
+                if base is None:
+                    print(f"{coupling} train {i}: its baseline run-up is not finished; skipped", flush=True)
+                    continue
                 base_ev, base_tr, base_cl, c_um = evaluate(ds, base)
                 base_sig = steady_signature(base_tr, base_cl)
                 unb = float(ds.parameters("labels/unbalance_kg_m")[0])
