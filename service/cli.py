@@ -404,7 +404,7 @@ def _register_report(app: typer.Typer) -> None:
     @app.command()
     def report(
         target: Optional[str] = typer.Argument(
-            None, metavar="[ASSET | RECORDING]",
+            None, metavar="ASSET|RECORDING",
             help="An asset's id (its latest stored verdict, recordings and trend from the service's database, as "
                  "GET /assets/{id}/report), or a steady recording file (its verdict, reasons and evidence). An "
                  "existing file is read as a recording; anything else is an asset id."),
