@@ -177,6 +177,12 @@ def load_feature_table(
     with f:
         if f.attrs.get("format") != "rotordiag-dataset":
             raise ValueError(f"dataset: {path} is not a rotordiag dataset (attribute format != 'rotordiag-dataset')")
+        from rotordiag.simulator.dataset.store import StoreError, require_kind
+
+        try:
+            require_kind(f, "steady", "the feature table (steady features per sample)")
+        except StoreError as exc:
+            raise ValueError(f"dataset: {exc}") from None
         done = f["done"][...].astype(bool)
         status_codes = _codes(f["labels/status"])
         status = np.array([status_codes.get(int(s), f"code {int(s)}") for s in f["labels/status"][...]], dtype=object)

@@ -374,17 +374,57 @@ def _startup_evidence(verdict: dict | None, recording, track, baseline) -> tuple
     return verdict, notes
 
 
+def report_target(target: str | None, asset_option: str | None) -> tuple[Path | None, str | None]:
+    """``rotordiag report``'s argument read as (recording, asset): an existing file is a recording (``--asset``
+    may then name the asset beside it); anything else is an asset id, which ``--asset`` may not name again.
+    A name that looks like a recording file (a reader's suffix, or a folder in it) but does not exist is
+    refused as a missing file rather than taken for an asset.
+
+    Raises
+    ------
+    ValueError
+        The message says what to fix.
+    """
+    from rotordiag.features.reader import FORMATS
+    from rotordiag.service.schemas import _check_asset_id
+
+    if target is None:
+        return None, asset_option
+    path = Path(target)
+    if path.is_file():
+        return path, asset_option
+    suffixes = {s for group in FORMATS.values() for s in group}
+    if path.suffix.lower() in suffixes or "/" in target:
+        raise ValueError(f"{target}: no such recording file (an asset's id has no folder and no recording "
+                         f"suffix such as {', '.join(sorted(suffixes))})")
+    if path.exists():
+        raise ValueError(f"{target} is a folder, not a recording file or an asset's id")
+    if asset_option is not None:
+        raise ValueError(f"the asset is given twice ({target!r} and --asset {asset_option!r}): name it once, "
+                         "as the argument (`rotordiag report G3`) or with --asset beside a recording")
+    try:
+        return None, _check_asset_id(target)
+    except ValueError as exc:
+        raise ValueError(f"{target!r} is neither a recording file nor an asset's id: {exc}") from None
+
+
 def _register_report(app: typer.Typer) -> None:
     """``rotordiag report``: a PDF and an HTML page to hand on."""
 
     @app.command()
     def report(
-        recording: Optional[Path] = typer.Argument(None, help="A steady recording: its verdict, reasons and evidence."),
+        target: Optional[str] = typer.Argument(
+            None, metavar="ASSET|RECORDING",
+            help="An asset's id (its latest stored verdict, recordings and trend from the service's database, as "
+                 "GET /assets/{id}/report), or a steady recording file (its verdict, reasons and evidence). An "
+                 "existing file is read as a recording; anything else is an asset id."),
         out: Path = typer.Option(..., "--out", help="The PDF to write (the HTML page goes next to it, .html)."),
         startup: Optional[Path] = typer.Option(None, "--startup", help="A start-up or coast-down recording: its Bode, "
                                                                        "polar, cascade, centreline, orbit plots."),
         asset: Optional[str] = typer.Option(None, "--asset", help="The asset's id: its trend from the service's "
-                                                                  "database (ROTORDIAG_* settings, as `rotordiag serve`)."),
+                                                                  "database (ROTORDIAG_* settings, as `rotordiag serve`); "
+                                                                  "beside a RECORDING (else give the asset as the "
+                                                                  "argument: `rotordiag report G3`)."),
         registry: Optional[Path] = typer.Option(None, "--registry", help="Model registry (default: the shipped one)."),
         version: Optional[str] = typer.Option(None, "--version", help="Model version (default: the active one)."),
         sample_rate_hz: Optional[float] = typer.Option(None, "--sample-rate-hz", help="Sample rate, Hz (both files)."),
@@ -398,9 +438,15 @@ def _register_report(app: typer.Typer) -> None:
         title: Optional[str] = typer.Option(None, "--title", help="Report title."),
         output_units: str = typer.Option("um", "--output-units", help="Lengths in the report and its plots: um | mil."),
     ) -> None:
-        """Write a report (PDF + HTML): the verdict with its status, reasons and evidence, the start-up plots, the trend."""
+        """Write a report (PDF + HTML) of an asset (`rotordiag report G3 --out g3.pdf`) or of recordings: the verdict
+        with its status, reasons and evidence, the start-up plots, the trend."""
+        try:
+            recording, asset = report_target(target, asset)
+        except ValueError as exc:
+            typer.secho(f"error: {exc}", fg="red", err=True)
+            raise typer.Exit(2) from None
         if recording is None and startup is None and asset is None:
-            typer.secho("error: give a RECORDING, --startup or --asset", fg="red", err=True)
+            typer.secho("error: give an ASSET or a RECORDING (or --startup)", fg="red", err=True)
             raise typer.Exit(2)
         if out.suffix.lower() != ".pdf":
             typer.secho(f"error: --out {out}: the report is a .pdf (the .html is written next to it)", fg="red",

@@ -54,11 +54,14 @@ def check_job_size(resolved: Any) -> None:
         raise InputError(f"measurement: {n} samples x {points} points per channel = {n * points} points; a job may "
                          f"store at most {MAX_JOB_POINTS} (shorten duration_s/duration_revs, lower the sample rate "
                          "or n_samples)")
-    steps = n * (spec.simulation.transient_revs * spec.simulation.samples_per_rev + points)
+    # a run-up's settling revolutions stand where a steady sample's transient does
+    pre, name = ((spec.transient.settle_revs, "transient.settle_revs") if spec.transient is not None
+                 else (spec.simulation.transient_revs, "transient_revs"))
+    steps = n * (pre * spec.simulation.samples_per_rev + points)
     if steps > MAX_JOB_STEPS:
-        raise InputError(f"simulation: about {steps:.3g} integration steps (samples x (transient_revs x "
+        raise InputError(f"simulation: about {steps:.3g} integration steps (samples x ({name} x "
                          f"samples_per_rev + points)); a job may take at most {MAX_JOB_STEPS:.3g} (lower "
-                         "transient_revs, samples_per_rev or n_samples)")
+                         f"{name}, samples_per_rev or n_samples)")
 
 
 def _check_training_numbers(value: Any, where: str = "training") -> None:

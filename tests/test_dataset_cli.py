@@ -64,6 +64,7 @@ def test_generate_and_info(tmp_path):
     r = runner.invoke(app, ["dataset", "info", str(out)])
     assert r.exit_code == 0, r.output
     assert "3/3 done" in r.output and "b1@45°" in r.output and "status      ok 3" in r.output
+    assert "samples are steady runs, one speed each" in r.output
     js = json.loads(runner.invoke(app, ["dataset", "info", str(out), "--json"]).output)
     with h5py.File(out, "r") as f:
         sev = f["labels/severity"][...]
@@ -72,7 +73,7 @@ def test_generate_and_info(tmp_path):
     assert sum(js["severity_counts"].values()) == 3
     assert js["severity_counts"]["severe"] == int(np.count_nonzero(sev == 3))
     assert js["parameter_ranges"]["speed_rpm"] == [speeds.min(), speeds.max()]
-    assert js["n_plants"] == 3
+    assert js["n_plants"] == 3 and js["sample_kind"] == "steady"
 
 
 def test_info_of_a_non_dataset(tmp_path):

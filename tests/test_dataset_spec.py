@@ -52,8 +52,8 @@ def test_small_spec_points():
          "asymmetry must be in [0.0, 0.5)"),
         ("asymmetry = 0.3", "asymmetry = 0.3\n[plant.set]\nwheels = 4", "unknown plant parameter(s) ['wheels']"),
         ("[design]", "[design\n", "not valid TOML"),
-        ("[operating]", '[operating]\nprofile = "100:3000:60"', "operating.profile: a dataset's samples are steady "
-         "runs at one speed each: run-ups and coast-downs are not in dataset specs yet"),
+        ("[operating]", '[operating]\nprofile = "100:3000:60"', "operating.profile: run-ups and coast-downs go in "
+         "a [transient] table: start_rpm, end_rpm and duration_s"),
     ],
 )
 def test_invalid_specs_are_refused_with_the_key_named(old, new, fragment):

@@ -62,7 +62,7 @@ def test_report_refuses_bad_input_and_leaves_nothing(tmp_path: Path):
     assert r.exit_code == 2 and "error:" in r.output
     assert not out.exists() and not out.with_suffix(".html").exists()
     r = CliRunner().invoke(app, ["report", "--out", str(out)])
-    assert r.exit_code == 2 and "give a RECORDING" in r.output
+    assert r.exit_code == 2 and "give an ASSET or a RECORDING" in r.output
 
 
 def test_write_report_holds_what_it_is_given(tmp_path: Path):

@@ -84,6 +84,12 @@ def test_dataset_spec_errors_are_422_before_any_job(tmp_path):
         assert r.status_code == 422 and "plant.file" in r.json()["detail"] and "root" not in r.json()["detail"]
         r = c.post("/datasets", json={"spec_toml": "not toml ["}, headers=auth())
         assert r.status_code == 422 and "TOML" in r.json()["detail"]
+        from tests.test_dataset_transient import BASE as RUNUP  # a run-up spec whose profile turns back
+
+        reverses = RUNUP.replace("start_rpm = 800\nend_rpm = 1600\nduration_s = 16",
+                                 "times_s = [0, 8, 16]\nspeeds_rpm = [800, 1600, 1200]")
+        r = c.post("/datasets", json={"spec_toml": reverses}, headers=auth())
+        assert r.status_code == 422 and "speed profile reverses at t = 8 s" in r.json()["detail"]
         r = c.post("/models/retrain", json={"plant": {"asymmetry": 0.7}}, headers=auth())
         assert r.status_code == 422 and "asymmetry" in r.json()["detail"]
         r = c.post("/models/retrain", json={"training": {"bogus": 1}}, headers=auth())

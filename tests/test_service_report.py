@@ -116,6 +116,43 @@ def test_cli_report_of_an_asset_has_the_service_reports_content(clients, tmp_pat
     assert f"severity: {verdicts[1]['severity']}" in cli_page
     r = CliRunner().invoke(app, ["report", "--asset", "nobody", "--out", str(tmp_path / "x.pdf")])
     assert r.exit_code == 2 and "has no stored diagnoses" in r.output and not (tmp_path / "x.pdf").exists()
+    # the form, the asset as the argument: the same page as --asset gives
+    pos = tmp_path / "g3_positional.pdf"
+    r = CliRunner().invoke(app, ["report", "G3", "--out", str(pos)])
+    assert r.exit_code == 0, r.output
+    assert body(html.unescape(pos.with_suffix(".html").read_text())) == body(cli_page)
+    r = CliRunner().invoke(app, ["report", "nobody", "--out", str(tmp_path / "y.pdf")])
+    assert r.exit_code == 2 and "'nobody' has no stored diagnoses" in r.output and not (tmp_path / "y.pdf").exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["G3", "--asset", "G3"], "the asset is given twice ('G3' and --asset 'G3')"),
+    (["G3", "--asset", "G4"], "name it once, as the argument"),
+    (["missing_run.csv"], "missing_run.csv: no such recording file"),
+    (["runs/G3"], "runs/G3: no such recording file"),
+    (["unit 3"], "'unit 3' is neither a recording file nor an asset's id"),
+    ([], "give an ASSET or a RECORDING"),
+])
+def test_cli_report_refuses_an_ambiguous_or_bad_target(tmp_path, args, message, monkeypatch):
+    from typer.testing import CliRunner
+
+    from rotordiag.cli import app
+
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "r.pdf"
+    r = CliRunner().invoke(app, ["report", *args, "--out", str(out)])
+    assert r.exit_code == 2 and message in r.output, r.output
+    assert not out.exists() and not out.with_suffix(".html").exists()
+
+
+def test_cli_report_reads_an_existing_file_argument_as_a_recording(tmp_path):
+    from rotordiag.service.cli import report_target
+
+    f = tmp_path / "G3"          # a file named like an asset: the file wins, --asset may name the asset beside it
+    f.write_text("t,x\n")
+    assert report_target(str(f), "G3") == (f, "G3")
+    assert report_target("G3", None) == (None, "G3")
+    assert report_target(None, "G3") == (None, "G3")
 
 
 @pytest.fixture(scope="module")

@@ -86,6 +86,15 @@ def info(
     typer.echo(f"channels    {s['n_channels']} × {s['n_points']} points at {s['sample_rate_hz']:g} Hz: "
                + ", ".join(f"b{c['bearing']}@{c['angle_deg']:g}°" for c in s["channels"]))
     typer.echo(f"plants      {s['n_plants']} distinct")
+    if s["sample_kind"] == "transient":
+        t = s["transient"]
+        for prof in t["profiles"]:
+            typer.echo("samples are run-ups / coast-downs with a keyphasor: profile "
+                       + ", ".join(f"{ts:g} s {n:g} r/min" for ts, n in zip(prof["times_s"], prof["speeds_rpm"])))
+        typer.echo(f"            {t['record_s']:.3f} s per record, {t['keyphasor_marks']} keyphasor marks, "
+                   f"{t['stopped_early']} stopped early; read them with DatasetReader.transient_sample")
+    else:
+        typer.echo("samples are steady runs, one speed each")
     for key in ("severity_counts", "status_counts", "mechanism_counts", "motion_counts"):
         typer.echo(f"{key.split('_')[0]:<11} " + ", ".join(f"{k} {v}" for k, v in s[key].items()))
     typer.echo("ranges")

@@ -96,6 +96,8 @@ class Design:
         self._scale = [(name, r.min, r.max) for name, r in spec.plant.scale.items()]
         op = spec.operating
         self._values = {name: getattr(op, name) for name in VARIABLES}
+        if spec.transient is not None:  # a run-up's speed is its profile's; the sample carries the top speed
+            self._values["speed_rpm"] = spec.speed_bounds_rpm[1]
         self._mechanism: str | list[str] | dict[str, float] = op.mechanism
         # perturbation dimensions: (field, element index or None, half-width)
         self._perturb: list[tuple[str, int | None, float]] = []

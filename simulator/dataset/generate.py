@@ -95,6 +95,7 @@ def _file_attrs(resolved: ResolvedSpec, design: Design, meas: MeasurementSetting
                                           for k, p in resolved.sources.items()}),
         "severity_bands_json": json.dumps(bands.to_dict()),
         "merged": False,
+        "sample_kind": "transient" if resolved.spec.is_transient else "steady",
     }
 
 
@@ -111,10 +112,17 @@ def _dataset_attrs() -> dict[str, dict[str, Any]]:
         "diagnostics/steady_start": {"description": "how the record started: shooting (on the period-1 orbit) "
                                                     "or integrate (after the transient)"},
         "diagnostics/steady_start_note": {"description": "why integrate when shooting was asked for"},
+        "transient/profile_times_s": {"units": "s", "description": "the run's speed profile: times of its points"},
+        "transient/profile_speeds_rpm": {"units": "r/min", "description": "the run's speed profile: its speeds "
+                                                                          "(straight lines between the points)"},
+        "transient/keyphasor_times_s": {"units": "s", "description": "once-per-revolution marks from the record's "
+                                                                     "start (shaft angle 0: the generator unbalance "
+                                                                     "along +x); NaN past a run that stopped early"},
     }
 
 
-def _rows(p: SampleParams, out: SampleOutput) -> dict[str, Any]:
+def _rows(p: SampleParams, out: SampleOutput,
+          profile: tuple[tuple[float, ...], tuple[float, ...]] | None = None, n_marks: int = 0) -> dict[str, Any]:
     from rotordiag.simulator import Plant
     from rotordiag.simulator.train.plant import TrainPlant, is_train_plant
 
@@ -158,7 +166,24 @@ def _rows(p: SampleParams, out: SampleOutput) -> dict[str, Any]:
         rows["labels/offset_um"] = out.offset_um
         rows["labels/unbalance_kg_m"] = out.unbalance_kg_m
         rows["diagnostics/log_decrement"] = out.log_decrement
+    if profile is not None:  # a run-up: its profile and keyphasor; the steady angle draws are not used
+        rows["measurement/start_angle_rad"] = rows["measurement/speed_fluctuation_phase_rad"] = math.nan
+        rows["transient/profile_times_s"] = np.asarray(profile[0], dtype=float)
+        rows["transient/profile_speeds_rpm"] = np.asarray(profile[1], dtype=float)
+        kp = np.full(n_marks, np.nan)
+        got = np.asarray(out.keyphasor_times_s if out.keyphasor_times_s is not None else [], dtype=float)[:n_marks]
+        kp[:got.size] = got
+        rows["transient/keyphasor_times_s"] = kp
     return rows
+
+
+def transient_marks(times_s: tuple[float, ...], speeds_rpm: tuple[float, ...], n_points: int,
+                    sample_rate_hz: float) -> int:
+    """Keyphasor marks in a complete transient record of ``n_points`` (what ``simulate_transient`` keeps)."""
+    from rotordiag.simulator.transient import SpeedProfile
+
+    rev_t = SpeedProfile(tuple(times_s), tuple(speeds_rpm)).revolution_times_s()
+    return int(np.count_nonzero(rev_t <= (n_points - 1) / sample_rate_hz))
 
 
 #: Samples are submitted in consecutive blocks of this many (in index order), the slowest of a block first.
@@ -247,7 +272,11 @@ def generate(
     from rotordiag.core.version import code_version
 
     angular = resolved.spec.operating.angular_misalignment_mrad != 0.0  # a constant 0 or a range/levels
-    L = layout(len(meas.channels), meas.n_points, len(meas.bearings), resolved.base_plant.to_dict(), angular=angular)
+    shape = None
+    if sim.profile is not None:
+        shape = (len(sim.profile[0]), transient_marks(*sim.profile, meas.n_points, meas.sample_rate_hz))
+    L = layout(len(meas.channels), meas.n_points, len(meas.bearings), resolved.base_plant.to_dict(), angular=angular,
+               transient=shape)
     own_client = None
     if scheduler_address is not None:  # connect first: an unreachable scheduler leaves no file behind
         from distributed import Client
@@ -299,7 +328,8 @@ def _run(resolved, design, meas, sim, L, out, n_workers, client, progress, on_pr
                                 on_ready=ready)
         for _, output in results:
             params = design[output.index]
-            writer.write_sample(output.index, {k: v for k, v in _rows(params, output).items() if k in L})
+            rows = _rows(params, output, sim.profile, L.get("transient/keyphasor_times_s", ((0,), ""))[0][0])
+            writer.write_sample(output.index, {k: v for k, v in rows.items() if k in L})
             counts[output.status] += 1
             if not math.isfinite(t_first):
                 t_first = time.perf_counter() - t_start

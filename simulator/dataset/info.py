@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .store import StoreError, open_dataset
+from .store import TRANSIENT_GROUP, StoreError, open_dataset, sample_kind
 
 __all__ = ["summarize"]
 
@@ -94,6 +94,21 @@ def _summarize(path: Path) -> dict[str, Any]:
                     where = "" if v.ndim == 1 else str([int(k) for k in np.unravel_index(j, v.shape[1:])])
                     ranges[f"plant.{name}{where}"] = [lo, hi]
         summary["parameter_ranges"] = ranges
+        summary["sample_kind"] = sample_kind(f)
+        if summary["sample_kind"] == "transient":
+            g = f[TRANSIENT_GROUP]
+            kp = g["keyphasor_times_s"][...][done]
+            profiles = {(tuple(t), tuple(n)) for t, n in zip(g["profile_times_s"][...][done].tolist(),
+                                                           g["profile_speeds_rpm"][...][done].tolist())}
+            summary["transient"] = {
+                "what": "each sample is a run-up or coast-down through a speed profile, with a keyphasor: "
+                        "read it with DatasetReader.transient_sample (steady readers refuse this file)",
+                "profiles": [{"times_s": list(t), "speeds_rpm": list(n)} for t, n in sorted(profiles)],
+                "record_s": (int(f.attrs["n_points"]) - 1) / float(f.attrs["sample_rate_hz"]),
+                "keyphasor_marks": int(g["keyphasor_times_s"].shape[1]),
+                "stopped_early": int(np.count_nonzero(np.any(~np.isfinite(kp), axis=1))) if kp.size else 0,
+            }
+            ranges.pop("speed_rpm", None)  # parameters/speed_rpm of a run-up is its profile's top speed
         if summary["merged"]:
             summary["sources"] = json.loads(f.attrs["sources_json"])
     return summary

@@ -40,7 +40,7 @@ import numpy as np
 from rotordiag.core.conventions import project_on_probe
 
 __all__ = ["MeasurementSettings", "MeasurementDraws", "draw_measurement", "shaft_angle_rad",
-           "required_record_revs", "probe_waveforms_um", "runout_um"]
+           "required_record_revs", "probe_waveforms_um", "transient_probe_waveforms_um", "runout_um"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -191,21 +191,71 @@ def probe_waveforms_um(
         raise ValueError(f"journal_displacements_m must have shape (n, n_bearings ≥ {max(settings.bearings)}, 2), "
                          f"got {disp.shape}")
     n_b = disp.shape[1]
-    n_ch, n_pts = len(settings.channels), settings.n_points
     theta = shaft_angle_rad(settings.time_s, speed_rpm, settings, draws)
-    out = np.full((n_ch, n_pts), np.nan)
+    out = np.full((len(settings.channels), settings.n_points), np.nan)
     n = disp.shape[0]
     if n >= 4:
         tau = TWO_PI / samples_per_rev * np.arange(n)
         inside = theta <= tau[-1]
         spline = CubicSpline(tau, disp.reshape(n, 2 * n_b), axis=0)
         xy = spline(theta[inside]).reshape(-1, n_b, 2) * 1e6  # µm
-        for c, (b, angle_deg) in enumerate(settings.channels):
-            signal = project_on_probe(xy[:, b - 1, 0], xy[:, b - 1, 1], angle_deg)
-            r1, r2 = _runout_orders_um(theta[inside], angle_deg, draws, settings.bearings.index(b))
-            out[c, inside] = signal + r1 + r2       # this order: the stored waveforms stay bit-identical
+        _probes_and_runout(out, xy, theta, inside, settings, draws)
+    return _with_noise(out, draws, rng)
+
+
+def transient_probe_waveforms_um(
+    journal_displacements_m: np.ndarray,
+    theta_rad: np.ndarray,
+    settings: MeasurementSettings,
+    draws: MeasurementDraws,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """Probe waveforms of a run-up or coast-down sample: steps 2–4 of the module docstring.
+
+    The transient simulator already samples the journals on the acquisition clock, so there is no step 1:
+    the shaft angle is the profile's, ``theta_rad`` (0 at each keyphasor mark), and the draws' start angle
+    and fluctuation phase are not used.
+
+    Parameters
+    ----------
+    journal_displacements_m : ndarray, shape (n, n_bearings, 2)
+        :attr:`rotordiag.simulator.transient.TransientResult.journal_displacements_m` (n ≤ ``settings.n_points``:
+        fewer rows if the run stopped early; those points are NaN).
+    theta_rad : ndarray, shape (settings.n_points,)
+        The profile's shaft angle at the sample times.
+
+    Returns
+    -------
+    ndarray, shape (n_channels, n_points), float32
+        µm.
+    """
+    disp = np.asarray(journal_displacements_m, dtype=float)
+    if disp.ndim != 3 or disp.shape[2] != 2 or disp.shape[1] < max(settings.bearings):
+        raise ValueError(f"journal_displacements_m must have shape (n, n_bearings ≥ {max(settings.bearings)}, 2), "
+                         f"got {disp.shape}")
+    theta = np.asarray(theta_rad, dtype=float)
+    if theta.shape != (settings.n_points,):
+        raise ValueError(f"theta_rad must have shape ({settings.n_points},), got {theta.shape}")
+    out = np.full((len(settings.channels), settings.n_points), np.nan)
+    n = min(disp.shape[0], settings.n_points)
+    inside = np.arange(settings.n_points) < n
+    _probes_and_runout(out, disp[:n] * 1e6, theta, inside, settings, draws)
+    return _with_noise(out, draws, rng)
+
+
+def _probes_and_runout(out: np.ndarray, xy_um: np.ndarray, theta: np.ndarray, inside: np.ndarray,
+                       settings: MeasurementSettings, draws: MeasurementDraws) -> None:
+    """Steps 2 and 3: each channel's projection plus its bearing's runout, written into ``out[:, inside]``."""
+    for c, (b, angle_deg) in enumerate(settings.channels):
+        signal = project_on_probe(xy_um[:, b - 1, 0], xy_um[:, b - 1, 1], angle_deg)
+        r1, r2 = _runout_orders_um(theta[inside], angle_deg, draws, settings.bearings.index(b))
+        out[c, inside] = signal + r1 + r2       # this order: the stored waveforms stay bit-identical
+
+
+def _with_noise(out: np.ndarray, draws: MeasurementDraws, rng: np.random.Generator) -> np.ndarray:
+    """Step 4 (white noise at the drawn SNR of each channel's finite part), as float32."""
     if math.isfinite(draws.snr_db):
-        noise = rng.standard_normal((n_ch, n_pts))
+        noise = rng.standard_normal(out.shape)
         with np.errstate(invalid="ignore"):
             power = np.array([np.var(row[np.isfinite(row)]) if np.isfinite(row).any() else 0.0 for row in out])
         out = out + noise * np.sqrt(power / 10.0 ** (draws.snr_db / 10.0))[:, None]

@@ -15,14 +15,71 @@ import contextlib
 import json
 import os
 from collections.abc import Iterator
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from .measurement import MeasurementDraws, MeasurementSettings, runout_um, shaft_angle_rad
-from .store import open_dataset
+from .store import TRANSIENT_GROUP, open_dataset, require_kind, sample_kind
 
-__all__ = ["DatasetReader", "recorded_runout_um"]
+__all__ = ["DatasetReader", "TransientSample", "recorded_runout_um"]
+
+
+@dataclass(frozen=True)
+class TransientSample:
+    """One run-up or coast-down sample of a transient dataset file (a ``[transient]`` spec).
+
+    Attributes
+    ----------
+    index : int
+        Row in the file.
+    waveforms_um : ndarray, shape (n_channels, n_points), float32
+        Probe displacements toward each probe (µm, DC kept); NaN past the end of a run that stopped early.
+    sample_rate_hz : float
+    channels : list of (int, float)
+        (bearing, angle_deg) per channel.
+    profile_times_s, profile_speeds_rpm : ndarray
+        The run's speed profile (straight lines between the points).
+    keyphasor_times_s : ndarray
+        Once-per-revolution marks inside the record (s from its start; shaft angle 0 at each).
+    status : str
+        The simulator's: ``ok``, ``contact``, ``diverged`` or ``error``.
+    clearance_m : float
+        The sample plant's radial clearance.
+    """
+
+    index: int
+    waveforms_um: np.ndarray
+    sample_rate_hz: float
+    channels: list[tuple[int, float]]
+    profile_times_s: np.ndarray
+    profile_speeds_rpm: np.ndarray
+    keyphasor_times_s: np.ndarray
+    status: str
+    clearance_m: float
+
+    @property
+    def time_s(self) -> np.ndarray:
+        """Sample times from the record's start (s)."""
+        return np.arange(self.waveforms_um.shape[-1]) / self.sample_rate_hz
+
+    @property
+    def speed_rpm(self) -> np.ndarray:
+        """The profile's speed at each sample (r/min)."""
+        return np.interp(self.time_s, self.profile_times_s, self.profile_speeds_rpm)
+
+    @property
+    def n_valid_points(self) -> int:
+        """Points recorded before the run ended (all of them unless it stopped early)."""
+        finite = np.all(np.isfinite(self.waveforms_um), axis=0)
+        return int(finite.size if finite.all() else np.argmin(finite))
+
+    def keyphasor_signal(self, notch_fraction: float = 0.1) -> np.ndarray:
+        """A keyphasor probe's signal at the samples (a −1 notch at each mark), as ``rotordiag runup`` writes it."""
+        from rotordiag.simulator.transient import keyphasor_pulse_signal
+
+        return keyphasor_pulse_signal(self.time_s, self.sample_rate_hz, self.keyphasor_times_s, notch_fraction)
 
 
 def _decode(codes: np.ndarray, codes_json: str) -> np.ndarray:
@@ -61,6 +118,7 @@ def recorded_runout_um(f: Any, index: int) -> np.ndarray:
     index : int
         Row.
     """
+    require_kind(f, "steady", "recorded_runout_um")
     i = int(index)
     m = _measurement_table(f, i)
     n_points = int(f["waveforms"].shape[-1])
@@ -91,6 +149,9 @@ class DatasetReader:
         (bearing, angle_deg) per channel.
     attrs : dict
         File attributes (spec text, spec hash, code version, ...).
+    kind : str
+        ``"steady"`` (one speed per sample: :meth:`waveforms`, :meth:`iter_waveforms`) or ``"transient"``
+        (run-ups / coast-downs: :meth:`transient_sample`); each refuses the other kind's file.
     """
 
     def __init__(self, path: str | os.PathLike):
@@ -102,6 +163,7 @@ class DatasetReader:
         self.sample_rate_hz = float(self.f.attrs["sample_rate_hz"])
         self.channels = [(int(b), float(a)) for b, a in self.f["channels"][...].tolist()]
         self.attrs = {k: (v.item() if hasattr(v, "item") else v) for k, v in self.f.attrs.items()}
+        self.kind = sample_kind(self.f)
 
     def close(self) -> None:
         if self._cm is not None:
@@ -167,7 +229,8 @@ class DatasetReader:
         return self.f[name][...][rows]
 
     def waveforms(self, index: int) -> np.ndarray:
-        """Waveforms of row ``index``: (n_channels, n_points) float32, µm."""
+        """Waveforms of steady row ``index``: (n_channels, n_points) float32, µm (a transient file: refused)."""
+        require_kind(self.f, "steady", "DatasetReader.waveforms")
         return self.f["waveforms"][int(index)]
 
     def runout_um(self, index: int) -> np.ndarray:
@@ -175,6 +238,22 @@ class DatasetReader:
         return recorded_runout_um(self.f, index)
 
     def iter_waveforms(self, indices: np.ndarray | None = None) -> Iterator[tuple[int, np.ndarray]]:
-        """Yield ``(row, waveforms)`` one sample at a time (memory stays flat); default: finished samples."""
+        """Yield ``(row, waveforms)`` one steady sample at a time (memory stays flat); default: finished samples."""
+        require_kind(self.f, "steady", "DatasetReader.iter_waveforms")
         for i in (self.indices if indices is None else indices):
             yield int(i), self.f["waveforms"][int(i)]
+
+    def transient_sample(self, index: int) -> TransientSample:
+        """Run-up / coast-down row ``index`` with its profile and keyphasor (a steady file: refused)."""
+        require_kind(self.f, "transient", "DatasetReader.transient_sample")
+        i = int(index)
+        if not 0 <= i < self.done.size:
+            raise IndexError(f"sample index {i} out of range [0, {self.done.size})")
+        if not self.done[i]:
+            raise ValueError(f"sample {i} is not finished (done = 0): nothing to read")
+        g = self.f[TRANSIENT_GROUP]
+        kp = g["keyphasor_times_s"][i]
+        status = _decode(self.f["labels/status"][i:i + 1], self.f["labels/status"].attrs["codes_json"])[0]
+        return TransientSample(i, self.f["waveforms"][i], self.sample_rate_hz, list(self.channels),
+                               g["profile_times_s"][i], g["profile_speeds_rpm"][i], kp[np.isfinite(kp)],
+                               str(status), float(self.f["parameters/plant/clearance_m"][i]))

@@ -10,6 +10,10 @@ See ``examples/dataset_small.toml`` for a commented example and
                    (``presets`` and/or ``shaftlines``, weighted), relative ``perturb``-ations and ``scale`` factors
 ``[measurement]``  probes, sample rate, duration, SNR, runout, speed fluctuation
 ``[simulation]``   transient_revs, samples_per_rev, rtol, atol, classify_motion, steady_start, transient_stop, integrator
+``[transient]``    optional: every sample a run-up or coast-down along one speed profile (``start_rpm``,
+                   ``end_rpm``, ``duration_s``, or ``times_s`` and ``speeds_rpm``) after ``settle_revs``
+                   (simulator.transient); then ``operating.speed_rpm`` and the measurement's duration are the
+                   profile's, not given
 
 A *value* is a number; a *list* ``[a, b, c]`` is a set of levels; a *range*
 ``{min = .., max = ..}`` is a continuous interval (``n = k`` levels for a grid).
@@ -33,7 +37,7 @@ from rotordiag.simulator.params import (
     UNBALANCE_RANGE,
 )
 
-__all__ = ["SpecError", "DatasetSpec", "Range", "load_spec", "parse_spec", "PERTURBABLE"]
+__all__ = ["SpecError", "DatasetSpec", "Range", "Transient", "load_spec", "parse_spec", "PERTURBABLE"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -181,7 +185,7 @@ class Design(_Strict):
 class Operating(_Strict):
     """Operating point of each sample (MODEL.md ranges)."""
 
-    speed_rpm: Variable
+    speed_rpm: Variable | None = None  # required for steady samples; a transient sample's speed is its profile's
     misalignment: Variable
     unbalance: Variable = 0.05
     unbalance_phase_rad: Variable = 0.0
@@ -194,8 +198,8 @@ class Operating(_Strict):
 
     @field_validator("speed_rpm")
     @classmethod
-    def _speed(cls, v: Variable) -> Variable:
-        return _check_bounds("speed_rpm", v, *SPEED_RANGE_RPM, " r/min")
+    def _speed(cls, v: Variable | None) -> Variable | None:
+        return None if v is None else _check_bounds("speed_rpm", v, *SPEED_RANGE_RPM, " r/min")
 
     @field_validator("misalignment")
     @classmethod
@@ -364,7 +368,7 @@ class Measurement(_Strict):
 
     @model_validator(mode="after")
     def _duration(self) -> Measurement:
-        if (self.duration_s is None) == (self.duration_revs is None):
+        if self.duration_s is not None and self.duration_revs is not None:  # none at all: checked by DatasetSpec
             raise ValueError("give exactly one of duration_s or duration_revs")
         if isinstance(self.snr_db, list):
             raise ValueError("snr_db must be a value or a range {min, max}, not a list")
@@ -403,6 +407,53 @@ class Simulation(_Strict):
                     "before issue 16; 10-100x slower on such runs, which may then end 'diverged' on the step budget)")
 
 
+#: Most points of a ``[transient]`` table profile.
+MAX_PROFILE_POINTS = 1000
+#: ``[simulation]`` keys of steady samples only: a transient sample starts settled at its profile's first speed
+#: (``transient.settle_revs``) and is recorded at the acquisition rate, not per revolution.
+STEADY_ONLY_SIMULATION = ("transient_revs", "samples_per_rev", "record_revs_min", "steady_start",
+                          "transient_stop", "integrator", "classify_motion")
+
+
+class Transient(_Strict):
+    """Run-ups or coast-downs: every sample runs through the same speed profile
+    (:class:`rotordiag.simulator.transient.SpeedProfile`), a linear ramp or a table."""
+
+    start_rpm: float | None = Field(default=None, allow_inf_nan=False)
+    end_rpm: float | None = Field(default=None, allow_inf_nan=False)
+    duration_s: float | None = Field(default=None, allow_inf_nan=False)
+    times_s: list[float] | None = Field(default=None, max_length=MAX_PROFILE_POINTS)
+    speeds_rpm: list[float] | None = Field(default=None, max_length=MAX_PROFILE_POINTS)
+    settle_revs: int = Field(default=200, ge=0, le=5000,
+                             description="revolutions at the profile's first speed before its t = 0 (a settled start)")
+
+    @model_validator(mode="after")
+    def _one_profile(self) -> Transient:
+        linear = [k for k in ("start_rpm", "end_rpm", "duration_s") if getattr(self, k) is not None]
+        table = [k for k in ("times_s", "speeds_rpm") if getattr(self, k) is not None]
+        if linear and table:
+            raise ValueError(f"give a linear ramp (start_rpm, end_rpm, duration_s) or a table (times_s, speeds_rpm), "
+                             f"not both (got {', '.join(linear + table)})")
+        if not linear and not table:
+            raise ValueError("give the speed profile: start_rpm, end_rpm and duration_s (a linear ramp), or "
+                             "times_s and speeds_rpm (a table)")
+        missing = sorted({"start_rpm", "end_rpm", "duration_s"} - set(linear)) if linear else \
+            sorted({"times_s", "speeds_rpm"} - set(table))
+        if missing:
+            raise ValueError(f"the speed profile lacks {', '.join(missing)}")
+        self.profile  # noqa: B018  (SpeedProfile's own checks: a ramp that reverses, a speed outside the range, …)
+        return self
+
+    @property
+    def profile(self) -> Any:
+        """The :class:`~rotordiag.simulator.transient.SpeedProfile` (raises ValueError with what to fix)."""
+        from rotordiag.simulator.transient import SpeedProfile
+
+        if self.times_s is not None:
+            return SpeedProfile.table(self.times_s, self.speeds_rpm)
+        return SpeedProfile.linear(self.start_rpm, self.end_rpm, self.duration_s)  # type: ignore[arg-type]
+
+
 class DatasetSpec(_Strict):
     """A validated dataset specification (see the module docstring)."""
 
@@ -411,10 +462,22 @@ class DatasetSpec(_Strict):
     plant: PlantSpec = Field(default_factory=PlantSpec)
     measurement: Measurement
     simulation: Simulation = Field(default_factory=Simulation)
+    transient: Transient | None = None
+
+    @property
+    def is_transient(self) -> bool:
+        """True when every sample is a run-up or coast-down (a ``[transient]`` table)."""
+        return self.transient is not None
 
     @model_validator(mode="after")
     def _consistent(self) -> DatasetSpec:
         op = self.operating
+        if self.transient is None and op.speed_rpm is None:
+            raise ValueError("operating.speed_rpm: required key is missing (or give a [transient] speed profile)")
+        if self.transient is not None:
+            self._transient_consistent()
+        elif self.measurement.duration_s is None and self.measurement.duration_revs is None:
+            raise ValueError("measurement: give exactly one of duration_s or duration_revs")
         if self.design.method == "grid":
             for name in Operating.model_fields:
                 v = getattr(op, name)
@@ -448,7 +511,7 @@ class DatasetSpec(_Strict):
                 raise ValueError(f"operating.{given[0]} is the lumped model's; a train's unbalance is its balance "
                                  "grade (plant.set.balance_grade_mm_s, ISO 21940 G in mm/s, at the generator's "
                                  "middle, phase operating.unbalance_phase_rad)")
-        s_lo, s_hi = _bounds(op.speed_rpm)
+        s_lo, s_hi = self.speed_bounds_rpm
         nyquist_need = 4.0 * s_hi / 60.0  # resolve 2X: fs > 2 × (2 × f_max)
         if self.measurement.sample_rate_hz < nyquist_need:
             raise ValueError(f"measurement.sample_rate_hz = {self.measurement.sample_rate_hz:g} Hz is too low "
@@ -460,22 +523,62 @@ class DatasetSpec(_Strict):
             raise ValueError(f"measurement: only {self.n_points} points per channel; lengthen the duration")
         return self
 
+    def _transient_consistent(self) -> None:
+        """The checks of a ``[transient]`` spec: what steady samples take and a run-up does not, and the
+        simulator's own rate rule, so that nothing is refused after the file is written."""
+        op, m = self.operating, self.measurement
+        if op.speed_rpm is not None:
+            raise ValueError("operating.speed_rpm: a run-up's or coast-down's speed is its [transient] profile's; "
+                             "remove operating.speed_rpm")
+        given = [k for k in ("duration_s", "duration_revs") if getattr(m, k) is not None]
+        if given:
+            raise ValueError(f"measurement.{given[0]}: a transient sample lasts its [transient] profile "
+                             "(duration_s of a ramp, the last of times_s); remove it")
+        if m.speed_fluctuation:
+            raise ValueError("measurement.speed_fluctuation: a transient sample's speed is its profile's; "
+                             "set it to 0 or remove it")
+        set_sim = sorted(set(STEADY_ONLY_SIMULATION) & self.simulation.model_fields_set)
+        if set_sim:
+            raise ValueError(f"simulation.{set_sim[0]} applies to steady samples; a run-up starts settled after "
+                             "transient.settle_revs revolutions and is recorded at measurement.sample_rate_hz "
+                             "(rtol and atol apply)")
+        top = max(self.transient.profile.speeds_rpm)  # type: ignore[union-attr]
+        need = 8.0 * top / 60.0
+        if m.sample_rate_hz < need:
+            raise ValueError(f"measurement.sample_rate_hz = {m.sample_rate_hz:g} Hz is too low for a run-up to "
+                             f"{top:g} r/min: the transient simulator needs ≥ {need:g} Hz (8 samples per "
+                             "revolution at the top speed)")
+
+    @property
+    def speed_bounds_rpm(self) -> tuple[float, float]:
+        """Slowest and fastest running speed of any sample (r/min): the operating range, or the profile's."""
+        if self.transient is not None:
+            n = self.transient.profile.speeds_rpm
+            return float(min(n)), float(max(n))
+        assert self.operating.speed_rpm is not None  # validated
+        return _bounds(self.operating.speed_rpm)
+
     @property
     def n_points(self) -> int:
         """Points per channel: fixed for the whole dataset.
 
         With ``duration_revs`` the record covers at least that many revolutions
-        at the slowest speed of the spec (faster samples cover more).
+        at the slowest speed of the spec (faster samples cover more). A transient
+        sample covers its profile up to its last whole revolution (as
+        :func:`rotordiag.simulator.transient.simulate_transient` records it).
         """
         m = self.measurement
+        if self.transient is not None:
+            last_rev_s = float(self.transient.profile.revolution_times_s()[-1])
+            return int(math.ceil(last_rev_s * m.sample_rate_hz - 1e-9))  # the samples before the last mark
         if m.duration_s is not None:
             return int(round(m.duration_s * m.sample_rate_hz))
-        s_lo, _ = _bounds(self.operating.speed_rpm)
+        s_lo, _ = self.speed_bounds_rpm
         assert m.duration_revs is not None  # exactly one of the two is set (validated)
         return int(math.ceil(m.duration_revs * 60.0 * m.sample_rate_hz / s_lo - 1e-9))
 
 
-#: keys a spec writer reaches for to ask for run-ups or coast-downs, which dataset specs do not take (yet)
+#: keys a spec writer reaches for to ask for run-ups or coast-downs outside the ``[transient]`` table
 _TRANSIENT_KEYS = frozenset({"profile", "speed_profile", "ramp", "runup", "run_up", "coast_down", "coastdown"})
 
 
@@ -483,9 +586,9 @@ def _one_error(err: Mapping[str, Any]) -> str:
     loc = ".".join(str(p) for p in err["loc"])
     msg = err["msg"].removeprefix("Value error, ")
     if err["type"] == "extra_forbidden" and err["loc"] and str(err["loc"][-1]) in _TRANSIENT_KEYS:
-        msg = ("a dataset's samples are steady runs at one speed each: run-ups and coast-downs are not in dataset "
-               "specs yet. Simulate them one at a time with `rotordiag runup --profile START:END:SECONDS` (or a "
-               "table TIME@SPEED,…) or `rotordiag.simulator.transient.simulate_transient` (docs/transient.md)")
+        msg = ("run-ups and coast-downs go in a [transient] table: start_rpm, end_rpm and duration_s (a linear "
+               "ramp) or times_s and speeds_rpm (a table), with settle_revs; operating.speed_rpm and the "
+               "measurement's duration are then the profile's (docs/datasets.md)")
     elif err["type"] == "extra_forbidden":
         msg = "unknown key (check the spelling; see examples/dataset_small.toml)"
     elif err["type"] == "missing":
@@ -575,6 +678,8 @@ class ResolvedSpec:
             dumped["operating"].pop("angular_misalignment_mrad")
         if dumped["simulation"].get("transient_stop") == "fixed":  # the transient before it existed: same hash
             dumped["simulation"].pop("transient_stop")
+        if dumped.get("transient") is None:  # steady specs keep the hash they had before [transient] existed
+            dumped.pop("transient", None)
         if dumped["simulation"].get("integrator") == "auto":  # likewise (the per-sample code version tells runs apart)
             dumped["simulation"].pop("integrator")
         canonical: dict[str, Any] = {"spec": dumped, "base_plant": _hashed_plant(self.base_plant)}

@@ -41,7 +41,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "StoreError", "DatasetWriter", "open_dataset", "layout",
+__all__ = ["FORMAT", "FORMAT_VERSION", "StoreError", "DatasetWriter", "open_dataset", "layout", "sample_kind",
+           "require_kind", "TRANSIENT_GROUP",
            "MECHANISM_CODES", "SIMULATED_MECHANISM_CODES", "EncodedChunk", "encode_waveform_chunk",
            "decode_waveform_chunk"]
 
@@ -97,10 +98,48 @@ TRAIN_DATASETS: dict[str, tuple[tuple[int, ...], str]] = {
 }
 
 
+#: The group that only run-up / coast-down files have (a ``[transient]`` spec); its presence marks such a file.
+TRANSIENT_GROUP = "transient"
+
+
+def transient_datasets(n_profile_points: int, n_marks: int) -> dict[str, tuple[tuple[int, ...], str]]:
+    """Per-sample datasets of a transient file: its speed profile's points and its keyphasor marks (s from the
+    record's start; NaN past the end of a run that stopped early)."""
+    return {f"{TRANSIENT_GROUP}/profile_times_s": ((n_profile_points,), "f8"),
+            f"{TRANSIENT_GROUP}/profile_speeds_rpm": ((n_profile_points,), "f8"),
+            f"{TRANSIENT_GROUP}/keyphasor_times_s": ((n_marks,), "f8")}
+
+
+def sample_kind(f: Any) -> str:
+    """``"transient"`` for a file of run-ups / coast-downs (it has the :data:`TRANSIENT_GROUP`), else ``"steady"``."""
+    return "transient" if TRANSIENT_GROUP in f else "steady"
+
+
+def require_kind(f: Any, kind: str, what: str) -> None:
+    """Refuse a file whose samples are not of ``kind`` (``"steady"`` | ``"transient"``) for ``what`` reads them.
+
+    Raises
+    ------
+    StoreError
+        Saying what the file holds and what reads it.
+    """
+    have = sample_kind(f)
+    if have == kind:
+        return
+    if have == "transient":
+        raise StoreError(f"{what} reads steady samples (one speed each); {f.filename} holds run-ups or coast-downs "
+                         "(a [transient] spec: a speed profile and a keyphasor per sample): read them with "
+                         "DatasetReader.transient_sample (docs/dataset-format.md)")
+    raise StoreError(f"{what} reads run-up / coast-down samples; {f.filename} holds steady samples (one speed each, "
+                     "no keyphasor): read them with DatasetReader.waveforms")
+
+
 def layout(n_channels: int, n_points: int, n_bearings: int,
-           plant_dict: dict[str, Any], *, angular: bool = False) -> dict[str, tuple[tuple[int, ...], str]]:
+           plant_dict: dict[str, Any], *, angular: bool = False,
+           transient: tuple[int, int] | None = None) -> dict[str, tuple[tuple[int, ...], str]]:
     """Per-sample datasets: name → (shape after the sample axis, dtype); ``angular``: the spec uses
-    an angular offset (adds :data:`ANGULAR_DATASETS`); a train's plant adds :data:`TRAIN_DATASETS`."""
+    an angular offset (adds :data:`ANGULAR_DATASETS`); a train's plant adds :data:`TRAIN_DATASETS`;
+    ``transient`` = (profile points, keyphasor marks) of a run-up file adds :func:`transient_datasets`."""
     L: dict[str, tuple[tuple[int, ...], str]] = {
         "waveforms": ((n_channels, n_points), "f4"),
         "done": ((), "u1"),
@@ -136,6 +175,8 @@ def layout(n_channels: int, n_points: int, n_bearings: int,
     L["diagnostics/steady_start_note"] = ((), f"S{_NOTE_LEN}")
     if plant_dict.get("model") == "train":
         L.update(TRAIN_DATASETS)
+    if transient is not None:
+        L.update(transient_datasets(*transient))
     return L
 
 

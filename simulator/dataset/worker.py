@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -26,6 +26,7 @@ from .measurement import (
     draw_measurement,
     probe_waveforms_um,
     required_record_revs,
+    transient_probe_waveforms_um,
 )
 from .store import EncodedChunk, encode_waveform_chunk
 
@@ -47,12 +48,17 @@ class SimulationSettings:
     steady_start: str = "shooting"  # as the spec's default
     transient_stop: str = "fixed"  # likewise
     integrator: str = "auto"  # likewise
+    #: a transient spec's speed profile, (times_s, speeds_rpm), and its settling revolutions; None: steady samples
+    profile: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    settle_revs: int = 0
 
     @classmethod
     def from_spec(cls, spec) -> SimulationSettings:
         s = spec.simulation
+        tr = spec.transient
+        profile = None if tr is None else (tuple(tr.profile.times_s), tuple(tr.profile.speeds_rpm))
         return cls(s.transient_revs, s.samples_per_rev, s.rtol, s.atol, s.record_revs_min, s.classify_motion,
-                   s.steady_start, s.transient_stop, s.integrator)
+                   s.steady_start, s.transient_stop, s.integrator, profile, 0 if tr is None else tr.settle_revs)
 
 
 @dataclass(frozen=True)
@@ -80,6 +86,7 @@ class SampleOutput:
     offset_um: float = math.nan   # a train's offset at the coupling, Δ·c (µm)
     unbalance_kg_m: float = math.nan  # a train's generator unbalance from its balance grade
     log_decrement: float = math.nan   # a train's least-damped mode about its static state at the sample's speed
+    keyphasor_times_s: np.ndarray | None = None  # a transient sample's once-per-revolution marks in its record
 
 
 def _motion(poincare_m: np.ndarray) -> tuple[str, int]:
@@ -106,6 +113,8 @@ def run_sample(task: SampleTask) -> SampleOutput:
     p, sim, meas = task.params, task.simulation, task.measurement
     rng = np.random.default_rng(p.sample_seed)
     draws = draw_measurement(meas, rng)
+    if sim.profile is not None:
+        return _run_transient_sample(task, draws, rng)
     revs = max(required_record_revs(p.speed_rpm, meas, draws), sim.record_revs_min)
     if is_train_plant(p.plant):
         return _run_train_sample(task, draws, revs, rng)
@@ -197,6 +206,64 @@ def _run_train_sample(task: SampleTask, draws: MeasurementDraws, revs: int,
                         motion_kind=kind, motion_period=period, message=message, steady_start="integrate",
                         steady_note="shaft train: from its static state", offset_um=offset_um,
                         unbalance_kg_m=unb, log_decrement=log_dec)
+
+
+def _run_transient_sample(task: SampleTask, draws: MeasurementDraws, rng: np.random.Generator) -> SampleOutput:
+    """A run-up or coast-down sample: the paper's model (:class:`~rotordiag.simulator.transient.PlantModel`) or
+    the sample's shaft train (:func:`sample_train`, its balance grade taken at the profile's top speed,
+    ``p.speed_rpm``) through the spec's profile with :func:`~rotordiag.simulator.transient.simulate_transient`,
+    recorded at the acquisition rate; the probes see it with the sample's runout and noise
+    (:func:`transient_probe_waveforms_um`), the shaft angle the profile's (0 at each keyphasor mark)."""
+    import time
+
+    from rotordiag.simulator import Plant
+    from rotordiag.simulator.system import MECHANISM_NAMES, resolve_mechanism
+    from rotordiag.simulator.transient import SpeedProfile, simulate_transient
+
+    p, sim, meas = task.params, task.simulation, task.measurement
+    assert sim.profile is not None
+    profile = SpeedProfile(*sim.profile)
+    train = is_train_plant(p.plant)
+    angular = p.angular_misalignment_mrad if p.mechanism in ("offset", "flexible") or train else 0.0
+    label = "aligned" if p.misalignment == 0 and angular == 0 else p.mechanism
+    offset_um = unb = log_dec = math.nan
+    try:
+        t0 = time.perf_counter()
+        if train:
+            from rotordiag.simulator.train.stability import stability
+            from rotordiag.simulator.train.transient import TrainTransientModel
+
+            tplant = TrainPlant.from_dict(p.plant)
+            offset_um = p.misalignment * tplant.clearance_m * 1e6
+            unb = tplant.unbalance_kg_m(p.speed_rpm)
+            tr = sample_train(tplant, p)
+            log_dec = stability(tr, p.speed_rpm).log_decrement  # its static state refuses a journal outside c
+            model: Any = TrainTransientModel(tr, rtol=sim.rtol)  # a VariableSpeedModel (structurally)
+            res = simulate_transient(model, profile, sample_rate_hz=meas.sample_rate_hz, settle_revs=sim.settle_revs)
+        else:
+            label = MECHANISM_NAMES[resolve_mechanism(p.mechanism, p.misalignment, angular)]
+            res = simulate_transient(
+                Plant.from_dict(p.plant), profile, p.misalignment, p.unbalance, sample_rate_hz=meas.sample_rate_hz,
+                settle_revs=sim.settle_revs, rtol=sim.rtol, atol=sim.atol, mechanism=p.mechanism,
+                unbalance_phase_rad=p.unbalance_phase_rad, exciter_unbalance=p.exciter_unbalance,
+                exciter_unbalance_phase_rad=p.exciter_unbalance_phase_rad, offset_angle_rad=p.offset_angle_rad,
+                coupling_phase_rad=p.coupling_phase_rad, angular_misalignment_mrad=angular)
+        wall_s = time.perf_counter() - t0
+    except ValueError as exc:  # the simulators' input errors: a labelled error sample, as for steady ones
+        return SampleOutput(p.index, np.full((len(meas.channels), meas.n_points), np.nan, np.float32), draws,
+                            "error", label, 0, message=f"{type(exc).__name__}: {exc}", steady_start="transient",
+                            offset_um=offset_um, unbalance_kg_m=unb, keyphasor_times_s=np.zeros(0))
+    theta = profile.angle_rad(meas.time_s)
+    waveforms = transient_probe_waveforms_um(res.journal_displacements_m, theta, meas, draws, rng)
+    kp = np.asarray(res.keyphasor_times_s, dtype=float)
+    message = res.message if res.status != "ok" else ""
+    if train and log_dec <= 0:
+        message = "; ".join(filter(None, [f"beyond the stability threshold at the top speed (log decrement "
+                                          f"{log_dec:.3f})", message]))
+    return SampleOutput(p.index, waveforms, draws, res.status, label, max(int(kp.size) - 1, 0),
+                        wall_time_s=wall_s, message=message, steady_start="transient",
+                        steady_note=f"settled {sim.settle_revs} revs at {profile.speeds_rpm[0]:g} r/min",
+                        offset_um=offset_um, unbalance_kg_m=unb, log_decrement=log_dec, keyphasor_times_s=kp)
 
 
 def _stiff_note(note: str, stiff_from_rev: float | None) -> str:
