@@ -462,8 +462,9 @@ def _direction_figures(s: list, conf: np.ndarray) -> dict[str, Any]:
     recordings whose features carry DC positions and whose case has a true direction: the share whose given
     direction is within :data:`DIRECTION_TOLERANCE_DEG` of the true one (no direction given counts as not right),
     the same among confident answers with true Δ ≥ :data:`DIRECTION_MIN_DELTA`, each with its Wilson interval and
-    n; the share of those recordings given a direction; and the angular offset's 90 % interval coverage and mean
-    absolute error where α was given. ``direction_estimated`` False (every figure None): the model gave no direction
+    n; the share of those recordings given a direction, the share right among them and the share whose true
+    direction lies within the answer's calibrated 90 % arc; and the angular offset's
+    90 % interval coverage, mean absolute error and Spearman correlation with the true α where α was given. ``direction_estimated`` False (every figure None): the model gave no direction
     on any recording (a model without direction heads)."""
     from .direction import angle_error_deg
 
@@ -473,8 +474,9 @@ def _direction_figures(s: list, conf: np.ndarray) -> dict[str, Any]:
                                                         or any(o.direction_code not in ("", "model_without_direction")
                                                                for o in s))}
     keys = ("direction_n", "direction_accuracy", "direction_accuracy_interval", "direction_given_share",
-            "direction_confident_n", "direction_accuracy_confident", "direction_accuracy_confident_interval",
-            "angular_n", "angular_coverage", "angular_mae_mrad")
+            "direction_accuracy_given", "direction_interval_coverage", "direction_confident_n", "direction_accuracy_confident",
+            "direction_accuracy_confident_interval", "angular_n", "angular_coverage", "angular_mae_mrad",
+            "angular_spearman")
     if not out["direction_estimated"]:
         return {**out, **dict.fromkeys(keys)}
     scope = np.array([o.delta > 0 and o.dc_available and np.isfinite(o.true_angle_rad) for o in s], dtype=bool)
@@ -485,7 +487,11 @@ def _direction_figures(s: list, conf: np.ndarray) -> dict[str, Any]:
     nc, kc = int(strong.sum()), int((right & strong).sum())
     out.update({"direction_n": n, "direction_accuracy": k / n if n else None,
                 "direction_accuracy_interval": _wilson(k, n), "direction_given_share": float(given[scope].mean()) if n
-                else None, "direction_confident_n": nc, "direction_accuracy_confident": kc / nc if nc else None,
+                else None, "direction_accuracy_given": k / int((given & scope).sum()) if (given & scope).any() else None,
+                "direction_interval_coverage": float(np.mean([
+                    angle_error_deg(o.direction_deg, o.true_angle_rad) <= o.direction_halfwidth_deg
+                    for o, g in zip(s, given & scope) if g])) if (given & scope).any() else None,
+                "direction_confident_n": nc, "direction_accuracy_confident": kc / nc if nc else None,
                 "direction_accuracy_confident_interval": _wilson(kc, nc)})
     a_scope = ang & np.array([np.isfinite(o.true_angular_mrad) for o in s], dtype=bool)
     na = int(a_scope.sum())
@@ -495,9 +501,9 @@ def _direction_figures(s: list, conf: np.ndarray) -> dict[str, Any]:
         lo_a = np.array([o.angular_interval[0] for o in s])[a_scope]
         hi_a = np.array([o.angular_interval[1] for o in s])[a_scope]
         out.update({"angular_n": na, "angular_coverage": float(np.mean((lo_a <= t) & (t <= hi_a))),
-                    "angular_mae_mrad": float(np.mean(np.abs(e - t)))})
+                    "angular_mae_mrad": float(np.mean(np.abs(e - t))), "angular_spearman": _spearman(e, t)})
     else:
-        out.update({"angular_n": 0, "angular_coverage": None, "angular_mae_mrad": None})
+        out.update({"angular_n": 0, "angular_coverage": None, "angular_mae_mrad": None, "angular_spearman": None})
     return out
 
 
@@ -706,9 +712,11 @@ def format_report(report: Mapping[str, Any]) -> str:
                      f"misaligned): {_share(f.get('direction_accuracy'), f.get('direction_accuracy_interval'))} of "
                      f"{f.get('direction_n')}; confident with Δ ≥ {DIRECTION_MIN_DELTA}: "
                      f"{_share(f.get('direction_accuracy_confident'), f.get('direction_accuracy_confident_interval'))} "
-                     f"of {f.get('direction_confident_n')}; angular offset: "
+                     f"of {f.get('direction_confident_n')}; true direction inside the answer's 90 % arc: "
+                     f"{_share(f.get('direction_interval_coverage'), None)}; angular offset: "
                      + ("not estimated" if not f.get("angular_n") else
-                        f"coverage {f['angular_coverage']:.0%} of {f['angular_n']}, MAE {f['angular_mae_mrad']:.4f} mrad"))
+                        f"coverage {f['angular_coverage']:.0%} of {f['angular_n']}, MAE {f['angular_mae_mrad']:.4f} mrad, "
+                        f"Spearman {f['angular_spearman'] if f['angular_spearman'] is not None else float('nan'):.2f}"))
     if "ood_share" in p["new"]:
         lines.append(f"flagged out of distribution (pooled): new {p['new']['ood_share']:.0%}, "
                      f"active {p['active'].get('ood_share', float('nan')):.0%}")

@@ -453,7 +453,7 @@ def verdict_of(scores: ModelScores, feature_result, status: str, reasons: Sequen
     ev = evidence(feature_result) if getattr(feature_result, "bearings", None) else []
     direction, angular = direction_answer(
         getattr(model, "direction_heads_", None), scores.row, aligned_call=scores.band == 0,
-        inconclusive=status == INCONCLUSIVE, delta=shown, clearance_um=clearance_um,
+        inconclusive=status == INCONCLUSIVE, delta=shown, delta_interval=shown_iv, clearance_um=clearance_um,
         dc_removed=any(getattr(w, "code", None) == "no_dc_position" for w in scores.warnings))
     return Verdict(
         status=status,

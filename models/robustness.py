@@ -357,6 +357,7 @@ class Outcome:
     dc_available: bool = False           # the recording's features carry a shaft centreline (DC positions, clearance)
     direction_deg: float = math.nan      # the verdict's offset direction; NaN: none given (``direction_code`` why)
     direction_code: str = ""
+    direction_halfwidth_deg: float = math.nan  # its calibrated 90 % half-width
     angular_mrad: float = math.nan       # the verdict's angular offset α and its interval; NaN: none given
     angular_interval: tuple[float, float] = (math.nan, math.nan)
 
@@ -410,6 +411,7 @@ def _direction_outcome(out: Outcome, v: Any, fr: Any) -> None:
         out.direction_code = "estimated" if d.get("estimated") else str(d.get("code", ""))
         if d.get("estimated"):
             out.direction_deg = float(d["angle_deg"])
+            out.direction_halfwidth_deg = float(d["angle_halfwidth_deg"])
     if a is not None and a.get("estimated"):
         out.angular_mrad = float(a["angular_mrad"])
         out.angular_interval = (float(a["interval_mrad"][0]), float(a["interval_mrad"][1]))

@@ -12,7 +12,14 @@ from threadpoolctl import threadpool_limits
 
 from rotordiag.core.notes import Note
 from rotordiag.models.config import TrainConfig
-from rotordiag.models.direction import angle_error_deg, direction_answer, fit_direction_heads, predict_heads
+from rotordiag.models.direction import (
+    angle_error_deg,
+    angle_halfwidth_deg,
+    direction_answer,
+    fit_direction_heads,
+    offset_angle,
+    predict_heads,
+)
 from rotordiag.models.estimators import ConformalIntervalRegressor
 from rotordiag.models.pipeline import diagnose
 from rotordiag.models.plant_retrain import _direction_figures, _figures, format_report
@@ -79,17 +86,22 @@ def _accuracy(direction, X, delta, phi, min_delta=0.15):
 
 
 def test_a_recoverable_direction_is_recovered_on_held_out_plants():
-    """Fitted on 80 plants, judged on 30 others: ≥ 90 % of offsets with Δ ≥ 0.15 get their direction within ±45°,
-    the components' 90 % intervals cover 80–98 % of the true ones, and α's estimate ranks the true α."""
+    """Fitted on 80 plants, judged on 30 others: ≥ 90 % of offsets with Δ ≥ 0.15 get their direction within ±45°;
+    the calibrated 90 % arcs hold 80–98 % of the true directions and are narrower for large offsets than for small
+    ones; α's estimate ranks the true α."""
     X, d, f, a, g = journals(80, 8, seed=1)
     heads = fit_direction_heads(X, NAMES, d, f, a, g, _reg())
     assert heads["heads"]["angular_mrad"] is not None and heads["n_plants"] == 80
     Xt, dt, ft, at, _ = journals(30, 8, seed=2)
     acc, pred = _accuracy(heads, Xt, dt, ft)
     assert acc >= 0.9
-    for name, truth in (("horizontal_per_c", dt * np.cos(ft)), ("vertical_per_c", dt * np.sin(ft))):
-        lo, hi = pred[name][1][:, 0], pred[name][1][:, 1]
-        assert 0.8 <= np.mean((lo <= truth) & (truth <= hi)) <= 0.98
+    theta, size = offset_angle(heads, Xt)
+    moved = dt > 0
+    half = np.array([angle_halfwidth_deg(heads, m) for m in size[moved]])
+    err = np.array([angle_error_deg(math.degrees(t), p) for t, p in zip(theta[moved], ft[moved])])
+    assert 0.8 <= np.mean(err <= half) <= 0.98
+    small, large = heads["angle_halfwidth_deg"][0], heads["angle_halfwidth_deg"][-1]
+    assert large < 45.0 and large < small
     from scipy.stats import spearmanr
     moved = dt > 0.15
     assert spearmanr(pred["angular_mrad"][0][moved], at[moved]).statistic > 0.6
@@ -97,12 +109,14 @@ def test_a_recoverable_direction_is_recovered_on_held_out_plants():
 
 def test_a_direction_the_journals_do_not_carry_is_not_recovered():
     """The control that lets the test above fail: the same family with the journals moving along a direction
-    unrelated to φ — the heads' directions are right about as often as chance (±45° is a quarter of the circle)."""
+    unrelated to φ — the heads' directions are right about as often as chance (±45° is a quarter of the circle), and
+    the calibrated arcs are nearly the whole circle."""
     X, d, f, a, g = journals(80, 8, seed=1, informative=False)
     heads = fit_direction_heads(X, NAMES, d, f, a, g, _reg())
     Xt, dt, ft, _, _ = journals(30, 8, seed=2, informative=False)
     acc, _ = _accuracy(heads, Xt, dt, ft)
     assert acc < 0.45
+    assert min(heads["angle_halfwidth_deg"]) > 120.0          # and the calibrated arcs say so: nearly any direction
 
 
 def test_heads_need_rows_with_the_centreline():
@@ -140,24 +154,29 @@ def _row(delta, phi_rad, alpha=0.0):
 
 
 def test_a_severe_offset_gets_its_direction_sized_by_the_verdicts_own_offset(trained):
-    """Exciter lifted (φ = 90°) by Δ = 0.45: the answer says high, with an angle within ±45° of 90°, and its
-    components are the verdict's own δ = Δ·c split along the estimated angle (so direction and Δ never disagree);
-    each component's interval contains it, and a side is named only where the interval excludes 0."""
+    """Exciter lifted (φ = 90°) by Δ = 0.45: the answer says high, with an angle within its own arc and within ±45°
+    of 90°, and its components are the verdict's own δ = Δ·c split along the estimated angle (so direction and Δ never
+    disagree); each component's interval is its range over the Δ interval and the arc (checked on a fine grid), and
+    a side is named only where the whole arc lies on it."""
     v = diagnose(trained, _fr(_row(0.45, math.pi / 2)), clearance_um=300.0)
     assert v.severity in ("moderate", "severe")
     d = v.direction
     assert d["estimated"] and d["unit"] == "um"
-    assert angle_error_deg(d["angle_deg"], math.pi / 2) <= 45.0
+    assert angle_error_deg(d["angle_deg"], math.pi / 2) <= min(45.0, d["angle_halfwidth_deg"])
     h, vert = d["horizontal"], d["vertical"]
     assert math.hypot(h["value"], vert["value"]) == pytest.approx(v.offset_um)
-    for comp in (h, vert):
+    t = np.radians(d["angle_deg"] + np.linspace(-d["angle_halfwidth_deg"], d["angle_halfwidth_deg"], 2001))
+    offsets = 300.0 * np.array(v.misalignment_interval)
+    for comp, fn in ((h, np.cos), (vert, np.sin)):
+        grid = np.outer(offsets, fn(t))
+        assert comp["interval"] == pytest.approx([grid.min(), grid.max()], abs=1e-3)
         assert comp["interval"][0] <= comp["value"] <= comp["interval"][1]
-    assert vert["interval"][0] > 0 and "exciter high by" in d["text"]
-    named_side = "to the right by" in d["text"] or "to the left by" in d["text"]
-    assert named_side == (h["interval"][0] > 0 or h["interval"][1] < 0)
+        assert comp["side"] == (1 if fn(t).min() > 0 else -1 if fn(t).max() < 0 else 0)
+    assert vert["side"] == 1 and "high by" in d["text"]
+    assert ("to the right by" in d["text"] or "to the left by" in d["text"]) == (h["side"] != 0)
     assert v.angular_offset["estimated"] and v.angular_offset["interval_mrad"][0] <= v.angular_offset["interval_mrad"][1]
     text = format_verdict(v)
-    assert "direction: exciter high by" in text and "angular offset α:" in text
+    assert "direction: exciter toward" in text and "high by" in text and "angular offset α:" in text
 
 
 def test_ac_only_input_gets_no_direction_and_says_why(trained):
@@ -182,7 +201,7 @@ def test_an_aligned_call_gets_no_direction(trained):
 def test_an_inconclusive_verdict_gets_no_direction():
     heads = {"heads": {}, "dc_columns": np.array([0]), "interval_level": 0.9}
     d, a = direction_answer(heads, np.array([0.1]), aligned_call=False, inconclusive=True, delta=None,
-                            clearance_um=300.0, dc_removed=False)
+                            delta_interval=(None, None), clearance_um=300.0, dc_removed=False)
     assert d["code"] == a["code"] == "inconclusive"
 
 
@@ -235,16 +254,17 @@ def test_mil_output_converts_the_direction(trained):
     mil = verdict_in_units(v, "mil")["direction"]
     assert mil["unit"] == "mil"
     assert mil["vertical"]["value"] == pytest.approx(v["direction"]["vertical"]["value"] / 25.4)
-    assert " mil" in mil["text"] and "µm" not in mil["text"]
+    assert " mil" in mil["text"] and "µm" not in mil["text"] and mil["angle_deg"] == v["direction"]["angle_deg"]
     assert v["direction"]["unit"] == "um"                     # the µm answer is not changed
 
 
 # --- the plant report --------------------------------------------------------------------------------------
 
-def _o(delta, true_deg, est_deg, *, status="confident", dc=True, code="estimated"):
+def _o(delta, true_deg, est_deg, *, status="confident", dc=True, code="estimated", half=40.0):
     return Outcome(delta, "rigid" if delta > 0 else "aligned", model_class="moderate", severity="moderate",
                    status=status, interval=(0.0, 1.0), delta_model=delta, true_angle_rad=math.radians(true_deg),
-                   dc_available=dc, direction_deg=math.nan if est_deg is None else est_deg, direction_code=code)
+                   dc_available=dc, direction_deg=math.nan if est_deg is None else est_deg, direction_code=code,
+                   direction_halfwidth_deg=half)
 
 
 def test_direction_accuracy_counts_answers_within_45_degrees():
@@ -259,7 +279,8 @@ def test_direction_accuracy_counts_answers_within_45_degrees():
     f = _direction_figures(outs, conf)
     assert f["direction_estimated"] is True
     assert f["direction_n"] == 5 and f["direction_accuracy"] == pytest.approx(3 / 5)
-    assert f["direction_given_share"] == pytest.approx(4 / 5)
+    assert f["direction_given_share"] == pytest.approx(4 / 5) and f["direction_accuracy_given"] == pytest.approx(3 / 4)
+    assert f["direction_interval_coverage"] == pytest.approx(3 / 4)        # 30°, 50°, 20°, 0° off against ±40°
     assert f["direction_confident_n"] == 3 and f["direction_accuracy_confident"] == pytest.approx(1 / 3)
     lo, hi = f["direction_accuracy_interval"]
     assert lo < 0.6 < hi
