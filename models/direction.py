@@ -24,6 +24,7 @@ counter-clockwise).
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -137,16 +138,10 @@ def offset_angle(direction: Mapping[str, Any], X: np.ndarray, *, calibration: bo
     """(angle rad, size per clearance) of the offset of each row of ``X``: from the component heads' point models
     (fitted on every plant: the answer's), or with ``calibration`` from their centre models (fitted without the
     calibration plants: what the half-width is calibrated on)."""
-    from threadpoolctl import threadpool_limits
-
-    from ._columns import _blank
-
     X = np.atleast_2d(np.asarray(X, dtype=float))
-    h, v = direction["heads"]["horizontal_per_c"], direction["heads"]["vertical_per_c"]
-    which = "center_model_" if calibration else "point_model_"
-    with threadpool_limits(limits=1, user_api="openmp"):
-        hc = getattr(h, which).predict(_blank(X, h.sparse_columns_))
-        vc = getattr(v, which).predict(_blank(X, v.sparse_columns_))
+    col = 1 if calibration else 0                       # CompiledRegressor.raw: point, centre(, scale)
+    hc = _compiled(direction["heads"]["horizontal_per_c"], X.shape[1]).raw(X)[:, col]
+    vc = _compiled(direction["heads"]["vertical_per_c"], X.shape[1]).raw(X)[:, col]
     return np.arctan2(vc, hc), np.hypot(hc, vc)
 
 
@@ -176,18 +171,31 @@ def angle_halfwidth_deg(direction: Mapping[str, Any], size_per_c: float) -> floa
     return float(direction["angle_halfwidth_deg"][int(np.searchsorted(edges, size_per_c, side="right"))])
 
 
+_COMPILED: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
+
+
+def _compiled(reg: Any, n_features: int) -> Any:
+    """The head's ``models.compiled.CompiledRegressor`` (built once per fitted head): a verdict's single row through
+    scikit-learn's predict methods costs ~4 ms per ensemble, through the flattened trees a few µs (the same numbers,
+    tests/test_models_direction.py)."""
+    from .compiled import CompiledRegressor
+
+    try:
+        return _COMPILED[reg]
+    except KeyError:
+        fast = _COMPILED[reg] = CompiledRegressor(reg, n_features)
+        return fast
+
+
 def predict_heads(direction: Mapping[str, Any], X: np.ndarray, names: Sequence[str] = HEADS
                   ) -> dict[str, tuple[np.ndarray, np.ndarray] | None]:
     """Each of the ``names`` heads' ``(point (n,), interval (n, 2))`` of rows ``X`` (None for a head the model
-    lacks), with one OpenMP thread (single rows: threads only cost)."""
-    from threadpoolctl import threadpool_limits
-
+    lacks), as the heads' ``predict`` and ``predict_interval``."""
     X = np.atleast_2d(np.asarray(X, dtype=float))
     out: dict[str, tuple[np.ndarray, np.ndarray] | None] = {}
-    with threadpool_limits(limits=1, user_api="openmp"):
-        for name in names:
-            reg = direction["heads"].get(name)
-            out[name] = None if reg is None else (reg.predict(X), reg.predict_interval(X))
+    for name in names:
+        reg = direction["heads"].get(name)
+        out[name] = None if reg is None else _compiled(reg, X.shape[1]).predict_interval(X)
     return out
 
 

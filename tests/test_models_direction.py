@@ -335,3 +335,23 @@ def test_a_plants_training_config_asks_for_direction_heads():
 
     assert plant_train_config({"seed": 3}).direction_heads and plant_train_config().seed == 0
     assert TrainConfig.shipped().direction_heads is False        # the shipped recipe itself is unchanged
+
+
+def test_the_compiled_heads_give_scikit_learns_numbers():
+    """The heads are walked by models.compiled's flattened trees: the same points, intervals and angles as the
+    fitted regressors' own scikit-learn methods (NaN rows included)."""
+    X, d, f, a, g = journals(40, 6, seed=7)
+    heads = fit_direction_heads(X, NAMES, d, f, a, g, _reg())
+    Xt = journals(5, 6, seed=8)[0]
+    Xt[::3, 2:4] = np.nan
+    got = predict_heads(heads, Xt)
+    for name in ("horizontal_per_c", "vertical_per_c", "angular_mrad"):
+        reg = heads["heads"][name]
+        np.testing.assert_allclose(got[name][0], reg.predict(Xt), rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(got[name][1], reg.predict_interval(Xt), rtol=1e-10, atol=1e-12)
+    for calibration, model in ((False, "point_model_"), (True, "center_model_")):
+        theta, size = offset_angle(heads, Xt, calibration=calibration)
+        h = getattr(heads["heads"]["horizontal_per_c"], model).predict(Xt)
+        v = getattr(heads["heads"]["vertical_per_c"], model).predict(Xt)
+        np.testing.assert_allclose(theta, np.arctan2(v, h), atol=1e-10)
+        np.testing.assert_allclose(size, np.hypot(h, v), atol=1e-12)
