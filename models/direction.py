@@ -37,7 +37,7 @@ from ._patterns import name_mask
 DC_PATTERNS: tuple[str, ...] = ("b*_centre_x_per_c", "b*_centre_y_per_c")
 #: the heads' names and what each regresses
 HEADS: tuple[str, ...] = ("horizontal_per_c", "vertical_per_c", "angular_mrad")
-#: fewest rows with a known centreline (and of distinct plants) to fit the heads on
+#: fewest training rows with a known centreline to fit the heads on
 MIN_DC_ROWS = 30
 #: edges of the bins of the estimated offset size |(horizontal, vertical)| (per clearance) within which the angle's
 #: conformal half-width is calibrated apart
@@ -77,7 +77,8 @@ def fit_direction_heads(X: np.ndarray, feature_names: Sequence[str], delta: np.n
     -------
     dict
         ``heads`` (name → fitted regressor or None), ``dc_columns``, ``n_rows``, ``n_plants``, ``interval_level``,
-        ``angular_range_mrad`` (None without an α head).
+        ``angular_range_mrad`` (None without an α head), ``magnitude_edges``, ``angle_halfwidth_deg`` (the angle's
+        calibrated half-width per size bin) and ``angle_calibration_rows`` (the calibration rows behind each).
 
     Raises
     ------
