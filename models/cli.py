@@ -98,7 +98,6 @@ def register(app: typer.Typer) -> None:
         from rotordiag.simulator.dataset.generate import generate
         from rotordiag.simulator.dataset.spec import SpecError, parse_spec
 
-        from .config import TrainConfig
         from .dataset import load_feature_table
         from .plant_retrain import (
             DEFAULT_N_SAMPLES,
@@ -109,6 +108,7 @@ def register(app: typer.Typer) -> None:
             format_report,
             pending_card,
             plant_dataset_spec,
+            plant_train_config,
             report_and_activate,
             retrain_units,
             stage_seconds,
@@ -136,7 +136,7 @@ def register(app: typer.Typer) -> None:
         folder.mkdir(parents=True, exist_ok=True)
         spec_path = folder / "dataset.toml"
         spec_path.write_text(tomli_w.dumps(spec), encoding="utf-8")
-        cfg = TrainConfig.shipped({"seed": seed})
+        cfg = plant_train_config({"seed": seed})
         staged = StagedProgress(retrain_units(plant, n, k, cfg.augment.copies if cfg.augment is not None else 0),
                                 seconds=stage_seconds(plant))
         bar = tqdm(total=1000, bar_format="{desc} {percentage:3.0f}%|{bar}| {elapsed}", dynamic_ncols=True)

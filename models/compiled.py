@@ -233,9 +233,7 @@ class _CompiledHead:
             self.clf_forest = compile_forest([boosted], n)
         self.clf_blank = np.asarray(clf.sparse_columns_, bool)
         self.clf_order = np.asarray(model.band_order(clf))
-        parts = [reg.point_model_, reg.center_model_] + ([reg.scale_model_] if reg.scale_model_ is not None else [])
-        self.reg_forest = compile_forest(parts, n)
-        self.reg_blank = np.asarray(reg.sparse_columns_, bool)
+        self.compiled_reg = CompiledRegressor(reg, n)
 
     def proba_from_raw(self, raw: np.ndarray) -> np.ndarray:
         if self.ordinal:
@@ -250,8 +248,28 @@ class _CompiledHead:
         return self.proba_from_raw(raw_predict(self.clf_forest, _blank(X, self.clf_blank)))
 
     def predict_misalignment(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return self.compiled_reg.predict_interval(X)
+
+
+class CompiledRegressor:
+    """One fitted ``ConformalIntervalRegressor`` flattened: its point, centre and scale ensembles in one forest, the
+    conformal arithmetic its own (``ConformalIntervalRegressor.predict_interval``). Rows in the regressor's feature
+    order (``n_features`` columns), not validated."""
+
+    def __init__(self, reg, n_features: int) -> None:
+        self.reg = reg
+        parts = [reg.point_model_, reg.center_model_] + ([reg.scale_model_] if reg.scale_model_ is not None else [])
+        self.forest = compile_forest(parts, n_features)
+        self.blank = np.asarray(reg.sparse_columns_, bool)
+
+    def raw(self, X: np.ndarray) -> np.ndarray:
+        """The ensembles' raw outputs, (n, 2 or 3): point, centre (and the residual scale)."""
+        return raw_predict(self.forest, _blank(X, self.blank))
+
+    def predict_interval(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(point (n,), interval (n, 2))`` as the regressor's ``predict`` and ``predict_interval``."""
         reg = self.reg
-        raw = raw_predict(self.reg_forest, _blank(X, self.reg_blank))
+        raw = self.raw(X)
         clip = (lambda v: v) if reg.lower_bound is None else (lambda v: np.maximum(v, reg.lower_bound))
         point = clip(raw[:, 0])
         centre = raw[:, 1]

@@ -44,6 +44,10 @@ Every section and key is optional; the defaults are the documented ones::
     bearing_sets = []           # [{bearings = [2, 3], weight = 1}, ...]
     speed_unknown = 0.0         # share of copies extracted without the speed
     seed = 0
+
+    [direction]                 # models/direction.py
+    heads = false               # fit the offset-direction (and angular-offset) heads when the
+                                # dataset records each sample's offset_angle_rad
 """
 from __future__ import annotations
 
@@ -69,7 +73,7 @@ DEFAULT_CLEARANCE_FEATURES: tuple[str, ...] = ("*_per_c", "*_per_c2")
 _FEATURE_KEYS = {"exclude", "clearance_features", "clearance_dropout", "clearance_heads", "monotonic_increasing", "ood_features",
                  "ood_log_scales", "envelope_features", "envelope_upper_only"}
 _SECTIONS = {"seed", "bands", "features", "classifier", "regressor", "ood", "envelope", "evaluation", "baselines",
-             "augment"}
+             "augment", "direction"}
 
 
 def _params(cls, section: str, d: Mapping[str, Any] | None) -> dict:
@@ -106,6 +110,7 @@ class TrainConfig:
     ratio_features: tuple[str, ...] = DEFAULT_RATIO_PATTERNS
     rule_cuts: tuple[float, ...] = DEFAULT_RULE_CUTS
     augment: Augmentation = field(default_factory=Augmentation)
+    direction_heads: bool = False
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any] | None) -> TrainConfig:
@@ -127,6 +132,11 @@ class TrainConfig:
         heads = feats.get("clearance_heads", False)
         if not isinstance(heads, bool):
             raise ValueError(f"[features] clearance_heads: true or false, got {heads!r}")
+        direction = dict(d.get("direction", {}))
+        if set(direction) - {"heads"}:
+            raise ValueError(f"[direction]: unknown key(s) {sorted(set(direction) - {'heads'})}; allowed: ['heads']")
+        if not isinstance(direction.get("heads", False), bool):
+            raise ValueError(f"[direction] heads: true or false, got {direction['heads']!r}")
         ev = dict(d.get("evaluation", {}))
         if set(ev) - {"n_splits", "speed_bands_rpm"}:
             raise ValueError(
@@ -196,6 +206,7 @@ class TrainConfig:
             ratio_features=tuple(str(p) for p in bl.get("ratio_features", DEFAULT_RATIO_PATTERNS)),
             rule_cuts=rule_cuts,
             augment=Augmentation.from_dict(d.get("augment")),
+            direction_heads=bool(direction.get("heads", False)),
         )
         # Validate the parameter values now, with messages naming the section.
         m = cfg.make_model(("x",))
@@ -254,6 +265,7 @@ class TrainConfig:
             "evaluation": {"n_splits": self.n_splits, "speed_bands_rpm": list(self.speed_bands_rpm)},
             "baselines": {"ratio_features": list(self.ratio_features), "rule_cuts": list(self.rule_cuts)},
             "augment": self.augment.to_dict(),
+            "direction": {"heads": self.direction_heads},
         }
 
     def make_model(self, feature_names, *, clearance_seed: int | None = None):

@@ -268,6 +268,10 @@ def load_feature_table(
             speed_rpm=f["parameters/speed_rpm"][...][r],
             sample_index=r,
             meta=meta,
+            offset_angle_rad=f["parameters/offset_angle_rad"][...][r] if "parameters/offset_angle_rad" in f else None,
+            # α only in files whose spec varies it (simulator.dataset.store.ANGULAR_DATASETS)
+            angular_mrad=(f["parameters/angular_misalignment_mrad"][...][r]
+                          if "parameters/angular_misalignment_mrad" in f else None),
         )
 
 

@@ -133,6 +133,15 @@ def verdict_in_units(verdict: dict[str, Any], units: str) -> dict[str, Any]:
                     if isinstance(q.get(k), int | float):
                         q[k] = q[k] / UM_PER_MIL
                 q["unit"] = "mil" + str(q["unit"])[2:]
+    d = out.get("direction")
+    if isinstance(d, dict) and d.get("estimated") and d.get("unit") == "um":
+        from .direction import direction_text
+
+        d["text"] = direction_text(d, "mil")
+        for comp in (d["horizontal"], d["vertical"]):
+            comp["value"] = comp["value"] / UM_PER_MIL
+            comp["interval"] = [x / UM_PER_MIL for x in comp["interval"]]
+        d["unit"] = "mil"
     if head:
         out["headline"] = head
     out["output_units"] = "mil"

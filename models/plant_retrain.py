@@ -287,6 +287,21 @@ def plant_dataset_spec(plant: PlantDescription, *, n_samples: int | None = None,
     return spec
 
 
+#: What a plant's retraining lays over the shipped recipe: the offset-direction and angular-offset heads
+#: (``models.direction``), which its dataset's labels (``offset_angle_rad``, ``angular_misalignment_mrad``) teach
+PLANT_TRAINING: dict[str, Any] = {"direction": {"heads": True}}
+
+
+def plant_train_config(overrides: Mapping[str, Any] | None = None) -> Any:
+    """The training configuration of a plant's model: the shipped recipe (``TrainConfig.shipped``) with
+    :data:`PLANT_TRAINING`, then ``overrides`` (train.toml tables) over both."""
+    from rotordiag.core.tables import deep_merge
+
+    from .config import TrainConfig
+
+    return TrainConfig.shipped(deep_merge(PLANT_TRAINING, dict(overrides or {})))
+
+
 # ----------------------------------------------------------------------------- held-out recordings
 def held_out_cases(plant: PlantDescription, n_per_class: int, seed: int) -> list[dict]:
     """Held-out cases of ``plant`` in :func:`models.robustness.design`'s form: ``n_per_class`` for each of
@@ -446,7 +461,64 @@ def _figures(outs: list, names: list[str], edges: np.ndarray) -> dict[str, Any]:
         "spearman_delta": _spearman(est[ok], delta[ok]),
         "n_moderate_or_worse": int(worse.sum()),
         "moderate_or_worse_detected": float(np.mean(pred[worse] >= 1)) if worse.any() else None,
+        **_direction_figures(s, conf),
     }
+
+
+#: a direction is right when within this many degrees of the true one
+DIRECTION_TOLERANCE_DEG = 45.0
+#: the confident answers whose direction the report scores apart: true Δ at least this (moderate or worse)
+DIRECTION_MIN_DELTA = 0.15
+
+
+def _direction_figures(s: list, conf: np.ndarray) -> dict[str, Any]:
+    """Direction accuracy of scored outcomes ``s`` (``conf``: which are confident answers) on the misaligned
+    recordings whose features carry DC positions and whose case has a true direction: the share whose given
+    direction is within :data:`DIRECTION_TOLERANCE_DEG` of the true one (no direction given counts as not right),
+    the same among confident answers with true Δ ≥ :data:`DIRECTION_MIN_DELTA`, each with its Wilson interval and
+    n; the share of those recordings given a direction, the share right among them and the share whose true
+    direction lies within the answer's calibrated 90 % arc; and the angular offset's
+    90 % interval coverage, mean absolute error and Spearman correlation with the true α where α was given. ``direction_estimated`` False (every figure None): the model gave no direction
+    on any recording (a model without direction heads)."""
+    from .direction import angle_error_deg
+
+    given = np.array([np.isfinite(o.direction_deg) for o in s], dtype=bool)
+    ang = np.array([np.isfinite(o.angular_mrad) for o in s], dtype=bool)
+    out: dict[str, Any] = {"direction_estimated": bool(given.any() or ang.any()
+                                                        or any(o.direction_code not in ("", "model_without_direction")
+                                                               for o in s))}
+    keys = ("direction_n", "direction_accuracy", "direction_accuracy_interval", "direction_given_share",
+            "direction_accuracy_given", "direction_interval_coverage", "direction_confident_n", "direction_accuracy_confident",
+            "direction_accuracy_confident_interval", "angular_n", "angular_coverage", "angular_mae_mrad",
+            "angular_spearman")
+    if not out["direction_estimated"]:
+        return {**out, **dict.fromkeys(keys)}
+    scope = np.array([o.delta > 0 and o.dc_available and np.isfinite(o.true_angle_rad) for o in s], dtype=bool)
+    right = np.array([bool(g) and angle_error_deg(o.direction_deg, o.true_angle_rad) <= DIRECTION_TOLERANCE_DEG
+                      for o, g in zip(s, given)], dtype=bool)
+    strong = scope & conf & np.array([o.delta >= DIRECTION_MIN_DELTA for o in s], dtype=bool)
+    n, k = int(scope.sum()), int((right & scope).sum())
+    nc, kc = int(strong.sum()), int((right & strong).sum())
+    out.update({"direction_n": n, "direction_accuracy": k / n if n else None,
+                "direction_accuracy_interval": _wilson(k, n), "direction_given_share": float(given[scope].mean()) if n
+                else None, "direction_accuracy_given": k / int((given & scope).sum()) if (given & scope).any() else None,
+                "direction_interval_coverage": float(np.mean([
+                    angle_error_deg(o.direction_deg, o.true_angle_rad) <= o.direction_halfwidth_deg
+                    for o, g in zip(s, given & scope) if g])) if (given & scope).any() else None,
+                "direction_confident_n": nc, "direction_accuracy_confident": kc / nc if nc else None,
+                "direction_accuracy_confident_interval": _wilson(kc, nc)})
+    a_scope = ang & np.array([np.isfinite(o.true_angular_mrad) for o in s], dtype=bool)
+    na = int(a_scope.sum())
+    if na:
+        t = np.array([o.true_angular_mrad for o in s])[a_scope]
+        e = np.array([o.angular_mrad for o in s])[a_scope]
+        lo_a = np.array([o.angular_interval[0] for o in s])[a_scope]
+        hi_a = np.array([o.angular_interval[1] for o in s])[a_scope]
+        out.update({"angular_n": na, "angular_coverage": float(np.mean((lo_a <= t) & (t <= hi_a))),
+                    "angular_mae_mrad": float(np.mean(np.abs(e - t))), "angular_spearman": _spearman(e, t)})
+    else:
+        out.update({"angular_n": 0, "angular_coverage": None, "angular_mae_mrad": None, "angular_spearman": None})
+    return out
 
 
 def _spearman(a: np.ndarray, b: np.ndarray) -> float | None:
@@ -695,6 +767,20 @@ def format_report(report: Mapping[str, Any]) -> str:
     for name, r in report["per_condition"].items():
         lines.append(row(name, r))
     lines.append(row("ALL (pooled)", p))
+    for who in ("new", "active"):
+        f = p[who]
+        if not f.get("direction_estimated"):
+            lines.append(f"direction ({who}): not estimated — the model has no direction heads")
+            continue
+        lines.append(f"direction ({who}, within ±{DIRECTION_TOLERANCE_DEG:.0f}° of the true one, DC available, "
+                     f"misaligned): {_share(f.get('direction_accuracy'), f.get('direction_accuracy_interval'))} of "
+                     f"{f.get('direction_n')}; confident with Δ ≥ {DIRECTION_MIN_DELTA}: "
+                     f"{_share(f.get('direction_accuracy_confident'), f.get('direction_accuracy_confident_interval'))} "
+                     f"of {f.get('direction_confident_n')}; true direction inside the answer's 90 % arc: "
+                     f"{_share(f.get('direction_interval_coverage'), None)}; angular offset: "
+                     + ("not estimated" if not f.get("angular_n") else
+                        f"coverage {f['angular_coverage']:.0%} of {f['angular_n']}, MAE {f['angular_mae_mrad']:.4f} mrad, "
+                        f"Spearman {f['angular_spearman'] if f['angular_spearman'] is not None else float('nan'):.2f}"))
     if "ood_share" in p["new"]:
         lines.append(f"flagged out of distribution (pooled): new {p['new']['ood_share']:.0%}, "
                      f"active {p['active'].get('ood_share', float('nan')):.0%}")
@@ -706,6 +792,12 @@ def format_report(report: Mapping[str, Any]) -> str:
     lines.append(("BETTER on this plant: " if d["better"] else "NOT better on this plant: ")
                  + "; ".join(d.get("failed") or d.get("held") or d.get("reasons", [])))
     return "\n".join(lines)
+
+
+def _share(v: float | None, iv: list[float] | None) -> str:
+    if v is None:
+        return "–"
+    return f"{v:.0%}" + ("" if iv is None else f" ({iv[0]:.0%}…{iv[1]:.0%})")
 
 
 REPORT_FILE = "plant_report.json"

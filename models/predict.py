@@ -24,6 +24,7 @@ from rotordiag.core.notes import Measured, Note
 from rotordiag.features import evidence
 
 from .checks.bearing_sets import bearing_plan, leave_out_bearings
+from .direction import direction_answer
 from .registry import Registry
 from .status import INCONCLUSIVE, Reason, consistent_estimate
 
@@ -79,6 +80,9 @@ class Verdict:
     class's band (``misalignment_model`` unclipped), so the two always agree. ``evidence`` is
     model-independent (``features.evidence``). ``ood`` is true when the OOD score is above 1 or a
     feature lies outside the training range (``ood_findings``, from ``MisalignmentModel.envelope_findings``).
+    ``direction`` and ``angular_offset`` (``models.direction.direction_answer``): which way the exciter sits and
+    the angular offset α, each with 90 % intervals, or ``estimated: false`` with the reason (a model trained without
+    direction labels, a recording without DC positions, an aligned or inconclusive verdict).
     """
 
     severity: str
@@ -106,6 +110,8 @@ class Verdict:
     #: which model answered (version, training families, the plant it was retrained for) and which plant model the
     #: recording was judged as, who declared it (``models.families.answered_by``); None when not made by the pipeline
     answered_by: dict | None = None
+    direction: dict | None = None
+    angular_offset: dict | None = None
 
     def to_dict(self) -> dict:
         """The verdict as JSON-able data (as :func:`dataclasses.asdict`, 4× faster), with ``warning_codes``: the
@@ -448,6 +454,10 @@ def verdict_of(scores: ModelScores, feature_result, status: str, reasons: Sequen
         offset_iv = (lo * float(clearance_um), hi * float(clearance_um))
     speed = getattr(feature_result, "speed_rpm", None)
     ev = evidence(feature_result) if getattr(feature_result, "bearings", None) else []
+    direction, angular = direction_answer(
+        getattr(model, "direction_heads_", None), scores.row, aligned_call=scores.band == 0,
+        inconclusive=status == INCONCLUSIVE, delta=shown, delta_interval=shown_iv, clearance_um=clearance_um,
+        dc_removed=any(getattr(w, "code", None) == "no_dc_position" for w in scores.warnings))
     return Verdict(
         status=status,
         reasons=[r.to_dict() for r in reasons],
@@ -471,7 +481,28 @@ def verdict_of(scores: ModelScores, feature_result, status: str, reasons: Sequen
         model_version=scores.version,
         bands=bands.to_dict(),
         warnings=scores.warnings,
+        direction=direction,
+        angular_offset=angular,
     )
+
+
+def _direction_lines(v: Verdict, units: str) -> list[str]:
+    """The CLI's lines of the verdict's direction and angular offset (nothing for a verdict made without them)."""
+    from .direction import direction_text
+
+    lines = []
+    d, a = v.direction, v.angular_offset
+    if d is not None:
+        lines.append(f"direction: {direction_text(d, units)}" if d.get("estimated")
+                     else f"direction: not estimated — {d.get('why_not')}")
+    if a is not None:
+        if a.get("estimated"):
+            lo, hi = a["interval_mrad"]
+            lines.append(f"angular offset α: {a['angular_mrad']:+.3f} mrad ({a['interval_level']:.0%} interval "
+                         f"{lo:+.3f} – {hi:+.3f} mrad; {a['meaning']})")
+        else:
+            lines.append(f"angular offset α: not estimated — {a.get('why_not')}")
+    return lines
 
 
 def format_verdict(v: Verdict, output_units: str = "um", *, baseline: dict | None = None) -> str:
@@ -525,6 +556,7 @@ def format_verdict(v: Verdict, output_units: str = "um", *, baseline: dict | Non
         lines.append("offset δ: not given (inconclusive)")
     else:
         lines.append(f"offset δ: unknown (give the bearing clearance to convert Δ to {unit})")
+    lines += _direction_lines(v, unit_key)
     if v.speed_rpm is not None:
         lines.append(f"speed: {v.speed_rpm:.1f} r/min")
     lines.append(f"motion type: {v.motion_type or 'not determined'}")

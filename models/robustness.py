@@ -352,6 +352,14 @@ class Outcome:
     speed_line: str = ""                 # speed not given: how the true 1X line shows (bench_speed.running_speed_line)
     across_dc_per_c: float = math.nan    # the shaft ends across the coupling (:func:`across_coupling`): static offset
     across_1x_per_c: float = math.nan    # … and the radius of their relative forward 1X circle, per clearance
+    true_angle_rad: float = math.nan     # the case's offset direction (from +x toward +y), when it has one
+    true_angular_mrad: float = math.nan  # the case's angular offset α, when it has one
+    dc_available: bool = False           # the recording's features carry a shaft centreline (DC positions, clearance)
+    direction_deg: float = math.nan      # the verdict's offset direction; NaN: none given (``direction_code`` why)
+    direction_code: str = ""
+    direction_halfwidth_deg: float = math.nan  # its calibrated 90 % half-width
+    angular_mrad: float = math.nan       # the verdict's angular offset α and its interval; NaN: none given
+    angular_interval: tuple[float, float] = (math.nan, math.nan)
 
 
 def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ...], fs_hz: float,
@@ -387,9 +395,26 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
     out.interval = (math.nan if lo is None else float(lo), math.nan if hi is None else float(hi))
     names = list(fr.names)
     out.across_dc_per_c, out.across_1x_per_c = across_coupling(fr)
+    _direction_outcome(out, v, fr)
     out.ratio = float(ratio_column(np.asarray(fr.values, dtype=float)[None, :], names, RULE_PATTERNS)[0])
     out.rule_class = str(RuleOfThumb(bundle.model.bands_.names, RULE_CUTS).predict(np.array([out.ratio]))[0])
     return out
+
+
+def _direction_outcome(out: Outcome, v: Any, fr: Any) -> None:
+    """Fill ``out``'s direction and angular-offset fields from the verdict ``v`` and whether ``fr`` has DC positions."""
+    from rotordiag.models.direction import dc_columns, has_dc
+
+    out.dc_available = bool(has_dc(np.asarray(fr.values, dtype=float)[None, :], dc_columns(list(fr.names)))[0])
+    d, a = getattr(v, "direction", None), getattr(v, "angular_offset", None)
+    if d is not None:
+        out.direction_code = "estimated" if d.get("estimated") else str(d.get("code", ""))
+        if d.get("estimated"):
+            out.direction_deg = float(d["angle_deg"])
+            out.direction_halfwidth_deg = float(d["angle_halfwidth_deg"])
+    if a is not None and a.get("estimated"):
+        out.angular_mrad = float(a["angular_mrad"])
+        out.angular_interval = (float(a["interval_mrad"][0]), float(a["interval_mrad"][1]))
 
 
 def across_coupling(fr) -> tuple[float, float]:
@@ -412,7 +437,9 @@ def _over_cases(cases: list[dict], disps: list, diagnose_one) -> list[Outcome]:
     ``diagnose_one(i, case, displacements, outcome)``."""
     outs = []
     for i, (c, d) in enumerate(zip(cases, disps)):
-        o = Outcome(c["misalignment"], c["label_mechanism"], speed_rpm=float(c["speed_rpm"]))
+        o = Outcome(c["misalignment"], c["label_mechanism"], speed_rpm=float(c["speed_rpm"]),
+                    true_angle_rad=float(c.get("offset_angle_rad", math.nan)),
+                    true_angular_mrad=float(c.get("angular_misalignment_mrad", math.nan)))
         if d is None:
             o.status = "sim failed"
             outs.append(o)

@@ -23,6 +23,11 @@ class FeatureTable:
     speed_rpm : ndarray (n_samples,)
     sample_index : ndarray (n_samples,) — row in the source dataset
     meta : dict — provenance (dataset path, hash, spec, plant family, skipped samples)
+    offset_angle_rad : ndarray (n_samples,) or None — direction of the exciter's offset from the generator's line
+        (from +x, horizontal, toward +y, vertical up; the dataset's ``parameters/offset_angle_rad``); None when the
+        dataset does not record it
+    angular_mrad : ndarray (n_samples,) or None — angular offset α at the coupling (mrad, along
+        ``offset_angle_rad``; ``parameters/angular_misalignment_mrad``); None when the dataset does not record it
     """
 
     X: np.ndarray
@@ -33,6 +38,8 @@ class FeatureTable:
     speed_rpm: np.ndarray
     sample_index: np.ndarray | None = None
     meta: dict = field(default_factory=dict)
+    offset_angle_rad: np.ndarray | None = None
+    angular_mrad: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.X = np.asarray(self.X, dtype=float)
@@ -48,8 +55,12 @@ class FeatureTable:
         self.speed_rpm = np.asarray(self.speed_rpm, dtype=float)
         if self.sample_index is None:
             self.sample_index = np.arange(n)
-        for name in ("misalignment", "plant_id", "mechanism", "speed_rpm", "sample_index"):
-            if getattr(self, name).shape != (n,):
+        for name in ("offset_angle_rad", "angular_mrad"):
+            if getattr(self, name) is not None:
+                setattr(self, name, np.asarray(getattr(self, name), dtype=float))
+        for name in ("misalignment", "plant_id", "mechanism", "speed_rpm", "sample_index", "offset_angle_rad",
+                     "angular_mrad"):
+            if getattr(self, name) is not None and getattr(self, name).shape != (n,):
                 raise ValueError(f"{name}: expected shape ({n},), got {getattr(self, name).shape}")
 
     def __len__(self) -> int:
@@ -64,6 +75,8 @@ class FeatureTable:
         return FeatureTable(
             self.X[rows], self.feature_names, self.misalignment[rows], self.plant_id[rows],
             self.mechanism[rows], self.speed_rpm[rows], self._sample_index()[rows], dict(self.meta),
+            None if self.offset_angle_rad is None else self.offset_angle_rad[rows],
+            None if self.angular_mrad is None else self.angular_mrad[rows],
         )
 
     @classmethod
@@ -86,6 +99,8 @@ class FeatureTable:
             np.concatenate([t.mechanism for t in tables]),
             np.concatenate([t.speed_rpm for t in tables]),
             np.concatenate([t.sample_index for t in tables]),
+            offset_angle_rad=_concat_labels([t.offset_angle_rad for t in tables]),
+            angular_mrad=_concat_labels([t.angular_mrad for t in tables]),
         )
         out.meta = {
             "sources": [dict(t.meta) for t in tables],
@@ -107,4 +122,17 @@ class FeatureTable:
         return FeatureTable(
             self.X[:, keep], tuple(self.feature_names[i] for i in keep), self.misalignment,
             self.plant_id, self.mechanism, self.speed_rpm, self.sample_index, dict(self.meta),
+            self.offset_angle_rad, self.angular_mrad,
         )
+
+    @property
+    def has_direction_labels(self) -> bool:
+        """Whether every row carries the direction of its offset (``offset_angle_rad``)."""
+        return self.offset_angle_rad is not None and bool(np.isfinite(self.offset_angle_rad).all())
+
+
+def _concat_labels(parts: Sequence[np.ndarray | None]) -> np.ndarray | None:
+    """The tables' label arrays in one, or None when any table lacks them (a label only some rows have is none)."""
+    if any(p is None for p in parts):
+        return None
+    return np.concatenate([np.asarray(p, dtype=float) for p in parts])

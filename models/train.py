@@ -8,8 +8,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from sklearn.base import clone
 
 from .config import TrainConfig
+from .direction import fit_direction_heads
 from .evaluate import METHODS, evaluate, plot_report
 from .families import families_of_specs, specs_of_meta
 from .registry import TRUSTED_TYPES, Registry, dumps_json
@@ -45,9 +47,32 @@ def metrics_summary(report: dict) -> dict:
 
 def fit_final(table: FeatureTable, config: TrainConfig):
     """The deployable model: fitted on every row of ``table`` (the clearance features handled as in
-    the evaluation: ``config.clearance_dropout`` and ``config.clearance_heads``)."""
+    the evaluation: ``config.clearance_dropout`` and ``config.clearance_heads``), with the offset-direction heads
+    (``models.direction``) as ``direction_heads_`` when ``config.direction_heads`` and the table records every
+    row's offset direction."""
     model = config.make_model(table.feature_names, clearance_seed=config.seed + 999)
-    return model.fit(table.X, table.misalignment, groups=table.plant_id)
+    model.fit(table.X, table.misalignment, groups=table.plant_id)
+    if config.direction_heads and table.has_direction_labels:
+        assert table.offset_angle_rad is not None  # has_direction_labels
+        try:
+            model.direction_heads_ = fit_direction_heads(
+                table.X, table.feature_names, table.misalignment, table.offset_angle_rad, table.angular_mrad,
+                table.plant_id, clone(model.regressor).set_params(monotonic_cst=None))
+        except ValueError as exc:          # too few rows with the centreline: the model says it has no direction
+            model.direction_note_ = str(exc)
+    return model
+
+
+def direction_card(model: Any) -> dict[str, Any]:
+    """The card's ``direction`` entry: whether the model estimates the offset's direction and angular offset, and
+    on how many rows and plants its heads were fitted."""
+    d = getattr(model, "direction_heads_", None)
+    if d is None:
+        return {"estimated": False, "why_not": getattr(model, "direction_note_", None)
+                or "trained without direction labels or without [direction] heads"}
+    return {"estimated": True, "angular": d["heads"].get("angular_mrad") is not None, "n_rows": d["n_rows"],
+            "n_plants": d["n_plants"], "interval_level": d["interval_level"],
+            "angular_range_mrad": d["angular_range_mrad"]}
 
 
 def train_and_register(
@@ -110,6 +135,7 @@ def train_and_register(
         "ood_threshold": float(model.ood_.threshold_),
         # the thresholds that turn the model's call into the verdict's status, stored with the model
         "decision_policy": DEFAULT_POLICY.to_dict(),
+        "direction": direction_card(model),
         "envelope": None if getattr(model, "envelope_", None) is None else {
             "features": list(model.envelope_names_), "margin_spreads": float(model.envelope_.margin_),
             "held_out_flag_rate": float(model.envelope_.calibration_flag_rate_)},

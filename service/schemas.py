@@ -627,6 +627,19 @@ class DiagnoseResponse(BaseModel):
                                                            "when `output_units=mil`.")
     offset_interval_um: list[float | None] | None = Field(None, description="[low, high] of δ in micrometres "
                                                           "(null inside: unbounded on that side).")
+    direction: dict[str, Any] | None = Field(None, description="Which way the exciter sits relative to the "
+                                             "generator at the coupling (models.direction): `estimated` true with "
+                                             "`horizontal` and `vertical` (each `value` and 90 % `interval`, in "
+                                             "`unit`: um, mil or per_c; + = right / high, seen from the end from "
+                                             "which the shaft turns counter-clockwise), `angle_deg` (from +x toward "
+                                             "+y) and `text`; a side is named only where its interval excludes 0. "
+                                             "`estimated` false with `code` and `why_not`: a model trained without "
+                                             "direction labels, a recording without DC positions (AC-coupled) or "
+                                             "without the clearance, an aligned or inconclusive verdict.")
+    angular_offset: dict[str, Any] | None = Field(None, description="The angular offset α at the coupling: "
+                                                  "`estimated` true with `angular_mrad`, `interval_mrad` and "
+                                                  "`interval_level`, or false with `code` and `why_not` (as "
+                                                  "`direction`; also a model whose training carried no α).")
     motion_type: str | None = Field(None, description="Motion type of the shaft (e.g. `period-1`, `quasi-periodic`), "
                                     "when the record is long enough to tell.")
     top_features: list[FeatureContributionOut] = Field(..., description="Features that drove the verdict, "

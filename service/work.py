@@ -190,8 +190,7 @@ def _retrain_plant(body: Any) -> Any:
 def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
     """Validate a POST /models/retrain body (plant, sweep, training options, field data); the dataset spec is
     ``models.plant_retrain.plant_dataset_spec``'s (the plant's tolerances, speeds and probe layout)."""
-    from rotordiag.models.config import TrainConfig
-    from rotordiag.models.plant_retrain import plant_dataset_spec
+    from rotordiag.models.plant_retrain import plant_dataset_spec, plant_train_config
 
     plant = _retrain_plant(body)
     sweep = dict(body.sweep)
@@ -208,7 +207,7 @@ def prepare_retrain_job(body: Any, settings: Settings) -> dict[str, Any]:
     resolved = _validate_spec_text(text)
     _check_training_numbers(body.training)
     try:
-        train_cfg = TrainConfig.shipped(body.training)
+        train_cfg = plant_train_config(body.training)
     except (TypeError, ValueError, OverflowError) as exc:
         raise InputError(f"training: {exc}") from None
     field = [r.model_dump(mode="json") for r in body.field_data]

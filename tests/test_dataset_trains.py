@@ -172,6 +172,9 @@ def test_a_train_dataset_is_the_train_simulated_directly_and_reads_as_features(t
     table = load_feature_table(out, cache=False)
     assert table.X.shape[0] == 2 and np.isfinite(table.X).mean() > 0.9
     np.testing.assert_allclose(table.misalignment, delta)
+    # the direction labels of models.direction: the spec's offset direction per row; no α (the spec keeps it 0)
+    np.testing.assert_allclose(table.offset_angle_rad, -math.pi / 2)
+    assert table.has_direction_labels and table.angular_mrad is None
 
 
 def test_a_flexible_samples_coupling_carries_the_offsets_kinematic_forcing():

@@ -93,6 +93,9 @@ def test_json_verdict_matches_the_library(client, rec):
     assert v["misalignment"] == pytest.approx(direct.misalignment, rel=1e-12)
     # every warning of the answer with its catalogue code (issue 43, item 2), as the library gives them
     assert v["warning_codes"] == [w.code for w in direct.warnings] and len(v["warning_codes"]) == len(v["warnings"])
+    # a model without direction heads (the shipped one): the answer says why it gives no direction (models.direction)
+    assert v["direction"] == direct.direction and v["direction"]["code"] == "model_without_direction"
+    assert v["angular_offset"]["estimated"] is False
 
 
 def test_binary_npy_and_json_agree(client, rec):

@@ -74,14 +74,16 @@ def test_retrain_takes_a_preset_by_name_and_its_sweep_follows_the_rated_speed(tm
 
 def test_retrain_trains_on_the_shipped_recipe_with_the_requests_overrides(tmp_path):
     """A plant's retraining gets the shipped model's train.toml (physics priors, clearance heads, OOD and
-    envelope features, measurement augmentation), not the library defaults, which have none of them;
-    the request's `training` tables override only the keys they name."""
+    envelope features, measurement augmentation) and the direction heads, not the library defaults, which have none
+    of them; the request's `training` tables override only the keys they name."""
     from rotordiag.models.config import TrainConfig
 
     shipped = TrainConfig.from_file(Path(__file__).resolve().parents[1] / "models" / "default" / "train.toml").to_dict()
     assert shipped != TrainConfig.from_dict({}).to_dict()
     plain = prepare_retrain_job(RetrainRequest.model_validate({}), make_settings(tmp_path))
-    assert plain["training"] == shipped
+    # … with the offset-direction heads a plant's shaft-train data teaches (models.plant_retrain.PLANT_TRAINING)
+    assert shipped["direction"] == {"heads": False}
+    assert plain["training"] == {**shipped, "direction": {"heads": True}}
     body = RetrainRequest.model_validate({"training": {"seed": 3, "classifier": {"max_iter": 30},
                                                        "features": {"clearance_heads": False}}})
     got = prepare_retrain_job(body, make_settings(tmp_path))["training"]

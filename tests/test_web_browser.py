@@ -377,6 +377,10 @@ def test_csv_upload_shows_verdict_orbits_and_spectra(server, browser, recordings
         if bound is not None:
             assert f"{bound:.3f}" in d.find_element("id", "verdict-delta").text
     assert d.find_element("id", "verdict-offset").text.startswith(f"{api['offset_um']:.1f} µm")
+    # the direction row: the answer's text, or why there is none (a model without direction heads says so)
+    direction = api["direction"]
+    assert d.find_element("id", "verdict-direction").text == (
+        direction["text"] if direction["estimated"] else f"not estimated — {direction['why_not']}")
     assert d.find_element("id", "verdict-model").text == api["model_version"]
     rows = d.find_elements("css selector", "#verdict-probs tbody tr")
     assert [r.get_attribute("data-class") for r in rows] == api["bands"]["names"]

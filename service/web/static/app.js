@@ -517,6 +517,11 @@
     } else {
       $("verdict-offset").textContent = "— (give the clearance to get δ in µm)";
     }
+    // which way the exciter sits (models.direction): its text, or why there is none
+    show($("verdict-direction-row"), !inconclusive && !!v.direction);
+    if (v.direction) {
+      $("verdict-direction").textContent = v.direction.estimated ? v.direction.text : `not estimated — ${v.direction.why_not}`;
+    }
     $("verdict-motion").textContent = v.motion_type || "not determined";
     // an estimated speed in doubt (the speed_ambiguous reason; perhaps a reading the model chose) is marked as such
     const speedDoubt = (v.reasons || []).some((r) => r.code === "speed_ambiguous");
