@@ -3,8 +3,9 @@ is merged into a verdict.
 
 From a tracked run (``features.transient``): each probe's 1X critical (``OrderTrack.peaks``) and each bearing's
 shaft-centreline rise — the speed by which the journal has made half its rise from the slowest step
-(``half_rise_rpm``, a lift-off speed) and where it stands at the top speed (``top_um``, from the slowest step's
-position): :func:`startup_evidence`, stored by the service as plain data (:class:`StartupEvidence`).
+(``half_rise_rpm``, a lift-off speed), where it stands at the top speed (``top_um``, from the slowest step's
+position) and where it sits at slow roll (``slow_roll_um``, the slowest steps' mean gap: a shaft train's offset moves
+it at every speed, so the rise from it does not change): :func:`startup_evidence`, stored by the service as plain data (:class:`StartupEvidence`).
 :func:`compare_startups` sets a run against the asset's baseline start-up. The check that turns the comparison into
 evidence entries and at most one reason (``startup_changed``) is ``models.checks.startup``; :func:`with_startup`
 adds its entries and reasons to a verdict, never changing a band. How much it adds, measured on simulated held-out
@@ -29,13 +30,16 @@ __all__ = ["StartupEvidence", "startup_evidence", "compare_startups", "with_star
 class StartupEvidence:
     """What a start-up shows: ``criticals`` {(bearing, angle_deg): speed_rpm} of the 1X peaks, ``half_rise_rpm``
     {bearing: speed}, ``top_um`` {bearing: (x, y) at the top speed from the slowest step}, ``clearance_um``
-    {bearing: radial clearance} (empty when not known), the run's speed range."""
+    {bearing: radial clearance} (empty when not known), the run's speed range, ``slow_roll_um`` {bearing: (x, y)
+    the journal's mean position over the slowest steps, in the centreline's own zero} (empty in evidence stored
+    before it was kept)."""
 
     criticals: dict[tuple[int, float], float]
     half_rise_rpm: dict[int, float] = field(default_factory=dict)
     top_um: dict[int, tuple[float, float]] = field(default_factory=dict)
     clearance_um: dict[int, float] = field(default_factory=dict)
     speed_range_rpm: tuple[float, float] = (math.nan, math.nan)
+    slow_roll_um: dict[int, tuple[float, float]] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON data (probes as ``"b2@45"``, bearings as strings): what the service stores of a start-up."""
@@ -43,7 +47,8 @@ class StartupEvidence:
                 "half_rise_rpm": {str(b): v for b, v in sorted(self.half_rise_rpm.items())},
                 "top_um": {str(b): [float(v[0]), float(v[1])] for b, v in sorted(self.top_um.items())},
                 "clearance_um": {str(b): v for b, v in sorted(self.clearance_um.items())},
-                "speed_range_rpm": [float(v) for v in self.speed_range_rpm]}
+                "speed_range_rpm": [float(v) for v in self.speed_range_rpm],
+                "slow_roll_um": {str(b): [float(v[0]), float(v[1])] for b, v in sorted(self.slow_roll_um.items())}}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> StartupEvidence:
@@ -57,7 +62,8 @@ class StartupEvidence:
             return cls(crit, {int(b): float(v) for b, v in (d.get("half_rise_rpm") or {}).items()},
                        {int(b): (float(v[0]), float(v[1])) for b, v in (d.get("top_um") or {}).items()},
                        {int(b): float(v) for b, v in (d.get("clearance_um") or {}).items()},
-                       (float(lo), float(hi)))
+                       (float(lo), float(hi)),
+                       {int(b): (float(v[0]), float(v[1])) for b, v in (d.get("slow_roll_um") or {}).items()})
         except (TypeError, ValueError, IndexError, AttributeError) as exc:
             raise ValueError(f"not a stored start-up evidence: {exc}") from None
 
@@ -76,6 +82,7 @@ def startup_evidence(track: Any, centreline: Any = None) -> StartupEvidence:
         x0, y0 = float(np.mean(x[:n_end])), float(np.mean(y[:n_end]))
         x1, y1 = float(np.mean(x[-n_end:])), float(np.mean(y[-n_end:]))
         ev.top_um[int(b)] = (x1 - x0, y1 - y0)
+        ev.slow_roll_um[int(b)] = (x0, y0)
         rise = np.hypot(x - x0, y - y0)
         total = math.hypot(x1 - x0, y1 - y0)
         if total > 0:
@@ -90,7 +97,9 @@ def compare_startups(now: StartupEvidence, baseline: StartupEvidence,
                      coupling_bearings: tuple[int, ...] = COUPLING_BEARINGS) -> dict[str, Any]:
     """How the run differs from the baseline: ``critical_shift`` {probe: (baseline, now, fraction)} for the probes
     with a 1X critical in both; ``half_rise_shift`` {coupling bearing: (baseline, now, fraction)};
-    ``top_change_per_clearance`` {coupling bearing: |Δ position at the top speed| / clearance}.
+    ``top_change_per_clearance`` {coupling bearing: |Δ position at the top speed| / clearance};
+    ``slow_roll_change_per_clearance`` {coupling bearing: |Δ slow-roll position| / clearance} (both runs' gaps read
+    against the same zero: the same probes, DC-coupled; a centreline referenced to each run's own slow roll gives 0).
     ``coupling_bearings``: the bearings either side of the coupling (the paper model's 2 and 3; a train's the
     last of the driving rotor and the first of the driven one)."""
     crit = {p: (baseline.criticals[p], s, (s - baseline.criticals[p]) / baseline.criticals[p])
@@ -104,7 +113,13 @@ def compare_startups(now: StartupEvidence, baseline: StartupEvidence,
         if b in now.top_um and b in baseline.top_um and c:
             d = np.subtract(now.top_um[b], baseline.top_um[b])
             top[b] = float(np.hypot(*d) / c)
-    return {"critical_shift": crit, "half_rise_shift": rise, "top_change_per_clearance": top}
+    slow = {}
+    for b in coupling_bearings:
+        c = now.clearance_um.get(b) or baseline.clearance_um.get(b)
+        if b in now.slow_roll_um and b in baseline.slow_roll_um and c:
+            slow[b] = float(np.hypot(*np.subtract(now.slow_roll_um[b], baseline.slow_roll_um[b])) / c)
+    return {"critical_shift": crit, "half_rise_shift": rise, "top_change_per_clearance": top,
+            "slow_roll_change_per_clearance": slow}
 
 
 def misaligned_call(verdict: dict[str, Any] | None) -> bool:

@@ -19,9 +19,10 @@ from rotordiag.models.status import UNCERTAIN
 from tests.test_features_transient import _synthetic
 
 
-def _ev(crit_rpm: float = 1500.0, half_rise_rpm: float = 1200.0, top=(10.0, 60.0)) -> StartupEvidence:
+def _ev(crit_rpm: float = 1500.0, half_rise_rpm: float = 1200.0, top=(10.0, 60.0),
+        slow=(0.0, -150.0)) -> StartupEvidence:
     return StartupEvidence({(2, 45.0): crit_rpm, (3, 45.0): crit_rpm}, {2: half_rise_rpm, 3: half_rise_rpm},
-                           {2: top, 3: top}, {2: 300.0, 3: 300.0}, (300.0, 2000.0))
+                           {2: top, 3: top}, {2: 300.0, 3: 300.0}, (300.0, 2000.0), {2: slow, 3: slow})
 
 
 def test_no_baseline_gives_entries_and_no_reason():
@@ -47,6 +48,8 @@ def test_a_moved_critical_alone_is_an_entry_not_a_doubt():
 @pytest.mark.parametrize("now, what", [
     (dict(half_rise_rpm=1500.0), "half its centreline rise at 1500 r/min against 1200"),
     (dict(top=(10.0, 100.0)), "13 % of its clearance away"),          # |Δ| 40 µm of a 300 µm clearance
+    # a train's offset moves the journal at every speed, slow roll included: the rise from slow roll is unchanged
+    (dict(slow=(0.0, -105.0)), "sits 15 % of its clearance away from where it sat at slow roll"),
 ])
 def test_a_changed_start_up_doubts_an_aligned_call_and_supports_a_misaligned_one(now, what):
     ctx = StartupContext(_ev(**now), _ev(), misaligned_call=False)
@@ -116,3 +119,31 @@ def test_report_cli_adds_the_start_up_doubt_to_an_aligned_call(tmp_path):
     r = run.invoke(app, ["report", str(steady), "--baseline-startup", str(base), "--out", str(tmp_path / "x.pdf")])
     assert r.exit_code == 2 and "--baseline-startup needs --startup" in r.output
     assert not (tmp_path / "x.pdf").exists()
+
+
+def test_a_slow_roll_shift_below_the_rule_or_missing_from_stored_evidence_is_no_doubt():
+    """Below 10 % of the clearance the slow-roll position is unchanged; evidence stored before the slow-roll position
+    was kept (no ``slow_roll_um``) is compared on what it has, and still reads back."""
+    assert not startup_check(StartupContext(_ev(slow=(0.0, -125.0)), _ev()))      # 25 µm = 8 % of 300 µm
+    old = _ev().to_dict()
+    del old["slow_roll_um"]
+    base = StartupEvidence.from_dict(old)
+    assert base.slow_roll_um == {}
+    assert compare_startups(_ev(slow=(0.0, 0.0)), base)["slow_roll_change_per_clearance"] == {}
+    assert not startup_check(StartupContext(_ev(slow=(0.0, 0.0)), base))
+    assert StartupEvidence.from_dict(_ev().to_dict()) == _ev()
+
+
+def test_the_slow_roll_position_is_the_slowest_steps_mean_gap():
+    """A run whose every centreline point is moved by a constant (a train's offset) keeps its rise and half-rise
+    speed, and its slow-roll position moves by that constant."""
+    rec, _, _ = _synthetic(rpm0=900.0, rpm1=2100.0, dur_s=20.0)
+    tr = T.track_orders(rec)
+    cl = T.centreline(rec, tr)
+    ev = startup_evidence(tr, cl)
+    moved = replace(cl, x_um=cl.x_um + 30.0, y_um=cl.y_um - 40.0)
+    ev2 = startup_evidence(tr, moved)
+    for b in ev.slow_roll_um:
+        assert np.allclose(np.subtract(ev2.slow_roll_um[b], ev.slow_roll_um[b]), (30.0, -40.0))
+        assert ev2.half_rise_rpm[b] == ev.half_rise_rpm[b]
+        assert np.allclose(ev2.top_um[b], ev.top_um[b])

@@ -26,7 +26,7 @@ __all__ = ["StartupContext", "startup_check", "startup_findings", "CRITICAL_MOVE
 #: of a probe jumped between the plant's nearby modes by 10–50 % (docs/transient.md)
 CRITICAL_MOVED_FRACTION = 0.05
 #: a coupling-end bearing's centreline changed when its half-rise speed moved by this fraction, or its position at
-#: the top speed by this fraction of the clearance
+#: the top speed or at slow roll by this fraction of the clearance
 RISE_CHANGED_FRACTION = 0.10
 
 
@@ -85,13 +85,19 @@ def startup_findings(context: StartupContext) -> tuple[list[dict[str, Any]], lis
         if v > RISE_CHANGED_FRACTION:
             found.append(f"bearing {b} (coupling end) stands {100 * v:.0f} % of its clearance away from where it "
                          "stood at the top speed in the baseline")
+    for b, v in sorted(cmp_["slow_roll_change_per_clearance"].items()):
+        if v > RISE_CHANGED_FRACTION:
+            found.append(f"bearing {b} (coupling end) sits {100 * v:.0f} % of its clearance away from where it sat "
+                         "at slow roll in the baseline (the same probes' gap)")
     value = {"critical_shift": {f"b{b}@{a:g}": f for (b, a), (_, _, f) in cmp_["critical_shift"].items()},
              "half_rise_shift": {str(b): v[2] for b, v in cmp_["half_rise_shift"].items()},
-             "top_change_per_clearance": {str(b): v for b, v in cmp_["top_change_per_clearance"].items()}}
+             "top_change_per_clearance": {str(b): v for b, v in cmp_["top_change_per_clearance"].items()},
+             "slow_roll_change_per_clearance": {str(b): v for b, v in
+                                                cmp_["slow_roll_change_per_clearance"].items()}}
     if not found:
         entries.append({"code": "startup_unchanged", "effect": "none", "value": value,
-                        "text": "the coupling-end centreline rise matches the baseline start-up's (within "
-                                f"{100 * RISE_CHANGED_FRACTION:.0f} %)"})
+                        "text": "the coupling-end centreline rise and slow-roll position match the baseline "
+                                f"start-up's (within {100 * RISE_CHANGED_FRACTION:.0f} %)"})
         return entries, []
     text = "; ".join(found)
     if call:

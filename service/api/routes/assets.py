@@ -430,6 +430,7 @@ def _startup_answer(state, asset_id: str, startup_id: int, units: str) -> dict:
         out["peaks"] = [lengths_in(dict(p), "mil") for p in out["peaks"]]
         ev = out["evidence"]
         ev["top_mil"] = {b: [v / UM_PER_MIL for v in xy] for b, xy in ev.pop("top_um").items()}
+        ev["slow_roll_mil"] = {b: [v / UM_PER_MIL for v in xy] for b, xy in ev.pop("slow_roll_um", {}).items()}
         ev["clearance_mil"] = {b: v / UM_PER_MIL for b, v in ev.pop("clearance_um").items()}
     return out
 
