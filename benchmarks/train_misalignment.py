@@ -260,7 +260,7 @@ def _plots(out_dir: Path, rows: list[dict]) -> list[Path]:
         return sorted(ok, key=lambda r: r["value"])
 
     def save(fig, fname):
-        fig.tight_layout()
+        fig.tight_layout(rect=(0, 0, 1, 0.97))
         p = out_dir / fname
         fig.savefig(p, dpi=90)
         plt.close(fig)
@@ -349,6 +349,8 @@ def _plots(out_dir: Path, rows: list[dict]) -> list[Path]:
             for level in (0.5, 1.0, 2.0):
                 ar.axhline(level, color="r", lw=0.6, ls=":")
             ar.set_yscale("log")
+            lo, hi = ar.get_ylim()
+            ar.set_ylim(min(lo, 0.3), max(hi, 3.0))   # the rule's three levels always in view
         axes[-1, k].set_xlabel("parallel offset δ / c")
     axes[0, 0].legend(fontsize=7)
     fig.suptitle("2X (larger of the 45°/135° probes) and 2X/1X against a parallel offset (solid: down, dashed: "
