@@ -371,7 +371,7 @@ def _plots(out_dir: Path, rows: list[dict]) -> list[Path]:
                 w = np.asarray(r["wave_um"])[:, b]
                 x, y = w[:, 0] - w[:, 0].mean(), w[:, 1] - w[:, 1].mean()
                 shape = (f"flat {r['flattening'][b]:.2f}, turn {r['turning'][b]:d}" if r["subsync"] < 0.05 else
-                         f"whirl: sub/1X {r['subsync']:.1f}, not period-1")
+                         f"not period-1: sub/1X {r['subsync']:.1f}")
                 ax.plot(x, y, lw=0.8, label=f"δ = {r['value']:.1f} c: {shape}")
             ax.set_aspect("equal", adjustable="datalim")
             ax.set_title(f"bearing {b + 1}, {coupling}, {arrangement} bearings", fontsize=8)
