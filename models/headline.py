@@ -102,7 +102,7 @@ def _change_clause(f: _Facts) -> str:
     from .change import CHANGE_NAMES
 
     if f.startup_changed and not f.baseline_changed:
-        return "the start-up's coupling-end centreline rise changed since the baseline start-up"
+        return "the start-up's coupling-end centreline changed since the baseline start-up"
 
     what = " and ".join(CHANGE_NAMES.get(x, x.replace("_", " ")) for x in f.baseline_exceeded) or "the signature"
     when = f" of {readable_time(f.baseline_set_at)}" if f.baseline_set_at else ""

@@ -196,7 +196,7 @@ def test_a_changed_start_up_asks_to_investigate_the_change():
     start-up; an inconclusive verdict still asks to record again first; no "aligned misalignment" wording."""
     h = headline(_v(status="uncertain", codes=("startup_changed",), offset_um=7.0))
     assert (h.action, h.urgency) == ("investigate_change", "next_outage")
-    assert "start-up's coupling-end centreline rise changed since the baseline start-up" in h.text
+    assert "start-up's coupling-end centreline changed since the baseline start-up" in h.text
     assert h.text.endswith("the model reads aligned") and "aligned misalignment" not in h.text
     h = headline(_v(status="inconclusive", severity="inconclusive", codes=("signature_above_call", "startup_changed")))
     assert h.action == "record_again"

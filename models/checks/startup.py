@@ -44,7 +44,7 @@ class StartupContext:
 
 def startup_check(context: StartupContext) -> list[Reason]:
     """The start-up's reasons: ``startup_changed`` (uncertain) for an "aligned" call on a run whose coupling-end
-    centreline rise changed since the baseline; none otherwise (:func:`startup_findings`' reasons)."""
+    centreline (its rise or slow-roll position) changed since the baseline; none otherwise (:func:`startup_findings`' reasons)."""
     return startup_findings(context)[1]
 
 

@@ -390,8 +390,8 @@ _ENTRIES = (
              "probe wiring problem reads so; a strongly preloaded (flattened) orbit can too. Check the probe cabling "
              "and grounding (a record with the unit off the grid shows pickup that stays), or compare with this "
              "machine's baseline")),
-    CodeInfo("startup_changed", REASON, _U, "called aligned, but the start-up's coupling-end centreline rise "
-             "changed since the asset's baseline start-up",
+    CodeInfo("startup_changed", REASON, _U, "called aligned, but the start-up's coupling-end centreline (its rise "
+             "or its slow-roll position) changed since the asset's baseline start-up",
              "compare the two start-ups' Bode and centreline plots before accepting the verdict",
              ("called aligned, but the start-up changed since the asset's baseline start-up: {changes}. A moved "
              "bearing, a changed coupling or a rub changes a run-up so; compare the two start-ups' Bode and "
