@@ -243,8 +243,9 @@ class TrainConfig:
         return cls.from_dict(data)
 
     def to_dict(self) -> dict:
-        """JSON/TOML-able form (recorded in the model card)."""
-        return {
+        """JSON/TOML-able form (recorded in the model card). ``[direction]`` only when the heads are on: a card
+        written before direction heads existed reads as heads off, and a recipe without them serialises as it did."""
+        out = {
             "seed": self.seed,
             "bands": self.bands.to_dict(),
             "features": {
@@ -265,8 +266,10 @@ class TrainConfig:
             "evaluation": {"n_splits": self.n_splits, "speed_bands_rpm": list(self.speed_bands_rpm)},
             "baselines": {"ratio_features": list(self.ratio_features), "rule_cuts": list(self.rule_cuts)},
             "augment": self.augment.to_dict(),
-            "direction": {"heads": self.direction_heads},
         }
+        if self.direction_heads:
+            out["direction"] = {"heads": True}
+        return out
 
     def make_model(self, feature_names, *, clearance_seed: int | None = None):
         """An unfitted :class:`~models.estimators.MisalignmentModel` with this configuration.
