@@ -13,7 +13,7 @@ Each machine of :data:`ross_validation.MACHINES` becomes a shaft-line file (docs
   cross-coupling; bore = the journal's diameter, length half of it (ROSS's bearings have no length; the
   linear force does not use it), radial clearance ``spec.clearance_um``;
 - a **flexible** coupling of radial stiffness ``coupling_stiffness_n_m`` and ROSS's rotational stiffness
-  (``kr_x`` = 1e5 N·m/rad); each coupling half's mass as a disk at its coupling-end bearing (a shaft line
+  (``kr_x`` = 1e5 N·m/rad); each coupling half's mass as a disk at its coupling-end bearing (the generator's 2 % of the span inside it) (a shaft line
   places disks within the span, ROSS at the flange, one overhang further out);
 - no two-pole asymmetry and no structural damping (ROSS's shafts have neither), the generator's residual
   unbalance of ISO 21940-11 G2.5 at the rated speed (ROSS's misaligned cases are at G2.5) and the rated
@@ -46,6 +46,9 @@ K_YY_OVER_K_XX = 1.6
 C_OVER_K_S = 4e-4
 #: ROSS's coupling element's rotational stiffness (N·m/rad), as ``ross_validation._build``
 COUPLING_ROTATIONAL_STIFFNESS_N_M_RAD = 1e5
+#: the generator hub's disk sits this fraction of the span inside bearing 2, so it stays within the span when a
+#: retrain's dataset shortens the span by its 1 % tolerance (a shaft line's disk positions are not scaled)
+HUB_INSET = 0.02
 #: balance grade of ROSS's misaligned cases (mm/s)
 GRADE_MM_S = 2.5
 
@@ -70,7 +73,7 @@ def shaftline_dict(spec: MachineSpec) -> dict[str, Any]:
         "generator_asymmetry": 0.0,
         "damping_ratio": 0.0,
         "generator": {"segments": gen_segments, "overhang": _segments(spec.generator[-1:]),
-                      "disks": [[gen_span, hub_kg, hub_polar, hub_polar / 2]]},
+                      "disks": [[(1.0 - HUB_INSET) * gen_span, hub_kg, hub_polar, hub_polar / 2]]},
         "exciter": {"segments": exc_segments, "overhang": _segments(spec.exciter[:1]),
                     "disks": [[0.0, hub_kg, hub_polar, hub_polar / 2]]},
         "bearings": {"diameter_m": list(journals), "length_m": [0.5 * j for j in journals],
