@@ -45,6 +45,8 @@ def measure(bundle, cases) -> dict:
     healthy = d == 0
     f["rule_false_alarms"] = int(np.sum([o.rule_class != "aligned" for o, h in zip(outs, healthy) if h]))
     f["statuses"] = {s: sum(o.status == s for o in outs) for s in sorted({o.status for o in outs})}
+    reasons = [r for o in outs for r in o.reasons]
+    f["reasons"] = {r: reasons.count(r) for r in sorted(set(reasons), key=reasons.count, reverse=True)}
     return f
 
 
@@ -90,8 +92,12 @@ def main(argv: list[str] | None = None) -> int:
     print("| model | n | Spearman Δ | confident (Wilson 90 %) | confident two bands off | false alarms (Wilson 90 %) "
           "| Δ ≥ 0.15 given slight+ | rule 2X/1X Spearman | rule false alarms | statuses |")
     print("|---|---|---|---|---|---|---|---|---|---|")
-    print(row(f"retrained ({version})", measure(new, cases)))
-    print(row("shipped", measure(shipped, cases)))
+    figures = {f"retrained ({version})": measure(new, cases), "shipped": measure(shipped, cases)}
+    for who, f in figures.items():
+        print(row(who, f))
+    for who, f in figures.items():
+        print(f"{who}: out of distribution {_p(f.get('ood_share'))}; reasons (recordings): "
+              + (", ".join(f"{k} {v}" for k, v in f["reasons"].items()) or "none"))
     return 0
 
 
