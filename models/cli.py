@@ -97,6 +97,7 @@ def register(app: typer.Typer) -> None:
 
         from rotordiag.simulator.dataset.generate import generate
         from rotordiag.simulator.dataset.spec import SpecError, parse_spec
+        from rotordiag.simulator.dataset.store import StoreError
 
         from .dataset import load_feature_table
         from .plant_retrain import (
@@ -166,6 +167,11 @@ def register(app: typer.Typer) -> None:
         except (ValueError, SpecError, RegistryError) as exc:
             bar.close()
             _fail(str(exc))
+        except StoreError as exc:   # the work folder's dataset.h5 is not this plant's and size's to resume
+            bar.close()
+            _fail(f"{exc}. rotordiag retrain keeps its dataset in {folder} (a rerun with the same plant, "
+                  f"--n-samples and --seed resumes it): give another --work-dir, or remove {folder / 'dataset.h5'} "
+                  "to start again")
         except KeyboardInterrupt:
             bar.close()
             _fail("interrupted; the dataset is kept and a rerun resumes it", 130)

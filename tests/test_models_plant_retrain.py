@@ -586,3 +586,21 @@ def test_retrain_request_takes_the_shaftline_files_text_with_its_rated_speed(tmp
     with pytest.raises(InputError, match="once"):
         prepare_retrain_job(RetrainRequest.model_validate({"shaftline_toml": text, "shaftline": {}}),
                             make_settings(tmp_path))
+
+
+def test_retrain_cli_refuses_a_work_folder_whose_dataset_it_cannot_resume(tmp_path):
+    """A work folder holding a dataset.h5 this retrain cannot resume (another spec, or not a dataset at all) is a
+    clear exit 2 naming --work-dir, not a traceback; nothing is registered."""
+    from rotordiag.cli import app
+
+    work = tmp_path / "work"
+    work.mkdir()
+    (work / "dataset.h5").write_bytes(b"not an HDF5 file")
+    reg_root = tmp_path / "reg"
+    r = CliRunner().invoke(app, ["retrain", "--registry", str(reg_root), "--preset", "gen600_4pole",
+                                 "--n-samples", "24", "--report-cases", "1", "--workers", "0",
+                                 "--work-dir", str(work)])
+    assert r.exit_code == 2, r.output
+    assert "--work-dir" in r.output and "dataset.h5" in r.output and "Traceback" not in r.output
+    assert r.exception is None or isinstance(r.exception, SystemExit)
+    assert not (reg_root / "v0001").exists()
