@@ -318,12 +318,7 @@ def held_out_cases(plant: PlantDescription, n_per_class: int, seed: int) -> list
     rated = plant.rated_speed_rpm or (0.5 * (lo + hi),)
     cases = []
     for i, mech in enumerate([m for m in MECHANISMS for _ in range(n_per_class)] + ["aligned"] * n_per_class):
-        p = dict(base)
-        for name, r in PLANT_TOLERANCES.items():
-            v = p[name]
-            p[name] = ([float(x) * (1 + r * rng.uniform(-1, 1)) for x in v] if isinstance(v, list)
-                       else float(v) * (1 + r * rng.uniform(-1, 1)))
-        speed = float(rng.choice(rated)) * float(rng.uniform(0.99, 1.01)) if i % 2 == 0 else float(rng.uniform(lo, hi))
+        p, speed = _draw_case_plant(base, PLANT_TOLERANCES, i, rated, (lo, hi), rng)
         cases.append(dict(
             plant=p, speed_rpm=speed, misalignment=0.0 if mech == "aligned" else float(rng.uniform(0.02, 0.6)),
             mechanism="pin" if mech == "aligned" else mech, label_mechanism=mech,
@@ -332,6 +327,20 @@ def held_out_cases(plant: PlantDescription, n_per_class: int, seed: int) -> list
             offset_angle_rad=float(rng.uniform(0, 2 * math.pi)), coupling_phase_rad=float(rng.uniform(0, 2 * math.pi)),
         ))
     return cases
+
+
+def _draw_case_plant(base: dict, tolerances: Mapping[str, float], i: int, rated: Sequence[float],
+                     speed_range: tuple[float, float], rng: np.random.Generator) -> tuple[dict, float]:
+    """One held-out case's plant (each toleranced value × (1 + u), u uniform in ±its tolerance, lists element by
+    element) and its speed: even cases at a rated speed ±1 %, odd ones anywhere in ``speed_range``."""
+    p = dict(base)
+    for name, r in tolerances.items():
+        v = p[name]
+        p[name] = ([float(x) * (1 + r * rng.uniform(-1, 1)) for x in v] if isinstance(v, list)
+                   else float(v) * (1 + r * rng.uniform(-1, 1)))
+    speed = (float(rng.choice(rated)) * float(rng.uniform(0.99, 1.01)) if i % 2 == 0
+             else float(rng.uniform(*speed_range)))
+    return p, speed
 
 
 def _held_out_train_cases(plant: PlantDescription, n_per_class: int, seed: int) -> list[dict]:
@@ -346,12 +355,7 @@ def _held_out_train_cases(plant: PlantDescription, n_per_class: int, seed: int) 
     couplings = plant.couplings()
     cases = []
     for i, mech in enumerate([m for m in couplings for _ in range(n_per_class)] + ["aligned"] * n_per_class):
-        p = dict(base)
-        for name, r in TRAIN_TOLERANCES.items():
-            v = p[name]
-            p[name] = ([float(x) * (1 + r * rng.uniform(-1, 1)) for x in v] if isinstance(v, list)
-                       else float(v) * (1 + r * rng.uniform(-1, 1)))
-        speed = float(rng.choice(rated)) * float(rng.uniform(0.99, 1.01)) if i % 2 == 0 else float(rng.uniform(lo, hi))
+        p, speed = _draw_case_plant(base, TRAIN_TOLERANCES, i, rated, (lo, hi), rng)
         aligned = mech == "aligned"
         cases.append(dict(
             plant=p, speed_rpm=speed, misalignment=0.0 if aligned else float(rng.uniform(0.02, 0.6)),
