@@ -784,6 +784,10 @@ class MisalignmentModel(BaseEstimator):
         explain a verdict.
     feature_nan_rate_ : ndarray of shape (n_features,)
         Share of training rows in which each feature was missing.
+    attitude_offset_reference_deg_ : ndarray of shape (9,)
+        Bearing ``n`` at index ``n − 1``: the training journals' median attitude angle minus a
+        plain short journal bearing's (NaN where undefined); models saved before it existed
+        are compared with a plain bearing's (0°).
     classes_ : ndarray of str, the band names in order
     envelope_ : FeatureEnvelope or None
         Fitted when ``envelope_features`` is given; ``envelope_names_`` its columns.
@@ -954,7 +958,27 @@ class MisalignmentModel(BaseEstimator):
         with np.errstate(all="ignore"):
             med = np.nanmedian(np.where(nan.all(axis=0), 0.0, X_shared), axis=0)
         self.feature_median_ = np.where(np.isfinite(med), med, 0.0)
+        self.attitude_offset_reference_deg_ = self._attitude_offset_reference(X)
         return self
+
+    def _attitude_offset_reference(self, X: np.ndarray) -> np.ndarray:
+        """Per bearing 1–9 (index ``n − 1``), the training rows' median attitude offset from a plain short journal
+        bearing's (``b{n}_attitude_offset_deg``, where defined), NaN where no row defines it: the load-line
+        direction this model's journals held, which ``models.status`` compares a recording's with (a tilting-pad
+        or linear bearing holds its journal on the load line, 30–60° off a plain bearing's)."""
+        names = list(self.feature_names_)
+        ref = np.full(9, np.nan)
+        for b in range(1, 10):
+            if f"b{b}_centre_x_per_c" not in names or f"b{b}_centre_y_per_c" not in names:
+                continue
+            x = X[:, names.index(f"b{b}_centre_x_per_c")]
+            y = X[:, names.index(f"b{b}_centre_y_per_c")]
+            ecc = np.hypot(x, y)
+            ok = np.isfinite(ecc) & (ecc >= ATTITUDE_MIN_ECC) & (ecc <= 1.0)
+            if ok.any():
+                off = attitude_angle_deg(x[ok], y[ok]) - short_bearing_attitude_deg(ecc[ok])
+                ref[b - 1] = float(np.median((off + 180.0) % 360.0 - 180.0))
+        return ref
 
     def _fit_heads(self, X: np.ndarray, y: np.ndarray, groups) -> tuple:
         """A fitted (classifier, Δ regressor) pair on rows X."""

@@ -197,7 +197,8 @@ def _recording_checks(scores: ModelScores, fr: FeatureResult, extra: Sequence[Re
                            feature_median=np.asarray(scores.model.feature_median_, dtype=float),
                            sanity=scores.sanity, ood_score=scores.ood_score, never_missing=scores.never_missing,
                            speed_source=getattr(fr, "speed_source", None), warnings=scores.warnings,
-                           envelope=scores.findings, extra=extra)
+                           envelope=scores.findings, extra=extra,
+                           attitude_reference_deg=getattr(scores.model, "attitude_offset_reference_deg_", None))
 
 
 def _model_call(scores: ModelScores, static_offset: Sequence[Reason]) -> ModelCall:

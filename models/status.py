@@ -228,12 +228,17 @@ def _near_centre_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
                                                        "limit_c": policy.near_centre_max_ecc})]
 
 
-def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: DecisionPolicy = DEFAULT_POLICY
-                         ) -> list[Reason]:
+def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: DecisionPolicy = DEFAULT_POLICY,
+                         reference_deg: np.ndarray | None = None) -> list[Reason]:
     """``centreline_frame_turned`` when at two or more bearings the journal sits off the load line (attitude angle)
-    by more than :data:`FRAME_OFFSET_DEG` beyond a plain short journal bearing's at the same eccentricity, every one
-    on the same side: the probes' frame as given is turned (wrong ``angle_deg``), or the bearings are no plain
-    cylindrical ones (the ROSS set's linear bearings, tilting pads: the journal near the load line)."""
+    by more than :data:`FRAME_OFFSET_DEG` beyond where the model's training journals sat, every one on the same
+    side: the probes' frame as given is turned (wrong ``angle_deg``), or the bearings are unlike the training's
+    (the ROSS set's linear bearings, tilting pads: the journal near the load line).
+
+    ``reference_deg`` (``MisalignmentModel.attitude_offset_reference_deg_``, bearing n at n − 1): the training's
+    median offset from a plain short journal bearing's attitude; where it is missing (a model saved before it, a
+    bearing never instrumented in training) the reference is the plain bearing's (0°). A model trained on a plant
+    with linear or tilting-pad bearings thus takes that plant's journals on the load line as its own."""
     index = name_index(names)
     bearings, xye = [], []
     for b in range(1, 10):
@@ -247,13 +252,21 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
         return []
     x, y, e = np.array(xye).T
     phis = attitude_angle_deg(x, y)
-    offsets = phis - short_bearing_attitude_deg(e)
+    ref = np.zeros(len(bearings))
+    if reference_deg is not None:
+        trained = np.asarray(reference_deg, dtype=float)
+        ref = np.array([trained[b - 1] if b <= trained.size and np.isfinite(trained[b - 1]) else 0.0
+                        for b in bearings])
+    offsets = (phis - short_bearing_attitude_deg(e) - ref + 180.0) % 360.0 - 180.0
     found = list(zip(bearings, phis.tolist(), offsets.tolist()))
     if not (np.all(offsets < -policy.frame_offset_deg) or np.all(offsets > policy.frame_offset_deg)):
         return []
     where = ", ".join(f"bearing {b} {phi:.0f}° ({off:+.0f}°)" for b, phi, off in found)
+    held = ("a plain oil-film journal bearing's" if not np.any(ref) else
+            "the model's training journals' (" + ", ".join(f"bearing {b} {r:+.0f}° from a plain bearing's"
+                                                          for b, r in zip(bearings, ref.tolist())) + ")")
     return [Reason("centreline_frame_turned", UNCERTAIN,
-                   {"mean_offset_deg": float(np.mean(offsets)), "bearings": where})]
+                   {"mean_offset_deg": float(np.mean(offsets)), "bearings": where, "reference": held})]
 
 
 def _scale_reasons(names: Sequence[str], row: np.ndarray, median: np.ndarray,
@@ -486,6 +499,8 @@ class RecordingChecks:
     extra : sequence of Reason
         Reasons found outside this module: ``models.checks.bearing_sets`` (a probe set the model was not trained on, or
         one it tells little from) and ``models.checks.numbering`` (bearings numbered from the other end).
+    attitude_reference_deg : ndarray or None
+        The model's ``attitude_offset_reference_deg_`` (None: a model saved before it; a plain bearing's).
     """
 
     names: Sequence[str]
@@ -498,6 +513,7 @@ class RecordingChecks:
     warnings: Iterable[str]
     envelope: Sequence[dict] = ()
     extra: Sequence[Reason] = ()
+    attitude_reference_deg: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -579,7 +595,7 @@ def _recording_reasons(c: RecordingChecks, policy: DecisionPolicy = DEFAULT_POLI
     reasons += envelope_reasons(c.envelope, policy=policy)
     reasons += _scale_reasons(c.names, c.row, c.feature_median, policy)
     reasons += _near_centre_reasons(c.names, c.row, policy)
-    reasons += _probe_frame_reasons(c.names, c.row, policy)
+    reasons += _probe_frame_reasons(c.names, c.row, policy, c.attitude_reference_deg)
     if c.speed_source == "estimated":
         for w in c.warnings:
             if speed_in_doubt(w):

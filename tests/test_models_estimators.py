@@ -423,3 +423,26 @@ def test_clearance_heads_need_clearance_features():
         _clearance_model(heads=True, clearance_features=("nothing_matches_*",))
     with pytest.raises(ValueError, match="clearance_dropout"):
         _clearance_model(heads=False, dropout=1.5)
+
+
+def test_the_training_journals_attitude_is_kept_per_bearing():
+    """``attitude_offset_reference_deg_``: the training rows' median attitude minus a plain short bearing's, per
+    bearing; journals held on the load line (linear or tilting-pad bearings) give minus the plain bearing's angle,
+    bearings the training never had NaN."""
+    from rotordiag.core.journal import short_bearing_attitude_deg
+
+    t = make_table(n_plants=20, per_plant=10, seed=3)
+    rng = np.random.default_rng(0)
+    ecc = rng.uniform(0.3, 0.6, size=(len(t.misalignment), 2))
+    centres = np.column_stack([np.zeros_like(ecc[:, 0]), -ecc[:, 0],          # bearing 1: on the load line
+                               np.zeros_like(ecc[:, 1]), -ecc[:, 1]])         # bearing 3
+    names = (*FEATURE_NAMES, "b1_centre_x_per_c", "b1_centre_y_per_c", "b3_centre_x_per_c", "b3_centre_y_per_c")
+    m = MisalignmentModel(classifier=SeverityClassifier(max_iter=20),
+                          regressor=ConformalIntervalRegressor(max_iter=20, lower_bound=0.0), feature_names=names,
+                          ).fit(np.column_stack([t.X, centres]), t.misalignment, groups=t.plant_id)
+    ref = m.attitude_offset_reference_deg_
+    assert ref.shape == (9,)
+    assert np.isnan(ref[1]) and np.isnan(ref[3]) and np.isnan(ref[8])
+    expected = -short_bearing_attitude_deg(np.median(ecc, axis=0))
+    np.testing.assert_allclose(ref[[0, 2]], expected, atol=3.0)
+    assert (ref[[0, 2]] < -40).all()

@@ -584,6 +584,31 @@ def test_journals_all_turned_off_a_plain_bearings_attitude_are_not_confident():
     assert "centreline_frame_turned" not in [r.code for r in run(0, 5, -10, 3)[1]]
 
 
+def test_journals_where_the_models_training_held_them_are_no_turned_frame():
+    """A model trained on a plant whose bearings hold the journal on the load line (linear, tilting-pad: the ROSS
+    machines retrained for, issue 48) keeps that direction as its reference (``attitude_offset_reference_deg_``):
+    that plant's journals are not doubted, a frame turned from there still is, and without the reference (a model
+    saved before it) the plain bearing's angle is the reference."""
+    from rotordiag.core.journal import short_bearing_attitude_deg
+
+    def run(reference, turn_deg=0.0):
+        names, row = ["b2_1x_major_um_pp"], [30.0]
+        for b in (1, 2, 3, 4):
+            phi = np.radians(turn_deg)                                  # on the load line, then turned
+            names += [f"b{b}_centre_x_per_c", f"b{b}_centre_y_per_c", f"b{b}_centre_ecc_per_c"]
+            row += [0.5 * np.sin(phi), -0.5 * np.cos(phi), 0.5]
+        return [r for r in _assess(names=names, row=np.array(row), feature_median=np.full(len(row), 30.0),
+                                   attitude_reference_deg=reference)[1] if r.code == "centreline_frame_turned"]
+
+    on_line = np.full(9, -short_bearing_attitude_deg(0.5))
+    assert short_bearing_attitude_deg(0.5) > 30                          # a plain bearing's model doubts them
+    assert run(None) and run(np.full(9, np.nan))
+    assert not run(on_line)
+    turned = run(on_line, turn_deg=45.0)
+    assert turned and "training journals'" in turned[0].values["reference"]
+    assert "plain oil-film" in run(None)[0].values["reference"]
+
+
 def test_the_decision_policy_is_stored_with_the_model_and_defaults_to_the_shipped_thresholds():
     """issue 43: the thresholds are one object (``DecisionPolicy``) read from the model's card; a card without one
     (the shipped model's) gets the module constants, and a stored policy changes the status."""
