@@ -97,7 +97,8 @@ def family_tables(data: Path, config_path: Path) -> tuple[object, np.ndarray]:
 
 def train_without(table, families: np.ndarray, held_out: str, config_path: Path, root: Path,
                   n_splits: int | None = None):
-    """A model trained, as ``rotordiag train`` does, on every family but ``held_out``; its bundle."""
+    """A model trained, as ``rotordiag train`` does, on every family but ``held_out`` ("": every family); its
+    bundle."""
     from rotordiag.models.config import TrainConfig
     from rotordiag.models.predict import load_bundle
     from rotordiag.models.registry import Registry
@@ -109,9 +110,10 @@ def train_without(table, families: np.ndarray, held_out: str, config_path: Path,
     from rotordiag.models.families import families_of_specs, specs_of_meta
 
     sub = table.subset(np.flatnonzero(families != held_out))
-    registry = Registry(root / held_out)
+    registry = Registry(root / (held_out or "every_family"))
     # the card's families are its specs' less the family whose rows were left out (the specs name every preset)
-    trained = [f for f in families_of_specs(specs_of_meta(sub.meta)) if not f.endswith(f"preset:{held_out}")]
+    trained = [f for f in families_of_specs(specs_of_meta(sub.meta))
+               if not (held_out and f.endswith(f"preset:{held_out}"))]
     train_and_register(sub, config, registry, card_extra={"training_families": trained})
     return load_bundle(registry.root)
 
@@ -155,6 +157,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--config", type=Path, default=Path("models/default/train.toml"))
     ap.add_argument("--no-holdout", action="store_true", help="judge the shipped model only")
     ap.add_argument("--out", type=Path, default=None, help="write the report (markdown) here (rewritten as parts finish)")
+    ap.add_argument("--train-data", type=Path, default=None,
+                    help="train the held-out models on these sets (the same four parts, other machines: another "
+                         "seed) instead of --data's, and add a model trained on every family of them, judged on "
+                         "--data's machines (plants of known families it never saw)")
     ap.add_argument("--inner-splits", type=int, default=2,
                     help="group folds of the training report of each held-out model (train.toml's n_splits: None)")
     args = ap.parse_args(argv)
@@ -176,10 +182,18 @@ def main(argv: list[str] | None = None) -> int:
 
     write()
     if not args.no_holdout:
-        table_, fams = family_tables(args.data, args.config)
-        name = "trained on shaft trains, the judged family held out"
-        results[name] = {c: [] for c in CONDITIONS}
+        table_, fams = family_tables(args.train_data or args.data, args.config)
         with tempfile.TemporaryDirectory() as td:
+            if args.train_data is not None:
+                name = "trained on every family's other machines (the judged machines never seen)"
+                t1 = time.perf_counter()
+                bundle = train_without(table_, fams, "", args.config, Path(td), args.inner_splits)
+                bundles[name] = bundle
+                results[name] = {c: judge(bundle, samples, c) for c in CONDITIONS}
+                print(f"every family: {len(samples)} recordings, {time.perf_counter() - t1:.0f} s", file=sys.stderr)
+                write()
+            name = "trained on shaft trains, the judged family held out"
+            results[name] = {c: [] for c in CONDITIONS}
             for fam in sorted(set(s["family"] for s in samples)):
                 t1 = time.perf_counter()
                 bundle = train_without(table_, fams, fam, args.config, Path(td), args.inner_splits)
