@@ -155,3 +155,24 @@ def test_the_shipped_model_was_trained_on_the_shipped_recipe():
                    for k in on_disk if on_disk[k] != trained.get(k)}
         assert not changed, f"dataset_{part}.toml differs from what the shipped model was trained on: {changed}"
     assert card["train_config"] == TrainConfig.from_file(REPO / "models" / "default" / "train.toml").to_dict()
+
+
+def test_the_shaft_train_verdicts_training_machines_are_other_machines_of_the_judged_designs():
+    """docs/train-verdict.md: ``models/trains/more`` holds four times the judged sets' machines with another seed
+    and otherwise the same spec (designs, couplings, speeds, measurement realities); each parses."""
+    import tomllib
+
+    from rotordiag.simulator.dataset.spec import load_spec
+
+    root = Path(__file__).resolve().parents[1] / "models" / "trains"
+    judged = sorted(root.glob("dataset_*.toml"))
+    assert len(judged) == 4
+    for path in judged:
+        more = root / "more" / path.name
+        load_spec(path), load_spec(more)
+        a, b = (tomllib.loads(p.read_text(encoding="utf-8")) for p in (path, more))
+        assert b["design"]["n_samples"] == 4 * a["design"]["n_samples"]
+        assert b["design"]["seed"] != a["design"]["seed"]
+        for d in (a, b):
+            del d["design"]["n_samples"], d["design"]["seed"]
+        assert a == b, path.name
