@@ -52,7 +52,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from rotordiag.core.bands import DEFAULT_EDGES, DEFAULT_NAMES, SeverityBands
-from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, short_bearing_attitude_deg
+from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, attitude_offset_deg
 
 from ._columns import _blank, _sparse_columns
 from ._patterns import name_mask, pattern_value, require_matches
@@ -976,8 +976,7 @@ class MisalignmentModel(BaseEstimator):
             ecc = np.hypot(x, y)
             ok = np.isfinite(ecc) & (ecc >= ATTITUDE_MIN_ECC) & (ecc <= 1.0)
             if ok.any():
-                off = attitude_angle_deg(x[ok], y[ok]) - short_bearing_attitude_deg(ecc[ok])
-                ref[b - 1] = float(np.median((off + 180.0) % 360.0 - 180.0))
+                ref[b - 1] = float(np.median(attitude_offset_deg(x[ok], y[ok], ecc[ok])))
         return ref
 
     def _fit_heads(self, X: np.ndarray, y: np.ndarray, groups) -> tuple:
@@ -1074,9 +1073,9 @@ class MisalignmentModel(BaseEstimator):
         for j, cx, cy, offset in derived:
             x, y = X[:, cx], X[:, cy]
             ecc = np.hypot(x, y)
-            att = attitude_angle_deg(x, y) - (short_bearing_attitude_deg(ecc) if offset else 0.0)
+            att = attitude_offset_deg(x, y, ecc) if offset else (attitude_angle_deg(x, y) + 180.0) % 360.0 - 180.0
             defined = (ecc >= ATTITUDE_MIN_ECC) & (ecc <= 1.0)
-            out[:, j] = np.where(defined, (att + 180.0) % 360.0 - 180.0, np.nan)
+            out[:, j] = np.where(defined, att, np.nan)
         return out
 
     def envelope_input(self, X: np.ndarray) -> np.ndarray:

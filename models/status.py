@@ -48,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, short_bearing_attitude_deg
+from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, attitude_offset_deg
 from rotordiag.core.notes import Length, Measured
 from rotordiag.core.reasons import DEFAULT_VARIANT, INCONCLUSIVE, UNCERTAIN, code_info, require_code
 from rotordiag.features import speed_in_doubt
@@ -257,7 +257,7 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
         trained = np.asarray(reference_deg, dtype=float)
         ref = np.array([trained[b - 1] if b <= trained.size and np.isfinite(trained[b - 1]) else 0.0
                         for b in bearings])
-    offsets = (phis - short_bearing_attitude_deg(e) - ref + 180.0) % 360.0 - 180.0
+    offsets = (attitude_offset_deg(x, y, e) - ref + 180.0) % 360.0 - 180.0
     found = list(zip(bearings, phis.tolist(), offsets.tolist()))
     if not (np.all(offsets < -policy.frame_offset_deg) or np.all(offsets > policy.frame_offset_deg)):
         return []

@@ -446,3 +446,19 @@ def test_the_training_journals_attitude_is_kept_per_bearing():
     expected = -short_bearing_attitude_deg(np.median(ecc, axis=0))
     np.testing.assert_allclose(ref[[0, 2]], expected, atol=3.0)
     assert (ref[[0, 2]] < -40).all()
+
+
+def test_attitude_offset_is_zero_where_a_plain_bearing_holds_the_journal_and_wraps():
+    """``core.journal.attitude_offset_deg``: a journal where the Ocvirk short bearing puts it reads 0°, one on the
+    load line minus the short bearing's angle, and a difference beyond ±180° comes back into [−180, 180)."""
+    from rotordiag.core.journal import attitude_offset_deg, short_bearing_attitude_deg
+
+    ecc = np.array([0.2, 0.5, 0.8])
+    phi = np.radians(short_bearing_attitude_deg(ecc))
+    np.testing.assert_allclose(attitude_offset_deg(ecc * np.sin(phi), -ecc * np.cos(phi)), 0.0, atol=1e-9)
+    np.testing.assert_allclose(attitude_offset_deg(np.zeros(3), -ecc), -short_bearing_attitude_deg(ecc))
+    # journal above the centre, just past the rotation side of 180°: −170° − φ_short wraps to the positive side
+    x, y = 0.5 * np.sin(np.radians(-170.0)), -0.5 * np.cos(np.radians(-170.0))
+    off = float(attitude_offset_deg(np.array([x]), np.array([y]))[0])
+    assert -180.0 <= off < 180.0
+    assert off == pytest.approx(360.0 - 170.0 - float(short_bearing_attitude_deg(0.5)))

@@ -39,3 +39,22 @@ def short_bearing_attitude_deg(ecc: np.ndarray) -> np.ndarray:
     e = np.asarray(ecc, dtype=float)
     with np.errstate(invalid="ignore"):
         return np.degrees(np.arctan2(np.pi * np.sqrt(np.clip(1.0 - e * e, 0.0, None)), 4.0 * np.abs(e)))
+
+
+def attitude_offset_deg(x: np.ndarray, y: np.ndarray, ecc: np.ndarray | None = None) -> np.ndarray:
+    """The centreline's attitude angle minus a plain short bearing's at its eccentricity, degrees in [−180, 180).
+
+    How far a journal sits from where a plain oil-film bearing would hold it under the same load: about 0° for a
+    plain cylindrical bearing, −30° to −60° for a linear or tilting-pad one (the journal on the load line), every
+    bearing shifted alike when the probe frame is turned. Not masked: below :data:`ATTITUDE_MIN_ECC` the value is
+    noise (the caller leaves it out).
+
+    Parameters
+    ----------
+    x, y : ndarray
+        Mean journal position per clearance.
+    ecc : ndarray, optional
+        Eccentricity ratio (default ``hypot(x, y)``).
+    """
+    e = np.hypot(x, y) if ecc is None else np.asarray(ecc, dtype=float)
+    return (attitude_angle_deg(x, y) - short_bearing_attitude_deg(e) + 180.0) % 360.0 - 180.0
