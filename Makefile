@@ -72,12 +72,15 @@ clean:
 .PHONY: default-model
 DEFAULT_DATA ?= data/default
 # the training parts of the shipped model, in the order the model was trained on them (models/default/dataset_<part>.toml)
-DEFAULT_PARTS = aligned presets_aligned misaligned presets severe misaligned_more aligned_more misaligned_more2 aligned_more2 misaligned_more3 aligned_more3 bearings bearings_aligned
+DEFAULT_PARTS = aligned presets_aligned misaligned presets severe misaligned_more aligned_more misaligned_more2 aligned_more2 misaligned_more3 aligned_more3 bearings bearings_aligned trains_2pole trains_2pole_aligned trains_4pole trains_4pole_aligned
 default-model: $(STAMP)
 	mkdir -p $(DEFAULT_DATA)
 	for part in $(DEFAULT_PARTS); do \
 		$(VENV)/bin/rotordiag dataset generate models/default/dataset_$$part.toml --out $(DEFAULT_DATA)/$$part.h5 --no-progress || exit 1; \
 	done
-	rm -rf models/default_registry.new
+	rm -rf models/default_registry.new && mkdir models/default_registry.new
+	# the shipped history comes along, so the new model takes the next version name (an asset's stored verdicts
+	# name the version that answered them; a name is never given to a second model)
+	cp models/default_registry/history.json models/default_registry.new/ 2>/dev/null || true
 	$(VENV)/bin/rotordiag train $(foreach part,$(DEFAULT_PARTS),$(DEFAULT_DATA)/$(part).h5) --config models/default/train.toml --registry models/default_registry.new
 	rm -rf models/default_registry && mv models/default_registry.new models/default_registry

@@ -134,6 +134,9 @@ RULES: Final[tuple[Rule, ...]] = (
                         f"investigate: {_change_clause(f)}"
                         + ("; the model reads aligned" if f.band == "aligned" else
                            f"; the model reads {f.band} misalignment{_offset_clause(f)}" if f.band else ""))),
+    ("aligned against its own 2X", lambda f: f.band == "aligned" and "signature_contradicts_call" in f.codes,
+     lambda f: Headline("confirm", "before_acting", "confirm before acting: called aligned, but the coupling bearings' "
+                        "2X/1X reads misalignment — " + code_info("signature_contradicts_call").action)),
     ("aligned", lambda f: f.band == "aligned" and f.status == "confident",
      lambda f: Headline("none", "none", "no action: aligned")),
     ("probably aligned", lambda f: f.band == "aligned",

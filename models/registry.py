@@ -320,9 +320,7 @@ class Registry:
             # Pick the next free name and move in; os.replace refuses a non-empty target,
             # so two writers racing for one name cannot overwrite each other.
             for _ in range(100):
-                existing = self.versions()
-                n = _version_number(existing[-1]) + 1 if existing else 1
-                version = f"v{n:04d}"
+                version = self.next_version()
                 full = dict(card)
                 full["version"] = version
                 full.setdefault("created", datetime.now(UTC).isoformat(timespec="seconds"))
@@ -343,6 +341,14 @@ class Registry:
         if activate:
             self.activate(version)
         return version
+
+    def next_version(self) -> str:
+        """The name the next registered model takes: one above every number this registry has used, in its
+        directories and in its activation history, so a name is never given to a second model after its directory
+        was deleted (an asset's stored verdicts name the version that answered them)."""
+        used = [_version_number(v) for v in self.versions()]
+        used += [_version_number(v) for v in self._history() if _VERSION_RE.fullmatch(v)]
+        return f"v{max(used, default=0) + 1:04d}"
 
     def _history(self) -> builtins.list[str]:
         p = self.root / HISTORY_FILE

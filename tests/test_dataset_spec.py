@@ -157,18 +157,19 @@ def test_the_shipped_model_was_trained_on_the_shipped_recipe():
     assert card["train_config"] == TrainConfig.from_file(REPO / "models" / "default" / "train.toml").to_dict()
 
 
-def test_the_shaft_train_verdicts_training_machines_are_other_machines_of_the_judged_designs():
-    """docs/train-verdict.md: ``models/trains/more`` holds four times the judged sets' machines with another seed
-    and otherwise the same spec (designs, couplings, speeds, measurement realities); each parses."""
+def test_the_shipped_models_trains_are_other_machines_of_the_judged_designs():
+    """The shipped model's shaft-train parts (``models/default/dataset_trains_*.toml``, also the training machines of
+    docs/train-verdict.md) are four times the judged sets' machines with another seed and otherwise the same spec
+    (designs, couplings, speeds, measurement realities), so the judged machines are ones it never saw; each parses."""
     import tomllib
 
     from rotordiag.simulator.dataset.spec import load_spec
 
-    root = Path(__file__).resolve().parents[1] / "models" / "trains"
-    judged = sorted(root.glob("dataset_*.toml"))
+    root = Path(__file__).resolve().parents[1] / "models"
+    judged = sorted((root / "trains").glob("dataset_*.toml"))
     assert len(judged) == 4
     for path in judged:
-        more = root / "more" / path.name
+        more = root / "default" / path.name
         load_spec(path), load_spec(more)
         a, b = (tomllib.loads(p.read_text(encoding="utf-8")) for p in (path, more))
         assert b["design"]["n_samples"] == 4 * a["design"]["n_samples"]

@@ -90,9 +90,9 @@ def test_removing_the_common_signal_gives_back_the_recording_without_pickup():
 
 
 def test_shipped_model_doubts_a_call_that_rests_on_pickup():
-    """The healthy default plant with a 6 µm 2X pickup (share 0.71, below the sanity check's 0.85) is called
-    slight by the classifier; read without the common signal it is aligned, so the verdict is uncertain and says
-    why. At 12 µm (share 0.96: the 2X is the pickup) the class, moderate, depends on it: inconclusive. Without
+    """The healthy default plant with an 8 µm 2X pickup (below the sanity check's share of 0.85) is called slight by
+    the classifier (v0001 already at 6 µm); read without the common signal it is aligned, so the verdict is uncertain
+    and says why. At 12 µm (share 0.96: the 2X is the pickup) the class, moderate, depends on it: inconclusive. Without
     pickup there is no such reason."""
     from rotordiag.models.pipeline import diagnose_recording
     from rotordiag.models.predict import load_bundle
@@ -106,7 +106,7 @@ def test_shipped_model_doubts_a_call_that_rests_on_pickup():
 
     plain, _ = diagnose_recording(bundle, _recording())
     assert plain.model_severity == "aligned" and "common_mode" not in codes(plain)
-    doubted, _ = diagnose_recording(bundle, _recording(pickup_um=6.0, phase_rad=0.75 * np.pi))
+    doubted, _ = diagnose_recording(bundle, _recording(pickup_um=8.0, phase_rad=0.75 * np.pi))
     assert doubted.model_severity != "aligned"
     assert "common_mode" in codes(doubted) and doubted.status == "uncertain"
     msg = next(r["message"] for r in doubted.reasons if r["code"] == "common_mode")

@@ -223,28 +223,33 @@ def test_direction_heads_change_nothing_else_in_the_answer(trained):
     assert direction_card(bare)["estimated"] is False
 
 
-def test_the_shipped_model_loads_and_answers_as_before_with_no_direction(monkeypatch):
-    """v0001 has no direction heads: it loads, says why it gives no direction, and every other field of its answer
-    is what it is with the direction stage taken out (the answer before this feature)."""
+def test_the_shipped_model_gives_a_direction_only_where_the_recording_carries_one():
+    """v0002 has direction heads (fitted on every training row: each carries the centreline). A DC-coupled moderate
+    recording with its clearance gets a direction whose components are the verdict's own offset; the same recording
+    with its means removed (AC-coupled) gets none and says why; α is not estimated (its lumped parts vary none)."""
+    import dataclasses
+
     from rotordiag.features.examples import example_path
-    from rotordiag.features.reader import read_recording
     from rotordiag.models import predict as predict_mod
+    from rotordiag.models.diagnose_files import load_options, read_recording
     from rotordiag.models.pipeline import diagnose_recording
     from rotordiag.models.registry import shipped_registry_dir
 
     bundle = predict_mod.load_bundle(shipped_registry_dir())
-    assert bundle.version == "v0001" and getattr(bundle.model, "direction_heads_", None) is None
-    rec = read_recording(example_path("moderate.csv")).recording
-    v, _ = diagnose_recording(bundle, rec)
-    assert v.direction["code"] == v.angular_offset["code"] == "model_without_direction"
-    monkeypatch.setattr(predict_mod, "direction_answer", lambda *a, **k: (None, None))
-    before, _ = diagnose_recording(bundle, rec)
-    assert before.direction is None
-    now, then = v.to_dict(), before.to_dict()
-    for key in ("direction", "angular_offset"):
-        now.pop(key)
-        then.pop(key)
-    assert now == then
+    card = direction_card(bundle.model)
+    assert card["estimated"] and card["n_plants"] > 9000 and card["angular"] is False
+    path = example_path("moderate.csv")
+    rec = read_recording(path, options=load_options(path, None, {})).recording
+    v, _ = diagnose_recording(bundle, rec, clearance_um=350.0)
+    assert v.severity == "moderate" and v.direction["estimated"] and v.direction["unit"] == "um"
+    d = v.direction
+    assert math.hypot(d["horizontal"]["value"], d["vertical"]["value"]) == pytest.approx(v.offset_um)
+    assert 0.0 < d["angle_halfwidth_deg"] <= 180.0
+    assert v.angular_offset["code"] == "angular_not_trained"
+    ac = dataclasses.replace(rec, channels=[dataclasses.replace(c, data=np.asarray(c.data) - np.mean(c.data))
+                                            for c in rec.channels], dc_removed=True)
+    v_ac, _ = diagnose_recording(bundle, ac, clearance_um=350.0)
+    assert v_ac.direction["estimated"] is False and v_ac.direction["code"] == "no_dc_position"
 
 
 def test_mil_output_converts_the_direction(trained):
@@ -334,7 +339,7 @@ def test_a_plants_training_config_asks_for_direction_heads():
     from rotordiag.models.plant_retrain import plant_train_config
 
     assert plant_train_config({"seed": 3}).direction_heads and plant_train_config().seed == 0
-    assert TrainConfig.shipped().direction_heads is False        # the shipped recipe itself is unchanged
+    assert TrainConfig.shipped().direction_heads is True         # the shipped recipe has them too (v0002 on)
 
 
 def test_the_compiled_heads_give_scikit_learns_numbers():

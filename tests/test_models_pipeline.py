@@ -34,11 +34,12 @@ def bundle():
 
 
 @pytest.fixture(scope="module")
-def aligned():
-    """The shipped aligned example (with its clearance): confident, aligned (tests/test_shipped_verdicts.py)."""
+def confident_example():
+    """The shipped severe example (with its clearance): a verdict the shipped model gives confidently, without a
+    reason (the aligned example's Δ interval reaches moderate with v0002: tests/test_shipped_verdicts.py)."""
     from rotordiag.models.diagnose_files import load_options, read_recording
 
-    path = example_path("aligned.csv")
+    path = example_path("severe.csv")
     return read_recording(path, options=load_options(path, None, {})).recording
 
 
@@ -80,14 +81,14 @@ def test_the_doubts_read_nothing_without_a_recording(check):
 
 
 @needs_model
-def test_the_decision_policy_stored_with_the_model_is_the_one_applied(bundle, aligned):
+def test_the_decision_policy_stored_with_the_model_is_the_one_applied(bundle, confident_example):
     """A card whose policy asks for more probability than the verdict's highest makes the same recording
     ``uncertain`` with ``low_probability``; the shipped card (no policy: the defaults) leaves it confident."""
-    v, _ = pipeline.diagnose_recording(bundle, aligned, clearance_um=350.0)
+    v, _ = pipeline.diagnose_recording(bundle, confident_example, clearance_um=350.0)
     assert v.status == "confident" and v.reasons == []
     pmax = max(v.probabilities.values())
     strict = replace(bundle, card={**bundle.card, "decision_policy": {"confident_min_probability": pmax + 1e-6}})
-    w, _ = pipeline.diagnose_recording(strict, aligned, clearance_um=350.0)
+    w, _ = pipeline.diagnose_recording(strict, confident_example, clearance_um=350.0)
     assert w.status == "uncertain" and [r["code"] for r in w.reasons] == ["low_probability"]
     assert w.probabilities == v.probabilities and w.misalignment == v.misalignment     # the model's call unchanged
 
@@ -115,18 +116,18 @@ def test_no_status_threshold_lives_in_the_estimators():
 
 
 @needs_model
-def test_a_verdict_from_given_features_is_the_recordings_when_nothing_reads_it_again(bundle, aligned):
+def test_a_verdict_from_given_features_is_the_recordings_when_nothing_reads_it_again(bundle, confident_example):
     """``pipeline.diagnose`` (features in) is the pipeline without the recording: on a recording no speed choice
     or doubt changes, the same verdict."""
     from rotordiag.features import extract_features
 
-    v, fr = pipeline.diagnose_recording(bundle, aligned, clearance_um=350.0)
-    w = pipeline.diagnose(bundle, extract_features(aligned), clearance_um=350.0)
+    v, fr = pipeline.diagnose_recording(bundle, confident_example, clearance_um=350.0)
+    w = pipeline.diagnose(bundle, extract_features(confident_example), clearance_um=350.0)
     assert w.to_dict() == v.to_dict()
 
 
 @needs_model
-def test_sanity_is_a_stage_of_its_own_run_once_per_reading(bundle, aligned, monkeypatch):
+def test_sanity_is_a_stage_of_its_own_run_once_per_reading(bundle, confident_example, monkeypatch):
     """The pipeline extracts without the sanity checks and runs them as their own stage (``read_features``): once
     per extraction, and the verdict's features carry exactly ``check_recording``'s findings."""
     from rotordiag.features import check_recording
@@ -146,9 +147,9 @@ def test_sanity_is_a_stage_of_its_own_run_once_per_reading(bundle, aligned, monk
 
     monkeypatch.setattr(pipeline, "extract_features", extract)
     monkeypatch.setattr(pipeline, "with_sanity", sanity)
-    v, fr = pipeline.diagnose_recording(bundle, aligned, clearance_um=350.0)
+    v, fr = pipeline.diagnose_recording(bundle, confident_example, clearance_um=350.0)
     assert seen and seen == ["features", "sanity"] * (len(seen) // 2)
-    assert fr.sanity == check_recording(aligned, fr)
+    assert fr.sanity == check_recording(confident_example, fr)
     assert v.status == "confident"
 
 

@@ -287,10 +287,14 @@ def test_moderate_or_worse_detection_is_counted_on_the_model_class_at_any_status
 # --- activation, force, rollback ---------------------------------------------------------------------
 
 def _registry_with_candidate(root: Path, better: bool | None) -> Registry:
-    """A copy of the shipped registry (v0001 active) plus v0002, the same model, as a plant-retrained
+    """A registry holding the shipped model as v0001 (active) plus v0002, the same model, as a plant-retrained
     version whose report says ``better`` (None: still pending)."""
-    shutil.copytree(shipped_registry_dir(), root)
+    shipped = Registry(shipped_registry_dir())
+    root.mkdir(parents=True)
+    shutil.copytree(shipped.root / str(shipped.active_version()), root / "v0001")
     reg = Registry(root)
+    reg.update_card("v0001", {"version": "v0001"})
+    reg.activate("v0001")
     shutil.copytree(root / "v0001", root / "v0002")
     rep: dict = {"pending": True, "plant": "preset:gen600_4pole"} if better is None else {
         "pending": False, "plant": "preset:gen600_4pole", "compared_with": "v0001 (active)", "better": better,

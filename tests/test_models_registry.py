@@ -85,6 +85,24 @@ def test_activate_and_rollback(tmp_path, fitted):
         reg.rollback()
 
 
+def test_a_version_name_is_never_given_to_a_second_model(tmp_path, fitted):
+    """An asset's stored verdicts name the version that answered: a deleted version's name is not reused, nor one
+    the activation history remembers (``make default-model`` carries the shipped history into its new registry)."""
+    import shutil
+
+    model, _ = fitted
+    reg = Registry(tmp_path / "a")
+    assert reg.register(model, {}) == "v0001" and reg.register(model, {}) == "v0002"
+    shutil.rmtree(reg.root / "v0002")
+    reg.activate("v0001")
+    assert reg.register(model, {}) == "v0003"
+    fresh = Registry(tmp_path / "b")
+    fresh.root.mkdir()
+    (fresh.root / "history.json").write_text('["v0001", "v0007"]\n')
+    assert fresh.next_version() == "v0008" and fresh.register(model, {}) == "v0008"
+    assert fresh.active_version() == "v0008" and fresh.versions() == ["v0008"]
+
+
 def test_unknown_version_and_empty_registry_errors(tmp_path, fitted):
     reg = Registry(tmp_path)
     with pytest.raises(RegistryError, match="no active model"):

@@ -95,7 +95,8 @@ def test_cli_batch_table_over_a_folder_with_a_broken_file(files, registry, tmp_p
     assert res.exit_code == 1, res.output           # one file could not be read
     rows = {r["file"].rsplit("/", 1)[-1]: r for r in json.loads(out.read_text())}
     assert "not a number" in rows["broken.csv"]["error"]
-    assert rows["aligned.h5"]["severity"] == "aligned" and rows["aligned.h5"]["status"] == "confident"
+    assert rows["aligned.h5"]["severity"] == "aligned"          # uncertain with v0002: tests/test_shipped_verdicts.py
+    assert rows["aligned.h5"]["status"] in ("confident", "uncertain")
     assert not (rows["whirl.h5"]["severity"] == "aligned" and rows["whirl.h5"]["status"] == "confident")
     r = rows["whirl.h5"]
     assert r["offset_mil"] == pytest.approx(350 * r["misalignment"] / 25.4)

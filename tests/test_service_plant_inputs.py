@@ -82,8 +82,8 @@ def test_retrain_trains_on_the_shipped_recipe_with_the_requests_overrides(tmp_pa
     assert shipped != TrainConfig.from_dict({}).to_dict()
     plain = prepare_retrain_job(RetrainRequest.model_validate({}), make_settings(tmp_path))
     # … with the offset-direction heads a plant's shaft-train data teaches (models.plant_retrain.PLANT_TRAINING)
-    assert "direction" not in shipped               # the shipped recipe: no heads (serialised as before)
-    assert plain["training"] == {**shipped, "direction": {"heads": True}}
+    assert shipped["direction"] == {"heads": True}  # the shipped recipe has them too (v0002 on)
+    assert plain["training"] == shipped
     body = RetrainRequest.model_validate({"training": {"seed": 3, "classifier": {"max_iter": 30},
                                                        "features": {"clearance_heads": False}}})
     got = prepare_retrain_job(body, make_settings(tmp_path))["training"]

@@ -3,8 +3,9 @@
 Made by ``examples/make_example_recordings.sh`` with ``rotordiag simulate --probes-out`` (seed 1): the MODEL.md
 plant at 1800 r/min, generator unbalance A = 0.05, 40 dB SNR, 1 µm 1X runout; 8 probes (b1@45 … b4@135) at
 2560 Hz, 1.3 s, µm. One clean, steady (period-1) recording of each state the verdict names — its sidecar
-``<name>.json`` gives the bearing clearance (350 µm), and the shipped model answers each with its band,
-confident — and one oil-whirl recording, labelled as such, in every reader format.
+``<name>.json`` gives the bearing clearance (350 µm), and the shipped model answers each with its band (the
+misaligned ones confident; the aligned one uncertain with v0002, its Δ interval reaching moderate) — and one
+oil-whirl recording, labelled as such, in every reader format.
 
 =========================  =====================================================================
 ``aligned.csv`` / ``.h5``  Δ = 0 (rigid coupling), CSV with a ``time_s`` column and ``b2@45``-style header /

@@ -411,8 +411,9 @@ _ENTRIES = (
               "{trained}): on a design it never saw its severity is not to be trusted, however sure it looks — retrain "
               "for this plant (rotordiag retrain --shaftline, POST /models/retrain) or compare with this machine's "
               "baseline")),
-    CodeInfo("signature_contradicts_call", REASON, _U, "called aligned while the coupling bearings' 2X/1X reads two or "
-             "more bands higher on the rule of thumb: the verdict contradicts its own evidence",
+    CodeInfo("signature_contradicts_call", REASON, _UI, "called aligned while the coupling bearings' 2X/1X reads two or "
+             "more bands higher on the rule of thumb: the verdict contradicts its own evidence (three bands, a 2X/1X "
+             "of 2 or more beside aligned: no severity is shown)",
              "check the alignment or compare with this machine's baseline; a strong 2X has other causes too (two-pole "
              "rotor, crack, looseness, runout)",
              ("called {call}, but the coupling bearings' 2X/1X is {ratio:.2f}: the classic misalignment signature reads "
