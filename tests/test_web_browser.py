@@ -830,7 +830,16 @@ def test_takes_saved_as_separate_files(server, browser, recordings, tmp_path):
 
 def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_path):
     """rotordiag.models.checks.bearing_sets on the page: probes at 1, 3, 4 are read from bearing 3 (a warning says so, the evidence
-    keeps every bearing, never confident); probes at 1 and 4 alone give no severity and say what to add."""
+    keeps every bearing; never confident when the shipped table calls bearing 3 alone weak — v0001 did, v0002 does
+    not); probes at 1 and 4 alone give no severity and say what to add."""
+    import json as _json
+
+    from rotordiag.models.checks import bearing_sets as bs
+    from tests.service_util import shipped_registry_usable
+
+    if not shipped_registry_usable():
+        pytest.skip("the tiny registry lists no training probe sets")
+    weak = _json.loads(bs.CAPABILITY_PATH.read_text(encoding="utf-8"))["figures"]["3"]["false_alarm"] > bs.MAX_FALSE_ALARM
     data = recordings[0.2]
     d = browser
     for keep, name in (((1, 3, 4), "probes_134"), ((1, 4), "probes_14")):
@@ -842,14 +851,12 @@ def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_
         _submit_file(d, path, sample_rate=str(FS_HZ), clearance=str(CLEARANCE_UM))
         page = d.execute_script("return window.rotordiag.state.verdict")
         codes = [r["code"] for r in page["reasons"]]
-        if not any(c.startswith("bearing_set") for c in codes):
-            pytest.skip("the tiny registry lists no training probe sets")
         reasons = " ".join(e.text for e in d.find_elements("css selector", "#verdict-reasons li"))
         if keep == (1, 4):
             assert page["status"] == "inconclusive" and not d.find_element("id", "verdict-severity-row").is_displayed()
             assert "bearings 1 and 4" in reasons and "coupling bearing" in reasons
         else:
-            assert page["status"] == "uncertain" and "bearing_set_weak" in codes
+            assert ("bearing_set_weak" in codes) == weak and (page["status"] == "uncertain" or not weak)
             assert any("bearings 1 and 4 not read by the model" in w for w in page["warnings"])
         _screenshot(d, name)
 
