@@ -94,7 +94,7 @@ from ._lines import LINE_CLASSES, running_speed_line
 from ._names import FEATURE_NAMES, FEATURE_SPECS, FeatureSpec, feature_names
 from ._orbit import OrbitShape
 from ._recording import ProbeChannel, Recording, parse_speed_range
-from ._sanity import SanityFinding, check_recording
+from ._sanity import REVERSE_WHIRL_INDEX, SanityFinding, check_recording
 from ._scale import with_scale
 from ._slow_roll import SLOW_ROLL_MAX_SPEED_FRACTION, SlowRollVectors, apply_slow_roll, slow_roll_vectors
 from ._speed_alternatives import speed_alternatives_rpm
@@ -104,7 +104,7 @@ tune_malloc()
 __all__ = [
     "ProbeChannel", "Recording", "parse_speed_range", "extract_features", "with_sanity", "with_speed_notes", "FeatureResult", "BearingDetail", "OrbitShape",
     "FEATURE_NAMES", "FEATURE_SPECS", "FeatureSpec", "feature_names", "ALLOWED_UNITS", "MIN_REVS",
-    "MIN_REVS_MOTION", "WHIRL_BAND", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
+    "MIN_REVS_MOTION", "WHIRL_BAND", "REVERSE_WHIRL_INDEX", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",
     "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",
     "Note", "speed_in_doubt", "speed_alternatives_rpm",

@@ -68,6 +68,11 @@ _CALIBRATION_METHODS = ("temperature", "sigmoid", "isotonic", "none")
 #: 3606 r/min is not outside them (docs/robustness.md, seeds 815–817: 6–16 of 240 rated-machine presets were)
 ENVELOPE_REL_TOLERANCE: dict[str, float] = {"speed_rpm": 0.01}
 
+#: training recordings whose journals' attitude a recording's is compared with (:meth:`MisalignmentModel.
+#: attitude_reference_deg`), and how many of them must define it at a bearing (else the training's overall median)
+ATTITUDE_NEIGHBOURS = 20
+ATTITUDE_MIN_NEIGHBOURS = 5
+
 
 def blank_clearance(X: np.ndarray, columns: np.ndarray, share: float, seed: int) -> np.ndarray:
     """Copy of X with the clearance ``columns`` set to NaN in a seeded ``share`` of the rows."""
@@ -448,6 +453,9 @@ class KNNDistanceOOD(OutlierMixin, BaseEstimator):
     ----------
     preprocess_ : Pipeline (SimpleImputer → StandardScaler)
     reference_ : ndarray of shape (n_reference, n_features), float32
+    reference_rows_ : ndarray of int of shape (n_reference,)
+        The fitted X's rows that make up the reference, in its order (what else a model keeps per reference row:
+        ``MisalignmentModel.reference_attitude_offset_deg_``).
     threshold_ : float
         Distance above which a row is out of distribution.
     offset_ : float
@@ -522,11 +530,13 @@ class KNNDistanceOOD(OutlierMixin, BaseEstimator):
         ref_rows = in_ref[inverse]
         if (~ref_rows).sum() >= 2 and ref_rows.sum() >= 2:
             self.reference_ = Z[ref_rows]
+            self.reference_rows_ = np.flatnonzero(ref_rows)
             self.k_ = int(min(self.n_neighbors, self.reference_.shape[0]))
             calib = self._kth_distance(Z[~ref_rows])
             self.calibration_ = "held-out groups"
         else:
             self.reference_ = Z
+            self.reference_rows_ = np.arange(n)
             self.k_ = int(min(self.n_neighbors, n - 1))
             fold_of_group = rng.permutation(len(uniq)) % min(5, len(uniq))
             fold = fold_of_group[inverse]
@@ -569,6 +579,34 @@ class KNNDistanceOOD(OutlierMixin, BaseEstimator):
     def ood_ratio(self, X) -> np.ndarray:
         """Distance divided by the threshold: > 1 means out of distribution."""
         return self.distance(X) / max(self.threshold_, np.finfo(float).tiny)
+
+    def nearest_reference(self, x, n_neighbors: int, ignore: int | None = None) -> np.ndarray:
+        """Indices of the ``n_neighbors`` reference rows nearest to the row ``x`` (nearest first).
+
+        The distance is taken over the columns ``x`` has (finite), column ``ignore`` left out (so a row's own value
+        of that column does not choose its neighbours), in the standardised space of :meth:`distance`.
+        """
+        check_is_fitted(self, "reference_")
+        x = np.asarray(x, dtype=float).reshape(-1)
+        if x.shape[0] != self.reference_.shape[1] or (ignore is not None and not 0 <= ignore < x.shape[0]):
+            raise ValueError(f"x: {x.shape[0]} columns (ignore={ignore}); the reference has "
+                             f"{self.reference_.shape[1]} columns")
+        scale = self.preprocess_.named_steps["scale"]
+        z = (x - scale.mean_) / scale.scale_
+        use = np.isfinite(z)
+        if ignore is not None:
+            use[ignore] = False
+        diff = self.reference_[:, use].astype(float) - z[use]
+        d = np.einsum("ij,ij->i", diff, diff)
+        return np.argsort(d, kind="stable")[: int(min(n_neighbors, d.size))]
+
+    def neighbour_values(self, x, column: int, n_neighbors: int) -> np.ndarray:
+        """Column ``column`` (in X's units) of the :meth:`nearest_reference` rows of ``x``, the column itself left
+        out of the distance: what training rows *like this one* show there. Reference rows whose value was missing
+        in training carry the imputed training median."""
+        nearest = self.nearest_reference(x, n_neighbors, ignore=column)
+        scale = self.preprocess_.named_steps["scale"]
+        return self.reference_[nearest, column].astype(float) * scale.scale_[column] + scale.mean_[column]
 
 
 class FeatureEnvelope(BaseEstimator):
@@ -788,6 +826,9 @@ class MisalignmentModel(BaseEstimator):
         Bearing ``n`` at index ``n − 1``: the training journals' median attitude angle minus a
         plain short journal bearing's (NaN where undefined); models saved before it existed
         are compared with a plain bearing's (0°).
+    reference_attitude_offset_deg_ : ndarray of shape (n_reference, 9), float32, or None
+        The same per OOD reference row (``ood_.reference_rows_``): :meth:`attitude_reference_deg` takes the
+        recording's nearest training machines' (None: an OOD scorer without reference rows).
     classes_ : ndarray of str, the band names in order
     envelope_ : FeatureEnvelope or None
         Fitted when ``envelope_features`` is given; ``envelope_names_`` its columns.
@@ -958,16 +999,22 @@ class MisalignmentModel(BaseEstimator):
         with np.errstate(all="ignore"):
             med = np.nanmedian(np.where(nan.all(axis=0), 0.0, X_shared), axis=0)
         self.feature_median_ = np.where(np.isfinite(med), med, 0.0)
-        self.attitude_offset_reference_deg_ = self._attitude_offset_reference(X)
+        offsets = self._attitude_offsets(X)
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)           # a bearing never instrumented: NaN
+            self.attitude_offset_reference_deg_ = np.nanmedian(offsets, axis=0)
+        rows = getattr(self.ood_, "reference_rows_", None)
+        self.reference_attitude_offset_deg_ = None if rows is None else offsets[rows].astype(np.float32)
         return self
 
-    def _attitude_offset_reference(self, X: np.ndarray) -> np.ndarray:
-        """Per bearing 1–9 (index ``n − 1``), the training rows' median attitude offset from a plain short journal
-        bearing's (``b{n}_attitude_offset_deg``, where defined), NaN where no row defines it: the load-line
-        direction this model's journals held, which ``models.status`` compares a recording's with (a tilting-pad
-        or linear bearing holds its journal on the load line, 30–60° off a plain bearing's)."""
+    def _attitude_offsets(self, X: np.ndarray) -> np.ndarray:
+        """Per row and bearing 1–9 (column ``n − 1``), the journal's attitude offset from a plain short journal
+        bearing's (``b{n}_attitude_offset_deg``), NaN where undefined (no centreline, eccentricity below
+        ``ATTITUDE_MIN_ECC`` or beyond the clearance): the load-line direction the training journals held, which
+        ``models.status`` compares a recording's with (a tilting-pad or linear bearing holds its journal on the
+        load line, 30–60° off a plain bearing's)."""
         names = list(self.feature_names_)
-        ref = np.full(9, np.nan)
+        out = np.full((X.shape[0], 9), np.nan)
         for b in range(1, 10):
             if f"b{b}_centre_x_per_c" not in names or f"b{b}_centre_y_per_c" not in names:
                 continue
@@ -975,9 +1022,29 @@ class MisalignmentModel(BaseEstimator):
             y = X[:, names.index(f"b{b}_centre_y_per_c")]
             ecc = np.hypot(x, y)
             ok = np.isfinite(ecc) & (ecc >= ATTITUDE_MIN_ECC) & (ecc <= 1.0)
-            if ok.any():
-                ref[b - 1] = float(np.median(attitude_offset_deg(x[ok], y[ok], ecc[ok])))
-        return ref
+            out[ok, b - 1] = attitude_offset_deg(x[ok], y[ok], ecc[ok])
+        return out
+
+    def attitude_reference_deg(self, row: np.ndarray, n_neighbors: int = ATTITUDE_NEIGHBOURS) -> np.ndarray:
+        """Per bearing 1–9 (index ``n − 1``), where the journals of the ``n_neighbors`` training recordings nearest
+        to ``row`` sat: their median attitude offset from a plain short bearing's, where at least
+        :data:`ATTITUDE_MIN_NEIGHBOURS` of them define it, else the training's overall median
+        (``attitude_offset_reference_deg_``). The neighbours are the OOD scorer's (its reference rows and columns,
+        which a turned probe frame does not move), so a train whose bearings hold their journals elsewhere than
+        the paper plant's is compared with the training trains like it. A model saved before the per-row
+        reference existed gives the overall median."""
+        check_is_fitted(self, "ood_")
+        overall = np.asarray(getattr(self, "attitude_offset_reference_deg_", np.zeros(9)), dtype=float)
+        per_row = getattr(self, "reference_attitude_offset_deg_", None)
+        if per_row is None or not isinstance(self.ood_, KNNDistanceOOD):
+            return overall
+        z = self.ood_input(np.asarray(row, dtype=float).reshape(1, -1))[0]
+        near = np.asarray(per_row, dtype=float)[self.ood_.nearest_reference(z, n_neighbors)]
+        count = np.isfinite(near).sum(axis=0)
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            median = np.nanmedian(near, axis=0)
+        return np.where(count >= ATTITUDE_MIN_NEIGHBOURS, median, overall)
 
     def _fit_heads(self, X: np.ndarray, y: np.ndarray, groups) -> tuple:
         """A fitted (classifier, Δ regressor) pair on rows X."""
@@ -1196,6 +1263,29 @@ class MisalignmentModel(BaseEstimator):
         check_is_fitted(self, "ood_")
         X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
         return self.ood_.ood_ratio(self.ood_input(X))
+
+    def training_neighbour_values(self, row: np.ndarray, feature: str, n_neighbors: int = 20) -> np.ndarray | None:
+        """``feature`` in the ``n_neighbors`` training recordings nearest to ``row`` (the OOD scorer's reference
+        rows and columns, ``feature`` itself left out of the distance: :meth:`KNNDistanceOOD.neighbour_values`),
+        in the feature's units; None when ``feature`` is not one of the OOD columns or the scorer keeps no
+        reference. What machines like this one do at that feature in training — e.g. whether their 1X whirls
+        backward at a bearing (``models.checks.backward_whirl``)."""
+        check_is_fitted(self, "ood_")
+        names = list(self.feature_names_)
+        cols = getattr(self, "ood_columns_", None)
+        if feature not in names or not isinstance(self.ood_, KNNDistanceOOD):
+            return None
+        j = names.index(feature)
+        ood_cols = list(range(len(names))) if cols is None else [int(c) for c in cols]
+        if j not in ood_cols:
+            return None
+        at = ood_cols.index(j)
+        z = self.ood_input(np.asarray(row, dtype=float).reshape(1, -1))[0]
+        values = self.ood_.neighbour_values(z, at, n_neighbors)
+        log_scale = getattr(self, "ood_log_scale_", None)
+        if log_scale is not None and cols is not None and log_scale[at] > 0:
+            values = np.expm1(values) * log_scale[at]
+        return values
 
 
 @lru_cache(maxsize=8)

@@ -198,7 +198,15 @@ def _recording_checks(scores: ModelScores, fr: FeatureResult, extra: Sequence[Re
                            sanity=scores.sanity, ood_score=scores.ood_score, never_missing=scores.never_missing,
                            speed_source=getattr(fr, "speed_source", None), warnings=scores.warnings,
                            envelope=scores.findings, extra=extra,
-                           attitude_reference_deg=getattr(scores.model, "attitude_offset_reference_deg_", None))
+                           attitude_reference_deg=_attitude_reference(scores.model, scores.row))
+
+
+def _attitude_reference(model: Any, row: np.ndarray) -> np.ndarray | None:
+    """Where the training journals nearest this recording sat (``MisalignmentModel.attitude_reference_deg``; the
+    overall median of a model without it; None: a model saved before either)."""
+    if hasattr(model, "attitude_reference_deg"):
+        return model.attitude_reference_deg(row)
+    return getattr(model, "attitude_offset_reference_deg_", None)
 
 
 def _model_call(scores: ModelScores, static_offset: Sequence[Reason]) -> ModelCall:

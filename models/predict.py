@@ -23,6 +23,7 @@ from threadpoolctl import threadpool_limits
 from rotordiag.core.notes import Measured, Note
 from rotordiag.features import evidence
 
+from .checks.backward_whirl import answer_reverse_whirl
 from .checks.bearing_sets import bearing_plan, leave_out_bearings
 from .direction import direction_answer
 from .registry import Registry
@@ -305,7 +306,9 @@ def _model_row(bundle, feature_result) -> _ModelRow:
         warnings.append(Note("model_features_not_produced", n_missing=len(missing),
                              examples=f"{missing[:5]}{' …' if len(missing) > 5 else ''}"))
     # the probe set the model reads (models.checks.bearing_sets): the other bearings' features left out
-    sanity = tuple(getattr(feature_result, "sanity", ()) or ())
+    # a backward 1X at one bearing that the nearest training machines share is theirs, not a probe mistake
+    sanity, as_trained = answer_reverse_whirl(model, names, row, tuple(getattr(feature_result, "sanity", ()) or ()))
+    warnings += as_trained
     plan = (bearing_plan(bundle, feature_result.bearings,
                          suspect=[f.bearing for f in sanity if f.code == "reverse_whirl" and f.bearing is not None])
             if getattr(feature_result, "bearings", None) else None)

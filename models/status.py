@@ -235,10 +235,12 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
     side: the probes' frame as given is turned (wrong ``angle_deg``), or the bearings are unlike the training's
     (the ROSS set's linear bearings, tilting pads: the journal near the load line).
 
-    ``reference_deg`` (``MisalignmentModel.attitude_offset_reference_deg_``, bearing n at n − 1): the training's
-    median offset from a plain short journal bearing's attitude; where it is missing (a model saved before it, a
-    bearing never instrumented in training) the reference is the plain bearing's (0°). A model trained on a plant
-    with linear or tilting-pad bearings thus takes that plant's journals on the load line as its own."""
+    ``reference_deg`` (``MisalignmentModel.attitude_reference_deg``, bearing n at n − 1): the median offset from a
+    plain short journal bearing's attitude of the training recordings nearest this one (of all training, for a
+    model saved before the per-row reference); where it is missing (a model saved before either, a bearing never
+    instrumented in training) the reference is the plain bearing's (0°). A model trained on trains whose bearings
+    hold their journals elsewhere than a plain bearing's (a four-pole train's +35°, linear or tilting-pad bearings
+    on the load line) thus takes those trains' journals as its own, and still sees a turned frame."""
     index = name_index(names)
     bearings, xye = [], []
     for b in range(1, 10):
@@ -263,7 +265,7 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
         return []
     where = ", ".join(f"bearing {b} {phi:.0f}° ({off:+.0f}°)" for b, phi, off in found)
     held = ("a plain oil-film journal bearing's" if not np.any(ref) else
-            "the model's training journals' (" + ", ".join(f"bearing {b} {r:+.0f}° from a plain bearing's"
+            "the training journals' nearest this recording (" + ", ".join(f"bearing {b} {r:+.0f}° from a plain bearing's"
                                                           for b, r in zip(bearings, ref.tolist())) + ")")
     return [Reason("centreline_frame_turned", UNCERTAIN,
                    {"mean_offset_deg": float(np.mean(offsets)), "bearings": where, "reference": held})]

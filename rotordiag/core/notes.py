@@ -246,6 +246,12 @@ _ENTRIES = (
     NoteInfo("features_outside_training", CAUTION, "features lie outside the training data's range",
              "treat the verdict with caution", "{n_outside} feature(s) outside the training data's range "
              "({examples}): treat the verdict with caution"),
+    NoteInfo("reverse_whirl_as_trained", INFO, "the 1X whirls backward at one bearing, as it does there in the "
+             "training machines most like this one: read as the machine's motion, not a probe mistake",
+             "if the probes were changed or re-cabled, check their order and polarity",
+             "bearing {bearing}: the 1X whirls backward, as in {n_backward} of the {n_neighbours} training "
+             "recordings nearest this one (a journal on anisotropic supports between their split critical speeds): "
+             "read as the machine's motion, not a probe-order or polarity mistake"),
     NoteInfo("bearings_not_read", INFO, "bearings outside the model's probe set were left out of the model's "
              "reading (the evidence still shows them)", "none", "{detail}"),
     # --- the change since an asset's baseline (models.change.compare) ---

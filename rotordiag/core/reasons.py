@@ -289,12 +289,12 @@ _ENTRIES = (
              "the training family it did not), so the sizes per clearance are suspect — check the units and the "
              "probe sensitivity (numbers 10× too small read like this), the clearance (radial, in µm) and that the "
              "DC readings are referenced to the bearing centre")),
-    CodeInfo("centreline_frame_turned", REASON, _U, "every journal's attitude angle is far off the training "
-             "journals' (a plain journal bearing's), on one side: probes not at the angles given, or bearings unlike "
-             "the training's",
+    CodeInfo("centreline_frame_turned", REASON, _U, "every journal's attitude angle is far off that of the "
+             "training machines nearest this one (a plain journal bearing's), on one side: probes not at the angles "
+             "given, or bearings unlike the training's",
              "check angle_deg, the rotation direction and the viewing end",
              ("at every bearing the shaft centreline sits {mean_offset_deg:+.0f}° off the attitude angle the "
-             "model's training held at its eccentricity ({bearings}; the angle from the load line, toward "
+             "training machines nearest this one held at its eccentricity ({bearings}; the angle from the load line, toward "
              "rotation; the reference: {reference}). Either the whole picture is turned, as when the probes do "
              "not sit at the angles given — check angle_deg (from horizontal +x toward vertical-up +y; 45/135 is "
              "the default for 8 channels), the rotation direction and the viewing end — or the bearings are "
