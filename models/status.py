@@ -265,7 +265,7 @@ def _probe_frame_reasons(names: Sequence[str], row: np.ndarray, policy: Decision
         return []
     where = ", ".join(f"bearing {b} {phi:.0f}° ({off:+.0f}°)" for b, phi, off in found)
     held = ("a plain oil-film journal bearing's" if not np.any(ref) else
-            "the training journals' nearest this recording (" + ", ".join(f"bearing {b} {r:+.0f}° from a plain bearing's"
+            "that of the training machines nearest this recording (" + ", ".join(f"bearing {b} {r:+.0f}° from a plain bearing's"
                                                           for b, r in zip(bearings, ref.tolist())) + ")")
     return [Reason("centreline_frame_turned", UNCERTAIN,
                    {"mean_offset_deg": float(np.mean(offsets)), "bearings": where, "reference": held})]

@@ -605,7 +605,7 @@ def test_journals_where_the_models_training_held_them_are_no_turned_frame():
     assert run(None) and run(np.full(9, np.nan))
     assert not run(on_line)
     turned = run(on_line, turn_deg=45.0)
-    assert turned and "training journals'" in turned[0].values["reference"]
+    assert turned and "training machines nearest this recording" in turned[0].values["reference"]
     assert "plain oil-film" in run(None)[0].values["reference"]
 
 
