@@ -15,12 +15,13 @@ model of ``--registry`` (default: the shipped one):
   training machines' (``MisalignmentModel.attitude_reference_deg``); and with the probes' frame turned by −60°,
   +60° and 90° at every bearing (the shares it should fire on).
 
-The figures are in docs/checks.md ("A backward 1X at one bearing", "The probe frame").
+Last, the cost of one nearest-neighbour query (each check makes one per verdict). The figures are in docs/checks.md ("A backward 1X at one bearing", "The probe frame").
 """
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -103,6 +104,13 @@ def main(argv: list[str] | None = None) -> int:
         m = measure(model, names, X)
         frame = "; ".join(f"{k} {a:.0%} → {b:.0%}" for k, (a, b) in m["frame"].items())
         print(f"| {path.stem} | {m['n']} | {_share(m['real'])} | {_share(m['inverted'])} | {frame} |")
+    rows = [r for r in X[:50]]
+    t0 = time.perf_counter()
+    for r in rows:
+        model.attitude_reference_deg(r)
+    per_query_ms = 1e3 * (time.perf_counter() - t0) / len(rows)
+    print(f"\none nearest-neighbour query ({model.ood_.reference_.shape[0]} reference rows × "
+          f"{model.ood_.reference_.shape[1]} columns): {per_query_ms:.2f} ms")
     return 0
 
 
