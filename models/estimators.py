@@ -68,9 +68,10 @@ _CALIBRATION_METHODS = ("temperature", "sigmoid", "isotonic", "none")
 #: 3606 r/min is not outside them (docs/robustness.md, seeds 815–817: 6–16 of 240 rated-machine presets were)
 ENVELOPE_REL_TOLERANCE: dict[str, float] = {"speed_rpm": 0.01}
 
-#: training recordings whose journals' attitude a recording's is compared with (:meth:`MisalignmentModel.
-#: attitude_reference_deg`), and how many of them must define it at a bearing (else the training's overall median)
-ATTITUDE_NEIGHBOURS = 20
+#: training recordings (OOD reference rows) a recording is compared with when a check asks what machines like it
+#: do (:meth:`MisalignmentModel.attitude_reference_deg`; ``models.checks.backward_whirl`` asks as many), and how
+#: many of them must define a bearing's attitude for it to be theirs (else the training's overall median)
+NEAREST_TRAINING = 20
 ATTITUDE_MIN_NEIGHBOURS = 5
 
 
@@ -1025,7 +1026,7 @@ class MisalignmentModel(BaseEstimator):
             out[ok, b - 1] = attitude_offset_deg(x[ok], y[ok], ecc[ok])
         return out
 
-    def attitude_reference_deg(self, row: np.ndarray, n_neighbors: int = ATTITUDE_NEIGHBOURS) -> np.ndarray:
+    def attitude_reference_deg(self, row: np.ndarray, n_neighbors: int = NEAREST_TRAINING) -> np.ndarray:
         """Per bearing 1–9 (index ``n − 1``), where the journals of the ``n_neighbors`` training recordings nearest
         to ``row`` sat: their median attitude offset from a plain short bearing's, where at least
         :data:`ATTITUDE_MIN_NEIGHBOURS` of them define it, else the training's overall median
@@ -1264,7 +1265,7 @@ class MisalignmentModel(BaseEstimator):
         X = validate_data(self, X, reset=False, ensure_all_finite="allow-nan")
         return self.ood_.ood_ratio(self.ood_input(X))
 
-    def training_neighbour_values(self, row: np.ndarray, feature: str, n_neighbors: int = 20) -> np.ndarray | None:
+    def training_neighbour_values(self, row: np.ndarray, feature: str, n_neighbors: int) -> np.ndarray | None:
         """``feature`` in the ``n_neighbors`` training recordings nearest to ``row`` (the OOD scorer's reference
         rows and columns, ``feature`` itself left out of the distance: :meth:`KNNDistanceOOD.neighbour_values`),
         in the feature's units; None when ``feature`` is not one of the OOD columns or the scorer keeps no

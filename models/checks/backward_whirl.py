@@ -23,11 +23,12 @@ from rotordiag.features import REVERSE_WHIRL_INDEX
 
 __all__ = ["N_NEIGHBOURS", "MIN_BACKWARD", "BackwardWhirl", "backward_as_trained", "answer_reverse_whirl"]
 
-#: training recordings consulted
+#: training recordings consulted (as many as the probe-frame check's, ``models.estimators.NEAREST_TRAINING``; the
+#: checks do not import the estimators)
 N_NEIGHBOURS = 20
-#: … and how many of them must whirl backward at the bearing for it to be the machine's motion (on the judged
-#: trains: 97–100 % of four-pole machines' backward bearing 3 read, 0–2 % of paper-model plants' and 3–5 % of
-#: two-pole trains' inverted probes taken for the machine's)
+#: … and how many of them must whirl backward at the bearing for it to be the machine's motion (machines the model
+#: never saw, docs/checks.md: 97–100 % of four-pole trains' backward bearing 3 read; inverted probes taken for the
+#: machine's on 1 % of paper-model plants' bearings, 3–5 % of two-pole trains', 21–26 % of four-pole trains')
 MIN_BACKWARD = 3
 
 
