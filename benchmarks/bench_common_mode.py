@@ -3,8 +3,8 @@
     .venv/bin/python benchmarks/bench_common_mode.py [--n 48] [--seeds 815,816,817]
 
 The thresholds of ``features._sanity.COMMON_MODE_MIN_SHARE`` (the sanity checks ``common_mode_1x`` /
-``common_mode_2x``) and ``models.checks.common_mode.COMMON_MODE_DOUBT_SHARE`` (the verdict read again without the common
-signal) are set from this. In family: docs/robustness.md's simulated sets (held-out plants; base sets of
+``common_mode_2x``) and ``models.checks.common_mode.COMMON_MODE_REMOVE_SHARE`` (the common signal removed before the
+verdict) are set from this. In family: docs/robustness.md's simulated sets (held-out plants; base sets of
 ``--seeds``, the far and presets sets of the first seed) under the clean, runout, SNR 15 dB and gain-mismatch
 conditions; for each recording ``features.common_mode`` over every probe set of 6 or 8 probes that spans the
 coupling (1-2-3-4, 1-2-3, 2-3-4, 1-2-4, 1-3-4), at 1X and 2X: the largest shares and their quantiles, per number
@@ -101,7 +101,7 @@ def with_pickup(n: int, seed: int) -> dict[tuple[int, float], list[float]]:
 
 def main(argv: list[str] | None = None) -> int:
     from rotordiag.features._sanity import COMMON_MODE_MIN_SHARE
-    from rotordiag.models.checks.common_mode import COMMON_MODE_DOUBT_SHARE
+    from rotordiag.models.checks.common_mode import COMMON_MODE_REMOVE_SHARE
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=48)
@@ -111,24 +111,24 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     fam = in_family(args.n, seeds)
     print(f"in family (held-out sets: base {seeds}, far and presets {seeds[0]}; conditions {', '.join(CONDITION_NAMES)})")
-    print("| order | probes | n | median | 99 % | 99.9 % | max | sanity threshold | doubt threshold |")
+    print("| order | probes | n | median | 99 % | 99.9 % | max | sanity threshold | removal threshold |")
     print("|---|---|---|---|---|---|---|---|---|")
     for (order, probes), v in sorted(fam.items()):
         a = np.asarray(v)
         need = COMMON_MODE_MIN_SHARE[max(m for m in COMMON_MODE_MIN_SHARE if m <= probes)]
         q = np.percentile(a, [50, 99, 99.9])
         print(f"| {order}X | {probes} | {a.size} | {q[0]:.3f} | {q[1]:.3f} | {q[2]:.3f} | {a.max():.3f} | {need:g} "
-              f"| {COMMON_MODE_DOUBT_SHARE:g} |")
+              f"| {COMMON_MODE_REMOVE_SHARE:g} |")
     pick = with_pickup(args.n, seeds[0])
     print(f"\nwith pickup on every channel (clean base set, seed {seeds[0]}; 8 probes judged where both probes of each "
           "bearing stand out of the noise)")
-    print("| order | pickup µm 0-pk | n | median share | ≥ sanity threshold (8 probes) | ≥ doubt threshold |")
+    print("| order | pickup µm 0-pk | n | median share | ≥ sanity threshold (8 probes) | ≥ removal threshold |")
     print("|---|---|---|---|---|---|")
     for (order, amp), v in sorted(pick.items()):
         a = np.asarray(v)
         ok = a[np.isfinite(a)]
         print(f"| {order}X | {amp:g} | {a.size} | {np.median(ok):.3f} | {np.mean(ok >= COMMON_MODE_MIN_SHARE[8]):.0%} "
-              f"| {np.mean(ok >= COMMON_MODE_DOUBT_SHARE):.0%} |")
+              f"| {np.mean(ok >= COMMON_MODE_REMOVE_SHARE):.0%} |")
     print(f"\n{time.perf_counter() - t0:.0f} s")
     return 0
 

@@ -9,9 +9,9 @@ is no evidence of misalignment, and a 2X pickup a few µm strong reads as a coup
 and to the 2X/1X rule of thumb alike.
 
 :func:`common_mode` measures the share of an order's power that one common signal explains over the
-probes whose order stands out of the noise; ``features._sanity`` fails a recording on it, and
-:func:`without_common_mode` gives the recording with the common signal removed, for a caller that
-reads it both ways (``models.checks.common_mode``).
+probes whose order stands out of the noise; ``features._sanity`` warns on a recording it dominates, and
+:func:`without_common_mode` gives the recording with the common signal removed: the verdict is given on that
+(``models.checks.common_mode``).
 """
 from __future__ import annotations
 
@@ -28,8 +28,8 @@ __all__ = ["CommonMode", "common_mode", "common_mode_share", "without_common_mod
 #: fewer probes are not judged: with 2 or 4 a shaft's own orbit reaches a share of 0.99 (a linear orbit along the
 #: probes' bisector, in phase at both coupling-end journals)
 COMMON_MODE_MIN_PROBES = 6
-#: a share from which the common part is worth a look: shown in the evidence, and the verdict is read again without
-#: it (``models.checks.common_mode``); about one recording in 1000 of a healthy shaft reaches it (docs/features.md,
+#: a share from which the common part is worth a look: shown in the evidence, and removed before the verdict
+#: (``models.checks.common_mode``); about one recording in 1000 of a healthy shaft reaches it (docs/features.md,
 #: "Measurements behind the speed estimate's thresholds")
 COMMON_MODE_NOTABLE_SHARE = 0.6
 
@@ -112,8 +112,8 @@ def without_common_mode(recording: Recording, fr, found: list[CommonMode]) -> Re
 
     The kX signal ``Re(C e^{jkθ(t)})`` is removed over the analysed segment, with the shaft angle θ the features
     ``fr`` were computed at (``features._speed.shaft_angle`` at ``fr.speed_rpm``: the keyphasor, or the locked or
-    estimated speed from the first sample). The channels come back in µm; everything else is unchanged. Used to
-    read a recording again without what no shaft motion explains; not a correction the verdict is given on.
+    estimated speed from the first sample). The channels come back in µm; everything else is unchanged. The
+    verdict of a recording with a notable common part is given on this (``models.checks.common_mode``).
     """
     from ._speed import shaft_angle
 

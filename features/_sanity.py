@@ -327,8 +327,8 @@ def common_mode_dominates(cm: CommonMode) -> bool:
 
 def _common_mode_checks(fr) -> list[SanityFinding]:
     """A 1X or 2X that reads the same amplitude and phase at every probe is no shaft motion (:mod:`._common_mode`):
-    a warning when its share reaches :data:`COMMON_MODE_MIN_SHARE`. Whether the verdict depends on it is for the
-    caller that can read the recording again without it (``models.checks.common_mode``: inconclusive when it does)."""
+    a warning when its share reaches :data:`COMMON_MODE_MIN_SHARE`. The verdict is given on the recording without it
+    (``models.checks.common_mode``)."""
     out: list[SanityFinding] = []
     for k in COMMON_MODE_ORDERS:
         cm = common_mode(fr, k)

@@ -24,7 +24,7 @@ from .checks.acquisitions import acquisitions_check
 from .checks.attitude import attitude_check
 from .checks.bearing_sets import bearing_set_check
 from .checks.clearance_check import clearance_check
-from .checks.common_mode import common_mode_check
+from .checks.common_mode import remove_pickup
 from .checks.contradiction import contradiction_check
 from .checks.family import family_check
 from .checks.numbering import numbering_check
@@ -50,7 +50,7 @@ __all__ = ["diagnose_recording", "diagnose", "read_features", "SCORE_CHECKS", "D
 SCORE_CHECKS: tuple[Check, ...] = (acquisitions_check, reverse_2x_check, numbering_check, family_check,
                                    contradiction_check)
 #: the checks that read the recording again, given the status found without them (``CheckContext.status``)
-DOUBT_CHECKS: tuple[Check, ...] = (common_mode_check, clearance_check, attitude_check)
+DOUBT_CHECKS: tuple[Check, ...] = (clearance_check, attitude_check)
 
 
 def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um: float | None = None,
@@ -148,6 +148,14 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
                 assert recording is not None
                 fr = read_features(recording, speed.chosen_rpm, notes)
                 scores = model_scores(bundle, fr)
+        #    — a 1X / 2X common to every probe (electrical pickup) is removed, and the rest read at the same speed
+        pickup = remove_pickup(recording, fr, read_features) if recording is not None else None
+        removed: list[Reason] = []
+        if pickup is not None:
+            call_as_sent = scores.call
+            recording, fr = pickup.recording, pickup.fr
+            scores = model_scores(bundle, fr)
+            removed = [pickup.reason(call_as_sent, scores.call)]
         #    — beside the scores: the probe set, separate acquisitions, a reverse coupling 2X, the numbering
         ctx = CheckContext(fr=fr, names=scores.names, row=scores.row, call=scores.call,
                            aligned_band=str(model.bands_.names[0]), ood_score=scores.ood_score, ood=scores.ood,
@@ -156,7 +164,7 @@ def diagnose_recording(bundle: Any, recording: Recording | None, *, clearance_um
                            machine_family=family, model_families=families,
                            envelope_of=getattr(model, "envelope_findings", None))
         probe_set = bearing_set_check(ctx)
-        beside = [r for check in SCORE_CHECKS for r in check(ctx)]
+        beside = removed + [r for check in SCORE_CHECKS for r in check(ctx)]
         # 6. assess status: every reason together, by the decision policy stored with the model
         call = _model_call(scores, one_position_check(ctx))
         status, reasons = assess(_recording_checks(scores, fr, probe_set + beside), call, policy)

@@ -161,8 +161,8 @@ CONDITIONS: tuple[Condition, ...] = (
     Condition("mains pickup at 2X, 10 µm", pickup=(2, 10.0), same_recordings_as="clean",
               what="the clean recordings with a 10 µm (0-pk) signal at twice the running frequency added to every "
                    "channel in one phase: mains pickup (a ground loop) on a grid-synchronous 2-pole generator, "
-                   "100/120 Hz; the sanity check common_mode_2x and the common_mode doubt (rotordiag.models.checks.common_mode) "
-                   "(not one of the issue's rows)"),
+                   "100/120 Hz; the common part is removed before the verdict (rotordiag.models.checks.common_mode); the "
+                   "rule of thumb reads the recording as sent (not one of the issue's rows)"),
     Condition("mains pickup at 2X, 10 µm, a phase per cable", pickup=(2, 10.0), pickup_per_channel=True,
               same_recordings_as="clean",
               what="the clean recordings with a 10 µm (0-pk) signal at twice the running frequency added to each "
@@ -393,10 +393,11 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
     out.ood, out.delta_model = bool(v.ood), float(v.misalignment_model) if v.misalignment_model is not None else math.nan
     lo, hi = v.misalignment_interval
     out.interval = (math.nan if lo is None else float(lo), math.nan if hi is None else float(hi))
-    names = list(fr.names)
     out.across_dc_per_c, out.across_1x_per_c = across_coupling(fr)
     _direction_outcome(out, v, fr)
-    out.ratio = float(ratio_column(np.asarray(fr.values, dtype=float)[None, :], names, RULE_PATTERNS)[0])
+    if "common_mode" in out.reasons:    # the rule of thumb reads the recording as sent, pickup and all
+        fr = read_features(rec, float(fr.speed_rpm) if fr.speed_source == "estimated" else None)
+    out.ratio = float(ratio_column(np.asarray(fr.values, dtype=float)[None, :], list(fr.names), RULE_PATTERNS)[0])
     out.rule_class = str(RuleOfThumb(bundle.model.bands_.names, RULE_CUTS).predict(np.array([out.ratio]))[0])
     return out
 

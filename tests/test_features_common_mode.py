@@ -89,13 +89,13 @@ def test_removing_the_common_signal_gives_back_the_recording_without_pickup():
     assert common_mode(again, 2).share < 1e-6
 
 
-def test_shipped_model_doubts_a_call_that_rests_on_pickup():
+def test_shipped_model_reads_the_recording_without_its_pickup():
     """The healthy default plant with an 8 µm 2X pickup (below the sanity check's share of 0.85) is called slight by
-    the classifier (v0001 already at 6 µm); read without the common signal it is aligned, so the verdict is uncertain
-    and says why. At 12 µm (share 0.96: the 2X is the pickup) the class, moderate, depends on it: inconclusive. Without
-    pickup there is no such reason."""
-    from rotordiag.models.pipeline import diagnose_recording
-    from rotordiag.models.predict import load_bundle
+    the classifier as sent, and moderate at 12 µm (share 0.96: the 2X is the pickup). The pickup is removed before the
+    verdict: both are the plant's own class, aligned, uncertain, and the reason names what was removed and the class
+    as sent (the 12 µm pickup's sanity finding is kept: it says what was sent). Without pickup there is no such reason and nothing is removed."""
+    from rotordiag.models.pipeline import diagnose_recording, read_features
+    from rotordiag.models.predict import load_bundle, ood_score_and_class
 
     if not (REGISTRY / "active").exists():
         pytest.skip("no shipped registry in this checkout")
@@ -104,16 +104,19 @@ def test_shipped_model_doubts_a_call_that_rests_on_pickup():
     def codes(v):
         return [r["code"] for r in v.reasons]
 
-    plain, _ = diagnose_recording(bundle, _recording())
+    plain, fr_plain = diagnose_recording(bundle, _recording())
     assert plain.model_severity == "aligned" and "common_mode" not in codes(plain)
-    doubted, _ = diagnose_recording(bundle, _recording(pickup_um=8.0, phase_rad=0.75 * np.pi))
-    assert doubted.model_severity != "aligned"
-    assert "common_mode" in codes(doubted) and doubted.status == "uncertain"
-    msg = next(r["message"] for r in doubted.reasons if r["code"] == "common_mode")
-    assert msg.values["other_call"] == "aligned" and msg.values["call"] == doubted.model_severity
-    failed, _ = diagnose_recording(bundle, _recording(pickup_um=12.0))
-    assert failed.status == "inconclusive" and failed.severity == "inconclusive"
-    assert {"common_mode_2x", "common_mode"} <= set(codes(failed))
+    for pickup_um, as_sent in ((8.0, "slight"), (12.0, "moderate")):
+        rec = _recording(pickup_um=pickup_um, phase_rad=0.75 * np.pi)
+        assert ood_score_and_class(bundle, read_features(rec))[1] == as_sent      # the pickup's class, as sent
+        v, fr = diagnose_recording(bundle, rec)
+        assert v.model_severity == "aligned" and v.status == "uncertain"
+        assert codes(v)[0] == "common_mode"
+        msg = next(r["message"] for r in v.reasons if r["code"] == "common_mode")
+        assert msg.values["call"] == "aligned" and msg.values["call_as_sent"] == as_sent
+        assert common_mode(fr, 2).share < 0.2                                 # the verdict's features: without it
+        assert ("common_mode_2x" in _codes(fr)) == (pickup_um == 12.0)         # the sanity finding as sent, kept
+        assert fr.warnings == read_features(rec).warnings
 
 
 def test_a_synthetic_train_with_a_common_2x():

@@ -7,7 +7,8 @@ class of other rows, their OOD score, a second reading of other features — is 
 callables bound to the active model. ``bearing_sets`` (the probe set the model reads), ``acquisitions`` (bearings 2
 and 3 recorded apart), ``reverse_2x`` (a coupling 2X whirling backward), ``numbering`` (bearings numbered from the
 other end), ``one_position`` (a call resting on the static offset between the coupling journals), ``common_mode`` (a
-1X / 2X common to every probe), ``clearance_check`` (a diametral clearance), ``family`` (a machine of a family the
+1X / 2X common to every probe removed before the verdict: like ``speed_choice``, its own signature — it picks the
+reading the verdict is given on and says so), ``clearance_check`` (a diametral clearance), ``family`` (a machine of a family the
 model was not trained on), ``contradiction`` ("aligned" against its own 2X/1X), ``attitude`` (the journals'
 attitude angles, which need no clearance, outside training when the clearance is not stated); ``speed_choice`` chooses among the
 speed hypotheses a doubtful estimate allows (its own signature: it picks a reading, it gives no reason). ``startup`` (a start-up that changed since the asset's baseline start-up) has the same shape — a context in, the
@@ -61,8 +62,8 @@ class CheckContext:
         The recording itself; None when the verdict is made from given features (the checks that read the
         recording again then find nothing).
     status : str, optional
-        The verdict's status before the doubts that read the recording again (``common_mode``,
-        ``clearance_check``); None until it is assessed.
+        The verdict's status before the doubts that read the recording again (``clearance_check``,
+        ``attitude``); None until it is assessed.
     machine_family : str, optional
         The machine's declared family (``models.families.machine_family``: the asset's or the request's plant
         model); None when not declared.

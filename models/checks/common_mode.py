@@ -1,79 +1,88 @@
-"""A verdict that rests on a 1X or 2X common to every probe (electrical pickup), read again without it.
+"""A 1X or 2X common to every probe (electrical pickup) is removed, and the verdict given on the rest.
 
 Mains pickup on a grid-synchronous generator's probe cables sits exactly at its 1X / 2X with the same amplitude
-and phase at every probe, which no shaft orbit does (``features._common_mode``). :func:`common_mode_reason` reads a
-recording whose common share is at least :data:`COMMON_MODE_DOUBT_SHARE` once more without that common signal
-(``features.without_common_mode``); when the class differs the verdict gets ``common_mode`` (``inconclusive`` when
-the sanity check found the pickup dominating, else ``uncertain``). The verdict itself is the recording's as sent.
-The measurements behind it: docs/checks.md.
+and phase at every probe, which no shaft orbit does (``features._common_mode``). A vibration analyst subtracts it
+and reads what is left; so does :func:`remove_pickup`: a recording whose 1X or 2X common share reaches
+:data:`COMMON_MODE_REMOVE_SHARE` is read again without that common signal (``features.without_common_mode``), the
+verdict is given on that reading, and :meth:`PickupRemoved.reason` says so (``common_mode``, ``uncertain``: what was
+removed, and the class the recording as sent would have had). Why not the recording as sent: its class is the
+pickup's, a 2X the model reads as a coupling's. The measurements behind it: docs/checks.md.
 """
 from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 from rotordiag.core.notes import Length, Measured
 from rotordiag.features import (
     COMMON_MODE_NOTABLE_SHARE,
+    CommonMode,
     FeatureResult,
     Recording,
     common_mode,
-    extract_features,
     without_common_mode,
 )
 
-from ..status import INCONCLUSIVE, UNCERTAIN, Reason
-from . import CheckContext, Scorer
+from ..status import UNCERTAIN, Reason
 
-__all__ = ["COMMON_MODE_DOUBT_SHARE", "common_mode_reason", "common_mode_check"]
+__all__ = ["COMMON_MODE_REMOVE_SHARE", "PickupRemoved", "remove_pickup"]
 
-#: a 1X or 2X whose common share (``features.common_mode``) reaches this is read again without its common part
-#: (``features.COMMON_MODE_NOTABLE_SHARE``: about one in-family recording in 1000); doubted only when the class changes
-COMMON_MODE_DOUBT_SHARE = COMMON_MODE_NOTABLE_SHARE
+#: a 1X or 2X whose common share (``features.common_mode``) reaches this is removed before the verdict
+#: (``features.COMMON_MODE_NOTABLE_SHARE``: about one in-family recording in 1000 reaches it)
+COMMON_MODE_REMOVE_SHARE = COMMON_MODE_NOTABLE_SHARE
 _ORDERS = (1, 2)
+#: the sanity findings of the recording as sent kept with the reading without its pickup (they say what was sent)
+_SAID = ("common_mode_1x", "common_mode_2x")
+
+#: the pipeline's reading of a recording at a speed (``models.pipeline.read_features``)
+Reader = Callable[[Recording, "float | None"], FeatureResult]
 
 
-def common_mode_check(ctx: CheckContext) -> list[Reason]:
-    """:func:`common_mode_reason` of the context's recording, features, status before the doubts and call."""
-    if ctx.recording is None:
-        return []
-    reason = common_mode_reason(ctx.score, ctx.recording, ctx.fr, ctx.status, ctx.call)
-    return [reason] if reason is not None else []
+@dataclass(frozen=True)
+class PickupRemoved:
+    """A recording with its common 1X / 2X removed, and its features read at the speed of the recording as sent.
 
-
-def common_mode_reason(score: Scorer, recording: Recording, fr: FeatureResult, status: str | None,
-                       call: str | None) -> Reason | None:
-    """``common_mode`` when the verdict's class changes with the common 1X / 2X removed, else None.
-
-    Parameters
+    Attributes
     ----------
-    score : callable
-        A recording's features to (OOD score, class) with the active model (``models.predict.ood_score_and_class``
-        bound to the bundle): given, so that this check does not import the predictor.
     recording : features.Recording
-        The recording as sent.
+        The recording without the common signals (µm).
     fr : features.FeatureResult
-        Its features (the speed the verdict was given at).
-    status : str
-        The verdict's status (before this doubt); an inconclusive one is not read again.
-    call : str
-        The classifier's class of the recording (``Verdict.model_severity``).
+        Its features and sanity findings, with the warnings of the reading as sent (the speed notes among them) and
+        its common-mode sanity findings (``common_mode_1x`` / ``common_mode_2x``: what was sent).
+    found : tuple of features.CommonMode
+        The common signals removed.
     """
-    found = [cm for k in _ORDERS if (cm := common_mode(fr, k)) is not None and cm.share >= COMMON_MODE_DOUBT_SHARE]
-    if not found or status == INCONCLUSIVE or call is None:
+
+    recording: Recording
+    fr: FeatureResult
+    found: tuple[CommonMode, ...]
+
+    def reason(self, call_as_sent: str | None, call: str | None) -> Reason:
+        """``common_mode`` (uncertain): what was removed, and the class of the recording as sent when it differs
+        from ``call``, the class given without the pickup."""
+        what = [x for k, cm in enumerate(self.found)
+                for x in (("; " if k else "") + f"{cm.order}X: ", Length(cm.amp_um_pp),
+                          f" pk-pk at {cm.phase_lag_deg:.0f}°, {100 * cm.share:.0f} % of its power over "
+                          f"{cm.n_probes} probes")]
+        values = {"orders": " and ".join(f"{cm.order}X" for cm in self.found), "per_order": Measured.of(*what),
+                  "call": call}
+        if call_as_sent != call:
+            return Reason("common_mode", UNCERTAIN, {**values, "call_as_sent": call_as_sent}, "changed")
+        return Reason("common_mode", UNCERTAIN, values)
+
+
+def remove_pickup(recording: Recording, fr: FeatureResult, read: Reader) -> PickupRemoved | None:
+    """``recording`` without each 1X / 2X whose common share reaches :data:`COMMON_MODE_REMOVE_SHARE`, read by
+    ``read`` at the speed ``fr`` was given (an estimated one kept: the pickup is no reason to read another speed);
+    None when no order's common share reaches it, or the recording cannot be read without it."""
+    found = tuple(cm for k in _ORDERS
+                  if (cm := common_mode(fr, k)) is not None and cm.share >= COMMON_MODE_REMOVE_SHARE)
+    if not found:
         return None
     try:
-        clean = without_common_mode(recording, fr, found)
-        fr_clean = extract_features(clean, speed_estimate_rpm=fr.speed_rpm if fr.speed_source == "estimated" else None,
-                                    speed_notes=list(fr.warnings))
-        _, other = score(fr_clean)
+        clean = without_common_mode(recording, fr, list(found))
+        fr_clean = read(clean, float(fr.speed_rpm) if fr.speed_source == "estimated" else None)
     except ValueError:
         return None
-    if other == call:
-        return None
-    dominant = [f.code for f in fr.sanity if f.code in ("common_mode_1x", "common_mode_2x")]
-    what = [x for k, cm in enumerate(found)
-            for x in (("; " if k else "") + f"{cm.order}X: ", Length(cm.amp_um_pp), f" pk-pk at {cm.phase_lag_deg:.0f}°, "
-                      f"{100 * cm.share:.0f} % of its power over {cm.n_probes} probes")]
-    values = {"orders": " and ".join(f"{cm.order}X" for cm in found), "per_order": Measured.of(*what),
-              "other_call": other, "call": call}
-    if dominant:
-        return Reason("common_mode", INCONCLUSIVE, {**values, "dominant": " and ".join(dominant)}, "dominant")
-    return Reason("common_mode", UNCERTAIN, values)
+    said = tuple(f for f in fr.sanity if f.code in _SAID)     # what the recording as sent showed: still said
+    return PickupRemoved(clean, replace(fr_clean, warnings=fr.warnings, sanity=(*fr_clean.sanity, *said)), found)

@@ -157,9 +157,10 @@ _ACQ_READ = (". Read with the shaft ends in phase across the coupling (0°, a he
              "{in_phase}; in anti-phase (180°, the classic misalignment sign), {anti_phase}")
 _COMMON_MODE = ("most of the {orders} is one signal common to every probe ({per_order}); a shaft's orbit differs from "
                 "probe to probe and bearing to bearing, so that part is likely electrical pickup (mains at the running "
-                "frequency or twice it on a grid-synchronous generator) or the probe mountings vibrating together. "
-                "Without it the class is {other_call!r}, not {call!r}: check the probe cabling and grounding (a probe "
-                "at a fixed target reads the pickup alone) before acting on this verdict")
+                "frequency or twice it on a grid-synchronous generator) or the probe mountings vibrating together. It "
+                "was removed from every probe and the verdict is given on the rest")
+_COMMON_MODE_ACT = (": check the probe cabling and grounding (a probe at a fixed target reads the pickup alone) and "
+                    "re-record before acting on this verdict")
 
 
 def _common_mode_template(order: int, source: str) -> str:
@@ -431,10 +432,10 @@ _ENTRIES = (
               "training's plain cylindrical ones (tilting pads hold the journal near the load line), or DC readings not "
               "referenced to the bearing centre, read so: the model's call is not to be trusted on this machine — "
               "state clearance_um and check the DC reference, or compare with this machine's baseline")),
-    CodeInfo("common_mode", REASON, _UI, "without the part of the 1X / 2X common to every probe the class differs "
-             "(inconclusive when that part dominates)", "check the probe cabling and grounding before acting",
-             {_D: _COMMON_MODE, "dominant": _COMMON_MODE + " ({dominant}: that part dominates, so no severity is "
-             "given)"}),
+    CodeInfo("common_mode", REASON, _U, "a 1X / 2X common to every probe (electrical pickup) was removed before the "
+             "verdict", "check the probe cabling and grounding and re-record before acting",
+             {_D: _COMMON_MODE + " ({call!r}, as with it)" + _COMMON_MODE_ACT, "changed": _COMMON_MODE + " ({call!r}; as recorded, with it, the "
+              "class would be {call_as_sent!r})" + _COMMON_MODE_ACT}),
 )
 
 #: every code, in the order of the table above (physics checks first)
