@@ -150,3 +150,23 @@ def test_the_evidence_shows_a_notable_common_part_and_only_then():
     assert weak[0].number == pytest.approx(0.71, abs=0.01)
     strong = items(extract_features(_recording(pickup_um=12.0)))                          # share 0.96
     assert "not shaft motion" in strong[0].meaning and strong[0].value.startswith("96 % of the 2X power")
+
+
+def test_a_recording_read_by_take_is_not_cleaned_with_one_shaft_angle():
+    """Two takes, each with its own keyphasor, and a 2X common to every probe: each take's phases refer to its own
+    mark, so one shaft angle cannot subtract the signal from both — the pickup is not removed (the sanity warning
+    stays), while the same recording in one take is cleaned."""
+    from rotordiag.models.checks.common_mode import remove_pickup
+    from rotordiag.models.pipeline import read_features
+
+    one = _recording(pickup_um=12.0)
+    fr_one = read_features(one)
+    assert remove_pickup(one, fr_one, read_features) is not None
+    period = 60.0 / SPEED_RPM
+    t_end = (one.n_points - 1) / one.sample_rate_hz
+    pulses = np.arange(0.3 * period, t_end, period)
+    takes = Recording(one.sample_rate_hz, one.channels, clearance_um=350.0, acquisitions="1,2;3,4",
+                      keyphasor_times_s=[pulses, pulses])
+    fr_takes = read_features(takes)
+    assert takes.keyphasor_takes is not None and common_mode(fr_takes, 2).share > 0.6
+    assert remove_pickup(takes, fr_takes, read_features) is None

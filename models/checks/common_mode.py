@@ -74,7 +74,10 @@ class PickupRemoved:
 def remove_pickup(recording: Recording, fr: FeatureResult, read: Reader) -> PickupRemoved | None:
     """``recording`` without each 1X / 2X whose common share reaches :data:`COMMON_MODE_REMOVE_SHARE`, read by
     ``read`` at the speed ``fr`` was given (an estimated one kept: the pickup is no reason to read another speed);
-    None when no order's common share reaches it, or the recording cannot be read without it."""
+    None when no order's common share reaches it, the recording cannot be read without it, or it is read by take
+    (each take's phases refer to its own keyphasor, so one shaft angle cannot subtract a signal from both)."""
+    if recording.keyphasor_takes is not None:
+        return None
     found = tuple(cm for k in _ORDERS
                   if (cm := common_mode(fr, k)) is not None and cm.share >= COMMON_MODE_REMOVE_SHARE)
     if not found:
