@@ -66,12 +66,20 @@ def across_bearings(X: np.ndarray, names: list[str]) -> tuple[np.ndarray, list[s
     return np.column_stack(cols), out
 
 
+def tv_edges() -> list[float]:
+    """The band edges of the shipped configuration (``[bands] edges``)."""
+    from rotordiag.models.config import TrainConfig
+
+    return list(TrainConfig.from_file(CONFIG).bands.edges)
+
+
 def curve(fractions: list[float], train_data: Path, data: Path, seed: int) -> None:
     from scipy.stats import spearmanr
 
     table, fams = tv.family_tables(train_data, CONFIG)
     samples = tv.read_samples(data)
-    keys = sorted(set(zip(fams.tolist(), np.asarray(table.sample_index).tolist())))
+    row_keys = list(zip(fams.tolist(), np.asarray(table.sample_index).tolist()))     # a machine's key per row
+    keys = sorted(set(row_keys))
     order = np.random.default_rng(seed).permutation(len(keys))
     edges = np.asarray(tv_edges())
     print("| fraction | training trains (keys) | rows | Spearman Δ | Δ MAE | confident | of them in the true band | "
@@ -79,7 +87,7 @@ def curve(fractions: list[float], train_data: Path, data: Path, seed: int) -> No
     print("|---|---|---|---|---|---|---|---|---|")
     for frac in fractions:
         keep = {keys[i] for i in order[: int(round(frac * len(keys)))]}
-        mask = np.array([k in keep for k in zip(fams.tolist(), np.asarray(table.sample_index).tolist())])
+        mask = np.array([k in keep for k in row_keys])
         t0 = time.perf_counter()
         with tempfile.TemporaryDirectory() as td:
             bundle = tv.train_without(table, np.where(mask, fams, "__left_out__"), "__left_out__", CONFIG, Path(td))
@@ -92,13 +100,6 @@ def curve(fractions: list[float], train_data: Path, data: Path, seed: int) -> No
         print(f"| {frac:g} | {len(keep)} | {int(mask.sum())} | {spearmanr(d, e).correlation:.3f} | "
               f"{np.nanmean(np.abs(d - e)):.4f} | {len(conf)} of {len(outs)} | {right} | {fa:.1%} | "
               f"{time.perf_counter() - t0:.0f} |", flush=True)
-
-
-def tv_edges() -> list[float]:
-    """The band edges of the shipped configuration (``[bands] edges``)."""
-    from rotordiag.models.config import TrainConfig
-
-    return list(TrainConfig.from_file(CONFIG).bands.edges)
 
 
 def ablation(train_data: Path, data: Path) -> None:
