@@ -1,6 +1,7 @@
 """What would lift the verdict on shaft trains: more training trains, or features across bearings? (issue 48)
 
     .venv/bin/python benchmarks/train_data_curve.py --train-data DIR --data DIR [--curve 0.25,0.5,1] [--ablation]
+        [--without-across]
 
 ``--train-data``: the four shaft-train training parts (``models/trains/dataset_trains_*.toml`` generated with other
 seeds, as for ``benchmarks/train_verdict.py --train-data``); ``--data``: the judged trains (the same families, other
@@ -10,20 +11,22 @@ machines). Two measurements, each printed as a Markdown table:
   on a seeded random fraction of the training trains alone (whole machines: all rows of a sample together), each
   judged as the verdict is given (``train_verdict.judge``, speed and clearance stated): Spearman and mean absolute
   error of the Δ estimate, confident answers and how many are in the true band, false alarms (healthy trains given
-  any misalignment class, any status). Minutes per fraction.
+  any misalignment class, any status). Minutes per fraction. ``--without-across`` trains them without the
+  columns across bearings (:data:`ACROSS`), as the recipe was before they were features.
 - ``--ablation``: a plain gradient-boosted Δ regressor (two seeds, averaged) on the training trains' feature rows,
-  scored on the judged trains' rows, with the model's features alone and with :func:`across_bearings` added —
-  quantities a tree can only approximate from the per-bearing columns: the ratio and difference of the journals'
-  static eccentricities and positions between neighbouring bearings (the load one bearing takes from another when
-  the coupling is offset, with the oil film's common factors — speed, viscosity — divided out) and the 1X / 2X
-  amplitude ratios. Judged on every family (trained on every family) and on each family trained on the others
-  (a design the regressor never saw). Under a minute.
+  scored on the judged trains' rows, without and with the columns across bearings (``features._across``: the
+  ratio and difference of the journals' static eccentricities and positions between neighbouring bearings — the
+  load one bearing takes from another when the coupling is offset, with the oil film's common factors divided
+  out — and the 1X / 2X orbit ratios), quantities a tree can only approximate from the per-bearing columns.
+  Judged on every family (trained on every family) and on each family trained on the others (a design the
+  regressor never saw). Under a minute.
 
 Nothing here changes the shipped model; the figures are in docs/train-verdict.md ("What would lift it").
 """
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import tempfile
 import time
@@ -38,32 +41,28 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import train_verdict as tv  # noqa: E402  (benchmarks/ on sys.path)
 
 CONFIG = ROOT / "models" / "default" / "train.toml"
-#: neighbouring bearing pairs whose journals' load sharing the offset changes: the generator's two, the exciter's
-#: two, and the two coupling-end journals
-PAIRS = ((2, 1), (3, 4), (2, 3))
 BANDS = ("aligned", "slight", "moderate", "severe")
 
 
-def across_bearings(X: np.ndarray, names: list[str]) -> tuple[np.ndarray, list[str]]:
-    """Columns across neighbouring bearings (:data:`PAIRS`) from a feature table's per-bearing columns: the ratio of
-    the static eccentricities, the x and y differences of the journal positions (per clearance), and the 1X and 2X
-    major-axis ratios; NaN where a column is missing."""
-    ix = {n: i for i, n in enumerate(names)}
+def across_columns() -> tuple[str, ...]:
+    """The names of the feature columns across bearings (``features._across``)."""
+    from rotordiag.features import ACROSS_FEATURES
 
-    def col(n: str) -> np.ndarray:
-        return X[:, ix[n]] if n in ix else np.full(X.shape[0], np.nan)
+    return ACROSS_FEATURES
 
-    cols, out = [], []
-    for a, b in PAIRS:
-        cols.append(col(f"b{a}_centre_ecc_per_c") / np.maximum(col(f"b{b}_centre_ecc_per_c"), 1e-3))
-        out.append(f"ecc_ratio_b{a}_b{b}")
-        for d in ("x", "y"):
-            cols.append(col(f"b{a}_centre_{d}_per_c") - col(f"b{b}_centre_{d}_per_c"))
-            out.append(f"centre_{d}_b{a}_minus_b{b}_per_c")
-        for k in (1, 2):
-            cols.append(col(f"b{a}_{k}x_major_um_pp") / np.maximum(col(f"b{b}_{k}x_major_um_pp"), 1e-3))
-            out.append(f"{k}x_major_ratio_b{a}_b{b}")
-    return np.column_stack(cols), out
+
+def config_without_across(root: Path) -> Path:
+    """The shipped configuration with the columns across bearings excluded, written under ``root``."""
+    from rotordiag.models.config import TrainConfig
+
+    line = 'exclude = ["b?_[xy]_[123]x_phase_deg"]'
+    text = CONFIG.read_text()
+    if line not in text:
+        raise SystemExit(f"{CONFIG}: its exclude line changed; update config_without_across")
+    path = root / "train_without_across.toml"
+    path.write_text(text.replace(line, "exclude = " + json.dumps([line[11:-1].strip('"'), *across_columns()])))
+    assert set(across_columns()) <= set(TrainConfig.from_file(path).exclude_features)
+    return path
 
 
 def tv_edges() -> list[float]:
@@ -73,10 +72,10 @@ def tv_edges() -> list[float]:
     return list(TrainConfig.from_file(CONFIG).bands.edges)
 
 
-def curve(fractions: list[float], train_data: Path, data: Path, seed: int) -> None:
+def curve(fractions: list[float], train_data: Path, data: Path, seed: int, config: Path = CONFIG) -> None:
     from scipy.stats import spearmanr
 
-    table, fams = tv.family_tables(train_data, CONFIG)
+    table, fams = tv.family_tables(train_data, config)
     samples = tv.read_samples(data)
     row_keys = list(zip(fams.tolist(), np.asarray(table.sample_index).tolist()))     # a machine's key per row
     keys = sorted(set(row_keys))
@@ -90,7 +89,7 @@ def curve(fractions: list[float], train_data: Path, data: Path, seed: int) -> No
         mask = np.array([k in keep for k in row_keys])
         t0 = time.perf_counter()
         with tempfile.TemporaryDirectory() as td:
-            bundle = tv.train_without(table, np.where(mask, fams, "__left_out__"), "__left_out__", CONFIG, Path(td))
+            bundle = tv.train_without(table, np.where(mask, fams, "__left_out__"), "__left_out__", config, Path(td))
             outs = tv.judge(bundle, samples, "speed and clearance stated")
         d = np.array([o.delta for o in outs])
         e = np.array([o.delta_model for o in outs])
@@ -108,17 +107,17 @@ def ablation(train_data: Path, data: Path) -> None:
 
     tr, fam_tr = tv.family_tables(train_data, CONFIG)
     te, fam_te = tv.family_tables(data, CONFIG)
-    extra_tr, extra_names = across_bearings(tr.X, list(tr.feature_names))
-    extra_te, _ = across_bearings(te.X, list(te.feature_names))
-    print(f"training rows {len(tr.misalignment)}, judged rows {len(te.misalignment)}; {len(extra_names)} columns "
-          f"across bearings: {', '.join(extra_names)}")
+    across = set(across_columns())
+    keep = np.array([n not in across for n in tr.feature_names])
+    print(f"training rows {len(tr.misalignment)}, judged rows {len(te.misalignment)}; {len(across)} columns "
+          f"across bearings: {', '.join(across_columns())}")
     print("| judged | trained on | features | Spearman Δ | Δ MAE |")
     print("|---|---|---|---|---|")
     held = [("every family", "every family", np.ones(len(fam_tr), bool), np.ones(len(fam_te), bool))]
     held += [(f, "the other families", fam_tr != f, fam_te == f) for f in sorted(set(fam_te.tolist()))]
     for judged, trained, m_tr, m_te in held:
-        for label, Xtr, Xte in (("the model's", tr.X, te.X),
-                                ("+ across bearings", np.hstack([tr.X, extra_tr]), np.hstack([te.X, extra_te]))):
+        for label, Xtr, Xte in (("without across bearings", tr.X[:, keep], te.X[:, keep]),
+                                ("with across bearings", tr.X, te.X)):
             scores = []
             for seed in (0, 1):
                 reg = HistGradientBoostingRegressor(max_iter=400, learning_rate=0.05, max_leaf_nodes=31,
@@ -137,11 +136,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--curve", type=str, default="", help="comma-separated fractions of the training trains")
     ap.add_argument("--ablation", action="store_true")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--without-across", action="store_true", help="--curve without the columns across bearings")
     args = ap.parse_args(argv)
     if args.ablation:
         ablation(args.train_data, args.data)
     if args.curve:
-        curve([float(x) for x in args.curve.split(",")], args.train_data, args.data, args.seed)
+        with tempfile.TemporaryDirectory() as td:
+            config = config_without_across(Path(td)) if args.without_across else CONFIG
+            curve([float(x) for x in args.curve.split(",")], args.train_data, args.data, args.seed, config)
     return 0
 
 

@@ -63,6 +63,7 @@ Importing the package raises glibc's malloc mmap/trim thresholds (see ``features
 from rotordiag.core.notes import Note, speed_in_doubt
 
 from ._acquisitions import format_acquisitions, parse_acquisitions, parse_keyphasor_takes, split_pairs
+from ._across import ACROSS_FEATURES, across_bearings
 from ._alloc import tune_malloc
 from ._change import (
     CHANGE_QUANTITIES,
@@ -103,7 +104,8 @@ tune_malloc()
 
 __all__ = [
     "ProbeChannel", "Recording", "parse_speed_range", "extract_features", "with_sanity", "with_speed_notes", "FeatureResult", "BearingDetail", "OrbitShape",
-    "FEATURE_NAMES", "FEATURE_SPECS", "FeatureSpec", "feature_names", "ALLOWED_UNITS", "MIN_REVS",
+    "FEATURE_NAMES", "FEATURE_SPECS", "FeatureSpec", "feature_names", "ACROSS_FEATURES", "across_bearings",
+    "ALLOWED_UNITS", "MIN_REVS",
     "MIN_REVS_MOTION", "WHIRL_BAND", "REVERSE_WHIRL_INDEX", "SanityFinding", "check_recording", "EvidenceItem", "evidence",
     "signature", "average_signatures", "change_features", "change_array", "speed_comparable", "ChangeResult", "SPEED_BAND_FRAC",
     "CHANGE_QUANTITIES", "SlowRollVectors", "slow_roll_vectors", "apply_slow_roll", "SLOW_ROLL_MAX_SPEED_FRACTION",

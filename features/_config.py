@@ -12,6 +12,15 @@ PROBE_BEARINGS: tuple[int, ...] = tuple(range(1, MAX_BEARING + 1))
 #: bearing pairs whose 1X / 2X phase differences are features: across the coupling, then
 #: along the generator and along the exciter
 PHASE_PAIRS: tuple[tuple[int, int], ...] = ((2, 3), (1, 2), (3, 4))
+#: bearing pairs whose static positions and 1X / 2X orbit sizes are compared (``centre_ecc_*_ratio``, ``dcentre_*``,
+#: ``*x_major_*_ratio``): across the coupling, then each coupling-end bearing against its rotor's outboard bearing.
+#: An offset coupling moves load between a rotor's bearings; a ratio divides out the oil film's factors common
+#: to the pair (speed, viscosity, the plant's size), which a tree reads only piecewise from the per-bearing columns.
+ACROSS_PAIRS: tuple[tuple[int, int], ...] = ((2, 3), (2, 1), (3, 4))
+#: floors of the ratios' denominators (a journal at the bearing's centre, an orbit in the noise): per clearance
+#: for the eccentricity, µm pk-pk for the orbit majors
+ACROSS_ECC_FLOOR = 1e-3
+ACROSS_MAJOR_FLOOR_UM = 1e-3
 
 #: minimum whole revolutions analysed. With 8 revolutions the 1X..3X least-squares fit is
 #: well conditioned and a 2X line 40 dB below 1X is still resolved from 1X leakage-free;

@@ -3,7 +3,8 @@ engineer reads, each with a one-line meaning.
 
 Per coupling bearing (2 and 3, else whatever is present): 1X and 2X vectors of each probe
 direction (µm pk-pk and phase lag), 2X/1X, orbit shape and the shaft-centreline position;
-across the coupling: the 1X and 2X phase differences; first, when runout was compensated, the
+across the coupling: the 1X and 2X phase differences; between neighbouring journals: how the load is shared
+(the centreline's positions compared, ``features._across``); first, when runout was compensated, the
 slow-roll vectors subtracted at each bearing, and a 1X / 2X largely common to every probe (mains pickup).
 Nothing here uses the ML model.
 """
@@ -17,7 +18,7 @@ from rotordiag.core.notes import Length, Measured
 
 from ._acquisitions import split_pairs
 from ._common_mode import COMMON_MODE_NOTABLE_SHARE, common_mode
-from ._config import CENTRELINE_MAX_ECC, PHASE_PAIRS
+from ._config import ACROSS_PAIRS, CENTRELINE_MAX_ECC, PHASE_PAIRS
 from ._sanity import common_mode_dominates
 
 __all__ = ["EvidenceItem", "evidence"]
@@ -218,6 +219,26 @@ def _coupling_items(fr) -> list[EvidenceItem]:
     return items
 
 
+def _load_sharing_items(fr) -> list[EvidenceItem]:
+    """Per pair of :data:`ACROSS_PAIRS` whose static positions are both read: journal i's eccentricity against
+    journal j's and where it sits relative to it (the load one bearing takes from the other)."""
+    items = []
+    for i, j in ACROSS_PAIRS:
+        ratio = fr[f"centre_ecc_b{i}_b{j}_ratio"]
+        dx, dy = fr[f"dcentre_x_b{i}_b{j}_per_c"], fr[f"dcentre_y_b{i}_b{j}_per_c"]
+        if not (np.isfinite(ratio) and np.isfinite(dx) and np.isfinite(dy)):
+            continue
+        where = (f"{abs(dy):.2f} c {'lower' if dy < 0 else 'higher'}, {abs(dx):.2f} c towards "
+                 f"{'+x' if dx >= 0 else '−x'}")
+        items.append(EvidenceItem(
+            f"journals {i} and {j}", "load sharing (centreline)",
+            f"journal {i}'s eccentricity {ratio:.2f}× journal {j}'s; journal {i} sits {where} of journal {j}",
+            "an offset coupling lifts one journal and presses its neighbour down: a ratio far from this machine's "
+            "aligned baseline is the load transfer misalignment causes (the design sets the healthy ratio; trend it)",
+            float(ratio)))
+    return items
+
+
 def _common_mode_items(fr) -> list[EvidenceItem]:
     """The 1X / 2X common to every probe, where it is a notable share of the order (``features._common_mode``)."""
     items = []
@@ -258,6 +279,7 @@ def evidence(fr) -> list[EvidenceItem]:
     items = [it for b in present if (it := _slow_roll_item(fr.bearings[b])) is not None]
     items += _common_mode_items(fr)
     items += _coupling_items(fr)
+    items += _load_sharing_items(fr)
     for b in chosen:
         items += _bearing_items(fr.bearings[b])
     return items

@@ -17,6 +17,7 @@ from rotordiag.core.notes import Note
 
 from . import _config as cfg
 from ._acquisitions import format_acquisitions, split_pairs
+from ._across import across_bearings
 from ._lines import refine_line_hz
 from ._names import FEATURE_NAMES
 from ._orbit import OrbitShape, orbit_arrays
@@ -472,6 +473,7 @@ def _extract(recording: Recording, estimate: tuple[float, list[str]] | None = No
             else (chans[0].slow_roll_um_pp, chans[1].slow_roll_um_pp))
 
     warnings += phase_differences(values, details, rec.acquisition_groups)
+    across_bearings(values)
 
     motion = None
     if sa.n_revs >= cfg.MIN_REVS_MOTION:

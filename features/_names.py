@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ._config import BEARINGS, PHASE_PAIRS, REPORTED_ORDERS
+from ._config import ACROSS_ECC_FLOOR, ACROSS_MAJOR_FLOOR_UM, ACROSS_PAIRS, BEARINGS, PHASE_PAIRS, REPORTED_ORDERS
 
 __all__ = ["FeatureSpec", "FEATURE_SPECS", "FEATURE_NAMES", "feature_names", "markdown_table"]
 
@@ -99,7 +99,26 @@ def _build() -> tuple[FeatureSpec, ...]:
                     f"dphase_{k}x_b{i}_b{j}_{d}_deg", "deg",
                     f"{k}X phase lag of bearing {i} minus bearing {j}, {d} direction, wrapped to (−180, 180]; NaN "
                     "when either phase is in the noise, or the two bearings were recorded in separate acquisitions"))
+    specs.extend(across_specs(ACROSS_PAIRS))
     return tuple(specs)
+
+
+def across_specs(pairs: tuple[tuple[int, int], ...]) -> list[FeatureSpec]:
+    """The columns that compare two bearings' static positions and orbit sizes (``features._across``)."""
+    out = []
+    for i, j in pairs:
+        out.append(FeatureSpec(f"centre_ecc_b{i}_b{j}_ratio", "1", f"b{i}_centre_ecc_per_c / b{j}_centre_ecc_per_c (the "
+                               f"denominator floored at {ACROSS_ECC_FLOOR:g}): the load bearing {i} carries against "
+                               f"bearing {j}'s; NaN where either position is"))
+        for d, dname in (("x", "horizontal"), ("y", "vertical")):
+            out.append(FeatureSpec(f"dcentre_{d}_b{i}_b{j}_per_c", "1", f"b{i}_centre_{d}_per_c − b{j}_centre_{d}_per_c: "
+                                   f"{dname} static position of journal {i} relative to journal {j}; NaN where either "
+                                   "position is"))
+        for k in (1, 2):
+            out.append(FeatureSpec(f"{k}x_major_b{i}_b{j}_ratio", "1", f"b{i}_{k}x_major_um_pp / b{j}_{k}x_major_um_pp "
+                                   f"(the denominator floored at {ACROSS_MAJOR_FLOOR_UM:g} µm); NaN where either "
+                                   "bearing is not recorded"))
+    return out
 
 
 FEATURE_SPECS: tuple[FeatureSpec, ...] = _build()

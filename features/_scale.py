@@ -17,6 +17,7 @@ import re
 import numpy as np
 
 from . import _config as cfg
+from ._across import across_bearings
 from ._names import FEATURE_SPECS
 
 __all__ = ["with_scale"]
@@ -57,4 +58,5 @@ def with_scale(fr, *, length_factor: float = 1.0, clearance_factor: float = 1.0)
         if ecc is not None and not values[ecc] <= cfg.CENTRELINE_MAX_ECC:
             for key in ("x", "y", "ecc"):
                 values[index[f"b{b}_centre_{key}_per_c"]] = np.nan
+    across_bearings(values)
     return dataclasses.replace(fr, values=values)

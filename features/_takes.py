@@ -25,6 +25,7 @@ from rotordiag.core.notes import Note
 
 from . import _config as cfg
 from ._acquisitions import format_acquisitions
+from ._across import across_bearings
 from ._extract import _NAME_INDEX, _SPEED_INDEX, FeatureResult, _bearing_schema, phase_differences
 from ._names import FEATURE_NAMES
 from ._recording import Recording
@@ -112,6 +113,7 @@ def extract_by_take(rec: Recording, extract_one: Callable[[Recording], FeatureRe
     warnings += phase_differences(values, details, unrelated, why=(
         f"the keyphasor of the take of {faulty} could not be used, so that take's phases are not referenced to the "
         "mark; see keyphasor_faulty"))
+    across_bearings(values)
     return FeatureResult(
         names=FEATURE_NAMES, values=values, bearings=details, speed_rpm=speed,
         speed_source="keyphasor" if referenced else results[0].speed_source,

@@ -14,6 +14,7 @@ from functools import lru_cache
 import numpy as np
 
 from rotordiag.core.conventions import wrap_deg
+from rotordiag.features import ACROSS_FEATURES, across_bearings
 
 from .._patterns import bearing_feature, name_index
 from ..status import UNCERTAIN, Reason
@@ -39,13 +40,16 @@ def mirrored_row(names: Sequence[str], row: np.ndarray) -> np.ndarray:
 
     Each per-bearing feature depends on that bearing's probes alone, so ``b{n}_…`` takes ``b{5−n}_…``'s value;
     a phase difference ``dphase_kx_bi_bj`` = wrap(φ_i − φ_j) becomes wrap(φ_{5−i} − φ_{5−j}), i.e. the wrapped
-    negative of ``dphase_kx_b{5−j}_b{5−i}``; the speed and the motion type do not depend on the numbering."""
+    negative of ``dphase_kx_b{5−j}_b{5−i}``; the columns across bearings are built again from the renumbered
+    per-bearing columns (:func:`features.across_bearings`); the speed and the motion type do not depend on the
+    numbering."""
     same, src_same, phase, src_phase, absent = _mirror_plan(tuple(names))
     row = np.asarray(row, dtype=float)
     out = np.array(row, dtype=float, copy=True)
     out[same] = row[src_same]
     out[phase] = wrap_deg(-row[src_phase])
     out[absent] = np.nan
+    across_bearings(out, names)
     return out
 
 
@@ -61,7 +65,7 @@ def _mirror_plan(names: tuple[str, ...]) -> tuple[np.ndarray, ...]:
     absent: list[int] = []
     for j, name in enumerate(names):
         parsed = bearing_feature(name)
-        if parsed is None:
+        if parsed is None or name in ACROSS_FEATURES:       # built again from the per-bearing columns
             continue
         prefix, bearings, suffix = parsed
         if len(bearings) == 1:
