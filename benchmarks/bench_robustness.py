@@ -4,8 +4,9 @@
         [--cache /tmp/rotordiag_bench_robustness] [--ross benchmarks/ross_set.npz]
         [--registry models/default_registry]   (a candidate model: its registry, with an --out of its own)
 
-Simulates held-out recordings with the project's own simulator (cached per set in ``--cache``,
-so a re-run only re-measures and re-diagnoses), applies each *condition* of the measurement
+Simulates held-out recordings with the project's own simulator (cached per set in ``--cache``, keyed by
+the cases and the simulator's source, so a re-run only re-measures and re-diagnoses, and a changed simulator
+simulates again), applies each *condition* of the measurement
 (:data:`CONDITIONS`), runs ``features.extract_features`` + ``models.pipeline.diagnose_recording`` with the
 shipped model (models/default_registry) and the 2X/1X rule of thumb beside it, and writes the
 table to ``--out``. The ``other machines`` row is the ROSS set of ``benchmarks/ross_validation.py``

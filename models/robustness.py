@@ -276,12 +276,27 @@ def simulate_case(c: dict, revs: int = REVS) -> np.ndarray | None:
     return res.journal_displacements_m.astype(np.float32) if res.status == "ok" else None
 
 
+def set_key(cases: list[dict], revs: int) -> str:
+    """What a cached set's recordings depend on: its cases, the revolutions recorded and the simulator's source
+    (``rotordiag.core.version.source_hash``): a changed preset or solver is simulated again, never read from an
+    older cache (a stale cache once kept the rated-machine presets' row of an earlier simulator)."""
+    import hashlib
+    import json
+
+    from rotordiag import simulator
+    from rotordiag.core.version import source_hash
+
+    text = json.dumps([cases, revs], sort_keys=True, default=repr) + source_hash(Path(simulator.__file__).parent)
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
 def simulate_set(sim_set: str, n: int, seed: int, cache: Path,
                  revs: int = REVS) -> tuple[list[dict], list[np.ndarray | None]]:
     """The cases and their journal displacements (n, 4, 2) in m (None where the run failed); cached.
-    ``revs``: the recorded revolutions (the report's :data:`REVS`; longer for bench_speed's record-length runs)."""
+    ``revs``: the recorded revolutions (the report's :data:`REVS`; longer for bench_speed's record-length runs). The
+    cache file is named by :func:`set_key`."""
     cases = design(sim_set, n, seed)
-    path = cache / (f"{sim_set}_n{n}_s{seed}.npz" if revs == REVS else f"{sim_set}_n{n}_s{seed}_r{revs}.npz")
+    path = cache / f"{sim_set}_n{n}_s{seed}_r{revs}_{set_key(cases, revs)}.npz"
     if path.exists():
         z = np.load(path, allow_pickle=False)
         return cases, [z[f"d{i}"] if f"d{i}" in z.files else None for i in range(len(cases))]

@@ -646,3 +646,32 @@ def test_a_stated_nominal_range_finds_the_1x_beside_a_whirls_2nd_harmonic(case):
     with pytest.raises(ValueError, match="no running speed's 1X could be told apart from it on these 4[0-9] "
                                          "revolutions — record longer"):
         extract_features(recording(42))
+
+
+def test_a_cached_set_is_keyed_by_its_cases_and_the_simulator_source(monkeypatch, tmp_path):
+    """A cache of simulated recordings is never read for another simulator: the key follows the simulator's source,
+    the cases and the revolutions (a stale cache once kept an older presets row)."""
+    import rotordiag.core.version as version
+
+    cases = bench.design("base", 2, 815)
+    key = bench.set_key(cases, bench.REVS)
+    assert key == bench.set_key(bench.design("base", 2, 815), bench.REVS)
+    assert key != bench.set_key(bench.design("base", 2, 816), bench.REVS)
+    assert key != bench.set_key(cases, 2 * bench.REVS)
+    monkeypatch.setattr(version, "source_hash", lambda package_dir: "another simulator")
+    assert key != bench.set_key(cases, bench.REVS)
+
+
+def test_source_hash_follows_every_python_file_below_the_package(tmp_path):
+    from rotordiag.core.version import source_hash
+
+    (tmp_path / "a.py").write_text("x = 1\n")
+    first = source_hash(tmp_path)
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "b.py").write_text("y = 2\n")
+    second = source_hash(tmp_path)
+    (tmp_path / "sub" / "b.py").write_text("y = 3\n")
+    third = source_hash(tmp_path)
+    assert len({first, second, third}) == 3
+    (tmp_path / "notes.txt").write_text("not code")
+    assert source_hash(tmp_path) == third

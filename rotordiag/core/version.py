@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import functools
+import hashlib
 import subprocess
 from importlib import metadata
 from pathlib import Path
@@ -48,3 +49,13 @@ def code_version() -> str:
     except (OSError, subprocess.SubprocessError):
         return __version__
     return f"{__version__}+g{sha}" + (".dirty" if dirty else "")
+
+
+def source_hash(package_dir: Path) -> str:
+    """SHA-256 of every ``*.py`` file under ``package_dir`` (names and contents, sorted): what a cache of a
+    package's results depends on, so that a changed simulator or extractor never serves results of the old code."""
+    h = hashlib.sha256()
+    for p in sorted(Path(package_dir).rglob("*.py")):
+        h.update(p.relative_to(package_dir).as_posix().encode())
+        h.update(p.read_bytes())
+    return h.hexdigest()
