@@ -403,3 +403,21 @@ def test_the_1x_difference_of_the_beam_is_the_linear_effect_of_the_chord_springs
     assert eps_chord > 0.05  # the chord springs matter: the check below is not empty
     predicted = paper[1] * lin_beam / lin_chord
     assert float(np.abs(ours[1] / predicted - 1).max()) < 2 * eps_lin * eps_chord + LINE_RTOL
+
+
+def test_an_undamped_mode_is_no_whirl():
+    """The coupling 0.3 m beyond the bearings at 1950 r/min has undamped modes (the chord springs' and the overhang's,
+    18.8 MHz and 1.9 GHz, Re λ ~ 1e-6 of 1e10): their log decrement is 0 up to round-off, whose sign is the
+    machine's, so the stability check must not read them as a whirl growing (this machine read −1e-15)."""
+    from rotordiag.simulator.train import dynamics
+
+    plant = Plant.default()
+    asm = assemble(lumped_train(plant, 0.05, overhang_m=0.3))
+    with_chord_springs(asm, plant)
+    kern = dynamics.build_kernel(asm, SPEED_RPM, 0)
+    logdec, f_hz = dynamics.linear_stability(kern, SPEED_RPM)
+    lam = np.linalg.eigvals(dynamics._linear_operator(kern))
+    osc = lam[lam.imag > 1e-6]
+    undamped = np.abs(-2 * np.pi * osc.real / osc.imag) <= dynamics.UNDAMPED_LOGDEC
+    assert undamped.any()                                   # the case has them
+    assert logdec > dynamics.UNDAMPED_LOGDEC and f_hz < 1e3  # the least-damped mode reported is a physical one

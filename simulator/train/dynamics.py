@@ -421,6 +421,10 @@ class Kernel:
     stability: tuple[float, float] | None = None
 
 
+#: a log decrement within this of 0 is an undamped mode read through round-off (|Re λ| ~ ε |λ|), not a whirl
+UNDAMPED_LOGDEC = 1e-9
+
+
 def linear_stability(kern: Kernel, speed_rpm: float) -> tuple[float, float]:
     """Log decrement and frequency (Hz) of the least-damped oscillating mode of the reduced train
     linearised at its static state (bearings by their coefficients there): a log decrement ≤ 0 puts the
@@ -430,6 +434,11 @@ def linear_stability(kern: Kernel, speed_rpm: float) -> tuple[float, float]:
         lam = np.linalg.eigvals(_linear_operator(kern))
         osc = lam[lam.imag > 1e-6]
         logdec = -2 * math.pi * osc.real / osc.imag
+        # an undamped mode (a stiff element without damping: the chord springs' MHz and an overhung coupling's GHz
+        # modes) has a log decrement of 0 up to round-off, whose sign is the machine's: not a growing whirl
+        damped = np.abs(logdec) > UNDAMPED_LOGDEC
+        if damped.any():
+            osc, logdec = osc[damped], logdec[damped]
         k = int(np.argmin(logdec))
         kern.stability = (float(logdec[k]), float(osc[k].imag / (2 * math.pi)))
     return kern.stability
