@@ -51,7 +51,7 @@ import numpy as np
 from rotordiag.core.journal import ATTITUDE_MIN_ECC, attitude_angle_deg, attitude_offset_deg
 from rotordiag.core.notes import Length, Measured
 from rotordiag.core.reasons import DEFAULT_VARIANT, INCONCLUSIVE, UNCERTAIN, code_info, require_code
-from rotordiag.features import speed_in_doubt
+from rotordiag.features import across_bearings, speed_in_doubt
 
 from ._patterns import name_index
 from .baselines import DEFAULT_RULE_CUTS, RuleOfThumb
@@ -430,8 +430,9 @@ def journals_at_one_position(names: Sequence[str], row: np.ndarray) -> np.ndarra
     The simulator that trained the model ties the two coupling-end journals together (MODEL.md: r3 = r4 on an
     aligned train), so to the model any static offset between them is a shaft-line offset; on a real train each
     journal sits by its own load, and a DC gap referenced to the wrong zero reads the same. The model's call on
-    these rows says whether the call rests on that offset (docs/robustness.md, transfer check). None when
-    either coupling bearing's centreline is not measured (no clearance, raw gaps, bearing absent)."""
+    these rows says whether the call rests on that offset (docs/robustness.md, transfer check); the columns across
+    bearings (``dcentre_*_b2_b3_per_c`` …) are built again from the moved journals, or they would keep the offset.
+    None when either coupling bearing's centreline is not measured (no clearance, raw gaps, bearing absent)."""
     index = name_index(names)
     found = {b: [index.get(f"b{b}_{q}") for q in CENTRELINE_FEATURES] for b in COUPLING_BEARINGS}
     if any(j is None or not np.isfinite(row[j]) for js in found.values() for j in js):
@@ -441,6 +442,7 @@ def journals_at_one_position(names: Sequence[str], row: np.ndarray) -> np.ndarra
     out = np.repeat(np.asarray(row, dtype=float)[None, :], 2, axis=0)
     out[0, cols[b3]] = row[cols[b2]]
     out[1, cols[b2]] = row[cols[b3]]
+    across_bearings(out, names)     # the columns across bearings read the journals as moved (features._across)
     return out
 
 

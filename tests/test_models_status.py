@@ -369,6 +369,30 @@ def test_journals_at_one_position_copies_the_coupling_centrelines_across():
     assert journals_apart_c(names, np.where(np.arange(8) == 2, np.nan, row)) is None
 
 
+def test_journals_at_one_position_builds_the_columns_across_bearings_again():
+    """The columns across bearings are built from the moved journals: with bearing 3 at bearing 2's position the
+    difference across the coupling is 0 and the eccentricity ratio 1; a copied column would keep the offset the
+    check is there to take away (v0004 candidate: 32 confident verdicts two bands off, journals apart)."""
+    from rotordiag.features import FEATURE_NAMES, across_bearings
+    from rotordiag.models.status import journals_at_one_position
+
+    names = list(FEATURE_NAMES)
+    row = np.full(len(names), np.nan)
+    index = {n: i for i, n in enumerate(names)}
+    for b, (x, y) in {1: (0.05, -0.5), 2: (0.1, -0.6), 3: (0.0, -0.2), 4: (0.02, -0.45)}.items():
+        row[index[f"b{b}_centre_x_per_c"]], row[index[f"b{b}_centre_y_per_c"]] = x, y
+        row[index[f"b{b}_centre_ecc_per_c"]] = float(np.hypot(x, y))
+    across_bearings(row, names)
+    assert row[index["dcentre_y_b2_b3_per_c"]] == pytest.approx(-0.4)
+    rows = journals_at_one_position(names, row)
+    assert rows is not None
+    for r in rows:
+        assert r[index["dcentre_x_b2_b3_per_c"]] == 0.0 and r[index["dcentre_y_b2_b3_per_c"]] == 0.0
+        assert r[index["centre_ecc_b2_b3_ratio"]] == pytest.approx(1.0)
+    assert rows[0][index["dcentre_y_b3_b4_per_c"]] == pytest.approx(-0.6 + 0.45)    # bearing 3 moved to 2's place
+    assert rows[1][index["dcentre_y_b2_b1_per_c"]] == pytest.approx(-0.2 + 0.5)     # bearing 2 moved to 3's place
+
+
 def test_a_misalignment_call_resting_on_the_static_offset_across_the_coupling_is_not_confident():
     """docs/robustness.md, "coupling journals apart": the simulator that trained the model ties the coupling-end
     journals together, so a healthy train whose exciter journal sits 0.2 c from the generator's was called
