@@ -141,14 +141,15 @@ def test_the_cli_opens_with_the_headline(tmp_path):
 
 
 @pytest.mark.parametrize(("name", "band", "status", "action"), [
-    ("aligned.csv", "aligned", "uncertain", "watch"), ("aligned.h5", "aligned", "uncertain", "watch"),
+    ("aligned.csv", "aligned", "confident", "none"), ("aligned.h5", "aligned", "confident", "none"),
     ("slight.csv", "slight", "confident", "watch"), ("moderate.csv", "moderate", "confident", "plan_alignment"),
     ("severe.csv", "severe", "confident", "align_soon"),
 ])
 def test_each_steady_shipped_example_gets_its_band(name, band, status, action):
     """The shipped examples are clean, steady cases of each state: with their sidecar (the clearance) the shipped
-    model gives each its band and the headline its action. The misaligned ones are confident; the aligned one is
-    doubted by v0002 for its Δ interval (0–0.199, reaching moderate): "probably aligned, not certain" — watch."""
+    model gives each its band and the headline its action, each confident (v0002 and v0003 doubted the aligned one
+    for its Δ interval, 0–0.199, reaching moderate: "probably aligned, not certain" — watch; v0004 reads the
+    columns across bearings: Δ 0, interval to 0.026 — "no action")."""
     from rotordiag.features import extract_features
     from rotordiag.features.examples import example_options, example_path
     from rotordiag.features.reader import ReadOptions, read_recording

@@ -35,13 +35,13 @@ def _recording(misalignment: float, late_samples: int = 0, **kw) -> Recording:
 @pytest.mark.parametrize("misalignment", [0.0, 0.3])
 def test_coupling_bearings_in_separate_takes_are_never_confident(bundle, misalignment):
     """Bearings 3 and 4 taken 5 ms later: stated as a second take, the verdict is uncertain and says why and what to
-    do; the phase across the coupling is then not what the model read. (One take: the misaligned machine is
-    confident; the aligned one is doubted for its Δ interval alone, reaching moderate with v0002.)"""
+    do; the phase across the coupling is then not what the model read. (One take: both are confident with v0004; the
+    aligned one was doubted for its Δ interval alone, reaching moderate, with v0002 and v0003.)"""
     from rotordiag.models.pipeline import diagnose_recording
 
     plain, _ = diagnose_recording(bundle, _recording(misalignment))
-    assert [r["code"] for r in plain.reasons] == ([] if misalignment else ["far_band_interval"])
-    assert plain.status == ("confident" if misalignment else "uncertain")
+    assert [r["code"] for r in plain.reasons] == []
+    assert plain.status == "confident"
     late = int(round(0.005 * 2048.0))
     stated, fr = diagnose_recording(bundle, _recording(misalignment, late, acquisitions="1,2;3,4"))
     assert stated.status == "uncertain"

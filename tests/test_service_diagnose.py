@@ -340,10 +340,14 @@ def test_models_list_says_which_probe_sets_the_model_reads(client):
         pytest.skip("the tiny registry lists no training probe sets")
     sets = {"-".join(map(str, p["bearings"])): p for p in card["probe_sets"]}
     assert sets["2-3"]["verdict"] == "reads" and sets["2"]["verdict"] == "no severity"
-    from rotordiag.models.checks.bearing_sets import MAX_FALSE_ALARM
+    from rotordiag.models.checks.bearing_sets import MAX_FALSE_ALARM, MAX_FALSE_ALARM_ANY, MIN_MACRO_F1
 
-    assert 0.0 <= sets["3"]["false_alarm"] <= 1.0      # bearing 3 alone: confident only under the bound
-    assert sets["3"]["verdict"] == ("never confident" if sets["3"]["false_alarm"] > MAX_FALSE_ALARM else "reads")
+    three = sets["3"]                                   # bearing 3 alone: as the shipped table's figures say
+    assert 0.0 <= three["false_alarm"] <= 1.0
+    if three["false_alarm"] > MAX_FALSE_ALARM_ANY or three["macro_f1"] < MIN_MACRO_F1:
+        assert three["verdict"] == "no severity"         # v0004: 35 % false alarms
+    else:
+        assert three["verdict"] == ("never confident" if three["false_alarm"] > MAX_FALSE_ALARM else "reads")
 
 
 def test_probes_at_the_outboard_bearings_alone_give_no_severity_and_say_what_to_add(client, rec):

@@ -2,8 +2,8 @@
 folder) must not change them silently.
 
 The values were recorded on main before the refactor (``rotordiag diagnose`` path: read, features, verdict with
-the shipped model of the time; now v0003, v0002's fit with
-the nearest training machines' journal attitudes kept). A change here is a change of behaviour: explain it in the commit, then update the pin.
+the shipped model of the time; now v0004, which reads the columns across bearings). A change here is a change of
+behaviour: explain it in the commit, then update the pin.
 The same recording in four formats (CSV, HDF5, UFF, NPY) must give the same verdict; the mil rendering is the µm
 value over 25.4 (an independent unit check).
 """
@@ -20,14 +20,15 @@ from tests.service_util import shipped_registry_usable
 pytestmark = pytest.mark.skipif(not shipped_registry_usable(), reason="no usable shipped model registry")
 
 # aligned.* ship with a sidecar giving the clearance (350 µm, issue 45: clean examples of each state). v0001 (lumped
-# only) answered them confident, Δ 0.027; v0002, trained on shaft trains too, has a wider Δ interval for this
-# lumped recording (0–0.199, reaching moderate): uncertain, far_band_interval. whirl.*: v0001 gave Δ 0.425 and
-# far_band_interval beside the two speed reasons. v0003 is v0002's fit (same training, same probabilities) with the
-# nearest training machines' attitudes kept: these lumped examples' neighbours are lumped plants, the same answers.
-_ALIGNED = dict(severity="aligned", status="uncertain", codes=["far_band_interval"],
-                misalignment=0.020470194118220677, misalignment_model=0.020470194118220677)
-_MISALIGNED = dict(severity="severe", status="uncertain", codes=["no_sync_signal", "speed_ambiguous"],
-                   misalignment=0.35, misalignment_model=0.3425686952061339)
+# only) answered them confident, Δ 0.027; v0002 and v0003, trained on shaft trains too, had a wider Δ interval for this
+# lumped recording (0–0.199, reaching moderate): uncertain, far_band_interval. v0004 reads the columns across bearings
+# (the journals' eccentricity ratios and position differences): Δ 0 with an interval to 0.026, confident again.
+# whirl.*: v0001 gave Δ 0.425 and far_band_interval beside the two speed reasons; v0003 0.343 without it; v0004 0.402
+# with it (interval 0.097–0.577).
+_ALIGNED = dict(severity="aligned", status="confident", codes=[],
+                misalignment=0.0, misalignment_model=0.0)
+_MISALIGNED = dict(severity="severe", status="uncertain",
+                   codes=["no_sync_signal", "speed_ambiguous", "far_band_interval"], misalignment=0.4024791822443665, misalignment_model=0.4024791822443665)
 PINNED = {"aligned.csv": _ALIGNED, "aligned.h5": _ALIGNED, "whirl.csv": _MISALIGNED,
           "whirl.h5": _MISALIGNED, "whirl.uff": _MISALIGNED, "whirl_2560hz.npy": _MISALIGNED}
 
@@ -46,7 +47,7 @@ def test_shipped_example_verdict_pinned(bundle, name):
     opts = load_options(path, None, {"sample_rate_hz": 2560} if path.suffix == ".npy" else {})
     verdict, res, _ = diagnose_one(bundle, path, opts)
     want = PINNED[name]
-    assert verdict.model_version == "v0003"
+    assert verdict.model_version == "v0004"
     assert verdict.severity == want["severity"]
     assert verdict.status == want["status"]
     assert [r["code"] for r in verdict.reasons] == want["codes"]

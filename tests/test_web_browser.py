@@ -831,7 +831,8 @@ def test_takes_saved_as_separate_files(server, browser, recordings, tmp_path):
 def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_path):
     """rotordiag.models.checks.bearing_sets on the page: probes at 1, 3, 4 are read from bearing 3 (a warning says so, the evidence
     keeps every bearing; never confident when the shipped table calls bearing 3 alone weak — v0001 did, v0002 does
-    not); probes at 1 and 4 alone give no severity and say what to add."""
+    not; no severity when it calls it uninformative — v0004), and the page says which set it read; probes at 1 and 4
+    alone give no severity and say what to add."""
     from rotordiag.models.checks import bearing_sets as bs
     from tests.service_util import shipped_registry_usable
 
@@ -843,6 +844,7 @@ def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_
     table = bs.load_capability(load_bundle(shipped_registry_dir()).card)
     assert table is not None, "the shipped probe-set table was measured for another model"
     weak = table["3"]["false_alarm"] > bs.MAX_FALSE_ALARM
+    informative = bs._informative(table["3"])
     data = recordings[0.2]
     d = browser
     for keep, name in (((1, 3, 4), "probes_134"), ((1, 4), "probes_14")):
@@ -858,6 +860,9 @@ def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_
         if keep == (1, 4):
             assert page["status"] == "inconclusive" and not d.find_element("id", "verdict-severity-row").is_displayed()
             assert "bearings 1 and 4" in reasons and "coupling bearing" in reasons
+        elif not informative:
+            assert page["status"] == "inconclusive" and codes[0] == "bearing_set_uninformative"
+            assert "the model reads bearing 3" in reasons and not d.find_element("id", "verdict-severity-row").is_displayed()
         else:
             assert ("bearing_set_weak" in codes) == weak and (page["status"] == "uncertain" or not weak)
             assert any("bearings 1 and 4 not read by the model" in w for w in page["warnings"])
