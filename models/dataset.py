@@ -53,16 +53,13 @@ def _str_array(a) -> np.ndarray:
 
 
 def features_code_hash() -> str:
-    """SHA-256 of the ``features`` package source (what the cached values depend on)."""
+    """SHA-256 of the ``features`` package source, every module below it, and the schema's names (what the cached
+    values depend on: ``rotordiag.core.version.source_hash``)."""
     from rotordiag import features
+    from rotordiag.core.version import source_hash
 
-    h = hashlib.sha256()
-    root = Path(features.__file__).parent
-    for p in sorted(root.glob("*.py")):
-        h.update(p.name.encode())
-        h.update(p.read_bytes())
-    h.update("|".join(features.FEATURE_NAMES).encode())
-    return h.hexdigest()
+    text = source_hash(Path(features.__file__).parent) + "|" + "|".join(features.FEATURE_NAMES)
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def dataset_hash(path: str | Path) -> str:

@@ -8,6 +8,7 @@ skips without it; everything else reads the cached set with NumPy.
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -675,3 +676,21 @@ def test_source_hash_follows_every_python_file_below_the_package(tmp_path):
     assert len({first, second, third}) == 3
     (tmp_path / "notes.txt").write_text("not code")
     assert source_hash(tmp_path) == third
+
+
+def test_the_feature_cache_key_follows_the_features_source_and_the_schema(monkeypatch):
+    """models.dataset's feature cache is keyed by every module below features/ (source_hash, as the robustness
+    sets' cache by the simulator's) and by the schema's names: a changed extractor never serves old values."""
+    from rotordiag import features
+    from rotordiag.core import version
+    from rotordiag.models.dataset import features_code_hash
+
+    key = features_code_hash()
+    assert key == features_code_hash()
+    seen = []
+    monkeypatch.setattr(version, "source_hash", lambda package_dir: seen.append(package_dir) or "another extractor")
+    assert features_code_hash() != key
+    assert seen == [Path(features.__file__).parent]
+    changed = features_code_hash()
+    monkeypatch.setattr(features, "FEATURE_NAMES", (*features.FEATURE_NAMES, "one_more_column"))
+    assert features_code_hash() != changed
