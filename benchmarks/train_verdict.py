@@ -62,6 +62,7 @@ def read_samples(data: Path) -> list[dict]:
                     "delta": float(f["labels/misalignment"][i]),
                     "mechanism": mcodes[int(f["parameters/simulated_mechanism"][i])],
                     "family": f["parameters/plant_source"][i].decode().removeprefix("preset:"),
+                    "offset_angle_rad": float(f["parameters/offset_angle_rad"][i]),
                     "log_decrement": float(f["diagnostics/log_decrement"][i]),
                 })
     return out
