@@ -485,39 +485,69 @@ def shift_journal_dc(w: np.ndarray, bearings: tuple[int, ...], clearance_um: flo
         w[2 * k + j] += r * math.cos(a - math.radians(angle))
 
 
+def apply_faults(w: np.ndarray, cond: Condition, bearings: tuple[int, ...], clearance_um: float, speed_rpm: float,
+                 fs_hz: float, rng: np.random.Generator) -> tuple[np.ndarray, int]:
+    """``cond``'s faults on measured waveforms ``w`` (two channels per bearing of ``bearings``, µm; changed in place
+    where the record keeps its length): bearing 3's DC shifted, the DC as a field recording gives it, a probe
+    inverted, a spike, mains pickup, bearings 3–4 in a later take (the record cut to the common length). Drawn from
+    ``rng`` in that order. Returns the waveforms and the later take's delay in samples (0: one take)."""
+    shift_journal_dc(w, bearings, clearance_um, cond.journal3_dc_shift_c, rng)
+    if cond.dc == "gap":
+        w += RAW_GAP_UM
+    elif cond.dc == "removed":
+        w -= w.mean(axis=1, keepdims=True)
+    if cond.inverted_probe is not None and cond.inverted_probe[0] in bearings:
+        b, j = cond.inverted_probe
+        w[2 * bearings.index(b) + j] *= -1.0
+    if cond.spike_um:
+        w[rng.integers(0, w.shape[0]), rng.integers(0, w.shape[1])] += cond.spike_um
+    if cond.pickup is not None:
+        order, amp_um = cond.pickup
+        t_s = np.arange(w.shape[1]) / fs_hz
+        phase = rng.uniform(0.0, 2.0 * np.pi, size=(w.shape[0], 1) if cond.pickup_per_channel else None)
+        w += amp_um * np.cos(2.0 * np.pi * order * speed_rpm / 60.0 * t_s + phase)
+    late = 0
+    if cond.second_take_ms[1] > 0:
+        late = int(round(rng.uniform(*cond.second_take_ms) * 1e-3 * fs_hz))
+        rows = [2 * k + j for k, b in enumerate(bearings) if b in (3, 4) for j in (0, 1)]
+        w[rows, :-late] = w[rows, late:]
+        w = w[:, :-late]
+    return w, late
+
+
+def sent_bearings(cond: Condition, bearings: tuple[int, ...]) -> tuple[int, ...]:
+    """The bearing numbers the recording is sent with: numbered from the exciter end, or bearings 2 and 3 mixed up."""
+    sent = tuple(5 - b for b in bearings) if cond.numbered_from_exciter else bearings
+    if cond.coupling_bearings_swapped:
+        sent = tuple({2: 3, 3: 2}.get(b, b) for b in sent)
+    return sent
+
+
+def told_extra(cond: Condition, speed_rpm: float, stated: float | None, keyphasor: Any,
+               rng: np.random.Generator) -> dict[str, Any]:
+    """What else the user states under ``cond``: the keyphasor, a nominal speed range (drawn from ``rng``) when
+    neither the speed nor a keyphasor is given, the acquisitions."""
+    told: dict[str, Any] = {} if keyphasor is None else {"keyphasor_times_s": keyphasor}
+    if cond.speed_range_stated and stated is None and keyphasor is None:
+        h = cond.speed_range_stated
+        nominal = speed_rpm * (1.0 + rng.uniform(-h / 2, h / 2))
+        told["speed_range_rpm"] = (nominal * (1.0 - h), nominal * (1.0 + h))
+    if cond.acquisitions:
+        told["acquisitions"] = cond.acquisitions
+    return told
+
+
 def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed: int) -> list[Outcome]:
     def one(i: int, c: dict, d, o: Outcome) -> Outcome:
         rng = measurement_rng(cond, seed, i)
         steady = bool(cond.keyphasor_fault) or cond.keyphasor_per_take
         w = measure(d, c["speed_rpm"], cond, rng, revs=cond.revs, **({"speed_fluctuation": 0.0} if steady else {}))
-        shift_journal_dc(w, cond.bearings, c["plant"]["clearance_m"] * 1e6, cond.journal3_dc_shift_c, rng)
-        if cond.dc == "gap":
-            w += RAW_GAP_UM
-        elif cond.dc == "removed":
-            w -= w.mean(axis=1, keepdims=True)
-        if cond.inverted_probe is not None and cond.inverted_probe[0] in cond.bearings:
-            b, j = cond.inverted_probe
-            w[2 * cond.bearings.index(b) + j] *= -1.0
-        if cond.spike_um:
-            w[rng.integers(0, w.shape[0]), rng.integers(0, w.shape[1])] += cond.spike_um
-        if cond.pickup is not None:
-            order, amp_um = cond.pickup
-            t_s = np.arange(w.shape[1]) / FS_HZ
-            phase = rng.uniform(0.0, 2.0 * np.pi, size=(w.shape[0], 1) if cond.pickup_per_channel else None)
-            w += amp_um * np.cos(2.0 * np.pi * order * c["speed_rpm"] / 60.0 * t_s + phase)
-        late = 0
-        if cond.second_take_ms[1] > 0:
-            late = int(round(rng.uniform(*cond.second_take_ms) * 1e-3 * FS_HZ))
-            rows = [2 * k + j for k, b in enumerate(cond.bearings) if b in (3, 4) for j in (0, 1)]
-            w[rows, :-late] = w[rows, late:]
-            w = w[:, :-late]
+        w, late = apply_faults(w, cond, cond.bearings, c["plant"]["clearance_m"] * 1e6, c["speed_rpm"], FS_HZ, rng)
         clearance = c["plant"]["clearance_m"] * 1e6 if cond.clearance_given else None
         if not cond.speed_given:
             o.speed_line = running_speed_line(w, FS_HZ, c["speed_rpm"])
         stated = c["speed_rpm"] * (1.0 + cond.speed_stated_error) if cond.speed_given else None
-        bearings = tuple(5 - b for b in cond.bearings) if cond.numbered_from_exciter else cond.bearings
-        if cond.coupling_bearings_swapped:
-            bearings = tuple({2: 3, 3: 2}.get(b, b) for b in bearings)
+        bearings = sent_bearings(cond, cond.bearings)
         keyphasor: Any = None
         if steady:                          # pulses once per revolution from an arbitrary angle (made faulty)
             period_s = 60.0 / c["speed_rpm"]
@@ -531,13 +561,7 @@ def run_condition(bundle, cond: Condition, cases: list[dict], disps: list, seed:
                              else np.sort(np.concatenate([pulses, pulses + 0.37 * period_s])))
                 keyphasor = keyphasor[keyphasor < t_end]
             stated = None
-        told: dict[str, Any] = {} if keyphasor is None else {"keyphasor_times_s": keyphasor}
-        if cond.speed_range_stated and stated is None and keyphasor is None:
-            h = cond.speed_range_stated
-            nominal = c["speed_rpm"] * (1.0 + rng.uniform(-h / 2, h / 2))
-            told["speed_range_rpm"] = (nominal * (1.0 - h), nominal * (1.0 + h))
-        if cond.acquisitions:
-            told["acquisitions"] = cond.acquisitions
+        told = told_extra(cond, c["speed_rpm"], stated, keyphasor, rng)
         return diagnose_waveforms(bundle, w, bearings, FS_HZ, stated, clearance, o, **told)
 
     return _over_cases(cases, disps, one)
