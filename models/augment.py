@@ -21,7 +21,8 @@ simulate again, because they act on the measured signal as a whole:
   clearances in a uniform direction. The simulator ties the two coupling-end journals together
   (MODEL.md: r3 = r4 on an aligned train), so in its data a static offset between bearings 2 and 3 is
   always a shaft-line offset; on a real train each journal sits by its own load, and a gap referenced to
-  another zero reads the same (docs/robustness.md, transfer check).
+  another zero reads the same (docs/robustness.md, transfer check). ``journals_apart_models`` limits it to the
+  samples of some simulations (``lumped``: the tied model; a finite-element train's journals already sit apart).
 
 Each sample gets ``copies`` extra rows (the original row is kept unchanged); copies keep
 the sample's plant id, so held-out evaluation never splits a plant. Draws come from
@@ -31,7 +32,7 @@ sample's copies do not depend on which other samples are in the file.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -39,7 +40,9 @@ import numpy as np
 __all__ = ["Augmentation", "Variant"]
 
 _KEYS = {"copies", "gain_mismatch", "bearing_sets", "speed_unknown", "runout_scaled", "journals_apart",
-         "journals_apart_c", "seed"}
+         "journals_apart_c", "journals_apart_models", "seed"}
+#: how a sample was simulated (``simulator.dataset.spec.PlantSpec.model``; ``models.families.SIMULATIONS``)
+_SIMULATIONS = ("lumped", "train")
 
 
 @dataclass(frozen=True)
@@ -89,6 +92,9 @@ class Augmentation:
         uniform direction (needs the sample's clearance).
     journals_apart_c : float
         Largest such shift, in clearances.
+    journals_apart_models : tuple of str
+        The simulations whose samples get that shift (empty: every sample); :meth:`for_simulation` gives the
+        augmentation of one dataset file.
     seed : int
     """
 
@@ -99,6 +105,7 @@ class Augmentation:
     runout_scaled: float = 0.0
     journals_apart: float = 0.0
     journals_apart_c: float = 0.3
+    journals_apart_models: tuple[str, ...] = ()
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -114,6 +121,9 @@ class Augmentation:
             raise ValueError(f"[augment] journals_apart: a share in [0, 1], got {self.journals_apart!r}")
         if not 0.0 <= self.journals_apart_c <= 1.0:
             raise ValueError(f"[augment] journals_apart_c: clearances in [0, 1], got {self.journals_apart_c!r}")
+        if any(m not in _SIMULATIONS for m in self.journals_apart_models):
+            raise ValueError(f"[augment] journals_apart_models: simulations among {list(_SIMULATIONS)}, "
+                             f"got {list(self.journals_apart_models)}")
         for bearings, w in self.bearing_sets:
             if not bearings or any(b not in (1, 2, 3, 4) for b in bearings) or len(set(bearings)) != len(bearings):
                 raise ValueError(f"[augment] bearing_sets: each set is distinct bearings 1–4, got {list(bearings)}")
@@ -142,14 +152,25 @@ class Augmentation:
                    speed_unknown=float(d.get("speed_unknown", 0.0)),
                    runout_scaled=float(d.get("runout_scaled", 0.0)),
                    journals_apart=float(d.get("journals_apart", 0.0)),
-                   journals_apart_c=float(d.get("journals_apart_c", 0.3)), seed=seed)
+                   journals_apart_c=float(d.get("journals_apart_c", 0.3)),
+                   journals_apart_models=tuple(str(m) for m in d.get("journals_apart_models", ())), seed=seed)
 
     def to_dict(self) -> dict:
         return {"copies": self.copies, "gain_mismatch": self.gain_mismatch,
                 "bearing_sets": [{"bearings": list(b), "weight": w} for b, w in self.bearing_sets],
                 "speed_unknown": self.speed_unknown, "runout_scaled": self.runout_scaled, "seed": self.seed,
                 **({"journals_apart": self.journals_apart, "journals_apart_c": self.journals_apart_c}
-                   if self.journals_apart > 0 else {})}
+                   if self.journals_apart > 0 else {}),
+                **({"journals_apart_models": list(self.journals_apart_models)}
+                   if self.journals_apart > 0 and self.journals_apart_models else {})}
+
+    def for_simulation(self, model: str | None) -> Augmentation:
+        """The augmentation of a dataset file whose samples were simulated by ``model`` (``lumped``, ``train``;
+        None: not recorded): without the journals' shift when ``journals_apart_models`` leaves that model out, so
+        the file's rows and cache key are those of an augmentation without it."""
+        if self.journals_apart == 0 or not self.journals_apart_models or model in self.journals_apart_models:
+            return self
+        return replace(self, journals_apart=0.0, journals_apart_models=())
 
     @property
     def key(self) -> str:

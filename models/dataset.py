@@ -247,6 +247,7 @@ def load_feature_table(
         assert X is not None and names is not None
         X = X[good]
         if augment is not None and augment.copies > 0:
+            augment = augment.for_simulation(_simulation(f))
             X_aug = _augmented_rows(f, r, augment, key, path, cache)
             ok_aug = ~np.all(np.isnan(X_aug), axis=1)
             failed_aug = int((~ok_aug).sum())
@@ -288,6 +289,13 @@ def _speed_estimate_off(X: np.ndarray, names: list[str], true_speed_rpm: np.ndar
     with np.errstate(invalid="ignore", divide="ignore"):
         err = np.abs(est / np.asarray(true_speed_rpm, dtype=float) - 1.0)
     return np.isfinite(est) & (err > SPEED_COPY_MAX_ERROR)
+
+
+def _simulation(f) -> str | None:
+    """How the file's samples were simulated (its spec's ``plant.model``, ``lumped`` when the spec leaves it out as
+    specs written before trains do); None for a file without a spec."""
+    spec = f.attrs.get("spec_json")
+    return str((json.loads(spec).get("plant") or {}).get("model", "lumped")) if spec else None
 
 
 def _augmented_rows(f, rows: np.ndarray, augment: Augmentation, key: str, path: Path, cache: bool) -> np.ndarray:

@@ -242,6 +242,31 @@ def test_journals_apart_copies_move_bearing_3s_static_reading_only(small, monkey
     with pytest.raises(ValueError, match="journals_apart"):
         Augmentation(journals_apart=2.0)
 
+
+def test_journals_apart_models_shift_only_the_named_simulations_samples(small):
+    """[augment] journals_apart_models = ["lumped"]: a lumped file's copies get the journals' shift; for a train
+    file the augmentation, and so its rows and cache key, is the one without it (a train's journals already sit
+    apart). The train file's rows: tests/test_dataset_trains.py."""
+    from rotordiag.models.augment import Augmentation
+    from rotordiag.models.dataset import _simulation
+
+    _, out, _ = small
+    with h5py.File(out, "r") as f:
+        assert _simulation(f) == "lumped"                 # the small spec simulates the paper's model
+    only_trains = Augmentation(copies=2, journals_apart=1.0, journals_apart_models=("train",), seed=3)
+    only_lumped = Augmentation(copies=2, journals_apart=1.0, journals_apart_models=("lumped",), seed=3)
+    plain = Augmentation(copies=2, seed=3)
+    assert only_trains.for_simulation("lumped") == plain and only_trains.for_simulation("lumped").key == plain.key
+    assert only_lumped.for_simulation("lumped") is only_lumped and only_lumped.key != plain.key
+    assert only_lumped.for_simulation(None) == plain                  # a file that does not say: not shifted
+    assert Augmentation(copies=2, journals_apart=1.0, seed=3).for_simulation("train").journals_apart == 1.0  # all
+    shifts = [v.journal3_shift_c for v in only_lumped.variants(1, [1, 1, 2, 2, 3, 3, 4, 4])]
+    assert all(s != (0.0, 0.0) for s in shifts)                       # share 1: every copy
+    assert "journals_apart_models" not in Augmentation(copies=2, journals_apart_models=("lumped",)).to_dict()
+    with pytest.raises(ValueError, match="journals_apart_models"):
+        Augmentation(journals_apart=1.0, journals_apart_models=("ross",))
+
+
 def test_contact_samples_are_kept_with_their_status(tmp_path):
     spec = write_spec(tmp_path / "spec.toml", n_samples=2)
     text = spec.read_text().replace("misalignment = {min = 0.0, max = 0.5}", "misalignment = 0.9") \

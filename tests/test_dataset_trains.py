@@ -171,6 +171,14 @@ def test_a_train_dataset_is_the_train_simulated_directly_and_reads_as_features(t
 
     table = load_feature_table(out, cache=False)
     assert table.X.shape[0] == 2 and np.isfinite(table.X).mean() > 0.9
+    # [augment] journals_apart_models = ["lumped"]: a train file's copies are those without the journals' shift
+    from rotordiag.models.augment import Augmentation
+
+    plain = load_feature_table(out, cache=False, augment=Augmentation(copies=1, seed=3)).X
+    lumped_only = Augmentation(copies=1, journals_apart=1.0, journals_apart_models=("lumped",), seed=3)
+    np.testing.assert_array_equal(load_feature_table(out, cache=False, augment=lumped_only).X, plain)
+    every = Augmentation(copies=1, journals_apart=1.0, seed=3)           # the shift does reach a train's columns
+    assert not np.array_equal(load_feature_table(out, cache=False, augment=every).X, plain, equal_nan=True)
     np.testing.assert_allclose(table.misalignment, delta)
     # the direction labels of models.direction: the spec's offset direction per row; no α (the spec keeps it 0)
     np.testing.assert_allclose(table.offset_angle_rad, -math.pi / 2)
