@@ -162,7 +162,7 @@ def test_shipped_model_reads_bearing_3_alone_when_the_probes_are_at_1_3_4():
     np.testing.assert_allclose(list(full.probabilities.values()), list(alone.probabilities.values()), atol=0.02)
     assert full.model_severity == alone.model_severity
     figures = _shipped_figures("3")
-    if not bs._informative(figures):           # v0004: 35.4 % false alarms from bearing 3 alone
+    if not bs.informative(figures):           # v0004: 35.4 % false alarms from bearing 3 alone
         assert full.status == INCONCLUSIVE and full.reasons[0]["code"] == "bearing_set_uninformative"
         assert "the model reads bearing 3 (the largest of its training sets within bearings 1, 3 and 4)" in str(
             full.reasons[0]["message"])
@@ -210,10 +210,10 @@ def test_shipped_model_leaves_out_a_bearing_with_an_inverted_probe():
     figures = _shipped_figures("3")
     # reverse_whirl doubts it whatever the set; without bearing 2 the training set left is bearing 3 alone: no severity
     # (v0004: 35.4 % false alarms), weak or not as the shipped table says
-    assert "reverse_whirl" in codes and v.status == ("uncertain" if bs._informative(figures) else INCONCLUSIVE)
-    assert ("bearing_set_uninformative" in codes) == (not bs._informative(figures))
-    assert ("bearing_set_weak" in codes) == (bs._informative(figures) and figures["false_alarm"] > bs.MAX_FALSE_ALARM)
-    if bs._informative(figures):
+    assert "reverse_whirl" in codes and v.status == ("uncertain" if bs.informative(figures) else INCONCLUSIVE)
+    assert ("bearing_set_uninformative" in codes) == (not bs.informative(figures))
+    assert ("bearing_set_weak" in codes) == (bs.informative(figures) and figures["false_alarm"] > bs.MAX_FALSE_ALARM)
+    if bs.informative(figures):
         assert any(w.code == "bearings_not_read" and "bearing 2: the 1X whirls backward" in w.values["detail"]
                    for w in v.warnings)
     else:

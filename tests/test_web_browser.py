@@ -844,7 +844,7 @@ def test_probes_only_at_bearings_1_3_4_and_1_4(server, browser, recordings, tmp_
     table = bs.load_capability(load_bundle(shipped_registry_dir()).card)
     assert table is not None, "the shipped probe-set table was measured for another model"
     weak = table["3"]["false_alarm"] > bs.MAX_FALSE_ALARM
-    informative = bs._informative(table["3"])
+    informative = bs.informative(table["3"])
     data = recordings[0.2]
     d = browser
     for keep, name in (((1, 3, 4), "probes_134"), ((1, 4), "probes_14")):

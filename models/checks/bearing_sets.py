@@ -27,7 +27,7 @@ from ..status import INCONCLUSIVE, UNCERTAIN, Reason
 from . import CheckContext
 
 __all__ = ["CAPABILITY_PATH", "MAX_FALSE_ALARM", "MAX_FALSE_ALARM_ANY", "MIN_MACRO_F1", "BearingPlan", "answering_set", "bearing_plan",
-           "set_key", "trained_sets", "load_capability", "leave_out_bearings", "probe_sets", "bearing_set_check"]
+           "set_key", "trained_sets", "load_capability", "leave_out_bearings", "probe_sets", "bearing_set_check", "informative"]
 
 #: held-out figures of the shipped model per probe set (``benchmarks/bench_bearing_sets.py --write``)
 CAPABILITY_PATH = Path(__file__).resolve().parent.parent / "default" / "bearing_sets.json"
@@ -95,12 +95,14 @@ def load_capability(card: Mapping[str, Any] | None, path: Path = CAPABILITY_PATH
     return dict(table.get("figures", {}))
 
 
-def _informative(f: Mapping[str, Any]) -> bool:
+def informative(f: Mapping[str, Any]) -> bool:
+    """Whether a probe set's measured figures (its ``false_alarm`` and ``macro_f1`` on held-out plants) let the model
+    give a severity from it at all (else ``bearing_set_uninformative``: no severity)."""
     return bool(f["false_alarm"] <= MAX_FALSE_ALARM_ANY and f["macro_f1"] >= MIN_MACRO_F1)
 
 
 def _passes(f: Mapping[str, Any] | None) -> bool:
-    return f is not None and _informative(f) and f["false_alarm"] <= MAX_FALSE_ALARM
+    return f is not None and informative(f) and f["false_alarm"] <= MAX_FALSE_ALARM
 
 
 @dataclass(frozen=True)
@@ -161,7 +163,7 @@ class BearingPlan:
             return []
         good = [set_key(s) for s in self.trained if _passes((self.table or {}).get(set_key(s)))]
         sets = ", ".join(good) if good else "the model was trained on"
-        if _informative(f):
+        if informative(f):
             return [Reason("bearing_set_weak", UNCERTAIN,
                            {"bearings": _said(self.answering), "probe_set": set_key(self.answering),
                             "false_alarm": f["false_alarm"], "macro_f1": f["macro_f1"],
@@ -215,7 +217,7 @@ def probe_sets(card: Mapping[str, Any] | None) -> list[dict] | None:
     for s, _ in trained:
         f = table.get(set_key(s))
         verdict = ("not measured" if f is None else "reads" if _passes(f) else
-                   "never confident" if _informative(f) else "no severity")
+                   "never confident" if informative(f) else "no severity")
         out.append({"bearings": list(s), "verdict": verdict,
                     **({"macro_f1": f["macro_f1"], "false_alarm": f["false_alarm"], "n": f["n"]} if f else {})})
     return out
