@@ -299,21 +299,19 @@ class JobManager:
             if self.stopping.is_set():
                 raise JobInterrupted("server shutting down")
             if self._client is None:
-                import logging as _logging
-
-                from distributed import Client, LocalCluster
-
                 address = self.settings.dask_scheduler_address
                 if address:
+                    from distributed import Client
+
                     log.info("connecting to Dask scheduler %s", address)
                     self._client = Client(address, timeout=30, set_as_default=False)
                 else:
+                    from rotordiag.simulator.runner import start_local_cluster
+
                     log.info("starting a local Dask cluster with %d worker process(es)",
                              self.settings.dask_local_workers)
-                    self._cluster = LocalCluster(
-                        n_workers=self.settings.dask_local_workers, threads_per_worker=1, processes=True,
-                        dashboard_address=None, silence_logs=_logging.ERROR)
-                    self._client = Client(self._cluster, set_as_default=False)
+                    self._client, self._cluster = start_local_cluster(self.settings.dask_local_workers,
+                                                                      dashboard_address=None)
             return self._client
 
     def cancel_futures(self, futures: list[Any], restart: bool = True) -> None:

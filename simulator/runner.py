@@ -17,7 +17,11 @@ Where the work runs
   event-loop watchdog, in every process; the 0.5 s system monitor). With two
   workers they burnt about 0.12 CPU-s per second in all (parent 0.045, workers
   0.036 each; 0.027 without them), CPU time that the workers' simulations lack
-  when every core runs a worker.
+  when every core runs a worker. Its workers log the heartbeat that meets a scheduler
+  already closing (``Failed to communicate with scheduler during heartbeat``, a
+  race inside ``distributed``'s shutdown when a worker is busy in a task) as a
+  warning without traceback (``simulator._dask_plugins``); the service's job
+  cluster is started the same way (:func:`start_local_cluster`).
 * ``scheduler_address="tcp://host:8786"``: an existing scheduler (for example
   the ``docker-compose.yml`` cluster). The runner connects a client, and closes
   only that client; the cluster is left running.
@@ -54,7 +58,7 @@ import uuid
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-__all__ = ["TaskError", "default_n_workers", "run_tasks", "LOCAL_CLUSTER_CONFIG"]
+__all__ = ["TaskError", "default_n_workers", "run_tasks", "start_local_cluster", "LOCAL_CLUSTER_CONFIG"]
 
 #: Dask settings of the local cluster the runner starts (not applied to an existing
 #: scheduler or client: those keep their own configuration). Memory limits, heartbeats
@@ -64,6 +68,36 @@ LOCAL_CLUSTER_CONFIG: dict[str, Any] = {
     "distributed.admin.tick.interval": "1s",            # event-loop watchdog (default 20 ms, in every process)
     "distributed.admin.system-monitor.interval": "5s",  # dashboard CPU/memory/network graphs (default 0.5 s)
 }
+
+
+def start_local_cluster(n_workers: int, *, dashboard_address: str | None = ":0") -> tuple[Any, Any]:
+    """A ``distributed.LocalCluster`` of ``n_workers`` one-thread worker processes and a client of it.
+
+    Started with :data:`LOCAL_CLUSTER_CONFIG`, logs at ERROR, and ``simulator._dask_plugins.QuietHeartbeatRace``
+    in every worker.
+    The caller closes both (the client first). ``dashboard_address=None``: no dashboard.
+
+    Returns
+    -------
+    (distributed.Client, distributed.LocalCluster)
+    """
+    import dask
+    from distributed import Client, LocalCluster
+
+    from ._dask_plugins import QuietHeartbeatRace
+
+    # the nannies hand this configuration on to the worker processes they start
+    with dask.config.set(LOCAL_CLUSTER_CONFIG):
+        cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                               dashboard_address=dashboard_address, silence_logs=logging.ERROR)
+    client = Client(cluster, set_as_default=False)
+    try:
+        client.register_plugin(QuietHeartbeatRace(), name=QuietHeartbeatRace.name)
+    except BaseException:
+        client.close()
+        cluster.close()
+        raise
+    return client, cluster
 
 
 class TaskError(RuntimeError):
@@ -159,7 +193,7 @@ def run_tasks(
         When ``scheduler_address`` cannot be reached within ``connect_timeout_s``.
     """
     _validate(n_workers, scheduler_address, client, max_in_flight)
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import Client, as_completed
     from tqdm.auto import tqdm
 
     if total is None and hasattr(tasks, "__len__"):
@@ -171,18 +205,7 @@ def run_tasks(
         if scheduler_address is not None:
             own_client = Client(scheduler_address, timeout=connect_timeout_s, set_as_default=False)
         else:
-            import dask
-
-            # the nannies hand this configuration on to the worker processes they start
-            with dask.config.set(LOCAL_CLUSTER_CONFIG):
-                cluster = LocalCluster(
-                    n_workers=n_workers or default_n_workers(),
-                    threads_per_worker=1,
-                    processes=True,
-                    dashboard_address=":0",
-                    silence_logs=logging.ERROR,
-                )
-            own_client = Client(cluster, set_as_default=False)
+            own_client, cluster = start_local_cluster(n_workers or default_n_workers())
         client = own_client
 
     bar = tqdm(total=total, desc=desc, unit=unit, disable=not progress, dynamic_ncols=True, smoothing=0.1)

@@ -148,3 +148,70 @@ def test_unreachable_scheduler_is_a_clear_error():
     with pytest.raises(OSError):
         next(run_tasks(math.factorial, [1], scheduler_address=f"tcp://127.0.0.1:{port}",
                        connect_timeout_s=1.0, progress=False))
+
+
+# ------------------------------------------------------------------ the shutdown race's heartbeat, quietly
+def _log_a_failed_heartbeat() -> str:
+    """On a worker: log a failed heartbeat exactly as ``distributed.Worker.heartbeat`` does, with warnings on,
+    and return what a handler wrote."""
+    import io
+    import logging
+
+    from rotordiag.simulator._dask_plugins import HEARTBEAT_RACE_MESSAGE
+
+    log = logging.getLogger("distributed.worker")
+    stream = io.StringIO()
+    handler = logging.StreamHandler(stream)
+    handler.setFormatter(logging.Formatter("%(levelname)s %(message)s"))
+    level = log.level
+    log.addHandler(handler)
+    log.setLevel(logging.WARNING)
+    try:
+        try:
+            raise OSError("in <TCP (closed) ConnectionPool.heartbeat_worker>: Stream is closed")
+        except OSError:
+            log.exception(HEARTBEAT_RACE_MESSAGE + ".")
+        log.error("another error", exc_info=(ValueError, ValueError("kept"), None))
+    finally:
+        log.removeHandler(handler)
+        log.setLevel(level)
+    return stream.getvalue()
+
+
+def test_the_heartbeat_race_filter_drops_the_traceback_only():
+    import logging
+
+    from rotordiag.simulator._dask_plugins import HEARTBEAT_RACE_MESSAGE, HeartbeatRaceFilter
+
+    def record(msg, exc=True):
+        try:
+            raise OSError("Stream is closed")
+        except OSError as e:
+            info = (type(e), e, e.__traceback__) if exc else None
+        return logging.LogRecord("rotordiag.test.heartbeat", logging.ERROR, __file__, 1, msg, (), info)
+
+    f = HeartbeatRaceFilter()
+    logging.getLogger("rotordiag.test.heartbeat").setLevel(logging.WARNING)
+    r = record(HEARTBEAT_RACE_MESSAGE + ".")
+    assert f.filter(r) and r.levelno == logging.WARNING and r.levelname == "WARNING" and r.exc_info is None
+    other = record("Unexpected exception during heartbeat. Closing worker.")
+    assert f.filter(other) and other.levelno == logging.ERROR and other.exc_info is not None
+    logging.getLogger("rotordiag.test.heartbeat").setLevel(logging.ERROR)   # a logger at errors only: dropped
+    assert not f.filter(record(HEARTBEAT_RACE_MESSAGE + "."))
+
+
+def test_a_started_local_clusters_workers_log_the_heartbeat_race_without_a_traceback(client):
+    from rotordiag.simulator.runner import start_local_cluster
+
+    plain = list(client.run(_log_a_failed_heartbeat).values())     # a cluster started without the plugin
+    assert all("Traceback" in w and "OSError: in <TCP (closed)" in w for w in plain), plain
+    own, cluster = start_local_cluster(1, dashboard_address=None)   # as the service's job cluster and the runner's
+    try:
+        (written,) = own.run(_log_a_failed_heartbeat).values()
+        assert "WARNING Failed to communicate with scheduler during heartbeat." in written, written
+        assert "OSError" not in written and "Traceback" not in written, written
+        assert "ERROR another error\nValueError: kept" in written, written     # other records as they were
+    finally:
+        own.close()
+        cluster.close()
+    assert cluster.status.name == "closed"
