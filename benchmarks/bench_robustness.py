@@ -225,6 +225,10 @@ def report(rows, ross, args, wall_s, bundle=None, ood_rows: dict | None = None,
     return "\n".join(text) + "\n"
 
 
+#: issue 48: a measurement condition's false alarms at most this (healthy machines given any class, any status)
+ROW_FALSE_ALARM_MAX = 0.05
+
+
 def trains_section(rows: dict[str, dict], families: list[dict], data: Path, wall_s: float) -> list[str]:
     """The report's section on the held-out shaft trains (issue 48, item 5): every condition that applies to a
     recording as measured (``models.robustness_trains``), the model and the rule of thumb, the confident answers,
@@ -253,8 +257,11 @@ def trains_section(rows: dict[str, dict], families: list[dict], data: Path, wall
     ]
 
 
-#: issue 48: a measurement condition's false alarms at most this (healthy machines given any class, any status)
-ROW_FALSE_ALARM_MAX = 0.05
+def train_parts() -> tuple[str, ...]:
+    """The judged trains' parts (``benchmarks/train_verdict.py``'s, which builds them)."""
+    from train_verdict import PARTS
+
+    return tuple(PARTS)
 
 
 def run_trains(bundle, data: Path, seed: int) -> tuple[dict[str, dict], list[dict]]:
@@ -337,9 +344,7 @@ def main(argv=None) -> int:
     if args.ross_band.exists():
         ood_rows[f"other machines: ROSS ({args.ross_band.name})"] = ood_summary(run_ross(bundle, args.ross_band))
     trains: list[str] = []
-    from train_verdict import PARTS as TRAIN_PARTS
-
-    if all((args.trains / f"{part}.h5").is_file() for part in TRAIN_PARTS):
+    if all((args.trains / f"{part}.h5").is_file() for part in train_parts()):
         t1 = time.perf_counter()
         train_rows, families = run_trains(bundle, args.trains, args.seed)
         shown = args.trains.absolute().relative_to(ROOT) if args.trains.absolute().is_relative_to(ROOT) else args.trains

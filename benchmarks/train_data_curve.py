@@ -1,7 +1,7 @@
 """What would lift the verdict on shaft trains: more training trains, or features across bearings? (issue 48)
 
     .venv/bin/python benchmarks/train_data_curve.py --train-data DIR --data DIR [--curve 0.25,0.5,1] [--ablation]
-        [--without-across]
+        [--without-across] [--capacity DEFAULT_DATA]
 
 ``--train-data``: the four shaft-train training parts (``models/trains/dataset_trains_*.toml`` generated with other
 seeds, as for ``benchmarks/train_verdict.py --train-data``); ``--data``: the judged trains (the same families, other
@@ -20,6 +20,13 @@ machines). Two measurements, each printed as a Markdown table:
   out — and the 1X / 2X orbit ratios), quantities a tree can only approximate from the per-bearing columns.
   Judged on every family (trained on every family) and on each family trained on the others (a design the
   regressor never saw). Under a minute.
+- ``--capacity DEFAULT_DATA`` (the seventeen parts of ``make default-model``): is the Δ estimate limited by what the
+  recordings carry or by the shipped recipe? A plain boosted Δ regressor on the shipped training table (every part,
+  augmented as ``train.toml``; the rows with all four centrelines, as the judged recordings have; ``bench_learning_curve.default_training_table``) at the shipped
+  regressor's settings and with more capacity; then, on the training trains' own rows (no augmentation), one
+  regressor per family, and one per family and coupling (the coupling known, as a plant's shaft line states it).
+  Each judged on the judged trains' rows (no augmentation: the recordings as stored), per coupling: mean absolute
+  error and standard deviation of the Δ error, and the ROC AUC of healthy against Δ ≥ 0.15. About two minutes.
 
 Nothing here changes the shipped model; the figures are in docs/train-verdict.md ("What would lift it").
 """
@@ -128,6 +135,100 @@ def ablation(train_data: Path, data: Path) -> None:
             print(f"| {judged} | {trained} | {label} | {s[0]:.3f} | {s[1]:.4f} |", flush=True)
 
 
+#: Δ from which a train must be told from a healthy one (issue 48: moderate or worse)
+MODERATE_DELTA = 0.15
+
+
+def coupling_errors(y_true: np.ndarray, y_pred: np.ndarray, mechanism: np.ndarray,
+                    couplings: tuple[str, ...] | None = None) -> dict[str, tuple[float, ...]]:
+    """Per coupling (its misaligned rows and the healthy ones; ``couplings``, default every one in ``mechanism``):
+    mean absolute Δ error, its standard deviation, and the ROC AUC of the estimate for healthy (Δ = 0) against
+    Δ ≥ :data:`MODERATE_DELTA`."""
+    from sklearn.metrics import roc_auc_score
+
+    out = {}
+    for coupling in couplings or sorted(set(mechanism.tolist()) - {"aligned"}):
+        sel = np.isin(mechanism, [coupling, "aligned"])
+        err = y_pred[sel] - y_true[sel]
+        told = (y_true[sel] == 0.0) | (y_true[sel] >= MODERATE_DELTA)
+        auc = roc_auc_score(y_true[sel][told] >= MODERATE_DELTA, y_pred[sel][told])
+        out[coupling] = (float(np.mean(np.abs(err))), float(np.std(err)), float(auc))
+    return out
+
+
+def _plain_table(data: Path) -> tuple[object, np.ndarray]:
+    """The four train parts' rows as stored (no augmentation) and each row's family."""
+    from rotordiag.models.dataset import load_feature_table
+    from rotordiag.models.table import FeatureTable
+
+    tables, fams = [], []
+    for part in tv.PARTS:
+        path = data / f"{part}.h5"
+        t = load_feature_table(path)
+        with tv.h5py.File(path, "r") as f:
+            src = np.array([x.decode().removeprefix("preset:") for x in f["parameters/plant_source"][...]], dtype=object)
+        tables.append(t)
+        fams.append(src[t.sample_index])
+    return FeatureTable.concat(tables), np.concatenate(fams)
+
+
+def capacity(default_data: Path, train_data: Path, data: Path) -> None:
+    import bench_learning_curve as blc
+    from sklearn.ensemble import HistGradientBoostingRegressor
+
+    from rotordiag.models.config import TrainConfig
+
+    base, shipped = blc.default_training_table(default_data)       # augmented as train.toml, its columns
+    exclude = TrainConfig.from_dict(base).exclude_features
+    judged, fam_te = _plain_table(data)
+    trains, fam_tr = _plain_table(train_data)
+    judged, trains = judged.without_features(exclude), trains.without_features(exclude)
+    names = list(shipped.feature_names)
+    if list(judged.feature_names) != names or list(trains.feature_names) != names:
+        raise SystemExit("the judged, training and shipped tables' columns differ: extract them with one code version")
+    centrelines = [names.index(f"b{b}_centre_ecc_per_c") for b in (1, 2, 3, 4)]
+    four = np.isfinite(shipped.X[:, centrelines]).all(axis=1)
+    mech_te, mech_tr = np.asarray(judged.mechanism, dtype=object), np.asarray(trains.mechanism, dtype=object)
+    print(f"shipped table {shipped.X.shape[0]} rows ({four.sum()} with four centrelines), training trains "
+          f"{trains.X.shape[0]}, judged {judged.X.shape[0]}")
+    print("| regressor | trained on | coupling | Δ MAE | Δ error s.d. | AUC healthy vs Δ ≥ 0.15 | fit s |")
+    print("|---|---|---|---|---|---|---|")
+
+    def fit(rows_X, rows_y, **kw):
+        return HistGradientBoostingRegressor(random_state=0, early_stopping=False, l2_regularization=1.0,
+                                             min_samples_leaf=20, **kw).fit(rows_X, rows_y)
+
+    def show(label, trained, pred, fit_s, only=None):
+        errors = coupling_errors(judged.misalignment, np.clip(pred, 0.0, None), mech_te,
+                                 None if only is None else (only,))
+        for coupling, (mae, sd, auc) in errors.items():
+            print(f"| {label} | {trained} | {coupling} | {mae:.3f} | {sd:.3f} | {auc:.3f} | {fit_s:.0f} |", flush=True)
+
+    for label, kw in (("shipped settings: 150 × 15 leaves, rate 0.1", dict(max_iter=150, max_leaf_nodes=15)),
+                      ("600 × 31 leaves, rate 0.1", dict(max_iter=600, max_leaf_nodes=31)),
+                      ("1500 × 31 leaves, rate 0.05", dict(max_iter=1500, max_leaf_nodes=31, learning_rate=0.05))):
+        kw.setdefault("learning_rate", 0.1)
+        t0 = time.perf_counter()
+        reg = fit(shipped.X[four], shipped.misalignment[four], **kw)
+        show(label, "the shipped table, four centrelines", reg.predict(judged.X), time.perf_counter() - t0)
+    small = dict(max_iter=300, max_leaf_nodes=15, learning_rate=0.05)
+    t0 = time.perf_counter()
+    pred = np.full(judged.X.shape[0], np.nan)
+    for family in sorted(set(fam_te.tolist())):
+        pred[fam_te == family] = fit(trains.X[fam_tr == family], trains.misalignment[fam_tr == family],
+                                     **small).predict(judged.X[fam_te == family])
+    show("300 × 15 leaves, rate 0.05, one per family", "the training trains", pred, time.perf_counter() - t0)
+    for coupling in sorted(set(mech_tr.tolist()) - {"aligned"}):
+        t0 = time.perf_counter()
+        pred = np.full(judged.X.shape[0], np.nan)     # the healthy trains judged by each coupling's model in turn
+        for family in sorted(set(fam_te.tolist())):
+            tr = (fam_tr == family) & np.isin(mech_tr, [coupling, "aligned"])
+            te = (fam_te == family) & np.isin(mech_te, [coupling, "aligned"])
+            pred[te] = fit(trains.X[tr], trains.misalignment[tr], **small).predict(judged.X[te])
+        show("300 × 15 leaves, rate 0.05, one per family and coupling", "the training trains", pred,
+             time.perf_counter() - t0, only=coupling)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--train-data", type=Path, required=True)
@@ -137,7 +238,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--without-across", action="store_true",
                     help="--curve with the shipped exclusion of the columns across bearings")
+    ap.add_argument("--capacity", type=Path, default=None, metavar="DEFAULT_DATA",
+                    help="the Δ regressor's capacity and per-family models (the seventeen parts of make default-model)")
     args = ap.parse_args(argv)
+    if args.capacity is not None:
+        capacity(args.capacity, args.train_data, args.data)
     if args.ablation:
         ablation(args.train_data, args.data)
     if args.curve:

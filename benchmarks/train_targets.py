@@ -8,6 +8,13 @@ and within one band; false alarms (a healthy train given any misalignment class,
 slight or worse; the 90 % interval's coverage of the true Δ; and the offset's direction on the confident answers with
 Δ ≥ 0.15 and DC positions, "right" when within 45° of the true direction (the quadrant it names: high or low,
 left or right). Counts are given with each share: n is small.
+
+A second table asks what the decision policy could reach at all: the answers ranked by the model's own calibrated
+probability of its call (any threshold on it is a policy), the largest share of answers that a threshold keeps with
+≥ 98 % in the true band, or with every one within one band, and how many are right at the issue's 70 %. A third
+sets that against an idealised estimator of the same recordings — the true Δ plus Gaussian noise of a given
+standard deviation, the 70 % whose estimate lies farthest from a band edge kept — to say how precise a Δ estimate
+the targets need (the model's own error is printed beside it).
 """
 from __future__ import annotations
 
@@ -66,6 +73,74 @@ def target_rows(bundle, samples: list[dict], outs: list) -> list[tuple[str, str,
     ]
 
 
+#: issue 48's confident share, and how right those answers must be (in the true band)
+TARGET_CONFIDENT_SHARE = 0.70
+TARGET_IN_BAND = 0.98
+
+
+def selective_rows(bundle, outs: list) -> list[tuple[str, str]]:
+    """(what, measured) for a threshold on the calibrated probability of the call, over every answer.
+
+    The answers with that probability at or above the threshold are the confident ones of such a policy (a refused
+    or unscored answer never is); the rows give the largest share any threshold keeps with ≥ 98 % in the true band,
+    the largest with every kept answer within one band, and the shares in and within one band of the true one at
+    the smallest threshold that keeps ≥ 70 % of the answers.
+    """
+    names = list(bundle.model.bands_.names)
+    edges = np.asarray(bundle.model.bands_.edges, dtype=float)
+    n = len(outs)
+    p = np.array([o.call_probability for o in outs], dtype=float)
+    shown = np.array([names.index(o.model_class) if o.model_class in names else -1 for o in outs])
+    off = np.abs(shown - np.searchsorted(edges, [o.delta for o in outs], side="right"))
+    scored = np.isfinite(p) & (shown >= 0)
+    order = np.argsort(-p[scored], kind="stable")
+    p_sorted, off_sorted = p[scored][order], off[scored][order]
+    # a threshold keeps a whole group of equal probabilities: the cuts are where the probability drops
+    cuts = [k for k in range(1, len(p_sorted) + 1) if k == len(p_sorted) or p_sorted[k] < p_sorted[k - 1]]
+    right = np.cumsum(off_sorted == 0)
+    best_band = max((k for k in cuts if right[k - 1] >= TARGET_IN_BAND * k), default=0)
+    best_one = max((k for k in cuts if (off_sorted[:k] <= 1).all()), default=0)
+    at = next((k for k in cuts if k >= TARGET_CONFIDENT_SHARE * n), None)
+    rows = [(f"largest share kept with ≥ {100 * TARGET_IN_BAND:g} % in the true band", _share(best_band, n)),
+            ("largest share kept with every answer within one band", _share(best_one, n))]
+    if at is None:
+        rows.append((f"kept answers at ≥ {100 * TARGET_CONFIDENT_SHARE:g} % of them", "no threshold keeps that many"))
+    else:
+        rows += [(f"in the true band, keeping {_share(at, n)}", _share(int(right[at - 1]), at)),
+                 (f"within one band, keeping {_share(at, n)}", _share(int((off_sorted[:at] <= 1).sum()), at))]
+    return rows
+
+
+def precision_rows(bundle, outs: list, sigmas: tuple[float, ...] = (0.01, 0.02, 0.03, 0.05, 0.08),
+                   repeats: int = 50, seed: int = 0) -> list[tuple[str, str, str]]:
+    """(σ, in the true band, within one band) of an idealised Δ estimate at each noise level ``sigmas``.
+
+    The estimate is the recordings' true Δ plus N(0, σ²) (clipped at 0), the kept answers the 70 % of them
+    farthest from a band edge (what a policy knowing σ would keep); the shares are means over ``repeats`` seeded
+    draws. The first row is the model's own Δ error on the same recordings (``Outcome.delta_model``).
+    """
+    edges = np.asarray(bundle.model.bands_.edges, dtype=float)
+    delta = np.array([o.delta for o in outs], dtype=float)
+    true_band = np.searchsorted(edges, delta, side="right")
+    estimate = np.array([o.delta_model for o in outs], dtype=float)
+    ok = np.isfinite(estimate)
+    err = estimate[ok] - delta[ok]
+    rows = [(f"the model: Δ error s.d. {err.std():.3f}, mean absolute {np.abs(err).mean():.3f}", "", "")] if ok.any() else []
+    rng = np.random.default_rng(seed)
+    keep = int(math.ceil(TARGET_CONFIDENT_SHARE * len(delta)))
+    for sigma in sigmas:
+        in_band = within_one = 0.0
+        for _ in range(repeats):
+            est = np.clip(delta + rng.normal(0.0, sigma, delta.size), 0.0, None)
+            margin = np.min(np.abs(est[:, None] - edges[None, :]), axis=1)
+            kept = np.argsort(-margin, kind="stable")[:keep]
+            off = np.abs(np.searchsorted(edges, est[kept], side="right") - true_band[kept])
+            in_band += float(np.mean(off == 0)) / repeats
+            within_one += float(np.mean(off <= 1)) / repeats
+        rows.append((f"{sigma:g}", f"{100 * in_band:.1f} %", f"{100 * within_one:.1f} %"))
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--data", type=Path, default=ROOT / "data" / "trains")
@@ -79,6 +154,14 @@ def main(argv: list[str] | None = None) -> int:
     print(f"model {bundle.version}, {len(samples)} judged trains, speed and clearance stated\n")
     print("| target | measured | issue 48 |\n|---|---|---|")
     for row in target_rows(bundle, samples, outs):
+        print("| " + " | ".join(row) + " |")
+    print("\nany threshold on the calibrated probability of the call (what a decision policy could reach)\n")
+    print("| what | measured |\n|---|---|")
+    for row in selective_rows(bundle, outs):
+        print("| " + " | ".join(row) + " |")
+    print(f"\nan idealised Δ estimate (true Δ + N(0, σ²)), the {TARGET_CONFIDENT_SHARE:.0%} farthest from a band edge kept\n")
+    print("| σ of the Δ estimate | in the true band | within one band |\n|---|---|---|")
+    for row in precision_rows(bundle, outs):
         print("| " + " | ".join(row) + " |")
     return 0
 

@@ -354,6 +354,8 @@ class Outcome:
     ood_score: float = math.nan
     outside: list[str] = field(default_factory=list)
     delta_model: float = math.nan
+    #: the calibrated probability of ``model_class`` (``Verdict.probabilities``); NaN when refused
+    call_probability: float = math.nan
     #: the verdict's Δ interval (``Verdict.misalignment_interval``, at its ``interval_level``); NaN when refused
     interval: tuple[float, float] = (math.nan, math.nan)
     rule_class: str = "aligned"
@@ -402,6 +404,7 @@ def diagnose_waveforms(bundle, waveforms_um: np.ndarray, bearings: tuple[int, ..
         out.notes.append(str(exc))
         return out
     out.model_class, out.severity, out.status = str(v.model_severity), v.severity, v.status
+    out.call_probability = float(v.probabilities.get(out.model_class, math.nan))
     out.speed_rpm_used = float(fr.speed_rpm)
     out.reasons = [str(r["code"]) for r in v.reasons]
     out.ood_score, out.outside = float(v.ood_score), [str(f["feature"]) for f in v.ood_findings]
