@@ -74,8 +74,7 @@ def start_local_cluster(n_workers: int, *, dashboard_address: str | None = ":0")
     """A ``distributed.LocalCluster`` of ``n_workers`` one-thread worker processes and a client of it.
 
     Started with :data:`LOCAL_CLUSTER_CONFIG`, logs at ERROR, and ``simulator._dask_plugins.QuietHeartbeatRace``
-    in every worker.
-    The caller closes both (the client first). ``dashboard_address=None``: no dashboard.
+    in every worker. The caller closes both (the client first). ``dashboard_address=None``: no dashboard.
 
     Returns
     -------
