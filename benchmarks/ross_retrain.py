@@ -14,9 +14,9 @@ beside them. Figures as the plant quality report's (``models.plant_retrain``), w
 Issue 48's "within-machine Spearman ≥ 0.95" meets ties: 16 of a machine's 31 recordings are healthy (Δ = 0) and the
 other 15 sit at five Δ levels, three each. A continuous estimate that orders the levels exactly but does not tie
 the healthy recordings (any spread among them, however small) reaches only the Spearman of
-:func:`spearman_ceiling` (0.927 on these sets); above it, the estimate ties healthy recordings (clipped at Δ = 0).
-So two figures that do not hinge on the ties are printed beside it: the Spearman among the misaligned recordings
-(ceiling 0.982: three recordings per level) and the ROC AUC of healthy against Δ ≥ 0.15.
+:func:`spearman_ceiling` (its value for these sets: docs/models.md); above it, the estimate ties healthy
+recordings (clipped at Δ = 0). So two figures that do not hinge on the ties are printed beside it: the Spearman among the misaligned recordings
+(with its own ceiling: three recordings per level) and the ROC AUC of healthy against Δ ≥ 0.15.
 """
 from __future__ import annotations
 
