@@ -29,6 +29,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from ross_validation import BAND_PATH, DEFAULT_PATH, MACHINES, load_ross_set  # noqa: E402
+from train_targets import MODERATE_DELTA  # noqa: E402
 
 from rotordiag.models.plant_retrain import _figures, _spearman, _wilson  # noqa: E402
 from rotordiag.models.predict import load_bundle  # noqa: E402
@@ -54,10 +55,10 @@ def tie_free_figures(delta: np.ndarray, estimate: np.ndarray) -> dict:
 
     ok = np.isfinite(estimate)
     d, e = delta[ok], estimate[ok]
-    told = (d == 0.0) | (d >= 0.15)
-    both = told.any() and 0 < int(np.sum(d[told] >= 0.15)) < int(told.sum())
+    told = (d == 0.0) | (d >= MODERATE_DELTA)
+    both = told.any() and 0 < int(np.sum(d[told] >= MODERATE_DELTA)) < int(told.sum())
     return {"spearman_misaligned": _spearman(e[d > 0], d[d > 0]), "spearman_misaligned_ceiling": spearman_ceiling(d[d > 0]),
-            "auc_healthy_moderate": float(roc_auc_score(d[told] >= 0.15, e[told])) if both else None}
+            "auc_healthy_moderate": float(roc_auc_score(d[told] >= MODERATE_DELTA, e[told])) if both else None}
 
 
 def measure(bundle, cases) -> dict:

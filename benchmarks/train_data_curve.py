@@ -45,6 +45,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import train_verdict as tv  # noqa: E402  (benchmarks/ on sys.path)
+from train_targets import MODERATE_DELTA  # noqa: E402
 
 CONFIG = ROOT / "models" / "default" / "train.toml"
 BANDS = ("aligned", "slight", "moderate", "severe")
@@ -135,8 +136,6 @@ def ablation(train_data: Path, data: Path) -> None:
             print(f"| {judged} | {trained} | {label} | {s[0]:.3f} | {s[1]:.4f} |", flush=True)
 
 
-#: Δ from which a train must be told from a healthy one (issue 48: moderate or worse)
-MODERATE_DELTA = 0.15
 
 
 def coupling_errors(y_true: np.ndarray, y_pred: np.ndarray, mechanism: np.ndarray,
