@@ -155,22 +155,6 @@ def coupling_errors(y_true: np.ndarray, y_pred: np.ndarray, mechanism: np.ndarra
     return out
 
 
-def _plain_table(data: Path) -> tuple[object, np.ndarray]:
-    """The four train parts' rows as stored (no augmentation) and each row's family."""
-    from rotordiag.models.dataset import load_feature_table
-    from rotordiag.models.table import FeatureTable
-
-    tables, fams = [], []
-    for part in tv.PARTS:
-        path = data / f"{part}.h5"
-        t = load_feature_table(path)
-        with tv.h5py.File(path, "r") as f:
-            src = np.array([x.decode().removeprefix("preset:") for x in f["parameters/plant_source"][...]], dtype=object)
-        tables.append(t)
-        fams.append(src[t.sample_index])
-    return FeatureTable.concat(tables), np.concatenate(fams)
-
-
 def capacity(default_data: Path, train_data: Path, data: Path) -> None:
     import bench_learning_curve as blc
     from sklearn.ensemble import HistGradientBoostingRegressor
@@ -179,8 +163,8 @@ def capacity(default_data: Path, train_data: Path, data: Path) -> None:
 
     base, shipped = blc.default_training_table(default_data)       # augmented as train.toml, its columns
     exclude = TrainConfig.from_dict(base).exclude_features
-    judged, fam_te = _plain_table(data)
-    trains, fam_tr = _plain_table(train_data)
+    judged, fam_te = tv.family_tables(data, None)          # the rows as stored
+    trains, fam_tr = tv.family_tables(train_data, None)
     judged, trains = judged.without_features(exclude), trains.without_features(exclude)
     names = list(shipped.feature_names)
     if list(judged.feature_names) != names or list(trains.feature_names) != names:

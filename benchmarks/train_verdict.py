@@ -83,17 +83,18 @@ def judge(bundle, samples: list[dict], condition: str) -> list:
     return outs
 
 
-def family_tables(data: Path, config_path: Path) -> tuple[object, np.ndarray]:
-    """The feature table of every set (with the configuration's augmentation) and each row's family."""
+def family_tables(data: Path, config_path: Path | None) -> tuple[object, np.ndarray]:
+    """The feature table of every set (with the configuration's augmentation; ``config_path`` None: the rows as
+    stored) and each row's family."""
     from rotordiag.models.config import TrainConfig
     from rotordiag.models.dataset import load_feature_table
     from rotordiag.models.table import FeatureTable
 
-    config = TrainConfig.from_file(config_path)
+    augment = None if config_path is None else TrainConfig.from_file(config_path).augment
     tables, fams = [], []
     for part in PARTS:
         path = data / f"{part}.h5"
-        t = load_feature_table(path, augment=config.augment)
+        t = load_feature_table(path, augment=augment)
         with h5py.File(path, "r") as f:
             src = np.array([s.decode().removeprefix("preset:") for s in f["parameters/plant_source"][...]], dtype=object)
         tables.append(t)
